@@ -1,0 +1,51 @@
+// Shared by every mesh-pass shader: the per-frame block, the interface between
+// mesh.vert and the technique fragment shaders, material sampling and normal mapping.
+// Mirrors src/gpu/layout.rs (FrameParams) and src/scene/mod.rs (Vertex).
+#ifndef SHVIS_COMMON_GLSL
+#define SHVIS_COMMON_GLSL
+
+const float PI = 3.14159265358979323846;
+
+layout(std140, set = 0, binding = SHVIS_BINDING_FRAME) uniform FrameParams {
+    layout(offset = 0) mat4 clip_from_world;
+    layout(offset = 64) vec4 camera_position;
+    layout(offset = 80) float normal_scale; // glTF normalTexture.scale; 0 = flat normals
+} frame;
+
+#ifdef SHVIS_FRAGMENT
+layout(set = 0, binding = SHVIS_BINDING_ALBEDO) uniform sampler2D albedo_tex;
+layout(set = 0, binding = SHVIS_BINDING_NORMAL_MAP) uniform sampler2D normal_tex;
+
+// Diffuse shading needs no view vector, so the world position is not passed on.
+layout(location = 0) in vec3 in_normal_world;
+layout(location = 1) in vec4 in_tangent_world;
+layout(location = 2) in vec2 in_uv_material;
+layout(location = 3) in vec2 in_uv_lightmap;
+layout(location = 4) in vec3 in_albedo_tint;
+
+// Linear albedo: the sRGB texture is decoded by the sampler.
+vec3 material_albedo() {
+    return texture(albedo_tex, in_uv_material).rgb * in_albedo_tint;
+}
+
+// World-space shading normal from the tangent-space normal map (glTF convention, DESIGN §1:
+// +Y green = image up; bitangent = w · cross(n, t) points toward decreasing v). A map texel
+// that decodes to a zero-length vector falls back to the interpolated normal.
+vec3 shading_normal() {
+    vec3 n = normalize(in_normal_world);
+    vec3 t = in_tangent_world.xyz - n * dot(n, in_tangent_world.xyz);
+    float t_len = length(t);
+    if (t_len < 1e-6 || frame.normal_scale == 0.0) {
+        return n;
+    }
+    t /= t_len;
+    vec3 b = cross(n, t) * in_tangent_world.w;
+    vec3 m = texture(normal_tex, in_uv_material).xyz * 2.0 - 1.0;
+    m.xy *= frame.normal_scale;
+    vec3 w = t * m.x + b * m.y + n * m.z;
+    float w_len = length(w);
+    return w_len > 1e-6 ? w / w_len : n;
+}
+#endif
+
+#endif

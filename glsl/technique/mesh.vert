@@ -1,0 +1,27 @@
+// The mesh pass's vertex shader, shared by every technique: world-space attributes to the
+// fragment stage (glsl/include/common.glsl), clip position from FrameParams.
+#version 450
+#extension GL_GOOGLE_include_directive : require
+#include "common.glsl"
+
+layout(location = 0) in vec3 position;
+layout(location = 1) in vec3 normal;
+layout(location = 2) in vec4 tangent;
+layout(location = 3) in vec2 uv_material;
+layout(location = 4) in vec2 uv_lightmap;
+layout(location = 5) in vec3 albedo_tint;
+
+layout(location = 0) out vec3 out_normal_world;
+layout(location = 1) out vec4 out_tangent_world;
+layout(location = 2) out vec2 out_uv_material;
+layout(location = 3) out vec2 out_uv_lightmap;
+layout(location = 4) out vec3 out_albedo_tint;
+
+void main() {
+    out_normal_world = normal;
+    out_tangent_world = tangent;
+    out_uv_material = uv_material;
+    out_uv_lightmap = uv_lightmap;
+    out_albedo_tint = albedo_tint;
+    gl_Position = frame.clip_from_world * vec4(position, 1.0);
+}

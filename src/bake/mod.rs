@@ -1,0 +1,80 @@
+//! CPU bake: everything computed once per scene and stored per lightmap texel (DESIGN §5).
+//!
+//! - [`raster`]: which lightmap texels a mesh covers, with their world position and
+//!   geometric normal (texel centres at (i+½)/res, DESIGN §1), and gutter dilation.
+//! - [`trace`]: occlusion rays against the mesh (obvhs compressed-wide BVH).
+//! - [`ao`]: scalar ambient occlusion per texel, the `preconv` technique's data (DESIGN §2).
+//!
+//! Inputs a user controls (ray counts, resolutions) are validated here once, by
+//! [`validate_rays`] and [`validate_res`], so the bake math itself returns no errors.
+
+pub mod ao;
+pub mod raster;
+pub mod trace;
+
+/// Fewest rays per texel.
+pub const MIN_RAYS: u32 = 1;
+/// Most rays per texel.
+pub const MAX_RAYS: u32 = 65536;
+/// Smallest lightmap resolution (texels per side).
+pub const MIN_RES: u32 = 16;
+/// Largest lightmap resolution (texels per side).
+pub const MAX_RES: u32 = 8192;
+
+/// Errors of the bake layer; each message is one line naming the input.
+#[derive(Debug, thiserror::Error)]
+pub enum BakeError {
+    #[error("--rays {rays} is out of range {min}..={max}")]
+    RaysOutOfRange { rays: u32, min: u32, max: u32 },
+    #[error("lightmap resolution {res} is out of range {min}..={max}")]
+    ResOutOfRange { res: u32, min: u32, max: u32 },
+    #[error("no triangle covers a lightmap texel centre: the mesh has no usable lightmap UVs")]
+    EmptyLightmap,
+}
+
+/// Checks a rays-per-texel count against [`MIN_RAYS`]..=[`MAX_RAYS`].
+///
+/// # Errors
+/// [`BakeError::RaysOutOfRange`] outside that range.
+pub fn validate_rays(rays: u32) -> Result<u32, BakeError> {
+    if (MIN_RAYS..=MAX_RAYS).contains(&rays) {
+        Ok(rays)
+    } else {
+        Err(BakeError::RaysOutOfRange {
+            rays,
+            min: MIN_RAYS,
+            max: MAX_RAYS,
+        })
+    }
+}
+
+/// Checks a lightmap resolution against [`MIN_RES`]..=[`MAX_RES`].
+///
+/// # Errors
+/// [`BakeError::ResOutOfRange`] outside that range.
+pub fn validate_res(res: u32) -> Result<u32, BakeError> {
+    if (MIN_RES..=MAX_RES).contains(&res) {
+        Ok(res)
+    } else {
+        Err(BakeError::ResOutOfRange {
+            res,
+            min: MIN_RES,
+            max: MAX_RES,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn limits_are_inclusive() {
+        assert!(validate_rays(1).is_ok() && validate_rays(65536).is_ok());
+        assert!(validate_rays(0).is_err() && validate_rays(65537).is_err());
+        assert!(validate_res(16).is_ok() && validate_res(8192).is_ok());
+        assert!(validate_res(15).is_err() && validate_res(8193).is_err());
+        let msg = validate_rays(0).map_err(|e| e.to_string());
+        assert_eq!(msg, Err("--rays 0 is out of range 1..=65536".to_string()));
+    }
+}

@@ -1,0 +1,291 @@
+//! Texel rasterization of a mesh into its lightmap parameterization (DESIGN §1 "Lightmap"),
+//! and gutter dilation.
+//!
+//! Texel (x, y) of a `res`² lightmap has its centre at uv = ((x+½)/res, (y+½)/res); uv v = 0
+//! is row 0; storage is row-major, index y·res + x. A texel is *covered* when its centre lies
+//! in some triangle's UV image. Its bake position is the barycentric interpolation of the
+//! triangle's corners at that centre, and its normal is the triangle's *geometric* normal
+//! (from positions), because visibility below the geometric tangent plane is the surface's
+//! own (DESIGN §1 "Shading model"); the winding normal is flipped when it disagrees with
+//! the interpolated vertex normals, so meshes with clockwise winding still bake the side
+//! they are shaded on.
+//!
+//! Inside tests are inclusive with a small barycentric tolerance ([`EDGE_EPS`]), so a texel
+//! centre exactly on an edge shared by two triangles is never lost to rounding (no cracks);
+//! the first triangle, in index order, that claims a texel keeps it. Triangles with zero
+//! area in 3D or in UV cannot be baked; they are skipped, counted, and reported once with
+//! `log::warn!`.
+//!
+//! [`dilate`] fills gutter texels around charts from their filled 8-neighbours so that
+//! bilinear filtering at chart borders does not fetch unbaked texels (DESIGN §6 "texels on
+//! chart borders").
+
+use std::ops::{Add, Mul};
+
+use glam::{DVec2, Vec3};
+
+use super::BakeError;
+use crate::scene::Mesh;
+
+/// Barycentric tolerance of the inside test: texel centres this far outside (as a fraction
+/// of the triangle's UV height) still count, which closes cracks on shared edges.
+pub const EDGE_EPS: f64 = 1e-6;
+
+/// Texels of a lightmap covered by a mesh, with what the bake needs at each.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightmapTexels {
+    /// Texels per side.
+    pub res: u32,
+    /// Whether a triangle covers the texel centre; row-major, index y·res + x.
+    pub covered: Vec<bool>,
+    /// World position at the texel centre (zero where not covered), metres.
+    pub position: Vec<Vec3>,
+    /// Unit geometric normal, world space (zero where not covered).
+    pub normal: Vec<Vec3>,
+}
+
+impl LightmapTexels {
+    /// Number of covered texels.
+    pub fn covered_count(&self) -> usize {
+        self.covered.iter().filter(|&&c| c).count()
+    }
+
+    /// The number of covered texels, or an error when there are none.
+    ///
+    /// # Errors
+    /// [`BakeError::EmptyLightmap`] when no texel is covered.
+    pub fn require_covered(&self) -> Result<usize, BakeError> {
+        match self.covered_count() {
+            0 => Err(BakeError::EmptyLightmap),
+            n => Ok(n),
+        }
+    }
+
+    /// Row-major index of the texel whose area contains `uv` (clamped to the lightmap).
+    pub fn texel_index(&self, uv: [f32; 2]) -> usize {
+        let to_texel = |c: f32| ((c * self.res as f32).floor().max(0.0) as u32).min(self.res - 1);
+        (to_texel(uv[1]) * self.res + to_texel(uv[0])) as usize
+    }
+}
+
+/// 2D cross product (signed parallelogram area).
+fn cross2(a: DVec2, b: DVec2) -> f64 {
+    a.x * b.y - a.y * b.x
+}
+
+/// Rasterizes the mesh's `uv_lightmap` into a `res`² texel grid (see the module doc).
+pub fn rasterize(mesh: &Mesh, res: u32) -> LightmapTexels {
+    let n = (res as usize) * (res as usize);
+    let mut out = LightmapTexels {
+        res,
+        covered: vec![false; n],
+        position: vec![Vec3::ZERO; n],
+        normal: vec![Vec3::ZERO; n],
+    };
+    let mut degenerate = 0usize;
+    for t in 0..mesh.triangle_count() {
+        let idx = &mesh.indices[3 * t..3 * t + 3];
+        let Some(v) = idx
+            .iter()
+            .map(|&i| mesh.vertices.get(i as usize))
+            .collect::<Option<Vec<_>>>()
+        else {
+            degenerate += 1; // an index out of range: nothing to bake
+            continue;
+        };
+        let p = [0, 1, 2].map(|k| Vec3::from(v[k].position));
+        // UV corners in texel units.
+        let q = [0, 1, 2].map(|k| DVec2::from(v[k].uv_lightmap.map(f64::from)) * f64::from(res));
+        let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
+        let cross = e1.cross(e2);
+        let area_uv = cross2(q[1] - q[0], q[2] - q[0]);
+        // Zero area: |e1 × e2| = |e1||e2| sin θ below f32 resolution of the edge lengths.
+        let flat_3d = !(cross.length() > 1e-7 * (e1.length_squared() + e2.length_squared()));
+        let flat_uv = !(area_uv.abs() > 1e-9);
+        if flat_3d || flat_uv {
+            degenerate += 1;
+            continue;
+        }
+        let mut normal = cross.normalize();
+        let shading: Vec3 = v.iter().map(|v| Vec3::from(v.normal)).sum();
+        if shading.dot(normal) < 0.0 {
+            normal = -normal;
+        }
+        // Texel centres x+½ inside the UV bounding box.
+        let lo = q[0].min(q[1]).min(q[2]);
+        let hi = q[0].max(q[1]).max(q[2]);
+        let first = |c: f64| (c - 0.5).ceil().clamp(0.0, f64::from(res)) as u32;
+        let last = |c: f64| ((c - 0.5).floor() + 1.0).clamp(0.0, f64::from(res)) as u32;
+        for y in first(lo.y)..last(hi.y) {
+            for x in first(lo.x)..last(hi.x) {
+                let i = y as usize * res as usize + x as usize;
+                if out.covered[i] {
+                    continue; // first writer wins
+                }
+                let c = DVec2::new(f64::from(x) + 0.5, f64::from(y) + 0.5);
+                let w0 = cross2(q[2] - q[1], c - q[1]) / area_uv;
+                let w1 = cross2(q[0] - q[2], c - q[2]) / area_uv;
+                let w2 = 1.0 - w0 - w1;
+                if w0 < -EDGE_EPS || w1 < -EDGE_EPS || w2 < -EDGE_EPS {
+                    continue;
+                }
+                out.covered[i] = true;
+                out.position[i] = p[0] * w0 as f32 + p[1] * w1 as f32 + p[2] * w2 as f32;
+                out.normal[i] = normal;
+            }
+        }
+    }
+    if degenerate > 0 {
+        log::warn!(
+            "lightmap raster: skipped {degenerate} degenerate triangles (zero area in 3D or in lightmap UV)"
+        );
+    }
+    out
+}
+
+/// Gutter dilation: `passes` times, every texel not yet filled that has filled
+/// 8-neighbours becomes their average. Filled = `covered` at first, then also texels filled
+/// by earlier passes. Each pass reads a copy of the previous one, so the result does not
+/// depend on the visiting order.
+///
+/// # Panics
+/// When `values` or `covered` do not hold res² entries (a bug in the caller).
+pub fn dilate<T>(values: &mut [T], covered: &[bool], res: u32, passes: u32)
+where
+    T: Copy + Add<Output = T> + Mul<f32, Output = T>,
+{
+    let n = res as usize;
+    assert_eq!(values.len(), n * n, "dilate: values are not res²");
+    assert_eq!(covered.len(), n * n, "dilate: coverage is not res²");
+    let mut filled = covered.to_vec();
+    for _ in 0..passes {
+        let (src, was) = (values.to_vec(), filled.clone());
+        let mut changed = false;
+        for y in 0..n {
+            for x in 0..n {
+                let i = y * n + x;
+                if was[i] {
+                    continue;
+                }
+                let (mut sum, mut count) = (None::<T>, 0u32);
+                for ny in y.saturating_sub(1)..(y + 2).min(n) {
+                    for nx in x.saturating_sub(1)..(x + 2).min(n) {
+                        let j = ny * n + nx;
+                        if j != i && was[j] {
+                            sum = Some(sum.map_or(src[j], |s| s + src[j]));
+                            count += 1;
+                        }
+                    }
+                }
+                if let Some(s) = sum {
+                    values[i] = s * (1.0 / count as f32);
+                    filled[i] = true;
+                    changed = true;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Vertex;
+
+    fn vertex(p: [f32; 3], uv: [f32; 2]) -> Vertex {
+        Vertex {
+            position: p,
+            normal: [0.0, 1.0, 0.0],
+            uv_lightmap: uv,
+            ..Vertex::default()
+        }
+    }
+
+    /// A unit square on y = 0 whose lightmap UVs are `uv0..uv1`, as two triangles sharing
+    /// the diagonal.
+    fn square(uv0: f32, uv1: f32) -> Mesh {
+        Mesh {
+            vertices: vec![
+                vertex([0.0, 0.0, 0.0], [uv0, uv0]),
+                vertex([1.0, 0.0, 0.0], [uv1, uv0]),
+                vertex([1.0, 0.0, 1.0], [uv1, uv1]),
+                vertex([0.0, 0.0, 1.0], [uv0, uv1]),
+            ],
+            // Counter-clockwise seen from +Y: (0,0,0) → (0,0,1) → (1,0,1).
+            indices: vec![0, 3, 2, 0, 2, 1],
+        }
+    }
+
+    /// Interpolated positions are f32 sums of three products.
+    const POSITION: f32 = 1e-6;
+
+    #[test]
+    fn full_square_covers_every_texel_without_cracks() {
+        let t = rasterize(&square(0.0, 1.0), 16);
+        assert_eq!(t.covered_count(), 256, "the shared diagonal lost texels");
+        for y in 0..16 {
+            for x in 0..16 {
+                let i = y * 16 + x;
+                let want = Vec3::new((x as f32 + 0.5) / 16.0, 0.0, (y as f32 + 0.5) / 16.0);
+                assert!((t.position[i] - want).length() < POSITION, "texel {x},{y}");
+                assert_eq!(t.normal[i], Vec3::Y);
+            }
+        }
+    }
+
+    #[test]
+    fn texel_aligned_chart_covers_exactly_its_rectangle() {
+        // Corners on texel boundaries 4/16 and 12/16: texels 4..12 in x and y.
+        let t = rasterize(&square(0.25, 0.75), 16);
+        for y in 0..16 {
+            for x in 0..16 {
+                let inside = (4..12).contains(&x) && (4..12).contains(&y);
+                assert_eq!(t.covered[y * 16 + x], inside, "texel {x},{y}");
+            }
+        }
+    }
+
+    #[test]
+    fn degenerate_triangles_are_skipped() {
+        let mut m = square(0.0, 1.0);
+        // Zero 3D area (repeated corner) and zero UV area (collinear UVs).
+        m.vertices.push(vertex([0.0, 0.0, 0.0], [0.1, 0.1]));
+        m.vertices.push(vertex([2.0, 0.0, 0.0], [0.9, 0.9]));
+        m.vertices.push(vertex([2.0, 1.0, 0.0], [0.5, 0.5]));
+        m.indices = vec![0, 0, 1, 4, 5, 6];
+        let t = rasterize(&m, 16);
+        assert_eq!(t.covered_count(), 0);
+        assert!(matches!(t.require_covered(), Err(BakeError::EmptyLightmap)));
+    }
+
+    #[test]
+    fn clockwise_winding_keeps_the_shaded_side() {
+        let mut m = square(0.0, 1.0);
+        m.indices = vec![0, 2, 3, 0, 1, 2]; // clockwise from +Y, vertex normals +Y
+        let t = rasterize(&m, 16);
+        assert!(t.normal.iter().all(|&n| n == Vec3::Y));
+    }
+
+    #[test]
+    fn dilation_fills_gutters_ring_by_ring_with_neighbour_averages() {
+        let res = 8;
+        let mut covered = vec![false; 64];
+        let mut values = vec![0.0f32; 64];
+        // Two covered texels side by side in the middle: 1 and 3.
+        covered[3 * 8 + 3] = true;
+        values[3 * 8 + 3] = 1.0;
+        covered[3 * 8 + 4] = true;
+        values[3 * 8 + 4] = 3.0;
+        dilate(&mut values, &covered, res, 1);
+        assert_eq!(values[2 * 8 + 2], 1.0); // touches only the first
+        assert_eq!(values[2 * 8 + 3], 2.0); // touches both
+        assert_eq!(values[4 * 8 + 5], 3.0);
+        assert_eq!(values[1 * 8 + 1], 0.0, "one pass reaches one ring only");
+        dilate(&mut values, &covered, res, 2);
+        assert!(values[1 * 8 + 1] > 0.0, "second pass reaches the next ring");
+        assert_eq!(values[3 * 8 + 3], 1.0, "covered texels never change");
+    }
+}

@@ -1,0 +1,323 @@
+//! The command line (DESIGN §4): clap types and the commands. `anyhow` lives here and in
+//! main.rs only; every failure becomes one `error: …` line and a non-zero exit.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{Context as _, Result, bail};
+use clap::{Args, Parser, Subcommand};
+
+use shvis::gpu::{Context, ContextDesc};
+use shvis::prepare::{PrepareSettings, Prepared, bake_scene_ao, prepare, resolve_scene};
+use shvis::render::{FrameSettings, SceneGpu};
+use shvis::report::image::{write_exr, write_frame, write_png};
+use shvis::report::metrics::TimingStats;
+use shvis::report::table::{BenchRow, BenchTable};
+use shvis::technique::{self, HwPath, TechniqueId};
+use shvis::{bake, report};
+
+/// Largest frame side accepted before asking the device (which may allow less).
+const MAX_FRAME_SIDE: u32 = 16384;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "shvis",
+    version,
+    about = "Normal mapping with low-frequency precomputed visibility (Iwanicki & Sloan): bake, render, measure"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Bake lightmap data (ambient occlusion) and write it as EXR for inspection.
+    Bake(BakeArgs),
+    /// Render one technique on one hardware path to a PNG or EXR.
+    Render(RenderArgs),
+    /// Time every technique × path and write table.md, table.json and images.
+    Bench(BenchArgs),
+}
+
+#[derive(Args, Debug, Clone)]
+struct SceneArgs {
+    /// `house` (built-in) or a .gltf/.glb file.
+    #[arg(long, default_value = "house")]
+    scene: String,
+    /// Lightmap texels per side.
+    #[arg(long, default_value_t = 512)]
+    vis_res: u32,
+    /// Rays per lightmap texel.
+    #[arg(long, default_value_t = 1024)]
+    rays: u32,
+    /// Seed of the bake's sample patterns.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+}
+
+#[derive(Args, Debug, Clone)]
+struct GpuArgs {
+    /// Pick the first Vulkan device whose name contains this.
+    #[arg(long)]
+    device: Option<String>,
+    /// Turn on VK_LAYER_KHRONOS_validation.
+    #[arg(long)]
+    validate: bool,
+}
+
+#[derive(Args, Debug)]
+struct BakeArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Output directory (ao.exr).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    /// `sky` (built-in) or an .exr/.hdr equirectangular environment map.
+    #[arg(long, default_value = "sky")]
+    env: String,
+    /// Technique name (see `shvis bench`).
+    #[arg(long)]
+    technique: TechniqueId,
+    /// Hardware path: dx9 or dx10.
+    #[arg(long, default_value = "dx10")]
+    path: HwPath,
+    #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Exposure in EV applied before sRGB encoding (PNG only).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Ignore the normal map (shade with interpolated normals).
+    #[arg(long)]
+    flat_normals: bool,
+    /// Output image: .png (sRGB) or .exr (linear).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+struct BenchArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    #[arg(long, default_value = "sky")]
+    env: String,
+    /// `all` or a comma-separated list of technique names.
+    #[arg(long, default_value = "all")]
+    techniques: String,
+    /// Comma-separated hardware paths.
+    #[arg(long, default_value = "dx9,dx10")]
+    paths: String,
+    /// Timed frames per technique × path (after the warm-up).
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    frames: u32,
+    /// Untimed warm-up frames per technique × path.
+    #[arg(long, default_value_t = 10)]
+    warmup: u32,
+    #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Exposure in EV of the PNG images.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Output directory.
+    #[arg(long, default_value = "bench-out")]
+    out: PathBuf,
+}
+
+/// Parses the arguments and runs the command.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Bake(a) => run_bake(a).context("bake"),
+        Command::Render(a) => run_render(a).context("render"),
+        Command::Bench(a) => run_bench(a).context("bench"),
+    }
+}
+
+fn prepare_settings(scene: &SceneArgs, env: &str) -> PrepareSettings {
+    PrepareSettings {
+        scene: scene.scene.clone(),
+        env: env.to_string(),
+        vis_res: scene.vis_res,
+        rays: scene.rays,
+        seed: scene.seed,
+        progress: true,
+    }
+}
+
+fn open_gpu(gpu: &GpuArgs) -> Result<Arc<Context>> {
+    let ctx = Context::new(&ContextDesc {
+        validate: gpu.validate,
+        device: gpu.device.clone(),
+    })?;
+    eprintln!("device: {}", ctx.device_name());
+    Ok(ctx)
+}
+
+fn create_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("{}: cannot create directory", dir.display()))
+}
+
+fn run_bake(a: BakeArgs) -> Result<()> {
+    let vis_res = bake::validate_res(a.scene.vis_res)?;
+    let rays = bake::validate_rays(a.scene.rays)?;
+    let scene = resolve_scene(&a.scene.scene, vis_res)?;
+    create_dir(&a.out)?;
+    let ao = bake_scene_ao(&scene, vis_res, rays, a.scene.seed, true)?;
+    let covered = ao.covered.iter().filter(|&&c| c).count();
+    println!(
+        "AO bake: {}² texels ({covered} covered) × {rays} rays, {} triangles: {:.2} s, {:.2} Mrays/s",
+        vis_res,
+        scene.mesh.triangle_count(),
+        ao.seconds,
+        ao.rays_per_second() / 1e6
+    );
+    let frame = shvis::render::Frame {
+        width: vis_res,
+        height: vis_res,
+        rgba: ao
+            .values
+            .iter()
+            .zip(&ao.covered)
+            .map(|(&v, &c)| [v, v, v, c as u8 as f32])
+            .collect(),
+        ms: vec![],
+    };
+    let path = a.out.join("ao.exr");
+    write_exr(&path, &frame)?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
+fn run_render(a: RenderArgs) -> Result<()> {
+    check_output_extension(&a.out)?;
+    let prepared = prepare(&prepare_settings(&a.scene, &a.env))?;
+    let ctx = open_gpu(&a.gpu)?;
+    let settings = FrameSettings {
+        width: a.width,
+        height: a.height,
+        flat_normals: a.flat_normals,
+    };
+    let scene_gpu = SceneGpu::new(&ctx, &prepared.scene, &settings)?;
+    let tech = technique::build(&ctx, &scene_gpu, a.technique, a.path, &prepared.inputs())?;
+    let frame = scene_gpu.render(&tech, 0, 1)?;
+    write_frame(&a.out, &frame, a.exposure)?;
+    check_validation(&ctx, a.gpu.validate)?;
+    println!("wrote {} ({})", a.out.display(), tech.label());
+    Ok(())
+}
+
+fn check_output_extension(path: &Path) -> Result<()> {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+    {
+        Some(e) if e == "png" || e == "exr" => Ok(()),
+        _ => Err(report::ReportError::Extension {
+            path: path.to_path_buf(),
+        }
+        .into()),
+    }
+}
+
+/// With `--validate`, any validation error or warning fails the command.
+fn check_validation(ctx: &Context, validate: bool) -> Result<()> {
+    let (errors, warnings) = ctx.message_counts();
+    if validate && (errors > 0 || warnings > 0) {
+        bail!("validation reported {errors} errors and {warnings} warnings (see the log above)");
+    }
+    Ok(())
+}
+
+fn parse_list<T: std::str::FromStr>(list: &str, all: &[T]) -> Result<Vec<T>>
+where
+    T: Copy,
+    T::Err: std::error::Error + Send + Sync + 'static,
+{
+    if list == "all" {
+        return Ok(all.to_vec());
+    }
+    list.split(',')
+        .map(|s| s.trim().parse::<T>().map_err(anyhow::Error::from))
+        .collect()
+}
+
+fn run_bench(a: BenchArgs) -> Result<()> {
+    let techniques = parse_list(&a.techniques, TechniqueId::ALL)?;
+    let paths = parse_list(&a.paths, HwPath::ALL)?;
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    let prepared: Prepared = prepare(&prepare_settings(&a.scene, &a.env))?;
+    let ctx = open_gpu(&a.gpu)?;
+    if !ctx.supports_timestamps() {
+        bail!(
+            "{}: the graphics queue has no timestamps, frames cannot be timed",
+            ctx.device_name()
+        );
+    }
+    let settings = FrameSettings {
+        width: a.width,
+        height: a.height,
+        flat_normals: false,
+    };
+    let scene_gpu = SceneGpu::new(&ctx, &prepared.scene, &settings)?;
+    let mut rows = Vec::new();
+    for &t in &techniques {
+        for &p in &paths {
+            let tech = technique::build(&ctx, &scene_gpu, t, p, &prepared.inputs())?;
+            let frame = scene_gpu.render(&tech, a.warmup, a.frames)?;
+            let stats = TimingStats::from_ms(&frame.ms);
+            write_png(
+                &a.out.join(format!("{}.png", tech.label())),
+                &frame,
+                a.exposure,
+            )?;
+            write_exr(&a.out.join(format!("{}.exr", tech.label())), &frame)?;
+            rows.push(BenchRow {
+                technique: t.to_string(),
+                path: p.to_string(),
+                ms_median: stats.map(|s| s.ms_median),
+                ms_min: stats.map(|s| s.ms_min),
+                ms_max: stats.map(|s| s.ms_max),
+                frames: frame.ms.len(),
+                rel_rmse: None,
+                psnr: None,
+                texel_bytes: tech.stats.texel_bytes,
+                table_bytes: tech.stats.table_bytes,
+                textures_bound: tech.stats.textures_bound,
+                lookups_per_pixel: tech.stats.lookups_per_pixel,
+            });
+        }
+    }
+    let table = BenchTable {
+        device: ctx.device_name().to_string(),
+        width: a.width,
+        height: a.height,
+        vis_res: a.scene.vis_res,
+        results: rows,
+    };
+    table.write(&a.out)?;
+    println!("{}", table.to_markdown());
+    println!(
+        "wrote {}/table.md, table.json and images in {:.1} s",
+        a.out.display(),
+        started.elapsed().as_secs_f64()
+    );
+    check_validation(&ctx, a.gpu.validate)?;
+    Ok(())
+}

@@ -1,0 +1,239 @@
+//! Loading and saving equirectangular radiance maps (DESIGN §1, §4 `--env PATH`).
+//!
+//! The format is detected by magic bytes — OpenEXR `76 2f 31 01`, Radiance `#?RADIANCE`
+//! or `#?RGBE` — so a misnamed file still loads and a text file named `x.exr` is a clear
+//! [`EnvError::Format`]; the extension only appears in that error's text.
+//!
+//! - OpenEXR via the `exr` crate: the first valid layer with R, G and B channels (any
+//!   sample type, converted to f32; other channels ignored), largest resolution level.
+//! - Radiance RGBE via `image`'s HDR decoder (f32 RGB).
+//!
+//! Validation, in this order: non-empty ([`EnvError::Empty`]), 2:1
+//! ([`EnvError::Shape`]), every channel finite ([`EnvError::NonFinite`] with the count
+//! and the first texel in row-major order; DESIGN §6), negative values clamped to 0 with
+//! one `log::warn!` giving their count (they are not radiance, but some tools emit tiny
+//! negatives from filtering).
+
+use std::io::Cursor;
+use std::path::Path;
+
+use super::{EnvError, EnvMap};
+
+const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+const RADIANCE_MAGICS: [&[u8]; 2] = [b"#?RADIANCE", b"#?RGBE"];
+
+/// Loads an OpenEXR or Radiance HDR equirectangular map and validates it (module doc).
+///
+/// # Errors
+/// [`EnvError::Io`] (cannot read), [`EnvError::Format`] (neither format, or decoding
+/// failed), [`EnvError::Empty`], [`EnvError::Shape`] (not 2:1), [`EnvError::NonFinite`].
+pub fn load(path: &Path) -> Result<EnvMap, EnvError> {
+    let bytes = std::fs::read(path).map_err(|source| EnvError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    let format_err = |detail: String| EnvError::Format {
+        path: path.to_owned(),
+        detail,
+    };
+    let map = if bytes.starts_with(&EXR_MAGIC) {
+        decode_exr(&bytes).map_err(|e| format_err(format!("invalid OpenEXR file: {e}")))?
+    } else if RADIANCE_MAGICS.iter().any(|m| bytes.starts_with(m)) {
+        decode_hdr(&bytes).map_err(|e| format_err(format!("invalid Radiance HDR file: {e}")))?
+    } else {
+        let ext = path
+            .extension()
+            .map(|e| format!("despite its .{} extension", e.to_string_lossy()))
+            .unwrap_or_else(|| "no extension".to_owned());
+        let head: Vec<String> = bytes.iter().take(4).map(|b| format!("{b:02x}")).collect();
+        return Err(format_err(format!(
+            "not an OpenEXR or Radiance HDR file ({ext}; starts with bytes [{}])",
+            head.join(" ")
+        )));
+    };
+    validate(map, path)
+}
+
+fn decode_exr(bytes: &[u8]) -> Result<EnvMap, exr::error::Error> {
+    use exr::prelude::*;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgb_channels(
+            |size: Vec2<usize>, _: &RgbChannels| {
+                (
+                    size.width(),
+                    vec![[0.0f32; 3]; size.width() * size.height()],
+                )
+            },
+            |(w, texels): &mut (usize, Vec<[f32; 3]>),
+             pos: Vec2<usize>,
+             (r, g, b): (f32, f32, f32)| {
+                texels[pos.y() * *w + pos.x()] = [r, g, b];
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))?;
+    let size = image.layer_data.size;
+    let (_, texels) = image.layer_data.channel_data.pixels;
+    Ok(EnvMap {
+        width: size.width() as u32,
+        height: size.height() as u32,
+        texels,
+    })
+}
+
+fn decode_hdr(bytes: &[u8]) -> Result<EnvMap, image::ImageError> {
+    let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Hdr)?.into_rgb32f();
+    Ok(EnvMap {
+        width: img.width(),
+        height: img.height(),
+        texels: img.pixels().map(|p| p.0).collect(),
+    })
+}
+
+/// Shape and value checks of the module doc; clamps negatives in place.
+fn validate(mut map: EnvMap, path: &Path) -> Result<EnvMap, EnvError> {
+    let (width, height) = (map.width, map.height);
+    if width == 0 || height == 0 {
+        return Err(EnvError::Empty {
+            path: path.to_owned(),
+            width,
+            height,
+        });
+    }
+    if width != 2 * height {
+        return Err(EnvError::Shape {
+            path: path.to_owned(),
+            width,
+            height,
+        });
+    }
+    debug_assert_eq!(map.texels.len(), width as usize * height as usize);
+    let mut non_finite = 0usize;
+    let mut first = None;
+    let mut negative = 0usize;
+    for (i, t) in map.texels.iter_mut().enumerate() {
+        if t.iter().any(|c| !c.is_finite()) {
+            non_finite += 1;
+            first.get_or_insert(i);
+            continue;
+        }
+        if t.iter().any(|c| *c < 0.0) {
+            negative += 1;
+            *t = t.map(|c| c.max(0.0));
+        }
+    }
+    if let Some(i) = first {
+        return Err(EnvError::NonFinite {
+            path: path.to_owned(),
+            count: non_finite,
+            x: (i % width as usize) as u32,
+            y: (i / width as usize) as u32,
+        });
+    }
+    if negative > 0 {
+        log::warn!(
+            "{}: {negative} texels have negative radiance; clamped to 0",
+            path.display()
+        );
+    }
+    Ok(map)
+}
+
+/// Writes `map` as an RGB f32 OpenEXR file ([`EnvMap::save_exr`]).
+pub(super) fn save_exr(map: &EnvMap, path: &Path) -> Result<(), EnvError> {
+    let (w, h) = (map.width as usize, map.height as usize);
+    if map.texels.len() != w * h || w == 0 || h == 0 {
+        return Err(EnvError::Write {
+            path: path.to_owned(),
+            detail: format!(
+                "{}×{} map holds {} texels",
+                map.width,
+                map.height,
+                map.texels.len()
+            ),
+        });
+    }
+    exr::prelude::write_rgb_file(path, w, h, |x, y| {
+        let t = map.texels[y * w + x];
+        (t[0], t[1], t[2])
+    })
+    .map_err(|e| EnvError::Write {
+        path: path.to_owned(),
+        detail: e.to_string(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    fn temp_path(name: &str) -> PathBuf {
+        std::env::temp_dir().join(format!("shvis-env-unit-{}-{name}", std::process::id()))
+    }
+
+    #[test]
+    fn negative_texels_are_clamped() {
+        let map = EnvMap {
+            width: 4,
+            height: 2,
+            texels: vec![[-1.0, 0.5, -0.0]; 8],
+        };
+        let ok = validate(map, Path::new("neg.exr")).expect("negatives are not an error");
+        assert!(ok.texels.iter().all(|t| *t == [0.0, 0.5, 0.0]));
+    }
+
+    #[test]
+    fn empty_and_shape_errors() {
+        let empty = EnvMap {
+            width: 0,
+            height: 0,
+            texels: vec![],
+        };
+        assert!(matches!(
+            validate(empty, Path::new("e.exr")),
+            Err(EnvError::Empty { .. })
+        ));
+        let square = EnvMap {
+            width: 2,
+            height: 2,
+            texels: vec![[0.0; 3]; 4],
+        };
+        let e = validate(square, Path::new("sq.exr")).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                EnvError::Shape {
+                    width: 2,
+                    height: 2,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn radiance_hdr_loads() {
+        // Minimal flat (non-RLE) RGBE file: 4×2, every texel (1.0, 0.5, 0.25).
+        let mut bytes = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 4\n".to_vec();
+        for _ in 0..8 {
+            bytes.extend_from_slice(&[128, 64, 32, 129]); // mantissas × 2^(129−136)
+        }
+        let path = temp_path("flat.hdr");
+        std::fs::write(&path, &bytes).expect("temp file");
+        let map = load(&path);
+        let _ = std::fs::remove_file(&path);
+        let map = map.expect("valid HDR");
+        assert_eq!((map.width, map.height), (4, 2));
+        for t in &map.texels {
+            assert!(
+                (t[0] - 1.0).abs() < 1e-2 && (t[2] - 0.25).abs() < 1e-2,
+                "{t:?}"
+            );
+        }
+    }
+}

@@ -1,0 +1,523 @@
+//! The Vulkan context: loader, instance (validation and debug-utils when asked), physical
+//! device choice, logical device with one graphics queue, the gpu-allocator, a command
+//! pool for one-shot work, and debug naming.
+//!
+//! Device choice: `--device SUBSTRING` picks the first device whose name contains it
+//! (case-insensitive); otherwise discrete > integrated > virtual > CPU (lavapipe when it is
+//! alone). The chosen name is in [`Context::device_name`].
+
+use std::ffi::{CStr, CString, c_char, c_void};
+use std::mem::ManuallyDrop;
+use std::sync::Mutex;
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, Allocator, AllocatorCreateDesc};
+
+pub use super::debug::MessageCounts;
+use super::{GpuError, debug};
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// How to create a [`Context`].
+#[derive(Clone, Debug, Default)]
+pub struct ContextDesc {
+    /// Turn on VK_LAYER_KHRONOS_validation (an error when it is not installed).
+    pub validate: bool,
+    /// Pick the first device whose name contains this (case-insensitive).
+    pub device: Option<String>,
+}
+
+/// Everything Vulkan that lives as long as the program: see the module doc.
+pub struct Context {
+    // Field order is irrelevant: `Drop` tears down explicitly in reverse creation order.
+    _entry: ash::Entry,
+    instance: ash::Instance,
+    debug_instance: Option<ash::ext::debug_utils::Instance>,
+    messenger: vk::DebugUtilsMessengerEXT,
+    debug_device: Option<ash::ext::debug_utils::Device>,
+    physical: vk::PhysicalDevice,
+    device: ash::Device,
+    queue: vk::Queue,
+    queue_family: u32,
+    allocator: ManuallyDrop<Mutex<Allocator>>,
+    command_pool: Mutex<vk::CommandPool>,
+    device_name: String,
+    limits: vk::PhysicalDeviceLimits,
+    timestamp_valid_bits: u32,
+    image_cube_array: bool,
+    messages: Box<MessageCounts>,
+}
+
+impl Context {
+    /// Loads Vulkan, creates the instance and picks and opens a device.
+    ///
+    /// # Errors
+    /// No loader, no device, no device matching `desc.device`, a missing validation layer,
+    /// or a failing Vulkan call.
+    pub fn new(desc: &ContextDesc) -> Result<std::sync::Arc<Self>, GpuError> {
+        // SAFETY: loading the system loader runs its initialisers; we hold the entry for the
+        // context's lifetime.
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| GpuError::Loader(e.to_string()))?;
+        // SAFETY: plain queries on a loaded entry.
+        let layers = unsafe { entry.enumerate_instance_layer_properties() }
+            .map_err(|e| GpuError::vulkan("vkEnumerateInstanceLayerProperties", "loader", e))?;
+        let has_layer = |name: &CStr| {
+            layers
+                .iter()
+                .any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == name))
+        };
+        if desc.validate && !has_layer(VALIDATION_LAYER) {
+            return Err(GpuError::NoValidationLayer);
+        }
+        // SAFETY: as above.
+        let extensions = unsafe { entry.enumerate_instance_extension_properties(None) }
+            .map_err(|e| GpuError::vulkan("vkEnumerateInstanceExtensionProperties", "loader", e))?;
+        let has_debug_utils = extensions.iter().any(|e| {
+            e.extension_name_as_c_str()
+                .is_ok_and(|n| n == ash::ext::debug_utils::NAME)
+        }) || desc.validate;
+
+        let app_name = c"shvis";
+        let app_info = vk::ApplicationInfo::default()
+            .application_name(app_name)
+            .engine_name(app_name)
+            .api_version(vk::API_VERSION_1_2);
+        let layer_names: Vec<*const c_char> = if desc.validate {
+            vec![VALIDATION_LAYER.as_ptr()]
+        } else {
+            vec![]
+        };
+        let ext_names: Vec<*const c_char> = if has_debug_utils {
+            vec![ash::ext::debug_utils::NAME.as_ptr()]
+        } else {
+            vec![]
+        };
+        let messages = Box::<MessageCounts>::default();
+        let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+            .message_severity(
+                vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+                    | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                    | vk::DebugUtilsMessageSeverityFlagsEXT::INFO,
+            )
+            .message_type(
+                vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                    | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                    | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+            )
+            .pfn_user_callback(Some(debug::messenger_callback))
+            .user_data(&*messages as *const MessageCounts as *mut c_void);
+        let mut instance_info = vk::InstanceCreateInfo::default()
+            .application_info(&app_info)
+            .enabled_layer_names(&layer_names)
+            .enabled_extension_names(&ext_names);
+        if has_debug_utils {
+            // Also catches messages from vkCreateInstance/vkDestroyInstance themselves.
+            instance_info = instance_info.push_next(&mut messenger_info);
+        }
+        // SAFETY: every pointer in the create-info borrows locals alive for the call.
+        let instance = unsafe { entry.create_instance(&instance_info, None) }.map_err(|e| {
+            if e == vk::Result::ERROR_INCOMPATIBLE_DRIVER {
+                GpuError::NoDevice
+            } else {
+                GpuError::vulkan("vkCreateInstance", "shvis", e)
+            }
+        })?;
+        let (debug_instance, messenger) = if has_debug_utils {
+            let di = ash::ext::debug_utils::Instance::new(&entry, &instance);
+            // SAFETY: the user-data box outlives the messenger (see Drop).
+            let m = unsafe { di.create_debug_utils_messenger(&messenger_info, None) };
+            match m {
+                Ok(m) => (Some(di), m),
+                Err(e) => {
+                    // SAFETY: nothing was created from the instance yet.
+                    unsafe { instance.destroy_instance(None) };
+                    return Err(GpuError::vulkan(
+                        "vkCreateDebugUtilsMessengerEXT",
+                        "shvis",
+                        e,
+                    ));
+                }
+            }
+        } else {
+            (None, vk::DebugUtilsMessengerEXT::null())
+        };
+
+        // From here on a failure must destroy what exists: build a partial context whose
+        // Drop tolerates null handles.
+        let picked = pick_device(&instance, desc.device.as_deref());
+        let (physical, queue_family, device_name) = match picked {
+            Ok(p) => p,
+            Err(e) => {
+                // SAFETY: the messenger and instance are ours and unused elsewhere.
+                unsafe {
+                    if let Some(di) = &debug_instance {
+                        di.destroy_debug_utils_messenger(messenger, None);
+                    }
+                    instance.destroy_instance(None);
+                }
+                return Err(e);
+            }
+        };
+        // SAFETY: `physical` came from this instance.
+        let (props, features, families) = unsafe {
+            (
+                instance.get_physical_device_properties(physical),
+                instance.get_physical_device_features(physical),
+                instance.get_physical_device_queue_family_properties(physical),
+            )
+        };
+        let priorities = [1.0f32];
+        let queue_info = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(queue_family)
+            .queue_priorities(&priorities)];
+        let enabled_features =
+            vk::PhysicalDeviceFeatures::default().image_cube_array(features.image_cube_array != 0);
+        let device_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_info)
+            .enabled_features(&enabled_features);
+        // SAFETY: create-info borrows locals alive for the call.
+        let device = match unsafe { instance.create_device(physical, &device_info, None) } {
+            Ok(d) => d,
+            Err(e) => {
+                // SAFETY: as above.
+                unsafe {
+                    if let Some(di) = &debug_instance {
+                        di.destroy_debug_utils_messenger(messenger, None);
+                    }
+                    instance.destroy_instance(None);
+                }
+                return Err(GpuError::vulkan("vkCreateDevice", &device_name, e));
+            }
+        };
+        // SAFETY: the family/index pair was requested in `device_info`.
+        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+        let debug_device =
+            has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device: physical,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        });
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: valid device and family.
+        let pool = unsafe { device.create_command_pool(&pool_info, None) };
+        let (allocator, pool) = match (allocator, pool) {
+            (Ok(a), Ok(p)) => (a, p),
+            (a, p) => {
+                let pool_error = match p {
+                    // SAFETY: an unused pool of this device.
+                    Ok(p) => unsafe {
+                        device.destroy_command_pool(p, None);
+                        None
+                    },
+                    Err(e) => Some(GpuError::vulkan("vkCreateCommandPool", "shvis.pool", e)),
+                };
+                let error = match a {
+                    Ok(allocator) => {
+                        drop(allocator); // frees its memory blocks before the device goes
+                        pool_error.unwrap_or(GpuError::NoDevice)
+                    }
+                    Err(source) => GpuError::Alloc {
+                        what: "allocator".into(),
+                        source,
+                    },
+                };
+                // SAFETY: nothing created from the device or instance is alive any more.
+                unsafe {
+                    device.destroy_device(None);
+                    if let Some(di) = &debug_instance {
+                        di.destroy_debug_utils_messenger(messenger, None);
+                    }
+                    instance.destroy_instance(None);
+                }
+                return Err(error);
+            }
+        };
+        let ctx = Context {
+            _entry: entry,
+            instance,
+            debug_instance,
+            messenger,
+            debug_device,
+            physical,
+            device,
+            queue,
+            queue_family,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            command_pool: Mutex::new(pool),
+            device_name: device_name.clone(),
+            limits: props.limits,
+            timestamp_valid_bits: families[queue_family as usize].timestamp_valid_bits,
+            image_cube_array: features.image_cube_array != 0,
+            messages,
+        };
+        ctx.set_name(pool, "shvis.command_pool");
+        ctx.set_name(ctx.queue, "shvis.queue");
+        log::info!("device: {device_name}");
+        Ok(std::sync::Arc::new(ctx))
+    }
+
+    pub fn device(&self) -> &ash::Device {
+        &self.device
+    }
+    pub fn instance(&self) -> &ash::Instance {
+        &self.instance
+    }
+    pub fn physical_device(&self) -> vk::PhysicalDevice {
+        self.physical
+    }
+    pub fn queue(&self) -> vk::Queue {
+        self.queue
+    }
+    pub fn queue_family(&self) -> u32 {
+        self.queue_family
+    }
+    /// The device's name as the driver reports it, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)".
+    pub fn device_name(&self) -> &str {
+        &self.device_name
+    }
+    pub fn limits(&self) -> &vk::PhysicalDeviceLimits {
+        &self.limits
+    }
+    /// Whether the graphics queue writes timestamps (and so `shvis bench` can time frames).
+    pub fn supports_timestamps(&self) -> bool {
+        self.timestamp_valid_bits > 0
+    }
+    pub fn timestamp_valid_bits(&self) -> u32 {
+        self.timestamp_valid_bits
+    }
+    pub fn supports_cube_arrays(&self) -> bool {
+        self.image_cube_array
+    }
+    /// Validation/debug messages counted so far: tests assert (0, 0).
+    pub fn message_counts(&self) -> (u32, u32) {
+        self.messages.get()
+    }
+
+    /// Gives `handle` a debug name visible in validation messages and captures.
+    pub fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
+        let Some(dd) = &self.debug_device else { return };
+        let Ok(cname) = CString::new(name) else {
+            return;
+        };
+        let info = vk::DebugUtilsObjectNameInfoEXT::default()
+            .object_handle(handle)
+            .object_name(&cname);
+        // SAFETY: `handle` is a live object of this device; the name outlives the call.
+        if let Err(e) = unsafe { dd.set_debug_utils_object_name(&info) } {
+            log::debug!("naming '{name}' failed: {e}");
+        }
+    }
+
+    /// Opens a debug label region on `cmd` (no-op without debug utils).
+    pub(crate) fn begin_label(&self, cmd: vk::CommandBuffer, name: &str) {
+        let Some(dd) = &self.debug_device else { return };
+        let Ok(cname) = CString::new(name) else {
+            return;
+        };
+        let label = vk::DebugUtilsLabelEXT::default().label_name(&cname);
+        // SAFETY: `cmd` is in the recording state (callers' contract).
+        unsafe { dd.cmd_begin_debug_utils_label(cmd, &label) };
+    }
+
+    pub(crate) fn end_label(&self, cmd: vk::CommandBuffer) {
+        if let Some(dd) = &self.debug_device {
+            // SAFETY: paired with `begin_label` on the same recording command buffer.
+            unsafe { dd.cmd_end_debug_utils_label(cmd) };
+        }
+    }
+
+    pub(crate) fn allocate(
+        &self,
+        name: &str,
+        requirements: vk::MemoryRequirements,
+        location: gpu_allocator::MemoryLocation,
+        linear: bool,
+    ) -> Result<Allocation, GpuError> {
+        let mut alloc = self.allocator.lock().unwrap_or_else(|p| p.into_inner());
+        alloc
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear,
+                allocation_scheme: gpu_allocator::vulkan::AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|source| GpuError::Alloc {
+                what: name.to_string(),
+                source,
+            })
+    }
+
+    /// Returns memory to the allocator; logs (never panics) on failure, as it runs in Drop.
+    pub(crate) fn free(&self, allocation: Allocation) {
+        let mut alloc = self.allocator.lock().unwrap_or_else(|p| p.into_inner());
+        if let Err(e) = alloc.free(allocation) {
+            log::error!("freeing GPU memory: {e}");
+        }
+    }
+
+    /// Records `record` into a fresh command buffer labelled `name`, submits it and waits.
+    pub(crate) fn one_shot(
+        &self,
+        name: &str,
+        record: impl FnOnce(vk::CommandBuffer),
+    ) -> Result<(), GpuError> {
+        let cmd = self.allocate_command_buffer(name)?;
+        let result = (|| {
+            let begin = vk::CommandBufferBeginInfo::default()
+                .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            // SAFETY: `cmd` was just allocated and is in the initial state.
+            unsafe { self.device.begin_command_buffer(cmd, &begin) }
+                .map_err(|e| GpuError::vulkan("vkBeginCommandBuffer", name, e))?;
+            self.begin_label(cmd, name);
+            record(cmd);
+            self.end_label(cmd);
+            // SAFETY: recording began above.
+            unsafe { self.device.end_command_buffer(cmd) }
+                .map_err(|e| GpuError::vulkan("vkEndCommandBuffer", name, e))?;
+            self.submit_and_wait(cmd, name)
+        })();
+        self.free_command_buffer(cmd);
+        result
+    }
+
+    pub(crate) fn allocate_command_buffer(
+        &self,
+        name: &str,
+    ) -> Result<vk::CommandBuffer, GpuError> {
+        let pool = self.command_pool.lock().unwrap_or_else(|p| p.into_inner());
+        let info = vk::CommandBufferAllocateInfo::default()
+            .command_pool(*pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: the pool belongs to this device and is externally synchronised by the lock.
+        let cmd = unsafe { self.device.allocate_command_buffers(&info) }
+            .map_err(|e| GpuError::vulkan("vkAllocateCommandBuffers", name, e))?[0];
+        self.set_name(cmd, name);
+        Ok(cmd)
+    }
+
+    pub(crate) fn free_command_buffer(&self, cmd: vk::CommandBuffer) {
+        let pool = self.command_pool.lock().unwrap_or_else(|p| p.into_inner());
+        // SAFETY: callers only free after the buffer's submission completed (submit_and_wait).
+        unsafe { self.device.free_command_buffers(*pool, &[cmd]) };
+    }
+
+    /// Submits one recorded command buffer and blocks until the GPU has finished it.
+    pub(crate) fn submit_and_wait(
+        &self,
+        cmd: vk::CommandBuffer,
+        name: &str,
+    ) -> Result<(), GpuError> {
+        // SAFETY: a fence is created, waited on and destroyed within this function; the
+        // queue is only used from the thread holding the context (no concurrent submits).
+        unsafe {
+            let fence = self
+                .device
+                .create_fence(&vk::FenceCreateInfo::default(), None)
+                .map_err(|e| GpuError::vulkan("vkCreateFence", name, e))?;
+            let cmds = [cmd];
+            let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+            let result = self
+                .device
+                .queue_submit(self.queue, &[submit], fence)
+                .map_err(|e| GpuError::vulkan("vkQueueSubmit", name, e))
+                .and_then(|_| {
+                    self.device
+                        .wait_for_fences(&[fence], true, u64::MAX)
+                        .map_err(|e| GpuError::vulkan("vkWaitForFences", name, e))
+                });
+            self.device.destroy_fence(fence, None);
+            result
+        }
+    }
+}
+
+impl Drop for Context {
+    fn drop(&mut self) {
+        // SAFETY: all resources holding an Arc<Context> are gone (we are the last owner);
+        // wait for the device, then destroy in reverse creation order.
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            let pool = *self
+                .command_pool
+                .get_mut()
+                .unwrap_or_else(|p| p.into_inner());
+            self.device.destroy_command_pool(pool, None);
+            ManuallyDrop::drop(&mut self.allocator);
+            self.device.destroy_device(None);
+            if let Some(di) = &self.debug_instance {
+                di.destroy_debug_utils_messenger(self.messenger, None);
+            }
+            self.instance.destroy_instance(None);
+        }
+    }
+}
+
+/// Picks the physical device and its graphics queue family; see the module doc.
+fn pick_device(
+    instance: &ash::Instance,
+    wanted: Option<&str>,
+) -> Result<(vk::PhysicalDevice, u32, String), GpuError> {
+    // SAFETY: plain queries on a live instance.
+    let devices = match unsafe { instance.enumerate_physical_devices() } {
+        Ok(d) => d,
+        Err(vk::Result::ERROR_INITIALIZATION_FAILED) => vec![],
+        Err(e) => return Err(GpuError::vulkan("vkEnumeratePhysicalDevices", "shvis", e)),
+    };
+    let mut candidates = Vec::new();
+    for pd in devices {
+        // SAFETY: `pd` came from this instance.
+        let (props, families) = unsafe {
+            (
+                instance.get_physical_device_properties(pd),
+                instance.get_physical_device_queue_family_properties(pd),
+            )
+        };
+        let name = props
+            .device_name_as_c_str()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|_| "unnamed device".into());
+        let Some(family) = families
+            .iter()
+            .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS))
+        else {
+            continue;
+        };
+        let rank = match props.device_type {
+            vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+            vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+            vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+            vk::PhysicalDeviceType::CPU => 3,
+            _ => 4,
+        };
+        candidates.push((rank, pd, family as u32, name));
+    }
+    if candidates.is_empty() {
+        return Err(GpuError::NoDevice);
+    }
+    if let Some(w) = wanted {
+        let lw = w.to_lowercase();
+        return candidates
+            .iter()
+            .find(|c| c.3.to_lowercase().contains(&lw))
+            .map(|c| (c.1, c.2, c.3.clone()))
+            .ok_or_else(|| GpuError::NoMatchingDevice {
+                wanted: w.to_string(),
+                available: candidates
+                    .iter()
+                    .map(|c| c.3.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            });
+    }
+    candidates.sort_by_key(|c| c.0);
+    let c = &candidates[0];
+    Ok((c.1, c.2, c.3.clone()))
+}

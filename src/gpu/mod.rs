@@ -1,0 +1,74 @@
+//! The Vulkan layer (ash): instance and device selection, validation and debug names,
+//! memory (gpu-allocator), buffers and images, shaders (shaderc), the mesh pipeline,
+//! timestamp queries, the offscreen target and readback.
+//!
+//! It knows nothing of SH or techniques: `technique/` describes what to bind and which
+//! shader to run, this layer turns that into Vulkan objects. Every object is owned by one
+//! value holding `Arc<Context>` that destroys it in `Drop`, and carries a debug name
+//! (VK_EXT_debug_utils) so a RenderDoc capture reads like the code.
+//! This is the only module allowed `unsafe`; each block says why it is sound.
+
+pub mod buffer;
+pub mod context;
+mod debug;
+pub mod image;
+pub mod layout;
+pub mod pass;
+pub mod shader;
+pub mod target;
+mod upload;
+
+pub use buffer::Buffer;
+pub use context::{Context, ContextDesc, MessageCounts};
+pub use image::{Image, ImageDesc, Sampler, SamplerKind};
+pub use pass::{MeshBuffers, MeshPipeline, MeshPipelineDesc, Resource, VertexLayout};
+pub use shader::{ShaderStage, compile_glsl};
+pub use target::RenderTarget;
+
+use ash::vk;
+
+/// Errors of the Vulkan layer; each message is one line naming what failed.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error(
+        "cannot load the Vulkan loader (libvulkan.so.1): {0}; install it with 'apt-get install libvulkan1 mesa-vulkan-drivers'"
+    )]
+    Loader(String),
+    #[error(
+        "no Vulkan device found (the loader saw no driver: check VK_ICD_FILENAMES/VK_DRIVER_FILES, or install mesa-vulkan-drivers for lavapipe)"
+    )]
+    NoDevice,
+    #[error("no Vulkan device name contains '{wanted}'; available: {available}")]
+    NoMatchingDevice { wanted: String, available: String },
+    #[error(
+        "validation was requested but VK_LAYER_KHRONOS_validation is not installed ('apt-get install vulkan-validationlayers')"
+    )]
+    NoValidationLayer,
+    #[error("{device}: lacks {feature}")]
+    MissingFeature { device: String, feature: String },
+    #[error("{call} failed for '{what}': {result}")]
+    Vulkan {
+        call: &'static str,
+        what: String,
+        result: vk::Result,
+    },
+    #[error("allocating memory for '{what}': {source}")]
+    Alloc {
+        what: String,
+        source: gpu_allocator::AllocationError,
+    },
+    #[error("{0}")]
+    Shader(String),
+    #[error("'{what}': {detail}")]
+    Invalid { what: String, detail: String },
+}
+
+impl GpuError {
+    pub(crate) fn vulkan(call: &'static str, what: &str, result: vk::Result) -> Self {
+        GpuError::Vulkan {
+            call,
+            what: what.to_string(),
+            result,
+        }
+    }
+}

@@ -1,0 +1,547 @@
+//! The mesh pass every technique uses: a graphics pipeline over the scene mesh into the
+//! [`RenderTarget`], one descriptor set (set 0) with the technique's resources, and the
+//! timed frame loop.
+//!
+//! Timing (DESIGN §4, `shvis bench`): one command buffer is recorded once; per frame it
+//! resets a 2-query pool, writes a TOP_OF_PIPE timestamp, runs the render pass (clear of
+//! colour and depth, one indexed draw of the whole mesh), writes a BOTTOM_OF_PIPE
+//! timestamp. Each submission is waited for, so frames never overlap. `warmup` frames are
+//! run and discarded before `frames` timed ones; ticks become ms with `timestampPeriod`.
+
+use std::sync::Arc;
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use super::{Buffer, Context, GpuError, Image, RenderTarget, Sampler};
+
+/// What is bound at a binding.
+pub enum Resource<'a> {
+    Uniform(&'a Buffer),
+    Texture(&'a Image, &'a Sampler),
+}
+
+/// Vertex buffer layout: stride and (location, format, offset) per attribute.
+#[derive(Clone, Debug)]
+pub struct VertexLayout {
+    pub stride: u32,
+    pub attributes: Vec<(u32, vk::Format, u32)>,
+}
+
+/// Everything needed to build a [`MeshPipeline`].
+pub struct MeshPipelineDesc<'a> {
+    /// Debug name and timestamp row: "preconv.dx10".
+    pub name: &'a str,
+    pub vertex_spirv: &'a [u32],
+    pub fragment_spirv: &'a [u32],
+    pub vertex_layout: &'a VertexLayout,
+    pub resources: &'a [(u32, Resource<'a>)],
+}
+
+/// Vertex and index buffers in device-local memory.
+pub struct MeshBuffers {
+    vertex: Buffer,
+    index: Buffer,
+    index_count: u32,
+}
+
+impl MeshBuffers {
+    pub fn new(
+        ctx: &Arc<Context>,
+        vertex_bytes: &[u8],
+        indices: &[u32],
+        name: &str,
+    ) -> Result<Self, GpuError> {
+        if indices.is_empty() || vertex_bytes.is_empty() {
+            return Err(GpuError::Invalid {
+                what: name.into(),
+                detail: "mesh has no triangles".into(),
+            });
+        }
+        Ok(MeshBuffers {
+            vertex: device_local_buffer(
+                ctx,
+                vertex_bytes,
+                vk::BufferUsageFlags::VERTEX_BUFFER,
+                &format!("{name}.vertices"),
+            )?,
+            index: device_local_buffer(
+                ctx,
+                bytemuck::cast_slice(indices),
+                vk::BufferUsageFlags::INDEX_BUFFER,
+                &format!("{name}.indices"),
+            )?,
+            index_count: indices.len() as u32,
+        })
+    }
+}
+
+/// A device-local buffer filled through a staging copy.
+pub fn device_local_buffer(
+    ctx: &Arc<Context>,
+    bytes: &[u8],
+    usage: vk::BufferUsageFlags,
+    name: &str,
+) -> Result<Buffer, GpuError> {
+    let staging = Buffer::with_data(
+        ctx,
+        bytes,
+        vk::BufferUsageFlags::TRANSFER_SRC,
+        &format!("{name}.staging"),
+    )?;
+    let buffer = Buffer::new(
+        ctx,
+        bytes.len() as u64,
+        usage | vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuOnly,
+        name,
+    )?;
+    let device = ctx.device();
+    ctx.one_shot(&format!("upload {name}"), |cmd| {
+        let region = vk::BufferCopy::default().size(bytes.len() as u64);
+        let barrier = vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .dst_access_mask(
+                vk::AccessFlags::VERTEX_ATTRIBUTE_READ
+                    | vk::AccessFlags::INDEX_READ
+                    | vk::AccessFlags::UNIFORM_READ,
+            );
+        // SAFETY: recording; both buffers outlive the waited submission.
+        unsafe {
+            device.cmd_copy_buffer(cmd, staging.raw(), buffer.raw(), &[region]);
+            device.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::PipelineStageFlags::VERTEX_INPUT
+                    | vk::PipelineStageFlags::VERTEX_SHADER
+                    | vk::PipelineStageFlags::FRAGMENT_SHADER,
+                vk::DependencyFlags::empty(),
+                &[barrier],
+                &[],
+                &[],
+            );
+        }
+    })?;
+    Ok(buffer)
+}
+
+/// A graphics pipeline for the mesh pass with its descriptor set.
+pub struct MeshPipeline {
+    ctx: Arc<Context>,
+    name: String,
+    set_layout: vk::DescriptorSetLayout,
+    pipeline_layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
+    pool: vk::DescriptorPool,
+    set: vk::DescriptorSet,
+    modules: [vk::ShaderModule; 2],
+}
+
+impl MeshPipeline {
+    pub fn new(
+        ctx: &Arc<Context>,
+        target: &RenderTarget,
+        desc: &MeshPipelineDesc<'_>,
+    ) -> Result<Self, GpuError> {
+        let mut p = MeshPipeline {
+            ctx: ctx.clone(),
+            name: desc.name.to_string(),
+            set_layout: vk::DescriptorSetLayout::null(),
+            pipeline_layout: vk::PipelineLayout::null(),
+            pipeline: vk::Pipeline::null(),
+            pool: vk::DescriptorPool::null(),
+            set: vk::DescriptorSet::null(),
+            modules: [vk::ShaderModule::null(); 2],
+        };
+        // Half-built pipelines are torn down by Drop, which tolerates null handles.
+        p.build(target, desc)?;
+        Ok(p)
+    }
+
+    fn build(
+        &mut self,
+        target: &RenderTarget,
+        desc: &MeshPipelineDesc<'_>,
+    ) -> Result<(), GpuError> {
+        let ctx = self.ctx.clone();
+        let device = ctx.device();
+        let name = desc.name;
+        let layout_bindings: Vec<_> = desc
+            .resources
+            .iter()
+            .map(|(binding, r)| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(*binding)
+                    .descriptor_type(descriptor_type(r))
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)
+            })
+            .collect();
+        let set_layout_info =
+            vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings);
+        // SAFETY (this block and those below): create-infos borrow locals alive for each
+        // call; created handles are stored in `self` at once so Drop destroys them.
+        self.set_layout = unsafe { device.create_descriptor_set_layout(&set_layout_info, None) }
+            .map_err(|e| GpuError::vulkan("vkCreateDescriptorSetLayout", name, e))?;
+        ctx.set_name(self.set_layout, name);
+        let set_layouts = [self.set_layout];
+        let pl_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+        // SAFETY: see above.
+        self.pipeline_layout = unsafe { device.create_pipeline_layout(&pl_info, None) }
+            .map_err(|e| GpuError::vulkan("vkCreatePipelineLayout", name, e))?;
+        ctx.set_name(self.pipeline_layout, name);
+
+        // Descriptor pool and set.
+        let uniforms = desc
+            .resources
+            .iter()
+            .filter(|(_, r)| matches!(r, Resource::Uniform(_)))
+            .count() as u32;
+        let textures = desc.resources.len() as u32 - uniforms;
+        let mut sizes = Vec::new();
+        if uniforms > 0 {
+            sizes.push(vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::UNIFORM_BUFFER,
+                descriptor_count: uniforms,
+            });
+        }
+        if textures > 0 {
+            sizes.push(vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                descriptor_count: textures,
+            });
+        }
+        let pool_info = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(1)
+            .pool_sizes(&sizes);
+        // SAFETY: see above.
+        self.pool = unsafe { device.create_descriptor_pool(&pool_info, None) }
+            .map_err(|e| GpuError::vulkan("vkCreateDescriptorPool", name, e))?;
+        ctx.set_name(self.pool, name);
+        let alloc_info = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(self.pool)
+            .set_layouts(&set_layouts);
+        // SAFETY: see above.
+        self.set = unsafe { device.allocate_descriptor_sets(&alloc_info) }
+            .map_err(|e| GpuError::vulkan("vkAllocateDescriptorSets", name, e))?[0];
+        ctx.set_name(self.set, name);
+        let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = desc
+            .resources
+            .iter()
+            .map(|(_, r)| match r {
+                Resource::Uniform(b) => [vk::DescriptorBufferInfo {
+                    buffer: b.raw(),
+                    offset: 0,
+                    range: vk::WHOLE_SIZE,
+                }],
+                Resource::Texture(..) => [vk::DescriptorBufferInfo::default()],
+            })
+            .collect();
+        let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = desc
+            .resources
+            .iter()
+            .map(|(_, r)| match r {
+                Resource::Texture(img, sampler) => [vk::DescriptorImageInfo {
+                    sampler: sampler.raw(),
+                    image_view: img.view(),
+                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                }],
+                Resource::Uniform(_) => [vk::DescriptorImageInfo::default()],
+            })
+            .collect();
+        let writes: Vec<_> = desc
+            .resources
+            .iter()
+            .enumerate()
+            .map(|(i, (binding, r))| {
+                let w = vk::WriteDescriptorSet::default()
+                    .dst_set(self.set)
+                    .dst_binding(*binding)
+                    .descriptor_type(descriptor_type(r));
+                match r {
+                    Resource::Uniform(_) => w.buffer_info(&buffer_infos[i]),
+                    Resource::Texture(..) => w.image_info(&image_infos[i]),
+                }
+            })
+            .collect();
+        // SAFETY: the set, buffers, views and samplers are live; infos outlive the call.
+        unsafe { device.update_descriptor_sets(&writes, &[]) };
+
+        // Shaders and pipeline.
+        for (i, code) in [desc.vertex_spirv, desc.fragment_spirv].iter().enumerate() {
+            let info = vk::ShaderModuleCreateInfo::default().code(code);
+            // SAFETY: SPIR-V words from shaderc.
+            self.modules[i] = unsafe { device.create_shader_module(&info, None) }
+                .map_err(|e| GpuError::vulkan("vkCreateShaderModule", name, e))?;
+            ctx.set_name(self.modules[i], &format!("{name}.{}", ["vert", "frag"][i]));
+        }
+        let stages = [
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(self.modules[0])
+                .name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::FRAGMENT)
+                .module(self.modules[1])
+                .name(c"main"),
+        ];
+        let vb = [vk::VertexInputBindingDescription {
+            binding: 0,
+            stride: desc.vertex_layout.stride,
+            input_rate: vk::VertexInputRate::VERTEX,
+        }];
+        let attrs: Vec<_> = desc
+            .vertex_layout
+            .attributes
+            .iter()
+            .map(
+                |&(location, format, offset)| vk::VertexInputAttributeDescription {
+                    location,
+                    binding: 0,
+                    format,
+                    offset,
+                },
+            )
+            .collect();
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(&vb)
+            .vertex_attribute_descriptions(&attrs);
+        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewports = [vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: target.width() as f32,
+            height: target.height() as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        }];
+        let scissors = [vk::Rect2D {
+            offset: vk::Offset2D { x: 0, y: 0 },
+            extent: vk::Extent2D {
+                width: target.width(),
+                height: target.height(),
+            },
+        }];
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
+            .viewports(&viewports)
+            .scissors(&scissors);
+        // No culling: the one-sided ground and thin boxes are never seen from behind by
+        // the built-in camera, and the same pipeline state must serve any glTF scene.
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(vk::CullModeFlags::NONE)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(true)
+            .depth_write_enable(true)
+            .depth_compare_op(vk::CompareOp::LESS);
+        let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
+            .color_write_mask(vk::ColorComponentFlags::RGBA)];
+        let blend =
+            vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+        let info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blend)
+            .layout(self.pipeline_layout)
+            .render_pass(target.render_pass())
+            .subpass(0);
+        // SAFETY: every state struct borrows locals alive for the call.
+        self.pipeline =
+            unsafe { device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
+                .map_err(|(_, e)| GpuError::vulkan("vkCreateGraphicsPipelines", name, e))?[0];
+        ctx.set_name(self.pipeline, name);
+        Ok(())
+    }
+
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Runs `warmup` untimed and `frames` timed frames; returns the timed frames' GPU
+    /// times in ms (empty when the queue has no timestamps). See the module doc.
+    pub fn render_frames(
+        &self,
+        target: &RenderTarget,
+        mesh: &MeshBuffers,
+        warmup: u32,
+        frames: u32,
+    ) -> Result<Vec<f64>, GpuError> {
+        let ctx = &self.ctx;
+        let device = ctx.device();
+        let name = self.name.as_str();
+        let timed = ctx.supports_timestamps();
+        let pool = if timed {
+            let info = vk::QueryPoolCreateInfo::default()
+                .query_type(vk::QueryType::TIMESTAMP)
+                .query_count(2);
+            // SAFETY: plain create-info; destroyed at the end of this function.
+            let pool = unsafe { device.create_query_pool(&info, None) }
+                .map_err(|e| GpuError::vulkan("vkCreateQueryPool", name, e))?;
+            ctx.set_name(pool, &format!("{name}.timestamps"));
+            pool
+        } else {
+            vk::QueryPool::null()
+        };
+        let cmd = match ctx.allocate_command_buffer(name) {
+            Ok(c) => c,
+            Err(e) => {
+                // SAFETY: unused pool (null is allowed).
+                unsafe { device.destroy_query_pool(pool, None) };
+                return Err(e);
+            }
+        };
+        let result = self.record_and_run(target, mesh, cmd, pool, warmup, frames);
+        ctx.free_command_buffer(cmd);
+        // SAFETY: every submission was waited for.
+        unsafe { device.destroy_query_pool(pool, None) };
+        result
+    }
+
+    fn record_and_run(
+        &self,
+        target: &RenderTarget,
+        mesh: &MeshBuffers,
+        cmd: vk::CommandBuffer,
+        pool: vk::QueryPool,
+        warmup: u32,
+        frames: u32,
+    ) -> Result<Vec<f64>, GpuError> {
+        let ctx = &self.ctx;
+        let device = ctx.device();
+        let name = self.name.as_str();
+        let timed = pool != vk::QueryPool::null();
+        let clears = [
+            vk::ClearValue {
+                color: vk::ClearColorValue {
+                    float32: [0.0, 0.0, 0.0, 0.0],
+                },
+            },
+            vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: 1.0,
+                    stencil: 0,
+                },
+            },
+        ];
+        let begin_pass = vk::RenderPassBeginInfo::default()
+            .render_pass(target.render_pass())
+            .framebuffer(target.framebuffer())
+            .render_area(vk::Rect2D {
+                offset: vk::Offset2D { x: 0, y: 0 },
+                extent: vk::Extent2D {
+                    width: target.width(),
+                    height: target.height(),
+                },
+            })
+            .clear_values(&clears);
+        // SAFETY: `cmd` is freshly allocated; every object recorded is owned by `self`,
+        // `target` or `mesh`, all alive until the waited submissions below complete.
+        unsafe {
+            device
+                .begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())
+                .map_err(|e| GpuError::vulkan("vkBeginCommandBuffer", name, e))?;
+            ctx.begin_label(cmd, name);
+            if timed {
+                device.cmd_reset_query_pool(cmd, pool, 0, 2);
+                device.cmd_write_timestamp(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, pool, 0);
+            }
+            device.cmd_begin_render_pass(cmd, &begin_pass, vk::SubpassContents::INLINE);
+            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
+            device.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.pipeline_layout,
+                0,
+                &[self.set],
+                &[],
+            );
+            device.cmd_bind_vertex_buffers(cmd, 0, &[mesh.vertex.raw()], &[0]);
+            device.cmd_bind_index_buffer(cmd, mesh.index.raw(), 0, vk::IndexType::UINT32);
+            device.cmd_draw_indexed(cmd, mesh.index_count, 1, 0, 0, 0);
+            device.cmd_end_render_pass(cmd);
+            if timed {
+                device.cmd_write_timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, pool, 1);
+            }
+            ctx.end_label(cmd);
+            device
+                .end_command_buffer(cmd)
+                .map_err(|e| GpuError::vulkan("vkEndCommandBuffer", name, e))?;
+        }
+        let mask = match ctx.timestamp_valid_bits() {
+            64.. => u64::MAX,
+            bits => (1u64 << bits) - 1,
+        };
+        let ns_per_tick = ctx.limits().timestamp_period as f64;
+        let mut ms = Vec::with_capacity(frames as usize);
+        for frame in 0..warmup + frames.max(1) {
+            ctx.submit_and_wait(cmd, name)?;
+            if timed && frame >= warmup {
+                let mut ticks = [0u64; 2];
+                // SAFETY: both queries were written by the completed submission.
+                unsafe {
+                    device.get_query_pool_results(
+                        pool,
+                        0,
+                        &mut ticks,
+                        vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                    )
+                }
+                .map_err(|e| GpuError::vulkan("vkGetQueryPoolResults", name, e))?;
+                ms.push(ticks_to_ms(ticks[0], ticks[1], mask, ns_per_tick));
+            }
+        }
+        Ok(ms)
+    }
+}
+
+/// Elapsed ms between two timestamps, tolerating one wrap of a `mask`-bit counter.
+pub fn ticks_to_ms(start: u64, end: u64, mask: u64, ns_per_tick: f64) -> f64 {
+    ((end & mask).wrapping_sub(start & mask) & mask) as f64 * ns_per_tick * 1e-6
+}
+
+fn descriptor_type(r: &Resource<'_>) -> vk::DescriptorType {
+    match r {
+        Resource::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
+        Resource::Texture(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+    }
+}
+
+impl Drop for MeshPipeline {
+    fn drop(&mut self) {
+        let device = self.ctx.device();
+        // SAFETY: submissions are waited for; destroying null handles is valid; the set is
+        // freed with its pool.
+        unsafe {
+            device.destroy_pipeline(self.pipeline, None);
+            for m in self.modules {
+                device.destroy_shader_module(m, None);
+            }
+            device.destroy_descriptor_pool(self.pool, None);
+            device.destroy_pipeline_layout(self.pipeline_layout, None);
+            device.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ticks_to_ms;
+
+    #[test]
+    fn ticks_wrap_once_within_valid_bits() {
+        let mask = (1u64 << 36) - 1;
+        // 100 ticks across the wrap of a 36-bit counter, 1 ns each.
+        let ms = ticks_to_ms(mask - 49, 50, mask, 1.0);
+        assert!((ms - 100e-6).abs() < 1e-12, "{ms}");
+    }
+}

@@ -1,0 +1,295 @@
+//! The GPU side of a scene shared by all techniques — mesh buffers, material textures
+//! (with CPU-built mip chains), samplers, the per-frame uniform block, the offscreen
+//! target — and the frame loop that renders a technique and reads the image back.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use crate::gpu::{
+    Buffer, Context, GpuError, Image, ImageDesc, MeshBuffers, RenderTarget, Resource, Sampler,
+    SamplerKind, ShaderStage, VertexLayout, compile_glsl, layout,
+};
+use crate::scene::{Scene, Texture8, Vertex};
+use crate::technique::TechniqueGpu;
+
+/// How a frame is rendered.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameSettings {
+    pub width: u32,
+    pub height: u32,
+    /// Replace the material's normal map with the interpolated normal (comparisons).
+    pub flat_normals: bool,
+}
+
+impl Default for FrameSettings {
+    fn default() -> Self {
+        FrameSettings {
+            width: 1280,
+            height: 800,
+            flat_normals: false,
+        }
+    }
+}
+
+/// GPU resources of one scene at one frame size.
+pub struct SceneGpu {
+    target: RenderTarget,
+    mesh: MeshBuffers,
+    albedo: Image,
+    normal: Image,
+    material_sampler: Sampler,
+    lightmap_sampler: Sampler,
+    frame: Buffer,
+    vertex_spirv: Vec<u32>,
+    vertex_layout: VertexLayout,
+}
+
+impl SceneGpu {
+    /// Uploads `scene` and creates the target for `settings`.
+    pub fn new(
+        ctx: &Arc<Context>,
+        scene: &Scene,
+        settings: &FrameSettings,
+    ) -> Result<Self, GpuError> {
+        let target = RenderTarget::new(ctx, settings.width, settings.height)?;
+        let mesh = MeshBuffers::new(
+            ctx,
+            bytemuck::cast_slice(&scene.mesh.vertices),
+            &scene.mesh.indices,
+            "scene.mesh",
+        )?;
+        let albedo = upload_texture8(
+            ctx,
+            &scene.material.albedo,
+            vk::Format::R8G8B8A8_SRGB,
+            true,
+            "scene.albedo",
+        )?;
+        let normal = upload_texture8(
+            ctx,
+            &scene.material.normal,
+            vk::Format::R8G8B8A8_UNORM,
+            false,
+            "scene.normal_map",
+        )?;
+        let aspect = settings.width as f32 / settings.height as f32;
+        let params = layout::FrameParams {
+            clip_from_world: scene.camera.clip_from_world(aspect).to_cols_array_2d(),
+            camera_position: scene.camera.position.extend(1.0).to_array(),
+            normal_scale: if settings.flat_normals {
+                0.0
+            } else {
+                scene.material.normal_scale
+            },
+            _pad: [0.0; 3],
+        };
+        let frame = Buffer::with_data(
+            ctx,
+            bytemuck::bytes_of(&params),
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            "scene.frame_params",
+        )?;
+        let f = |offset: usize| offset as u32;
+        let vertex_layout = VertexLayout {
+            stride: std::mem::size_of::<Vertex>() as u32,
+            attributes: vec![
+                (
+                    0,
+                    vk::Format::R32G32B32_SFLOAT,
+                    f(std::mem::offset_of!(Vertex, position)),
+                ),
+                (
+                    1,
+                    vk::Format::R32G32B32_SFLOAT,
+                    f(std::mem::offset_of!(Vertex, normal)),
+                ),
+                (
+                    2,
+                    vk::Format::R32G32B32A32_SFLOAT,
+                    f(std::mem::offset_of!(Vertex, tangent)),
+                ),
+                (
+                    3,
+                    vk::Format::R32G32_SFLOAT,
+                    f(std::mem::offset_of!(Vertex, uv_material)),
+                ),
+                (
+                    4,
+                    vk::Format::R32G32_SFLOAT,
+                    f(std::mem::offset_of!(Vertex, uv_lightmap)),
+                ),
+                (
+                    5,
+                    vk::Format::R32G32B32_SFLOAT,
+                    f(std::mem::offset_of!(Vertex, albedo_tint)),
+                ),
+            ],
+        };
+        Ok(SceneGpu {
+            target,
+            mesh,
+            albedo,
+            normal,
+            material_sampler: Sampler::new(
+                ctx,
+                SamplerKind::MaterialRepeat,
+                "scene.material_sampler",
+            )?,
+            lightmap_sampler: Sampler::new(
+                ctx,
+                SamplerKind::LinearClamp,
+                "scene.lightmap_sampler",
+            )?,
+            frame,
+            vertex_spirv: compile_glsl("technique/mesh.vert", ShaderStage::Vertex, &[])?,
+            vertex_layout,
+        })
+    }
+
+    /// The bindings every technique shares: frame block, albedo, normal map.
+    pub fn common_resources(&self) -> Vec<(u32, Resource<'_>)> {
+        vec![
+            (layout::BINDING_FRAME, Resource::Uniform(&self.frame)),
+            (
+                layout::BINDING_ALBEDO,
+                Resource::Texture(&self.albedo, &self.material_sampler),
+            ),
+            (
+                layout::BINDING_NORMAL_MAP,
+                Resource::Texture(&self.normal, &self.material_sampler),
+            ),
+        ]
+    }
+    pub fn target(&self) -> &RenderTarget {
+        &self.target
+    }
+    pub fn lightmap_sampler(&self) -> &Sampler {
+        &self.lightmap_sampler
+    }
+    pub fn vertex_spirv(&self) -> &[u32] {
+        &self.vertex_spirv
+    }
+    pub fn vertex_layout(&self) -> &VertexLayout {
+        &self.vertex_layout
+    }
+
+    /// Renders `technique`: `warmup` untimed frames, then `frames` timed ones, and reads
+    /// the last image back.
+    pub fn render(
+        &self,
+        technique: &TechniqueGpu,
+        warmup: u32,
+        frames: u32,
+    ) -> Result<Frame, GpuError> {
+        let ms = technique
+            .pipeline
+            .render_frames(&self.target, &self.mesh, warmup, frames)?;
+        Ok(Frame {
+            width: self.target.width(),
+            height: self.target.height(),
+            rgba: self.target.read_rgba()?,
+            ms,
+        })
+    }
+}
+
+/// A rendered image (linear radiance, RGBA f32, row 0 at the top) and its frame times.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<[f32; 4]>,
+    /// GPU time of each timed frame, ms (empty without timestamp support).
+    pub ms: Vec<f64>,
+}
+
+impl Frame {
+    /// Linear RGB at pixel (x, y).
+    pub fn rgb(&self, x: u32, y: u32) -> [f32; 3] {
+        let t = self.rgba[(y * self.width + x) as usize];
+        [t[0], t[1], t[2]]
+    }
+    /// Rec. 709 luminance at pixel (x, y).
+    pub fn luminance(&self, x: u32, y: u32) -> f32 {
+        let [r, g, b] = self.rgb(x, y);
+        0.2126 * r + 0.7152 * g + 0.0722 * b
+    }
+    /// Pixels rendered (alpha 1) as opposed to background (alpha 0).
+    pub fn covered(&self, x: u32, y: u32) -> bool {
+        self.rgba[(y * self.width + x) as usize][3] > 0.5
+    }
+}
+
+/// Uploads an RGBA8 texture with a full box-filtered mip chain (averaged in linear light
+/// when `srgb`, so dark mortar lines do not grow in the distance).
+fn upload_texture8(
+    ctx: &Arc<Context>,
+    tex: &Texture8,
+    format: vk::Format,
+    srgb: bool,
+    name: &str,
+) -> Result<Image, GpuError> {
+    let levels = mip_chain(tex, srgb);
+    let desc = ImageDesc::texture_2d(format, tex.width, tex.height).mip_levels(levels.len() as u32);
+    let level_bytes: Vec<Vec<&[u8]>> = levels
+        .iter()
+        .map(|l| vec![bytemuck::cast_slice::<[u8; 4], u8>(&l.texels)])
+        .collect();
+    Image::with_data(ctx, &desc, &level_bytes, name)
+}
+
+/// Level 0 = `tex`; each next level halves each side (at least 1) with a 2×2 box filter.
+pub fn mip_chain(tex: &Texture8, srgb: bool) -> Vec<Texture8> {
+    let to_linear = |c: u8| {
+        let c = c as f32 / 255.0;
+        if !srgb {
+            c
+        } else if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let from_linear = |c: f32| {
+        let c = if !srgb {
+            c
+        } else if c <= 0.0031308 {
+            c * 12.92
+        } else {
+            1.055 * c.powf(1.0 / 2.4) - 0.055
+        };
+        (c * 255.0).round().clamp(0.0, 255.0) as u8
+    };
+    let mut levels = vec![tex.clone()];
+    while let Some(prev) = levels.last().filter(|l| l.width > 1 || l.height > 1) {
+        let (w, h) = ((prev.width / 2).max(1), (prev.height / 2).max(1));
+        let mut texels = Vec::with_capacity((w * h) as usize);
+        for y in 0..h {
+            for x in 0..w {
+                let mut sum = [0.0f32; 4];
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let sx = (2 * x + dx).min(prev.width - 1);
+                    let sy = (2 * y + dy).min(prev.height - 1);
+                    let t = prev.texels[(sy * prev.width + sx) as usize];
+                    for c in 0..3 {
+                        sum[c] += to_linear(t[c]);
+                    }
+                    sum[3] += t[3] as f32 / 255.0;
+                }
+                texels.push([
+                    from_linear(sum[0] / 4.0),
+                    from_linear(sum[1] / 4.0),
+                    from_linear(sum[2] / 4.0),
+                    (sum[3] / 4.0 * 255.0).round() as u8,
+                ]);
+            }
+        }
+        levels.push(Texture8 {
+            width: w,
+            height: h,
+            texels,
+        });
+    }
+    levels
+}

@@ -1,0 +1,159 @@
+//! Scenes: triangle meshes with material and lightmap UVs, a material (albedo and
+//! tangent-space normal map), and a camera (DESIGN §1: right-handed, +Y up, metres).
+//!
+//! `house` builds the procedural default scene. The vertex layout here is the one the GPU
+//! reads (`glsl/technique/mesh.vert`), so it is `#[repr(C)]` + `Pod`.
+
+pub mod house;
+
+use glam::{Mat4, Vec3, Vec4};
+
+/// One mesh vertex, as uploaded to the GPU (68 bytes, tightly packed f32).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Vertex {
+    /// World-space position, metres.
+    pub position: [f32; 3],
+    /// World-space shading normal (unit).
+    pub normal: [f32; 3],
+    /// World-space tangent (unit, along +u of `uv_material`); `w` = ±1 so that the
+    /// bitangent is `w · cross(normal, tangent)` and points toward decreasing v (DESIGN §1).
+    pub tangent: [f32; 4],
+    /// Material texture coordinates (glTF TEXCOORD_0; tiling, origin top-left).
+    pub uv_material: [f32; 2],
+    /// Unique lightmap coordinates in [0, 1]² (glTF TEXCOORD_1; texel centres at (i+½)/res).
+    pub uv_lightmap: [f32; 2],
+    /// Linear RGB factor multiplied into the albedo texture.
+    pub albedo_tint: [f32; 3],
+}
+
+/// An indexed triangle list.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    pub vertices: Vec<Vertex>,
+    pub indices: Vec<u32>,
+}
+
+impl Mesh {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// World-space corner positions of triangle `t`.
+    pub fn triangle_positions(&self, t: usize) -> [Vec3; 3] {
+        let i = &self.indices[3 * t..3 * t + 3];
+        [0, 1, 2].map(|k| Vec3::from(self.vertices[i[k] as usize].position))
+    }
+
+    /// Axis-aligned bounds (min, max) of all vertices.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.vertices.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), v| {
+                let p = Vec3::from(v.position);
+                (lo.min(p), hi.max(p))
+            },
+        )
+    }
+}
+
+/// An RGBA8 texture in row-major order, row 0 at the top (v = 0).
+#[derive(Clone, Debug)]
+pub struct Texture8 {
+    pub width: u32,
+    pub height: u32,
+    pub texels: Vec<[u8; 4]>,
+}
+
+/// The surface material shared by the whole mesh (per-vertex `albedo_tint` varies it).
+#[derive(Clone, Debug)]
+pub struct Material {
+    /// sRGB-encoded base colour, tiled by `uv_material`.
+    pub albedo: Texture8,
+    /// Tangent-space normal map, glTF convention (+Y green = image up), tiled by `uv_material`.
+    pub normal: Texture8,
+    /// glTF `normalTexture.scale`: scales the map's x and y before renormalizing.
+    pub normal_scale: f32,
+}
+
+/// A pinhole camera (right-handed, looking down −Z in view space).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    pub position: Vec3,
+    pub target: Vec3,
+    pub up: Vec3,
+    /// Vertical field of view, radians.
+    pub fov_y: f32,
+    pub z_near: f32,
+    pub z_far: f32,
+}
+
+impl Camera {
+    /// Right-handed view matrix: the camera looks down −Z, +Y up.
+    pub fn view_from_world(&self) -> Mat4 {
+        let f = (self.target - self.position).normalize();
+        let s = f.cross(self.up).normalize();
+        let u = s.cross(f);
+        Mat4::from_cols(
+            Vec4::new(s.x, u.x, -f.x, 0.0),
+            Vec4::new(s.y, u.y, -f.y, 0.0),
+            Vec4::new(s.z, u.z, -f.z, 0.0),
+            Vec4::new(
+                -s.dot(self.position),
+                -u.dot(self.position),
+                f.dot(self.position),
+                1.0,
+            ),
+        )
+    }
+
+    /// Vulkan clip space: x right, y *down*, depth in [0, 1] (near → 0).
+    pub fn clip_from_view(&self, aspect: f32) -> Mat4 {
+        let h = 1.0 / (0.5 * self.fov_y).tan();
+        let r = self.z_far / (self.z_near - self.z_far);
+        Mat4::from_cols(
+            Vec4::new(h / aspect, 0.0, 0.0, 0.0),
+            Vec4::new(0.0, -h, 0.0, 0.0),
+            Vec4::new(0.0, 0.0, r, -1.0),
+            Vec4::new(0.0, 0.0, r * self.z_near, 0.0),
+        )
+    }
+
+    pub fn clip_from_world(&self, aspect: f32) -> Mat4 {
+        self.clip_from_view(aspect) * self.view_from_world()
+    }
+
+    /// Pixel coordinates (x right, y down, pixel centres at +0.5) of a world point, or
+    /// `None` when it is behind the camera.
+    pub fn project_to_pixel(&self, p_world: Vec3, width: u32, height: u32) -> Option<(f32, f32)> {
+        let clip = self.clip_from_world(width as f32 / height as f32) * p_world.extend(1.0);
+        if clip.w <= 0.0 {
+            return None;
+        }
+        let ndc = clip.truncate() / clip.w;
+        Some((
+            (ndc.x * 0.5 + 0.5) * width as f32,
+            (ndc.y * 0.5 + 0.5) * height as f32,
+        ))
+    }
+}
+
+/// Everything a technique needs from a scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub name: String,
+    pub mesh: Mesh,
+    pub material: Material,
+    pub camera: Camera,
+}
+
+/// Errors from building or loading a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("unknown scene '{0}': use 'house' or a path to a .gltf/.glb file")]
+    Unknown(String),
+    #[error("{0}: glTF scenes are not supported yet; use --scene house")]
+    GltfNotYetSupported(String),
+    #[error("lightmap resolution {res} is out of range {min}..={max}")]
+    LightmapRes { res: u32, min: u32, max: u32 },
+}

@@ -1,0 +1,222 @@
+//! Techniques of the paper's cost table (DESIGN §2) and the two hardware paths.
+//!
+//! A technique is one module that says what it needs from the bake and the lighting prep
+//! ([`Inputs`]), what it uploads, and which fragment shader it runs; adding one touches its
+//! module, its shader, the `TechniqueId` list and tests. The CLI's names live here only.
+
+pub mod preconv;
+
+use std::fmt;
+use std::str::FromStr;
+use std::sync::Arc;
+
+use ash::vk;
+
+use crate::bake::ao::AoMap;
+use crate::gpu::{self, Context, GpuError, Image, MeshPipeline, layout};
+use crate::render::SceneGpu;
+
+/// The techniques that exist, in DESIGN §2 order; `FromStr`/`Display` use the CLI names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TechniqueId {
+    Preconv,
+}
+
+impl TechniqueId {
+    pub const ALL: &'static [TechniqueId] = &[TechniqueId::Preconv];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            TechniqueId::Preconv => "preconv",
+        }
+    }
+}
+
+impl fmt::Display for TechniqueId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for TechniqueId {
+    type Err = TechniqueError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        TechniqueId::ALL
+            .iter()
+            .copied()
+            .find(|t| t.name() == s)
+            .ok_or_else(|| TechniqueError::UnknownTechnique {
+                name: s.to_string(),
+                known: join_names(TechniqueId::ALL.iter().map(|t| t.name())),
+            })
+    }
+}
+
+/// The hardware paths of DESIGN §2.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum HwPath {
+    /// DX9-class: 2D textures only, ≤ 16 textures per draw, 4 values per RGBA texel.
+    Dx9,
+    /// DX10-class: texture arrays for per-texel data, seamless cube (array) tables.
+    Dx10,
+}
+
+impl HwPath {
+    pub const ALL: &'static [HwPath] = &[HwPath::Dx9, HwPath::Dx10];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            HwPath::Dx9 => "dx9",
+            HwPath::Dx10 => "dx10",
+        }
+    }
+
+    /// The value of the shader macro `SHVIS_PATH_DX9`.
+    pub fn shader_define(self) -> (&'static str, u32) {
+        ("PATH_DX9", (self == HwPath::Dx9) as u32)
+    }
+}
+
+impl fmt::Display for HwPath {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for HwPath {
+    type Err = TechniqueError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        HwPath::ALL
+            .iter()
+            .copied()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| TechniqueError::UnknownPath {
+                name: s.to_string(),
+                known: join_names(HwPath::ALL.iter().map(|p| p.name())),
+            })
+    }
+}
+
+fn join_names<'a>(names: impl Iterator<Item = &'a str>) -> String {
+    names.collect::<Vec<_>>().join(", ")
+}
+
+/// What techniques read from the bake and the lighting prep.
+pub struct Inputs<'a> {
+    /// Ambient occlusion in the lightmap (`preconv`).
+    pub ao: &'a AoMap,
+    /// Order-3 SH of irradiance (radiance convolved with the clamped cosine), RGB.
+    pub irradiance_sh: &'a [[f64; 3]],
+}
+
+/// Memory and cost figures of a technique on a path (the cost table's columns).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TechniqueStats {
+    /// Bytes of per-texel (lightmap) data on the GPU.
+    pub texel_bytes: u64,
+    /// Bytes of per-lighting lookup tables and uniforms.
+    pub table_bytes: u64,
+    /// Textures bound for the draw, albedo and normal map included.
+    pub textures_bound: u32,
+    /// Texture fetches per pixel, albedo and normal map included.
+    pub lookups_per_pixel: u32,
+}
+
+/// A technique ready to draw: its pipeline and the resources it owns.
+pub struct TechniqueGpu {
+    pub id: TechniqueId,
+    pub path: HwPath,
+    pub pipeline: MeshPipeline,
+    pub stats: TechniqueStats,
+    _images: Vec<Image>,
+    _buffers: Vec<gpu::Buffer>,
+}
+
+impl TechniqueGpu {
+    /// "preconv.dx10": debug label and timestamp row.
+    pub fn label(&self) -> String {
+        format!("{}.{}", self.id, self.path)
+    }
+}
+
+/// Builds technique `id` on `path`.
+pub fn build(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    id: TechniqueId,
+    path: HwPath,
+    inputs: &Inputs<'_>,
+) -> Result<TechniqueGpu, TechniqueError> {
+    match id {
+        TechniqueId::Preconv => preconv::build(ctx, scene, path, inputs),
+    }
+}
+
+/// Enforces the `dx9` rules in code (DESIGN §2): only 2D textures, at most
+/// `DX9_MAX_TEXTURES` per draw counting albedo and normal map.
+pub fn check_path_rules(
+    label: &str,
+    path: HwPath,
+    technique_textures: &[&Image],
+) -> Result<(), TechniqueError> {
+    if path != HwPath::Dx9 {
+        return Ok(());
+    }
+    let total = technique_textures.len() as u32 + layout::MATERIAL_TEXTURES;
+    if total > layout::DX9_MAX_TEXTURES {
+        return Err(TechniqueError::Dx9Rule {
+            label: label.into(),
+            detail: format!(
+                "needs {total} textures per draw, dx9 allows {}",
+                layout::DX9_MAX_TEXTURES
+            ),
+        });
+    }
+    if let Some(img) = technique_textures
+        .iter()
+        .find(|i| i.desc().view_type != vk::ImageViewType::TYPE_2D)
+    {
+        return Err(TechniqueError::Dx9Rule {
+            label: label.into(),
+            detail: format!(
+                "binds a {:?} texture; dx9 allows only 2D textures",
+                img.desc().view_type
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Errors of building a technique.
+#[derive(Debug, thiserror::Error)]
+pub enum TechniqueError {
+    #[error("unknown technique '{name}'; known: {known}")]
+    UnknownTechnique { name: String, known: String },
+    #[error("unknown path '{name}'; known: {known}")]
+    UnknownPath { name: String, known: String },
+    #[error("{label}: breaks the dx9 rules: {detail}")]
+    Dx9Rule { label: String, detail: String },
+    #[error("{label}: {detail}")]
+    Input { label: String, detail: String },
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_and_unknown_lists_known() {
+        for &t in TechniqueId::ALL {
+            assert_eq!(t.name().parse::<TechniqueId>().unwrap(), t);
+        }
+        for &p in HwPath::ALL {
+            assert_eq!(p.name().parse::<HwPath>().unwrap(), p);
+        }
+        let e = "unc7".parse::<TechniqueId>().unwrap_err().to_string();
+        assert!(e.contains("unc7") && e.contains("preconv"), "{e}");
+        let e = "dx11".parse::<HwPath>().unwrap_err().to_string();
+        assert!(e.contains("dx9, dx10"), "{e}");
+    }
+}

@@ -1,0 +1,107 @@
+//! `preconv`: scalar ambient occlusion × irradiance from the pre-convolved environment
+//! (Iwanicki–Sloan §2 and §5, "Preconv"; DESIGN §2).
+//!
+//! radiance = albedo/π · AO(x) · E(n), with E(n) = Σ_{l<3} A_l Σ_m L_lm y_lm(n) evaluated at
+//! the normal-mapped normal, so shadows of the sun are not modelled at all — only
+//! how open each texel is. Per texel: one f16 (R16_SFLOAT, 2 bytes). Per lighting: 9 RGB
+//! coefficients in a uniform block. dx9 binds AO as a 2D texture, dx10 as a one-layer
+//! 2D array, the rest is shared (glsl/technique/preconv.frag).
+
+use std::sync::Arc;
+
+use ash::vk;
+use half::f16;
+
+use super::{HwPath, Inputs, TechniqueError, TechniqueGpu, TechniqueId, TechniqueStats};
+use crate::gpu::{
+    Buffer, Context, Image, ImageDesc, MeshPipeline, MeshPipelineDesc, Resource, ShaderStage,
+    compile_glsl, layout,
+};
+use crate::render::SceneGpu;
+
+/// Uniforms of glsl/technique/preconv.frag, block `PreconvParams` (std140).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct PreconvParams {
+    /// offset 0: order-3 irradiance SH, RGB in .xyz (std140 pads vec3 arrays to 16 B).
+    pub irradiance_sh: [[f32; 4]; 9],
+}
+const _: () = assert!(std::mem::size_of::<PreconvParams>() == 144);
+
+pub fn build(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    path: HwPath,
+    inputs: &Inputs<'_>,
+) -> Result<TechniqueGpu, TechniqueError> {
+    let label = format!("preconv.{path}");
+    if inputs.irradiance_sh.len() < 9 {
+        return Err(TechniqueError::Input {
+            label,
+            detail: format!(
+                "needs order-3 irradiance (9 coefficients), got {}",
+                inputs.irradiance_sh.len()
+            ),
+        });
+    }
+    let ao = inputs.ao;
+    let ao_f16: Vec<f16> = ao.values.iter().map(|&a| f16::from_f32(a)).collect();
+    let ao_bytes: &[u8] = bytemuck::cast_slice(&ao_f16);
+    let desc = match path {
+        HwPath::Dx9 => ImageDesc::texture_2d(vk::Format::R16_SFLOAT, ao.res, ao.res),
+        HwPath::Dx10 => ImageDesc::texture_2d_array(vk::Format::R16_SFLOAT, ao.res, ao.res, 1),
+    };
+    let ao_image = Image::with_data(ctx, &desc, &[vec![ao_bytes]], &format!("{label}.ao"))?;
+    super::check_path_rules(&label, path, &[&ao_image])?;
+
+    let mut params = PreconvParams::default();
+    for (dst, src) in params.irradiance_sh.iter_mut().zip(inputs.irradiance_sh) {
+        *dst = [src[0] as f32, src[1] as f32, src[2] as f32, 0.0];
+    }
+    let params_buffer = Buffer::with_data(
+        ctx,
+        bytemuck::bytes_of(&params),
+        vk::BufferUsageFlags::UNIFORM_BUFFER,
+        &format!("{label}.params"),
+    )?;
+
+    let fragment = compile_glsl(
+        "technique/preconv.frag",
+        ShaderStage::Fragment,
+        &[path.shader_define()],
+    )?;
+    let mut resources = scene.common_resources();
+    resources.push((
+        layout::BINDING_TECHNIQUE_PARAMS,
+        Resource::Uniform(&params_buffer),
+    ));
+    resources.push((
+        layout::BINDING_TECHNIQUE_TEXTURE0,
+        Resource::Texture(&ao_image, scene.lightmap_sampler()),
+    ));
+    let pipeline = MeshPipeline::new(
+        ctx,
+        scene.target(),
+        &MeshPipelineDesc {
+            name: &label,
+            vertex_spirv: scene.vertex_spirv(),
+            fragment_spirv: &fragment,
+            vertex_layout: scene.vertex_layout(),
+            resources: &resources,
+        },
+    )?;
+    drop(resources);
+    Ok(TechniqueGpu {
+        id: TechniqueId::Preconv,
+        path,
+        pipeline,
+        stats: TechniqueStats {
+            texel_bytes: ao_bytes.len() as u64,
+            table_bytes: std::mem::size_of::<PreconvParams>() as u64,
+            textures_bound: layout::MATERIAL_TEXTURES + 1,
+            lookups_per_pixel: layout::MATERIAL_TEXTURES + 1,
+        },
+        _images: vec![ao_image],
+        _buffers: vec![params_buffer],
+    })
+}
