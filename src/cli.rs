@@ -163,7 +163,7 @@ fn open_gpu(gpu: &GpuArgs) -> Result<Arc<Context>> {
         validate: gpu.validate,
         device: gpu.device.clone(),
     })?;
-    eprintln!("device: {}", ctx.device_name());
+    log::info!("device: {}", ctx.device_name());
     Ok(ctx)
 }
 
@@ -205,8 +205,9 @@ fn run_bake(a: BakeArgs) -> Result<()> {
 
 fn run_render(a: RenderArgs) -> Result<()> {
     check_output_extension(&a.out)?;
-    let prepared = prepare(&prepare_settings(&a.scene, &a.env))?;
+    // The device first: a missing GPU should not cost a bake.
     let ctx = open_gpu(&a.gpu)?;
+    let prepared = prepare(&prepare_settings(&a.scene, &a.env))?;
     let settings = FrameSettings {
         width: a.width,
         height: a.height,

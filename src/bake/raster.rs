@@ -99,10 +99,11 @@ pub fn rasterize(mesh: &Mesh, res: u32) -> LightmapTexels {
         let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
         let cross = e1.cross(e2);
         let area_uv = cross2(q[1] - q[0], q[2] - q[0]);
-        // Zero area: |e1 × e2| = |e1||e2| sin θ below f32 resolution of the edge lengths.
-        let flat_3d = !(cross.length() > 1e-7 * (e1.length_squared() + e2.length_squared()));
-        let flat_uv = !(area_uv.abs() > 1e-9);
-        if flat_3d || flat_uv {
+        // Zero area: |e1 × e2| = |e1||e2| sin θ below f32 resolution of the edge lengths
+        // (written as "has area" so that NaN corners count as degenerate too).
+        let has_area_3d = cross.length() > 1e-7 * (e1.length_squared() + e2.length_squared());
+        let has_area_uv = area_uv.abs() > 1e-9; // texels²
+        if !(has_area_3d && has_area_uv) {
             degenerate += 1;
             continue;
         }
@@ -283,9 +284,9 @@ mod tests {
         assert_eq!(values[2 * 8 + 2], 1.0); // touches only the first
         assert_eq!(values[2 * 8 + 3], 2.0); // touches both
         assert_eq!(values[4 * 8 + 5], 3.0);
-        assert_eq!(values[1 * 8 + 1], 0.0, "one pass reaches one ring only");
+        assert_eq!(values[8 + 1], 0.0, "one pass reaches one ring only");
         dilate(&mut values, &covered, res, 2);
-        assert!(values[1 * 8 + 1] > 0.0, "second pass reaches the next ring");
+        assert!(values[8 + 1] > 0.0, "second pass reaches the next ring");
         assert_eq!(values[3 * 8 + 3], 1.0, "covered texels never change");
     }
 }

@@ -45,7 +45,7 @@ pub struct Context {
     limits: vk::PhysicalDeviceLimits,
     timestamp_valid_bits: u32,
     image_cube_array: bool,
-    messages: Box<MessageCounts>,
+    messages: std::sync::Arc<MessageCounts>,
 }
 
 impl Context {
@@ -92,7 +92,7 @@ impl Context {
         } else {
             vec![]
         };
-        let messages = Box::<MessageCounts>::default();
+        let messages = std::sync::Arc::<MessageCounts>::default();
         let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
             .message_severity(
                 vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
@@ -105,7 +105,7 @@ impl Context {
                     | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
             )
             .pfn_user_callback(Some(debug::messenger_callback))
-            .user_data(&*messages as *const MessageCounts as *mut c_void);
+            .user_data(std::sync::Arc::as_ptr(&messages) as *mut c_void);
         let mut instance_info = vk::InstanceCreateInfo::default()
             .application_info(&app_info)
             .enabled_layer_names(&layer_names)
@@ -258,7 +258,6 @@ impl Context {
         };
         ctx.set_name(pool, "shvis.command_pool");
         ctx.set_name(ctx.queue, "shvis.queue");
-        log::info!("device: {device_name}");
         Ok(std::sync::Arc::new(ctx))
     }
 
@@ -297,6 +296,11 @@ impl Context {
     /// Validation/debug messages counted so far: tests assert (0, 0).
     pub fn message_counts(&self) -> (u32, u32) {
         self.messages.get()
+    }
+
+    /// The live counter itself, to check messages of teardown after the context is gone.
+    pub fn message_counter(&self) -> std::sync::Arc<MessageCounts> {
+        self.messages.clone()
     }
 
     /// Gives `handle` a debug name visible in validation messages and captures.

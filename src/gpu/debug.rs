@@ -38,10 +38,18 @@ pub(crate) unsafe extern "system" fn messenger_callback(
             .map(|m| m.to_string_lossy().into_owned())
             .unwrap_or_default()
     };
-    // SAFETY: `user_data` is the address of the `MessageCounts` boxed in the context,
-    // which outlives the messenger (destroyed first in `Context::drop`).
+    // SAFETY: `user_data` is the address of the context's `Arc<MessageCounts>`, which
+    // outlives the messenger (destroyed in `Context::drop` before the Arc is released).
     let counts = unsafe { (user_data as *const MessageCounts).as_ref() };
-    if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
+    // Loader chatter (GENERAL) is for debugging set-up: a missing driver already becomes
+    // one clear error, so it is not repeated at error level. Validation and performance
+    // messages are counted — tests require none.
+    if !kind.intersects(
+        vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+            | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+    ) {
+        log::debug!(target: "vulkan", "[{kind:?}] {message}");
+    } else if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
         if let Some(c) = counts {
             c.errors.fetch_add(1, Ordering::SeqCst);
         }
@@ -51,10 +59,8 @@ pub(crate) unsafe extern "system" fn messenger_callback(
             c.warnings.fetch_add(1, Ordering::SeqCst);
         }
         log::warn!(target: "vulkan", "[{kind:?}] {message}");
-    } else if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::INFO) {
-        log::debug!(target: "vulkan", "[{kind:?}] {message}");
     } else {
-        log::trace!(target: "vulkan", "[{kind:?}] {message}");
+        log::debug!(target: "vulkan", "[{kind:?}] {message}");
     }
     vk::FALSE
 }

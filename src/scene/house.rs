@@ -21,7 +21,7 @@
 //! whose centre lies in the chart rectangle is fully covered. Chart sizes come from one
 //! uniform density (texels per metre; the ground gets half of it), the largest for which a
 //! shelf packer fits all charts with [`GUTTER_TEXELS`] empty texels between charts and
-//! around the border (bisection on the density). About 250 charts of at least 1×1 texels
+//! around the border (bisection on the density). The 224 charts of at least 1×1 texels
 //! plus gutters need [`MIN_LIGHTMAP_RES`] texels per side at least.
 //!
 //! The material is a procedural tiling brick texture (sRGB albedo) with a normal map derived
@@ -76,8 +76,8 @@ pub struct Landmarks {
 /// The house's landmark points (see [`Landmarks`]).
 pub fn landmarks() -> Landmarks {
     Landmarks {
-        under_overhang: Vec3::new(-2.6, 0.0, 4.4),
-        open_ground: Vec3::new(4.0, 0.0, 14.0),
+        under_overhang: Vec3::new(-2.3, 0.0, 4.0),
+        open_ground: Vec3::new(-10.0, 0.0, 8.0),
         brick_wall: Vec3::new(1.05, 1.5, HALF_Z),
     }
 }
@@ -86,8 +86,8 @@ pub fn landmarks() -> Landmarks {
 /// corner, 50° vertical field of view.
 pub fn camera() -> Camera {
     Camera {
-        position: Vec3::new(11.0, 4.2, 17.0),
-        target: Vec3::new(-0.5, 1.0, 3.0),
+        position: Vec3::new(9.0, 3.8, 14.0),
+        target: Vec3::new(-0.6, 1.0, 3.0),
         up: Vec3::Y,
         fov_y: 50f32.to_radians(),
         z_near: 0.05,

@@ -21,13 +21,18 @@
 //!    Q_l^m = a_l^m (z Q_{l−1}^m − b_l^m Q_{l−2}^m), a_l^m = √((4l²−1)/(l²−m²)),
 //!    b_l^m = √(((l−1)²−m²)/(4(l−1)²−1)).
 //!
-//! Every quantity is O(√l) in magnitude, so the f64 evaluation is stable well past
-//! order 30 (tested: orthonormality to order 6 to 1e-12, closed forms for l ≤ 2, poles
-//! and 1e-9 from them at order 30; DESIGN §6).
+//! The constants (Q_m^m, a, b) are tabulated once for every (l, m) up to order 30. The
+//! normalised recurrence is the standard stable one: no factorial is ever formed, the
+//! Q stay below ~10⁶ at order 30 (at the poles, where sᵐ = 0 kills them) and every
+//! y_l^m is bounded by √((2l+1)/2π). Tested: closed forms for l ≤ 2, orthonormality to
+//! order 6 to 1e-12, the addition theorem Σ_m (y_l^m)² = (2l+1)/4π to order 30, and the
+//! poles exactly and 1e-9 from them at order 30 (DESIGN §6).
+
+use std::sync::OnceLock;
 
 use glam::{DVec3, Vec3};
 
-use super::{Order, sh_index};
+use super::{MAX_ORDER, Order, sh_index};
 
 /// Writes y_l^m(`dir`) for every band l < `order` to `out[l(l+1)+m]`.
 ///
@@ -50,48 +55,60 @@ pub fn eval_basis(order: Order, dir: DVec3, out: &mut [f64]) {
         order.coeff_count()
     );
     let (x, y, z) = (dir.x, dir.y, dir.z);
+    let table = recurrence_table();
 
-    // Q_m^m, updated by the running product of step 1.
-    let mut q_mm = 1.0 / (4.0 * std::f64::consts::PI).sqrt();
-    // (x + iy)^m = c + i s, updated by complex multiplication (exact at the poles).
+    // m = 0: zonal column, Q_l^0 = y_l^0.
+    let mut q_prev = 0.0;
+    let mut q = table[0].0;
+    out[0] = q;
+    for l in 1..n {
+        let (a, b) = table[sh_index(l, 0)];
+        (q_prev, q) = (q, a * (z * q - b * q_prev));
+        out[sh_index(l, 0)] = q;
+    }
+    // m > 0: (x + iy)^m = c + i s by complex multiplication (exact at the poles), times √2:
+    // the azimuthal factors √2·sinᵐθ·cos(mφ), √2·sinᵐθ·sin(mφ) of eq. (3).
     let (mut c, mut s) = (1.0, 0.0);
-    for m in 0..n {
-        if m > 0 {
-            let mf = m as f64;
-            q_mm *= -((2.0 * mf + 1.0) / (2.0 * mf)).sqrt();
-            (c, s) = (x * c - y * s, x * s + y * c);
-        }
-        // Azimuthal factors of eq. (3): √2·cos(mφ)·sinᵐθ and √2·sin(mφ)·sinᵐθ.
-        let (re, im) = if m == 0 {
-            (1.0, 0.0)
-        } else {
-            (std::f64::consts::SQRT_2 * c, std::f64::consts::SQRT_2 * s)
-        };
-        let mut store = |l: i32, q: f64| {
+    for m in 1..n {
+        (c, s) = (x * c - y * s, x * s + y * c);
+        let (re, im) = (std::f64::consts::SQRT_2 * c, std::f64::consts::SQRT_2 * s);
+        let mut q_prev = 0.0;
+        let mut q = table[sh_index(m, m)].0;
+        out[sh_index(m, m)] = q * re;
+        out[sh_index(m, -m)] = q * im;
+        for l in (m + 1)..n {
+            let (a, b) = table[sh_index(l, m)];
+            (q_prev, q) = (q, a * (z * q - b * q_prev));
             out[sh_index(l, m)] = q * re;
-            if m > 0 {
-                out[sh_index(l, -m)] = q * im;
-            }
-        };
-        store(m, q_mm);
-        if m + 1 >= n {
-            continue;
-        }
-        let mf = m as f64;
-        let mut q_prev = q_mm;
-        let mut q = (2.0 * mf + 3.0).sqrt() * z * q_mm; // step 2
-        store(m + 1, q);
-        for l in (m + 2)..n {
-            // Step 3.
-            let (lf, l1) = (l as f64, (l - 1) as f64);
-            let a = ((4.0 * lf * lf - 1.0) / (lf * lf - mf * mf)).sqrt();
-            let b = ((l1 * l1 - mf * mf) / (4.0 * l1 * l1 - 1.0)).sqrt();
-            let q_next = a * (z * q - b * q_prev);
-            q_prev = q;
-            q = q_next;
-            store(l, q);
+            out[sh_index(l, -m)] = q * im;
         }
     }
+}
+
+/// Recurrence constants for every (l, m ≥ 0) up to [`MAX_ORDER`], at index l(l+1)+m:
+/// (Q_m^m, 0) on the diagonal (step 1, a constant), (a_l^m, b_l^m) below it (steps 2–3;
+/// b = 0 at l = m+1, where a = √(2m+3)). Built once, ~15 kB.
+fn recurrence_table() -> &'static [(f64, f64)] {
+    static TABLE: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
+    TABLE.get_or_init(|| {
+        let n = MAX_ORDER as i32;
+        let mut table = vec![(0.0, 0.0); (n * n) as usize];
+        let mut q_mm = 1.0 / (4.0 * std::f64::consts::PI).sqrt();
+        for m in 0..n {
+            let mf = m as f64;
+            if m > 0 {
+                q_mm *= -((2.0 * mf + 1.0) / (2.0 * mf)).sqrt();
+            }
+            table[sh_index(m, m)] = (q_mm, 0.0);
+            for l in (m + 1)..n {
+                let (lf, l1) = (l as f64, (l - 1) as f64);
+                let a = ((4.0 * lf * lf - 1.0) / (lf * lf - mf * mf)).sqrt();
+                let b = ((l1 * l1 - mf * mf) / (4.0 * l1 * l1 - 1.0)).sqrt();
+                table[sh_index(l, m)] = (a, b);
+            }
+        }
+        table
+    })
 }
 
 /// f32 variant of [`eval_basis`] for GPU-side data: evaluated in f64, rounded once.
@@ -131,7 +148,7 @@ pub fn eval_basis_vec(order: Order, dir: DVec3) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sh::{MAX_ORDER, gauss_legendre};
+    use crate::sh::gauss_legendre;
     use std::f64::consts::PI;
 
     /// Closed forms vs recurrence: a handful of f64 operations each, values O(1).

@@ -173,7 +173,7 @@ mod tests {
         let order = Order::new(13).expect("valid order");
         let (ts, ws) = gauss_legendre(16);
         let mut y = vec![0.0; order.coeff_count()];
-        let mut z = vec![0.0; 13];
+        let mut z = [0.0; 13];
         for (t, w) in ts.iter().zip(&ws) {
             let t = 0.5 * (t + 1.0);
             let r = (1.0 - t * t).sqrt();

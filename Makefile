@@ -1,0 +1,22 @@
+# The two commands of the README. Each installs what is missing first (scripts/install-deps.sh).
+.PHONY: deps test bench build clean
+
+# Tests run on lavapipe with the validation layer; keep tests single-binary-parallel
+# but not one Vulkan instance per core more than the machine has.
+TEST_THREADS ?= 2
+BENCH_OUT ?= bench-out
+
+deps:
+	@scripts/install-deps.sh
+
+build: deps
+	cargo build --release --locked
+
+test: deps
+	cargo test --locked -- --test-threads=$(TEST_THREADS)
+
+bench: build
+	target/release/shvis bench --out $(BENCH_OUT)
+
+clean:
+	cargo clean

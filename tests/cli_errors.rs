@@ -1,0 +1,153 @@
+//! Bad input at the command line: each case exits non-zero with one `error:` line that
+//! names the input, and never panics (DESIGN §4).
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn shvis(args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_shvis"));
+    cmd.args(args).env("RUST_LOG", "off");
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    cmd.output().expect("shvis runs")
+}
+
+/// Asserts failure with exactly one `error…` line on stderr containing every `needle`.
+fn assert_one_error_line(out: &Output, needles: &[&str]) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "exit status 0; stderr: {stderr}");
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "expected one line, got: {stderr}");
+    assert!(lines[0].starts_with("error"), "{}", lines[0]);
+    for n in needles {
+        assert!(lines[0].contains(n), "'{n}' missing from: {}", lines[0]);
+    }
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("shvis-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A render command that would be quick if its input were good.
+fn render_args<'a>(env: &'a str, out: &'a str) -> Vec<&'a str> {
+    vec![
+        "render",
+        "--technique",
+        "preconv",
+        "--vis-res",
+        "64",
+        "--rays",
+        "1",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--env",
+        env,
+        "--out",
+        out,
+    ]
+}
+
+#[test]
+fn missing_env_file() {
+    let dir = scratch("missing");
+    let out_png = dir.join("x.png");
+    let out = shvis(
+        &render_args("/no/such/probe.exr", out_png.to_str().unwrap()),
+        &[],
+    );
+    assert_one_error_line(&out, &["/no/such/probe.exr", "cannot read"]);
+}
+
+#[test]
+fn env_file_of_the_wrong_format() {
+    let dir = scratch("format");
+    let bogus = dir.join("notes.exr");
+    std::fs::write(&bogus, "these are not texels\n").unwrap();
+    let out_png = dir.join("x.png");
+    let out = shvis(
+        &render_args(bogus.to_str().unwrap(), out_png.to_str().unwrap()),
+        &[],
+    );
+    assert_one_error_line(&out, &["notes.exr"]);
+}
+
+#[test]
+fn unknown_technique_lists_the_names() {
+    let out = shvis(&["render", "--technique", "unc7", "--out", "x.png"], &[]);
+    assert_one_error_line(&out, &["unc7", "preconv"]);
+}
+
+#[test]
+fn unknown_path_lists_the_names() {
+    let out = shvis(
+        &[
+            "render",
+            "--technique",
+            "preconv",
+            "--path",
+            "dx11",
+            "--out",
+            "x.png",
+        ],
+        &[],
+    );
+    assert_one_error_line(&out, &["dx11", "dx9", "dx10"]);
+}
+
+#[test]
+fn zero_width() {
+    let out = shvis(
+        &[
+            "render",
+            "--technique",
+            "preconv",
+            "--width",
+            "0",
+            "--out",
+            "x.png",
+        ],
+        &[],
+    );
+    assert_one_error_line(&out, &["--width"]);
+}
+
+#[test]
+fn absurd_lightmap_resolution() {
+    let dir = scratch("visres");
+    let out = shvis(
+        &[
+            "bake",
+            "--vis-res",
+            "100000",
+            "--out",
+            dir.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert_one_error_line(&out, &["100000"]);
+}
+
+#[test]
+fn no_vulkan_device_at_all() {
+    let dir = scratch("noicd");
+    let out_png = dir.join("x.png");
+    let missing_icd = dir.join("no-such-icd.json");
+    let icd = missing_icd.to_str().unwrap();
+    let out = shvis(
+        &render_args("sky", out_png.to_str().unwrap()),
+        &[("VK_ICD_FILENAMES", icd), ("VK_DRIVER_FILES", icd)],
+    );
+    assert_one_error_line(&out, &["no Vulkan device"]);
+}
+
+#[test]
+fn unsupported_output_extension() {
+    let out = shvis(&["render", "--technique", "preconv", "--out", "x.bmp"], &[]);
+    assert_one_error_line(&out, &["x.bmp", ".png or .exr"]);
+}

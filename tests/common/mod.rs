@@ -1,0 +1,65 @@
+//! Fixtures shared by the integration tests: a small prepared house scene, a Vulkan
+//! context with validation on that fails the test on any message, and rendering.
+#![allow(dead_code)] // each test binary uses a subset
+
+use std::sync::{Arc, OnceLock};
+
+use shvis::gpu::{Context, ContextDesc};
+use shvis::prepare::{PrepareSettings, Prepared, prepare};
+use shvis::render::{Frame, FrameSettings, SceneGpu};
+use shvis::technique::{self, HwPath, TechniqueId};
+
+/// Lightmap resolution of test bakes: small, yet a texel is ~10 cm on the house.
+pub const TEST_VIS_RES: u32 = 128;
+/// Rays per texel of test bakes.
+pub const TEST_RAYS: u32 = 128;
+
+/// The built-in house and sky, baked once per test binary.
+pub fn house() -> &'static Prepared {
+    static PREPARED: OnceLock<Prepared> = OnceLock::new();
+    PREPARED.get_or_init(|| {
+        prepare(&PrepareSettings {
+            vis_res: TEST_VIS_RES,
+            rays: TEST_RAYS,
+            ..PrepareSettings::default()
+        })
+        .expect("the built-in scene prepares")
+    })
+}
+
+/// A context with VK_LAYER_KHRONOS_validation on.
+pub fn validated_context() -> Arc<Context> {
+    Context::new(&ContextDesc {
+        validate: true,
+        device: None,
+    })
+    .expect("a Vulkan device with the validation layer (lavapipe in CI)")
+}
+
+/// Fails the test if validation said anything at warning level or above.
+pub fn assert_validation_clean(ctx: &Context, what: &str) {
+    let (errors, warnings) = ctx.message_counts();
+    assert_eq!(
+        (errors, warnings),
+        (0, 0),
+        "{what}: validation errors/warnings (see the log)"
+    );
+}
+
+/// Renders one technique × path of `prepared` and checks validation stayed clean.
+pub fn render(
+    ctx: &Arc<Context>,
+    prepared: &Prepared,
+    id: TechniqueId,
+    path: HwPath,
+    settings: &FrameSettings,
+) -> Frame {
+    let scene = SceneGpu::new(ctx, &prepared.scene, settings).expect("scene uploads");
+    let tech =
+        technique::build(ctx, &scene, id, path, &prepared.inputs()).expect("technique builds");
+    let frame = scene.render(&tech, 1, 2).expect("frames render");
+    drop(tech);
+    drop(scene);
+    assert_validation_clean(ctx, &format!("{id}.{path}"));
+    frame
+}
