@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Installs what shvis needs on Debian when it is missing: the Vulkan loader, Mesa's
 # lavapipe (CPU Vulkan), the Khronos validation layer, and shaderc + glslang static
-# libraries (linked by build.rs). As root it runs apt-get; otherwise it prints the exact
+# libraries (linked by build.rs), and the DejaVu font for plot labels. As root it runs apt-get; otherwise it prints the exact
 # command and fails.
 set -euo pipefail
 
-packages=(libvulkan1 mesa-vulkan-drivers vulkan-validationlayers libshaderc-dev glslang-dev)
+packages=(libvulkan1 mesa-vulkan-drivers vulkan-validationlayers libshaderc-dev glslang-dev fonts-dejavu-core)
 missing=()
 for p in "${packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then

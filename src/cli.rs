@@ -19,6 +19,8 @@ use shvis::{bake, report};
 
 /// Largest frame side accepted before asking the device (which may allow less).
 const MAX_FRAME_SIDE: u32 = 16384;
+/// PNG exposure unless `--exposure` says otherwise.
+const DEFAULT_EXPOSURE_EV: f32 = -1.0;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -95,8 +97,9 @@ struct RenderArgs {
     width: u32,
     #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
     height: u32,
-    /// Exposure in EV applied before sRGB encoding (PNG only).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    /// Exposure in EV applied before sRGB encoding (PNG only). The default −1 keeps the
+    /// built-in sky's sunlit ground out of clipping.
+    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_negative_numbers = true)]
     exposure: f32,
     /// Ignore the normal map (shade with interpolated normals).
     #[arg(long)]
@@ -131,7 +134,7 @@ struct BenchArgs {
     #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
     height: u32,
     /// Exposure in EV of the PNG images.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_negative_numbers = true)]
     exposure: f32,
     /// Output directory.
     #[arg(long, default_value = "bench-out")]

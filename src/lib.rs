@@ -16,4 +16,6 @@ pub mod render;
 pub mod report;
 pub mod scene;
 pub mod sh;
+pub mod sphere;
+pub mod study;
 pub mod technique;

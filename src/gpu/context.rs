@@ -426,6 +426,7 @@ impl Context {
                 .device
                 .create_fence(&vk::FenceCreateInfo::default(), None)
                 .map_err(|e| GpuError::vulkan("vkCreateFence", name, e))?;
+            self.set_name(fence, &format!("{name}.fence"));
             let cmds = [cmd];
             let submit = vk::SubmitInfo::default().command_buffers(&cmds);
             let result = self

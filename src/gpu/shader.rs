@@ -53,6 +53,16 @@ pub fn compile_glsl(
 ) -> Result<Vec<u32>, GpuError> {
     let text = source(path)
         .ok_or_else(|| GpuError::Shader(format!("glsl/{path}: no such embedded shader")))?;
+    compile_source(&format!("glsl/{path}"), text, stage, defines)
+}
+
+/// Compiles GLSL `text` reported as `name` in diagnostics; see [`compile_glsl`].
+pub fn compile_source(
+    name: &str,
+    text: &str,
+    stage: ShaderStage,
+    defines: &[(&str, u32)],
+) -> Result<Vec<u32>, GpuError> {
     let compiler = shaderc::Compiler::new()
         .map_err(|e| GpuError::Shader(format!("shaderc unavailable: {e}")))?;
     let mut options = shaderc::CompileOptions::new()
@@ -81,7 +91,7 @@ pub fn compile_glsl(
         ShaderStage::Compute => shaderc::ShaderKind::Compute,
     };
     let artifact = compiler
-        .compile_into_spirv(text, kind, &format!("glsl/{path}"), "main", Some(&options))
+        .compile_into_spirv(text, kind, name, "main", Some(&options))
         .map_err(|e| {
             let one_line = e
                 .to_string()
@@ -110,6 +120,17 @@ mod tests {
             )
             .unwrap();
         }
+    }
+
+    #[test]
+    fn compile_error_names_file_and_line_on_one_line() {
+        let broken = "#version 450\n#extension GL_GOOGLE_include_directive : require\n#include \"sh.glsl\"\nvoid main() {\n    float x = undefined_thing;\n}\n";
+        let e = compile_source("glsl/technique/broken.frag", broken, ShaderStage::Fragment, &[])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("glsl/technique/broken.frag:5"), "{e}");
+        assert!(e.contains("undefined_thing"), "{e}");
+        assert!(!e.contains('\n'), "{e}");
     }
 
     #[test]

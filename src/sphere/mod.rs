@@ -1,0 +1,1 @@
+//! Sphere parameterizations (in progress).
