@@ -41,6 +41,38 @@ enum Command {
     Render(RenderArgs),
     /// Time every technique × path and write table.md, table.json and images.
     Bench(BenchArgs),
+    /// SH utilities for checking the math from outside (17 significant digits).
+    #[command(subcommand)]
+    Sh(ShCommand),
+}
+
+#[derive(Subcommand, Debug)]
+enum ShCommand {
+    /// Reads directions "x y z" per line on stdin, prints the order² basis values per line.
+    Eval {
+        #[arg(long)]
+        order: u32,
+    },
+    /// Prints the environment's RGB SH coefficients, one line "r g b" per coefficient.
+    Project {
+        #[arg(long, default_value = "sky")]
+        env: String,
+        #[arg(long)]
+        order: u32,
+    },
+    /// Prints the irradiance E(n) = ∫ L max(0, n·ω) dω as "r g b": from SH of the given
+    /// order (default 3), or by direct quadrature over the texels with --exact.
+    Irradiance {
+        #[arg(long, default_value = "sky")]
+        env: String,
+        /// The normal "x,y,z" (normalized; zero or NaN is an error).
+        #[arg(long, allow_hyphen_values = true)]
+        normal: String,
+        #[arg(long, conflicts_with = "exact")]
+        order: Option<u32>,
+        #[arg(long)]
+        exact: bool,
+    },
 }
 
 #[derive(Args, Debug, Clone)]
@@ -147,7 +179,80 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Bake(a) => run_bake(a).context("bake"),
         Command::Render(a) => run_render(a).context("render"),
         Command::Bench(a) => run_bench(a).context("bench"),
+        Command::Sh(c) => run_sh(c).context("sh"),
     }
+}
+
+/// 17 significant digits: enough to round-trip an f64.
+fn fmt17(v: f64) -> String {
+    format!("{v:.16e}")
+}
+
+fn parse_direction(text: &str, what: &str) -> Result<glam::DVec3> {
+    let parts: Vec<&str> = text
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|p| !p.is_empty())
+        .collect();
+    let values: Vec<f64> = parts
+        .iter()
+        .map(|p| p.parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| anyhow::anyhow!("{what}: '{text}' is not three numbers"))?;
+    let [x, y, z] = values[..] else {
+        bail!("{what}: '{text}' is not three numbers");
+    };
+    Ok(shvis::sh::unit_dir(glam::DVec3::new(x, y, z)).with_context(|| what.to_string())?)
+}
+
+fn run_sh(c: ShCommand) -> Result<()> {
+    use std::io::{BufRead, Write};
+
+    use shvis::sh::{Order, basis::eval_basis, zonal};
+    let stdout = std::io::stdout();
+    let mut out = std::io::BufWriter::new(stdout.lock());
+    match c {
+        ShCommand::Eval { order } => {
+            let order = Order::new(order)?;
+            let mut values = vec![0.0; order.coeff_count()];
+            for (i, line) in std::io::stdin().lock().lines().enumerate() {
+                let line = line.context("reading stdin")?;
+                if line.trim().is_empty() || line.trim_start().starts_with('#') {
+                    continue;
+                }
+                let dir = parse_direction(&line, &format!("stdin line {}", i + 1))?;
+                eval_basis(order, dir, &mut values);
+                let text: Vec<String> = values.iter().map(|&v| fmt17(v)).collect();
+                writeln!(out, "{}", text.join(" "))?;
+            }
+        }
+        ShCommand::Project { env, order } => {
+            let order = Order::new(order)?;
+            let env = shvis::env::resolve(&env)?;
+            for c in shvis::env::project::project_sh(&env, order) {
+                writeln!(out, "{} {} {}", fmt17(c[0]), fmt17(c[1]), fmt17(c[2]))?;
+            }
+        }
+        ShCommand::Irradiance {
+            env,
+            normal,
+            order,
+            exact,
+        } => {
+            let n = parse_direction(&normal, "--normal")?;
+            let order = order.map(Order::new).transpose()?;
+            let env = shvis::env::resolve(&env)?;
+            let e = if exact {
+                shvis::env::project::irradiance_brute_force(&env, n)
+            } else {
+                let order = order.unwrap_or(Order::THREE);
+                let radiance = shvis::env::project::project_sh(&env, order);
+                zonal::eval_rgb(&zonal::irradiance_from_radiance(&radiance, order), order, n)
+            };
+            writeln!(out, "{} {} {}", fmt17(e[0]), fmt17(e[1]), fmt17(e[2]))?;
+        }
+    }
+    out.flush()?;
+    Ok(())
 }
 
 fn prepare_settings(scene: &SceneArgs, env: &str) -> PrepareSettings {

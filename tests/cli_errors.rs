@@ -151,3 +151,31 @@ fn unsupported_output_extension() {
     let out = shvis(&["render", "--technique", "preconv", "--out", "x.bmp"], &[]);
     assert_one_error_line(&out, &["x.bmp", ".png or .exr"]);
 }
+
+#[test]
+fn sh_order_out_of_range() {
+    for order in ["0", "31"] {
+        let out = shvis(&["sh", "eval", "--order", order], &[]);
+        assert_one_error_line(&out, &["order", order]);
+    }
+}
+
+#[test]
+fn sh_zero_and_nan_directions() {
+    for dir in ["0 0 0", "nan 0 1", "1 2"] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_shvis"))
+            .args(["sh", "eval", "--order", "3"])
+            .env("RUST_LOG", "off")
+            .stdin(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        use std::io::Write;
+        writeln!(child.stdin.take().unwrap(), "{dir}").unwrap();
+        let out = child.wait_with_output().unwrap();
+        assert_one_error_line(&out, &["stdin line 1"]);
+    }
+    let out = shvis(&["sh", "irradiance", "--normal", "0,0,0"], &[]);
+    assert_one_error_line(&out, &["--normal", "zero-length"]);
+}

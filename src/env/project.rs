@@ -91,26 +91,87 @@ pub fn project_sh(env: &EnvMap, order: Order) -> Vec<[f64; 3]> {
         .collect()
 }
 
+/// The per-texel quadrature of one row (module doc): θ nodes (sin θ, cos θ, weight),
+/// the common weight scale (exact solid angle / raw rule), and the φ step.
+struct RowRule {
+    theta: [(f64, f64, f64); 3],
+    scale: f64,
+    d_phi: f64,
+}
+
+impl RowRule {
+    fn new(env: &EnvMap, y: u32) -> RowRule {
+        let (w, h) = (env.width as f64, env.height as f64);
+        let (g_nodes, g_weights) = gauss3();
+        let d_phi = 2.0 * PI / w;
+        let d_theta = PI / h;
+        let theta_mid = (y as f64 + 0.5) * d_theta;
+        let mut theta = [(0.0, 0.0, 0.0); 3];
+        for k in 0..3 {
+            let t = theta_mid + 0.5 * d_theta * g_nodes[k];
+            theta[k] = (t.sin(), t.cos(), g_weights[k] * t.sin());
+        }
+        let raw: f64 = theta.iter().map(|t| t.2).sum::<f64>() * 0.5 * d_theta * d_phi;
+        let omega = env.texel_solid_angle(y);
+        // Each (θ, φ) node's weight: GL in θ × GL in φ (both halves of ½Δ·Σ g = Δ).
+        let scale = omega / raw * 0.5 * d_theta * 0.5 * d_phi;
+        RowRule {
+            theta,
+            scale,
+            d_phi,
+        }
+    }
+
+    /// Calls `f(direction, weight)` for the 9 nodes of texel `x`; weights sum to Ω_texel.
+    fn for_each_node(&self, env: &EnvMap, x: u32, mut f: impl FnMut(DVec3, f64)) {
+        let (g_nodes, g_weights) = gauss3();
+        let phi_mid = 2.0 * PI * ((x as f64 + 0.5) / env.width as f64 - 0.5);
+        for (sin_t, cos_t, wt) in self.theta {
+            for j in 0..3 {
+                let phi = phi_mid + 0.5 * self.d_phi * g_nodes[j];
+                let (sin_p, cos_p) = phi.sin_cos();
+                let dir = DVec3::new(sin_t * sin_p, cos_t, -sin_t * cos_p);
+                f(dir, wt * g_weights[j] * self.scale);
+            }
+        }
+    }
+}
+
+/// Irradiance E(n) = ∫ L(ω) max(0, n·ω) dω by direct quadrature over the texels (the same
+/// per-texel rule as [`project_sh`]): the ground truth that order-3 SH irradiance
+/// approximates (`shvis sh irradiance --exact`). `normal` must be unit length.
+pub fn irradiance_brute_force(env: &EnvMap, normal: DVec3) -> [f64; 3] {
+    let rows: Vec<[f64; 3]> = (0..env.height)
+        .into_par_iter()
+        .map(|y| {
+            let rule = RowRule::new(env, y);
+            let mut acc = [Neumaier::default(); 3];
+            for x in 0..env.width {
+                let l_t = env.texels[y as usize * env.width as usize + x as usize];
+                let mut cosine = 0.0;
+                rule.for_each_node(env, x, |dir, weight| {
+                    cosine += weight * normal.dot(dir).max(0.0);
+                });
+                for k in 0..3 {
+                    acc[k].add(l_t[k] as f64 * cosine);
+                }
+            }
+            acc.map(Neumaier::value)
+        })
+        .collect();
+    std::array::from_fn(|k| {
+        let mut acc = Neumaier::default();
+        for r in &rows {
+            acc.add(r[k]);
+        }
+        acc.value()
+    })
+}
+
 /// Compensated partial sums of one row: Σ_x L_t ∫_t y_i dω.
 fn project_row(env: &EnvMap, order: Order, y: u32) -> Vec<[f64; 3]> {
     let n = order.coeff_count();
-    let (w, h) = (env.width as f64, env.height as f64);
-    let (g_nodes, g_weights) = gauss3();
-    let d_phi = 2.0 * PI / w;
-    let d_theta = PI / h;
-    let theta_mid = (y as f64 + 0.5) * d_theta;
-
-    // θ nodes and their sin θ weights, rescaled to the exact solid angle of the texel.
-    let mut theta = [(0.0, 0.0, 0.0); 3]; // (sin θ, cos θ, weight)
-    for k in 0..3 {
-        let t = theta_mid + 0.5 * d_theta * g_nodes[k];
-        theta[k] = (t.sin(), t.cos(), g_weights[k] * t.sin());
-    }
-    let raw: f64 = theta.iter().map(|t| t.2).sum::<f64>() * 0.5 * d_theta * d_phi;
-    let omega = env.texel_solid_angle(y);
-    // Each (θ, φ) node's weight: GL in θ × GL in φ (both halves of ½Δ·Σ g = Δ).
-    let scale = omega / raw * 0.5 * d_theta * 0.5 * d_phi;
-
+    let rule = RowRule::new(env, y);
     let mut basis_weighted = vec![0.0; n];
     let mut basis = vec![0.0; n];
     let mut acc = vec![[Neumaier::default(); 3]; n];
@@ -120,19 +181,12 @@ fn project_row(env: &EnvMap, order: Order, y: u32) -> Vec<[f64; 3]> {
             continue;
         }
         basis_weighted.fill(0.0);
-        let phi_mid = 2.0 * PI * ((x as f64 + 0.5) / w - 0.5);
-        for (sin_t, cos_t, wt) in theta {
-            for j in 0..3 {
-                let phi = phi_mid + 0.5 * d_phi * g_nodes[j];
-                let (sin_p, cos_p) = phi.sin_cos();
-                let dir = DVec3::new(sin_t * sin_p, cos_t, -sin_t * cos_p);
-                eval_basis(order, dir, &mut basis);
-                let weight = wt * g_weights[j] * scale;
-                for (b, v) in basis_weighted.iter_mut().zip(&basis) {
-                    *b += weight * v;
-                }
+        rule.for_each_node(env, x, |dir, weight| {
+            eval_basis(order, dir, &mut basis);
+            for (b, v) in basis_weighted.iter_mut().zip(&basis) {
+                *b += weight * v;
             }
-        }
+        });
         for (a, b) in acc.iter_mut().zip(&basis_weighted) {
             for k in 0..3 {
                 a[k].add(l_t[k] as f64 * b);

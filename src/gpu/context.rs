@@ -293,6 +293,18 @@ impl Context {
     pub fn supports_cube_arrays(&self) -> bool {
         self.image_cube_array
     }
+
+    /// Whether optimal-tiling images of `format` can be sampled with linear filtering.
+    pub fn supports_linear_filter(&self, format: vk::Format) -> bool {
+        // SAFETY: a plain query on the physical device of this instance.
+        let props = unsafe {
+            self.instance
+                .get_physical_device_format_properties(self.physical, format)
+        };
+        props
+            .optimal_tiling_features
+            .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
+    }
     /// Validation/debug messages counted so far: tests assert (0, 0).
     pub fn message_counts(&self) -> (u32, u32) {
         self.messages.get()

@@ -44,6 +44,15 @@ impl ImageDesc {
             ..Self::texture_2d(format, width, height)
         }
     }
+    /// A sampled cube-map array of `cubes` cubes, `size`² texels per face; layer
+    /// 6·cube + face, faces in +X, −X, +Y, −Y, +Z, −Z order (Vulkan's).
+    pub fn texture_cube_array(format: vk::Format, size: u32, cubes: u32) -> Self {
+        ImageDesc {
+            layers: 6 * cubes,
+            view_type: vk::ImageViewType::CUBE_ARRAY,
+            ..Self::texture_2d(format, size, size)
+        }
+    }
     pub fn mip_levels(mut self, levels: u32) -> Self {
         self.mip_levels = levels;
         self
@@ -79,6 +88,20 @@ pub struct Image {
 impl Image {
     /// `name` reads like a capture label: "preconv.dx10.ao", "scene.albedo".
     pub fn new(ctx: &Arc<Context>, desc: &ImageDesc, name: &str) -> Result<Self, GpuError> {
+        if matches!(desc.view_type, vk::ImageViewType::CUBE_ARRAY) && !ctx.supports_cube_arrays() {
+            return Err(GpuError::MissingFeature {
+                device: ctx.device_name().to_string(),
+                feature: format!("cube-map arrays (imageCubeArray) for '{name}'"),
+            });
+        }
+        if desc.usage.contains(vk::ImageUsageFlags::SAMPLED)
+            && !ctx.supports_linear_filter(desc.format)
+        {
+            return Err(GpuError::MissingFeature {
+                device: ctx.device_name().to_string(),
+                feature: format!("linear filtering of {:?} for '{name}'", desc.format),
+            });
+        }
         let max = ctx.limits().max_image_dimension2_d;
         if desc.width == 0 || desc.height == 0 || desc.width > max || desc.height > max {
             return Err(GpuError::Invalid {

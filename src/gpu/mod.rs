@@ -9,8 +9,10 @@
 //! This is the only module allowed `unsafe`; each block says why it is sound.
 
 pub mod buffer;
+pub mod compute;
 pub mod context;
 mod debug;
+mod descriptors;
 pub mod image;
 pub mod layout;
 pub mod pass;
@@ -19,9 +21,11 @@ pub mod target;
 mod upload;
 
 pub use buffer::Buffer;
+pub use compute::{ComputePipeline, ComputePipelineDesc};
 pub use context::{Context, ContextDesc, MessageCounts};
+pub use descriptors::Resource;
 pub use image::{Image, ImageDesc, Sampler, SamplerKind};
-pub use pass::{MeshBuffers, MeshPipeline, MeshPipelineDesc, Resource, VertexLayout};
+pub use pass::{MeshBuffers, MeshPipeline, MeshPipelineDesc, VertexLayout};
 pub use shader::{ShaderStage, compile_glsl};
 pub use target::RenderTarget;
 

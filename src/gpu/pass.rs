@@ -13,13 +13,8 @@ use std::sync::Arc;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use super::{Buffer, Context, GpuError, Image, RenderTarget, Sampler};
-
-/// What is bound at a binding.
-pub enum Resource<'a> {
-    Uniform(&'a Buffer),
-    Texture(&'a Image, &'a Sampler),
-}
+use super::descriptors::{DescriptorSet, Resource};
+use super::{Buffer, Context, GpuError, RenderTarget};
 
 /// Vertex buffer layout: stride and (location, format, offset) per attribute.
 #[derive(Clone, Debug)]
@@ -129,11 +124,9 @@ pub fn device_local_buffer(
 pub struct MeshPipeline {
     ctx: Arc<Context>,
     name: String,
-    set_layout: vk::DescriptorSetLayout,
+    descriptors: DescriptorSet,
     pipeline_layout: vk::PipelineLayout,
     pipeline: vk::Pipeline,
-    pool: vk::DescriptorPool,
-    set: vk::DescriptorSet,
     modules: [vk::ShaderModule; 2],
 }
 
@@ -146,11 +139,14 @@ impl MeshPipeline {
         let mut p = MeshPipeline {
             ctx: ctx.clone(),
             name: desc.name.to_string(),
-            set_layout: vk::DescriptorSetLayout::null(),
+            descriptors: DescriptorSet::new(
+                ctx,
+                desc.resources,
+                vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+                desc.name,
+            )?,
             pipeline_layout: vk::PipelineLayout::null(),
             pipeline: vk::Pipeline::null(),
-            pool: vk::DescriptorPool::null(),
-            set: vk::DescriptorSet::null(),
             modules: [vk::ShaderModule::null(); 2],
         };
         // Half-built pipelines are torn down by Drop, which tolerates null handles.
@@ -166,106 +162,13 @@ impl MeshPipeline {
         let ctx = self.ctx.clone();
         let device = ctx.device();
         let name = desc.name;
-        let layout_bindings: Vec<_> = desc
-            .resources
-            .iter()
-            .map(|(binding, r)| {
-                vk::DescriptorSetLayoutBinding::default()
-                    .binding(*binding)
-                    .descriptor_type(descriptor_type(r))
-                    .descriptor_count(1)
-                    .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)
-            })
-            .collect();
-        let set_layout_info =
-            vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings);
+        let set_layouts = [self.descriptors.layout];
+        let pl_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
         // SAFETY (this block and those below): create-infos borrow locals alive for each
         // call; created handles are stored in `self` at once so Drop destroys them.
-        self.set_layout = unsafe { device.create_descriptor_set_layout(&set_layout_info, None) }
-            .map_err(|e| GpuError::vulkan("vkCreateDescriptorSetLayout", name, e))?;
-        ctx.set_name(self.set_layout, name);
-        let set_layouts = [self.set_layout];
-        let pl_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
-        // SAFETY: see above.
         self.pipeline_layout = unsafe { device.create_pipeline_layout(&pl_info, None) }
             .map_err(|e| GpuError::vulkan("vkCreatePipelineLayout", name, e))?;
         ctx.set_name(self.pipeline_layout, name);
-
-        // Descriptor pool and set.
-        let uniforms = desc
-            .resources
-            .iter()
-            .filter(|(_, r)| matches!(r, Resource::Uniform(_)))
-            .count() as u32;
-        let textures = desc.resources.len() as u32 - uniforms;
-        let mut sizes = Vec::new();
-        if uniforms > 0 {
-            sizes.push(vk::DescriptorPoolSize {
-                ty: vk::DescriptorType::UNIFORM_BUFFER,
-                descriptor_count: uniforms,
-            });
-        }
-        if textures > 0 {
-            sizes.push(vk::DescriptorPoolSize {
-                ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                descriptor_count: textures,
-            });
-        }
-        let pool_info = vk::DescriptorPoolCreateInfo::default()
-            .max_sets(1)
-            .pool_sizes(&sizes);
-        // SAFETY: see above.
-        self.pool = unsafe { device.create_descriptor_pool(&pool_info, None) }
-            .map_err(|e| GpuError::vulkan("vkCreateDescriptorPool", name, e))?;
-        ctx.set_name(self.pool, name);
-        let alloc_info = vk::DescriptorSetAllocateInfo::default()
-            .descriptor_pool(self.pool)
-            .set_layouts(&set_layouts);
-        // SAFETY: see above.
-        self.set = unsafe { device.allocate_descriptor_sets(&alloc_info) }
-            .map_err(|e| GpuError::vulkan("vkAllocateDescriptorSets", name, e))?[0];
-        ctx.set_name(self.set, name);
-        let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = desc
-            .resources
-            .iter()
-            .map(|(_, r)| match r {
-                Resource::Uniform(b) => [vk::DescriptorBufferInfo {
-                    buffer: b.raw(),
-                    offset: 0,
-                    range: vk::WHOLE_SIZE,
-                }],
-                Resource::Texture(..) => [vk::DescriptorBufferInfo::default()],
-            })
-            .collect();
-        let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = desc
-            .resources
-            .iter()
-            .map(|(_, r)| match r {
-                Resource::Texture(img, sampler) => [vk::DescriptorImageInfo {
-                    sampler: sampler.raw(),
-                    image_view: img.view(),
-                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                }],
-                Resource::Uniform(_) => [vk::DescriptorImageInfo::default()],
-            })
-            .collect();
-        let writes: Vec<_> = desc
-            .resources
-            .iter()
-            .enumerate()
-            .map(|(i, (binding, r))| {
-                let w = vk::WriteDescriptorSet::default()
-                    .dst_set(self.set)
-                    .dst_binding(*binding)
-                    .descriptor_type(descriptor_type(r));
-                match r {
-                    Resource::Uniform(_) => w.buffer_info(&buffer_infos[i]),
-                    Resource::Texture(..) => w.image_info(&image_infos[i]),
-                }
-            })
-            .collect();
-        // SAFETY: the set, buffers, views and samplers are live; infos outlive the call.
-        unsafe { device.update_descriptor_sets(&writes, &[]) };
 
         // Shaders and pipeline.
         for (i, code) in [desc.vertex_spirv, desc.fragment_spirv].iter().enumerate() {
@@ -462,7 +365,7 @@ impl MeshPipeline {
                 vk::PipelineBindPoint::GRAPHICS,
                 self.pipeline_layout,
                 0,
-                &[self.set],
+                &[self.descriptors.set],
                 &[],
             );
             device.cmd_bind_vertex_buffers(cmd, 0, &[mesh.vertex.raw()], &[0]);
@@ -509,26 +412,17 @@ pub fn ticks_to_ms(start: u64, end: u64, mask: u64, ns_per_tick: f64) -> f64 {
     ((end & mask).wrapping_sub(start & mask) & mask) as f64 * ns_per_tick * 1e-6
 }
 
-fn descriptor_type(r: &Resource<'_>) -> vk::DescriptorType {
-    match r {
-        Resource::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
-        Resource::Texture(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-    }
-}
-
 impl Drop for MeshPipeline {
     fn drop(&mut self) {
         let device = self.ctx.device();
-        // SAFETY: submissions are waited for; destroying null handles is valid; the set is
-        // freed with its pool.
+        // SAFETY: submissions are waited for; destroying null handles is valid. The
+        // descriptor set is dropped after this (field order), once nothing uses it.
         unsafe {
             device.destroy_pipeline(self.pipeline, None);
             for m in self.modules {
                 device.destroy_shader_module(m, None);
             }
-            device.destroy_descriptor_pool(self.pool, None);
             device.destroy_pipeline_layout(self.pipeline_layout, None);
-            device.destroy_descriptor_set_layout(self.set_layout, None);
         }
     }
 }

@@ -125,9 +125,14 @@ mod tests {
     #[test]
     fn compile_error_names_file_and_line_on_one_line() {
         let broken = "#version 450\n#extension GL_GOOGLE_include_directive : require\n#include \"sh.glsl\"\nvoid main() {\n    float x = undefined_thing;\n}\n";
-        let e = compile_source("glsl/technique/broken.frag", broken, ShaderStage::Fragment, &[])
-            .unwrap_err()
-            .to_string();
+        let e = compile_source(
+            "glsl/technique/broken.frag",
+            broken,
+            ShaderStage::Fragment,
+            &[],
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("glsl/technique/broken.frag:5"), "{e}");
         assert!(e.contains("undefined_thing"), "{e}");
         assert!(!e.contains('\n'), "{e}");

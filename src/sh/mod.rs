@@ -29,9 +29,19 @@
 //!   the poles.
 //! - [`zonal`]: the clamped cosine max(0, cos θ) in SH, its convolution factors and
 //!   radiance → irradiance.
+//! - [`product`]: the real Gaunt (triple-product) tensor and the product matrix of
+//!   Iwanicki–Sloan §3.3.
+//! - [`rotate`]: rotation of coefficients of any order (Ivanic–Ruedenberg recurrence).
+//! - [`window`]: per-band windowing against ringing (Hanning, Lanczos, deringing).
+//! - [`project`]: projection of a function by an exact sphere quadrature, and
+//!   reconstruction.
 //! - [`gauss_legendre`]: quadrature nodes used by projections and tests.
 
 pub mod basis;
+pub mod product;
+pub mod project;
+pub mod rotate;
+pub mod window;
 pub mod zonal;
 
 /// Highest SH order accepted by [`Order::new`]: the recurrences of [`basis`] are tested

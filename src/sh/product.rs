@@ -102,7 +102,12 @@ impl Matrix {
     /// # Panics
     /// If `data.len() != rows * cols`.
     pub fn from_row_major(rows: usize, cols: usize, data: Vec<f64>) -> Matrix {
-        assert_eq!(data.len(), rows * cols, "{rows}×{cols} matrix from {} values", data.len());
+        assert_eq!(
+            data.len(),
+            rows * cols,
+            "{rows}×{cols} matrix from {} values",
+            data.len()
+        );
         Matrix { rows, cols, data }
     }
 
@@ -161,8 +166,20 @@ impl Matrix {
     /// # Panics
     /// If `v.len() != cols` or `out.len() != rows`.
     pub fn mul_vec_into(&self, v: &[f64], out: &mut [f64]) {
-        assert_eq!(v.len(), self.cols, "vector of {} for {} columns", v.len(), self.cols);
-        assert_eq!(out.len(), self.rows, "output of {} for {} rows", out.len(), self.rows);
+        assert_eq!(
+            v.len(),
+            self.cols,
+            "vector of {} for {} columns",
+            v.len(),
+            self.cols
+        );
+        assert_eq!(
+            out.len(),
+            self.rows,
+            "output of {} for {} rows",
+            out.len(),
+            self.rows
+        );
         for (o, row) in out.iter_mut().zip(self.data.chunks_exact(self.cols.max(1))) {
             *o = row.iter().zip(v).map(|(a, b)| a * b).sum();
         }
@@ -226,9 +243,14 @@ impl GauntTensor {
     /// If `f` holds fewer than a² or `g` fewer than b² values.
     pub fn product(&self, f: &[f64], g: &[f64]) -> Vec<f64> {
         let (a, b, c) = self.orders;
-        assert!(f.len() >= a.coeff_count() && g.len() >= b.coeff_count(),
+        assert!(
+            f.len() >= a.coeff_count() && g.len() >= b.coeff_count(),
             "{} and {} coefficients given, orders {a} and {b} need {} and {}",
-            f.len(), g.len(), a.coeff_count(), b.coeff_count());
+            f.len(),
+            g.len(),
+            a.coeff_count(),
+            b.coeff_count()
+        );
         let mut out = vec![0.0; c.coeff_count()];
         for e in &self.entries {
             out[e.k as usize] += f[e.i as usize] * g[e.j as usize] * e.value;
@@ -250,7 +272,11 @@ pub fn gaunt_tensor(a: Order, b: Order, c: Order) -> GauntTensor {
     let mut at_node = vec![0.0; zs.len() * nc];
     for (t, z) in zs.iter().enumerate() {
         let s = (1.0 - z * z).max(0.0).sqrt();
-        eval_basis(max_order, DVec3::new(s, 0.0, *z), &mut at_node[t * nc..(t + 1) * nc]);
+        eval_basis(
+            max_order,
+            DVec3::new(s, 0.0, *z),
+            &mut at_node[t * nc..(t + 1) * nc],
+        );
     }
     let z_integral = |p: usize, q: usize, r: usize| -> f64 {
         ws.iter()
@@ -441,7 +467,11 @@ mod tests {
         let m = product_matrix(&f, fo, go, out);
         assert_eq!((m.rows(), m.cols()), (25, 9));
         let got = m.mul_vec(&g);
-        let want = project_fn(out, |d| eval(&f, fo, d) * eval(&g, go, d), exact_quadrature_n(out, 4));
+        let want = project_fn(
+            out,
+            |d| eval(&f, fo, d) * eval(&g, go, d),
+            exact_quadrature_n(out, 4),
+        );
         for (k, (a, b)) in got.iter().zip(&want).enumerate() {
             assert!((a - b).abs() < EXACT, "k={k}: {a} vs {b}");
         }

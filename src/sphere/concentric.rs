@@ -71,12 +71,8 @@ mod tests {
     /// diagonals exactly.
     fn grid_square(n: usize) -> impl Iterator<Item = DVec2> {
         let step = 2.0 / (n - 1) as f64;
-        (0..n * n).map(move |k| {
-            DVec2::new(
-                -1.0 + (k % n) as f64 * step,
-                -1.0 + (k / n) as f64 * step,
-            )
-        })
+        (0..n * n)
+            .map(move |k| DVec2::new(-1.0 + (k % n) as f64 * step, -1.0 + (k / n) as f64 * step))
     }
 
     #[test]
@@ -94,7 +90,10 @@ mod tests {
             for (sx, sy) in [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)] {
                 let q = square_to_disk(DVec2::new(sx * t, sy * t));
                 let expect = DVec2::new(sx, sy) * (t * std::f64::consts::FRAC_1_SQRT_2);
-                assert!((q - expect).length() < ROUND_TRIP * t, "{t}: {q} vs {expect}");
+                assert!(
+                    (q - expect).length() < ROUND_TRIP * t,
+                    "{t}: {q} vs {expect}"
+                );
             }
         }
     }

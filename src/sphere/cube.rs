@@ -191,7 +191,8 @@ fn wrap_texel(res: u32, face: u32, i: i64, j: i64) -> Option<u32> {
             let [n2, s2, t2] = FACE_AXES[f2 as usize];
             debug_assert!((q.dot(n2) - 1.0).abs() < 1e-12, "{q} is not on face {f2}");
             // Texel containing the point; the edge coordinate (±1) lands in the edge row.
-            let index = |c: f64| ((0.5 * (c + 1.0) * f64::from(res)).floor() as i64).clamp(0, n - 1) as u32;
+            let index =
+                |c: f64| ((0.5 * (c + 1.0) * f64::from(res)).floor() as i64).clamp(0, n - 1) as u32;
             Some(flat(res, f2, index(q.dot(s2)), index(q.dot(t2))))
         }
     }
