@@ -20,6 +20,14 @@ const SOURCES: &[(&str, &str)] = &[
         include_str!("../../glsl/include/sh.glsl"),
     ),
     (
+        "include/sphere.glsl",
+        include_str!("../../glsl/include/sphere.glsl"),
+    ),
+    (
+        "study/reconstruct.comp",
+        include_str!("../../glsl/study/reconstruct.comp"),
+    ),
+    (
         "technique/mesh.vert",
         include_str!("../../glsl/technique/mesh.vert"),
     ),
@@ -117,6 +125,22 @@ mod tests {
                 "technique/preconv.frag",
                 ShaderStage::Fragment,
                 &[("PATH_DX9", path_dx9)],
+            )
+            .unwrap();
+        }
+        for param in 0..4 {
+            compile_glsl(
+                "study/reconstruct.comp",
+                ShaderStage::Compute,
+                &[("STUDY_PARAM", param)],
+            )
+            .unwrap();
+        }
+        for param in 0..4 {
+            compile_glsl(
+                "study/reconstruct.comp",
+                ShaderStage::Compute,
+                &[("STUDY_PARAM", param)],
             )
             .unwrap();
         }

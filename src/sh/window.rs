@@ -32,12 +32,17 @@
 //!    points by a pattern search on the sphere (steps halved down to 1e-9 rad), so that
 //!    minima between grid points are found to ~1e-16 of the function's scale.
 //! 3. If the unwindowed function is already non-negative, nothing is done. Otherwise w
-//!    is bracketed between 1 (σ_l = 0 for l ≥ 1: only the mean, non-negative when
-//!    c_0 ≥ 0) and a width where the minimum is negative (starting at w = order,
-//!    doubling), and bisected to a relative width of 1e-6, keeping the non-negative end.
+//!    lies between 1 (σ_l = 0 for l ≥ 1: only the mean, non-negative when c_0 ≥ 0) and
+//!    a width w_hi where the minimum is negative (starting at w = order, doubling).
+//!    The minimum need not be monotonic in w, so 32 widths evenly spaced in [1, w_hi]
+//!    are tried from the gentle end; the largest non-negative one and its negative
+//!    neighbour are then bisected to a relative width of 1e-6, keeping the
+//!    non-negative end.
 //!
 //! If the mean c_0 is negative no window can help; the strongest one (mean only) is
-//! used. The minimum need not be monotonic in w; bisection returns one crossing. For
+//! used. In practice the family is blunt: a hemisphere step at order 8 needs
+//! w ≈ 2.55 (Hanning), keeping bands 0–2 — the price of one parameter, where Sloan's
+//! per-band optimisation keeps more detail. For
 //! RGB the smallest width over the channels is applied to all three, so hue is
 //! filtered consistently.
 //!
@@ -67,7 +72,7 @@ impl Taper {
             return 1.0;
         }
         let lf = l as f64;
-        if !(lf < w) {
+        if w.is_nan() || lf >= w {
             return 0.0;
         }
         let x = std::f64::consts::PI * lf / w;
@@ -188,6 +193,8 @@ const BISECTION_REL: f64 = 1e-6;
 const REFINE_MIN_STEP: f64 = 1e-9;
 /// Grid minima refined per evaluation.
 const REFINE_STARTS: usize = 4;
+/// Widths sampled before the bisection (step 3 of the module doc).
+const DERINGING_SCAN: usize = 32;
 
 /// The width w of the gentlest `taper` window whose reconstruction of `coeffs` is
 /// non-negative over the sphere (module doc), or `None` when the unwindowed
@@ -224,13 +231,27 @@ pub fn deringing_width(taper: Taper, coeffs: &[f64], order: Order) -> Option<f64
         log::warn!("SH deringing: negative mean, no window makes the function non-negative");
         return Some(lo);
     }
+    // A width whose reconstruction is negative: σ → 1 as w → ∞, so doubling finds one.
     let mut hi = (n as f64).max(2.0);
-    for _ in 0..64 {
-        if windowed_min(&sigma_at(hi)) < 0.0 {
+    let mut doublings = 0;
+    while windowed_min(&sigma_at(hi)) >= 0.0 {
+        doublings += 1;
+        if doublings > 64 {
+            return Some(hi);
+        }
+        hi *= 2.0;
+    }
+    // Coarse scan from the gentle end: the largest non-negative sample and its negative
+    // neighbour bracket the gentlest crossing even if the minimum is not monotonic in w.
+    let span = hi - lo;
+    let mut upper = hi;
+    for k in (0..DERINGING_SCAN).rev() {
+        let w = lo + span * k as f64 / DERINGING_SCAN as f64;
+        if windowed_min(&sigma_at(w)) >= 0.0 {
+            (lo, hi) = (w, upper);
             break;
         }
-        lo = hi;
-        hi *= 2.0;
+        upper = w;
     }
     while hi - lo > BISECTION_REL * hi {
         let mid = 0.5 * (lo + hi);

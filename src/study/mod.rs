@@ -1,1 +1,9 @@
-//! Studies (in progress).
+//! Studies: CPU experiments that reproduce the paper's measurements outside the renderer
+//! and write their data, a markdown summary and plots (DESIGN §4, `shvis study …`).
+//!
+//! - [`params`]: Iwanicki–Sloan App. A, Figure 8 — how well each sphere parameterization
+//!   of [`crate::sphere`] reconstructs SH basis functions under hardware bilinear
+//!   filtering, as MSE against total texel count (`shvis study params`).
+
+pub mod params;
+pub mod params_gpu;

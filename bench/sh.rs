@@ -1,0 +1,65 @@
+//! Criterion benches of the SH core (issue 3): basis evaluation at order 6 in f32 (per
+//! direction), projection of a 512×256 environment to order 8, and the §3.3 product
+//! matrix for H order 3 × V order 6 (lighting at order 8 = O+2). Inputs are seeded.
+
+use std::hint::black_box;
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glam::{DVec3, Vec3};
+use shvis::env::project::project_sh;
+use shvis::env::sky::{SkyParams, sky};
+use shvis::sh::Order;
+use shvis::sh::basis::eval_basis_f32;
+use shvis::sh::product::gaunt_tensor;
+
+/// Deterministic unit directions (golden-spiral points).
+fn directions(n: usize) -> Vec<Vec3> {
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let r = (1.0 - z * z).sqrt();
+            let phi = i as f64 * std::f64::consts::PI * (3.0 - 5f64.sqrt());
+            DVec3::new(r * phi.cos(), r * phi.sin(), z).as_vec3()
+        })
+        .collect()
+}
+
+fn sh_eval(c: &mut Criterion) {
+    let dirs = directions(1024);
+    let mut out = [0.0f32; 36];
+    let mut g = c.benchmark_group("sh_eval");
+    g.throughput(Throughput::Elements(dirs.len() as u64));
+    g.bench_function("order6_f32_x1024", |b| {
+        b.iter(|| {
+            for &d in &dirs {
+                eval_basis_f32(Order::SIX, black_box(d), &mut out);
+                black_box(&out);
+            }
+        })
+    });
+    g.finish();
+}
+
+fn env_projection(c: &mut Criterion) {
+    let env = sky(512, &SkyParams::default());
+    let order = Order::new(8).expect("valid order");
+    let mut g = c.benchmark_group("env_projection");
+    g.sample_size(10);
+    g.bench_function("512x256_order8", |b| {
+        b.iter(|| black_box(project_sh(black_box(&env), order)))
+    });
+    g.finish();
+}
+
+fn product_matrix(c: &mut Criterion) {
+    let (l_order, v_order, h_order) = (Order::new(8).expect("valid"), Order::SIX, Order::THREE);
+    let tensor = gaunt_tensor(l_order, v_order, h_order);
+    let env = sky(128, &SkyParams::default());
+    let lighting: Vec<f64> = project_sh(&env, l_order).iter().map(|c| c[1]).collect();
+    c.bench_function("product_matrix_h3_v6_l8", |b| {
+        b.iter(|| black_box(tensor.product_matrix(black_box(&lighting))))
+    });
+}
+
+criterion_group!(benches, sh_eval, env_projection, product_matrix);
+criterion_main!(benches);
