@@ -13,14 +13,28 @@
 //!
 //! Triangles with zero area or non-finite corners are left out of the BVH: they cannot
 //! occlude anything.
+//!
+//! # Coherent queries
+//!
+//! [`Tracer::occluded_coherent`] answers up to [`PACKET_RAYS`] rays that share one
+//! direction (the visibility bake's direction-major order, [`super::visibility`]) in one
+//! walk of the CWBVH: each node is decoded once for the packet (child slabs, the
+//! direction's sign selection and the products q·extent·(1/d), all shared because the
+//! direction is), and only the per-ray origin terms differ; the packet carries a mask of
+//! rays still alive, split per child. Every per-ray operation is the very IEEE operation,
+//! in the very order and with the same min/max operand order, that obvhs's single-ray
+//! `CwBvhNode::intersect_ray` (SSE) and `Triangle::intersect` perform, and a ray enters a
+//! child exactly when its own single-ray traversal would, so each ray's answer is
+//! bit-for-bit that of [`Tracer::occluded`] — only the order of visits differs, which an
+//! any-hit query does not see (tested here and in `tests/bake_visibility.rs`).
 
 use std::time::Duration;
 
-use glam::{Vec3, Vec3A};
+use glam::{Vec3, Vec3A, Vec4};
 use obvhs::{
     BvhBuildParams,
     cwbvh::{CwBvh, builder::build_cwbvh_from_tris},
-    ray::Ray,
+    ray::{Ray, safe_inverse},
     triangle::Triangle,
 };
 
@@ -28,6 +42,77 @@ use crate::scene::Mesh;
 
 /// Normal offset of ray origins relative to the scene's bounding-box diagonal.
 pub const EPSILON_PER_EXTENT: f32 = 1e-4;
+
+/// Most rays of one [`Tracer::occluded_coherent`] query (one bit each of a `u64` mask).
+pub const PACKET_RAYS: usize = 64;
+/// SIMD lanes of 4 rays in a packet.
+const PACKET_LANES: usize = PACKET_RAYS / 4;
+/// obvhs's node-test lower bound on t (`cwbvh::node::EPSILON`, crate-private there),
+/// repeated so that coherent node tests equal single-ray ones bit for bit.
+const NODE_T_MIN: f32 = 0.0001;
+
+/// Origins of one coherent query (structure of arrays, 4 rays per SIMD lane) and the
+/// traversal stack, reused across queries.
+#[derive(Clone, Debug)]
+pub struct RayPacket {
+    x: [Vec4; PACKET_LANES],
+    y: [Vec4; PACKET_LANES],
+    z: [Vec4; PACKET_LANES],
+    len: usize,
+    stack: Vec<(u32, u64)>,
+}
+
+impl RayPacket {
+    /// A packet of `origins` (ray i = bit i of the query masks).
+    ///
+    /// # Panics
+    /// With more than [`PACKET_RAYS`] origins (a bug in the caller).
+    pub fn new(origins: &[Vec3]) -> RayPacket {
+        assert!(
+            origins.len() <= PACKET_RAYS,
+            "{} origins exceed a packet of {PACKET_RAYS}",
+            origins.len()
+        );
+        let mut packet = RayPacket {
+            x: [Vec4::ZERO; PACKET_LANES],
+            y: [Vec4::ZERO; PACKET_LANES],
+            z: [Vec4::ZERO; PACKET_LANES],
+            len: origins.len(),
+            stack: Vec::with_capacity(256),
+        };
+        for (i, o) in origins.iter().enumerate() {
+            let (lane, k) = (i / 4, i % 4);
+            packet.x[lane][k] = o.x;
+            packet.y[lane][k] = o.y;
+            packet.z[lane][k] = o.z;
+        }
+        packet
+    }
+
+    /// Number of rays.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether the packet has no ray.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Mask of all rays of the packet.
+    pub fn all(&self) -> u64 {
+        if self.len == PACKET_RAYS {
+            !0
+        } else {
+            (1u64 << self.len) - 1
+        }
+    }
+
+    fn origin(&self, i: usize) -> Vec3A {
+        let (lane, k) = (i / 4, i % 4);
+        Vec3A::new(self.x[lane][k], self.y[lane][k], self.z[lane][k])
+    }
+}
 
 /// Any-hit ray queries against a static mesh.
 pub struct Tracer {
@@ -126,6 +211,122 @@ impl Tracer {
         let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), self.t_min(), t_max);
         !bvh.ray_traverse_miss(ray, |ray, id| self.triangles[id].intersect(ray))
     }
+
+    /// [`Self::occluded`] for the rays of `packet` selected by `active` (bit i = origin
+    /// i), all along the unit `dir`, in one coherent BVH walk (module doc). Returns the
+    /// mask of the active rays that are occluded; each bit equals what
+    /// [`Self::occluded`] answers for that ray.
+    pub fn occluded_coherent(&self, packet: &mut RayPacket, dir: Vec3, t_max: f32, active: u64) -> u64 {
+        let active = active & packet.all();
+        let Some(bvh) = &self.bvh else {
+            return 0;
+        };
+        if active == 0 || bvh.nodes.is_empty() {
+            return 0;
+        }
+        let t_min = self.t_min();
+        let d = Vec3A::from(dir);
+        // As Ray::new computes it.
+        let inv = Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
+        let (rdx, rdy, rdz) = (d.x < 0.0, d.y < 0.0, d.z < 0.0);
+        // Child-slot priority of obvhs's traversal order: slot ^ octant (near first).
+        let oct = (if rdx { 0 } else { 4 }) | (if rdy { 0 } else { 2 }) | (if rdz { 0 } else { 1 });
+        let (inv_x, inv_y, inv_z) = (Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z));
+        let node_t_min = Vec4::splat(NODE_T_MIN);
+        let ray_t_max = Vec4::splat(t_max);
+        let mut occluded = 0u64;
+        let mut ox = [Vec4::ZERO; PACKET_LANES];
+        let mut oy = [Vec4::ZERO; PACKET_LANES];
+        let mut oz = [Vec4::ZERO; PACKET_LANES];
+        let mut stack = std::mem::take(&mut packet.stack);
+        stack.clear();
+        stack.push((0, active));
+        while let Some((node_index, mask)) = stack.pop() {
+            let mask = mask & !occluded;
+            if mask == 0 {
+                continue;
+            }
+            let node = &bvh.nodes[node_index as usize];
+            // Per-ray part of CwBvhNode::intersect_ray: (p − origin)·(1/d).
+            let adj = node.compute_extent() * inv;
+            let (px, py, pz) = (Vec4::splat(node.p.x), Vec4::splat(node.p.y), Vec4::splat(node.p.z));
+            let mut lanes = 0u32;
+            for l in 0..PACKET_LANES {
+                if (mask >> (4 * l)) & 0xf != 0 {
+                    lanes |= 1 << l;
+                    ox[l] = (px - packet.x[l]) * inv_x;
+                    oy[l] = (py - packet.y[l]) * inv_y;
+                    oz[l] = (pz - packet.z[l]) * inv_z;
+                }
+            }
+            let mut child_masks = [0u64; 8];
+            for c in 0..8 {
+                if node.child_meta[c] == 0 {
+                    continue; // empty slot
+                }
+                let pick = |lo: u8, hi: u8, neg: bool| {
+                    let (lo, hi) = (f32::from(lo), f32::from(hi));
+                    if neg { (hi, lo) } else { (lo, hi) }
+                };
+                let (x0, x1) = pick(node.child_min_x[c], node.child_max_x[c], rdx);
+                let (y0, y1) = pick(node.child_min_y[c], node.child_max_y[c], rdy);
+                let (z0, z1) = pick(node.child_min_z[c], node.child_max_z[c], rdz);
+                let (x0, x1) = (Vec4::splat(x0 * adj.x), Vec4::splat(x1 * adj.x));
+                let (y0, y1) = (Vec4::splat(y0 * adj.y), Vec4::splat(y1 * adj.y));
+                let (z0, z1) = (Vec4::splat(z0 * adj.z), Vec4::splat(z1 * adj.z));
+                let mut hit = 0u64;
+                let mut todo = lanes;
+                while todo != 0 {
+                    let l = todo.trailing_zeros() as usize;
+                    todo &= todo - 1;
+                    // The operand order of obvhs's _mm_max_ps/_mm_min_ps (NaN handling).
+                    let tmin = (x0 + ox[l]).max((y0 + oy[l]).max(z0 + oz[l])).max(node_t_min);
+                    let tmax = (x1 + ox[l]).min((y1 + oy[l]).min(z1 + oz[l])).min(ray_t_max);
+                    hit |= u64::from(tmin.cmple(tmax).bitmask()) << (4 * l);
+                }
+                child_masks[c] = hit & mask;
+            }
+            // Leaves first (any hit removes rays from everything below), then internal
+            // children pushed far to near so the nearest is walked next.
+            for c in 0..8 {
+                let m = child_masks[c];
+                if m == 0 || !node.is_leaf(c) {
+                    continue;
+                }
+                let (first, count) = node.child_primitives(c);
+                for prim in first..first + count {
+                    let tri = &self.triangles[prim as usize];
+                    let mut todo = m & !occluded;
+                    while todo != 0 {
+                        let r = todo.trailing_zeros() as usize;
+                        todo &= todo - 1;
+                        let ray = Ray {
+                            origin: packet.origin(r),
+                            direction: d,
+                            inv_direction: inv,
+                            tmin: t_min,
+                            tmax: t_max,
+                        };
+                        if tri.intersect(&ray) < t_max {
+                            occluded |= 1 << r;
+                        }
+                    }
+                }
+            }
+            if occluded == active {
+                break;
+            }
+            for priority in 0..8 {
+                let c = priority ^ oct;
+                let m = child_masks[c] & !occluded;
+                if m != 0 && !node.is_leaf(c) {
+                    stack.push((node.child_node_index(c), m));
+                }
+            }
+        }
+        packet.stack = stack;
+        occluded
+    }
 }
 
 #[cfg(test)]
@@ -170,6 +371,39 @@ mod tests {
         assert_eq!(tracer.triangle_count(), 0);
         assert!(!tracer.occluded(Vec3::ZERO, Vec3::Z, f32::INFINITY));
         assert!(!Tracer::new(&Mesh::default()).occluded(Vec3::ZERO, Vec3::Z, 1.0));
+    }
+
+    #[test]
+    fn coherent_queries_equal_single_rays_bit_for_bit() {
+        // A cloud of small random triangles, rays from a grid of origins inside it.
+        let mut h = 1u64;
+        let mut next = || {
+            h = h.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((h >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+        };
+        let tris: Vec<[Vec3; 3]> = (0..3000)
+            .map(|_| {
+                let c = Vec3::new(next(), next(), next()) * 4.0;
+                [0, 1, 2].map(|_| c + Vec3::new(next(), next(), next()) * 0.3)
+            })
+            .collect();
+        let tracer = Tracer::new(&mesh(&tris));
+        let origins: Vec<Vec3> = (0..61)
+            .map(|i| Vec3::new((i % 8) as f32 * 0.1, (i / 8) as f32 * 0.1, 0.05))
+            .collect();
+        let mut packet = RayPacket::new(&origins);
+        for k in 0..200 {
+            let dir = Vec3::new(next(), next(), next()).normalize_or(Vec3::X);
+            let dir = if k % 17 == 0 { Vec3::Y } else { dir }; // axis-aligned: 1/0 slabs
+            let active = if k % 3 == 0 { !0 } else { 0x5555_aaaa_0f0f_f0f0 };
+            let t_max = if k % 5 == 0 { 2.0 } else { f32::INFINITY };
+            let got = tracer.occluded_coherent(&mut packet, dir, t_max, active);
+            for (i, &o) in origins.iter().enumerate() {
+                let want = active >> i & 1 == 1 && tracer.occluded(o, dir, t_max);
+                assert_eq!(got >> i & 1 == 1, want, "direction {k}, ray {i}");
+            }
+            assert_eq!(got >> origins.len(), 0);
+        }
     }
 
     #[test]
