@@ -44,6 +44,36 @@ enum Command {
     /// SH utilities for checking the math from outside (17 significant digits).
     #[command(subcommand)]
     Sh(ShCommand),
+    /// Reproduce the paper's side studies.
+    #[command(subcommand)]
+    Study(StudyCommand),
+}
+
+#[derive(Subcommand, Debug)]
+enum StudyCommand {
+    /// Appendix A / Figure 8: MSE of SH basis functions stored in four sphere
+    /// parameterizations against total samples (CPU emulation and real texture hardware).
+    Params(StudyParamsArgs),
+}
+
+#[derive(Args, Debug)]
+struct StudyParamsArgs {
+    /// Output directory: params.csv, params.json, params.md, params_mse.svg/png, gpu.csv.
+    #[arg(long, default_value = "study-out")]
+    out: PathBuf,
+    /// Random directions for the CPU reconstruction.
+    #[arg(long, default_value_t = shvis::study::params::DEFAULT_DIRECTIONS, value_parser = clap::value_parser!(usize))]
+    directions: usize,
+    /// Directions for the GPU reconstruction (a subset of the same set).
+    #[arg(long, default_value_t = 65536)]
+    gpu_directions: usize,
+    /// Skip the GPU reconstruction.
+    #[arg(long)]
+    no_gpu: bool,
+    #[arg(long, default_value_t = shvis::study::params::DEFAULT_SEED)]
+    seed: u64,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 #[derive(Subcommand, Debug)]
@@ -180,7 +210,77 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(a) => run_render(a).context("render"),
         Command::Bench(a) => run_bench(a).context("bench"),
         Command::Sh(c) => run_sh(c).context("sh"),
+        Command::Study(StudyCommand::Params(a)) => run_study_params(a).context("study params"),
     }
+}
+
+fn run_study_params(a: StudyParamsArgs) -> Result<()> {
+    use shvis::sh::Order;
+    use shvis::sphere::Parameterization;
+    use shvis::study::{params, params_gpu};
+    if a.directions == 0 || a.directions > 100_000_000 {
+        bail!(
+            "--directions {} is out of range 1..=100000000",
+            a.directions
+        );
+    }
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    let points = params::run_study(a.directions, a.seed);
+    log::info!(
+        "CPU emulation: {} parameterization × resolution × order points at {} directions in {:.1} s",
+        points.len(),
+        a.directions,
+        started.elapsed().as_secs_f64()
+    );
+    let mut written = params::write_report(&points, &a.out)?;
+    if !a.no_gpu {
+        let gpu_started = Instant::now();
+        let ctx = open_gpu(&a.gpu)?;
+        let mut directions =
+            params::study_directions(a.directions.min(a.gpu_directions.max(1)), a.seed);
+        directions.truncate(a.gpu_directions.max(1));
+        let configs: Vec<(Parameterization, u32)> = Parameterization::ALL
+            .iter()
+            .flat_map(|&p| params::resolutions(p).iter().map(move |&r| (p, r)))
+            .collect();
+        let gpu_points = params_gpu::run_gpu_study(&ctx, &configs, Order::SIX, &directions)?;
+        let path = a.out.join("gpu.csv");
+        let mut csv = String::from(
+            "parameterization,order,res,samples,mse_gpu,mse_cpu,max_abs_diff,rms_diff\n",
+        );
+        for p in &gpu_points {
+            csv += &format!(
+                "{},{},{},{},{:.9e},{:.9e},{:.3e},{:.3e}\n",
+                p.parameterization,
+                p.order,
+                p.res,
+                p.samples,
+                p.mse_gpu,
+                p.mse_cpu,
+                p.max_abs_diff,
+                p.rms_diff
+            );
+        }
+        std::fs::write(&path, csv).with_context(|| format!("{}: cannot write", path.display()))?;
+        let md_path = a.out.join("params.md");
+        let mut md = std::fs::read_to_string(&md_path).unwrap_or_default();
+        md += &params_gpu::gpu_summary_markdown(&gpu_points, ctx.device_name(), directions.len());
+        std::fs::write(&md_path, md)
+            .with_context(|| format!("{}: cannot write", md_path.display()))?;
+        written.push(path);
+        log::info!(
+            "GPU reconstruction on {} in {:.1} s",
+            ctx.device_name(),
+            gpu_started.elapsed().as_secs_f64()
+        );
+        check_validation(&ctx, a.gpu.validate)?;
+    }
+    for p in &written {
+        println!("wrote {}", p.display());
+    }
+    println!("study params: {:.1} s", started.elapsed().as_secs_f64());
+    Ok(())
 }
 
 /// 17 significant digits: enough to round-trip an f64.

@@ -9,7 +9,7 @@ use crate::bake::raster::rasterize;
 use crate::bake::trace::Tracer;
 use crate::bake::{self, BakeError};
 use crate::env::{self, EnvError, EnvMap};
-use crate::scene::{Scene, SceneError, house};
+use crate::scene::{Scene, SceneError, gltf, house};
 use crate::sh::{Order, zonal};
 use crate::technique::Inputs;
 
@@ -78,7 +78,7 @@ pub fn resolve_scene(name: &str, vis_res: u32) -> Result<Scene, SceneError> {
     match name {
         "house" => house::build(vis_res),
         p if p.ends_with(".gltf") || p.ends_with(".glb") => {
-            Err(SceneError::GltfNotYetSupported(p.to_string()))
+            gltf::load(std::path::Path::new(p), vis_res)
         }
         other => Err(SceneError::Unknown(other.to_string())),
     }

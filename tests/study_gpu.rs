@@ -6,7 +6,8 @@ mod common;
 
 use shvis::sh::Order;
 use shvis::sphere::Parameterization;
-use shvis::study::params_gpu::{run_gpu_study, uniform_directions};
+use shvis::study::params::study_directions;
+use shvis::study::params_gpu::run_gpu_study;
 
 /// Vulkan requires ≥ 8 bits of sub-texel precision: a weight may be off by 2⁻⁹, so a
 /// reconstruction by at most 2⁻⁹ × (the largest difference between neighbouring texels,
@@ -19,7 +20,7 @@ const MSE_AGREEMENT: f64 = 0.05;
 fn hardware_reconstruction_matches_the_emulation() {
     let ctx = common::validated_context();
     let configs: Vec<_> = Parameterization::ALL.iter().map(|&p| (p, 8)).collect();
-    let dirs = uniform_directions(4096, 7);
+    let dirs = study_directions(4096, 7);
     let points = run_gpu_study(&ctx, &configs, Order::SIX, &dirs).expect("GPU study runs");
     assert_eq!(points.len(), 8);
     for p in &points {

@@ -293,11 +293,7 @@ mod tests {
     fn set_is_unit_deterministic_and_seeded() {
         let a = DirectionSet::new(1000, 3);
         assert_eq!(a.len(), 1000);
-        assert!(
-            a.dirs()
-                .iter()
-                .all(|d| (d.length() - 1.0).abs() < UNIT)
-        );
+        assert!(a.dirs().iter().all(|d| (d.length() - 1.0).abs() < UNIT));
         assert_eq!(a, DirectionSet::new(1000, 3));
         assert_ne!(a.dirs(), DirectionSet::new(1000, 4).dirs());
         assert!(DirectionSet::new(0, 1).is_empty());
@@ -365,6 +361,9 @@ mod tests {
             .sum::<f64>()
             / 4095.0;
         let spacing = (4.0 * PI / 4096.0).sqrt();
-        assert!(mean < 4.0 * spacing, "mean step {mean} vs spacing {spacing}");
+        assert!(
+            mean < 4.0 * spacing,
+            "mean step {mean} vs spacing {spacing}"
+        );
     }
 }

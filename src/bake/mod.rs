@@ -4,13 +4,20 @@
 //!   geometric normal (texel centres at (i+½)/res, DESIGN §1), and gutter dilation.
 //! - [`trace`]: occlusion rays against the mesh (obvhs compressed-wide BVH).
 //! - [`ao`]: scalar ambient occlusion per texel, the `preconv` technique's data (DESIGN §2).
+//! - [`directions`]: the shared stratified ray directions of the visibility bake and the
+//!   SH projection of a texel's visible set.
+//! - [`visibility`]: SH visibility per texel (Iwanicki–Sloan §3.1), the `unc*`/`pca*` data.
+//! - [`cache`]: versioned, checksummed bake cache files, and EXR dumps for inspection.
 //!
 //! Inputs a user controls (ray counts, resolutions) are validated here once, by
 //! [`validate_rays`] and [`validate_res`], so the bake math itself returns no errors.
 
 pub mod ao;
+pub mod cache;
+pub mod directions;
 pub mod raster;
 pub mod trace;
+pub mod visibility;
 
 /// Fewest rays per texel.
 pub const MIN_RAYS: u32 = 1;
@@ -30,6 +37,17 @@ pub enum BakeError {
     ResOutOfRange { res: u32, min: u32, max: u32 },
     #[error("no triangle covers a lightmap texel centre: the mesh has no usable lightmap UVs")]
     EmptyLightmap,
+    #[error("{}: cannot {action}: {source}", .path.display())]
+    Io {
+        path: std::path::PathBuf,
+        action: &'static str,
+        source: std::io::Error,
+    },
+    #[error("{}: cannot write EXR: {detail}", .path.display())]
+    Exr {
+        path: std::path::PathBuf,
+        detail: String,
+    },
 }
 
 /// Checks a rays-per-texel count against [`MIN_RAYS`]..=[`MAX_RAYS`].

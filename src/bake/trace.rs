@@ -216,7 +216,13 @@ impl Tracer {
     /// i), all along the unit `dir`, in one coherent BVH walk (module doc). Returns the
     /// mask of the active rays that are occluded; each bit equals what
     /// [`Self::occluded`] answers for that ray.
-    pub fn occluded_coherent(&self, packet: &mut RayPacket, dir: Vec3, t_max: f32, active: u64) -> u64 {
+    pub fn occluded_coherent(
+        &self,
+        packet: &mut RayPacket,
+        dir: Vec3,
+        t_max: f32,
+        active: u64,
+    ) -> u64 {
         let active = active & packet.all();
         let Some(bvh) = &self.bvh else {
             return 0;
@@ -249,7 +255,11 @@ impl Tracer {
             let node = &bvh.nodes[node_index as usize];
             // Per-ray part of CwBvhNode::intersect_ray: (p − origin)·(1/d).
             let adj = node.compute_extent() * inv;
-            let (px, py, pz) = (Vec4::splat(node.p.x), Vec4::splat(node.p.y), Vec4::splat(node.p.z));
+            let (px, py, pz) = (
+                Vec4::splat(node.p.x),
+                Vec4::splat(node.p.y),
+                Vec4::splat(node.p.z),
+            );
             let mut lanes = 0u32;
             for l in 0..PACKET_LANES {
                 if (mask >> (4 * l)) & 0xf != 0 {
@@ -280,8 +290,12 @@ impl Tracer {
                     let l = todo.trailing_zeros() as usize;
                     todo &= todo - 1;
                     // The operand order of obvhs's _mm_max_ps/_mm_min_ps (NaN handling).
-                    let tmin = (x0 + ox[l]).max((y0 + oy[l]).max(z0 + oz[l])).max(node_t_min);
-                    let tmax = (x1 + ox[l]).min((y1 + oy[l]).min(z1 + oz[l])).min(ray_t_max);
+                    let tmin = (x0 + ox[l])
+                        .max((y0 + oy[l]).max(z0 + oz[l]))
+                        .max(node_t_min);
+                    let tmax = (x1 + ox[l])
+                        .min((y1 + oy[l]).min(z1 + oz[l]))
+                        .min(ray_t_max);
                     hit |= u64::from(tmin.cmple(tmax).bitmask()) << (4 * l);
                 }
                 child_masks[c] = hit & mask;
@@ -378,7 +392,9 @@ mod tests {
         // A cloud of small random triangles, rays from a grid of origins inside it.
         let mut h = 1u64;
         let mut next = || {
-            h = h.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            h = h
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((h >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
         };
         let tris: Vec<[Vec3; 3]> = (0..3000)
@@ -395,7 +411,11 @@ mod tests {
         for k in 0..200 {
             let dir = Vec3::new(next(), next(), next()).normalize_or(Vec3::X);
             let dir = if k % 17 == 0 { Vec3::Y } else { dir }; // axis-aligned: 1/0 slabs
-            let active = if k % 3 == 0 { !0 } else { 0x5555_aaaa_0f0f_f0f0 };
+            let active = if k % 3 == 0 {
+                !0
+            } else {
+                0x5555_aaaa_0f0f_f0f0
+            };
             let t_max = if k % 5 == 0 { 2.0 } else { f32::INFINITY };
             let got = tracer.occluded_coherent(&mut packet, dir, t_max, active);
             for (i, &o) in origins.iter().enumerate() {

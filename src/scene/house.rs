@@ -19,9 +19,9 @@
 //! Lightmap UVs (DESIGN §1 "Lightmap"): every quad is its own chart, laid out texel-aligned:
 //! a chart of w×h texels maps the quad corners exactly onto texel boundaries, so every texel
 //! whose centre lies in the chart rectangle is fully covered. Chart sizes come from one
-//! uniform density (texels per metre; the ground gets half of it), the largest for which a
-//! shelf packer fits all charts with [`GUTTER_TEXELS`] empty texels between charts and
-//! around the border (bisection on the density). The 224 charts of at least 1×1 texels
+//! uniform density (texels per metre; the ground gets half of it), the largest for which the
+//! shared shelf packer ([`lightmap_uv::pack_charts`]) fits all charts with [`GUTTER_TEXELS`]
+//! empty texels between charts and around the border (bisection on the density). The 224 charts of at least 1×1 texels
 //! plus gutters need [`MIN_LIGHTMAP_RES`] texels per side at least.
 //!
 //! The material is a procedural tiling brick texture (sRGB albedo) with a normal map derived
@@ -30,16 +30,17 @@
 //! degenerate triangles, orthonormal frames), the chart layout (inside [0,1], no overlaps)
 //! and the [`landmarks`] used by image tests.
 
-use glam::{Vec2, Vec3};
+use glam::{DVec2, Vec2, Vec3};
 
+use super::lightmap_uv::{self, ChartRect as Chart, ChartSize};
 use super::{Camera, Material, Mesh, Scene, SceneError, Texture8, Vertex};
+
+pub use super::lightmap_uv::GUTTER_TEXELS;
 
 /// Smallest lightmap resolution the house's charts fit in (one texel per chart plus gutters).
 pub const MIN_LIGHTMAP_RES: u32 = 64;
 /// Largest lightmap resolution accepted.
 pub const MAX_LIGHTMAP_RES: u32 = 8192;
-/// Empty texels between two charts and between a chart and the lightmap border.
-pub const GUTTER_TEXELS: u32 = 2;
 /// Side of the square brick textures, texels.
 pub const TEXTURE_SIZE: u32 = 256;
 
@@ -420,82 +421,17 @@ fn quads() -> Vec<Quad> {
     q
 }
 
-/// Texel rectangle of one chart: corner (x, y) and size (w, h), texels.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Chart {
-    x: u32,
-    y: u32,
-    w: u32,
-    h: u32,
-}
-
-/// Chart sizes at `density` texels per metre (at least 1×1).
-fn chart_sizes(quads: &[Quad], density: f64) -> Vec<(u32, u32)> {
-    quads
-        .iter()
-        .map(|q| {
-            let d = if q.half_density {
-                0.5 * density
-            } else {
-                density
-            };
-            let texels = |m: f32| (f64::from(m) * d).ceil().clamp(1.0, 1e9) as u32;
-            (texels(q.size.x), texels(q.size.y))
-        })
-        .collect()
-}
-
-/// Shelf packing, tallest first, with `GUTTER_TEXELS` between charts and at the border.
-fn shelf_pack(sizes: &[(u32, u32)], res: u32) -> Option<Vec<Chart>> {
-    let g = GUTTER_TEXELS;
-    let mut order: Vec<usize> = (0..sizes.len()).collect();
-    order.sort_by_key(|&i| (std::cmp::Reverse(sizes[i].1), std::cmp::Reverse(sizes[i].0)));
-    let mut charts = vec![
-        Chart {
-            x: 0,
-            y: 0,
-            w: 0,
-            h: 0
-        };
-        sizes.len()
-    ];
-    let (mut x, mut y, mut shelf) = (g, g, 0);
-    for i in order {
-        let (w, h) = sizes[i];
-        if x + w + g > res {
-            (x, y, shelf) = (g, y + shelf + g, 0);
-        }
-        if x + w + g > res || y + h + g > res {
-            return None;
-        }
-        charts[i] = Chart { x, y, w, h };
-        x += w + g;
-        shelf = shelf.max(h);
-    }
-    Some(charts)
-}
-
-/// The largest uniform density whose charts fit (bisection), or `None` when even 1×1
-/// charts do not.
+/// The quads as charts for the shared packer ([`lightmap_uv::pack_charts`]): the ground at
+/// half density.
 fn pack_charts(quads: &[Quad], res: u32) -> Option<Vec<Chart>> {
-    let mut best = shelf_pack(&chart_sizes(quads, 0.0), res)?;
-    let area: f64 = quads
+    let charts: Vec<ChartSize> = quads
         .iter()
-        .map(|q| f64::from(q.size.x * q.size.y) * if q.half_density { 0.25 } else { 1.0 })
-        .sum();
-    // Total chart area cannot exceed the lightmap: an upper bound on the density.
-    let (mut lo, mut hi) = (0.0, f64::from(res) / area.sqrt());
-    for _ in 0..40 {
-        let mid = 0.5 * (lo + hi);
-        match shelf_pack(&chart_sizes(quads, mid), res) {
-            Some(charts) => {
-                best = charts;
-                lo = mid;
-            }
-            None => hi = mid,
-        }
-    }
-    Some(best)
+        .map(|q| ChartSize {
+            size: DVec2::new(f64::from(q.size.x), f64::from(q.size.y)),
+            density_scale: if q.half_density { 0.5 } else { 1.0 },
+        })
+        .collect();
+    lightmap_uv::pack_charts(&charts, res).map(|p| p.rects)
 }
 
 /// Triangulates the quads: 4 vertices and 2 counter-clockwise triangles each.

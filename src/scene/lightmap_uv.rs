@@ -208,7 +208,10 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
         for k in 0..3 {
             let (a, b) = (welded[corner(t, k)], welded[corner(t, (k + 1) % 3)]);
             if a != b {
-                edges.entry((a.min(b), a.max(b))).or_default().push(t as u32);
+                edges
+                    .entry((a.min(b), a.max(b)))
+                    .or_default()
+                    .push(t as u32);
             }
         }
     }
@@ -316,7 +319,13 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
             let old = corner(t, k) as u32;
             let index = *remap.entry((old, id)).or_insert_with(|| {
                 let p = local.get(&(old, id)).copied().unwrap_or_default() - mins[id as usize];
-                let uv = (offset + p * d) * inv_res;
+                let mut uv = (offset + p * d) * inv_res;
+                if !uv.is_finite() {
+                    // Only for absurd input (zero density): the chart's rectangle centre.
+                    uv = (DVec2::new(f64::from(rect.x), f64::from(rect.y))
+                        + 0.5 * DVec2::new(f64::from(rect.w), f64::from(rect.h)))
+                        * inv_res;
+                }
                 let mut v = mesh.vertices[old as usize];
                 v.uv_lightmap = [uv.x as f32, uv.y as f32];
                 vertices.push(v);
@@ -342,7 +351,11 @@ mod tests {
     pub(crate) fn covered_texels(uv: [[f32; 2]; 3], res: u32) -> Vec<u32> {
         let p = uv.map(|c| DVec2::new(f64::from(c[0]), f64::from(c[1])) * f64::from(res));
         let lo = p[0].min(p[1]).min(p[2]).floor().max(DVec2::ZERO);
-        let hi = p[0].max(p[1]).max(p[2]).ceil().min(DVec2::splat(f64::from(res)));
+        let hi = p[0]
+            .max(p[1])
+            .max(p[2])
+            .ceil()
+            .min(DVec2::splat(f64::from(res)));
         let area = (p[1] - p[0]).perp_dot(p[2] - p[0]);
         let mut out = Vec::new();
         if area.abs() < 1e-12 {
@@ -351,9 +364,8 @@ mod tests {
         for y in lo.y as u32..hi.y as u32 {
             for x in lo.x as u32..hi.x as u32 {
                 let c = DVec2::new(f64::from(x) + 0.5, f64::from(y) + 0.5);
-                let w = [0, 1, 2].map(|k| {
-                    (p[(k + 2) % 3] - p[(k + 1) % 3]).perp_dot(c - p[(k + 1) % 3]) / area
-                });
+                let w = [0, 1, 2]
+                    .map(|k| (p[(k + 2) % 3] - p[(k + 1) % 3]).perp_dot(c - p[(k + 1) % 3]) / area);
                 if w.iter().all(|&b| b >= -1e-6) {
                     out.push(y * res + x);
                 }
@@ -424,7 +436,10 @@ mod tests {
         }
         for t in m.indices.chunks(3) {
             for k in 1..3 {
-                let (a, b) = (find(&mut parent, t[0] as usize), find(&mut parent, t[k] as usize));
+                let (a, b) = (
+                    find(&mut parent, t[0] as usize),
+                    find(&mut parent, t[k] as usize),
+                );
                 parent[a] = b;
             }
         }

@@ -1,10 +1,15 @@
 //! Scenes: triangle meshes with material and lightmap UVs, a material (albedo and
 //! tangent-space normal map), and a camera (DESIGN §1: right-handed, +Y up, metres).
 //!
-//! `house` builds the procedural default scene. The vertex layout here is the one the GPU
-//! reads (`glsl/technique/mesh.vert`), so it is `#[repr(C)]` + `Pod`.
+//! `house` builds the procedural default scene, `gltf` loads glTF 2.0 files; `tangent`
+//! (MikkTSpace frames) and `lightmap_uv` (chart packing, generated lightmap UVs) serve both.
+//! The vertex layout here is the one the GPU reads (`glsl/technique/mesh.vert`), so it is
+//! `#[repr(C)]` + `Pod`.
 
+pub mod gltf;
 pub mod house;
+pub mod lightmap_uv;
+pub mod tangent;
 
 use glam::{Mat4, Vec3, Vec4};
 
@@ -138,6 +143,34 @@ impl Camera {
     }
 }
 
+/// Vertical field of view of [`framing_camera`], degrees.
+pub const FRAMING_FOV_Y_DEG: f32 = 50.0;
+
+/// A camera for a scene that brings none: it looks at the centre of `bounds` (min, max)
+/// from the front-right diagonal (+X, +Z), elevated by about 25°, far enough that the
+/// bounding sphere fills the 50° vertical field of view; near and far planes bracket the
+/// sphere. Works at any scale (centimetre models included) and for empty or flat bounds.
+pub fn framing_camera(bounds: (Vec3, Vec3)) -> Camera {
+    let (lo, hi) = bounds;
+    let (centre, radius) = if lo.is_finite() && hi.is_finite() && lo.cmple(hi).all() {
+        (0.5 * (lo + hi), (0.5 * (hi - lo).length()).max(1e-6))
+    } else {
+        (Vec3::ZERO, 1.0)
+    };
+    let fov_y = FRAMING_FOV_Y_DEG.to_radians();
+    // Distance at which the sphere just fits the vertical field of view, plus a margin.
+    let distance = 1.1 * radius / (0.5 * fov_y).sin();
+    let direction = Vec3::new(1.0, 0.65, 1.2).normalize();
+    Camera {
+        position: centre + direction * distance,
+        target: centre,
+        up: Vec3::Y,
+        fov_y,
+        z_near: (distance - radius).max(0.0) * 0.5 + distance * 1e-3,
+        z_far: (distance + radius) * 2.0,
+    }
+}
+
 /// Everything a technique needs from a scene.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -152,8 +185,9 @@ pub struct Scene {
 pub enum SceneError {
     #[error("unknown scene '{0}': use 'house' or a path to a .gltf/.glb file")]
     Unknown(String),
-    #[error("{0}: glTF scenes are not supported yet; use --scene house")]
-    GltfNotYetSupported(String),
+    /// A glTF file that cannot be read or used; `message` says what is wrong.
+    #[error("{path}: {message}")]
+    Gltf { path: String, message: String },
     #[error("lightmap resolution {res} is out of range {min}..={max}")]
     LightmapRes { res: u32, min: u32, max: u32 },
 }

@@ -1,0 +1,419 @@
+//! Bake cache files (DESIGN §5: "bake (cached, versioned files)") and EXR dumps of a bake
+//! for inspection.
+//!
+//! # Cache file layout (little-endian)
+//!
+//! ```text
+//! offset  size  field
+//!      0     8  magic "SHVISBC\0"
+//!      8     4  format version (CACHE_FORMAT_VERSION)
+//!     12     4  kind (1 = SH visibility)
+//!     16     8  key: hash of the scene content and the settings (below)
+//!     24     8  payload length, bytes
+//!     32     8  payload checksum (hash64 of the payload)
+//!     40     …  payload: res u32, order u32, rays_traced u64, seconds f64,
+//!               res²·order² coefficients f32, res² covered u8 (0/1), res² AO f32
+//! ```
+//!
+//! The key is [`hash64`] of the format version, the kind, the vertex and index bytes of
+//! the mesh (every attribute, as laid out in [`Vertex`]) and the settings (order, rays,
+//! seed, res); the file is `visibility-{key:016x}.bin` in the cache directory. A file is
+//! used only when magic, version, kind, key, length and checksum all match and the
+//! payload parses to the requested resolution and order; anything else is logged with
+//! `log::warn!` (one line: the file and what is wrong) and rebuilt, never trusted.
+//! Files are written atomically: a temporary file in the same directory, fsync, rename
+//! (then a best-effort fsync of the directory), so a crash leaves the old file or none.
+//!
+//! Bump [`CACHE_FORMAT_VERSION`] whenever the layout *or the bake's results* change.
+//!
+//! [`hash64`] is FNV-1a over little-endian 64-bit words (odd 64-bit FNV prime), bytes of
+//! a short tail folded one by one, and a SplitMix64 finalizer: every step is a bijection
+//! of the state for a given input, so any change confined to one word (a flipped byte)
+//! always changes the hash. It is a checksum and a cache key, not a cryptographic hash.
+
+use std::fs::{self, File};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use super::BakeError;
+use super::directions::splitmix64;
+use super::visibility::{VisibilityMap, VisibilitySettings};
+use crate::scene::{Mesh, Vertex};
+use crate::sh::Order;
+
+/// Version of the cache layout and of the bake results it stores.
+pub const CACHE_FORMAT_VERSION: u32 = 1;
+/// First 8 bytes of every cache file.
+pub const CACHE_MAGIC: [u8; 8] = *b"SHVISBC\0";
+/// Header bytes before the payload.
+pub const HEADER_BYTES: usize = 40;
+/// Environment variable naming the cache directory.
+pub const CACHE_DIR_ENV: &str = "SHVIS_CACHE_DIR";
+/// Kind tag of SH visibility caches.
+const KIND_VISIBILITY: u32 = 1;
+
+/// 64-bit FNV prime.
+const FNV_PRIME: u64 = 0x0000_0100_0000_01b3;
+/// 64-bit FNV offset basis.
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+
+/// Incremental [`hash64`].
+#[derive(Clone, Copy, Debug)]
+pub struct Hasher64 {
+    state: u64,
+    len: u64,
+}
+
+impl Default for Hasher64 {
+    fn default() -> Self {
+        Hasher64 {
+            state: FNV_OFFSET,
+            len: 0,
+        }
+    }
+}
+
+impl Hasher64 {
+    /// Folds `bytes` in (whole 64-bit words, then the tail byte by byte).
+    pub fn write(&mut self, bytes: &[u8]) {
+        let mut words = bytes.chunks_exact(8);
+        for w in &mut words {
+            let word = u64::from_le_bytes([w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]]);
+            self.state = (self.state ^ word).wrapping_mul(FNV_PRIME);
+        }
+        for &b in words.remainder() {
+            self.state = (self.state ^ u64::from(b)).wrapping_mul(FNV_PRIME);
+        }
+        self.len = self.len.wrapping_add(bytes.len() as u64);
+    }
+
+    /// Folds a u64 in (little-endian).
+    pub fn write_u64(&mut self, v: u64) {
+        self.write(&v.to_le_bytes());
+    }
+
+    /// The hash of everything written.
+    pub fn finish(&self) -> u64 {
+        splitmix64(self.state ^ self.len)
+    }
+}
+
+/// Hash of `bytes` (module doc).
+pub fn hash64(bytes: &[u8]) -> u64 {
+    let mut h = Hasher64::default();
+    h.write(bytes);
+    h.finish()
+}
+
+/// The cache directory: `$SHVIS_CACHE_DIR` when set and not empty, else `.shvis-cache`
+/// in the current directory.
+pub fn default_cache_dir() -> PathBuf {
+    match std::env::var_os(CACHE_DIR_ENV) {
+        Some(dir) if !dir.is_empty() => PathBuf::from(dir),
+        _ => PathBuf::from(".shvis-cache"),
+    }
+}
+
+/// Cache key of a visibility bake of `mesh` at `res`² texels with `settings` (module
+/// doc; `settings.progress` does not enter).
+pub fn visibility_key(mesh: &Mesh, res: u32, settings: &VisibilitySettings) -> u64 {
+    let mut h = Hasher64::default();
+    h.write(b"shvis bake cache");
+    h.write_u64(u64::from(CACHE_FORMAT_VERSION));
+    h.write(b"visibility");
+    h.write_u64(u64::from(settings.order.get()));
+    h.write_u64(u64::from(settings.rays));
+    h.write_u64(settings.seed);
+    h.write_u64(u64::from(res));
+    h.write_u64(mesh.vertices.len() as u64);
+    h.write(bytemuck::cast_slice::<Vertex, u8>(&mesh.vertices));
+    h.write_u64(mesh.indices.len() as u64);
+    h.write(bytemuck::cast_slice::<u32, u8>(&mesh.indices));
+    h.finish()
+}
+
+/// Path of the visibility cache file with `key` in `cache_dir`.
+pub fn visibility_cache_path(cache_dir: &Path, key: u64) -> PathBuf {
+    cache_dir.join(format!("visibility-{key:016x}.bin"))
+}
+
+/// The visibility map of `mesh` at `res`² texels with `settings` from the cache in
+/// `cache_dir` when a valid file is there, else from `bake()`, which is then written to
+/// the cache (module doc). A missing file is silent; a damaged or mismatching one is
+/// logged with `log::warn!` and rebuilt.
+///
+/// # Errors
+/// [`BakeError::Io`] when the cache directory or file cannot be written (the baked map
+/// is lost then: point `SHVIS_CACHE_DIR` somewhere writable).
+pub fn load_or_bake_visibility(
+    cache_dir: &Path,
+    mesh: &Mesh,
+    res: u32,
+    settings: &VisibilitySettings,
+    bake: impl FnOnce() -> VisibilityMap,
+) -> Result<VisibilityMap, BakeError> {
+    let key = visibility_key(mesh, res, settings);
+    let path = visibility_cache_path(cache_dir, key);
+    match fs::read(&path) {
+        Ok(bytes) => match decode_visibility(&bytes, key, res, settings.order) {
+            Ok(map) => {
+                log::info!("visibility: using cache {}", path.display());
+                return Ok(map);
+            }
+            Err(what) => log::warn!("bake cache {}: {what}; rebuilding", path.display()),
+        },
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            log::debug!("bake cache {}: not there yet", path.display());
+        }
+        Err(e) => log::warn!(
+            "bake cache {}: cannot read ({e}); rebuilding",
+            path.display()
+        ),
+    }
+    let map = bake();
+    write_atomically(&path, &encode_visibility(&map, key))?;
+    Ok(map)
+}
+
+/// The bytes of a cache file holding `map` under `key`.
+pub fn encode_visibility(map: &VisibilityMap, key: u64) -> Vec<u8> {
+    let texels = map.covered.len();
+    let mut payload = Vec::with_capacity(24 + 4 * map.coeffs.len() + 5 * texels);
+    payload.extend_from_slice(&map.res.to_le_bytes());
+    payload.extend_from_slice(&map.order.get().to_le_bytes());
+    payload.extend_from_slice(&map.rays_traced.to_le_bytes());
+    payload.extend_from_slice(&map.seconds.to_le_bytes());
+    for c in &map.coeffs {
+        payload.extend_from_slice(&c.to_le_bytes());
+    }
+    payload.extend(map.covered.iter().map(|&c| u8::from(c)));
+    for a in &map.ao {
+        payload.extend_from_slice(&a.to_le_bytes());
+    }
+    let mut out = Vec::with_capacity(HEADER_BYTES + payload.len());
+    out.extend_from_slice(&CACHE_MAGIC);
+    out.extend_from_slice(&CACHE_FORMAT_VERSION.to_le_bytes());
+    out.extend_from_slice(&KIND_VISIBILITY.to_le_bytes());
+    out.extend_from_slice(&key.to_le_bytes());
+    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    out.extend_from_slice(&hash64(&payload).to_le_bytes());
+    out.extend_from_slice(&payload);
+    out
+}
+
+/// Little-endian reader over a byte slice that reports short reads.
+struct Reader<'a> {
+    bytes: &'a [u8],
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize) -> Result<&'a [u8], String> {
+        if self.bytes.len() < n {
+            return Err(format!(
+                "payload ends early ({} bytes short)",
+                n - self.bytes.len()
+            ));
+        }
+        let (head, tail) = self.bytes.split_at(n);
+        self.bytes = tail;
+        Ok(head)
+    }
+    fn u32(&mut self) -> Result<u32, String> {
+        let b = self.take(4)?;
+        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+    fn u64(&mut self) -> Result<u64, String> {
+        let b = self.take(8)?;
+        Ok(u64::from_le_bytes([
+            b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7],
+        ]))
+    }
+    fn f32s(&mut self, n: usize) -> Result<Vec<f32>, String> {
+        let bytes = self.take(n.checked_mul(4).ok_or("size overflows")?)?;
+        Ok(bytes
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect())
+    }
+}
+
+/// Parses a cache file; `Err` says what is wrong, in a few words.
+pub fn decode_visibility(
+    bytes: &[u8],
+    key: u64,
+    res: u32,
+    order: Order,
+) -> Result<VisibilityMap, String> {
+    if bytes.len() < HEADER_BYTES {
+        return Err(format!(
+            "truncated header ({} of {HEADER_BYTES} bytes)",
+            bytes.len()
+        ));
+    }
+    let mut header = Reader {
+        bytes: &bytes[..HEADER_BYTES],
+    };
+    if header.take(8)? != CACHE_MAGIC {
+        return Err("wrong magic (not a shvis bake cache)".into());
+    }
+    let version = header.u32()?;
+    if version != CACHE_FORMAT_VERSION {
+        return Err(format!(
+            "format version {version}, expected {CACHE_FORMAT_VERSION}"
+        ));
+    }
+    let kind = header.u32()?;
+    if kind != KIND_VISIBILITY {
+        return Err(format!(
+            "kind {kind}, expected {KIND_VISIBILITY} (visibility)"
+        ));
+    }
+    let stored_key = header.u64()?;
+    if stored_key != key {
+        return Err(format!("key {stored_key:016x}, expected {key:016x}"));
+    }
+    let length = header.u64()?;
+    let payload = &bytes[HEADER_BYTES..];
+    if length != payload.len() as u64 {
+        return Err(format!(
+            "payload length {} bytes, header says {length}",
+            payload.len()
+        ));
+    }
+    let checksum = header.u64()?;
+    let actual = hash64(payload);
+    if checksum != actual {
+        return Err(format!(
+            "payload checksum {actual:016x}, header says {checksum:016x}"
+        ));
+    }
+    let mut r = Reader { bytes: payload };
+    let (file_res, file_order) = (r.u32()?, r.u32()?);
+    if file_res != res || file_order != order.get() {
+        return Err(format!(
+            "holds res {file_res} order {file_order}, expected res {res} order {}",
+            order.get()
+        ));
+    }
+    let rays_traced = r.u64()?;
+    let seconds = f64::from_bits(r.u64()?);
+    let texels = (res as usize) * (res as usize);
+    let coeffs = r.f32s(texels * order.coeff_count())?;
+    let covered: Vec<bool> = r.take(texels)?.iter().map(|&b| b != 0).collect();
+    let ao = r.f32s(texels)?;
+    if !r.bytes.is_empty() {
+        return Err(format!(
+            "{} unexpected bytes after the payload",
+            r.bytes.len()
+        ));
+    }
+    Ok(VisibilityMap {
+        res,
+        order,
+        coeffs,
+        covered,
+        ao,
+        rays_traced,
+        seconds,
+    })
+}
+
+/// Writes `bytes` to `path` atomically: temporary file in the same directory, fsync,
+/// rename, best-effort fsync of the directory.
+fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), BakeError> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let io = |action, source| BakeError::Io {
+        path: path.to_path_buf(),
+        action,
+        source,
+    };
+    let dir = path.parent().unwrap_or(Path::new("."));
+    fs::create_dir_all(dir).map_err(|e| io("create the cache directory", e))?;
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("cache");
+    let tmp = dir.join(format!(
+        ".{name}.tmp-{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let result = (|| {
+        let mut file = File::create(&tmp)?;
+        file.write_all(bytes)?;
+        file.sync_all()?;
+        fs::rename(&tmp, path)
+    })();
+    if let Err(e) = result {
+        let _ = fs::remove_file(&tmp); // best effort: the error below is what matters
+        return Err(io("write cache file", e));
+    }
+    if let Ok(d) = File::open(dir) {
+        let _ = d.sync_all(); // not supported everywhere; the rename is already done
+    }
+    Ok(())
+}
+
+/// Writes `map` into `dir` as f32 OpenEXR images for inspection: `visibility_{k}.exr`
+/// holds coefficients 4k, 4k+1, 4k+2, 4k+3 (flat index l(l+1)+m) in channels R, G, B, A
+/// (zero past order²), `ao.exr` the AO in channel Y. Image row y is lightmap row y
+/// (v = 0 at the top, DESIGN §1).
+///
+/// # Errors
+/// [`BakeError::Io`] when `dir` cannot be created, [`BakeError::Exr`] when a file
+/// cannot be written.
+pub fn write_exr_layers(dir: &Path, map: &VisibilityMap) -> Result<(), BakeError> {
+    use exr::prelude::{Image, SpecificChannels, WritableImage};
+    fs::create_dir_all(dir).map_err(|source| BakeError::Io {
+        path: dir.to_path_buf(),
+        action: "create the output directory",
+        source,
+    })?;
+    let res = map.res as usize;
+    let n2 = map.order.coeff_count();
+    let exr_err = |path: &Path, e: exr::error::Error| BakeError::Exr {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    };
+    for k in 0..n2.div_ceil(4) {
+        let path = dir.join(format!("visibility_{k}.exr"));
+        let c = |x: usize, y: usize, j: usize| {
+            let i = 4 * k + j;
+            if i < n2 {
+                map.coeffs[(y * res + x) * n2 + i]
+            } else {
+                0.0
+            }
+        };
+        exr::prelude::write_rgba_file(&path, res, res, |x, y| {
+            (c(x, y, 0), c(x, y, 1), c(x, y, 2), c(x, y, 3))
+        })
+        .map_err(|e| exr_err(&path, e))?;
+    }
+    let path = dir.join("ao.exr");
+    let channels = SpecificChannels::build()
+        .with_channel("Y")
+        .with_pixel_fn(|p: exr::math::Vec2<usize>| (map.ao[p.1 * res + p.0],));
+    Image::from_channels((res, res), channels)
+        .write()
+        .to_file(&path)
+        .map_err(|e| exr_err(&path, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_flipped_byte_changes_the_hash() {
+        let data: Vec<u8> = (0..1000u32).map(|i| (i * 7 % 251) as u8).collect();
+        let h = hash64(&data);
+        for i in [0, 7, 8, 500, 995, 999] {
+            for bit in 0..8 {
+                let mut d = data.clone();
+                d[i] ^= 1 << bit;
+                assert_ne!(hash64(&d), h, "byte {i} bit {bit}");
+            }
+        }
+        assert_ne!(hash64(&data[..999]), h);
+        assert_ne!(hash64(&[]), hash64(&[0]));
+    }
+}

@@ -1,0 +1,398 @@
+//! SH visibility per lightmap texel, the per-texel data of the `unc*` and (through PCA)
+//! `pca*` techniques (DESIGN §2; Iwanicki–Sloan §3.1).
+//!
+//! # What is baked
+//!
+//! For a covered texel at x with unit geometric normal n (DESIGN §1),
+//!
+//! ```text
+//! V(x, ω) = 1 if the ray x + tω (t > 0) escapes the scene, 0 if it is blocked,
+//!           0 for n·ω ≤ 0 (below the tangent plane the surface occludes itself),
+//! v_i(x)  = ∫_S² V(x, ω) y_i(ω) dω ≈ Σ_r w V(x, ω_r) y_i(ω_r),  w = 4π/R      (1)
+//! ```
+//!
+//! for every i < order² (Iwanicki–Sloan eq. (4)'s V_i, any order, default 6). The R
+//! directions are one shared stratified set over the whole sphere per (rays, seed)
+//! ([`super::directions`]); rays below the tangent plane are not traced (V = 0 there by
+//! definition). The set is the same for every texel, so there is no per-texel noise: each
+//! texel's estimate carries the rule's quadrature error on its own visibility function,
+//! unbiased over seeds. `tests/bake_visibility.rs` measures that error against exact
+//! projections (open plane, inner corner) and bounds seed-to-seed differences.
+//!
+//! The AO of the same rays, for the EXR and for `preconv`, is the cosine-weighted
+//! escaping fraction with the ratio estimator AO = Σ_vis (n·ω_r) / Σ_{n·ω_r>0} (n·ω_r):
+//! exactly 1 on an open plane, 0 in a closed box, the same rays as eq. (1).
+//!
+//! # How it is traced
+//!
+//! Rays leave [`Tracer::offset_origin`] (no acne, no leaks at contacts: see
+//! [`super::trace`]). Covered texels are sorted by the dominant axis of their normal,
+//! then along a Morton curve of their positions, and cut into groups of
+//! [`PACKET_RAYS`] neighbours. A group traces direction by direction: all its texels
+//! above the horizon of direction r form one coherent packet
+//! ([`Tracer::occluded_coherent`], bit-identical to single rays), so the nodes near the
+//! group stay in cache and each node is decoded once per packet. Each texel's escaping
+//! rays form a bitmask of R bits, projected by table lookups ([`ShProjector`]). Groups
+//! run in parallel (rayon); every texel's result depends only on its own rays, summed in
+//! a fixed order, so a bake is bit-identical whatever the thread count.
+//!
+//! Finally the coefficients and AO are dilated [`DILATION_PASSES`] texels into the chart
+//! gutters ([`dilate`]); gutter texels further out keep 0 coefficients and AO 1.
+
+use std::ops::{Add, Mul};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+use glam::Vec3;
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+
+use super::directions::{DirectionSet, ShProjector, above_horizon};
+use super::raster::{LightmapTexels, dilate};
+use super::trace::{PACKET_RAYS, RayPacket, Tracer};
+use crate::sh::Order;
+
+/// Gutter texels filled around charts after the bake (as the AO bake does).
+pub const DILATION_PASSES: u32 = 2;
+
+/// What a visibility bake does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VisibilitySettings {
+    /// SH order of the coefficients (bands l < order; default 6).
+    pub order: Order,
+    /// Directions per texel over the whole sphere (validated by
+    /// [`super::validate_rays`]); about half are below a texel's horizon and not traced.
+    pub rays: u32,
+    /// Seed of the shared direction set's rotation.
+    pub seed: u64,
+    /// Show a progress bar on stderr.
+    pub progress: bool,
+}
+
+impl Default for VisibilitySettings {
+    fn default() -> Self {
+        VisibilitySettings {
+            order: Order::SIX,
+            rays: 1024,
+            seed: 0,
+            progress: false,
+        }
+    }
+}
+
+/// A baked SH visibility lightmap.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VisibilityMap {
+    /// Texels per side.
+    pub res: u32,
+    /// SH order of the coefficients.
+    pub order: Order,
+    /// Coefficients v_i of eq. (1), texel-major: texel t (row-major, y·res + x) holds
+    /// `coeffs[t·order² .. (t+1)·order²]` at flat index l(l+1)+m; gutters dilated.
+    pub coeffs: Vec<f32>,
+    /// Which texels were baked (the rest are dilated, or 0).
+    pub covered: Vec<bool>,
+    /// Cosine-weighted escaping fraction of the same rays, in [0, 1]; gutters dilated,
+    /// 1 further out.
+    pub ao: Vec<f32>,
+    /// Rays traced in total (directions below a texel's horizon are not traced).
+    pub rays_traced: u64,
+    /// Wall-clock time of the bake, seconds.
+    pub seconds: f64,
+}
+
+impl VisibilityMap {
+    /// Bake throughput, traced rays per second (0 when nothing was timed).
+    pub fn rays_per_second(&self) -> f64 {
+        if self.seconds > 0.0 {
+            self.rays_traced as f64 / self.seconds
+        } else {
+            0.0
+        }
+    }
+
+    /// The order² coefficients of texel `index` (row-major y·res + x).
+    ///
+    /// # Panics
+    /// If `index` ≥ res².
+    pub fn texel(&self, index: usize) -> &[f32] {
+        let n2 = self.order.coeff_count();
+        &self.coeffs[index * n2..(index + 1) * n2]
+    }
+}
+
+/// Four f32 lanes, so [`dilate`] can fill coefficient vectors four at a time.
+#[derive(Clone, Copy, Debug, Default)]
+struct Lanes4([f32; 4]);
+
+impl Add for Lanes4 {
+    type Output = Lanes4;
+    fn add(self, o: Lanes4) -> Lanes4 {
+        Lanes4([0, 1, 2, 3].map(|k| self.0[k] + o.0[k]))
+    }
+}
+
+impl Mul<f32> for Lanes4 {
+    type Output = Lanes4;
+    fn mul(self, s: f32) -> Lanes4 {
+        Lanes4(self.0.map(|v| v * s))
+    }
+}
+
+/// Covered texels in tracing order: by the dominant axis (and sign) of the normal, then
+/// along a Morton curve of the position in the texels' bounding box (10 bits per axis).
+fn texel_order(texels: &LightmapTexels) -> Vec<u32> {
+    let covered: Vec<u32> = (0..texels.covered.len() as u32)
+        .filter(|&i| texels.covered[i as usize])
+        .collect();
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for &i in &covered {
+        let p = texels.position[i as usize];
+        (lo, hi) = (lo.min(p), hi.max(p));
+    }
+    let scale = 1023.0 / (hi - lo).max(Vec3::splat(1e-30));
+    let spread = |v: u32| {
+        let mut v = u64::from(v) & 0x3ff;
+        v = (v | (v << 16)) & 0x0300_00ff;
+        v = (v | (v << 8)) & 0x0300_f00f;
+        v = (v | (v << 4)) & 0x030c_30c3;
+        (v | (v << 2)) & 0x0924_9249
+    };
+    let key = |i: u32| {
+        let n = texels.normal[i as usize];
+        let a = n.abs();
+        let axis = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            2
+        } else {
+            4
+        };
+        let sign = u64::from(n[axis / 2] < 0.0);
+        let q = ((texels.position[i as usize] - lo) * scale)
+            .round()
+            .clamp(Vec3::ZERO, Vec3::splat(1023.0))
+            .as_uvec3();
+        let morton = spread(q.x) | (spread(q.y) << 1) | (spread(q.z) << 2);
+        ((axis as u64 + sign) << 32) | morton
+    };
+    let mut order = covered;
+    order.sort_by_key(|&i| (key(i), i));
+    order
+}
+
+/// Result of one texel group.
+struct GroupResult {
+    /// order² coefficients per texel of the group.
+    coeffs: Vec<f32>,
+    ao: Vec<f32>,
+    rays: u64,
+}
+
+/// Traces and projects one group of ≤ [`PACKET_RAYS`] texels (module doc).
+fn bake_group(
+    tracer: &Tracer,
+    texels: &LightmapTexels,
+    dirs: &DirectionSet,
+    projector: &ShProjector,
+    group: &[u32],
+) -> GroupResult {
+    let n2 = projector.order().coeff_count();
+    let words = dirs.mask_words();
+    let normals: Vec<Vec3> = group.iter().map(|&i| texels.normal[i as usize]).collect();
+    let origins: Vec<Vec3> = group
+        .iter()
+        .zip(&normals)
+        .map(|(&i, &n)| tracer.offset_origin(texels.position[i as usize], n))
+        .collect();
+    let mut packet = RayPacket::new(&origins);
+    let mut masks = vec![0u64; group.len() * words];
+    let (mut up_cos, mut vis_cos) = (vec![0.0f64; group.len()], vec![0.0f64; group.len()]);
+    let mut rays = 0u64;
+    let mut cos = vec![0.0f32; group.len()];
+    for (r, &d) in dirs.dirs().iter().enumerate() {
+        let mut active = 0u64;
+        for (k, &n) in normals.iter().enumerate() {
+            if above_horizon(n, d) {
+                active |= 1 << k;
+                cos[k] = n.dot(d);
+            }
+        }
+        if active == 0 {
+            continue;
+        }
+        rays += u64::from(active.count_ones());
+        let visible = active & !tracer.occluded_coherent(&mut packet, d, f32::INFINITY, active);
+        let mut todo = active;
+        while todo != 0 {
+            let k = todo.trailing_zeros() as usize;
+            todo &= todo - 1;
+            up_cos[k] += f64::from(cos[k]);
+            if visible >> k & 1 == 1 {
+                vis_cos[k] += f64::from(cos[k]);
+                masks[k * words + r / 64] |= 1 << (r % 64);
+            }
+        }
+    }
+    let mut coeffs = vec![0.0f32; group.len() * n2];
+    let mut sum = vec![0.0f64; n2];
+    for k in 0..group.len() {
+        sum.fill(0.0);
+        projector.project(&masks[k * words..(k + 1) * words], &mut sum);
+        for (c, s) in coeffs[k * n2..(k + 1) * n2].iter_mut().zip(&sum) {
+            *c = *s as f32;
+        }
+    }
+    let ao = up_cos
+        .iter()
+        .zip(&vis_cos)
+        .map(|(&up, &vis)| if up > 0.0 { (vis / up) as f32 } else { 1.0 })
+        .collect();
+    GroupResult { coeffs, ao, rays }
+}
+
+/// Bakes SH visibility (and the AO of the same rays) for every covered texel, then
+/// dilates [`DILATION_PASSES`] texels into the gutters (see the module doc). A lightmap
+/// with no covered texel gives all-zero coefficients.
+pub fn bake_visibility(
+    tracer: &Tracer,
+    texels: &LightmapTexels,
+    settings: &VisibilitySettings,
+) -> VisibilityMap {
+    let start = Instant::now();
+    let res = texels.res as usize;
+    let n2 = settings.order.coeff_count();
+    let dirs = DirectionSet::new(settings.rays, settings.seed);
+    let projector = ShProjector::new(&dirs, settings.order);
+    let order = texel_order(texels);
+    let progress = if settings.progress {
+        let bar = ProgressBar::new(order.len() as u64);
+        let style = ProgressStyle::with_template(
+            "visibility {elapsed_precise} [{bar:40.cyan/blue}] {percent:>3}% {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> ");
+        bar.set_style(style);
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+    let rays_done = AtomicU64::new(0);
+    let groups: Vec<&[u32]> = order.chunks(PACKET_RAYS).collect();
+    let results: Vec<GroupResult> = groups
+        .par_iter()
+        .map(|group| {
+            let result = bake_group(tracer, texels, &dirs, &projector, group);
+            let total = rays_done.fetch_add(result.rays, Ordering::Relaxed) + result.rays;
+            if settings.progress {
+                let s = start.elapsed().as_secs_f64().max(1e-9);
+                progress.set_message(format!("{:.2} Mrays/s", total as f64 / s * 1e-6));
+                progress.inc(group.len() as u64);
+            }
+            result
+        })
+        .collect();
+    progress.finish_and_clear();
+
+    let mut coeffs = vec![0.0f32; res * res * n2];
+    let mut ao = vec![1.0f32; res * res];
+    for (group, result) in groups.iter().zip(&results) {
+        for (k, &i) in group.iter().enumerate() {
+            let i = i as usize;
+            coeffs[i * n2..(i + 1) * n2].copy_from_slice(&result.coeffs[k * n2..(k + 1) * n2]);
+            ao[i] = result.ao[k];
+        }
+    }
+    drop(results);
+    dilate_coeffs(&mut coeffs, n2, &texels.covered, texels.res);
+    dilate(&mut ao, &texels.covered, texels.res, DILATION_PASSES);
+    let map = VisibilityMap {
+        res: texels.res,
+        order: settings.order,
+        coeffs,
+        covered: texels.covered.clone(),
+        ao,
+        rays_traced: rays_done.into_inner(),
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    log::info!(
+        "visibility bake: {} texels × {} directions (order {}) in {:.2} s = {:.2} Mrays/s traced",
+        order.len(),
+        settings.rays,
+        settings.order.get(),
+        map.seconds,
+        map.rays_per_second() * 1e-6
+    );
+    map
+}
+
+/// [`dilate`] of texel-major vectors of `n2` coefficients, four coefficients per plane,
+/// planes in parallel (each plane's result is independent of the others).
+fn dilate_coeffs(coeffs: &mut [f32], n2: usize, covered: &[bool], res: u32) {
+    let texel_count = covered.len();
+    let planes: Vec<Vec<Lanes4>> = (0..n2.div_ceil(4))
+        .into_par_iter()
+        .map(|p| {
+            let mut plane: Vec<Lanes4> = (0..texel_count)
+                .map(|t| {
+                    let mut lanes = [0.0f32; 4];
+                    for (k, lane) in lanes.iter_mut().enumerate() {
+                        if 4 * p + k < n2 {
+                            *lane = coeffs[t * n2 + 4 * p + k];
+                        }
+                    }
+                    Lanes4(lanes)
+                })
+                .collect();
+            dilate(&mut plane, covered, res, DILATION_PASSES);
+            plane
+        })
+        .collect();
+    for (p, plane) in planes.iter().enumerate() {
+        for (t, lanes) in plane.iter().enumerate() {
+            for k in 0..4 {
+                if 4 * p + k < n2 {
+                    coeffs[t * n2 + 4 * p + k] = lanes.0[k];
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Mesh, Vertex};
+
+    #[test]
+    fn lanes_dilate_like_scalars() {
+        let a = Lanes4([1.0, 2.0, 3.0, 4.0]);
+        let b = (a + a) * 0.5;
+        assert_eq!(b.0, a.0);
+    }
+
+    #[test]
+    fn texel_order_visits_every_covered_texel_once() {
+        let v = |p: [f32; 3], uv: [f32; 2]| Vertex {
+            position: p,
+            normal: [0.0, 1.0, 0.0],
+            uv_lightmap: uv,
+            ..Vertex::default()
+        };
+        let mesh = Mesh {
+            vertices: vec![
+                v([0.0, 0.0, 0.0], [0.0, 0.0]),
+                v([1.0, 0.0, 0.0], [1.0, 0.0]),
+                v([1.0, 0.0, 1.0], [1.0, 1.0]),
+                v([0.0, 0.0, 1.0], [0.0, 1.0]),
+            ],
+            indices: vec![0, 3, 2, 0, 2, 1],
+        };
+        let texels = super::super::raster::rasterize(&mesh, 16);
+        let mut order = texel_order(&texels);
+        assert_eq!(order.len(), 256);
+        order.sort();
+        order.dedup();
+        assert_eq!(order.len(), 256);
+    }
+}

@@ -1,0 +1,967 @@
+//! glTF 2.0 scenes (`.gltf` with external or data-URI buffers, `.glb`), DESIGN §1 and §4
+//! (`--scene PATH`).
+//!
+//! What is read: every primitive of mode TRIANGLES of every mesh instance reached from the
+//! default scene (else the first), walking the node hierarchy with world transforms:
+//! positions by the world matrix M, normals by M's inverse-transpose, TANGENT xyz by M's
+//! upper 3×3, all renormalized. A transform with det M < 0 mirrors the mesh, so the winding
+//! is swapped (triangles stay counter-clockwise around their normal) and the tangent's w is
+//! negated (the bitangent w·(n × t) must still follow the mirrored surface).
+//!
+//! - NORMAL: as given; when absent, area-weighted smooth normals over the primitive's
+//!   indexed triangles (the brief's choice; glTF asks for flat normals, which the same code
+//!   gives for unshared vertices).
+//! - TANGENT: used as given (DESIGN §1); when absent, MikkTSpace on (u, 1 − v)
+//!   ([`super::tangent`]), computed on the world-space triangles.
+//! - TEXCOORD_0: material UVs (default (0, 0)). TEXCOORD_1: lightmap UVs, used as given only
+//!   when every primitive has them in [0, 1] and no mesh is instanced twice (two instances
+//!   of one layout would share texels); otherwise generated for the whole scene by
+//!   [`super::lightmap_uv::generate`].
+//! - Material: shvis renders one albedo and one normal texture per scene, so the first
+//!   primitive with a base-colour texture supplies the albedo, the first with a normal
+//!   texture the normal map and its `scale`; different textures on other primitives are
+//!   ignored with one warning. Each primitive's base-colour factor (linear RGB) becomes its
+//!   vertices' `albedo_tint`. Missing textures: 1×1 white albedo, 1×1 flat normal.
+//!   Images are decoded to RGBA8, row 0 at the top (glTF's image origin). Only these two
+//!   images are decoded.
+//! - Camera: the first perspective camera met in the hierarchy (world position, forward
+//!   −Z, up +Y, `yfov`, `znear`, `zfar` or [`DEFAULT_Z_FAR_SCALE`] × the scene size);
+//!   else [`super::framing_camera`].
+//!
+//! Robustness (a file never panics the loader; `tests/scene_gltf.rs` and `fuzz/`): the
+//! `gltf` crate parses and validates the JSON (index references, enums); this module reads
+//! buffers, images and accessors itself with checked arithmetic, because the crate's own
+//! readers assume valid offsets (and its URI decoder and `.glb` length handling can panic or
+//! over-allocate on hostile input). Errors are [`SceneError::Gltf`], one line naming the
+//! file. Skipped with one warning each and counted in [`LoadReport`]: degenerate triangles
+//! (zero area), triangles with zero TEXCOORD_0 area (no tangent frame), primitives of other
+//! modes (points, lines, strips, fans). Errors: malformed JSON or `.glb`, missing or short
+//! buffers and images, out-of-range accessors, indices ≥ the vertex count, index counts not
+//! a multiple of 3, non-finite attribute values, node cycles, no scene, no meshes, no usable
+//! triangles, and charts that do not fit the lightmap.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::{Mode, Semantic};
+
+use super::lightmap_uv::{self, MAX_LIGHTMAP_RES, MIN_LIGHTMAP_RES};
+use super::{Camera, Material, Mesh, Scene, SceneError, Texture8, Vertex, framing_camera, tangent};
+
+/// Triangles with |e₁ × e₂| ≤ this × |e₁|·|e₂| (sine of the corner angle) are degenerate.
+/// Relative, so it is scale-free (Avocado is 6 cm); f32 positions resolve sines ~1e-7.
+pub const DEGENERATE_SINE: f32 = 1e-7;
+/// TEXCOORD_0 triangles with |Δuv₁ × Δuv₂| below this have no tangent frame (UV units; one
+/// texel of an 8192² texture has area 1.5e-8).
+pub const MIN_UV_AREA: f32 = 1e-12;
+/// Lightmap UVs given in a file may stray this far outside [0, 1] (exporter rounding).
+const LIGHTMAP_UV_SLACK: f32 = 1e-4;
+/// Accessors without a buffer view are zero-filled; more elements than this are refused
+/// (a hostile file could otherwise ask for gigabytes of zeros).
+const MAX_ZERO_FILLED: usize = 1 << 20;
+/// Positions farther than this from the origin, metres, are refused (squared lengths and
+/// areas must stay finite in f32).
+pub const MAX_ABS_POSITION: f32 = 1e12;
+/// Largest texture side accepted (the usual Vulkan `maxImageDimension2D`).
+const MAX_TEXTURE_SIDE: u32 = 16384;
+/// A camera without `zfar` sees this many scene diagonals far.
+pub const DEFAULT_Z_FAR_SCALE: f32 = 100.0;
+/// Flat normal-map texel (0, 0, 1).
+const FLAT_NORMAL: [u8; 4] = [128, 128, 255, 255];
+
+/// What loading did besides building the scene (the counts behind its warnings).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct LoadReport {
+    /// Triangles skipped because their 3D area is zero.
+    pub degenerate_triangles: usize,
+    /// Triangles skipped because their TEXCOORD_0 area is zero.
+    pub zero_uv_area_triangles: usize,
+    /// Primitives skipped because their mode is not TRIANGLES.
+    pub skipped_primitives: usize,
+    /// Whether TANGENTs were generated (MikkTSpace) for at least one primitive.
+    pub generated_tangents: bool,
+    /// Number of generated lightmap charts, `None` when TEXCOORD_1 was used as given.
+    pub generated_charts: Option<usize>,
+    /// Whether the camera came from the file (else it frames the bounds).
+    pub camera_from_file: bool,
+}
+
+/// Loads a `.gltf` or `.glb` file with lightmap UVs for a `lightmap_res`² lightmap.
+///
+/// # Errors
+/// [`SceneError::LightmapRes`] for a resolution outside
+/// [`MIN_LIGHTMAP_RES`]..=[`MAX_LIGHTMAP_RES`]; [`SceneError::Gltf`] for anything wrong with
+/// the file (module doc).
+pub fn load(path: &Path, lightmap_res: u32) -> Result<Scene, SceneError> {
+    load_with_report(path, lightmap_res).map(|(scene, _)| scene)
+}
+
+/// [`load`], also returning what was skipped or generated.
+///
+/// # Errors
+/// As [`load`].
+pub fn load_with_report(path: &Path, lightmap_res: u32) -> Result<(Scene, LoadReport), SceneError> {
+    let file = path.display().to_string();
+    check_res(lightmap_res)?;
+    let bytes = std::fs::read(path).map_err(|e| gltf_error(&file, format!("cannot read: {e}")))?;
+    let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| file.clone());
+    Loader {
+        file,
+        base: Some(base),
+    }
+    .load(&name, &bytes, lightmap_res)
+}
+
+/// Loads a `.glb` or `.gltf` held in memory; only embedded data (the GLB BIN chunk, data
+/// URIs) can be referenced. The entry point of the `gltf_scene` fuzz target.
+///
+/// # Errors
+/// As [`load`]; external file references are errors.
+pub fn load_from_slice(bytes: &[u8], lightmap_res: u32) -> Result<Scene, SceneError> {
+    check_res(lightmap_res)?;
+    Loader {
+        file: "<memory>".to_string(),
+        base: None,
+    }
+    .load("gltf", bytes, lightmap_res)
+    .map(|(scene, _)| scene)
+}
+
+fn check_res(res: u32) -> Result<(), SceneError> {
+    if (MIN_LIGHTMAP_RES..=MAX_LIGHTMAP_RES).contains(&res) {
+        Ok(())
+    } else {
+        Err(SceneError::LightmapRes {
+            res,
+            min: MIN_LIGHTMAP_RES,
+            max: MAX_LIGHTMAP_RES,
+        })
+    }
+}
+
+fn gltf_error(file: &str, message: impl Into<String>) -> SceneError {
+    SceneError::Gltf {
+        path: file.to_string(),
+        message: message.into(),
+    }
+}
+
+/// One mesh instance: the mesh and its node's world matrix.
+struct Instance<'a> {
+    mesh: gltf::Mesh<'a>,
+    world_from_mesh: Mat4,
+}
+
+/// The textures chosen for the scene, by image index.
+#[derive(Default)]
+struct TextureChoice {
+    albedo: Option<usize>,
+    normal: Option<(usize, f32)>,
+    ignored: Vec<String>,
+}
+
+struct Loader {
+    /// The file's name for messages.
+    file: String,
+    /// Directory of relative URIs; `None` when loading from memory.
+    base: Option<PathBuf>,
+}
+
+impl Loader {
+    fn err(&self, message: impl Into<String>) -> SceneError {
+        gltf_error(&self.file, message)
+    }
+
+    fn load(
+        &self,
+        name: &str,
+        bytes: &[u8],
+        lightmap_res: u32,
+    ) -> Result<(Scene, LoadReport), SceneError> {
+        check_glb_header(bytes).map_err(|m| self.err(m))?;
+        let gltf::Gltf { document, blob } =
+            gltf::Gltf::from_slice(bytes).map_err(|e| self.err(format!("invalid glTF: {e}")))?;
+        let buffers = self.buffers(&document, blob)?;
+        let mut report = LoadReport::default();
+
+        let scene = document
+            .default_scene()
+            .or_else(|| document.scenes().next())
+            .ok_or_else(|| self.err("no scene to draw"))?;
+        let (instances, camera_node) = self.walk(&document, &scene)?;
+        if instances.is_empty() {
+            return Err(self.err("the scene has no meshes"));
+        }
+        let mut uses: HashMap<usize, usize> = HashMap::new();
+        for inst in &instances {
+            *uses.entry(inst.mesh.index()).or_default() += 1;
+        }
+
+        let mut mesh = Mesh::default();
+        let mut textures = TextureChoice::default();
+        let mut all_have_uv1 = true;
+        let mut modes_skipped: Vec<String> = Vec::new();
+        for inst in &instances {
+            for prim in inst.mesh.primitives() {
+                let what = format!("mesh {} primitive {}", inst.mesh.index(), prim.index());
+                if prim.mode() != Mode::Triangles {
+                    report.skipped_primitives += 1;
+                    modes_skipped.push(format!("{what} ({:?})", prim.mode()));
+                    continue;
+                }
+                all_have_uv1 &= prim.get(&Semantic::TexCoords(1)).is_some();
+                self.choose_textures(&prim, &mut textures);
+                self.append_primitive(&what, &prim, inst, &buffers, &mut mesh, &mut report)?;
+            }
+        }
+        if !modes_skipped.is_empty() {
+            log::warn!(
+                "{}: skipped {} primitive(s) that are not triangle lists: {}",
+                self.file,
+                modes_skipped.len(),
+                modes_skipped.join(", ")
+            );
+        }
+        if report.degenerate_triangles + report.zero_uv_area_triangles > 0 {
+            log::warn!(
+                "{}: skipped {} degenerate and {} zero-UV-area triangle(s)",
+                self.file,
+                report.degenerate_triangles,
+                report.zero_uv_area_triangles
+            );
+        }
+        if mesh.indices.is_empty() {
+            return Err(self.err(format!(
+                "no usable triangles ({} degenerate, {} with zero UV area, {} primitive(s) not \
+                 triangle lists)",
+                report.degenerate_triangles,
+                report.zero_uv_area_triangles,
+                report.skipped_primitives
+            )));
+        }
+        if !textures.ignored.is_empty() {
+            log::warn!(
+                "{}: shvis uses one albedo and one normal texture per scene; ignoring {}",
+                self.file,
+                textures.ignored.join(", ")
+            );
+        }
+
+        let given_ok = all_have_uv1
+            && uses.values().all(|&n| n == 1)
+            && mesh.vertices.iter().all(|v| {
+                v.uv_lightmap
+                    .iter()
+                    .all(|&c| (-LIGHTMAP_UV_SLACK..=1.0 + LIGHTMAP_UV_SLACK).contains(&c))
+            });
+        if given_ok {
+            for v in &mut mesh.vertices {
+                v.uv_lightmap = v.uv_lightmap.map(|c| c.clamp(0.0, 1.0));
+            }
+        } else {
+            if all_have_uv1 {
+                log::warn!(
+                    "{}: TEXCOORD_1 is outside [0, 1] or shared by instanced meshes; \
+                     generating lightmap UVs",
+                    self.file
+                );
+            }
+            let charts = lightmap_uv::generate(&mut mesh, lightmap_res).map_err(|e| {
+                self.err(format!(
+                    "{} lightmap charts do not fit a {lightmap_res}² lightmap; raise --vis-res",
+                    e.charts
+                ))
+            })?;
+            report.generated_charts = Some(charts.charts);
+        }
+
+        let material = Material {
+            albedo: match textures.albedo {
+                Some(i) => self.texture(&document, i, &buffers)?,
+                None => solid_texture([255; 4]),
+            },
+            normal: match textures.normal {
+                Some((i, _)) => self.texture(&document, i, &buffers)?,
+                None => solid_texture(FLAT_NORMAL),
+            },
+            normal_scale: textures.normal.map_or(1.0, |(_, s)| s),
+        };
+        let bounds = mesh.bounds();
+        let camera = camera_node
+            .and_then(|(cam, world)| file_camera(&document, cam, world, bounds))
+            .inspect(|_| report.camera_from_file = true)
+            .unwrap_or_else(|| framing_camera(bounds));
+        Ok((
+            Scene {
+                name: name.to_string(),
+                mesh,
+                material,
+                camera,
+            },
+            report,
+        ))
+    }
+
+    /// Loads every buffer: the GLB BIN chunk, data URIs, or files next to the glTF.
+    fn buffers(
+        &self,
+        document: &gltf::Document,
+        mut blob: Option<Vec<u8>>,
+    ) -> Result<Vec<Vec<u8>>, SceneError> {
+        let mut out = Vec::new();
+        for buffer in document.buffers() {
+            let data = match buffer.source() {
+                gltf::buffer::Source::Bin => blob.take().ok_or_else(|| {
+                    self.err(format!(
+                        "buffer {} refers to a GLB BIN chunk that is missing",
+                        buffer.index()
+                    ))
+                })?,
+                gltf::buffer::Source::Uri(uri) => self
+                    .read_uri(uri)
+                    .map_err(|m| self.err(format!("buffer {}: {m}", buffer.index())))?,
+            };
+            if data.len() < buffer.length() {
+                return Err(self.err(format!(
+                    "buffer {} holds {} bytes but byteLength is {}",
+                    buffer.index(),
+                    data.len(),
+                    buffer.length()
+                )));
+            }
+            out.push(data);
+        }
+        Ok(out)
+    }
+
+    /// Bytes behind a URI: a base64 data URI, a relative path or a `file:` URI.
+    fn read_uri(&self, uri: &str) -> Result<Vec<u8>, String> {
+        if uri.starts_with("data:") {
+            // Data URIs never touch the file system; the crate's decoder is safe here.
+            return gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), None)
+                .map(|d| d.0)
+                .map_err(|e| format!("bad data URI: {e}"));
+        }
+        let Some(base) = &self.base else {
+            return Err(format!(
+                "refers to external file '{}', which cannot be loaded from memory",
+                short(uri)
+            ));
+        };
+        let path = if let Some(rest) = uri.strip_prefix("file://").or(uri.strip_prefix("file:")) {
+            PathBuf::from(percent_decode(rest).ok_or("bad percent-encoding in URI")?)
+        } else if uri.contains(':') {
+            return Err(format!("unsupported URI scheme in '{}'", short(uri)));
+        } else {
+            base.join(percent_decode(uri).ok_or("bad percent-encoding in URI")?)
+        };
+        std::fs::read(&path).map_err(|e| match e.kind() {
+            std::io::ErrorKind::NotFound => format!("'{}' not found", path.display()),
+            _ => format!("cannot read '{}': {e}", path.display()),
+        })
+    }
+
+    /// Mesh instances (depth-first, in child order) and the first perspective camera node.
+    #[allow(clippy::type_complexity)]
+    fn walk<'a>(
+        &self,
+        document: &'a gltf::Document,
+        scene: &gltf::Scene<'a>,
+    ) -> Result<(Vec<Instance<'a>>, Option<(usize, Mat4)>), SceneError> {
+        let mut visited = vec![false; document.nodes().count()];
+        let mut instances = Vec::new();
+        let mut camera = None;
+        let mut stack: Vec<(gltf::Node<'a>, Mat4)> =
+            scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+        stack.reverse();
+        while let Some((node, parent)) = stack.pop() {
+            let seen = visited
+                .get_mut(node.index())
+                .ok_or_else(|| self.err("bad node"))?;
+            if *seen {
+                return Err(self.err(format!(
+                    "node {} is reached twice (a cycle or a shared child)",
+                    node.index()
+                )));
+            }
+            *seen = true;
+            let world = parent * local_matrix(&node);
+            if let Some(mesh) = node.mesh() {
+                instances.push(Instance {
+                    mesh,
+                    world_from_mesh: world,
+                });
+            }
+            if let Some(cam) = node.camera() {
+                let perspective = document
+                    .as_json()
+                    .cameras
+                    .get(cam.index())
+                    .is_some_and(|c| c.perspective.is_some());
+                if camera.is_none() && perspective {
+                    camera = Some((cam.index(), world));
+                }
+            }
+            let children: Vec<_> = node.children().collect();
+            stack.extend(children.into_iter().rev().map(|c| (c, world)));
+        }
+        Ok((instances, camera))
+    }
+
+    /// Records the primitive's textures, or notes them as ignored when others were chosen.
+    fn choose_textures(&self, prim: &gltf::Primitive, choice: &mut TextureChoice) {
+        let material = prim.material();
+        if let Some(info) = material.pbr_metallic_roughness().base_color_texture() {
+            let image = info.texture().source().index();
+            match choice.albedo {
+                None => choice.albedo = Some(image),
+                Some(i) if i != image => {
+                    choice.ignored.push(format!("base-colour image {image}"));
+                }
+                Some(_) => {}
+            }
+        }
+        if let Some(normal) = material.normal_texture() {
+            let image = normal.texture().source().index();
+            match choice.normal {
+                None => choice.normal = Some((image, normal.scale())),
+                Some((i, _)) if i != image => {
+                    choice.ignored.push(format!("normal image {image}"));
+                }
+                Some(_) => {}
+            }
+        }
+        choice.ignored.dedup();
+    }
+
+    /// Reads, transforms, filters and appends one triangle-list primitive.
+    fn append_primitive(
+        &self,
+        what: &str,
+        prim: &gltf::Primitive,
+        inst: &Instance,
+        buffers: &[Vec<u8>],
+        mesh: &mut Mesh,
+        report: &mut LoadReport,
+    ) -> Result<(), SceneError> {
+        let err = |m: String| self.err(format!("{what}: {m}"));
+        let attr = |semantic: Semantic, dims: usize| -> Result<Option<Vec<f32>>, SceneError> {
+            let Some(acc) = prim.get(&semantic) else {
+                return Ok(None);
+            };
+            let name = format!("{semantic:?} (accessor {})", acc.index());
+            let values =
+                read_floats(&acc, buffers, dims).map_err(|m| err(format!("{name}: {m}")))?;
+            if let Some(bad) = values.iter().position(|x| !x.is_finite()) {
+                return Err(err(format!("{name}: element {} is not finite", bad / dims)));
+            }
+            Ok(Some(values))
+        };
+        let positions = attr(Semantic::Positions, 3)?.ok_or_else(|| err("no POSITION".into()))?;
+        let count = positions.len() / 3;
+        let normals = attr(Semantic::Normals, 3)?;
+        let tangents = attr(Semantic::Tangents, 4)?;
+        let uv0 = attr(Semantic::TexCoords(0), 2)?;
+        let uv1 = attr(Semantic::TexCoords(1), 2)?;
+        for (name, values, dims) in [
+            ("NORMAL", &normals, 3),
+            ("TANGENT", &tangents, 4),
+            ("TEXCOORD_0", &uv0, 2),
+            ("TEXCOORD_1", &uv1, 2),
+        ] {
+            if let Some(v) = values.as_ref().filter(|v| v.len() / dims != count) {
+                return Err(err(format!(
+                    "{name} has {} elements but POSITION has {count}",
+                    v.len() / dims
+                )));
+            }
+        }
+        let indices: Vec<u32> = match prim.indices() {
+            Some(acc) => read_indices(&acc, buffers)
+                .map_err(|m| err(format!("indices (accessor {}): {m}", acc.index())))?,
+            None => (0..count as u32).collect(),
+        };
+        if indices.len() % 3 != 0 {
+            return Err(err(format!(
+                "{} indices is not a whole number of triangles",
+                indices.len()
+            )));
+        }
+        if let Some(bad) = indices.iter().find(|&&i| i as usize >= count) {
+            return Err(err(format!(
+                "index {bad} is out of range (the primitive has {count} vertices)"
+            )));
+        }
+
+        // World space.
+        let m = inst.world_from_mesh;
+        let linear = Mat3::from_mat4(m);
+        let mirrored = linear.determinant() < 0.0;
+        let normal_from_mesh = linear.inverse().transpose();
+        let p: Vec<Vec3> = positions
+            .chunks_exact(3)
+            .map(|c| m.transform_point3(Vec3::from_slice(c)))
+            .collect();
+        if p.iter().any(|v| !v.is_finite()) {
+            return Err(err("the node transform gives non-finite positions".into()));
+        }
+        if p.iter().any(|v| v.abs().max_element() > MAX_ABS_POSITION) {
+            return Err(err(format!(
+                "positions reach beyond ±{MAX_ABS_POSITION:e} m"
+            )));
+        }
+        let uv = |values: &Option<Vec<f32>>| -> Vec<Vec2> {
+            match values {
+                Some(v) => v.chunks_exact(2).map(Vec2::from_slice).collect(),
+                None => vec![Vec2::ZERO; count],
+            }
+        };
+        let (uv0_v, uv1_v) = (uv(&uv0), uv(&uv1));
+
+        // Keep non-degenerate triangles, wound counter-clockwise in world space.
+        let mut kept: Vec<[u32; 3]> = Vec::with_capacity(indices.len() / 3);
+        for t in indices.chunks_exact(3) {
+            let tri = if mirrored {
+                [t[0], t[2], t[1]]
+            } else {
+                [t[0], t[1], t[2]]
+            };
+            let [a, b, c] = tri.map(|i| p[i as usize]);
+            let (e1, e2) = (b - a, c - a);
+            let scale = e1.length() * e2.length();
+            if !(e1.cross(e2).length() > DEGENERATE_SINE * scale) || scale == 0.0 {
+                report.degenerate_triangles += 1;
+                continue;
+            }
+            if uv0.is_some() {
+                let [ua, ub, uc] = tri.map(|i| uv0_v[i as usize]);
+                if (ub - ua).perp_dot(uc - ua).abs() < MIN_UV_AREA {
+                    report.zero_uv_area_triangles += 1;
+                    continue;
+                }
+            }
+            kept.push(tri);
+        }
+        if kept.is_empty() {
+            return Ok(());
+        }
+
+        // Normals: given (inverse-transpose), else area-weighted smooth.
+        let mut smooth = vec![Vec3::ZERO; count];
+        for tri in &kept {
+            let [a, b, c] = tri.map(|i| p[i as usize]);
+            let n = (b - a).cross(c - a);
+            for &i in tri {
+                smooth[i as usize] += n;
+            }
+        }
+        let n: Vec<Vec3> = (0..count)
+            .map(|i| {
+                let given = normals.as_ref().and_then(|v| {
+                    (normal_from_mesh * Vec3::from_slice(&v[3 * i..])).try_normalize()
+                });
+                given
+                    .or_else(|| smooth[i].try_normalize())
+                    .unwrap_or(Vec3::Y)
+            })
+            .collect();
+
+        // Tangents per corner: given (upper 3×3, w mirrored), else MikkTSpace.
+        let flat: Vec<u32> = kept.iter().flatten().copied().collect();
+        let corner_tangents: Vec<Vec4> = match &tangents {
+            Some(t) => flat
+                .iter()
+                .map(|&i| {
+                    let i = i as usize;
+                    let given = Vec4::from_slice(&t[4 * i..]);
+                    let w = if (given.w < 0.0) != mirrored {
+                        -1.0
+                    } else {
+                        1.0
+                    };
+                    tangent::orthonormalize(n[i], (linear * given.truncate()).extend(w))
+                })
+                .collect(),
+            None => {
+                report.generated_tangents = true;
+                if uv0.is_some() {
+                    tangent::generate(&p, &n, &uv0_v, &flat)
+                } else {
+                    flat.iter()
+                        .map(|&i| tangent::fallback_tangent(n[i as usize]))
+                        .collect()
+                }
+            }
+        };
+
+        // Append, splitting a vertex only where its corners' tangents differ.
+        let tint = prim.material().pbr_metallic_roughness().base_color_factor();
+        let mut remap: HashMap<(u32, [u32; 4]), u32> = HashMap::new();
+        for (&i, t) in flat.iter().zip(&corner_tangents) {
+            let key = (i, t.to_array().map(f32::to_bits));
+            let index = *remap.entry(key).or_insert_with(|| {
+                let k = i as usize;
+                mesh.vertices.push(Vertex {
+                    position: p[k].to_array(),
+                    normal: n[k].to_array(),
+                    tangent: t.to_array(),
+                    uv_material: uv0_v[k].to_array(),
+                    uv_lightmap: uv1_v[k].to_array(),
+                    albedo_tint: [tint[0], tint[1], tint[2]],
+                });
+                (mesh.vertices.len() - 1) as u32
+            });
+            mesh.indices.push(index);
+        }
+        Ok(())
+    }
+
+    /// Decodes image `index` to RGBA8.
+    fn texture(
+        &self,
+        document: &gltf::Document,
+        index: usize,
+        buffers: &[Vec<u8>],
+    ) -> Result<Texture8, SceneError> {
+        let err = |m: String| self.err(format!("image {index}: {m}"));
+        let image = document
+            .images()
+            .nth(index)
+            .ok_or_else(|| err("missing".into()))?;
+        let bytes: Vec<u8> = match image.source() {
+            gltf::image::Source::Uri { uri, .. } => self.read_uri(uri).map_err(err)?,
+            gltf::image::Source::View { view, .. } => {
+                let data = buffers
+                    .get(view.buffer().index())
+                    .ok_or_else(|| err("bad buffer".into()))?;
+                view.offset()
+                    .checked_add(view.length())
+                    .and_then(|end| data.get(view.offset()..end))
+                    .ok_or_else(|| err("buffer view runs past its buffer".into()))?
+                    .to_vec()
+            }
+        };
+        let decoded = image::load_from_memory(&bytes)
+            .map_err(|e| err(format!("cannot decode: {e}")))?
+            .to_rgba8();
+        let (width, height) = decoded.dimensions();
+        if width == 0 || height == 0 || width.max(height) > MAX_TEXTURE_SIDE {
+            return Err(err(format!(
+                "{width}×{height} is outside 1..={MAX_TEXTURE_SIDE} texels per side"
+            )));
+        }
+        Ok(Texture8 {
+            width,
+            height,
+            texels: decoded
+                .into_raw()
+                .chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], c[3]])
+                .collect(),
+        })
+    }
+}
+
+/// A 1×1 texture.
+fn solid_texture(texel: [u8; 4]) -> Texture8 {
+    Texture8 {
+        width: 1,
+        height: 1,
+        texels: vec![texel],
+    }
+}
+
+/// `uri` shortened for messages (data URIs can be megabytes).
+fn short(uri: &str) -> String {
+    const MAX: usize = 80;
+    match uri.char_indices().nth(MAX) {
+        Some((i, _)) => format!("{}…", &uri[..i]),
+        None => uri.to_string(),
+    }
+}
+
+/// RFC 3986 percent-decoding into UTF-8, `None` when malformed.
+fn percent_decode(s: &str) -> Option<String> {
+    let bytes = s.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i] == b'%' {
+            let hex = std::str::from_utf8(bytes.get(i + 1..i + 3)?).ok()?;
+            out.push(u8::from_str_radix(hex, 16).ok()?);
+            i += 3;
+        } else {
+            out.push(bytes[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
+/// Rejects a `.glb` header the `gltf` crate would mishandle (length below the header).
+fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
+    const HEADER: usize = 12;
+    if !bytes.starts_with(b"glTF") {
+        return Ok(());
+    }
+    let length = bytes
+        .get(8..HEADER)
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+        .ok_or("truncated .glb header")?;
+    if length < HEADER {
+        return Err(format!(".glb header length {length} is below 12"));
+    }
+    Ok(())
+}
+
+/// The node's local matrix (TRS with the rotation renormalized, or the matrix).
+fn local_matrix(node: &gltf::Node) -> Mat4 {
+    match node.transform() {
+        gltf::scene::Transform::Matrix { matrix } => Mat4::from_cols_array_2d(&matrix),
+        gltf::scene::Transform::Decomposed {
+            translation,
+            rotation,
+            scale,
+        } => {
+            let q = Quat::from_array(rotation);
+            let q = if q.length_squared() > 0.0 && q.is_finite() {
+                q.normalize()
+            } else {
+                Quat::IDENTITY
+            };
+            Mat4::from_scale_rotation_translation(Vec3::from(scale), q, Vec3::from(translation))
+        }
+    }
+}
+
+/// The camera of node matrix `world` (perspective checked by the caller), or `None` when
+/// its transform or projection is unusable.
+fn file_camera(
+    document: &gltf::Document,
+    index: usize,
+    world: Mat4,
+    bounds: (Vec3, Vec3),
+) -> Option<Camera> {
+    let p = document
+        .as_json()
+        .cameras
+        .get(index)?
+        .perspective
+        .as_ref()?;
+    let position = world.transform_point3(Vec3::ZERO);
+    let forward = world.transform_vector3(Vec3::NEG_Z).try_normalize()?;
+    let up = world.transform_vector3(Vec3::Y).try_normalize()?;
+    let size = (bounds.1 - bounds.0).length().max(f32::MIN_POSITIVE);
+    let z_far = p
+        .zfar
+        .filter(|&f| f.is_finite() && f > p.znear)
+        .unwrap_or(DEFAULT_Z_FAR_SCALE * size);
+    let valid = position.is_finite()
+        && forward.cross(up).length() > DEGENERATE_SINE
+        && p.yfov > 0.0
+        && p.yfov < std::f32::consts::PI
+        && p.znear > 0.0
+        && z_far > p.znear;
+    valid.then(|| Camera {
+        position,
+        target: position + forward,
+        up,
+        fov_y: p.yfov,
+        z_near: p.znear,
+        z_far,
+    })
+}
+
+/// Where an accessor's elements live: bytes from the first element on, and the stride.
+fn element_bytes<'b>(
+    acc: &gltf::Accessor,
+    buffers: &'b [Vec<u8>],
+    elem_size: usize,
+) -> Result<Option<(&'b [u8], usize)>, String> {
+    let Some(view) = acc.view() else {
+        return Ok(None);
+    };
+    let data = buffers
+        .get(view.buffer().index())
+        .ok_or("bad buffer index")?;
+    let view_bytes = view
+        .offset()
+        .checked_add(view.length())
+        .and_then(|end| data.get(view.offset()..end))
+        .ok_or("buffer view runs past its buffer")?;
+    let stride = view.stride().unwrap_or(elem_size);
+    if stride < elem_size {
+        return Err(format!("byteStride {stride} < element size {elem_size}"));
+    }
+    let count = acc.count();
+    let needed = match count {
+        0 => 0,
+        n => (n - 1)
+            .checked_mul(stride)
+            .and_then(|b| b.checked_add(elem_size))
+            .ok_or("size overflows")?,
+    };
+    let bytes = acc
+        .offset()
+        .checked_add(needed)
+        .and_then(|end| view_bytes.get(acc.offset()..end))
+        .ok_or_else(|| {
+            format!(
+                "{count} elements at offset {} run past the buffer view ({} bytes)",
+                acc.offset(),
+                view_bytes.len()
+            )
+        })?;
+    Ok(Some((bytes, stride)))
+}
+
+/// One component at `bytes[0..]` as f32, normalized per glTF §3.11 when asked.
+fn component(bytes: &[u8], ty: DataType, normalized: bool) -> f32 {
+    let b = |k: usize| bytes.get(k).copied().unwrap_or(0);
+    match (ty, normalized) {
+        (DataType::I8, false) => f32::from(b(0) as i8),
+        (DataType::I8, true) => (f32::from(b(0) as i8) / 127.0).max(-1.0),
+        (DataType::U8, false) => f32::from(b(0)),
+        (DataType::U8, true) => f32::from(b(0)) / 255.0,
+        (DataType::I16, n) => {
+            let v = f32::from(i16::from_le_bytes([b(0), b(1)]));
+            if n { (v / 32767.0).max(-1.0) } else { v }
+        }
+        (DataType::U16, n) => {
+            let v = f32::from(u16::from_le_bytes([b(0), b(1)]));
+            if n { v / 65535.0 } else { v }
+        }
+        (DataType::U32, n) => {
+            let v = u32::from_le_bytes([b(0), b(1), b(2), b(3)]) as f32;
+            if n { v / u32::MAX as f32 } else { v }
+        }
+        (DataType::F32, _) => f32::from_le_bytes([b(0), b(1), b(2), b(3)]),
+    }
+}
+
+/// An accessor of `dims` components per element as flat f32 values (sparse applied).
+fn read_floats(acc: &gltf::Accessor, buffers: &[Vec<u8>], dims: usize) -> Result<Vec<f32>, String> {
+    let found = match acc.dimensions() {
+        Dimensions::Scalar => 1,
+        Dimensions::Vec2 => 2,
+        Dimensions::Vec3 => 3,
+        Dimensions::Vec4 => 4,
+        other => return Err(format!("type {other:?} where VEC{dims} was expected")),
+    };
+    if found != dims {
+        return Err(format!("VEC{found} where VEC{dims} was expected"));
+    }
+    let ty = acc.data_type();
+    let size = ty.size();
+    let elem = size * dims;
+    let count = acc.count();
+    let mut out = match element_bytes(acc, buffers, elem)? {
+        Some((bytes, stride)) => {
+            let mut out = Vec::with_capacity(count * dims);
+            for i in 0..count {
+                let e = &bytes[i * stride..i * stride + elem];
+                out.extend((0..dims).map(|k| component(&e[k * size..], ty, acc.normalized())));
+            }
+            out
+        }
+        None if count <= MAX_ZERO_FILLED => vec![0.0; count * dims],
+        None => return Err(format!("{count} elements without a buffer view")),
+    };
+    if let Some(sparse) = acc.sparse() {
+        let n = sparse.count();
+        let indices = sparse_indices(&sparse, buffers)?;
+        let values = sparse.values();
+        let data = buffers
+            .get(values.view().buffer().index())
+            .ok_or("bad buffer index")?;
+        let start = values
+            .view()
+            .offset()
+            .checked_add(values.offset())
+            .ok_or("sparse offset overflows")?;
+        let bytes = n
+            .checked_mul(elem)
+            .and_then(|len| len.checked_add(start))
+            .and_then(|end| data.get(start..end))
+            .ok_or("sparse values run past their buffer")?;
+        for (k, &i) in indices.iter().enumerate() {
+            let slot = out
+                .get_mut(i as usize * dims..(i as usize + 1) * dims)
+                .ok_or_else(|| format!("sparse index {i} ≥ count {count}"))?;
+            for (c, v) in slot.iter_mut().enumerate() {
+                *v = component(&bytes[k * elem + c * size..], ty, acc.normalized());
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Indices of a sparse accessor.
+fn sparse_indices(
+    sparse: &gltf::accessor::sparse::Sparse,
+    buffers: &[Vec<u8>],
+) -> Result<Vec<u32>, String> {
+    let idx = sparse.indices();
+    let size = idx.index_type().size();
+    let data = buffers
+        .get(idx.view().buffer().index())
+        .ok_or("bad buffer index")?;
+    let start = idx
+        .view()
+        .offset()
+        .checked_add(idx.offset())
+        .ok_or("sparse offset overflows")?;
+    let bytes = sparse
+        .count()
+        .checked_mul(size)
+        .and_then(|len| len.checked_add(start))
+        .and_then(|end| data.get(start..end))
+        .ok_or("sparse indices run past their buffer")?;
+    Ok(bytes
+        .chunks_exact(size)
+        .map(|c| match c {
+            [a] => u32::from(*a),
+            [a, b] => u32::from(u16::from_le_bytes([*a, *b])),
+            [a, b, c, d] => u32::from_le_bytes([*a, *b, *c, *d]),
+            _ => u32::MAX,
+        })
+        .collect())
+}
+
+/// A SCALAR accessor of unsigned integers (the index buffer).
+fn read_indices(acc: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u32>, String> {
+    if acc.dimensions() != Dimensions::Scalar {
+        return Err(format!(
+            "type {:?} where SCALAR was expected",
+            acc.dimensions()
+        ));
+    }
+    let ty = acc.data_type();
+    if !matches!(ty, DataType::U8 | DataType::U16 | DataType::U32) || acc.normalized() {
+        return Err(format!("component type {ty:?} cannot hold indices"));
+    }
+    // Integers below 2²⁴ survive f32 exactly; larger ones are read directly.
+    let size = ty.size();
+    match element_bytes(acc, buffers, size)? {
+        Some((bytes, stride)) if acc.sparse().is_none() => Ok((0..acc.count())
+            .map(|i| {
+                let e = &bytes[i * stride..i * stride + size];
+                match ty {
+                    DataType::U8 => u32::from(e[0]),
+                    DataType::U16 => u32::from(u16::from_le_bytes([e[0], e[1]])),
+                    _ => u32::from_le_bytes([e[0], e[1], e[2], e[3]]),
+                }
+            })
+            .collect()),
+        _ => Ok(read_floats(acc, buffers, 1)?
+            .into_iter()
+            .map(|v| v as u32)
+            .collect()),
+    }
+}
