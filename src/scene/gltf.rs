@@ -185,8 +185,30 @@ impl Loader {
         lightmap_res: u32,
     ) -> Result<(Scene, LoadReport), SceneError> {
         check_glb_header(bytes).map_err(|m| self.err(m))?;
-        let gltf::Gltf { document, blob } =
-            gltf::Gltf::from_slice(bytes).map_err(|e| self.err(format!("invalid glTF: {e}")))?;
+        let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
+            .map_err(|e| self.err(format!("invalid glTF: {e}")))?;
+        // gltf-json's own validation indexes POSITION accessors unchecked: check them first.
+        let json = document.into_json();
+        for (m, mesh) in json.meshes.iter().enumerate() {
+            for (p, prim) in mesh.primitives.iter().enumerate() {
+                let position = gltf::json::validation::Checked::Valid(Semantic::Positions);
+                if let Some(a) = prim.attributes.get(&position)
+                    && a.value() >= json.accessors.len()
+                {
+                    return Err(self.err(format!(
+                        "invalid glTF: meshes[{m}].primitives[{p}] POSITION refers to \
+                         accessor {} of {}",
+                        a.value(),
+                        json.accessors.len()
+                    )));
+                }
+            }
+        }
+        let document = gltf::Document::from_json(json).map_err(|e| match e {
+            // Its message starts with "invalid glTF:" and lists every problem.
+            gltf::Error::Validation(_) => self.err(e.to_string()),
+            _ => self.err(format!("invalid glTF: {e}")),
+        })?;
         let buffers = self.buffers(&document, blob)?;
         let mut report = LoadReport::default();
 
@@ -455,7 +477,7 @@ impl Loader {
             let Some(acc) = prim.get(&semantic) else {
                 return Ok(None);
             };
-            let name = format!("{semantic:?} (accessor {})", acc.index());
+            let name = format!("{} (accessor {})", semantic_name(&semantic), acc.index());
             let values =
                 read_floats(&acc, buffers, dims).map_err(|m| err(format!("{name}: {m}")))?;
             if let Some(bad) = values.iter().position(|x| !x.is_finite()) {
@@ -487,7 +509,7 @@ impl Loader {
                 .map_err(|m| err(format!("indices (accessor {}): {m}", acc.index())))?,
             None => (0..count as u32).collect(),
         };
-        if indices.len() % 3 != 0 {
+        if !indices.len().is_multiple_of(3) {
             return Err(err(format!(
                 "{} indices is not a whole number of triangles",
                 indices.len()
@@ -535,7 +557,9 @@ impl Loader {
             let [a, b, c] = tri.map(|i| p[i as usize]);
             let (e1, e2) = (b - a, c - a);
             let scale = e1.length() * e2.length();
-            if !(e1.cross(e2).length() > DEGENERATE_SINE * scale) || scale == 0.0 {
+            // Written so that NaN-free zero areas and zero-length edges both count.
+            let area_ok = e1.cross(e2).length() > DEGENERATE_SINE * scale;
+            if !area_ok || scale == 0.0 {
                 report.degenerate_triangles += 1;
                 continue;
             }
@@ -665,6 +689,17 @@ impl Loader {
                 .map(|c| [c[0], c[1], c[2], c[3]])
                 .collect(),
         })
+    }
+}
+
+/// The attribute's glTF spelling (`POSITION`, `TEXCOORD_1`, …) for messages.
+fn semantic_name(semantic: &Semantic) -> String {
+    match semantic {
+        Semantic::Positions => "POSITION".into(),
+        Semantic::Normals => "NORMAL".into(),
+        Semantic::Tangents => "TANGENT".into(),
+        Semantic::TexCoords(n) => format!("TEXCOORD_{n}"),
+        other => format!("{other:?}"),
     }
 }
 

@@ -307,8 +307,7 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
     let mut remap: HashMap<(u32, u32), u32> = HashMap::new();
     let mut vertices: Vec<Vertex> = Vec::with_capacity(mesh.vertices.len());
     let mut indices = Vec::with_capacity(mesh.indices.len());
-    for t in 0..tri_count {
-        let id = chart_of[t];
+    for (t, &id) in chart_of.iter().enumerate() {
         let rect = packing.rects[id as usize];
         let d = packing.density;
         let extent = sizes[id as usize].size * d;

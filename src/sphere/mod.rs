@@ -163,7 +163,7 @@ pub struct BilinearTaps {
 }
 
 impl BilinearTaps {
-    /// Σ weight·values[index] for a single-channel array of the map's texels.
+    /// Σ `weight[k]·values[index[k]]` for a single-channel array of the map's texels.
     ///
     /// # Panics
     /// If `values` is shorter than the map (a bug: [`TexelGrid`] checks lengths).
@@ -226,8 +226,8 @@ impl SphereMap {
         }
     }
 
-    /// Unit direction at uv of image `face`; inverse of [`dir_to_texcoord`]
-    /// (Self::dir_to_texcoord). For dual maps, uv outside the shrunk square
+    /// Unit direction at uv of image `face`; inverse of
+    /// [`dir_to_texcoord`](Self::dir_to_texcoord). For dual maps, uv outside the shrunk square
     /// [½/res, 1−½/res]² is clamped onto it (the equator).
     pub fn texcoord_to_dir(&self, face: u32, uv: DVec2) -> DVec3 {
         debug_assert!(
@@ -287,7 +287,7 @@ impl SphereMap {
     /// for `dir` in the closed hemisphere; on the equator both give identical uv).
     ///
     /// # Panics
-    /// (debug) if the map is a cube.
+    /// If the map is a cube (a bug: only dual maps have hemispheres).
     pub fn dual_texcoord_in(&self, h: u32, dir: DVec3) -> DVec2 {
         let p = match self.kind {
             Parameterization::DualOrtho => dual_ortho::project(h, dir),

@@ -569,7 +569,7 @@ fn register_plot_font() -> Result<(), String> {
 ///
 /// # Errors
 /// [`StudyError::Plot`] when plotters fails or no font is available for the labels
-/// (`$SHVIS_FONT` or a common system font, see [`FONT_CANDIDATES`]).
+/// (`$SHVIS_FONT`, else DejaVu/Liberation/Noto Sans or Arial at their usual paths).
 pub fn write_plots(points: &[StudyPoint], dir: &Path) -> Result<Vec<PathBuf>, StudyError> {
     use plotters::prelude::{BitMapBackend, IntoDrawingArea, SVGBackend};
     const SIZE: (u32, u32) = (1200, 520);
