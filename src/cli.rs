@@ -119,6 +119,15 @@ struct SceneArgs {
     /// Seed of the bake's sample patterns.
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// SH order of the visibility bake (bands l < order).
+    #[arg(long, default_value_t = 6)]
+    order: u32,
+    /// L×H table texels per hemisphere (dx9) or cube face (dx10) side.
+    #[arg(long, default_value_t = 32)]
+    table_res: u32,
+    /// SH order of the clamped cosine in the L×H product (the paper uses 3).
+    #[arg(long, default_value_t = 3)]
+    h_order: u32,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -355,15 +364,19 @@ fn run_sh(c: ShCommand) -> Result<()> {
     Ok(())
 }
 
-fn prepare_settings(scene: &SceneArgs, env: &str) -> PrepareSettings {
-    PrepareSettings {
+fn prepare_settings(scene: &SceneArgs, env: &str) -> Result<PrepareSettings> {
+    Ok(PrepareSettings {
         scene: scene.scene.clone(),
         env: env.to_string(),
         vis_res: scene.vis_res,
         rays: scene.rays,
         seed: scene.seed,
         progress: true,
-    }
+        order: shvis::sh::Order::new(scene.order).context("--order")?,
+        table_res: scene.table_res,
+        h_order: shvis::sh::Order::new(scene.h_order).context("--h-order")?,
+        cache_dir: None,
+    })
 }
 
 fn open_gpu(gpu: &GpuArgs) -> Result<Arc<Context>> {
@@ -383,6 +396,7 @@ fn create_dir(dir: &Path) -> Result<()> {
 fn run_bake(a: BakeArgs) -> Result<()> {
     let vis_res = bake::validate_res(a.scene.vis_res)?;
     let rays = bake::validate_rays(a.scene.rays)?;
+    let settings = prepare_settings(&a.scene, "sky")?;
     let scene = resolve_scene(&a.scene.scene, vis_res)?;
     create_dir(&a.out)?;
     let ao = bake_scene_ao(&scene, vis_res, rays, a.scene.seed, true)?;
@@ -394,20 +408,18 @@ fn run_bake(a: BakeArgs) -> Result<()> {
         ao.seconds,
         ao.rays_per_second() / 1e6
     );
-    let frame = shvis::render::Frame {
-        width: vis_res,
-        height: vis_res,
-        rgba: ao
-            .values
-            .iter()
-            .zip(&ao.covered)
-            .map(|(&v, &c)| [v, v, v, c as u8 as f32])
-            .collect(),
-        ms: vec![],
-    };
-    let path = a.out.join("ao.exr");
-    write_exr(&path, &frame)?;
-    println!("wrote {}", path.display());
+    let visibility = shvis::prepare::bake_scene_visibility(&scene, vis_res, rays, &settings)?;
+    println!(
+        "visibility bake: order {} × {rays} rays: {:.2} s, {:.2} Mrays/s (0 s: from the cache)",
+        visibility.order,
+        visibility.seconds,
+        visibility.rays_per_second() / 1e6
+    );
+    shvis::bake::cache::write_exr_layers(&a.out, &visibility)?;
+    println!(
+        "wrote {}/ (visibility coefficient and ao EXR layers)",
+        a.out.display()
+    );
     Ok(())
 }
 
@@ -415,7 +427,7 @@ fn run_render(a: RenderArgs) -> Result<()> {
     check_output_extension(&a.out)?;
     // The device first: a missing GPU should not cost a bake.
     let ctx = open_gpu(&a.gpu)?;
-    let prepared = prepare(&prepare_settings(&a.scene, &a.env))?;
+    let prepared = prepare(&prepare_settings(&a.scene, &a.env)?)?;
     let settings = FrameSettings {
         width: a.width,
         height: a.height,
@@ -471,7 +483,7 @@ fn run_bench(a: BenchArgs) -> Result<()> {
     let paths = parse_list(&a.paths, HwPath::ALL)?;
     create_dir(&a.out)?;
     let started = Instant::now();
-    let prepared: Prepared = prepare(&prepare_settings(&a.scene, &a.env))?;
+    let prepared: Prepared = prepare(&prepare_settings(&a.scene, &a.env)?)?;
     let ctx = open_gpu(&a.gpu)?;
     if !ctx.supports_timestamps() {
         bail!(

@@ -4,9 +4,13 @@
 
 use std::time::Instant;
 
+use std::path::PathBuf;
+
 use crate::bake::ao::{AoMap, AoSettings, bake_ao};
+use crate::bake::cache::{default_cache_dir, load_or_bake_visibility};
 use crate::bake::raster::rasterize;
 use crate::bake::trace::Tracer;
+use crate::bake::visibility::{VisibilityMap, VisibilitySettings, bake_visibility};
 use crate::bake::{self, BakeError};
 use crate::env::{self, EnvError, EnvMap};
 use crate::scene::{Scene, SceneError, gltf, house};
@@ -27,6 +31,14 @@ pub struct PrepareSettings {
     pub seed: u64,
     /// Show progress bars.
     pub progress: bool,
+    /// SH order of the visibility bake (techniques use its first coefficients).
+    pub order: Order,
+    /// L×H table texels per hemisphere (dx9) / cube face (dx10) side.
+    pub table_res: u32,
+    /// Order of the clamped cosine in the L×H product (the paper's 3).
+    pub h_order: Order,
+    /// Where bakes are cached (`None`: `bake::cache::default_cache_dir()`).
+    pub cache_dir: Option<PathBuf>,
 }
 
 impl Default for PrepareSettings {
@@ -38,6 +50,10 @@ impl Default for PrepareSettings {
             rays: 1024,
             seed: 0,
             progress: false,
+            order: Order::SIX,
+            table_res: 32,
+            h_order: Order::THREE,
+            cache_dir: None,
         }
     }
 }
@@ -46,18 +62,34 @@ impl Default for PrepareSettings {
 pub struct Prepared {
     pub scene: Scene,
     pub env: EnvMap,
+    /// Ambient occlusion from the visibility bake's rays.
     pub ao: AoMap,
-    /// Order-3 SH of the environment's radiance, RGB.
+    /// SH visibility per lightmap texel.
+    pub visibility: VisibilityMap,
+    /// SH of the environment's radiance, RGB, to order `LIGHTING_ORDER` (≥ visibility + 2).
     pub radiance_sh: Vec<[f64; 3]>,
     /// Order-3 SH of irradiance: `radiance_sh` convolved with the clamped cosine.
     pub irradiance_sh: Vec<[f64; 3]>,
+    pub table_res: u32,
+    pub h_order: Order,
 }
+
+/// Order of the lighting projection: L×H of order-6 visibility needs lighting of order 8
+/// (O + 2, Iwanicki–Sloan §3.3).
+pub const LIGHTING_ORDER: u32 = 8;
+
+/// Valid `--table-res` values (DESIGN §2: 16–32 per hemisphere is adequate; more for study).
+pub const TABLE_RES_RANGE: std::ops::RangeInclusive<u32> = 4..=256;
 
 impl Prepared {
     pub fn inputs(&self) -> Inputs<'_> {
         Inputs {
             ao: &self.ao,
             irradiance_sh: &self.irradiance_sh,
+            radiance_sh: &self.radiance_sh,
+            visibility: Some(&self.visibility),
+            table_res: self.table_res,
+            h_order: self.h_order,
         }
     }
 }
@@ -71,6 +103,10 @@ pub enum PrepareError {
     Env(#[from] EnvError),
     #[error(transparent)]
     Bake(#[from] BakeError),
+    #[error("--table-res {0} is out of range 4..=256")]
+    TableRes(u32),
+    #[error("visibility order {0} needs lighting of order {0}+2 > 30")]
+    Order(u32),
 }
 
 /// The built-in scene by name, or a scene file.
@@ -89,14 +125,26 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
     let vis_res = bake::validate_res(settings.vis_res)?;
     let rays = bake::validate_rays(settings.rays)?;
     let env = env::resolve(&settings.env)?;
+    if !TABLE_RES_RANGE.contains(&settings.table_res) {
+        return Err(PrepareError::TableRes(settings.table_res));
+    }
     let scene = resolve_scene(&settings.scene, vis_res)?;
-    let ao = bake_scene_ao(&scene, vis_res, rays, settings.seed, settings.progress)?;
-    let order3 = Order::new(3).expect("3 is a valid order");
+    let visibility = bake_scene_visibility(&scene, vis_res, rays, settings)?;
+    let ao = AoMap {
+        res: visibility.res,
+        values: visibility.ao.clone(),
+        covered: visibility.covered.clone(),
+        rays_traced: visibility.rays_traced,
+        seconds: visibility.seconds,
+    };
+    let order3 = Order::THREE;
+    let lighting_order = Order::new(LIGHTING_ORDER.max(settings.order.get() + 2))
+        .map_err(|_| PrepareError::Order(settings.order.get()))?;
     let t = Instant::now();
-    let radiance_sh = env::project::project_sh(&env, order3);
-    let irradiance_sh = zonal::irradiance_from_radiance(&radiance_sh, order3);
+    let radiance_sh = env::project::project_sh(&env, lighting_order);
+    let irradiance_sh = zonal::irradiance_from_radiance(&radiance_sh[..9], order3);
     log::info!(
-        "env: {}×{} projected to order 3 in {:.1} ms",
+        "env: {}×{} projected to order {lighting_order} in {:.1} ms",
         env.width,
         env.height,
         t.elapsed().as_secs_f64() * 1e3
@@ -105,8 +153,40 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
         scene,
         env,
         ao,
+        visibility,
         radiance_sh,
         irradiance_sh,
+        table_res: settings.table_res,
+        h_order: settings.h_order,
+    })
+}
+
+/// Rasterizes the lightmap and bakes SH visibility, through the bake cache.
+pub fn bake_scene_visibility(
+    scene: &Scene,
+    vis_res: u32,
+    rays: u32,
+    settings: &PrepareSettings,
+) -> Result<VisibilityMap, BakeError> {
+    let vis_settings = VisibilitySettings {
+        order: settings.order,
+        rays,
+        seed: settings.seed,
+        progress: settings.progress,
+    };
+    let cache_dir = settings.cache_dir.clone().unwrap_or_else(default_cache_dir);
+    load_or_bake_visibility(&cache_dir, &scene.mesh, vis_res, &vis_settings, || {
+        let texels = rasterize(&scene.mesh, vis_res);
+        let tracer = Tracer::new(&scene.mesh);
+        let map = bake_visibility(&tracer, &texels, &vis_settings);
+        log::info!(
+            "visibility bake: {} texels × {rays} rays at order {} in {:.2} s = {:.2} Mrays/s",
+            texels.covered_count(),
+            settings.order,
+            map.seconds,
+            map.rays_per_second() / 1e6
+        );
+        map
     })
 }
 

@@ -781,7 +781,13 @@ fn avocado_loads_with_generated_lightmap_uvs() {
         (scene.material.normal.width, scene.material.normal.height),
         (2048, 2048)
     );
-    assert_disjoint_charts(&scene.mesh, res, "avocado");
+    let covered = assert_disjoint_charts(&scene.mesh, res, "avocado");
+    println!("avocado: {covered} of {} texels covered", res * res);
+    // Chart rectangles and gutters cost space, but most of the lightmap must be surface.
+    assert!(
+        covered > (res * res / 4) as usize,
+        "{covered} texels covered"
+    );
     // The framing camera sees the whole avocado from centimetres away.
     let d = (scene.camera.position - scene.camera.target).length();
     assert!(d > 0.03 && d < 0.3, "camera distance {d}");

@@ -15,6 +15,7 @@
 pub mod ao;
 pub mod cache;
 pub mod directions;
+pub mod lxh;
 pub mod raster;
 pub mod trace;
 pub mod visibility;

@@ -45,19 +45,14 @@ pub const EPSILON_PER_EXTENT: f32 = 1e-4;
 
 /// Most rays of one [`Tracer::occluded_coherent`] query (one bit each of a `u64` mask).
 pub const PACKET_RAYS: usize = 64;
-/// SIMD lanes of 4 rays in a packet.
-const PACKET_LANES: usize = PACKET_RAYS / 4;
 /// obvhs's node-test lower bound on t (`cwbvh::node::EPSILON`, crate-private there),
 /// repeated so that coherent node tests equal single-ray ones bit for bit.
 const NODE_T_MIN: f32 = 0.0001;
 
-/// Origins of one coherent query (structure of arrays, 4 rays per SIMD lane) and the
-/// traversal stack, reused across queries.
+/// Origins of one coherent query and the traversal stack, reused across queries.
 #[derive(Clone, Debug)]
 pub struct RayPacket {
-    x: [Vec4; PACKET_LANES],
-    y: [Vec4; PACKET_LANES],
-    z: [Vec4; PACKET_LANES],
+    origins: [Vec3A; PACKET_RAYS],
     len: usize,
     stack: Vec<(u32, u64)>,
 }
@@ -74,17 +69,12 @@ impl RayPacket {
             origins.len()
         );
         let mut packet = RayPacket {
-            x: [Vec4::ZERO; PACKET_LANES],
-            y: [Vec4::ZERO; PACKET_LANES],
-            z: [Vec4::ZERO; PACKET_LANES],
+            origins: [Vec3A::ZERO; PACKET_RAYS],
             len: origins.len(),
             stack: Vec::with_capacity(256),
         };
-        for (i, o) in origins.iter().enumerate() {
-            let (lane, k) = (i / 4, i % 4);
-            packet.x[lane][k] = o.x;
-            packet.y[lane][k] = o.y;
-            packet.z[lane][k] = o.z;
+        for (slot, o) in packet.origins.iter_mut().zip(origins) {
+            *slot = Vec3A::from(*o);
         }
         packet
     }
@@ -106,11 +96,6 @@ impl RayPacket {
         } else {
             (1u64 << self.len) - 1
         }
-    }
-
-    fn origin(&self, i: usize) -> Vec3A {
-        let (lane, k) = (i / 4, i % 4);
-        Vec3A::new(self.x[lane][k], self.y[lane][k], self.z[lane][k])
     }
 }
 
@@ -237,13 +222,9 @@ impl Tracer {
         let (rdx, rdy, rdz) = (d.x < 0.0, d.y < 0.0, d.z < 0.0);
         // Child-slot priority of obvhs's traversal order: slot ^ octant (near first).
         let oct = (if rdx { 0 } else { 4 }) | (if rdy { 0 } else { 2 }) | (if rdz { 0 } else { 1 });
-        let (inv_x, inv_y, inv_z) = (Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z));
         let node_t_min = Vec4::splat(NODE_T_MIN);
         let ray_t_max = Vec4::splat(t_max);
         let mut occluded = 0u64;
-        let mut ox = [Vec4::ZERO; PACKET_LANES];
-        let mut oy = [Vec4::ZERO; PACKET_LANES];
-        let mut oz = [Vec4::ZERO; PACKET_LANES];
         let mut stack = std::mem::take(&mut packet.stack);
         stack.clear();
         stack.push((0, active));
@@ -253,52 +234,56 @@ impl Tracer {
                 continue;
             }
             let node = &bvh.nodes[node_index as usize];
-            // Per-ray part of CwBvhNode::intersect_ray: (p − origin)·(1/d).
+            // Shared part of CwBvhNode::intersect_ray_simd for this direction: the child
+            // planes picked by the direction's signs, times extent·(1/d), 4 children per
+            // SIMD vector as obvhs groups them.
             let adj = node.compute_extent() * inv;
-            let (px, py, pz) = (
-                Vec4::splat(node.p.x),
-                Vec4::splat(node.p.y),
-                Vec4::splat(node.p.z),
-            );
-            let mut lanes = 0u32;
-            for l in 0..PACKET_LANES {
-                if (mask >> (4 * l)) & 0xf != 0 {
-                    lanes |= 1 << l;
-                    ox[l] = (px - packet.x[l]) * inv_x;
-                    oy[l] = (py - packet.y[l]) * inv_y;
-                    oz[l] = (pz - packet.z[l]) * inv_z;
+            let planes = |lo: &[u8; 8], hi: &[u8; 8], neg: bool, scale: f32, half: usize| {
+                let (near, far) = if neg { (hi, lo) } else { (lo, hi) };
+                let q = |v: &[u8; 8]| {
+                    Vec4::new(
+                        f32::from(v[4 * half]),
+                        f32::from(v[4 * half + 1]),
+                        f32::from(v[4 * half + 2]),
+                        f32::from(v[4 * half + 3]),
+                    ) * Vec4::splat(scale)
+                };
+                (q(near), q(far))
+            };
+            let mut slabs = [[Vec4::ZERO; 6]; 2];
+            for (half, slab) in slabs.iter_mut().enumerate() {
+                let (x0, x1) = planes(&node.child_min_x, &node.child_max_x, rdx, adj.x, half);
+                let (y0, y1) = planes(&node.child_min_y, &node.child_max_y, rdy, adj.y, half);
+                let (z0, z1) = planes(&node.child_min_z, &node.child_max_z, rdz, adj.z, half);
+                *slab = [x0, x1, y0, y1, z0, z1];
+            }
+            let occupied = u64::from_le_bytes(node.child_meta);
+            let mut child_masks = [0u64; 8];
+            let p = Vec3A::from(node.p);
+            let mut todo = mask;
+            while todo != 0 {
+                let r = todo.trailing_zeros() as usize;
+                todo &= todo - 1;
+                // Per-ray part: (p − origin)·(1/d), then obvhs's slab test with its
+                // operand order of _mm_max_ps/_mm_min_ps (NaN handling).
+                let o = (p - packet.origins[r]) * inv;
+                let (ox, oy, oz) = (Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z));
+                let mut hits = 0u32;
+                for (half, [x0, x1, y0, y1, z0, z1]) in slabs.iter().enumerate() {
+                    let tmin = (*x0 + ox).max((*y0 + oy).max(*z0 + oz)).max(node_t_min);
+                    let tmax = (*x1 + ox).min((*y1 + oy).min(*z1 + oz)).min(ray_t_max);
+                    hits |= tmin.cmple(tmax).bitmask() << (4 * half);
+                }
+                while hits != 0 {
+                    let c = hits.trailing_zeros() as usize;
+                    hits &= hits - 1;
+                    child_masks[c] |= 1 << r;
                 }
             }
-            let mut child_masks = [0u64; 8];
-            for c in 0..8 {
-                if node.child_meta[c] == 0 {
-                    continue; // empty slot
+            for (c, m) in child_masks.iter_mut().enumerate() {
+                if (occupied >> (8 * c)) & 0xff == 0 {
+                    *m = 0; // empty slot
                 }
-                let pick = |lo: u8, hi: u8, neg: bool| {
-                    let (lo, hi) = (f32::from(lo), f32::from(hi));
-                    if neg { (hi, lo) } else { (lo, hi) }
-                };
-                let (x0, x1) = pick(node.child_min_x[c], node.child_max_x[c], rdx);
-                let (y0, y1) = pick(node.child_min_y[c], node.child_max_y[c], rdy);
-                let (z0, z1) = pick(node.child_min_z[c], node.child_max_z[c], rdz);
-                let (x0, x1) = (Vec4::splat(x0 * adj.x), Vec4::splat(x1 * adj.x));
-                let (y0, y1) = (Vec4::splat(y0 * adj.y), Vec4::splat(y1 * adj.y));
-                let (z0, z1) = (Vec4::splat(z0 * adj.z), Vec4::splat(z1 * adj.z));
-                let mut hit = 0u64;
-                let mut todo = lanes;
-                while todo != 0 {
-                    let l = todo.trailing_zeros() as usize;
-                    todo &= todo - 1;
-                    // The operand order of obvhs's _mm_max_ps/_mm_min_ps (NaN handling).
-                    let tmin = (x0 + ox[l])
-                        .max((y0 + oy[l]).max(z0 + oz[l]))
-                        .max(node_t_min);
-                    let tmax = (x1 + ox[l])
-                        .min((y1 + oy[l]).min(z1 + oz[l]))
-                        .min(ray_t_max);
-                    hit |= u64::from(tmin.cmple(tmax).bitmask()) << (4 * l);
-                }
-                child_masks[c] = hit & mask;
             }
             // Leaves first (any hit removes rays from everything below), then internal
             // children pushed far to near so the nearest is walked next.
@@ -315,7 +300,7 @@ impl Tracer {
                         let r = todo.trailing_zeros() as usize;
                         todo &= todo - 1;
                         let ray = Ray {
-                            origin: packet.origin(r),
+                            origin: packet.origins[r],
                             direction: d,
                             inv_direction: inv,
                             tmin: t_min,

@@ -170,8 +170,13 @@ impl Context {
         let queue_info = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
             .queue_priorities(&priorities)];
-        let enabled_features =
-            vk::PhysicalDeviceFeatures::default().image_cube_array(features.image_cube_array != 0);
+        // Cube arrays (dx10 tables) and dynamically uniform indexing of sampler arrays (the
+        // dx9 techniques' texture lists) where the device has them; techniques check.
+        let enabled_features = vk::PhysicalDeviceFeatures::default()
+            .image_cube_array(features.image_cube_array != 0)
+            .shader_sampled_image_array_dynamic_indexing(
+                features.shader_sampled_image_array_dynamic_indexing != 0,
+            );
         let device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
             .enabled_features(&enabled_features);

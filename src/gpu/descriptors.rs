@@ -12,6 +12,8 @@ pub enum Resource<'a> {
     Uniform(&'a Buffer),
     Storage(&'a Buffer),
     Texture(&'a Image, &'a Sampler),
+    /// An array of textures at one binding (`uniform sampler2D t[N]`).
+    TextureArray(Vec<(&'a Image, &'a Sampler)>),
 }
 
 impl Resource<'_> {
@@ -19,7 +21,16 @@ impl Resource<'_> {
         match self {
             Resource::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
             Resource::Storage(_) => vk::DescriptorType::STORAGE_BUFFER,
-            Resource::Texture(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            Resource::Texture(..) | Resource::TextureArray(_) => {
+                vk::DescriptorType::COMBINED_IMAGE_SAMPLER
+            }
+        }
+    }
+
+    fn count(&self) -> u32 {
+        match self {
+            Resource::TextureArray(t) => t.len() as u32,
+            _ => 1,
         }
     }
 }
@@ -52,7 +63,7 @@ impl DescriptorSet {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(*binding)
                     .descriptor_type(r.descriptor_type())
-                    .descriptor_count(1)
+                    .descriptor_count(r.count())
                     .stage_flags(stages)
             })
             .collect();
@@ -67,10 +78,10 @@ impl DescriptorSet {
         for (_, r) in resources {
             let ty = r.descriptor_type();
             match sizes.iter_mut().find(|s| s.ty == ty) {
-                Some(s) => s.descriptor_count += 1,
+                Some(s) => s.descriptor_count += r.count(),
                 None => sizes.push(vk::DescriptorPoolSize {
                     ty,
-                    descriptor_count: 1,
+                    descriptor_count: r.count(),
                 }),
             }
         }
@@ -101,18 +112,20 @@ impl DescriptorSet {
                     offset: 0,
                     range: vk::WHOLE_SIZE,
                 }],
-                Resource::Texture(..) => [vk::DescriptorBufferInfo::default()],
+                _ => [vk::DescriptorBufferInfo::default()],
             })
             .collect();
-        let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = resources
+        let image_info = |img: &Image, sampler: &Sampler| vk::DescriptorImageInfo {
+            sampler: sampler.raw(),
+            image_view: img.view(),
+            image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+        };
+        let image_infos: Vec<Vec<vk::DescriptorImageInfo>> = resources
             .iter()
             .map(|(_, r)| match r {
-                Resource::Texture(img, sampler) => [vk::DescriptorImageInfo {
-                    sampler: sampler.raw(),
-                    image_view: img.view(),
-                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                }],
-                _ => [vk::DescriptorImageInfo::default()],
+                Resource::Texture(img, sampler) => vec![image_info(img, sampler)],
+                Resource::TextureArray(t) => t.iter().map(|(i, s)| image_info(i, s)).collect(),
+                _ => vec![vk::DescriptorImageInfo::default()],
             })
             .collect();
         let writes: Vec<_> = resources
@@ -124,7 +137,9 @@ impl DescriptorSet {
                     .dst_binding(*binding)
                     .descriptor_type(r.descriptor_type());
                 match r {
-                    Resource::Texture(..) => w.image_info(&image_infos[i]),
+                    Resource::Texture(..) | Resource::TextureArray(_) => {
+                        w.image_info(&image_infos[i])
+                    }
                     _ => w.buffer_info(&buffer_infos[i]),
                 }
             })

@@ -35,6 +35,10 @@ const SOURCES: &[(&str, &str)] = &[
         "technique/preconv.frag",
         include_str!("../../glsl/technique/preconv.frag"),
     ),
+    (
+        "technique/unc.frag",
+        include_str!("../../glsl/technique/unc.frag"),
+    ),
 ];
 
 /// Which pipeline stage a source is for.
@@ -128,6 +132,16 @@ mod tests {
             )
             .unwrap();
         }
+        for path_dx9 in [0, 1] {
+            for groups in [3, 4, 9] {
+                compile_glsl(
+                    "technique/unc.frag",
+                    ShaderStage::Fragment,
+                    &[("PATH_DX9", path_dx9), ("UNC_GROUPS", groups)],
+                )
+                .unwrap();
+            }
+        }
         for param in 0..4 {
             compile_glsl(
                 "study/reconstruct.comp",
@@ -135,6 +149,16 @@ mod tests {
                 &[("STUDY_PARAM", param)],
             )
             .unwrap();
+        }
+        for path_dx9 in [0, 1] {
+            for groups in [3, 4, 9] {
+                compile_glsl(
+                    "technique/unc.frag",
+                    ShaderStage::Fragment,
+                    &[("PATH_DX9", path_dx9), ("UNC_GROUPS", groups)],
+                )
+                .unwrap();
+            }
         }
         for param in 0..4 {
             compile_glsl(

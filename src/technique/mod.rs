@@ -5,6 +5,7 @@
 //! module, its shader, the `TechniqueId` list and tests. The CLI's names live here only.
 
 pub mod preconv;
+pub mod unc;
 
 use std::fmt;
 use std::str::FromStr;
@@ -13,20 +14,33 @@ use std::sync::Arc;
 use ash::vk;
 
 use crate::bake::ao::AoMap;
+use crate::bake::visibility::VisibilityMap;
 use crate::gpu::{self, Context, GpuError, Image, MeshPipeline, layout};
 use crate::render::SceneGpu;
+use crate::sh::Order;
 
 /// The techniques that exist, in DESIGN §2 order; `FromStr`/`Display` use the CLI names.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TechniqueId {
+    Unc3,
+    Unc4,
+    Unc6,
     Preconv,
 }
 
 impl TechniqueId {
-    pub const ALL: &'static [TechniqueId] = &[TechniqueId::Preconv];
+    pub const ALL: &'static [TechniqueId] = &[
+        TechniqueId::Unc3,
+        TechniqueId::Unc4,
+        TechniqueId::Unc6,
+        TechniqueId::Preconv,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
+            TechniqueId::Unc3 => "unc3",
+            TechniqueId::Unc4 => "unc4",
+            TechniqueId::Unc6 => "unc6",
             TechniqueId::Preconv => "preconv",
         }
     }
@@ -107,6 +121,14 @@ pub struct Inputs<'a> {
     pub ao: &'a AoMap,
     /// Order-3 SH of irradiance (radiance convolved with the clamped cosine), RGB.
     pub irradiance_sh: &'a [[f64; 3]],
+    /// SH of radiance, RGB, to at least the visibility order + 2 (L×H tables).
+    pub radiance_sh: &'a [[f64; 3]],
+    /// SH visibility per lightmap texel (`unc*`).
+    pub visibility: Option<&'a VisibilityMap>,
+    /// L×H table texels per hemisphere / face side.
+    pub table_res: u32,
+    /// Clamped-cosine order of the L×H product.
+    pub h_order: Order,
 }
 
 /// Memory and cost figures of a technique on a path (the cost table's columns).
@@ -148,6 +170,9 @@ pub fn build(
     inputs: &Inputs<'_>,
 ) -> Result<TechniqueGpu, TechniqueError> {
     match id {
+        TechniqueId::Unc3 | TechniqueId::Unc4 | TechniqueId::Unc6 => {
+            unc::build(ctx, scene, id, path, inputs)
+        }
         TechniqueId::Preconv => preconv::build(ctx, scene, path, inputs),
     }
 }

@@ -13,6 +13,8 @@ use shvis::technique::{self, HwPath, TechniqueId};
 pub const TEST_VIS_RES: u32 = 128;
 /// Rays per texel of test bakes.
 pub const TEST_RAYS: u32 = 128;
+/// L×H table texels per side in tests (the paper's lower bound).
+pub const TEST_TABLE_RES: u32 = 16;
 
 /// The built-in house and sky, baked once per test binary.
 pub fn house() -> &'static Prepared {
@@ -21,6 +23,8 @@ pub fn house() -> &'static Prepared {
         prepare(&PrepareSettings {
             vis_res: TEST_VIS_RES,
             rays: TEST_RAYS,
+            table_res: TEST_TABLE_RES,
+            cache_dir: Some(concat!(env!("CARGO_TARGET_TMPDIR"), "/bake-cache").into()),
             ..PrepareSettings::default()
         })
         .expect("the built-in scene prepares")
