@@ -67,9 +67,10 @@ fn bench_scene(c: &mut Criterion, name: &str, mesh: &Mesh, res: u32, rays: u32) 
         b.iter(|| black_box(bake_visibility(&tracer, &texels, &s)))
     });
     let dirs = DirectionSet::new(rays, s.seed);
-    g.bench_function(format!("{res}x{res}_{rays}rays_single_ray_trace_only"), |b| {
-        b.iter(|| black_box(single_ray_pass(&tracer, &texels, &dirs)))
-    });
+    g.bench_function(
+        format!("{res}x{res}_{rays}rays_single_ray_trace_only"),
+        |b| b.iter(|| black_box(single_ray_pass(&tracer, &texels, &dirs))),
+    );
     g.finish();
 }
 

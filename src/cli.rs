@@ -39,6 +39,9 @@ enum Command {
     Bake(BakeArgs),
     /// Render one technique on one hardware path to a PNG or EXR.
     Render(RenderArgs),
+    /// Ground truth: G-buffer on the GPU, ray-cast visibility and importance-sampled
+    /// environment integration on the CPU; prints its noise level.
+    Reference(ReferenceArgs),
     /// Time every technique × path and write table.md, table.json and images.
     Bench(BenchArgs),
     /// SH utilities for checking the math from outside (17 significant digits).
@@ -181,6 +184,34 @@ struct RenderArgs {
 }
 
 #[derive(Args, Debug)]
+struct ReferenceArgs {
+    /// `house` (built-in) or a .gltf/.glb file.
+    #[arg(long, default_value = "house")]
+    scene: String,
+    #[arg(long, default_value = "sky")]
+    env: String,
+    #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Environment samples per pixel.
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    spp: u32,
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Lightmap resolution the scene is built for (only the built-in house's UVs use it).
+    #[arg(long, default_value_t = 512)]
+    vis_res: u32,
+    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_negative_numbers = true)]
+    exposure: f32,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    /// Output image: .exr (linear) or .png (sRGB).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+#[derive(Args, Debug)]
 struct BenchArgs {
     #[command(flatten)]
     scene: SceneArgs,
@@ -207,6 +238,9 @@ struct BenchArgs {
     /// Exposure in EV of the PNG images.
     #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_negative_numbers = true)]
     exposure: f32,
+    /// Samples per pixel of the reference the errors are measured against (0: no errors).
+    #[arg(long, default_value_t = 64)]
+    ref_spp: u32,
     /// Output directory.
     #[arg(long, default_value = "bench-out")]
     out: PathBuf,
@@ -217,6 +251,7 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Bake(a) => run_bake(a).context("bake"),
         Command::Render(a) => run_render(a).context("render"),
+        Command::Reference(a) => run_reference(a).context("reference"),
         Command::Bench(a) => run_bench(a).context("bench"),
         Command::Sh(c) => run_sh(c).context("sh"),
         Command::Study(StudyCommand::Params(a)) => run_study_params(a).context("study params"),
@@ -432,6 +467,7 @@ fn run_render(a: RenderArgs) -> Result<()> {
         width: a.width,
         height: a.height,
         flat_normals: a.flat_normals,
+        ..FrameSettings::default()
     };
     let scene_gpu = SceneGpu::new(&ctx, &prepared.scene, &settings)?;
     let tech = technique::build(&ctx, &scene_gpu, a.technique, a.path, &prepared.inputs())?;
@@ -439,6 +475,36 @@ fn run_render(a: RenderArgs) -> Result<()> {
     write_frame(&a.out, &frame, a.exposure)?;
     check_validation(&ctx, a.gpu.validate)?;
     println!("wrote {} ({})", a.out.display(), tech.label());
+    Ok(())
+}
+
+fn run_reference(a: ReferenceArgs) -> Result<()> {
+    check_output_extension(&a.out)?;
+    let ctx = open_gpu(&a.gpu)?;
+    let vis_res = bake::validate_res(a.vis_res)?;
+    let env = shvis::env::resolve(&a.env)?;
+    let scene = resolve_scene(&a.scene, vis_res)?;
+    let image = shvis::reference::render_reference(
+        &ctx,
+        &scene,
+        &env,
+        &shvis::reference::ReferenceSettings {
+            width: a.width,
+            height: a.height,
+            spp: a.spp,
+            seed: a.seed,
+        },
+    )?;
+    write_frame(&a.out, &image.frame, a.exposure)?;
+    check_validation(&ctx, a.gpu.validate)?;
+    println!(
+        "reference: {} spp, {:.1} M rays in {:.1} s; noise (relative standard error of the image) {:.4}",
+        a.spp,
+        image.rays as f64 / 1e6,
+        image.seconds,
+        image.rel_noise
+    );
+    println!("wrote {}", a.out.display());
     Ok(())
 }
 
@@ -495,6 +561,31 @@ fn run_bench(a: BenchArgs) -> Result<()> {
         width: a.width,
         height: a.height,
         flat_normals: false,
+        ..FrameSettings::default()
+    };
+    let reference = if a.ref_spp > 0 {
+        let image = shvis::reference::render_reference(
+            &ctx,
+            &prepared.scene,
+            &prepared.env,
+            &shvis::reference::ReferenceSettings {
+                width: a.width,
+                height: a.height,
+                spp: a.ref_spp,
+                seed: a.scene.seed,
+            },
+        )?;
+        log::info!(
+            "reference: {} spp in {:.1} s, relative noise {:.4}",
+            a.ref_spp,
+            image.seconds,
+            image.rel_noise
+        );
+        write_exr(&a.out.join("reference.exr"), &image.frame)?;
+        write_png(&a.out.join("reference.png"), &image.frame, a.exposure)?;
+        Some(image)
+    } else {
+        None
     };
     let scene_gpu = SceneGpu::new(&ctx, &prepared.scene, &settings)?;
     let mut rows = Vec::new();
@@ -503,6 +594,9 @@ fn run_bench(a: BenchArgs) -> Result<()> {
             let tech = technique::build(&ctx, &scene_gpu, t, p, &prepared.inputs())?;
             let frame = scene_gpu.render(&tech, a.warmup, a.frames)?;
             let stats = TimingStats::from_ms(&frame.ms);
+            let error = reference
+                .as_ref()
+                .and_then(|r| shvis::report::metrics::image_error(&frame, &r.frame));
             write_png(
                 &a.out.join(format!("{}.png", tech.label())),
                 &frame,
@@ -516,8 +610,8 @@ fn run_bench(a: BenchArgs) -> Result<()> {
                 ms_min: stats.map(|s| s.ms_min),
                 ms_max: stats.map(|s| s.ms_max),
                 frames: frame.ms.len(),
-                rel_rmse: None,
-                psnr: None,
+                rel_rmse: error.map(|e| e.rel_rmse),
+                psnr: error.map(|e| e.psnr),
                 texel_bytes: tech.stats.texel_bytes,
                 table_bytes: tech.stats.table_bytes,
                 textures_bound: tech.stats.textures_bound,
@@ -526,6 +620,8 @@ fn run_bench(a: BenchArgs) -> Result<()> {
         }
     }
     let table = BenchTable {
+        reference_spp: a.ref_spp,
+        reference_rel_noise: reference.as_ref().map(|r| r.rel_noise),
         device: ctx.device_name().to_string(),
         width: a.width,
         height: a.height,

@@ -12,6 +12,7 @@ pub mod env;
 #[allow(unsafe_code)]
 pub mod gpu;
 pub mod prepare;
+pub mod reference;
 pub mod render;
 pub mod report;
 pub mod scene;

@@ -7,8 +7,8 @@ use std::sync::Arc;
 use ash::vk;
 
 use crate::gpu::{
-    Buffer, Context, GpuError, Image, ImageDesc, MeshBuffers, RenderTarget, Resource, Sampler,
-    SamplerKind, ShaderStage, VertexLayout, compile_glsl, layout,
+    Buffer, Context, GpuError, Image, ImageDesc, MeshBuffers, MeshPipeline, RenderTarget, Resource,
+    Sampler, SamplerKind, ShaderStage, VertexLayout, compile_glsl, layout,
 };
 use crate::scene::{Scene, Texture8, Vertex};
 use crate::technique::TechniqueGpu;
@@ -20,6 +20,8 @@ pub struct FrameSettings {
     pub height: u32,
     /// Replace the material's normal map with the interpolated normal (comparisons).
     pub flat_normals: bool,
+    /// Render into RGBA32F instead of RGBA16F (G-buffer passes of the reference).
+    pub float32_target: bool,
 }
 
 impl Default for FrameSettings {
@@ -28,6 +30,7 @@ impl Default for FrameSettings {
             width: 1280,
             height: 800,
             flat_normals: false,
+            float32_target: false,
         }
     }
 }
@@ -52,7 +55,12 @@ impl SceneGpu {
         scene: &Scene,
         settings: &FrameSettings,
     ) -> Result<Self, GpuError> {
-        let target = RenderTarget::new(ctx, settings.width, settings.height)?;
+        let format = if settings.float32_target {
+            crate::gpu::target::COLOR_FORMAT_F32
+        } else {
+            crate::gpu::target::COLOR_FORMAT
+        };
+        let target = RenderTarget::with_format(ctx, settings.width, settings.height, format)?;
         let mesh = MeshBuffers::new(
             ctx,
             bytemuck::cast_slice(&scene.mesh.vertices),
@@ -142,7 +150,11 @@ impl SceneGpu {
                 "scene.lightmap_sampler",
             )?,
             frame,
-            vertex_spirv: compile_glsl("technique/mesh.vert", ShaderStage::Vertex, &[])?,
+            vertex_spirv: compile_glsl(
+                "technique/mesh.vert",
+                ShaderStage::Vertex,
+                &[("GBUFFER", settings.float32_target as u32)],
+            )?,
             vertex_layout,
         })
     }
@@ -182,9 +194,17 @@ impl SceneGpu {
         warmup: u32,
         frames: u32,
     ) -> Result<Frame, GpuError> {
-        let ms = technique
-            .pipeline
-            .render_frames(&self.target, &self.mesh, warmup, frames)?;
+        self.render_pipeline(&technique.pipeline, warmup, frames)
+    }
+
+    /// Renders with any mesh pipeline built for this scene's target (e.g. G-buffer passes).
+    pub fn render_pipeline(
+        &self,
+        pipeline: &MeshPipeline,
+        warmup: u32,
+        frames: u32,
+    ) -> Result<Frame, GpuError> {
+        let ms = pipeline.render_frames(&self.target, &self.mesh, warmup, frames)?;
         Ok(Frame {
             width: self.target.width(),
             height: self.target.height(),

@@ -14,6 +14,7 @@ fn every_technique_and_path_is_validation_clean() {
         width: 160,
         height: 100,
         flat_normals: false,
+        ..FrameSettings::default()
     };
     for &id in TechniqueId::ALL {
         for &path in HwPath::ALL {

@@ -37,6 +37,7 @@ fn render(flat_normals: bool) -> Frame {
             width: WIDTH,
             height: HEIGHT,
             flat_normals,
+            ..FrameSettings::default()
         },
     )
 }

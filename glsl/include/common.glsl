@@ -22,6 +22,9 @@ layout(location = 1) in vec4 in_tangent_world;
 layout(location = 2) in vec2 in_uv_material;
 layout(location = 3) in vec2 in_uv_lightmap;
 layout(location = 4) in vec3 in_albedo_tint;
+#if defined(SHVIS_GBUFFER) && SHVIS_GBUFFER
+layout(location = 5) in vec3 in_position_world;
+#endif
 
 // Linear albedo: the sRGB texture is decoded by the sampler.
 vec3 material_albedo() {

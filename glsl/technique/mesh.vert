@@ -16,6 +16,9 @@ layout(location = 1) out vec4 out_tangent_world;
 layout(location = 2) out vec2 out_uv_material;
 layout(location = 3) out vec2 out_uv_lightmap;
 layout(location = 4) out vec3 out_albedo_tint;
+#if defined(SHVIS_GBUFFER) && SHVIS_GBUFFER
+layout(location = 5) out vec3 out_position_world; // only the reference's G-buffer reads it
+#endif
 
 void main() {
     out_normal_world = normal;
@@ -23,5 +26,8 @@ void main() {
     out_uv_material = uv_material;
     out_uv_lightmap = uv_lightmap;
     out_albedo_tint = albedo_tint;
+#if defined(SHVIS_GBUFFER) && SHVIS_GBUFFER
+    out_position_world = position;
+#endif
     gl_Position = frame.clip_from_world * vec4(position, 1.0);
 }

@@ -18,15 +18,24 @@
 //!
 //! [`Tracer::occluded_coherent`] answers up to [`PACKET_RAYS`] rays that share one
 //! direction (the visibility bake's direction-major order, [`super::visibility`]) in one
-//! walk of the CWBVH: each node is decoded once for the packet (child slabs, the
-//! direction's sign selection and the products q·extent·(1/d), all shared because the
-//! direction is), and only the per-ray origin terms differ; the packet carries a mask of
-//! rays still alive, split per child. Every per-ray operation is the very IEEE operation,
-//! in the very order and with the same min/max operand order, that obvhs's single-ray
-//! `CwBvhNode::intersect_ray` (SSE) and `Triangle::intersect` perform, and a ray enters a
-//! child exactly when its own single-ray traversal would, so each ray's answer is
-//! bit-for-bit that of [`Tracer::occluded`] — only the order of visits differs, which an
-//! any-hit query does not see (tested here and in `tests/bake_visibility.rs`).
+//! walk of the CWBVH with a mask of the rays still alive per stack entry. Each node is
+//! decoded once for the packet: the child planes picked by the direction's signs, u8 →
+//! f32, times extent·(1/d) — everything but the origin term is shared because the
+//! direction is. Each live ray then costs the origin term (p − o)·(1/d) and two 4-wide
+//! slab tests (8 children), and its 8-bit child hit mask is scattered into per-child ray
+//! masks, so a node costs in proportion to the rays that reach it (a sparse packet is no
+//! slower per ray than single rays). In a leaf, the ray-independent part of
+//! Möller–Trumbore (edges, normal, 1/(n·d)) is computed once per triangle. A ray found
+//! occluded leaves every mask.
+//!
+//! Bit-identity: every per-ray operation is the very IEEE operation, in the very order
+//! and with the same min/max operand order (NaN handling), that obvhs's single-ray
+//! `CwBvhNode::intersect_ray_simd` and `Triangle::intersect` perform (products shared by
+//! the packet are the same products), and a ray enters a child exactly when its own
+//! single-ray traversal would, so each ray's answer is bit-for-bit that of
+//! [`Tracer::occluded`] — only the order of visits differs, which an any-hit query does
+//! not see. Tested here (random triangle soup, axis-aligned and finite-`t_max` rays) and
+//! in `tests/bake_visibility.rs` (whole bakes against a single-ray reference).
 
 use std::time::Duration;
 
@@ -287,27 +296,38 @@ impl Tracer {
             }
             // Leaves first (any hit removes rays from everything below), then internal
             // children pushed far to near so the nearest is walked next.
-            for c in 0..8 {
-                let m = child_masks[c];
+            for (c, &m) in child_masks.iter().enumerate() {
                 if m == 0 || !node.is_leaf(c) {
                     continue;
                 }
                 let (first, count) = node.child_primitives(c);
                 for prim in first..first + count {
                     let tri = &self.triangles[prim as usize];
+                    // Triangle::intersect (Möller–Trumbore), its ray-independent part
+                    // hoisted: the same operations, so the same bits.
+                    let e1 = tri.v0 - tri.v1;
+                    let e2 = tri.v2 - tri.v0;
+                    let n = e1.cross(e2);
+                    let inv_det = 1.0 / n.dot(d);
+                    if inv_det == 0.0 {
+                        continue; // obvhs's `valid` needs inv_det ≠ 0
+                    }
                     let mut todo = m & !occluded;
                     while todo != 0 {
                         let r = todo.trailing_zeros() as usize;
                         todo &= todo - 1;
-                        let ray = Ray {
-                            origin: packet.origins[r],
-                            direction: d,
-                            inv_direction: inv,
-                            tmin: t_min,
-                            tmax: t_max,
-                        };
-                        if tri.intersect(&ray) < t_max {
-                            occluded |= 1 << r;
+                        let c = tri.v0 - packet.origins[r];
+                        let q = d.cross(c);
+                        let u = q.dot(e2) * inv_det;
+                        let v = q.dot(e1) * inv_det;
+                        let w = 1.0 - u - v;
+                        if (u.to_bits() | v.to_bits() | w.to_bits()) & 0x8000_0000 == 0 {
+                            let t = n.dot(c) * inv_det;
+                            // intersect() returns t within [t_min, t_max] (else ∞) and
+                            // the any-hit traversal counts it when t < t_max.
+                            if t >= t_min && t < t_max {
+                                occluded |= 1 << r;
+                            }
                         }
                     }
                 }

@@ -278,11 +278,7 @@ pub fn bake_visibility(
         ProgressBar::hidden()
     };
     let rays_done = AtomicU64::new(0);
-    let group_size = std::env::var("SHVIS_GROUP")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(PACKET_RAYS);
-    let groups: Vec<&[u32]> = order.chunks(group_size).collect();
+    let groups: Vec<&[u32]> = order.chunks(PACKET_RAYS).collect();
     let results: Vec<GroupResult> = groups
         .par_iter()
         .map(|group| {

@@ -24,6 +24,10 @@ const SOURCES: &[(&str, &str)] = &[
         include_str!("../../glsl/include/sphere.glsl"),
     ),
     (
+        "reference/gbuffer.frag",
+        include_str!("../../glsl/reference/gbuffer.frag"),
+    ),
+    (
         "study/reconstruct.comp",
         include_str!("../../glsl/study/reconstruct.comp"),
     ),
@@ -142,6 +146,20 @@ mod tests {
                 .unwrap();
             }
         }
+        for output in 0..4 {
+            compile_glsl(
+                "reference/gbuffer.frag",
+                ShaderStage::Fragment,
+                &[("GBUFFER", 1), ("GBUFFER_OUTPUT", output)],
+            )
+            .unwrap();
+        }
+        compile_glsl(
+            "technique/mesh.vert",
+            ShaderStage::Vertex,
+            &[("GBUFFER", 1)],
+        )
+        .unwrap();
         for param in 0..4 {
             compile_glsl(
                 "study/reconstruct.comp",
@@ -160,6 +178,20 @@ mod tests {
                 .unwrap();
             }
         }
+        for output in 0..4 {
+            compile_glsl(
+                "reference/gbuffer.frag",
+                ShaderStage::Fragment,
+                &[("GBUFFER", 1), ("GBUFFER_OUTPUT", output)],
+            )
+            .unwrap();
+        }
+        compile_glsl(
+            "technique/mesh.vert",
+            ShaderStage::Vertex,
+            &[("GBUFFER", 1)],
+        )
+        .unwrap();
         for param in 0..4 {
             compile_glsl(
                 "study/reconstruct.comp",

@@ -8,7 +8,10 @@ use gpu_allocator::MemoryLocation;
 
 use super::{Buffer, Context, GpuError, Image, ImageDesc};
 
+/// The colour format of technique frames.
 pub const COLOR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+/// The colour format of G-buffer passes (positions need f32).
+pub const COLOR_FORMAT_F32: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
 /// Colour and depth images at one size, with the render pass that clears them.
@@ -20,12 +23,29 @@ pub struct RenderTarget {
     framebuffer: vk::Framebuffer,
     width: u32,
     height: u32,
+    format: vk::Format,
 }
 
 impl RenderTarget {
     /// # Errors
     /// A size of zero or beyond the device's limits, or a failing Vulkan call.
     pub fn new(ctx: &Arc<Context>, width: u32, height: u32) -> Result<Self, GpuError> {
+        Self::with_format(ctx, width, height, COLOR_FORMAT)
+    }
+
+    /// A target with colour format [`COLOR_FORMAT`] or [`COLOR_FORMAT_F32`].
+    pub fn with_format(
+        ctx: &Arc<Context>,
+        width: u32,
+        height: u32,
+        format: vk::Format,
+    ) -> Result<Self, GpuError> {
+        if format != COLOR_FORMAT && format != COLOR_FORMAT_F32 {
+            return Err(GpuError::Invalid {
+                what: "render target".into(),
+                detail: format!("colour format {format:?} is not supported"),
+            });
+        }
         let max = ctx
             .limits()
             .max_framebuffer_width
@@ -38,7 +58,7 @@ impl RenderTarget {
         }
         let color = Image::new(
             ctx,
-            &ImageDesc::texture_2d(COLOR_FORMAT, width, height)
+            &ImageDesc::texture_2d(format, width, height)
                 .usage(vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC),
             "target.color",
         )?;
@@ -51,7 +71,7 @@ impl RenderTarget {
         )?;
         let attachments = [
             vk::AttachmentDescription::default()
-                .format(COLOR_FORMAT)
+                .format(format)
                 .samples(vk::SampleCountFlags::TYPE_1)
                 .load_op(vk::AttachmentLoadOp::CLEAR)
                 .store_op(vk::AttachmentStoreOp::STORE)
@@ -148,6 +168,7 @@ impl RenderTarget {
             framebuffer,
             width,
             height,
+            format,
         })
     }
 
@@ -168,9 +189,14 @@ impl RenderTarget {
     /// host: linear RGBA f32, row-major, row 0 at the top. Call after at least one frame.
     pub fn read_rgba(&self) -> Result<Vec<[f32; 4]>, GpuError> {
         let texels = self.width as u64 * self.height as u64;
+        let texel_bytes = if self.format == COLOR_FORMAT_F32 {
+            16
+        } else {
+            8
+        };
         let buffer = Buffer::new(
             &self.ctx,
-            texels * 8,
+            texels * texel_bytes,
             vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuToCpu,
             "target.readback",
@@ -218,6 +244,16 @@ impl RenderTarget {
             }
         })?;
         let bytes = buffer.read()?;
+        if self.format == COLOR_FORMAT_F32 {
+            return Ok(bytes
+                .chunks_exact(16)
+                .map(|t| {
+                    std::array::from_fn(|i| {
+                        f32::from_le_bytes([t[4 * i], t[4 * i + 1], t[4 * i + 2], t[4 * i + 3]])
+                    })
+                })
+                .collect());
+        }
         Ok(bytes
             .chunks_exact(8)
             .map(|t| {

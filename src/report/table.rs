@@ -31,6 +31,10 @@ pub struct BenchTable {
     pub width: u32,
     pub height: u32,
     pub vis_res: u32,
+    /// Samples per pixel of the reference the errors are measured against (0: none).
+    pub reference_spp: u32,
+    /// The reference's own relative noise (compare with `rel_rmse`).
+    pub reference_rel_noise: Option<f64>,
     pub results: Vec<BenchRow>,
 }
 
@@ -42,8 +46,13 @@ impl BenchTable {
     /// Markdown table (also what the terminal shows).
     pub fn to_markdown(&self) -> String {
         let mut s = format!(
-            "device: {} · {}×{} · visibility {}²\n\n",
-            self.device, self.width, self.height, self.vis_res
+            "device: {} · {}×{} · visibility {}² · reference {} spp (relative noise {})\n\n",
+            self.device,
+            self.width,
+            self.height,
+            self.vis_res,
+            self.reference_spp,
+            opt(self.reference_rel_noise, 4)
         );
         s += "| technique | path | ms median | ms min | ms max | frames | rel. RMSE | PSNR dB | texel bytes | table bytes | textures | lookups/px |\n";
         s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
