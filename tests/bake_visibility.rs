@@ -341,6 +341,17 @@ fn ground_lit_only_from_below_stays_dark() {
     // From above the same plane receives ∫ max(0, y) dω = π.
     assert!((lit - PI).abs() < truncation_bound, "{lit} vs π");
     assert!(lit > 20.0 * dark.abs());
+    // Sharper: the exact order-6 value of Σ v_i L_i (V projected exactly, the pure
+    // truncation error ∫ V L_n) plus the quadrature error, each coefficient within the
+    // bound: |Σ e_i L_i| ≤ bound · Σ |L_i|.
+    let hemisphere = lune_projection(s.order, 0.0, PI, |_| 1.0);
+    let truncation = dot(&hemisphere, &below);
+    let quadrature = quadrature_bound(RAYS) * below.iter().map(|l| l.abs()).sum::<f64>();
+    eprintln!("  exact truncated value {truncation:.3e}, quadrature term ≤ {quadrature:.3e}");
+    assert!(
+        (dark - truncation).abs() < quadrature,
+        "{dark} vs {truncation}"
+    );
 }
 
 /// Floor [−1, 1]² (64² texels of 3.1 cm) with a zero-thickness wall x = 0 (1 m high,

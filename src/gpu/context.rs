@@ -177,9 +177,28 @@ impl Context {
             .shader_sampled_image_array_dynamic_indexing(
                 features.shader_sampled_image_array_dynamic_indexing != 0,
             );
-        let device_info = vk::DeviceCreateInfo::default()
+        // VK_KHR_maintenance4 relaxes vertex-output/fragment-input matching, so a pass may
+        // read a subset of the shared mesh.vert outputs (the reference's G-buffer passes).
+        // SAFETY: a plain query on this instance's physical device.
+        let device_extensions =
+            unsafe { instance.enumerate_device_extension_properties(physical) }.unwrap_or_default();
+        let has_maintenance4 = device_extensions.iter().any(|e| {
+            e.extension_name_as_c_str()
+                .is_ok_and(|n| n == ash::khr::maintenance4::NAME)
+        });
+        let device_ext_names: Vec<*const c_char> = if has_maintenance4 {
+            vec![ash::khr::maintenance4::NAME.as_ptr()]
+        } else {
+            vec![]
+        };
+        let mut maintenance4 = vk::PhysicalDeviceMaintenance4Features::default().maintenance4(true);
+        let mut device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
-            .enabled_features(&enabled_features);
+            .enabled_features(&enabled_features)
+            .enabled_extension_names(&device_ext_names);
+        if has_maintenance4 {
+            device_info = device_info.push_next(&mut maintenance4);
+        }
         // SAFETY: create-info borrows locals alive for the call.
         let device = match unsafe { instance.create_device(physical, &device_info, None) } {
             Ok(d) => d,

@@ -33,6 +33,11 @@ pub fn house() -> &'static Prepared {
 
 /// A context with VK_LAYER_KHRONOS_validation on.
 pub fn validated_context() -> Arc<Context> {
+    // Validation messages reach the test output through the log.
+    let _ = env_logger::builder()
+        .is_test(true)
+        .filter_level(log::LevelFilter::Warn)
+        .try_init();
     Context::new(&ContextDesc {
         validate: true,
         device: None,
