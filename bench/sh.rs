@@ -61,5 +61,25 @@ fn product_matrix(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, sh_eval, env_projection, product_matrix);
+/// L×H table build (§3.3): order-6 visibility, H order 3, 32² per hemisphere, both
+/// layouts; the product matrices are built once per lighting and included.
+fn lxh_table(c: &mut Criterion) {
+    use shvis::bake::lxh::{LxhMatrices, build_table};
+    use shvis::sphere::{Parameterization, SphereMap};
+    let env = sky(128, &SkyParams::default());
+    let radiance = project_sh(&env, Order::new(8).expect("valid"));
+    let mut g = c.benchmark_group("lxh_table");
+    for kind in [Parameterization::DualParaboloid, Parameterization::CubeDx10] {
+        let map = SphereMap::new(kind, 32).expect("valid");
+        g.bench_function(format!("order6_h3_{kind}_32"), |b| {
+            b.iter(|| {
+                let m = LxhMatrices::new(black_box(&radiance), Order::SIX, Order::THREE);
+                black_box(build_table(&m, map))
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, sh_eval, env_projection, product_matrix, lxh_table);
 criterion_main!(benches);

@@ -38,8 +38,9 @@
 //! rule fixed, w·y_i(ω_r) is computed once (in f64). For each chunk of B consecutive
 //! directions (B = 8 normally, smaller for huge R or order, [`ShProjector::new`]) a table
 //! holds the partial sums Σ_{b ∈ pattern} w·y_i(ω_{cB+b}) of all 2^B bit patterns, so a
-//! texel costs R/B table rows of order² f64 adds, summed in chunk order — the result
-//! depends only on the bitmask, never on the thread that computes it.
+//! texel costs at most R/B table rows of order² f64 adds, summed in chunk order; all-zero
+//! chunks are skipped and an all-visible 64-direction word (open sky) is one precomputed
+//! row. The result depends only on the bitmask, never on the thread that computes it.
 
 use std::f64::consts::PI;
 
@@ -175,6 +176,9 @@ pub struct ShProjector {
     chunk_bits: usize,
     /// `table[((c << B) + pattern) · n² + i]` = Σ_{b ∈ pattern} w·y_i(ω_{cB+b}).
     table: Vec<f64>,
+    /// `full[w · n² + i]` = Σ over the 64 directions of mask word w of w·y_i: one row for
+    /// an all-visible word (open sky) instead of 64/B.
+    full: Vec<f64>,
 }
 
 impl ShProjector {
@@ -227,11 +231,19 @@ impl ShProjector {
                 }
             }
         }
+        let words = rays.div_ceil(64);
+        let mut full = vec![0.0f64; words * n2];
+        for (r, row) in wy.chunks_exact(n2).enumerate() {
+            for (f, v) in full[(r / 64) * n2..(r / 64 + 1) * n2].iter_mut().zip(row) {
+                *f += v;
+            }
+        }
         ShProjector {
             order,
             rays,
             chunk_bits,
             table,
+            full,
         }
     }
 
@@ -259,6 +271,12 @@ impl ShProjector {
         let pattern_mask = (1u64 << b) - 1;
         for (wi, &word) in mask[..self.rays.div_ceil(64)].iter().enumerate() {
             if word == 0 {
+                continue;
+            }
+            if word == !0 && (wi + 1) * 64 <= self.rays {
+                for (o, f) in out.iter_mut().zip(&self.full[wi * n2..(wi + 1) * n2]) {
+                    *o += f;
+                }
                 continue;
             }
             for k in 0..per_word {
@@ -328,6 +346,7 @@ mod tests {
                 mask[r / 64] |= 1 << (r % 64);
             }
         }
+        mask[3] = !0; // an all-visible word takes the precomputed row
         mask[set.len() / 64] |= !0 << (set.len() % 64); // bits past R are ignored
         let mut plain = vec![0.0; 36];
         for r in 0..set.len() {

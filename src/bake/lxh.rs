@@ -81,6 +81,24 @@ impl LxhMatrices {
             *hk *= f;
         }
         let cols = self.v_order.coeff_count();
+        // Channel-major accumulation over contiguous rows (vectorizes), then interleave.
+        let mut acc = [[0.0f64; 36]; 3];
+        if cols <= 36 {
+            for (c, m) in self.per_channel.iter().enumerate() {
+                let a = &mut acc[c][..cols];
+                for (k, &hk) in h.iter().enumerate() {
+                    if hk != 0.0 {
+                        for (o, &mkj) in a.iter_mut().zip(m.row(k)) {
+                            *o += mkj * hk;
+                        }
+                    }
+                }
+            }
+            for (j, o) in out.iter_mut().enumerate().take(cols) {
+                *o = [acc[0][j], acc[1][j], acc[2][j]];
+            }
+            return;
+        }
         for o in out.iter_mut() {
             *o = [0.0; 3];
         }
@@ -89,9 +107,8 @@ impl LxhMatrices {
                 continue;
             }
             for (c, m) in self.per_channel.iter().enumerate() {
-                let row = m.row(k);
-                for j in 0..cols {
-                    out[j][c] += row[j] * hk;
+                for (o, &mkj) in out.iter_mut().zip(m.row(k)) {
+                    o[c] += mkj * hk;
                 }
             }
         }
