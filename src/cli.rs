@@ -445,7 +445,7 @@ fn run_bake(a: BakeArgs) -> Result<()> {
     );
     let visibility = shvis::prepare::bake_scene_visibility(&scene, vis_res, rays, &settings)?;
     println!(
-        "visibility bake: order {} × {rays} rays: {:.2} s, {:.2} Mrays/s (0 s: from the cache)",
+        "visibility bake: order {} × {rays} rays: {:.2} s, {:.2} Mrays/s",
         visibility.order,
         visibility.seconds,
         visibility.rays_per_second() / 1e6

@@ -7,6 +7,8 @@
 //! Files are written programmatically: [`Gltf`] collects accessors in one binary buffer and
 //! writes `.gltf` + `.bin`, `.gltf` with a base64 data URI, or `.glb`.
 
+mod common;
+
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -337,6 +339,46 @@ fn node_transforms_apply_to_positions_normals_tangents_and_camera() {
     assert!((forward - cam_world.transform_vector3(Vec3::NEG_Z)).length() < TOL);
     assert!((cam.up - cam_world.transform_vector3(Vec3::Y)).length() < TOL);
     assert_eq!((cam.fov_y, cam.z_near, cam.z_far), (0.7, 0.1, 50.0));
+
+    // It renders with preconv from the camera it defines: the quads' centres land on
+    // covered pixels of that view, validation stays silent.
+    let prepared = shvis::prepare::prepare(&shvis::prepare::PrepareSettings {
+        scene: path.to_string_lossy().into_owned(),
+        vis_res: 64,
+        rays: 16,
+        cache_dir: Some(dir.join("cache")),
+        ..Default::default()
+    })
+    .expect("the glTF prepares");
+    let ctx = common::validated_context();
+    let (w, h) = (160, 100);
+    let frame = common::render(
+        &ctx,
+        &prepared,
+        shvis::technique::TechniqueId::Preconv,
+        shvis::technique::HwPath::Dx10,
+        &shvis::render::FrameSettings {
+            width: w,
+            height: h,
+            ..Default::default()
+        },
+    );
+    let mut seen = 0;
+    for (world, _) in cases {
+        let centre = world.transform_point3(Vec3::new(0.5, 0.5, 0.0));
+        let Some((x, y)) = cam.project_to_pixel(centre, w, h) else {
+            continue;
+        };
+        if x < 0.0 || y < 0.0 || x as u32 >= w || y as u32 >= h {
+            continue; // outside the file camera's view
+        }
+        seen += 1;
+        assert!(
+            frame.covered(x as u32, y as u32),
+            "quad centre {centre} at ({x}, {y}) not drawn"
+        );
+    }
+    assert!(seen >= 1, "the file's camera sees no quad centre");
 }
 
 #[test]
