@@ -26,7 +26,7 @@ use rayon::prelude::*;
 
 use crate::bake::trace::Tracer;
 use crate::env::EnvMap;
-use crate::gpu::{Context, GpuError, MeshPipeline, MeshPipelineDesc, ShaderStage, compile_glsl};
+use crate::gpu::{Context, GpuError, ShaderStage, compile_glsl};
 use crate::render::{Frame, FrameSettings, SceneGpu};
 use crate::scene::Scene;
 
@@ -85,18 +85,7 @@ pub fn render_reference(
             ShaderStage::Fragment,
             &[("GBUFFER", 1), ("GBUFFER_OUTPUT", output)],
         )?;
-        let resources = gpu.common_resources();
-        let pipeline = MeshPipeline::new(
-            ctx,
-            gpu.target(),
-            &MeshPipelineDesc {
-                name: &name,
-                vertex_spirv: gpu.vertex_spirv(),
-                fragment_spirv: &fragment,
-                vertex_layout: gpu.vertex_layout(),
-                resources: &resources,
-            },
-        )?;
+        let pipeline = gpu.mesh_pipeline(ctx, &name, &fragment, &gpu.common_resources())?;
         passes.push(gpu.render_pipeline(&pipeline, 0, 1)?);
     }
     let [position, normal, albedo, vertex_normal] =

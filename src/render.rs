@@ -179,11 +179,27 @@ impl SceneGpu {
     pub fn lightmap_sampler(&self) -> &Sampler {
         &self.lightmap_sampler
     }
-    pub fn vertex_spirv(&self) -> &[u32] {
-        &self.vertex_spirv
-    }
-    pub fn vertex_layout(&self) -> &VertexLayout {
-        &self.vertex_layout
+
+    /// A mesh pipeline over this scene's target with the shared vertex shader: `resources`
+    /// are the common ones ([`Self::common_resources`]) plus the pass's own.
+    pub fn mesh_pipeline(
+        &self,
+        ctx: &Arc<Context>,
+        name: &str,
+        fragment_spirv: &[u32],
+        resources: &[(u32, Resource<'_>)],
+    ) -> Result<MeshPipeline, GpuError> {
+        MeshPipeline::new(
+            ctx,
+            &self.target,
+            &crate::gpu::MeshPipelineDesc {
+                name,
+                vertex_spirv: &self.vertex_spirv,
+                fragment_spirv,
+                vertex_layout: &self.vertex_layout,
+                resources,
+            },
+        )
     }
 
     /// Renders `technique`: `warmup` untimed frames, then `frames` timed ones, and reads

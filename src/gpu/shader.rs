@@ -168,38 +168,6 @@ mod tests {
             )
             .unwrap();
         }
-        for path_dx9 in [0, 1] {
-            for groups in [3, 4, 9] {
-                compile_glsl(
-                    "technique/unc.frag",
-                    ShaderStage::Fragment,
-                    &[("PATH_DX9", path_dx9), ("UNC_GROUPS", groups)],
-                )
-                .unwrap();
-            }
-        }
-        for output in 0..4 {
-            compile_glsl(
-                "reference/gbuffer.frag",
-                ShaderStage::Fragment,
-                &[("GBUFFER", 1), ("GBUFFER_OUTPUT", output)],
-            )
-            .unwrap();
-        }
-        compile_glsl(
-            "technique/mesh.vert",
-            ShaderStage::Vertex,
-            &[("GBUFFER", 1)],
-        )
-        .unwrap();
-        for param in 0..4 {
-            compile_glsl(
-                "study/reconstruct.comp",
-                ShaderStage::Compute,
-                &[("STUDY_PARAM", param)],
-            )
-            .unwrap();
-        }
     }
 
     #[test]

@@ -13,10 +13,7 @@ use ash::vk;
 use half::f16;
 
 use super::{HwPath, Inputs, TechniqueError, TechniqueGpu, TechniqueId, TechniqueStats};
-use crate::gpu::{
-    Buffer, Context, Image, ImageDesc, MeshPipeline, MeshPipelineDesc, Resource, ShaderStage,
-    compile_glsl, layout,
-};
+use crate::gpu::{Buffer, Context, Image, ImageDesc, Resource, ShaderStage, compile_glsl, layout};
 use crate::render::SceneGpu;
 
 /// Uniforms of glsl/technique/preconv.frag, block `PreconvParams` (std140).
@@ -79,17 +76,7 @@ pub fn build(
         layout::BINDING_TECHNIQUE_TEXTURE0,
         Resource::Texture(&ao_image, scene.lightmap_sampler()),
     ));
-    let pipeline = MeshPipeline::new(
-        ctx,
-        scene.target(),
-        &MeshPipelineDesc {
-            name: &label,
-            vertex_spirv: scene.vertex_spirv(),
-            fragment_spirv: &fragment,
-            vertex_layout: scene.vertex_layout(),
-            resources: &resources,
-        },
-    )?;
+    let pipeline = scene.mesh_pipeline(ctx, &label, &fragment, &resources)?;
     drop(resources);
     Ok(TechniqueGpu {
         id: TechniqueId::Preconv,

@@ -24,10 +24,7 @@ use half::f16;
 
 use super::{HwPath, Inputs, TechniqueError, TechniqueGpu, TechniqueId, TechniqueStats};
 use crate::bake::lxh::{LxhMatrices, build_table};
-use crate::gpu::{
-    Buffer, Context, Image, ImageDesc, MeshPipeline, MeshPipelineDesc, Resource, ShaderStage,
-    compile_glsl, layout,
-};
+use crate::gpu::{Buffer, Context, Image, ImageDesc, Resource, ShaderStage, compile_glsl, layout};
 use crate::render::SceneGpu;
 use crate::sh::Order;
 use crate::sphere::{Parameterization, SphereMap};
@@ -241,17 +238,7 @@ pub fn build(
             ));
         }
     }
-    let pipeline = MeshPipeline::new(
-        ctx,
-        scene.target(),
-        &MeshPipelineDesc {
-            name: &label,
-            vertex_spirv: scene.vertex_spirv(),
-            fragment_spirv: &fragment,
-            vertex_layout: scene.vertex_layout(),
-            resources: &resources,
-        },
-    )?;
+    let pipeline = scene.mesh_pipeline(ctx, &label, &fragment, &resources)?;
     drop(resources);
     let texel_bytes = (groups * texels * 8) as u64;
     let table_texels = (map.sample_count() * groups * 3) as u64;
