@@ -290,22 +290,7 @@ fn run_study_params(a: StudyParamsArgs) -> Result<()> {
             .collect();
         let gpu_points = params_gpu::run_gpu_study(&ctx, &configs, Order::SIX, &directions)?;
         let path = a.out.join("gpu.csv");
-        let mut csv = String::from(
-            "parameterization,order,res,samples,mse_gpu,mse_cpu,max_abs_diff,rms_diff\n",
-        );
-        for p in &gpu_points {
-            csv += &format!(
-                "{},{},{},{},{:.9e},{:.9e},{:.3e},{:.3e}\n",
-                p.parameterization,
-                p.order,
-                p.res,
-                p.samples,
-                p.mse_gpu,
-                p.mse_cpu,
-                p.max_abs_diff,
-                p.rms_diff
-            );
-        }
+        let csv = params_gpu::gpu_csv(&gpu_points);
         std::fs::write(&path, csv).with_context(|| format!("{}: cannot write", path.display()))?;
         let md_path = a.out.join("params.md");
         let mut md = std::fs::read_to_string(&md_path).unwrap_or_default();

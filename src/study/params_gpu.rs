@@ -188,6 +188,26 @@ pub fn run_gpu_study(
     Ok(points)
 }
 
+/// `gpu.csv` of `shvis study params`: one line per point, header first.
+pub fn gpu_csv(points: &[GpuStudyPoint]) -> String {
+    let mut csv =
+        String::from("parameterization,order,res,samples,mse_gpu,mse_cpu,max_abs_diff,rms_diff\n");
+    for p in points {
+        csv += &format!(
+            "{},{},{},{},{:.9e},{:.9e},{:.3e},{:.3e}\n",
+            p.parameterization,
+            p.order,
+            p.res,
+            p.samples,
+            p.mse_gpu,
+            p.mse_cpu,
+            p.max_abs_diff,
+            p.rms_diff
+        );
+    }
+    csv
+}
+
 /// The markdown section `shvis study params` appends to params.md: hardware vs emulation.
 pub fn gpu_summary_markdown(points: &[GpuStudyPoint], device: &str, directions: usize) -> String {
     let mut s = format!(
