@@ -16,6 +16,7 @@ pub mod ao;
 pub mod cache;
 pub mod directions;
 pub mod lxh;
+pub mod pca;
 pub mod raster;
 pub mod trace;
 pub mod visibility;
@@ -38,6 +39,8 @@ pub enum BakeError {
     ResOutOfRange { res: u32, min: u32, max: u32 },
     #[error("no triangle covers a lightmap texel centre: the mesh has no usable lightmap UVs")]
     EmptyLightmap,
+    #[error("PCA basis size {m} is out of range 1..={n}")]
+    PcaBasisOutOfRange { m: usize, n: usize },
     #[error("{}: cannot {action}: {source}", .path.display())]
     Io {
         path: std::path::PathBuf,

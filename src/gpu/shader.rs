@@ -16,6 +16,10 @@ const SOURCES: &[(&str, &str)] = &[
         include_str!("../../glsl/include/common.glsl"),
     ),
     (
+        "include/grouped.glsl",
+        include_str!("../../glsl/include/grouped.glsl"),
+    ),
+    (
         "include/sh.glsl",
         include_str!("../../glsl/include/sh.glsl"),
     ),
@@ -34,6 +38,14 @@ const SOURCES: &[(&str, &str)] = &[
     (
         "technique/mesh.vert",
         include_str!("../../glsl/technique/mesh.vert"),
+    ),
+    (
+        "technique/pca.frag",
+        include_str!("../../glsl/technique/pca.frag"),
+    ),
+    (
+        "technique/pcaw.frag",
+        include_str!("../../glsl/technique/pcaw.frag"),
     ),
     (
         "technique/preconv.frag",
@@ -142,6 +154,22 @@ mod tests {
                     "technique/unc.frag",
                     ShaderStage::Fragment,
                     &[("PATH_DX9", path_dx9), ("UNC_GROUPS", groups)],
+                )
+                .unwrap();
+            }
+        }
+        for path_dx9 in [0, 1] {
+            for groups in [1, 2, 3, 4, 6] {
+                compile_glsl(
+                    "technique/pca.frag",
+                    ShaderStage::Fragment,
+                    &[("PATH_DX9", path_dx9), ("PCA_GROUPS", groups)],
+                )
+                .unwrap();
+                compile_glsl(
+                    "technique/pcaw.frag",
+                    ShaderStage::Fragment,
+                    &[("PATH_DX9", path_dx9), ("PCA_GROUPS", groups)],
                 )
                 .unwrap();
             }

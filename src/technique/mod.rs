@@ -4,6 +4,7 @@
 //! ([`Inputs`]), what it uploads, and which fragment shader it runs; adding one touches its
 //! module, its shader, the `TechniqueId` list and tests. The CLI's names live here only.
 
+pub mod grouped;
 pub mod preconv;
 pub mod unc;
 
