@@ -8,6 +8,7 @@ use std::path::PathBuf;
 
 use crate::bake::ao::{AoMap, AoSettings, bake_ao};
 use crate::bake::cache::{default_cache_dir, load_or_bake_visibility};
+use crate::bake::pca::{PcaModel, fit};
 use crate::bake::raster::rasterize;
 use crate::bake::trace::Tracer;
 use crate::bake::visibility::{VisibilityMap, VisibilitySettings, bake_visibility};
@@ -66,6 +67,8 @@ pub struct Prepared {
     pub ao: AoMap,
     /// SH visibility per lightmap texel.
     pub visibility: VisibilityMap,
+    /// PCA of `visibility` with `PCA_MAX_BASIS` vectors (`pca*` use prefixes of it).
+    pub pca: PcaModel,
     /// SH of the environment's radiance, RGB, to order `LIGHTING_ORDER` (≥ visibility + 2).
     pub radiance_sh: Vec<[f64; 3]>,
     /// Order-3 SH of irradiance: `radiance_sh` convolved with the clamped cosine.
@@ -78,6 +81,9 @@ pub struct Prepared {
 /// (O + 2, Iwanicki–Sloan §3.3).
 pub const LIGHTING_ORDER: u32 = 8;
 
+/// The largest PCA basis of the cost table (`pca24`).
+pub const PCA_MAX_BASIS: usize = 24;
+
 /// Valid `--table-res` values (DESIGN §2: 16–32 per hemisphere is adequate; more for study).
 pub const TABLE_RES_RANGE: std::ops::RangeInclusive<u32> = 4..=256;
 
@@ -88,6 +94,7 @@ impl Prepared {
             irradiance_sh: &self.irradiance_sh,
             radiance_sh: &self.radiance_sh,
             visibility: Some(&self.visibility),
+            pca: Some(&self.pca),
             table_res: self.table_res,
             h_order: self.h_order,
         }
@@ -137,6 +144,21 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
         rays_traced: visibility.rays_traced,
         seconds: visibility.seconds,
     };
+    let t = Instant::now();
+    let pca = fit(
+        &visibility,
+        PCA_MAX_BASIS.min(visibility.order.coeff_count()),
+    )?;
+    log::info!(
+        "PCA: {} vectors in {:.2} s; energy captured by 4/8/12/16/24: {:.4} {:.4} {:.4} {:.4} {:.4}",
+        pca.basis.len(),
+        t.elapsed().as_secs_f64(),
+        pca.energy_captured(4),
+        pca.energy_captured(8),
+        pca.energy_captured(12),
+        pca.energy_captured(16),
+        pca.energy_captured(24)
+    );
     let order3 = Order::THREE;
     let lighting_order = Order::new(LIGHTING_ORDER.max(settings.order.get() + 2))
         .map_err(|_| PrepareError::Order(settings.order.get()))?;
@@ -154,6 +176,7 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
         env,
         ao,
         visibility,
+        pca,
         radiance_sh,
         irradiance_sh,
         table_res: settings.table_res,

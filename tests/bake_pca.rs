@@ -229,7 +229,7 @@ fn quantization_error_is_within_half_an_lsb_per_weight() {
     );
     // The bound: half an LSB (hi_k − lo_k)/(2(2^b − 1)) per weight along orthonormal
     // basis vectors gives ‖δ‖ ≤ √Σ(hi_k − lo_k)² / (2(2^b − 1)) for every texel.
-    let mut ranges = vec![(f64::INFINITY, f64::NEG_INFINITY); 8];
+    let mut ranges = [(f64::INFINITY, f64::NEG_INFINITY); 8];
     for tw in model.weights.chunks_exact(8) {
         for (r, &x) in ranges.iter_mut().zip(tw) {
             *r = (r.0.min(f64::from(x)), r.1.max(f64::from(x)));

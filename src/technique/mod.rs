@@ -5,6 +5,7 @@
 //! module, its shader, the `TechniqueId` list and tests. The CLI's names live here only.
 
 pub mod grouped;
+pub mod pca;
 pub mod preconv;
 pub mod unc;
 
@@ -15,6 +16,7 @@ use std::sync::Arc;
 use ash::vk;
 
 use crate::bake::ao::AoMap;
+use crate::bake::pca::PcaModel;
 use crate::bake::visibility::VisibilityMap;
 use crate::gpu::{self, Context, GpuError, Image, MeshPipeline, layout};
 use crate::render::SceneGpu;
@@ -26,6 +28,16 @@ pub enum TechniqueId {
     Unc3,
     Unc4,
     Unc6,
+    Pca4,
+    Pca8,
+    Pca12,
+    Pca16,
+    Pca24,
+    Pca4w,
+    Pca8w,
+    Pca12w,
+    Pca16w,
+    Pca24w,
     Preconv,
 }
 
@@ -34,6 +46,16 @@ impl TechniqueId {
         TechniqueId::Unc3,
         TechniqueId::Unc4,
         TechniqueId::Unc6,
+        TechniqueId::Pca4,
+        TechniqueId::Pca8,
+        TechniqueId::Pca12,
+        TechniqueId::Pca16,
+        TechniqueId::Pca24,
+        TechniqueId::Pca4w,
+        TechniqueId::Pca8w,
+        TechniqueId::Pca12w,
+        TechniqueId::Pca16w,
+        TechniqueId::Pca24w,
         TechniqueId::Preconv,
     ];
 
@@ -42,6 +64,16 @@ impl TechniqueId {
             TechniqueId::Unc3 => "unc3",
             TechniqueId::Unc4 => "unc4",
             TechniqueId::Unc6 => "unc6",
+            TechniqueId::Pca4 => "pca4",
+            TechniqueId::Pca8 => "pca8",
+            TechniqueId::Pca12 => "pca12",
+            TechniqueId::Pca16 => "pca16",
+            TechniqueId::Pca24 => "pca24",
+            TechniqueId::Pca4w => "pca4w",
+            TechniqueId::Pca8w => "pca8w",
+            TechniqueId::Pca12w => "pca12w",
+            TechniqueId::Pca16w => "pca16w",
+            TechniqueId::Pca24w => "pca24w",
             TechniqueId::Preconv => "preconv",
         }
     }
@@ -126,6 +158,8 @@ pub struct Inputs<'a> {
     pub radiance_sh: &'a [[f64; 3]],
     /// SH visibility per lightmap texel (`unc*`).
     pub visibility: Option<&'a VisibilityMap>,
+    /// PCA of the visibility with the largest basis any `pca*` uses (24 vectors).
+    pub pca: Option<&'a PcaModel>,
     /// L×H table texels per hemisphere / face side.
     pub table_res: u32,
     /// Clamped-cosine order of the L×H product.
@@ -175,6 +209,7 @@ pub fn build(
             unc::build(ctx, scene, id, path, inputs)
         }
         TechniqueId::Preconv => preconv::build(ctx, scene, path, inputs),
+        _ => pca::build(ctx, scene, id, path, inputs),
     }
 }
 
