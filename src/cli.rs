@@ -614,6 +614,14 @@ fn run_bench(a: BenchArgs) -> Result<()> {
         results: rows,
     };
     table.write(&a.out)?;
+    for path in &paths {
+        match shvis::report::plot::write_pca_error_plot(&table.results, path.name(), &a.out) {
+            Ok(files) => files
+                .iter()
+                .for_each(|f| log::info!("wrote {}", f.display())),
+            Err(e) => log::warn!("{e}"),
+        }
+    }
     println!("{}", table.to_markdown());
     println!(
         "wrote {}/table.md, table.json and images in {:.1} s",

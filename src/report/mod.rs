@@ -3,6 +3,7 @@
 
 pub mod image;
 pub mod metrics;
+pub mod plot;
 pub mod table;
 
 use std::path::PathBuf;

@@ -524,47 +524,6 @@ where
     root.present().map_err(|e| e.to_string())
 }
 
-/// TrueType fonts tried, in order, for plot labels after `$SHVIS_FONT`. plotters is built
-/// with `ab_glyph` (no system font lookup), so a font file must be registered by hand.
-const FONT_CANDIDATES: &[&str] = &[
-    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
-    "/usr/share/fonts/TTF/DejaVuSans.ttf",
-    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
-    "/usr/share/fonts/dejavu-sans-fonts/DejaVuSans.ttf",
-    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
-    "/usr/share/fonts/liberation-sans/LiberationSans-Regular.ttf",
-    "/usr/share/fonts/truetype/noto/NotoSans-Regular.ttf",
-    "/usr/share/fonts/noto/NotoSans-Regular.ttf",
-    "/Library/Fonts/Arial.ttf",
-    "/System/Library/Fonts/Supplemental/Arial.ttf",
-    "C:\\Windows\\Fonts\\arial.ttf",
-];
-
-/// Registers a TrueType font as plotters' "sans-serif" once per process: `$SHVIS_FONT`
-/// if set, else the first of [`FONT_CANDIDATES`] that loads. The font bytes are leaked
-/// (plotters keeps `&'static` data); a few hundred KiB, once.
-fn register_plot_font() -> Result<(), String> {
-    static FONT: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
-    FONT.get_or_init(|| {
-        use plotters::style::{FontStyle, register_font};
-        let from_env = std::env::var_os("SHVIS_FONT").map(PathBuf::from);
-        let candidates = from_env
-            .into_iter()
-            .chain(FONT_CANDIDATES.iter().map(PathBuf::from));
-        for path in candidates {
-            if let Ok(bytes) = std::fs::read(&path) {
-                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
-                if register_font("sans-serif", FontStyle::Normal, bytes).is_ok() {
-                    log::debug!("plot font: {}", path.display());
-                    return Ok(());
-                }
-            }
-        }
-        Err("no TrueType font found for plot labels; set SHVIS_FONT to a .ttf file".to_owned())
-    })
-    .clone()
-}
-
 /// Writes Figure 8 as `params_mse.svg` and `params_mse.png` into `dir`; returns the paths.
 ///
 /// # Errors
@@ -574,7 +533,7 @@ pub fn write_plots(points: &[StudyPoint], dir: &Path) -> Result<Vec<PathBuf>, St
     use plotters::prelude::{BitMapBackend, IntoDrawingArea, SVGBackend};
     const SIZE: (u32, u32) = (1200, 520);
     let svg = dir.join("params_mse.svg");
-    register_plot_font().map_err(|message| StudyError::Plot {
+    crate::report::plot::register_plot_font().map_err(|message| StudyError::Plot {
         path: svg.clone(),
         message,
     })?;
