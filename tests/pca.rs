@@ -3,13 +3,9 @@
 
 mod common;
 
-use shvis::reference::{ReferenceSettings, render_reference};
-use shvis::render::FrameSettings;
 use shvis::report::metrics::image_error;
 use shvis::technique::{HwPath, TechniqueId};
 
-const WIDTH: u32 = 320;
-const HEIGHT: u32 = 200;
 /// pcaNw and pcaN compute the same ∫ L V H₃ from the same 8-bit weights; they differ by the
 /// table's bilinear reconstruction over normals (32² per face) and its f16 storage —
 /// measured ≈ 1e-3 relative; this leaves an order of magnitude.
@@ -19,23 +15,7 @@ const WEIGHTS_ONLY_AGREEMENT: f64 = 0.01;
 fn error_falls_with_basis_size_and_weights_only_matches() {
     let ctx = common::validated_context();
     let prepared = common::house();
-    let reference = render_reference(
-        &ctx,
-        &prepared.scene,
-        &prepared.env,
-        &ReferenceSettings {
-            width: WIDTH,
-            height: HEIGHT,
-            spp: 64,
-            seed: 3,
-        },
-    )
-    .expect("reference renders");
-    let settings = FrameSettings {
-        width: WIDTH,
-        height: HEIGHT,
-        ..FrameSettings::default()
-    };
+    let (reference, settings) = common::house_reference(&ctx);
     let pairs = [
         (TechniqueId::Pca4, TechniqueId::Pca4w),
         (TechniqueId::Pca8, TechniqueId::Pca8w),

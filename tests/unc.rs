@@ -6,15 +6,12 @@ mod common;
 
 use shvis::env::project::project_sh;
 use shvis::env::sky::{SkyParams, sky};
-use shvis::reference::{ReferenceSettings, render_reference};
 use shvis::render::{FrameSettings, SceneGpu};
 use shvis::report::metrics::image_error;
 use shvis::sh::Order;
 use shvis::sh::zonal::irradiance_from_radiance;
 use shvis::technique::{self, HwPath, Inputs, TechniqueId};
 
-const WIDTH: u32 = 320;
-const HEIGHT: u32 = 200;
 /// dx9 and dx10 store the same L×H in different parameterizations at the same
 /// `--table-res`; their images may differ by the parameterization error, measured here at
 /// ≈ 1e-4 relative RMSE; this bound leaves an order of magnitude.
@@ -24,23 +21,7 @@ const PATH_AGREEMENT: f64 = 0.01;
 fn error_falls_with_order_and_paths_agree() {
     let ctx = common::validated_context();
     let prepared = common::house();
-    let reference = render_reference(
-        &ctx,
-        &prepared.scene,
-        &prepared.env,
-        &ReferenceSettings {
-            width: WIDTH,
-            height: HEIGHT,
-            spp: 64,
-            seed: 3,
-        },
-    )
-    .expect("reference renders");
-    let settings = FrameSettings {
-        width: WIDTH,
-        height: HEIGHT,
-        ..FrameSettings::default()
-    };
+    let (reference, settings) = common::house_reference(&ctx);
     let mut errors = Vec::new();
     for id in [TechniqueId::Unc3, TechniqueId::Unc4, TechniqueId::Unc6] {
         let mut per_path = Vec::new();

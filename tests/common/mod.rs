@@ -72,3 +72,31 @@ pub fn render(
     assert_validation_clean(ctx, &format!("{id}.{path}"));
     frame
 }
+
+/// Width and height of the error tests' images (technique and reference alike).
+pub const ERROR_TEST_SIZE: (u32, u32) = (320, 200);
+
+/// The reference of the test house at `ERROR_TEST_SIZE` (64 spp) and the frame settings to
+/// render techniques against it.
+pub fn house_reference(ctx: &Arc<Context>) -> (shvis::reference::ReferenceImage, FrameSettings) {
+    let (width, height) = ERROR_TEST_SIZE;
+    let prepared = house();
+    let reference = shvis::reference::render_reference(
+        ctx,
+        &prepared.scene,
+        &prepared.env,
+        &shvis::reference::ReferenceSettings {
+            width,
+            height,
+            spp: 64,
+            seed: 3,
+        },
+    )
+    .expect("reference renders");
+    let settings = FrameSettings {
+        width,
+        height,
+        ..FrameSettings::default()
+    };
+    (reference, settings)
+}
