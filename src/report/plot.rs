@@ -47,6 +47,28 @@ pub fn register_plot_font() -> Result<(), String> {
     .clone()
 }
 
+/// Draws into an RGB bitmap and encodes it as PNG with the `image` crate (plotters' own
+/// encoder would pull in a second, older `image`).
+pub fn write_png_plot<F>(path: &Path, size: (u32, u32), draw: F) -> Result<(), String>
+where
+    F: for<'a> FnOnce(
+        plotters::prelude::DrawingArea<plotters::prelude::BitMapBackend<'a>, plotters::coord::Shift>,
+    ) -> Result<(), String>,
+{
+    use plotters::prelude::{BitMapBackend, IntoDrawingArea};
+    let mut rgb = vec![0u8; (size.0 * size.1 * 3) as usize];
+    draw(BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area())?;
+    image::save_buffer_with_format(
+        path,
+        &rgb,
+        size.0,
+        size.1,
+        image::ExtendedColorType::Rgb8,
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| e.to_string())
+}
+
 /// Writes `pca_error_{path}.svg` and `.png`: relative RMSE against M for `pcaN` and
 /// `pcaNw` on `path`, with `unc6` as a horizontal line. Returns the files written (none when
 /// the rows hold no errors).
@@ -108,11 +130,7 @@ pub fn write_pca_error_plot(
     draw_pca(SVGBackend::new(&svg, (900, 520)).into_drawing_area(), &data)
         .map_err(|e| err(&svg, e))?;
     let png = dir.join(format!("pca_error_{path}.png"));
-    draw_pca(
-        BitMapBackend::new(&png, (900, 520)).into_drawing_area(),
-        &data,
-    )
-    .map_err(|e| err(&png, e))?;
+    write_png_plot(&png, (900, 520), |root| draw_pca(root, &data)).map_err(|e| err(&png, e))?;
     Ok(vec![svg, png])
 }
 

@@ -530,7 +530,7 @@ where
 /// [`StudyError::Plot`] when plotters fails or no font is available for the labels
 /// (`$SHVIS_FONT`, else DejaVu/Liberation/Noto Sans or Arial at their usual paths).
 pub fn write_plots(points: &[StudyPoint], dir: &Path) -> Result<Vec<PathBuf>, StudyError> {
-    use plotters::prelude::{BitMapBackend, IntoDrawingArea, SVGBackend};
+    use plotters::prelude::{IntoDrawingArea, SVGBackend};
     const SIZE: (u32, u32) = (1200, 520);
     let svg = dir.join("params_mse.svg");
     crate::report::plot::register_plot_font().map_err(|message| StudyError::Plot {
@@ -544,12 +544,12 @@ pub fn write_plots(points: &[StudyPoint], dir: &Path) -> Result<Vec<PathBuf>, St
         }
     })?;
     let png = dir.join("params_mse.png");
-    draw_figure(BitMapBackend::new(&png, SIZE).into_drawing_area(), points).map_err(|message| {
-        StudyError::Plot {
+    crate::report::plot::write_png_plot(&png, SIZE, |root| draw_figure(root, points)).map_err(
+        |message| StudyError::Plot {
             path: png.clone(),
             message,
-        }
-    })?;
+        },
+    )?;
     Ok(vec![svg, png])
 }
 
