@@ -1,4 +1,4 @@
-//! Generated tangent frames (DESIGN §1): MikkTSpace (Mikkelsen 2008, the `mikktspace`
+//! Generated tangent frames (DESIGN §1): MikkTSpace (Mikkelsen 2008, the `bevy_mikktspace`
 //! crate) run on (u, 1 − v).
 //!
 //! glTF's UV origin is the top-left corner, so image-up is *decreasing* v. MikkTSpace's
@@ -32,7 +32,7 @@ impl Faces<'_> {
     }
 }
 
-impl mikktspace::Geometry for Faces<'_> {
+impl bevy_mikktspace::Geometry for Faces<'_> {
     fn num_faces(&self) -> usize {
         self.indices.len() / 3
     }
@@ -50,9 +50,16 @@ impl mikktspace::Geometry for Faces<'_> {
         let uv = self.uvs[self.vertex(face, vert)];
         [uv.x, 1.0 - uv.y]
     }
-    fn set_tangent_encoded(&mut self, tangent: [f32; 4], face: usize, vert: usize) {
-        if let Some(slot) = self.tangents.get_mut(3 * face + vert) {
-            *slot = Vec4::from_array(tangent);
+    fn set_tangent(
+        &mut self,
+        tangent_space: Option<bevy_mikktspace::TangentSpace>,
+        face: usize,
+        vert: usize,
+    ) {
+        // None (a degenerate face with no neighbour to borrow from) stays zero and gets
+        // the fallback below.
+        if let (Some(ts), Some(slot)) = (tangent_space, self.tangents.get_mut(3 * face + vert)) {
+            *slot = Vec4::from_array(ts.tangent_encoded());
         }
     }
 }
@@ -97,7 +104,7 @@ pub fn generate(positions: &[Vec3], normals: &[Vec3], uvs: &[Vec2], indices: &[u
         indices: &indices[..corners],
         tangents: vec![Vec4::ZERO; corners],
     };
-    if corners == 0 || !mikktspace::generate_tangents(&mut faces) {
+    if corners == 0 || bevy_mikktspace::generate_tangents(&mut faces).is_err() {
         faces.tangents.iter_mut().for_each(|t| *t = Vec4::ZERO);
     }
     faces
