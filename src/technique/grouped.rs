@@ -193,9 +193,58 @@ pub fn upload_normal_tables(
     Ok((images, 1.0 / scale))
 }
 
+/// The end every grouped technique shares: checks the path rules, creates the uniform
+/// block, compiles `shader` with `defines` (plus the path's) and builds the pipeline.
+/// Returns the finished technique with `stats.textures_bound` filled in.
+#[allow(clippy::too_many_arguments)]
+pub fn finish(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    id: super::TechniqueId,
+    path: HwPath,
+    shader: &str,
+    defines: &[(&str, u32)],
+    texel_images: Vec<Image>,
+    table_images: Vec<Image>,
+    has_mean: bool,
+    unscale: f32,
+    table_res: u32,
+    mut stats: super::TechniqueStats,
+) -> Result<super::TechniqueGpu, TechniqueError> {
+    let label = format!("{id}.{path}");
+    let all: Vec<_> = texel_images.iter().chain(&table_images).collect();
+    super::check_path_rules(&label, path, &all)?;
+    stats.textures_bound = layout::MATERIAL_TEXTURES + all.len() as u32;
+    let params = params_buffer(ctx, unscale, table_res, &label)?;
+    let mut all_defines = vec![path.shader_define()];
+    all_defines.extend_from_slice(defines);
+    let fragment =
+        crate::gpu::compile_glsl(shader, crate::gpu::ShaderStage::Fragment, &all_defines)?;
+    let pipeline = grouped_pipeline(
+        ctx,
+        scene,
+        path,
+        &label,
+        &fragment,
+        &texel_images,
+        &table_images,
+        has_mean,
+        &params,
+    )?;
+    Ok(super::TechniqueGpu {
+        id,
+        path,
+        pipeline,
+        stats,
+        _images: texel_images.into_iter().chain(table_images).collect(),
+        _buffers: vec![params],
+    })
+}
+
 /// The pipeline of a grouped technique: `texel_images` at TEXTURE0 and `table_images` at
 /// TEXTURE0 + 1 (dx9: as arrays, the mean table at TEXTURE0 + 2; dx10: one image each).
-pub fn grouped_pipeline(
+#[allow(clippy::too_many_arguments)]
+fn grouped_pipeline(
     ctx: &Arc<Context>,
     scene: &SceneGpu,
     path: HwPath,

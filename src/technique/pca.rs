@@ -22,7 +22,7 @@ use std::sync::Arc;
 
 use ash::vk;
 
-use super::grouped::{grouped_pipeline, params_buffer, upload_normal_tables, upload_texel_groups};
+use super::grouped::{self, upload_normal_tables, upload_texel_groups};
 use super::unc::table_map;
 use super::{HwPath, Inputs, TechniqueError, TechniqueGpu, TechniqueId, TechniqueStats};
 use crate::bake::lxh::{LxhMatrices, build_table};
@@ -207,37 +207,23 @@ pub fn build(
         Some(&mean_fn),
         &format!("{label}.tables"),
     )?;
-    let all: Vec<_> = texel_images.iter().chain(&table_images).collect();
-    super::check_path_rules(&label, path, &all)?;
-    let textures_bound = layout::MATERIAL_TEXTURES + all.len() as u32;
-    let params = params_buffer(ctx, unscale, inputs.table_res, &label)?;
-    let fragment = compile_glsl(
-        "technique/pca.frag",
-        ShaderStage::Fragment,
-        &[path.shader_define(), ("PCA_GROUPS", groups as u32)],
-    )?;
-    let pipeline = grouped_pipeline(
+    grouped::finish(
         ctx,
         scene,
-        path,
-        &label,
-        &fragment,
-        &texel_images,
-        &table_images,
-        true,
-        &params,
-    )?;
-    Ok(TechniqueGpu {
         id,
         path,
-        pipeline,
-        stats: TechniqueStats {
+        "technique/pca.frag",
+        &[("PCA_GROUPS", groups as u32)],
+        texel_images,
+        table_images,
+        true,
+        unscale,
+        inputs.table_res,
+        TechniqueStats {
             texel_bytes,
             table_bytes: (samples * (3 * groups + 1) * 8) as u64,
-            textures_bound,
+            textures_bound: 0, // filled in by `finish`
             lookups_per_pixel: layout::MATERIAL_TEXTURES + (4 * groups + 1) as u32,
         },
-        _images: texel_images.into_iter().chain(table_images).collect(),
-        _buffers: vec![params],
-    })
+    )
 }

@@ -12,10 +12,10 @@ use std::sync::Arc;
 use ash::vk;
 use half::f16;
 
-use super::grouped::{grouped_pipeline, params_buffer, upload_normal_tables, upload_texel_groups};
+use super::grouped::{self, upload_normal_tables, upload_texel_groups};
 use super::{HwPath, Inputs, TechniqueError, TechniqueGpu, TechniqueId, TechniqueStats};
 use crate::bake::lxh::{LxhMatrices, build_table};
-use crate::gpu::{Context, ShaderStage, compile_glsl, layout};
+use crate::gpu::{Context, layout};
 use crate::render::SceneGpu;
 use crate::sh::Order;
 use crate::sphere::{Parameterization, SphereMap};
@@ -108,39 +108,23 @@ pub fn build(
         None,
         &format!("{label}.lxh"),
     )?;
-    let all_textures: Vec<_> = texel_images.iter().chain(&table_images).collect();
-    super::check_path_rules(&label, path, &all_textures)?;
-    let textures_bound = layout::MATERIAL_TEXTURES + all_textures.len() as u32;
-
-    let params = params_buffer(ctx, unscale, inputs.table_res, &label)?;
-    let fragment = compile_glsl(
-        "technique/unc.frag",
-        ShaderStage::Fragment,
-        &[path.shader_define(), ("UNC_GROUPS", groups as u32)],
-    )?;
-    let pipeline = grouped_pipeline(
+    grouped::finish(
         ctx,
         scene,
-        path,
-        &label,
-        &fragment,
-        &texel_images,
-        &table_images,
-        false,
-        &params,
-    )?;
-    let stats = TechniqueStats {
-        texel_bytes: (groups * texels * 8) as u64,
-        table_bytes: (map.sample_count() * groups * 3 * 8) as u64,
-        textures_bound,
-        lookups_per_pixel: layout::MATERIAL_TEXTURES + (4 * groups) as u32,
-    };
-    Ok(TechniqueGpu {
         id,
         path,
-        pipeline,
-        stats,
-        _images: texel_images.into_iter().chain(table_images).collect(),
-        _buffers: vec![params],
-    })
+        "technique/unc.frag",
+        &[("UNC_GROUPS", groups as u32)],
+        texel_images,
+        table_images,
+        false,
+        unscale,
+        inputs.table_res,
+        TechniqueStats {
+            texel_bytes: (groups * texels * 8) as u64,
+            table_bytes: (map.sample_count() * groups * 3 * 8) as u64,
+            textures_bound: 0, // filled in by `finish`
+            lookups_per_pixel: layout::MATERIAL_TEXTURES + (4 * groups) as u32,
+        },
+    )
 }
