@@ -21,6 +21,8 @@ use shvis::{bake, report};
 const MAX_FRAME_SIDE: u32 = 16384;
 /// PNG exposure unless `--exposure` says otherwise.
 const DEFAULT_EXPOSURE_EV: f32 = -1.0;
+/// Most bounces of inter-reflection accepted (each adds a pass over the lightmap).
+const MAX_BOUNCES: u32 = 16;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -175,6 +177,9 @@ struct RenderArgs {
     /// built-in sky's sunlit ground out of clipping.
     #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_negative_numbers = true)]
     exposure: f32,
+    /// Bounces of inter-reflection baked for shlmap.
+    #[arg(long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
+    bounces: u32,
     /// Ignore the normal map (shade with interpolated normals).
     #[arg(long)]
     flat_normals: bool,
@@ -204,6 +209,10 @@ struct ReferenceArgs {
     vis_res: u32,
     #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_negative_numbers = true)]
     exposure: f32,
+    /// Reflections of light to include (0: direct light only, the model of every technique
+    /// but shlmap; shlmap bakes 2 by default).
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
+    bounces: u32,
     #[command(flatten)]
     gpu: GpuArgs,
     /// Output image: .exr (linear) or .png (sRGB).
@@ -241,6 +250,10 @@ struct BenchArgs {
     /// Samples per pixel of the reference the errors are measured against (0: no errors).
     #[arg(long, default_value_t = 64)]
     ref_spp: u32,
+    /// Bounces of inter-reflection in shlmap's bake and in the reference it is measured
+    /// against (the other techniques model direct light and meet the direct reference).
+    #[arg(long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
+    bounces: u32,
     /// Output directory.
     #[arg(long, default_value = "bench-out")]
     out: PathBuf,
@@ -384,7 +397,11 @@ fn run_sh(c: ShCommand) -> Result<()> {
     Ok(())
 }
 
-fn prepare_settings(scene: &SceneArgs, env: &str) -> Result<PrepareSettings> {
+fn prepare_settings(
+    scene: &SceneArgs,
+    env: &str,
+    sh_lightmap_bounces: Option<u32>,
+) -> Result<PrepareSettings> {
     Ok(PrepareSettings {
         scene: scene.scene.clone(),
         env: env.to_string(),
@@ -396,6 +413,7 @@ fn prepare_settings(scene: &SceneArgs, env: &str) -> Result<PrepareSettings> {
         table_res: scene.table_res,
         h_order: shvis::sh::Order::new(scene.h_order).context("--h-order")?,
         cache_dir: None,
+        sh_lightmap_bounces,
     })
 }
 
@@ -416,7 +434,7 @@ fn create_dir(dir: &Path) -> Result<()> {
 fn run_bake(a: BakeArgs) -> Result<()> {
     let vis_res = bake::validate_res(a.scene.vis_res)?;
     let rays = bake::validate_rays(a.scene.rays)?;
-    let settings = prepare_settings(&a.scene, "sky")?;
+    let settings = prepare_settings(&a.scene, "sky", None)?;
     let scene = resolve_scene(&a.scene.scene, vis_res)?;
     create_dir(&a.out)?;
     let ao = bake_scene_ao(&scene, vis_res, rays, a.scene.seed, true)?;
@@ -447,7 +465,8 @@ fn run_render(a: RenderArgs) -> Result<()> {
     check_output_extension(&a.out)?;
     // The device first: a missing GPU should not cost a bake.
     let ctx = open_gpu(&a.gpu)?;
-    let prepared = prepare(&prepare_settings(&a.scene, &a.env)?)?;
+    let bounces = (a.technique == TechniqueId::Shlmap).then_some(a.bounces);
+    let prepared = prepare(&prepare_settings(&a.scene, &a.env, bounces)?)?;
     let settings = FrameSettings {
         width: a.width,
         height: a.height,
@@ -478,16 +497,22 @@ fn run_reference(a: ReferenceArgs) -> Result<()> {
             height: a.height,
             spp: a.spp,
             seed: a.seed,
+            bounces: a.bounces,
         },
     )?;
-    write_frame(&a.out, &image.frame, a.exposure)?;
+    let (frame, noise) = match &image.bounced {
+        Some(b) => (&b.frame, b.rel_noise),
+        None => (&image.frame, image.rel_noise),
+    };
+    write_frame(&a.out, frame, a.exposure)?;
     check_validation(&ctx, a.gpu.validate)?;
     println!(
-        "reference: {} spp, {:.1} M rays in {:.1} s; noise (relative standard error of the image) {:.4}",
+        "reference: {} spp, {} bounces, {:.1} M rays in {:.1} s; noise (relative standard error of the image) {:.4}",
         a.spp,
+        a.bounces,
         image.rays as f64 / 1e6,
         image.seconds,
-        image.rel_noise
+        noise
     );
     println!("wrote {}", a.out.display());
     Ok(())
@@ -534,7 +559,12 @@ fn run_bench(a: BenchArgs) -> Result<()> {
     let paths = parse_list(&a.paths, HwPath::ALL)?;
     create_dir(&a.out)?;
     let started = Instant::now();
-    let prepared: Prepared = prepare(&prepare_settings(&a.scene, &a.env)?)?;
+    let with_shlmap = techniques.contains(&TechniqueId::Shlmap);
+    let prepared: Prepared = prepare(&prepare_settings(
+        &a.scene,
+        &a.env,
+        with_shlmap.then_some(a.bounces),
+    )?)?;
     let ctx = open_gpu(&a.gpu)?;
     if !ctx.supports_timestamps() {
         bail!(
@@ -558,6 +588,7 @@ fn run_bench(a: BenchArgs) -> Result<()> {
                 height: a.height,
                 spp: a.ref_spp,
                 seed: a.scene.seed,
+                bounces: if with_shlmap { a.bounces } else { 0 },
             },
         )?;
         log::info!(
@@ -568,6 +599,16 @@ fn run_bench(a: BenchArgs) -> Result<()> {
         );
         write_exr(&a.out.join("reference.exr"), &image.frame)?;
         write_png(&a.out.join("reference.png"), &image.frame, a.exposure)?;
+        if let Some(b) = &image.bounced {
+            log::info!(
+                "reference with {} bounces: relative noise {:.4}",
+                b.bounces,
+                b.rel_noise
+            );
+            let name = format!("reference_bounces{}", b.bounces);
+            write_exr(&a.out.join(format!("{name}.exr")), &b.frame)?;
+            write_png(&a.out.join(format!("{name}.png")), &b.frame, a.exposure)?;
+        }
         Some(image)
     } else {
         None
@@ -579,9 +620,30 @@ fn run_bench(a: BenchArgs) -> Result<()> {
             let tech = technique::build(&ctx, &scene_gpu, t, p, &prepared.inputs())?;
             let frame = scene_gpu.render(&tech, a.warmup, a.frames)?;
             let stats = TimingStats::from_ms(&frame.ms);
-            let error = reference
-                .as_ref()
-                .and_then(|r| shvis::report::metrics::image_error(&frame, &r.frame));
+            // shlmap models inter-reflection: it meets the reference that has it.
+            let (reference_frame, reference_kind) = match &reference {
+                None => (None, "none".to_string()),
+                Some(r) => match (&r.bounced, t) {
+                    (Some(b), TechniqueId::Shlmap) => {
+                        (Some(&b.frame), format!("{} bounces", b.bounces))
+                    }
+                    _ => (Some(&r.frame), "direct".to_string()),
+                },
+            };
+            let error = reference_frame
+                .and_then(|r| shvis::report::metrics::image_error(&frame, r));
+            if t == TechniqueId::Shlmap {
+                if let Some(e) = reference
+                    .as_ref()
+                    .and_then(|r| shvis::report::metrics::image_error(&frame, &r.frame))
+                {
+                    log::info!(
+                        "{}: relative RMSE against the direct-only reference {:.4}",
+                        tech.label(),
+                        e.rel_rmse
+                    );
+                }
+            }
             write_png(
                 &a.out.join(format!("{}.png", tech.label())),
                 &frame,
@@ -601,12 +663,25 @@ fn run_bench(a: BenchArgs) -> Result<()> {
                 table_bytes: tech.stats.table_bytes,
                 textures_bound: tech.stats.textures_bound,
                 lookups_per_pixel: tech.stats.lookups_per_pixel,
+                ratio_to_preconv: None,
+                paper_ms: t.paper_ms(),
+                paper_ratio_to_preconv: t.paper_ratio_to_preconv(),
+                reference: reference_kind,
             });
         }
     }
+    shvis::report::table::fill_ratios_to_preconv(&mut rows);
     let table = BenchTable {
         reference_spp: a.ref_spp,
         reference_rel_noise: reference.as_ref().map(|r| r.rel_noise),
+        reference_bounces: reference
+            .as_ref()
+            .and_then(|r| r.bounced.as_ref())
+            .map_or(0, |b| b.bounces),
+        reference_bounced_rel_noise: reference
+            .as_ref()
+            .and_then(|r| r.bounced.as_ref())
+            .map(|b| b.rel_noise),
         device: ctx.device_name().to_string(),
         width: a.width,
         height: a.height,
@@ -621,6 +696,12 @@ fn run_bench(a: BenchArgs) -> Result<()> {
                 .for_each(|f| log::info!("wrote {}", f.display())),
             Err(e) => log::warn!("{e}"),
         }
+    }
+    match shvis::report::plot::write_speed_error_plot(&table, &a.out) {
+        Ok(files) => files
+            .iter()
+            .for_each(|f| log::info!("wrote {}", f.display())),
+        Err(e) => log::warn!("{e}"),
     }
     println!("{}", table.to_markdown());
     println!(

@@ -10,6 +10,7 @@ use crate::bake::ao::{AoMap, AoSettings, bake_ao};
 use crate::bake::cache::{default_cache_dir, load_or_bake_visibility};
 use crate::bake::pca::{PcaModel, fit};
 use crate::bake::raster::rasterize;
+use crate::bake::shlmap::{ShLightmap, ShLightmapSettings, bake_sh_lightmap};
 use crate::bake::trace::Tracer;
 use crate::bake::visibility::{VisibilityMap, VisibilitySettings, bake_visibility};
 use crate::bake::{self, BakeError};
@@ -40,6 +41,8 @@ pub struct PrepareSettings {
     pub h_order: Order,
     /// Where bakes are cached (`None`: `bake::cache::default_cache_dir()`).
     pub cache_dir: Option<PathBuf>,
+    /// Bake the SH lightmap (`shlmap`) with this many bounces; `None`: skip it.
+    pub sh_lightmap_bounces: Option<u32>,
 }
 
 impl Default for PrepareSettings {
@@ -55,6 +58,7 @@ impl Default for PrepareSettings {
             table_res: 32,
             h_order: Order::THREE,
             cache_dir: None,
+            sh_lightmap_bounces: None,
         }
     }
 }
@@ -75,6 +79,8 @@ pub struct Prepared {
     pub irradiance_sh: Vec<[f64; 3]>,
     pub table_res: u32,
     pub h_order: Order,
+    /// Order-3 SH of incident radiance with inter-reflection, when asked for.
+    pub sh_lightmap: Option<ShLightmap>,
 }
 
 /// Order of the lighting projection: L×H of order-6 visibility needs lighting of order 8
@@ -95,6 +101,7 @@ impl Prepared {
             radiance_sh: &self.radiance_sh,
             visibility: Some(&self.visibility),
             pca: Some(&self.pca),
+            sh_lightmap: self.sh_lightmap.as_ref(),
             table_res: self.table_res,
             h_order: self.h_order,
         }
@@ -171,7 +178,24 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
         env.height,
         t.elapsed().as_secs_f64() * 1e3
     );
+    let sh_lightmap = settings.sh_lightmap_bounces.map(|bounces| {
+        let texels = rasterize(&scene.mesh, vis_res);
+        let tracer = Tracer::new(&scene.mesh);
+        bake_sh_lightmap(
+            &scene,
+            &tracer,
+            &texels,
+            &radiance_sh,
+            &ShLightmapSettings {
+                rays,
+                seed: settings.seed,
+                bounces,
+                progress: settings.progress,
+            },
+        )
+    });
     Ok(Prepared {
+        sh_lightmap,
         scene,
         env,
         ao,

@@ -17,6 +17,26 @@
 //! from a per-pixel PCG stream seeded by (seed, pixel): identical results for any thread
 //! count. The noise level is estimated from the per-pixel sample variance and reported as
 //! the image's relative standard error, comparable to the techniques' relative RMSE.
+//!
+//! # Inter-reflection (`--bounces N`, for `shlmap`)
+//!
+//! With N > 0 a second image adds light reflected off the scene up to N times, the
+//! quantity the SH lightmap bakes ([`crate::bake::shlmap`]). The integral splits into the
+//! environment seen directly (the estimator above) and the surfaces seen instead of it:
+//!
+//! ```text
+//! L_in(x, ω) = L_env(ω) V(x, ω) + ρ(x')/π · E_{N−1}(x')  (x' the front face hit along ω)
+//! E_k(x')    = ∫ L_env V max(0, n'·ω) dω + [k > 0] ∫ ρ(x'')/π E_{k−1}(x'') max(0, n'·ω) dω
+//! ```
+//!
+//! The surface part is estimated by one cosine-weighted direction about the shading normal
+//! per sample (pdf cos/π, so the estimate is π × the radiance found; directions below n_g's
+//! plane count 0), closest-hit traced; at the hit ([`crate::bake::surface`]: oriented
+//! geometric normal n', albedo ρ, back faces reflect nothing) E is estimated recursively
+//! the same way: one environment sample with a shadow ray plus, while bounces remain, one
+//! more cosine-weighted direction. Every term is an unbiased estimate of its integral, so
+//! the image converges to the N-bounce solution; the direct image comes from the same
+//! samples at no extra cost.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -24,6 +44,7 @@ use std::time::Instant;
 use glam::Vec3;
 use rayon::prelude::*;
 
+use crate::bake::surface::SurfaceReader;
 use crate::bake::trace::Tracer;
 use crate::env::EnvMap;
 use crate::gpu::{Context, GpuError, ShaderStage, compile_glsl};
@@ -38,6 +59,8 @@ pub struct ReferenceSettings {
     /// Environment samples per pixel.
     pub spp: u32,
     pub seed: u64,
+    /// Reflections of light added in [`ReferenceImage::bounced`] (0: direct light only).
+    pub bounces: u32,
 }
 
 /// The reference image and how noisy it is.
@@ -46,8 +69,62 @@ pub struct ReferenceImage {
     /// √(Σ σ²_pixel) / √(Σ value²) over covered pixels and channels: the relative RMS
     /// error the Monte Carlo noise alone would give.
     pub rel_noise: f64,
+    /// With `bounces` > 0: direct plus inter-reflected light (module doc).
+    pub bounced: Option<BouncedImage>,
     pub seconds: f64,
     pub rays: u64,
+}
+
+/// The reference with inter-reflection.
+pub struct BouncedImage {
+    pub bounces: u32,
+    pub frame: Frame,
+    /// As [`ReferenceImage::rel_noise`].
+    pub rel_noise: f64,
+}
+
+/// Per-image sums of the noise estimate.
+#[derive(Clone, Copy, Default)]
+struct NoiseSums {
+    var: f64,
+    sq: f64,
+}
+
+impl NoiseSums {
+    fn rel_noise(&self) -> f64 {
+        if self.sq > 0.0 { (self.var / self.sq).sqrt() } else { 0.0 }
+    }
+}
+
+/// Mean and variance of the mean of one pixel's samples, per channel.
+#[derive(Clone, Copy, Default)]
+struct PixelSums {
+    sum: [f64; 3],
+    sum_sq: [f64; 3],
+}
+
+impl PixelSums {
+    fn add(&mut self, v: Vec3) {
+        for c in 0..3 {
+            let v = v[c] as f64;
+            self.sum[c] += v;
+            self.sum_sq[c] += v * v;
+        }
+    }
+
+    /// Writes albedo/π × the mean into `out` and adds to the noise sums.
+    fn finish(&self, spp: u32, albedo: &[f32; 4], out: &mut [f32; 4], noise: &mut NoiseSums) {
+        let n = spp as f64;
+        for c in 0..3 {
+            let mean = self.sum[c] / n;
+            let var_of_mean = (self.sum_sq[c] / n - mean * mean).max(0.0) / n;
+            let k = albedo[c] as f64 / std::f64::consts::PI;
+            out[c] = (k * mean) as f32;
+            noise.var += k * k * var_of_mean;
+            noise.sq += (k * mean).powi(2);
+        }
+        out[3] = 1.0;
+    }
 }
 
 /// Renders the reference for `scene` under `env` from the scene's camera.
@@ -96,13 +173,23 @@ pub fn render_reference(
 
     let tracer = Tracer::new(&scene.mesh);
     let sampler = EnvSampler::new(env);
+    let surfaces = SurfaceReader::new(scene);
+    let paths = Paths {
+        tracer: &tracer,
+        sampler: &sampler,
+        surfaces: &surfaces,
+    };
     let (w, h) = (settings.width as usize, settings.height as usize);
-    let rows: Vec<(Vec<[f32; 4]>, f64, f64, u64)> = (0..h)
+    let bounces = settings.bounces;
+    type Row = (Vec<[f32; 4]>, Vec<[f32; 4]>, NoiseSums, NoiseSums, u64);
+    let rows: Vec<Row> = (0..h)
         .into_par_iter()
         .map(|y| {
             let mut row = vec![[0.0f32; 4]; w];
-            let (mut var_sum, mut sq_sum, mut rays) = (0.0, 0.0, 0u64);
-            for (x, out) in row.iter_mut().enumerate() {
+            let mut row_bounced = vec![[0.0f32; 4]; if bounces > 0 { w } else { 0 }];
+            let (mut noise, mut noise_bounced, mut rays) =
+                (NoiseSums::default(), NoiseSums::default(), 0u64);
+            for x in 0..w {
                 let i = y * w + x;
                 if position.rgba[i][3] < 0.5 {
                     continue;
@@ -110,64 +197,125 @@ pub fn render_reference(
                 let p = Vec3::from_slice(&position.rgba[i][..3]);
                 let n_s = Vec3::from_slice(&normal.rgba[i][..3]).normalize_or_zero();
                 let n_g = Vec3::from_slice(&vertex_normal.rgba[i][..3]).normalize_or_zero();
-                let a = &albedo.rgba[i];
                 let origin = tracer.offset_origin(p, n_g);
                 let mut rng = Pcg32::new(settings.seed, i as u64);
-                let mut sum = [0.0f64; 3];
-                let mut sum_sq = [0.0f64; 3];
+                let (mut direct, mut total) = (PixelSums::default(), PixelSums::default());
                 for _ in 0..settings.spp {
-                    let (dir, radiance, pdf) = sampler.sample(&mut rng);
-                    let cos = n_s.dot(dir);
-                    if cos <= 0.0 || n_g.dot(dir) <= 0.0 || pdf <= 0.0 {
-                        continue;
-                    }
-                    rays += 1;
-                    if tracer.occluded(origin, dir, f32::INFINITY) {
-                        continue;
-                    }
-                    for c in 0..3 {
-                        let v = radiance[c] as f64 * cos as f64 / pdf;
-                        sum[c] += v;
-                        sum_sq[c] += v * v;
+                    let d = paths.direct(origin, n_s, n_g, &mut rng, &mut rays);
+                    direct.add(d);
+                    if bounces > 0 {
+                        let g = paths.indirect(origin, n_s, n_g, bounces - 1, &mut rng, &mut rays);
+                        total.add(d + g);
                     }
                 }
-                let n = settings.spp as f64;
-                for c in 0..3 {
-                    let mean = sum[c] / n;
-                    let var_of_mean = (sum_sq[c] / n - mean * mean).max(0.0) / n;
-                    let k = a[c] as f64 / std::f64::consts::PI;
-                    out[c] = (k * mean) as f32;
-                    var_sum += k * k * var_of_mean;
-                    sq_sum += (k * mean).powi(2);
+                let albedo = &albedo.rgba[i];
+                direct.finish(settings.spp, albedo, &mut row[x], &mut noise);
+                if bounces > 0 {
+                    total.finish(settings.spp, albedo, &mut row_bounced[x], &mut noise_bounced);
                 }
-                out[3] = 1.0;
             }
-            (row, var_sum, sq_sum, rays)
+            (row, row_bounced, noise, noise_bounced, rays)
         })
         .collect();
     let mut rgba = Vec::with_capacity(w * h);
-    let (mut var_sum, mut sq_sum, mut rays) = (0.0, 0.0, 0u64);
-    for (row, v, s, r) in rows {
+    let mut rgba_bounced = Vec::with_capacity(if bounces > 0 { w * h } else { 0 });
+    let (mut noise, mut noise_bounced, mut rays) =
+        (NoiseSums::default(), NoiseSums::default(), 0u64);
+    for (row, row_bounced, n, nb, r) in rows {
         rgba.extend(row);
-        var_sum += v;
-        sq_sum += s;
+        rgba_bounced.extend(row_bounced);
+        noise.var += n.var;
+        noise.sq += n.sq;
+        noise_bounced.var += nb.var;
+        noise_bounced.sq += nb.sq;
         rays += r;
     }
+    let frame = |rgba| Frame {
+        width: settings.width,
+        height: settings.height,
+        rgba,
+        ms: vec![],
+    };
     Ok(ReferenceImage {
-        frame: Frame {
-            width: settings.width,
-            height: settings.height,
-            rgba,
-            ms: vec![],
-        },
-        rel_noise: if sq_sum > 0.0 {
-            (var_sum / sq_sum).sqrt()
-        } else {
-            0.0
-        },
+        frame: frame(rgba),
+        rel_noise: noise.rel_noise(),
+        bounced: (bounces > 0).then(|| BouncedImage {
+            bounces,
+            frame: frame(rgba_bounced),
+            rel_noise: noise_bounced.rel_noise(),
+        }),
         seconds: start.elapsed().as_secs_f64(),
         rays,
     })
+}
+
+/// The estimators of the module doc over one scene and environment.
+struct Paths<'a> {
+    tracer: &'a Tracer,
+    sampler: &'a EnvSampler<'a>,
+    surfaces: &'a SurfaceReader<'a>,
+}
+
+impl Paths<'_> {
+    /// One sample of ∫ L_env V max(0, n_s·ω) dω (V = 0 below n_g's plane).
+    fn direct(&self, origin: Vec3, n_s: Vec3, n_g: Vec3, rng: &mut Pcg32, rays: &mut u64) -> Vec3 {
+        let (dir, radiance, pdf) = self.sampler.sample(rng);
+        let cos = n_s.dot(dir);
+        if cos <= 0.0 || n_g.dot(dir) <= 0.0 || pdf <= 0.0 {
+            return Vec3::ZERO;
+        }
+        *rays += 1;
+        if self.tracer.occluded(origin, dir, f32::INFINITY) {
+            return Vec3::ZERO;
+        }
+        Vec3::from(radiance) * (cos as f64 / pdf) as f32
+    }
+
+    /// One sample of ∫ ρ(x')/π E_k(x') max(0, n_s·ω) dω over the surfaces seen from
+    /// `origin`, k = `remaining` further reflections.
+    fn indirect(
+        &self,
+        origin: Vec3,
+        n_s: Vec3,
+        n_g: Vec3,
+        remaining: u32,
+        rng: &mut Pcg32,
+        rays: &mut u64,
+    ) -> Vec3 {
+        if n_s == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let dir = cosine_sample(n_s, rng);
+        if n_g.dot(dir) <= 0.0 {
+            return Vec3::ZERO;
+        }
+        *rays += 1;
+        let Some(hit) = self.tracer.closest_hit(origin, dir) else {
+            return Vec3::ZERO;
+        };
+        let surface = self.surfaces.at(&hit, origin, dir);
+        if !surface.front_face {
+            return Vec3::ZERO;
+        }
+        let n = surface.normal;
+        let next = self.tracer.offset_origin(surface.position, n);
+        let mut e = self.direct(next, n, n, rng, rays);
+        if remaining > 0 {
+            e += self.indirect(next, n, n, remaining - 1, rng, rays);
+        }
+        // π · (ρ/π · E): the cosine-weighted pdf cancels the cosine and 1/π.
+        surface.albedo * e
+    }
+}
+
+/// A direction about unit `n` with pdf max(0, n·ω)/π (Malley's method).
+fn cosine_sample(n: Vec3, rng: &mut Pcg32) -> Vec3 {
+    let (u1, u2) = (rng.next_f64(), rng.next_f64());
+    let r = u1.sqrt();
+    let phi = 2.0 * std::f64::consts::PI * u2;
+    let (t, b) = n.any_orthonormal_pair();
+    let z = (1.0 - u1).max(0.0).sqrt();
+    (t * (r * phi.cos()) as f32 + b * (r * phi.sin()) as f32 + n * z as f32).normalize()
 }
 
 /// Importance sampling of an equirect map by luminance × texel solid angle.

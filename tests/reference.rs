@@ -94,6 +94,7 @@ fn render(env: &EnvMap) -> (Frame, f64) {
             height: 64,
             spp: 32,
             seed: 1,
+            bounces: 0,
         },
     )
     .expect("reference renders");
@@ -128,4 +129,30 @@ fn sky_matches_brute_force_irradiance() {
         (mean - expected).abs() < SIGMAS * err,
         "{mean} ± {err} vs {expected}"
     );
+}
+
+/// On a lone plane no ray from the surface hits anything: the reference with bounces is
+/// the direct one, sample for sample.
+#[test]
+fn bounces_add_nothing_on_an_open_plane() {
+    let ctx = common::validated_context();
+    let env = shvis::env::sky::sky(128, &SkyParams::default());
+    let image = render_reference(
+        &ctx,
+        &ground_scene(),
+        &env,
+        &ReferenceSettings {
+            width: 48,
+            height: 32,
+            spp: 8,
+            seed: 2,
+            bounces: 2,
+        },
+    )
+    .expect("reference renders");
+    let bounced = image.bounced.expect("bounced image");
+    assert_eq!(bounced.bounces, 2);
+    assert!(image.frame.rgba.iter().any(|t| t[3] > 0.5 && t[0] > 0.0));
+    assert_eq!(bounced.frame.rgba, image.frame.rgba);
+    common::assert_validation_clean(&ctx, "reference with bounces");
 }

@@ -34,4 +34,22 @@ vec3 sh_eval_rgb_order3(vec4 c[9], vec3 d) {
     return sum;
 }
 
+// Irradiance E(n) = ∫ L max(0, n·ω) dω from order-3 RGB radiance coefficients: the
+// clamped-cosine convolution (band factors A_l = π, 2π/3, π/4; src/sh/zonal.rs) evaluated
+// at unit n. Used where radiance, not irradiance, reaches the shader (shlmap, sh2).
+vec3 sh_irradiance_order3(vec3 radiance[9], vec3 n) {
+    const float pi = 3.14159265358979323846;
+    const float a[3] = float[3](pi, 2.0 * pi / 3.0, pi / 4.0);
+    float y[9];
+    sh_eval_order3(n, y);
+    vec3 sum = radiance[0] * (a[0] * y[0]);
+    for (int i = 1; i < 4; ++i) {
+        sum += radiance[i] * (a[1] * y[i]);
+    }
+    for (int i = 4; i < 9; ++i) {
+        sum += radiance[i] * (a[2] * y[i]);
+    }
+    return sum;
+}
+
 #endif

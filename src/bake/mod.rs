@@ -7,6 +7,8 @@
 //! - [`directions`]: the shared stratified ray directions of the visibility bake and the
 //!   SH projection of a texel's visible set.
 //! - [`visibility`]: SH visibility per texel (Iwanicki–Sloan §3.1), the `unc*`/`pca*` data.
+//! - [`surface`]: attributes of ray hit points (oriented normal, albedo, lightmap texel).
+//! - [`shlmap`]: order-3 SH of incident radiance with inter-reflection, the `shlmap` data.
 //! - [`cache`]: versioned, checksummed bake cache files, and EXR dumps for inspection.
 //!
 //! Inputs a user controls (ray counts, resolutions) are validated here once, by
@@ -18,6 +20,8 @@ pub mod directions;
 pub mod lxh;
 pub mod pca;
 pub mod raster;
+pub mod shlmap;
+pub mod surface;
 pub mod trace;
 pub mod visibility;
 

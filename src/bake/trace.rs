@@ -43,7 +43,7 @@ use glam::{Vec3, Vec3A, Vec4};
 use obvhs::{
     BvhBuildParams,
     cwbvh::{CwBvh, builder::build_cwbvh_from_tris},
-    ray::{Ray, safe_inverse},
+    ray::{Ray, RayHit, safe_inverse},
     triangle::Triangle,
 };
 
@@ -114,29 +114,50 @@ pub struct Tracer {
     bvh: Option<CwBvh>,
     /// Triangles in BVH primitive order (`triangles[i]` = input `primitive_indices[i]`).
     triangles: Vec<Triangle>,
+    /// Mesh triangle index of each BVH primitive.
+    mesh_triangles: Vec<u32>,
     ray_epsilon: f32,
+}
+
+/// The nearest surface along a ray ([`Tracer::closest_hit`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Index of the mesh triangle hit (`Mesh::indices[3·triangle..]`).
+    pub triangle: u32,
+    /// Distance along the unit direction, metres.
+    pub t: f32,
+    /// Barycentric weights of the triangle's corners 1 and 2 at the hit (corner 0 gets
+    /// 1 − u − v).
+    pub u: f32,
+    pub v: f32,
 }
 
 impl Tracer {
     /// Builds the BVH over the mesh's triangles (see the module doc for what is skipped).
     pub fn new(mesh: &Mesh) -> Tracer {
-        let input: Vec<Triangle> = (0..mesh.triangle_count())
+        let input: Vec<(u32, [Vec3; 3])> = (0..mesh.triangle_count())
             .filter(|&t| {
                 mesh.indices[3 * t..3 * t + 3]
                     .iter()
                     .all(|&i| (i as usize) < mesh.vertices.len())
             })
-            .map(|t| mesh.triangle_positions(t))
-            .filter(|p| {
+            .map(|t| (t as u32, mesh.triangle_positions(t)))
+            .filter(|(_, p)| {
                 let finite = p.iter().all(|v| v.is_finite());
                 finite && (p[1] - p[0]).cross(p[2] - p[0]).length_squared() > 0.0
             })
-            .map(|p| Triangle {
-                v0: p[0].into(),
-                v1: p[1].into(),
-                v2: p[2].into(),
-            })
             .collect();
+        let (input_triangles, input): (Vec<u32>, Vec<Triangle>) = input
+            .into_iter()
+            .map(|(t, p)| {
+                let tri = Triangle {
+                    v0: p[0].into(),
+                    v1: p[1].into(),
+                    v2: p[2].into(),
+                };
+                (t, tri)
+            })
+            .unzip();
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for t in &input {
             for v in [t.v0, t.v1, t.v2] {
@@ -154,6 +175,7 @@ impl Tracer {
             return Tracer {
                 bvh: None,
                 triangles: input,
+                mesh_triangles: input_triangles,
                 ray_epsilon,
             };
         }
@@ -164,6 +186,11 @@ impl Tracer {
             .iter()
             .map(|&i| input[i as usize])
             .collect();
+        let mesh_triangles = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| input_triangles[i as usize])
+            .collect();
         log::debug!(
             "CWBVH over {} triangles built in {:.3} s",
             input.len(),
@@ -172,6 +199,7 @@ impl Tracer {
         Tracer {
             bvh: Some(bvh),
             triangles,
+            mesh_triangles,
             ray_epsilon,
         }
     }
@@ -204,6 +232,38 @@ impl Tracer {
         };
         let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), self.t_min(), t_max);
         !bvh.ray_traverse_miss(ray, |ray, id| self.triangles[id].intersect(ray))
+    }
+
+    /// The nearest triangle along `origin + t·dir`, t ∈ [[`Self::t_min`], ∞) (`dir` unit
+    /// length), with its barycentrics; `None` when the ray escapes. Both faces count.
+    pub fn closest_hit(&self, origin: Vec3, dir: Vec3) -> Option<Hit> {
+        let bvh = self.bvh.as_ref()?;
+        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), self.t_min(), f32::INFINITY);
+        let mut hit = RayHit::none();
+        if !bvh.ray_traverse(ray, &mut hit, |ray, id| self.triangles[id].intersect(ray)) {
+            return None;
+        }
+        let tri = &self.triangles[hit.primitive_id as usize];
+        // Barycentrics of the hit point (Möller–Trumbore's u, v recomputed in f32).
+        let p = Vec3A::from(origin) + Vec3A::from(dir) * hit.t;
+        let (e1, e2, d) = (tri.v1 - tri.v0, tri.v2 - tri.v0, p - tri.v0);
+        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let (dp1, dp2) = (d.dot(e1), d.dot(e2));
+        let det = d11 * d22 - d12 * d12;
+        let (u, v) = if det > 0.0 {
+            (
+                ((d22 * dp1 - d12 * dp2) / det).clamp(0.0, 1.0),
+                ((d11 * dp2 - d12 * dp1) / det).clamp(0.0, 1.0),
+            )
+        } else {
+            (0.0, 0.0)
+        };
+        Some(Hit {
+            triangle: self.mesh_triangles[hit.primitive_id as usize],
+            t: hit.t,
+            u,
+            v,
+        })
     }
 
     /// [`Self::occluded`] for the rays of `packet` selected by `active` (bit i = origin

@@ -24,6 +24,10 @@ const SOURCES: &[(&str, &str)] = &[
         include_str!("../../glsl/include/sh.glsl"),
     ),
     (
+        "include/sh_product.glsl",
+        include_str!("../../glsl/include/sh_product.glsl"),
+    ),
+    (
         "include/sphere.glsl",
         include_str!("../../glsl/include/sphere.glsl"),
     ),
@@ -50,6 +54,14 @@ const SOURCES: &[(&str, &str)] = &[
     (
         "technique/preconv.frag",
         include_str!("../../glsl/technique/preconv.frag"),
+    ),
+    (
+        "technique/sh2.frag",
+        include_str!("../../glsl/technique/sh2.frag"),
+    ),
+    (
+        "technique/shlmap.frag",
+        include_str!("../../glsl/technique/shlmap.frag"),
     ),
     (
         "technique/unc.frag",
@@ -145,6 +157,18 @@ mod tests {
                 "technique/preconv.frag",
                 ShaderStage::Fragment,
                 &[("PATH_DX9", path_dx9)],
+            )
+            .unwrap();
+            compile_glsl(
+                "technique/sh2.frag",
+                ShaderStage::Fragment,
+                &[("PATH_DX9", path_dx9)],
+            )
+            .unwrap();
+            compile_glsl(
+                "technique/shlmap.frag",
+                ShaderStage::Fragment,
+                &[("PATH_DX9", path_dx9), ("SHLMAP_GROUPS", 7)],
             )
             .unwrap();
         }

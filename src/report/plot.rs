@@ -201,3 +201,216 @@ where
         .map_err(|e| format!("{e:?}"))?;
     root.present().map_err(|e| format!("{e:?}"))
 }
+
+/// Indices of the points on the Pareto front of (time, error), both minimized: no other
+/// point is at least as fast and at least as accurate and better in one. Sorted by time.
+pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..points.len())
+        .filter(|&i| points[i].0.is_finite() && points[i].1.is_finite())
+        .collect();
+    order.sort_by(|&a, &b| {
+        points[a]
+            .0
+            .total_cmp(&points[b].0)
+            .then(points[a].1.total_cmp(&points[b].1))
+    });
+    let mut front = Vec::new();
+    let mut best_error = f64::INFINITY;
+    for i in order {
+        if points[i].1 < best_error {
+            best_error = points[i].1;
+            front.push(i);
+        }
+    }
+    front
+}
+
+/// Writes `speed_error.svg` and `.png`: relative RMSE against median ms (log axis) for
+/// every row with both, one colour and marker per path, the Pareto front of each path
+/// drawn as a staircase through its points (filled markers; dominated points hollow).
+/// Returns the files written (none when no row has both figures).
+pub fn write_speed_error_plot(
+    table: &super::table::BenchTable,
+    dir: &Path,
+) -> Result<Vec<PathBuf>, ReportError> {
+    let points: Vec<SpeedErrorPoint> = table
+        .results
+        .iter()
+        .filter_map(|r| {
+            let starred = r.reference != "direct";
+            Some(SpeedErrorPoint {
+                label: if starred {
+                    format!("{}*", r.technique)
+                } else {
+                    r.technique.clone()
+                },
+                path: r.path.clone(),
+                ms: r.ms_median.filter(|&m| m > 0.0)?,
+                error: r.rel_rmse?,
+                on_front: false,
+            })
+        })
+        .collect();
+    if points.is_empty() {
+        return Ok(vec![]);
+    }
+    let mut points = points;
+    let mut paths: Vec<String> = points.iter().map(|p| p.path.clone()).collect();
+    paths.dedup();
+    paths.sort();
+    paths.dedup();
+    for path in &paths {
+        let idx: Vec<usize> = (0..points.len())
+            .filter(|&i| points[i].path == *path)
+            .collect();
+        let xy: Vec<(f64, f64)> = idx.iter().map(|&i| (points[i].ms, points[i].error)).collect();
+        for k in pareto_front(&xy) {
+            points[idx[k]].on_front = true;
+        }
+    }
+    let svg = dir.join("speed_error.svg");
+    let err = |path: &Path, e: String| ReportError::Write {
+        path: path.to_path_buf(),
+        detail: e,
+    };
+    register_plot_font().map_err(|e| err(&svg, e))?;
+    let starred = table
+        .results
+        .iter()
+        .find(|r| r.reference != "direct" && r.reference != "none")
+        .map(|r| format!("{}* against the reference with {}", r.technique, r.reference));
+    let title = format!(
+        "Speed against error · {} · {}×{}",
+        table.device, table.width, table.height
+    );
+    let data = SpeedErrorPlot {
+        title: &title,
+        note: starred.as_deref(),
+        points: &points,
+        paths: &paths,
+    };
+    use plotters::prelude::{IntoDrawingArea, SVGBackend};
+    let size = (1100, 700);
+    draw_speed_error(SVGBackend::new(&svg, size).into_drawing_area(), &data)
+        .map_err(|e| err(&svg, e))?;
+    let png = dir.join("speed_error.png");
+    write_png_plot(&png, size, |root| draw_speed_error(root, &data)).map_err(|e| err(&png, e))?;
+    Ok(vec![svg, png])
+}
+
+struct SpeedErrorPoint {
+    label: String,
+    path: String,
+    ms: f64,
+    error: f64,
+    on_front: bool,
+}
+
+struct SpeedErrorPlot<'a> {
+    title: &'a str,
+    note: Option<&'a str>,
+    points: &'a [SpeedErrorPoint],
+    paths: &'a [String],
+}
+
+fn draw_speed_error<DB: plotters::prelude::DrawingBackend>(
+    root: plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+    d: &SpeedErrorPlot<'_>,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    use plotters::prelude::*;
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| format!("{e:?}");
+    root.fill(&WHITE).map_err(e)?;
+    let (ms_lo, ms_hi, err_lo, err_hi) = d.points.iter().fold(
+        (f64::MAX, f64::MIN, f64::MAX, f64::MIN),
+        |(a, b, c, dd), p| (a.min(p.ms), b.max(p.ms), c.min(p.error), dd.max(p.error)),
+    );
+    let err_pad = 0.08 * (err_hi - err_lo).max(1e-3);
+    let mut chart = ChartBuilder::on(&root)
+        .caption(d.title, ("sans-serif", 20))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(65)
+        .build_cartesian_2d(
+            ((ms_lo * 0.8)..(ms_hi * 1.25)).log_scale(),
+            (err_lo - err_pad).max(0.0)..(err_hi + err_pad),
+        )
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc(match d.note {
+            Some(n) => format!("ms per frame, median (log scale)    [{n}]"),
+            None => "ms per frame, median (log scale)".to_string(),
+        })
+        .y_desc("relative RMSE against the reference")
+        .draw()
+        .map_err(e)?;
+    let palette = [BLUE, RED, GREEN, MAGENTA];
+    for (k, path) in d.paths.iter().enumerate() {
+        let colour = palette[k % palette.len()];
+        let mut front: Vec<&SpeedErrorPoint> = d
+            .points
+            .iter()
+            .filter(|p| p.path == *path && p.on_front)
+            .collect();
+        front.sort_by(|a, b| a.ms.total_cmp(&b.ms));
+        // Staircase: from each front point, right at its error, then down to the next.
+        let mut stairs = Vec::new();
+        for (i, p) in front.iter().enumerate() {
+            stairs.push((p.ms, p.error));
+            if let Some(next) = front.get(i + 1) {
+                stairs.push((next.ms, p.error));
+            }
+        }
+        if let Some(last) = front.last() {
+            stairs.push((ms_hi * 1.25, last.error));
+        }
+        chart
+            .draw_series(LineSeries::new(stairs, colour.stroke_width(2)))
+            .map_err(e)?
+            .label(format!("{path}: Pareto front"))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+        for p in d.points.iter().filter(|p| p.path == *path) {
+            let style = if p.on_front {
+                colour.filled()
+            } else {
+                colour.stroke_width(1)
+            };
+            // Labels left of the second path's points and right of the first's keep the
+            // two paths' labels of one technique apart.
+            let dx = if k % 2 == 1 { -8 - 7 * p.label.len() as i32 } else { 8 };
+            let marker = EmptyElement::at((p.ms, p.error))
+                + Circle::new((0, 0), 5, style)
+                + Text::new(
+                    p.label.clone(),
+                    (dx, -7),
+                    ("sans-serif", 13).into_font().color(&colour),
+                );
+            chart.draw_series(std::iter::once(marker)).map_err(e)?;
+        }
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE)
+        .border_style(BLACK)
+        .draw()
+        .map_err(e)?;
+    root.present().map_err(|e| format!("{e:?}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pareto_front_keeps_only_undominated_points() {
+        // (ms, error): 1 is dominated by 0 (slower and worse), 3 by 2 (same speed,
+        // worse); 4 is slowest but best.
+        let pts = [(1.0, 0.5), (2.0, 0.6), (3.0, 0.3), (3.0, 0.4), (9.0, 0.1), (f64::NAN, 0.0)];
+        assert_eq!(pareto_front(&pts), vec![0, 2, 4]);
+        assert!(pareto_front(&[]).is_empty());
+    }
+}

@@ -22,6 +22,31 @@ pub struct BenchRow {
     pub table_bytes: u64,
     pub textures_bound: u32,
     pub lookups_per_pixel: u32,
+    /// `ms_median` over `preconv`'s on the same path.
+    pub ratio_to_preconv: Option<f64>,
+    /// The paper's ms/frame on its GTX 295 (DESIGN §3), where it measured the technique.
+    pub paper_ms: Option<f64>,
+    /// The paper's ratio to its `preconv`.
+    pub paper_ratio_to_preconv: Option<f64>,
+    /// What `rel_rmse` is measured against: "direct" (the direct-light reference),
+    /// "N bounces" (with inter-reflection, for `shlmap`) or "none".
+    pub reference: String,
+}
+
+/// Fills `ratio_to_preconv` of every row from the `preconv` row of its path.
+pub fn fill_ratios_to_preconv(rows: &mut [BenchRow]) {
+    let preconv: Vec<(String, f64)> = rows
+        .iter()
+        .filter(|r| r.technique == "preconv")
+        .filter_map(|r| Some((r.path.clone(), r.ms_median?)))
+        .collect();
+    for row in rows.iter_mut() {
+        row.ratio_to_preconv = preconv
+            .iter()
+            .find(|(p, _)| *p == row.path)
+            .and_then(|(_, base)| Some(row.ms_median? / base))
+            .filter(|r| r.is_finite());
+    }
 }
 
 /// The whole table.
@@ -35,6 +60,10 @@ pub struct BenchTable {
     pub reference_spp: u32,
     /// The reference's own relative noise (compare with `rel_rmse`).
     pub reference_rel_noise: Option<f64>,
+    /// Bounces of the inter-reflected reference `shlmap` is measured against (0: none).
+    pub reference_bounces: u32,
+    /// That reference's relative noise.
+    pub reference_bounced_rel_noise: Option<f64>,
     pub results: Vec<BenchRow>,
 }
 
@@ -46,7 +75,7 @@ impl BenchTable {
     /// Markdown table (also what the terminal shows).
     pub fn to_markdown(&self) -> String {
         let mut s = format!(
-            "device: {} · {}×{} · visibility {}² · reference {} spp (relative noise {})\n\n",
+            "device: {} · {}×{} · visibility {}² · reference {} spp (relative noise {})",
             self.device,
             self.width,
             self.height,
@@ -54,18 +83,32 @@ impl BenchTable {
             self.reference_spp,
             opt(self.reference_rel_noise, 4)
         );
-        s += "| technique | path | ms median | ms min | ms max | frames | rel. RMSE | PSNR dB | texel bytes | table bytes | textures | lookups/px |\n";
-        s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-        for r in &self.results {
+        if self.reference_bounces > 0 {
             s += &format!(
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                "; shlmap against the reference with {} bounces (relative noise {})",
+                self.reference_bounces,
+                opt(self.reference_bounced_rel_noise, 4)
+            );
+        }
+        s += "\n\n";
+        s += "| technique | path | ms median | ms min | ms max | frames | ×preconv | paper ×preconv | rel. RMSE | PSNR dB | texel bytes | table bytes | textures | lookups/px |\n";
+        s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+        for r in &self.results {
+            let rmse = match (r.rel_rmse, r.reference.as_str()) {
+                (Some(e), kind) if kind != "direct" => format!("{e:.4} ({kind})"),
+                (e, _) => opt(e, 4),
+            };
+            s += &format!(
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
                 r.technique,
                 r.path,
                 opt(r.ms_median, 3),
                 opt(r.ms_min, 3),
                 opt(r.ms_max, 3),
                 r.frames,
-                opt(r.rel_rmse, 4),
+                opt(r.ratio_to_preconv, 2),
+                opt(r.paper_ratio_to_preconv, 2),
+                rmse,
                 opt(r.psnr, 2),
                 r.texel_bytes,
                 r.table_bytes,

@@ -71,6 +71,10 @@ pub enum ShError {
 pub struct Order(u32);
 
 impl Order {
+    /// Order 1 (1 coefficient): a constant.
+    pub const ONE: Order = Order(1);
+    /// Order 2 (4 coefficients): `sh2` visibility.
+    pub const TWO: Order = Order(2);
     /// Order 3 (9 coefficients): irradiance, `preconv`, `sh2` lighting.
     pub const THREE: Order = Order(3);
     /// Order 4 (16 coefficients).

@@ -7,6 +7,8 @@
 pub mod grouped;
 pub mod pca;
 pub mod preconv;
+pub mod sh2;
+pub mod shlmap;
 pub mod unc;
 
 use std::fmt;
@@ -17,6 +19,7 @@ use ash::vk;
 
 use crate::bake::ao::AoMap;
 use crate::bake::pca::PcaModel;
+use crate::bake::shlmap::ShLightmap;
 use crate::bake::visibility::VisibilityMap;
 use crate::gpu::{self, Context, GpuError, Image, MeshPipeline, layout};
 use crate::render::SceneGpu;
@@ -38,7 +41,9 @@ pub enum TechniqueId {
     Pca12w,
     Pca16w,
     Pca24w,
+    Shlmap,
     Preconv,
+    Sh2,
 }
 
 impl TechniqueId {
@@ -56,7 +61,9 @@ impl TechniqueId {
         TechniqueId::Pca12w,
         TechniqueId::Pca16w,
         TechniqueId::Pca24w,
+        TechniqueId::Shlmap,
         TechniqueId::Preconv,
+        TechniqueId::Sh2,
     ];
 
     pub fn name(self) -> &'static str {
@@ -74,7 +81,9 @@ impl TechniqueId {
             TechniqueId::Pca12w => "pca12w",
             TechniqueId::Pca16w => "pca16w",
             TechniqueId::Pca24w => "pca24w",
+            TechniqueId::Shlmap => "shlmap",
             TechniqueId::Preconv => "preconv",
+            TechniqueId::Sh2 => "sh2",
         }
     }
 }
@@ -96,6 +105,31 @@ impl FromStr for TechniqueId {
                 name: s.to_string(),
                 known: join_names(TechniqueId::ALL.iter().map(|t| t.name())),
             })
+    }
+}
+
+impl TechniqueId {
+    /// ms/frame of the paper's cost table (GeForce GTX 295, 1280×800, 512² visibility;
+    /// DESIGN §3) for the techniques it measured.
+    pub fn paper_ms(self) -> Option<f64> {
+        Some(match self {
+            TechniqueId::Unc6 => 8.19,
+            TechniqueId::Unc4 => 3.33,
+            TechniqueId::Unc3 => 2.75,
+            TechniqueId::Pca4 => 1.40,
+            TechniqueId::Pca8 => 2.08,
+            TechniqueId::Pca16 => 3.61,
+            TechniqueId::Pca24 => 5.56,
+            TechniqueId::Shlmap => 0.846,
+            TechniqueId::Preconv => 0.648,
+            TechniqueId::Sh2 => 0.607,
+            _ => return None,
+        })
+    }
+
+    /// The paper's time relative to its `preconv`.
+    pub fn paper_ratio_to_preconv(self) -> Option<f64> {
+        Some(self.paper_ms()? / TechniqueId::Preconv.paper_ms()?)
     }
 }
 
@@ -160,6 +194,8 @@ pub struct Inputs<'a> {
     pub visibility: Option<&'a VisibilityMap>,
     /// PCA of the visibility with the largest basis any `pca*` uses (24 vectors).
     pub pca: Option<&'a PcaModel>,
+    /// Order-3 SH of incident radiance with inter-reflection per texel (`shlmap`).
+    pub sh_lightmap: Option<&'a ShLightmap>,
     /// L×H table texels per hemisphere / face side.
     pub table_res: u32,
     /// Clamped-cosine order of the L×H product.
@@ -209,6 +245,8 @@ pub fn build(
             unc::build(ctx, scene, id, path, inputs)
         }
         TechniqueId::Preconv => preconv::build(ctx, scene, path, inputs),
+        TechniqueId::Shlmap => shlmap::build(ctx, scene, path, inputs),
+        TechniqueId::Sh2 => sh2::build(ctx, scene, path, inputs),
         _ => pca::build(ctx, scene, id, path, inputs),
     }
 }

@@ -25,6 +25,7 @@ pub fn house() -> &'static Prepared {
             rays: TEST_RAYS,
             table_res: TEST_TABLE_RES,
             cache_dir: Some(concat!(env!("CARGO_TARGET_TMPDIR"), "/bake-cache").into()),
+            sh_lightmap_bounces: Some(shvis::bake::shlmap::DEFAULT_BOUNCES),
             ..PrepareSettings::default()
         })
         .expect("the built-in scene prepares")
@@ -76,8 +77,8 @@ pub fn render(
 /// Width and height of the error tests' images (technique and reference alike).
 pub const ERROR_TEST_SIZE: (u32, u32) = (320, 200);
 
-/// The reference of the test house at `ERROR_TEST_SIZE` (64 spp) and the frame settings to
-/// render techniques against it.
+/// The reference of the test house at `ERROR_TEST_SIZE` (64 spp; with the 2-bounce image
+/// for `shlmap` in `bounced`) and the frame settings to render techniques against it.
 pub fn house_reference(ctx: &Arc<Context>) -> (shvis::reference::ReferenceImage, FrameSettings) {
     let (width, height) = ERROR_TEST_SIZE;
     let prepared = house();
@@ -90,6 +91,7 @@ pub fn house_reference(ctx: &Arc<Context>) -> (shvis::reference::ReferenceImage,
             height,
             spp: 64,
             seed: 3,
+            bounces: shvis::bake::shlmap::DEFAULT_BOUNCES,
         },
     )
     .expect("reference renders");

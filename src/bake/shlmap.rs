@@ -1,0 +1,314 @@
+//! SH lightmap: per lightmap texel, the order-3 SH of *incident radiance* including
+//! inter-reflection, for one static lighting — the `shlmap` baseline of Iwanicki–Sloan §5
+//! ("SH lightmaps (storing 3rd order SH lighting)"; DESIGN §2).
+//!
+//! # What is baked
+//!
+//! For a covered texel at x with geometric normal n_g and the bake's shared direction set
+//! {ω_r} (weights w = 4π/R, [`super::directions`]),
+//!
+//! ```text
+//! c_i(x) = Σ_{r: n_g·ω_r > 0} w · L_in(x, ω_r) · y_i(ω_r),   i < 9                   (1)
+//! L_in(x, ω) = L_env(ω)                         if the ray escapes
+//!            = ρ(x')/π · E_{k−1}(x')            if it hits the front of a surface at x'
+//!            = 0                                if it hits a back face
+//! E_k(x)    = Σ_{l<3} A_l Σ_m c^k_lm(x) y_lm(n_g(x))                                  (2)
+//! ```
+//!
+//! Bounce k = 0 is direct light only (E_{−1} = 0); each further bounce re-traces the same
+//! rays with the previous bounce's irradiance (2) read at the hit texel of the lightmap
+//! (gutters dilated, so hits near chart borders read their chart). `bounces` = N gives
+//! light that has reflected up to N times before reaching x. L_env is the environment's SH
+//! at the lighting order (8), the same smooth lighting the `unc*` tables use, evaluated at
+//! each ray direction: a small sun is not aliased by the shared directions. ρ is the
+//! surface's albedo ([`super::surface`]).
+//!
+//! Shading (`glsl/technique/shlmap.frag`) convolves the 9 coefficients with the clamped
+//! cosine (A_l: π, 2π/3, π/4) and evaluates at the normal-mapped normal — the paper's
+//! "shade by convolution at the normal". The coefficients of (1) include directions below
+//! the shading normal but above n_g's plane, so a bent normal sees what it should.
+//!
+//! Texels are independent within a pass and sum their rays in a fixed order, so a bake is
+//! bit-identical for any thread count. Results are dilated [`DILATION_PASSES`] texels
+//! into the gutters, as the visibility bake's are.
+
+use std::ops::{Add, Mul};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+use glam::{DVec3, Vec3};
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+
+use super::directions::{DirectionSet, above_horizon};
+use super::raster::{LightmapTexels, dilate};
+use super::surface::SurfaceReader;
+use super::trace::Tracer;
+use super::visibility::DILATION_PASSES;
+use crate::scene::Scene;
+use crate::sh::{Order, basis::eval_basis, zonal};
+
+/// Coefficients per texel and colour (order 3).
+pub const SH_LIGHTMAP_COEFFS: usize = 9;
+
+/// Default number of bounces of inter-reflection (issue 7; the paper does not say).
+pub const DEFAULT_BOUNCES: u32 = 2;
+
+/// What an SH lightmap bake does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ShLightmapSettings {
+    /// Rays per texel (shared direction set).
+    pub rays: u32,
+    pub seed: u64,
+    /// Reflections of light before it reaches a texel (0 = direct only).
+    pub bounces: u32,
+    pub progress: bool,
+}
+
+/// Order-3 SH of incident radiance per lightmap texel, RGB.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShLightmap {
+    pub res: u32,
+    pub bounces: u32,
+    /// Texel-major, `SH_LIGHTMAP_COEFFS` RGB triples per texel (res² × 9).
+    pub coeffs: Vec<[f32; 3]>,
+    pub covered: Vec<bool>,
+    pub rays_traced: u64,
+    pub seconds: f64,
+}
+
+impl ShLightmap {
+    /// The 9 RGB coefficients of texel `index` (row-major y·res + x).
+    pub fn texel(&self, index: usize) -> &[[f32; 3]] {
+        &self.coeffs[index * SH_LIGHTMAP_COEFFS..(index + 1) * SH_LIGHTMAP_COEFFS]
+    }
+
+    /// Irradiance E(n) = ∫ L_in max(0, n·ω) dω at texel `index` from its order-3 SH, eq. (2).
+    pub fn irradiance(&self, index: usize, n: Vec3) -> Vec3 {
+        irradiance_at(self.texel(index), n)
+    }
+}
+
+/// Eq. (2): clamped-cosine convolution of order-3 RGB coefficients, evaluated at `n`.
+pub fn irradiance_at(coeffs: &[[f32; 3]], n: Vec3) -> Vec3 {
+    let mut y = [0.0f64; SH_LIGHTMAP_COEFFS];
+    eval_basis(Order::THREE, n.as_dvec3().normalize_or(DVec3::Z), &mut y);
+    let mut e = Vec3::ZERO;
+    for (i, (c, y)) in coeffs.iter().zip(y).enumerate() {
+        let l = if i == 0 {
+            0
+        } else if i < 4 {
+            1
+        } else {
+            2
+        };
+        e += Vec3::from(*c) * (zonal::clamped_cosine_convolution(l) * y) as f32;
+    }
+    e
+}
+
+/// Bakes the SH lightmap of `scene` under the environment whose radiance SH (RGB, any
+/// order ≥ 1) is `radiance_sh` (see the module doc).
+pub fn bake_sh_lightmap(
+    scene: &Scene,
+    tracer: &Tracer,
+    texels: &LightmapTexels,
+    radiance_sh: &[[f64; 3]],
+    settings: &ShLightmapSettings,
+) -> ShLightmap {
+    let start = Instant::now();
+    let res = texels.res as usize;
+    let dirs = DirectionSet::new(settings.rays, settings.seed);
+    let weight = dirs.weight();
+    // Per direction: the 9 basis values and the environment's radiance.
+    let lighting_order = Order::new((radiance_sh.len() as f64).sqrt() as u32).unwrap_or(Order::ONE);
+    let basis: Vec<[f64; SH_LIGHTMAP_COEFFS]> = dirs
+        .dirs()
+        .iter()
+        .map(|d| {
+            let mut y = [0.0; SH_LIGHTMAP_COEFFS];
+            eval_basis(Order::THREE, d.as_dvec3().normalize(), &mut y);
+            y
+        })
+        .collect();
+    let env: Vec<[f64; 3]> = dirs
+        .dirs()
+        .iter()
+        .map(|d| zonal::eval_rgb(radiance_sh, lighting_order, d.as_dvec3().normalize()))
+        .collect();
+    let surfaces = SurfaceReader::new(scene);
+    let covered: Vec<u32> = (0..res * res)
+        .filter(|&i| texels.covered[i])
+        .map(|i| i as u32)
+        .collect();
+    let rays_done = AtomicU64::new(0);
+
+    // Bounce 0: direct light through the visible directions (any-hit rays).
+    let bar = progress_bar(settings.progress, covered.len(), "direct");
+    let direct: Vec<Sh9Rgb> = covered
+        .par_iter()
+        .with_min_len(64)
+        .map(|&i| {
+            let i = i as usize;
+            let (n, origin) = (texels.normal[i], tracer.offset_origin(texels.position[i], texels.normal[i]));
+            let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
+            let mut rays = 0u64;
+            for (r, &d) in dirs.dirs().iter().enumerate() {
+                if !above_horizon(n, d) {
+                    continue;
+                }
+                rays += 1;
+                if !tracer.occluded(origin, d, f32::INFINITY) {
+                    accumulate(&mut sum, &basis[r], env[r]);
+                }
+            }
+            rays_done.fetch_add(rays, Ordering::Relaxed);
+            bar.inc(1);
+            Sh9Rgb::from_sums(&sum, weight)
+        })
+        .collect();
+    bar.finish_and_clear();
+    let mut current = direct.clone();
+
+    for bounce in 1..=settings.bounces {
+        // Irradiance of the previous bounce at every texel, dilated into the gutters.
+        let mut irradiance = vec![Vec3::ZERO; res * res];
+        for (k, &i) in covered.iter().enumerate() {
+            let i = i as usize;
+            irradiance[i] = irradiance_at(&current[k].as_rgb(), texels.normal[i]).max(Vec3::ZERO);
+        }
+        dilate(&mut irradiance, &texels.covered, texels.res, DILATION_PASSES);
+        let bar = progress_bar(settings.progress, covered.len(), &format!("bounce {bounce}"));
+        current = covered
+            .par_iter()
+            .with_min_len(64)
+            .zip(direct.par_iter())
+            .map(|(&i, direct)| {
+                let i = i as usize;
+                let n = texels.normal[i];
+                let origin = tracer.offset_origin(texels.position[i], n);
+                let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
+                let mut rays = 0u64;
+                for (r, &d) in dirs.dirs().iter().enumerate() {
+                    if !above_horizon(n, d) {
+                        continue;
+                    }
+                    rays += 1;
+                    let Some(hit) = tracer.closest_hit(origin, d) else {
+                        continue;
+                    };
+                    let surface = surfaces.at(&hit, origin, d);
+                    if !surface.front_face {
+                        continue;
+                    }
+                    let e = irradiance[texels.texel_index(surface.uv_lightmap.into())];
+                    let radiance = surface.albedo * e / std::f32::consts::PI;
+                    accumulate(&mut sum, &basis[r], radiance.as_dvec3().into());
+                }
+                rays_done.fetch_add(rays, Ordering::Relaxed);
+                bar.inc(1);
+                *direct + Sh9Rgb::from_sums(&sum, weight)
+            })
+            .collect();
+        bar.finish_and_clear();
+    }
+
+    let mut planes = vec![Sh9Rgb::default(); res * res];
+    for (k, &i) in covered.iter().enumerate() {
+        planes[i as usize] = current[k];
+    }
+    dilate(&mut planes, &texels.covered, texels.res, DILATION_PASSES);
+    let map = ShLightmap {
+        res: texels.res,
+        bounces: settings.bounces,
+        coeffs: planes.iter().flat_map(|p| p.as_rgb()).collect(),
+        covered: texels.covered.clone(),
+        rays_traced: rays_done.into_inner(),
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    log::info!(
+        "SH lightmap bake: {} texels × {} directions, {} bounces in {:.2} s = {:.2} Mrays/s",
+        covered.len(),
+        settings.rays,
+        settings.bounces,
+        map.seconds,
+        map.rays_traced as f64 / map.seconds.max(1e-9) * 1e-6
+    );
+    map
+}
+
+fn accumulate(sum: &mut [[f64; 3]; SH_LIGHTMAP_COEFFS], y: &[f64; SH_LIGHTMAP_COEFFS], radiance: [f64; 3]) {
+    for (s, &y) in sum.iter_mut().zip(y) {
+        for c in 0..3 {
+            s[c] += radiance[c] * y;
+        }
+    }
+}
+
+fn progress_bar(show: bool, len: usize, what: &str) -> ProgressBar {
+    if !show {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(len as u64);
+    let style = ProgressStyle::with_template(&format!(
+        "SH lightmap {what} {{elapsed_precise}} [{{bar:40.cyan/blue}}] {{percent:>3}}%"
+    ))
+    .unwrap_or_else(|_| ProgressStyle::default_bar())
+    .progress_chars("=> ");
+    bar.set_style(style);
+    bar
+}
+
+/// 9 RGB coefficients as one value that [`dilate`] can average.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Sh9Rgb([f32; 3 * SH_LIGHTMAP_COEFFS]);
+
+impl Sh9Rgb {
+    fn from_sums(sum: &[[f64; 3]; SH_LIGHTMAP_COEFFS], weight: f64) -> Self {
+        let mut out = [0.0f32; 3 * SH_LIGHTMAP_COEFFS];
+        for (i, s) in sum.iter().enumerate() {
+            for c in 0..3 {
+                out[3 * i + c] = (s[c] * weight) as f32;
+            }
+        }
+        Sh9Rgb(out)
+    }
+
+    fn as_rgb(&self) -> [[f32; 3]; SH_LIGHTMAP_COEFFS] {
+        std::array::from_fn(|i| [self.0[3 * i], self.0[3 * i + 1], self.0[3 * i + 2]])
+    }
+}
+
+impl Add for Sh9Rgb {
+    type Output = Sh9Rgb;
+    fn add(self, o: Sh9Rgb) -> Sh9Rgb {
+        Sh9Rgb(std::array::from_fn(|k| self.0[k] + o.0[k]))
+    }
+}
+
+impl Mul<f32> for Sh9Rgb {
+    type Output = Sh9Rgb;
+    fn mul(self, s: f32) -> Sh9Rgb {
+        Sh9Rgb(self.0.map(|v| v * s))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A constant environment of radiance 1 over the upper hemisphere of +z has order-3
+    /// coefficients whose clamped-cosine convolution at +z is exactly π (the hemisphere's
+    /// band 2 vanishes), the irradiance of an open plane.
+    #[test]
+    fn hemisphere_convolves_to_pi() {
+        let s = std::f32::consts::PI.sqrt();
+        let mut c = [[0.0f32; 3]; SH_LIGHTMAP_COEFFS];
+        c[0] = [s; 3];
+        c[2] = [(3.0 * std::f32::consts::PI).sqrt() / 2.0; 3];
+        let e = irradiance_at(&c, Vec3::Z);
+        assert!((e - Vec3::splat(std::f32::consts::PI)).abs().max_element() < 1e-5, "{e}");
+        // Facing away: the hemisphere's irradiance at −z is 0.
+        assert!(irradiance_at(&c, -Vec3::Z).abs().max_element() < 1e-5);
+    }
+}

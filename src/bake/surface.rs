@@ -1,0 +1,163 @@
+//! What a ray sees where it hits the scene: the surface attributes that inter-reflection
+//! needs (DESIGN §1's shading model applied at a hit point), shared by the SH lightmap bake
+//! ([`super::shlmap`]) and the reference's bounces ([`crate::reference`]) so both read the
+//! scene the same way.
+//!
+//! At a hit on triangle t with barycentrics (u, v):
+//! - the *oriented geometric normal*: the winding normal, flipped when it disagrees with
+//!   the interpolated vertex normal — the side the surface is shaded on, as
+//!   [`super::raster`] bakes it. A ray arriving from behind that side sees the back face,
+//!   which reflects nothing;
+//! - the *albedo*: the material's sRGB texture decoded to linear, bilinear with repeat at
+//!   the interpolated `uv_material` (as the GPU's sampler reads it, without mipmaps),
+//!   times the interpolated `albedo_tint`;
+//! - the lightmap texel containing the interpolated `uv_lightmap`.
+
+use glam::{Vec2, Vec3};
+
+use super::trace::Hit;
+use crate::scene::{Scene, Texture8};
+
+/// The attributes of a hit point (see the module doc).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePoint {
+    pub position: Vec3,
+    /// Unit oriented geometric normal.
+    pub normal: Vec3,
+    /// Whether the ray arrived on the shaded side (`dir · normal < 0`).
+    pub front_face: bool,
+    /// Linear RGB albedo.
+    pub albedo: Vec3,
+    /// Lightmap UV (TEXCOORD_1 or generated).
+    pub uv_lightmap: Vec2,
+}
+
+/// Reads hit points of one scene; holds the albedo texture decoded to linear once.
+pub struct SurfaceReader<'a> {
+    scene: &'a Scene,
+    albedo: LinearTexture,
+}
+
+impl<'a> SurfaceReader<'a> {
+    pub fn new(scene: &'a Scene) -> Self {
+        SurfaceReader {
+            scene,
+            albedo: LinearTexture::from_srgb(&scene.material.albedo),
+        }
+    }
+
+    /// The surface at `hit` of a ray along unit `dir`.
+    pub fn at(&self, hit: &Hit, origin: Vec3, dir: Vec3) -> SurfacePoint {
+        let mesh = &self.scene.mesh;
+        let t = hit.triangle as usize;
+        let corner = |k: usize| &mesh.vertices[mesh.indices[3 * t + k] as usize];
+        let (a, b, c) = (corner(0), corner(1), corner(2));
+        let w = [1.0 - hit.u - hit.v, hit.u, hit.v];
+        let mix3 = |f: &dyn Fn(&crate::scene::Vertex) -> [f32; 3]| {
+            Vec3::from(f(a)) * w[0] + Vec3::from(f(b)) * w[1] + Vec3::from(f(c)) * w[2]
+        };
+        let mix2 = |f: &dyn Fn(&crate::scene::Vertex) -> [f32; 2]| {
+            Vec2::from(f(a)) * w[0] + Vec2::from(f(b)) * w[1] + Vec2::from(f(c)) * w[2]
+        };
+        let [p0, p1, p2] = mesh.triangle_positions(t);
+        let mut normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        if normal.dot(mix3(&|v| v.normal)) < 0.0 {
+            normal = -normal;
+        }
+        let tint = mix3(&|v| v.albedo_tint);
+        let uv_material = mix2(&|v| v.uv_material);
+        SurfacePoint {
+            position: origin + dir * hit.t,
+            normal,
+            front_face: dir.dot(normal) < 0.0,
+            albedo: self.albedo.bilinear_repeat(uv_material) * tint,
+            uv_lightmap: mix2(&|v| v.uv_lightmap),
+        }
+    }
+}
+
+/// An RGB texture in linear f32, row 0 at v = 0.
+struct LinearTexture {
+    width: u32,
+    height: u32,
+    texels: Vec<Vec3>,
+}
+
+impl LinearTexture {
+    fn from_srgb(tex: &Texture8) -> Self {
+        let lut: Vec<f32> = (0..256)
+            .map(|i| {
+                let c = i as f32 / 255.0;
+                if c <= 0.04045 {
+                    c / 12.92
+                } else {
+                    ((c + 0.055) / 1.055).powf(2.4)
+                }
+            })
+            .collect();
+        LinearTexture {
+            width: tex.width.max(1),
+            height: tex.height.max(1),
+            texels: if tex.texels.is_empty() {
+                vec![Vec3::ONE]
+            } else {
+                tex.texels
+                    .iter()
+                    .map(|t| Vec3::new(lut[t[0] as usize], lut[t[1] as usize], lut[t[2] as usize]))
+                    .collect()
+            },
+        }
+    }
+
+    /// Bilinear with repeat wrapping, texel centres at (i+½)/size.
+    fn bilinear_repeat(&self, uv: Vec2) -> Vec3 {
+        if self.texels.len() == 1 {
+            return self.texels[0];
+        }
+        let (w, h) = (self.width as i64, self.height as i64);
+        let x = uv.x * w as f32 - 0.5;
+        let y = uv.y * h as f32 - 0.5;
+        if !(x.is_finite() && y.is_finite()) {
+            return self.texels[0];
+        }
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let fetch = |xi: i64, yi: i64| {
+            let (xi, yi) = (xi.rem_euclid(w), yi.rem_euclid(h));
+            self.texels[(yi * w + xi) as usize]
+        };
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let top = fetch(x0, y0) * (1.0 - fx) + fetch(x0 + 1, y0) * fx;
+        let bottom = fetch(x0, y0 + 1) * (1.0 - fx) + fetch(x0 + 1, y0 + 1) * fx;
+        top * (1.0 - fy) + bottom * fy
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_decode_and_repeat() {
+        let tex = Texture8 {
+            width: 2,
+            height: 1,
+            texels: vec![[255, 255, 255, 255], [0, 0, 0, 255]],
+        };
+        let lin = LinearTexture::from_srgb(&tex);
+        // Texel centres read back exactly; repeat wraps u by whole periods.
+        assert_eq!(lin.bilinear_repeat(Vec2::new(0.25, 0.5)), Vec3::ONE);
+        assert_eq!(lin.bilinear_repeat(Vec2::new(0.75, 0.5)), Vec3::ZERO);
+        assert_eq!(lin.bilinear_repeat(Vec2::new(-0.75, 0.5)), Vec3::ONE);
+        // Halfway between the two centres across the seam: the average.
+        let mid = lin.bilinear_repeat(Vec2::new(0.0, 0.5));
+        assert!((mid - Vec3::splat(0.5)).abs().max_element() < 1e-6);
+        // sRGB 128 is linear 0.2158.
+        let grey = LinearTexture::from_srgb(&Texture8 {
+            width: 1,
+            height: 1,
+            texels: vec![[128, 128, 128, 255]],
+        });
+        assert!((grey.texels[0].x - 0.2158).abs() < 1e-3);
+    }
+}

@@ -1,0 +1,129 @@
+//! `shlmap`: the SH lightmap baseline (Iwanicki–Sloan §5, "SHLmap"; DESIGN §2). Per texel,
+//! the order-3 SH of incident radiance with inter-reflection for one static lighting
+//! ([`crate::bake::shlmap`]); the shader convolves it with the clamped cosine and evaluates
+//! at the normal-mapped normal:
+//!
+//! ```text
+//! radiance = albedo/π · Σ_k A_l(k) c_k(uv) y_k(n)
+//! ```
+//!
+//! No per-lighting data: changing the lighting needs a new bake. Per texel: 27 values (9
+//! RGB coefficients, value 3k + c) packed 4 per RGBA16F texel into 7 groups (the last
+//! padded), 56 bytes. dx9 binds 7 2D textures (9 with the material's, ≤ 16), dx10 one
+//! 7-layer 2D array. Values are scaled into f16's range like the L×H tables
+//! ([`super::grouped::F16_TABLE_MAX`]) and the shader multiplies back.
+
+use std::sync::Arc;
+
+use ash::vk;
+use half::f16;
+
+use super::grouped::{F16_TABLE_MAX, upload_texel_groups};
+use super::{HwPath, Inputs, TechniqueError, TechniqueGpu, TechniqueId, TechniqueStats};
+use crate::bake::shlmap::SH_LIGHTMAP_COEFFS;
+use crate::gpu::{Buffer, Context, Resource, ShaderStage, compile_glsl, layout};
+use crate::render::SceneGpu;
+
+/// RGBA groups per texel: ⌈27 / 4⌉.
+pub const SHLMAP_GROUPS: usize = (3 * SH_LIGHTMAP_COEFFS).div_ceil(4);
+
+/// Uniforms of glsl/technique/shlmap.frag, block `ShLightmapParams` (std140).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ShLightmapParams {
+    /// x: factor undoing the f16 range scaling.
+    pub unscale: [f32; 4],
+}
+
+pub fn build(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    path: HwPath,
+    inputs: &Inputs<'_>,
+) -> Result<TechniqueGpu, TechniqueError> {
+    let label = format!("shlmap.{path}");
+    let map = inputs.sh_lightmap.ok_or_else(|| TechniqueError::Input {
+        label: label.clone(),
+        detail: "needs the SH lightmap bake".into(),
+    })?;
+    let texels = (map.res * map.res) as usize;
+    let max_abs = map
+        .coeffs
+        .iter()
+        .flatten()
+        .fold(0.0f32, |m, v| m.max(v.abs()));
+    if !max_abs.is_finite() {
+        return Err(TechniqueError::Input {
+            label,
+            detail: "the SH lightmap is not finite (non-finite lighting?)".into(),
+        });
+    }
+    let scale = if max_abs > F16_TABLE_MAX {
+        F16_TABLE_MAX / max_abs
+    } else {
+        1.0
+    };
+    let mut groups: Vec<Vec<f16>> = vec![vec![f16::ZERO; texels * 4]; SHLMAP_GROUPS];
+    for t in 0..texels {
+        for (k, rgb) in map.texel(t).iter().enumerate() {
+            for (c, &v) in rgb.iter().enumerate() {
+                let value = 3 * k + c;
+                groups[value / 4][t * 4 + value % 4] = f16::from_f32(v * scale);
+            }
+        }
+    }
+    let bytes: Vec<&[u8]> = groups.iter().map(|g| bytemuck::cast_slice(g)).collect();
+    let images = upload_texel_groups(
+        ctx,
+        path,
+        map.res,
+        vk::Format::R16G16B16A16_SFLOAT,
+        &bytes,
+        &format!("{label}.radiance_sh"),
+    )?;
+    let refs: Vec<_> = images.iter().collect();
+    super::check_path_rules(&label, path, &refs)?;
+
+    let params = ShLightmapParams {
+        unscale: [1.0 / scale, 0.0, 0.0, 0.0],
+    };
+    let params_buffer = Buffer::with_data(
+        ctx,
+        bytemuck::bytes_of(&params),
+        vk::BufferUsageFlags::UNIFORM_BUFFER,
+        &format!("{label}.params"),
+    )?;
+    let fragment = compile_glsl(
+        "technique/shlmap.frag",
+        ShaderStage::Fragment,
+        &[path.shader_define(), ("SHLMAP_GROUPS", SHLMAP_GROUPS as u32)],
+    )?;
+    let sampler = scene.lightmap_sampler();
+    let mut resources = scene.common_resources();
+    resources.push((
+        layout::BINDING_TECHNIQUE_PARAMS,
+        Resource::Uniform(&params_buffer),
+    ));
+    resources.push((
+        layout::BINDING_TECHNIQUE_TEXTURE0,
+        match path {
+            HwPath::Dx9 => Resource::TextureArray(images.iter().map(|i| (i, sampler)).collect()),
+            HwPath::Dx10 => Resource::Texture(&images[0], sampler),
+        },
+    ));
+    let pipeline = scene.mesh_pipeline(ctx, &label, &fragment, &resources)?;
+    drop(resources);
+    Ok(TechniqueGpu {
+        id: TechniqueId::Shlmap,
+        path,
+        pipeline,
+        stats: TechniqueStats {
+            texel_bytes: (SHLMAP_GROUPS * texels * 8) as u64,
+            table_bytes: std::mem::size_of::<ShLightmapParams>() as u64,
+            textures_bound: layout::MATERIAL_TEXTURES + images.len() as u32,
+            lookups_per_pixel: layout::MATERIAL_TEXTURES + SHLMAP_GROUPS as u32,
+        },
+        _images: images,
+        _buffers: vec![params_buffer],
+    })
+}

@@ -1,0 +1,190 @@
+//! `shlmap` (order-3 SH of incident radiance with inter-reflection, Iwanicki–Sloan §5):
+//! a bounce brightens the floor next to a sunlit wall; the technique is measured against
+//! the reference with 2 bounces (and is closer to it than to the direct-only one); on an
+//! open plane the bounced reference is the direct one; both paths agree.
+
+mod common;
+
+use glam::{DVec3, Vec3};
+use shvis::bake::raster::rasterize;
+use shvis::bake::shlmap::{ShLightmap, ShLightmapSettings, bake_sh_lightmap};
+use shvis::bake::trace::Tracer;
+use shvis::env::EnvMap;
+use shvis::report::metrics::image_error;
+use shvis::scene::{Camera, Material, Mesh, Scene, Texture8, Vertex, lightmap_uv};
+use shvis::sh::Order;
+use shvis::technique::{HwPath, TechniqueId};
+
+/// Appends the quad a, b, c, d (counter-clockwise seen from the side `normal` points to).
+fn quad(mesh: &mut Mesh, corners: [[f32; 3]; 4], normal: [f32; 3], tint: f32) {
+    let base = mesh.vertices.len() as u32;
+    for p in corners {
+        mesh.vertices.push(Vertex {
+            position: p,
+            normal,
+            tangent: [1.0, 0.0, 0.0, 1.0],
+            uv_material: [p[0], p[2]],
+            uv_lightmap: [0.0, 0.0],
+            albedo_tint: [tint; 3],
+        });
+    }
+    mesh.indices
+        .extend([0, 1, 2, 0, 2, 3].iter().map(|i| base + i));
+}
+
+/// A 12 m square floor (albedo 0.3) and a 6 m long, 3 m high, 0.4 m thick white (0.8)
+/// wall along x at z = 0; lightmap UVs generated for `res`.
+fn wall_scene(res: u32) -> Scene {
+    let mut mesh = Mesh {
+        vertices: vec![],
+        indices: vec![],
+    };
+    let (f, h, t, l) = (6.0, 3.0, 0.2, 3.0);
+    quad(&mut mesh, [[-f, 0.0, f], [f, 0.0, f], [f, 0.0, -f], [-f, 0.0, -f]], [0.0, 1.0, 0.0], 0.3);
+    let w = 0.8;
+    // +Z (sunlit) and −Z faces, the two ends, the top.
+    quad(&mut mesh, [[-l, 0.0, t], [l, 0.0, t], [l, h, t], [-l, h, t]], [0.0, 0.0, 1.0], w);
+    quad(&mut mesh, [[l, 0.0, -t], [-l, 0.0, -t], [-l, h, -t], [l, h, -t]], [0.0, 0.0, -1.0], w);
+    quad(&mut mesh, [[l, 0.0, t], [l, 0.0, -t], [l, h, -t], [l, h, t]], [1.0, 0.0, 0.0], w);
+    quad(&mut mesh, [[-l, 0.0, -t], [-l, 0.0, t], [-l, h, t], [-l, h, -t]], [-1.0, 0.0, 0.0], w);
+    quad(&mut mesh, [[-l, h, t], [l, h, t], [l, h, -t], [-l, h, -t]], [0.0, 1.0, 0.0], w);
+    lightmap_uv::generate(&mut mesh, res).expect("charts fit");
+    let texture = |texel| Texture8 {
+        width: 1,
+        height: 1,
+        texels: vec![texel],
+    };
+    Scene {
+        name: "wall".into(),
+        mesh,
+        material: Material {
+            albedo: texture([255; 4]),
+            normal: texture([128, 128, 255, 255]),
+            normal_scale: 0.0,
+        },
+        camera: Camera {
+            position: Vec3::new(0.0, 4.0, 9.0),
+            target: Vec3::new(0.0, 0.5, 0.0),
+            up: Vec3::Y,
+            fov_y: 50f32.to_radians(),
+            z_near: 0.05,
+            z_far: 100.0,
+        },
+    }
+}
+
+/// A dim sky and a broad bright lobe (a soft sun) from +Z at 30° elevation.
+fn sun_env() -> EnvMap {
+    let sun = DVec3::new(0.0, 0.5, 0.75f64.sqrt());
+    EnvMap::from_fn(128, 64, |d| {
+        let lobe = 40.0 * d.dot(sun).max(0.0).powi(16);
+        let sky = if d.y > 0.0 { 0.3 } else { 0.05 };
+        [(sky + lobe) as f32; 3]
+    })
+}
+
+fn bake(scene: &Scene, res: u32, bounces: u32) -> ShLightmap {
+    let texels = rasterize(&scene.mesh, res);
+    let tracer = Tracer::new(&scene.mesh);
+    let radiance = shvis::env::project::project_sh(&sun_env(), Order::new(8).unwrap());
+    bake_sh_lightmap(
+        scene,
+        &tracer,
+        &texels,
+        &radiance,
+        &ShLightmapSettings {
+            rays: 512,
+            seed: 5,
+            bounces,
+            progress: false,
+        },
+    )
+}
+
+/// Mean irradiance at the normal over floor texels whose centre lies in x ∈ (−2, 2), z ∈ z_range.
+fn mean_floor_irradiance(scene: &Scene, map: &ShLightmap, z_range: (f32, f32)) -> f64 {
+    let texels = rasterize(&scene.mesh, map.res);
+    let (mut sum, mut n) = (0.0, 0);
+    for i in 0..texels.covered.len() {
+        let p = texels.position[i];
+        if texels.covered[i]
+            && p.y.abs() < 1e-4
+            && texels.normal[i].y > 0.99
+            && p.x.abs() < 2.0
+            && p.z > z_range.0
+            && p.z < z_range.1
+        {
+            sum += map.irradiance(i, Vec3::Y).x as f64;
+            n += 1;
+        }
+    }
+    assert!(n >= 10, "only {n} floor texels in z ∈ {z_range:?}");
+    sum / n as f64
+}
+
+#[test]
+fn one_bounce_brightens_the_floor_next_to_a_lit_wall() {
+    let res = 96;
+    let scene = wall_scene(res);
+    let direct = bake(&scene, res, 0);
+    let bounced = bake(&scene, res, 1);
+    let near = (0.25, 0.9);
+    let far = (4.5, 5.8);
+    let (near0, near1) = (
+        mean_floor_irradiance(&scene, &direct, near),
+        mean_floor_irradiance(&scene, &bounced, near),
+    );
+    let (far0, far1) = (
+        mean_floor_irradiance(&scene, &direct, far),
+        mean_floor_irradiance(&scene, &bounced, far),
+    );
+    let (gain_near, gain_far) = (near1 / near0 - 1.0, far1 / far0 - 1.0);
+    println!(
+        "floor irradiance next to the wall {near0:.4} → {near1:.4} (+{:.1}%), far from it {far0:.4} → {far1:.4} (+{:.1}%)",
+        100.0 * gain_near,
+        100.0 * gain_far
+    );
+    // The wall reflects 0.8 of the sun onto the floor in front of it, which sees the wall
+    // over a large solid angle: a clear gain there, and more than far away.
+    assert!(gain_near > 0.05, "bounce gain next to the wall {gain_near}");
+    assert!(gain_near > 2.0 * gain_far.max(0.0), "{gain_near} vs {gain_far}");
+    // Inter-reflection only adds light: nowhere does a covered texel get darker.
+    for i in 0..direct.covered.len() {
+        if direct.covered[i] {
+            let n = Vec3::Y;
+            let (e0, e1) = (direct.irradiance(i, n), bounced.irradiance(i, n));
+            assert!(
+                (e1 - e0).min_element() > -1e-3 * e0.max_element().max(1.0),
+                "texel {i}: {e0} → {e1}"
+            );
+        }
+    }
+}
+
+#[test]
+fn shlmap_meets_the_reference_with_two_bounces() {
+    let ctx = common::validated_context();
+    let (reference, settings) = common::house_reference(&ctx);
+    let bounced = reference.bounced.as_ref().expect("the house reference has bounces");
+    assert_eq!(bounced.bounces, 2);
+    let prepared = common::house();
+    let mut errors = vec![];
+    for &path in HwPath::ALL {
+        let frame = common::render(&ctx, prepared, TechniqueId::Shlmap, path, &settings);
+        let against_bounced = image_error(&frame, &bounced.frame).unwrap().rel_rmse;
+        let against_direct = image_error(&frame, &reference.frame).unwrap().rel_rmse;
+        println!(
+            "shlmap.{path}: relative RMSE {against_bounced:.4} against the 2-bounce reference \
+             (noise {:.4}), {against_direct:.4} against the direct-only one",
+            bounced.rel_noise
+        );
+        // It models inter-reflection, so the bounced reference is the one it should meet.
+        assert!(against_bounced < against_direct, "{against_bounced} vs {against_direct}");
+        assert!(against_bounced < 0.3, "{against_bounced}");
+        errors.push(against_bounced);
+    }
+    assert!((errors[0] - errors[1]).abs() < 0.01, "dx9 vs dx10: {errors:?}");
+    // The bounced reference is brighter than the direct one (light only adds up).
+    let sum = |f: &shvis::render::Frame| f.rgba.iter().map(|t| t[0] as f64 + t[1] as f64 + t[2] as f64).sum::<f64>();
+    assert!(sum(&bounced.frame) > 1.01 * sum(&reference.frame));
+}
