@@ -20,3 +20,26 @@ fn generated_product_include_is_current() {
         "{path} is stale: rerun with SHVIS_REGENERATE=1"
     );
 }
+
+/// On the house, sh2 captures some of the shadowing preconv misses (the paper's Fig. 4
+/// reading): its error against the reference is below preconv's, and the paths agree.
+#[test]
+fn sh2_error_is_below_preconv_and_paths_agree() {
+    use shvis::report::metrics::image_error;
+    use shvis::technique::{HwPath, TechniqueId};
+    let ctx = common::validated_context();
+    let (reference, settings) = common::house_reference(&ctx);
+    let prepared = common::house();
+    let mut sh2 = vec![];
+    for &path in HwPath::ALL {
+        let e = |t| {
+            let frame = common::render(&ctx, prepared, t, path, &settings);
+            image_error(&frame, &reference.frame).unwrap().rel_rmse
+        };
+        let (e_sh2, e_preconv) = (e(TechniqueId::Sh2), e(TechniqueId::Preconv));
+        println!("{path}: relative RMSE sh2 {e_sh2:.4}, preconv {e_preconv:.4} (reference noise {:.4})", reference.rel_noise);
+        assert!(e_sh2 < e_preconv, "{e_sh2} vs {e_preconv}");
+        sh2.push(e_sh2);
+    }
+    assert!((sh2[0] - sh2[1]).abs() < 0.01, "dx9 vs dx10: {sh2:?}");
+}
