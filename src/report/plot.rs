@@ -333,13 +333,20 @@ where
         .margin(15)
         .x_label_area_size(45)
         .y_label_area_size(65)
+        // x is ln(ms) on a linear axis labelled in ms: a log axis whose labels plotters
+        // cannot drop when the range spans less than a decade.
         .build_cartesian_2d(
-            ((ms_lo * 0.8)..(ms_hi * 1.25)).log_scale(),
+            (ms_lo * 0.8).ln()..(ms_hi * 1.25).ln(),
             (err_lo - err_pad).max(0.0)..(err_hi + err_pad),
         )
         .map_err(e)?;
     chart
         .configure_mesh()
+        .x_labels(12)
+        .x_label_formatter(&|x| {
+            let ms = x.exp();
+            if ms >= 10.0 { format!("{ms:.0}") } else { format!("{ms:.2}") }
+        })
         .x_desc(match d.note {
             Some(n) => format!("ms per frame, median (log scale)    [{n}]"),
             None => "ms per frame, median (log scale)".to_string(),
@@ -359,18 +366,18 @@ where
         // Staircase: from each front point, right at its error, then down to the next.
         let mut stairs = Vec::new();
         for (i, p) in front.iter().enumerate() {
-            stairs.push((p.ms, p.error));
+            stairs.push((p.ms.ln(), p.error));
             if let Some(next) = front.get(i + 1) {
-                stairs.push((next.ms, p.error));
+                stairs.push((next.ms.ln(), p.error));
             }
         }
         if let Some(last) = front.last() {
-            stairs.push((ms_hi * 1.25, last.error));
+            stairs.push(((ms_hi * 1.25).ln(), last.error));
         }
         chart
             .draw_series(LineSeries::new(stairs, colour.stroke_width(2)))
             .map_err(e)?
-            .label(format!("{path}: Pareto front"))
+            .label(format!("{path}: Pareto front (filled: on it, hollow: dominated)"))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
         for p in d.points.iter().filter(|p| p.path == *path) {
             let style = if p.on_front {
@@ -378,14 +385,14 @@ where
             } else {
                 colour.stroke_width(1)
             };
-            // Labels left of the second path's points and right of the first's keep the
-            // two paths' labels of one technique apart.
-            let dx = if k % 2 == 1 { -8 - 7 * p.label.len() as i32 } else { 8 };
-            let marker = EmptyElement::at((p.ms, p.error))
+            // Labels above the first path's points and below the second's keep the two
+            // paths' labels of one technique apart.
+            let dy = if k % 2 == 1 { 5 } else { -17 };
+            let marker = EmptyElement::at((p.ms.ln(), p.error))
                 + Circle::new((0, 0), 5, style)
                 + Text::new(
                     p.label.clone(),
-                    (dx, -7),
+                    (6, dy),
                     ("sans-serif", 13).into_font().color(&colour),
                 );
             chart.draw_series(std::iter::once(marker)).map_err(e)?;
