@@ -630,8 +630,8 @@ fn run_bench(a: BenchArgs) -> Result<()> {
                     _ => (Some(&r.frame), "direct".to_string()),
                 },
             };
-            let error = reference_frame
-                .and_then(|r| shvis::report::metrics::image_error(&frame, r));
+            let error =
+                reference_frame.and_then(|r| shvis::report::metrics::image_error(&frame, r));
             if t == TechniqueId::Shlmap {
                 if let Some(e) = reference
                     .as_ref()

@@ -92,7 +92,11 @@ struct NoiseSums {
 
 impl NoiseSums {
     fn rel_noise(&self) -> f64 {
-        if self.sq > 0.0 { (self.var / self.sq).sqrt() } else { 0.0 }
+        if self.sq > 0.0 {
+            (self.var / self.sq).sqrt()
+        } else {
+            0.0
+        }
     }
 }
 
@@ -211,7 +215,12 @@ pub fn render_reference(
                 let albedo = &albedo.rgba[i];
                 direct.finish(settings.spp, albedo, &mut row[x], &mut noise);
                 if bounces > 0 {
-                    total.finish(settings.spp, albedo, &mut row_bounced[x], &mut noise_bounced);
+                    total.finish(
+                        settings.spp,
+                        albedo,
+                        &mut row_bounced[x],
+                        &mut noise_bounced,
+                    );
                 }
             }
             (row, row_bounced, noise, noise_bounced, rays)

@@ -37,7 +37,10 @@ fn sh2_error_is_below_preconv_and_paths_agree() {
             image_error(&frame, &reference.frame).unwrap().rel_rmse
         };
         let (e_sh2, e_preconv) = (e(TechniqueId::Sh2), e(TechniqueId::Preconv));
-        println!("{path}: relative RMSE sh2 {e_sh2:.4}, preconv {e_preconv:.4} (reference noise {:.4})", reference.rel_noise);
+        println!(
+            "{path}: relative RMSE sh2 {e_sh2:.4}, preconv {e_preconv:.4} (reference noise {:.4})",
+            reference.rel_noise
+        );
         assert!(e_sh2 < e_preconv, "{e_sh2} vs {e_preconv}");
         sh2.push(e_sh2);
     }

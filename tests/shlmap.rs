@@ -40,14 +40,44 @@ fn wall_scene(res: u32) -> Scene {
         indices: vec![],
     };
     let (f, h, t, l) = (6.0, 3.0, 0.2, 3.0);
-    quad(&mut mesh, [[-f, 0.0, f], [f, 0.0, f], [f, 0.0, -f], [-f, 0.0, -f]], [0.0, 1.0, 0.0], 0.3);
+    quad(
+        &mut mesh,
+        [[-f, 0.0, f], [f, 0.0, f], [f, 0.0, -f], [-f, 0.0, -f]],
+        [0.0, 1.0, 0.0],
+        0.3,
+    );
     let w = 0.8;
     // +Z (sunlit) and −Z faces, the two ends, the top.
-    quad(&mut mesh, [[-l, 0.0, t], [l, 0.0, t], [l, h, t], [-l, h, t]], [0.0, 0.0, 1.0], w);
-    quad(&mut mesh, [[l, 0.0, -t], [-l, 0.0, -t], [-l, h, -t], [l, h, -t]], [0.0, 0.0, -1.0], w);
-    quad(&mut mesh, [[l, 0.0, t], [l, 0.0, -t], [l, h, -t], [l, h, t]], [1.0, 0.0, 0.0], w);
-    quad(&mut mesh, [[-l, 0.0, -t], [-l, 0.0, t], [-l, h, t], [-l, h, -t]], [-1.0, 0.0, 0.0], w);
-    quad(&mut mesh, [[-l, h, t], [l, h, t], [l, h, -t], [-l, h, -t]], [0.0, 1.0, 0.0], w);
+    quad(
+        &mut mesh,
+        [[-l, 0.0, t], [l, 0.0, t], [l, h, t], [-l, h, t]],
+        [0.0, 0.0, 1.0],
+        w,
+    );
+    quad(
+        &mut mesh,
+        [[l, 0.0, -t], [-l, 0.0, -t], [-l, h, -t], [l, h, -t]],
+        [0.0, 0.0, -1.0],
+        w,
+    );
+    quad(
+        &mut mesh,
+        [[l, 0.0, t], [l, 0.0, -t], [l, h, -t], [l, h, t]],
+        [1.0, 0.0, 0.0],
+        w,
+    );
+    quad(
+        &mut mesh,
+        [[-l, 0.0, -t], [-l, 0.0, t], [-l, h, t], [-l, h, -t]],
+        [-1.0, 0.0, 0.0],
+        w,
+    );
+    quad(
+        &mut mesh,
+        [[-l, h, t], [l, h, t], [l, h, -t], [-l, h, -t]],
+        [0.0, 1.0, 0.0],
+        w,
+    );
     lightmap_uv::generate(&mut mesh, res).expect("charts fit");
     let texture = |texel| Texture8 {
         width: 1,
@@ -147,7 +177,10 @@ fn one_bounce_brightens_the_floor_next_to_a_lit_wall() {
     // The wall reflects 0.8 of the sun onto the floor in front of it, which sees the wall
     // over a large solid angle: a clear gain there, and more than far away.
     assert!(gain_near > 0.05, "bounce gain next to the wall {gain_near}");
-    assert!(gain_near > 2.0 * gain_far.max(0.0), "{gain_near} vs {gain_far}");
+    assert!(
+        gain_near > 2.0 * gain_far.max(0.0),
+        "{gain_near} vs {gain_far}"
+    );
     // Inter-reflection only adds light: no covered texel gets darker at its own normal
     // (up to the order-3 truncation of the added light, 1% of the texel's irradiance).
     let texels = rasterize(&scene.mesh, res);
@@ -167,7 +200,10 @@ fn one_bounce_brightens_the_floor_next_to_a_lit_wall() {
 fn shlmap_meets_the_reference_with_two_bounces() {
     let ctx = common::validated_context();
     let (reference, settings) = common::house_reference(&ctx);
-    let bounced = reference.bounced.as_ref().expect("the house reference has bounces");
+    let bounced = reference
+        .bounced
+        .as_ref()
+        .expect("the house reference has bounces");
     assert_eq!(bounced.bounces, 2);
     let prepared = common::house();
     let mut errors = vec![];
@@ -181,13 +217,24 @@ fn shlmap_meets_the_reference_with_two_bounces() {
             bounced.rel_noise
         );
         // It models inter-reflection, so the bounced reference is the one it should meet.
-        assert!(against_bounced < against_direct, "{against_bounced} vs {against_direct}");
+        assert!(
+            against_bounced < against_direct,
+            "{against_bounced} vs {against_direct}"
+        );
         assert!(against_bounced < 0.3, "{against_bounced}");
         errors.push(against_bounced);
     }
-    assert!((errors[0] - errors[1]).abs() < 0.01, "dx9 vs dx10: {errors:?}");
+    assert!(
+        (errors[0] - errors[1]).abs() < 0.01,
+        "dx9 vs dx10: {errors:?}"
+    );
     // The bounced reference is brighter than the direct one (light only adds up).
-    let sum = |f: &shvis::render::Frame| f.rgba.iter().map(|t| t[0] as f64 + t[1] as f64 + t[2] as f64).sum::<f64>();
+    let sum = |f: &shvis::render::Frame| {
+        f.rgba
+            .iter()
+            .map(|t| t[0] as f64 + t[1] as f64 + t[2] as f64)
+            .sum::<f64>()
+    };
     assert!(sum(&bounced.frame) > 1.01 * sum(&reference.frame));
 }
 
@@ -251,7 +298,9 @@ fn shlmap_tracks_strong_inter_reflection() {
         );
         assert!(e_bounced < 0.5 * e_direct, "{e_bounced} vs {e_direct}");
         // What is left beyond the reference's own noise is shlmap's error.
-        let beyond_noise = (e_bounced.powi(2) - bounced.rel_noise.powi(2)).max(0.0).sqrt();
+        let beyond_noise = (e_bounced.powi(2) - bounced.rel_noise.powi(2))
+            .max(0.0)
+            .sqrt();
         assert!(beyond_noise < 0.05, "{beyond_noise}");
     }
     common::assert_validation_clean(&ctx, "wall scene shlmap");

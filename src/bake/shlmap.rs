@@ -150,7 +150,10 @@ pub fn bake_sh_lightmap(
         .with_min_len(64)
         .map(|&i| {
             let i = i as usize;
-            let (n, origin) = (texels.normal[i], tracer.offset_origin(texels.position[i], texels.normal[i]));
+            let (n, origin) = (
+                texels.normal[i],
+                tracer.offset_origin(texels.position[i], texels.normal[i]),
+            );
             let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
             let mut rays = 0u64;
             for (r, &d) in dirs.dirs().iter().enumerate() {
@@ -177,8 +180,17 @@ pub fn bake_sh_lightmap(
             let i = i as usize;
             irradiance[i] = irradiance_at(&current[k].as_rgb(), texels.normal[i]).max(Vec3::ZERO);
         }
-        dilate(&mut irradiance, &texels.covered, texels.res, DILATION_PASSES);
-        let bar = progress_bar(settings.progress, covered.len(), &format!("bounce {bounce}"));
+        dilate(
+            &mut irradiance,
+            &texels.covered,
+            texels.res,
+            DILATION_PASSES,
+        );
+        let bar = progress_bar(
+            settings.progress,
+            covered.len(),
+            &format!("bounce {bounce}"),
+        );
         current = covered
             .par_iter()
             .with_min_len(64)
@@ -237,7 +249,11 @@ pub fn bake_sh_lightmap(
     map
 }
 
-fn accumulate(sum: &mut [[f64; 3]; SH_LIGHTMAP_COEFFS], y: &[f64; SH_LIGHTMAP_COEFFS], radiance: [f64; 3]) {
+fn accumulate(
+    sum: &mut [[f64; 3]; SH_LIGHTMAP_COEFFS],
+    y: &[f64; SH_LIGHTMAP_COEFFS],
+    radiance: [f64; 3],
+) {
     for (s, &y) in sum.iter_mut().zip(y) {
         for c in 0..3 {
             s[c] += radiance[c] * y;
@@ -307,7 +323,10 @@ mod tests {
         c[0] = [s; 3];
         c[2] = [(3.0 * std::f32::consts::PI).sqrt() / 2.0; 3];
         let e = irradiance_at(&c, Vec3::Z);
-        assert!((e - Vec3::splat(std::f32::consts::PI)).abs().max_element() < 1e-5, "{e}");
+        assert!(
+            (e - Vec3::splat(std::f32::consts::PI)).abs().max_element() < 1e-5,
+            "{e}"
+        );
         // Facing away: the hemisphere's irradiance at −z is 0.
         assert!(irradiance_at(&c, -Vec3::Z).abs().max_element() < 1e-5);
     }

@@ -238,7 +238,12 @@ impl Tracer {
     /// length), with its barycentrics; `None` when the ray escapes. Both faces count.
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3) -> Option<Hit> {
         let bvh = self.bvh.as_ref()?;
-        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), self.t_min(), f32::INFINITY);
+        let ray = Ray::new(
+            Vec3A::from(origin),
+            Vec3A::from(dir),
+            self.t_min(),
+            f32::INFINITY,
+        );
         let mut hit = RayHit::none();
         if !bvh.ray_traverse(ray, &mut hit, |ray, id| self.triangles[id].intersect(ray)) {
             return None;

@@ -263,7 +263,10 @@ pub fn write_speed_error_plot(
         let idx: Vec<usize> = (0..points.len())
             .filter(|&i| points[i].path == *path)
             .collect();
-        let xy: Vec<(f64, f64)> = idx.iter().map(|&i| (points[i].ms, points[i].error)).collect();
+        let xy: Vec<(f64, f64)> = idx
+            .iter()
+            .map(|&i| (points[i].ms, points[i].error))
+            .collect();
         for k in pareto_front(&xy) {
             points[idx[k]].on_front = true;
         }
@@ -278,7 +281,12 @@ pub fn write_speed_error_plot(
         .results
         .iter()
         .find(|r| r.reference != "direct" && r.reference != "none")
-        .map(|r| format!("{}* against the reference with {}", r.technique, r.reference));
+        .map(|r| {
+            format!(
+                "{}* against the reference with {}",
+                r.technique, r.reference
+            )
+        });
     let title = format!(
         "Speed against error · {} · {}×{}",
         table.device, table.width, table.height
@@ -345,7 +353,11 @@ where
         .x_labels(12)
         .x_label_formatter(&|x| {
             let ms = x.exp();
-            if ms >= 10.0 { format!("{ms:.0}") } else { format!("{ms:.2}") }
+            if ms >= 10.0 {
+                format!("{ms:.0}")
+            } else {
+                format!("{ms:.2}")
+            }
         })
         .x_desc(match d.note {
             Some(n) => format!("ms per frame, median (log scale)    [{n}]"),
@@ -377,8 +389,12 @@ where
         chart
             .draw_series(LineSeries::new(stairs, colour.stroke_width(2)))
             .map_err(e)?
-            .label(format!("{path}: Pareto front (filled: on it, hollow: dominated)"))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+            .label(format!(
+                "{path}: Pareto front (filled: on it, hollow: dominated)"
+            ))
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+            });
         for p in d.points.iter().filter(|p| p.path == *path) {
             let style = if p.on_front {
                 colour.filled()
@@ -416,7 +432,14 @@ mod tests {
     fn pareto_front_keeps_only_undominated_points() {
         // (ms, error): 1 is dominated by 0 (slower and worse), 3 by 2 (same speed,
         // worse); 4 is slowest but best.
-        let pts = [(1.0, 0.5), (2.0, 0.6), (3.0, 0.3), (3.0, 0.4), (9.0, 0.1), (f64::NAN, 0.0)];
+        let pts = [
+            (1.0, 0.5),
+            (2.0, 0.6),
+            (3.0, 0.3),
+            (3.0, 0.4),
+            (9.0, 0.1),
+            (f64::NAN, 0.0),
+        ];
         assert_eq!(pareto_front(&pts), vec![0, 2, 4]);
         assert!(pareto_front(&[]).is_empty());
     }

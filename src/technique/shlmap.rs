@@ -96,7 +96,10 @@ pub fn build(
     let fragment = compile_glsl(
         "technique/shlmap.frag",
         ShaderStage::Fragment,
-        &[path.shader_define(), ("SHLMAP_GROUPS", SHLMAP_GROUPS as u32)],
+        &[
+            path.shader_define(),
+            ("SHLMAP_GROUPS", SHLMAP_GROUPS as u32),
+        ],
     )?;
     let sampler = scene.lightmap_sampler();
     let mut resources = scene.common_resources();
