@@ -179,3 +179,22 @@ fn sh_zero_and_nan_directions() {
     let out = shvis(&["sh", "irradiance", "--normal", "0,0,0"], &[]);
     assert_one_error_line(&out, &["--normal", "zero-length"]);
 }
+
+#[test]
+fn absurd_bounce_count() {
+    let out = shvis(&["reference", "--bounces", "99", "--out", "x.exr"], &[]);
+    assert_one_error_line(&out, &["--bounces", "99"]);
+    let out = shvis(
+        &[
+            "render",
+            "--technique",
+            "shlmap",
+            "--bounces",
+            "two",
+            "--out",
+            "x.png",
+        ],
+        &[],
+    );
+    assert_one_error_line(&out, &["--bounces", "two"]);
+}
