@@ -251,6 +251,57 @@ pub fn build(
     }
 }
 
+/// The end shared by techniques with one uniform block (`params`, std140 bytes) and their
+/// per-texel `images` at TEXTURE0 — one image as a single texture, several as a texture
+/// array (dx9's `sampler2D t[N]`): path rules, uniform buffer, `shader` compiled with the
+/// path's define plus `defines`, pipeline.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn finish_per_texel(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    id: TechniqueId,
+    path: HwPath,
+    shader: &str,
+    defines: &[(&str, u32)],
+    params: &[u8],
+    images: Vec<Image>,
+    stats: TechniqueStats,
+) -> Result<TechniqueGpu, TechniqueError> {
+    let label = format!("{id}.{path}");
+    let refs: Vec<&Image> = images.iter().collect();
+    check_path_rules(&label, path, &refs)?;
+    let params_buffer = gpu::Buffer::with_data(
+        ctx,
+        params,
+        vk::BufferUsageFlags::UNIFORM_BUFFER,
+        &format!("{label}.params"),
+    )?;
+    let mut all_defines = vec![path.shader_define()];
+    all_defines.extend_from_slice(defines);
+    let fragment = gpu::compile_glsl(shader, gpu::ShaderStage::Fragment, &all_defines)?;
+    let sampler = scene.lightmap_sampler();
+    let textures = match images.as_slice() {
+        [one] => gpu::Resource::Texture(one, sampler),
+        many => gpu::Resource::TextureArray(many.iter().map(|i| (i, sampler)).collect()),
+    };
+    let mut resources = scene.common_resources();
+    resources.push((
+        layout::BINDING_TECHNIQUE_PARAMS,
+        gpu::Resource::Uniform(&params_buffer),
+    ));
+    resources.push((layout::BINDING_TECHNIQUE_TEXTURE0, textures));
+    let pipeline = scene.mesh_pipeline(ctx, &label, &fragment, &resources)?;
+    drop(resources);
+    Ok(TechniqueGpu {
+        id,
+        path,
+        pipeline,
+        stats,
+        _images: images,
+        _buffers: vec![params_buffer],
+    })
+}
+
 /// Enforces the `dx9` rules in code (DESIGN §2): only 2D textures, at most
 /// `DX9_MAX_TEXTURES` per draw counting albedo and normal map.
 pub fn check_path_rules(

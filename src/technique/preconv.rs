@@ -13,7 +13,7 @@ use ash::vk;
 use half::f16;
 
 use super::{HwPath, Inputs, TechniqueError, TechniqueGpu, TechniqueId, TechniqueStats};
-use crate::gpu::{Buffer, Context, Image, ImageDesc, Resource, ShaderStage, compile_glsl, layout};
+use crate::gpu::{Context, Image, ImageDesc, layout};
 use crate::render::SceneGpu;
 
 /// Uniforms of glsl/technique/preconv.frag, block `PreconvParams` (std140).
@@ -49,46 +49,25 @@ pub fn build(
         HwPath::Dx10 => ImageDesc::texture_2d_array(vk::Format::R16_SFLOAT, ao.res, ao.res, 1),
     };
     let ao_image = Image::with_data(ctx, &desc, &[vec![ao_bytes]], &format!("{label}.ao"))?;
-    super::check_path_rules(&label, path, &[&ao_image])?;
 
     let mut params = PreconvParams::default();
     for (dst, src) in params.irradiance_sh.iter_mut().zip(inputs.irradiance_sh) {
         *dst = [src[0] as f32, src[1] as f32, src[2] as f32, 0.0];
     }
-    let params_buffer = Buffer::with_data(
+    super::finish_per_texel(
         ctx,
-        bytemuck::bytes_of(&params),
-        vk::BufferUsageFlags::UNIFORM_BUFFER,
-        &format!("{label}.params"),
-    )?;
-
-    let fragment = compile_glsl(
-        "technique/preconv.frag",
-        ShaderStage::Fragment,
-        &[path.shader_define()],
-    )?;
-    let mut resources = scene.common_resources();
-    resources.push((
-        layout::BINDING_TECHNIQUE_PARAMS,
-        Resource::Uniform(&params_buffer),
-    ));
-    resources.push((
-        layout::BINDING_TECHNIQUE_TEXTURE0,
-        Resource::Texture(&ao_image, scene.lightmap_sampler()),
-    ));
-    let pipeline = scene.mesh_pipeline(ctx, &label, &fragment, &resources)?;
-    drop(resources);
-    Ok(TechniqueGpu {
-        id: TechniqueId::Preconv,
+        scene,
+        TechniqueId::Preconv,
         path,
-        pipeline,
-        stats: TechniqueStats {
+        "technique/preconv.frag",
+        &[],
+        bytemuck::bytes_of(&params),
+        vec![ao_image],
+        TechniqueStats {
             texel_bytes: ao_bytes.len() as u64,
             table_bytes: std::mem::size_of::<PreconvParams>() as u64,
             textures_bound: layout::MATERIAL_TEXTURES + 1,
             lookups_per_pixel: layout::MATERIAL_TEXTURES + 1,
         },
-        _images: vec![ao_image],
-        _buffers: vec![params_buffer],
-    })
+    )
 }

@@ -24,7 +24,7 @@ use half::f16;
 
 use super::grouped::upload_texel_groups;
 use super::{HwPath, Inputs, TechniqueError, TechniqueGpu, TechniqueId, TechniqueStats};
-use crate::gpu::{Buffer, Context, Resource, ShaderStage, compile_glsl, layout};
+use crate::gpu::{Context, layout};
 use crate::render::SceneGpu;
 use crate::sh::Order;
 use crate::sh::product::gaunt_tensor;
@@ -116,9 +116,6 @@ pub fn build(
         &[bytes],
         &format!("{label}.visibility"),
     )?;
-    let refs: Vec<_> = images.iter().collect();
-    super::check_path_rules(&label, path, &refs)?;
-
     let mut params = Sh2Params::default();
     for (dst, src) in params.lighting_sh.iter_mut().zip(inputs.radiance_sh) {
         *dst = [src[0] as f32, src[1] as f32, src[2] as f32, 0.0];
@@ -129,39 +126,20 @@ pub fn build(
             detail: "order-3 lighting is not finite in f32".into(),
         });
     }
-    let params_buffer = Buffer::with_data(
+    super::finish_per_texel(
         ctx,
-        bytemuck::bytes_of(&params),
-        vk::BufferUsageFlags::UNIFORM_BUFFER,
-        &format!("{label}.params"),
-    )?;
-    let fragment = compile_glsl(
-        "technique/sh2.frag",
-        ShaderStage::Fragment,
-        &[path.shader_define()],
-    )?;
-    let mut resources = scene.common_resources();
-    resources.push((
-        layout::BINDING_TECHNIQUE_PARAMS,
-        Resource::Uniform(&params_buffer),
-    ));
-    resources.push((
-        layout::BINDING_TECHNIQUE_TEXTURE0,
-        Resource::Texture(&images[0], scene.lightmap_sampler()),
-    ));
-    let pipeline = scene.mesh_pipeline(ctx, &label, &fragment, &resources)?;
-    drop(resources);
-    Ok(TechniqueGpu {
-        id: TechniqueId::Sh2,
+        scene,
+        TechniqueId::Sh2,
         path,
-        pipeline,
-        stats: TechniqueStats {
+        "technique/sh2.frag",
+        &[],
+        bytemuck::bytes_of(&params),
+        images,
+        TechniqueStats {
             texel_bytes: bytes.len() as u64,
             table_bytes: std::mem::size_of::<Sh2Params>() as u64,
             textures_bound: layout::MATERIAL_TEXTURES + 1,
             lookups_per_pixel: layout::MATERIAL_TEXTURES + 1,
         },
-        _images: images,
-        _buffers: vec![params_buffer],
-    })
+    )
 }

@@ -21,7 +21,7 @@ use half::f16;
 use super::grouped::{F16_TABLE_MAX, upload_texel_groups};
 use super::{HwPath, Inputs, TechniqueError, TechniqueGpu, TechniqueId, TechniqueStats};
 use crate::bake::shlmap::SH_LIGHTMAP_COEFFS;
-use crate::gpu::{Buffer, Context, Resource, ShaderStage, compile_glsl, layout};
+use crate::gpu::{Context, layout};
 use crate::render::SceneGpu;
 
 /// RGBA groups per texel: ⌈27 / 4⌉.
@@ -81,52 +81,24 @@ pub fn build(
         &bytes,
         &format!("{label}.radiance_sh"),
     )?;
-    let refs: Vec<_> = images.iter().collect();
-    super::check_path_rules(&label, path, &refs)?;
-
     let params = ShLightmapParams {
         unscale: [1.0 / scale, 0.0, 0.0, 0.0],
     };
-    let params_buffer = Buffer::with_data(
+    let textures_bound = layout::MATERIAL_TEXTURES + images.len() as u32;
+    super::finish_per_texel(
         ctx,
-        bytemuck::bytes_of(&params),
-        vk::BufferUsageFlags::UNIFORM_BUFFER,
-        &format!("{label}.params"),
-    )?;
-    let fragment = compile_glsl(
-        "technique/shlmap.frag",
-        ShaderStage::Fragment,
-        &[
-            path.shader_define(),
-            ("SHLMAP_GROUPS", SHLMAP_GROUPS as u32),
-        ],
-    )?;
-    let sampler = scene.lightmap_sampler();
-    let mut resources = scene.common_resources();
-    resources.push((
-        layout::BINDING_TECHNIQUE_PARAMS,
-        Resource::Uniform(&params_buffer),
-    ));
-    resources.push((
-        layout::BINDING_TECHNIQUE_TEXTURE0,
-        match path {
-            HwPath::Dx9 => Resource::TextureArray(images.iter().map(|i| (i, sampler)).collect()),
-            HwPath::Dx10 => Resource::Texture(&images[0], sampler),
-        },
-    ));
-    let pipeline = scene.mesh_pipeline(ctx, &label, &fragment, &resources)?;
-    drop(resources);
-    Ok(TechniqueGpu {
-        id: TechniqueId::Shlmap,
+        scene,
+        TechniqueId::Shlmap,
         path,
-        pipeline,
-        stats: TechniqueStats {
+        "technique/shlmap.frag",
+        &[("SHLMAP_GROUPS", SHLMAP_GROUPS as u32)],
+        bytemuck::bytes_of(&params),
+        images,
+        TechniqueStats {
             texel_bytes: (SHLMAP_GROUPS * texels * 8) as u64,
             table_bytes: std::mem::size_of::<ShLightmapParams>() as u64,
-            textures_bound: layout::MATERIAL_TEXTURES + images.len() as u32,
+            textures_bound,
             lookups_per_pixel: layout::MATERIAL_TEXTURES + SHLMAP_GROUPS as u32,
         },
-        _images: images,
-        _buffers: vec![params_buffer],
-    })
+    )
 }
