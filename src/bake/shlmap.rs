@@ -91,20 +91,14 @@ impl ShLightmap {
 
 /// Eq. (2): clamped-cosine convolution of order-3 RGB coefficients, evaluated at `n`.
 pub fn irradiance_at(coeffs: &[[f32; 3]], n: Vec3) -> Vec3 {
-    let mut y = [0.0f64; SH_LIGHTMAP_COEFFS];
-    eval_basis(Order::THREE, n.as_dvec3().normalize_or(DVec3::Z), &mut y);
-    let mut e = Vec3::ZERO;
-    for (i, (c, y)) in coeffs.iter().zip(y).enumerate() {
-        let l = if i == 0 {
-            0
-        } else if i < 4 {
-            1
-        } else {
-            2
-        };
-        e += Vec3::from(*c) * (zonal::clamped_cosine_convolution(l) * y) as f32;
-    }
-    e
+    let radiance: Vec<[f64; 3]> = coeffs.iter().map(|c| c.map(f64::from)).collect();
+    let irradiance = zonal::irradiance_from_radiance(&radiance, Order::THREE);
+    let e = zonal::eval_rgb(
+        &irradiance,
+        Order::THREE,
+        n.as_dvec3().normalize_or(DVec3::Z),
+    );
+    Vec3::new(e[0] as f32, e[1] as f32, e[2] as f32)
 }
 
 /// Bakes the SH lightmap of `scene` under the environment whose radiance SH (RGB, any

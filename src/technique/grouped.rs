@@ -34,6 +34,16 @@ use crate::sphere::SphereMap;
 /// stay finite, far above f16's subnormals.
 pub const F16_TABLE_MAX: f32 = 16384.0;
 
+/// Factor that brings values whose largest magnitude is `max_abs` into f16's safe range
+/// (`F16_TABLE_MAX`); 1 when they already fit. Shaders multiply by its inverse.
+pub fn f16_range_scale(max_abs: f32) -> f32 {
+    if max_abs > F16_TABLE_MAX {
+        F16_TABLE_MAX / max_abs
+    } else {
+        1.0
+    }
+}
+
 /// Uniforms of glsl/include/grouped.glsl, block `GroupedParams` (std140).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
@@ -104,11 +114,7 @@ pub fn upload_normal_tables(
             detail: "a normal-indexed table is not finite (non-finite lighting?)".into(),
         });
     }
-    let scale = if max_abs > F16_TABLE_MAX {
-        F16_TABLE_MAX / max_abs
-    } else {
-        1.0
-    };
+    let scale = f16_range_scale(max_abs);
     let h = |v: f32| f16::from_f32(v * scale);
     let fmt = vk::Format::R16G16B16A16_SFLOAT;
     let tr = map.res() as usize;

@@ -11,14 +11,14 @@
 //! RGB coefficients, value 3k + c) packed 4 per RGBA16F texel into 7 groups (the last
 //! padded), 56 bytes. dx9 binds 7 2D textures (9 with the material's, ≤ 16), dx10 one
 //! 7-layer 2D array. Values are scaled into f16's range like the L×H tables
-//! ([`super::grouped::F16_TABLE_MAX`]) and the shader multiplies back.
+//! ([`super::grouped::f16_range_scale`]) and the shader multiplies back.
 
 use std::sync::Arc;
 
 use ash::vk;
 use half::f16;
 
-use super::grouped::{F16_TABLE_MAX, upload_texel_groups};
+use super::grouped::{f16_range_scale, upload_texel_groups};
 use super::{HwPath, Inputs, TechniqueError, TechniqueGpu, TechniqueId, TechniqueStats};
 use crate::bake::shlmap::SH_LIGHTMAP_COEFFS;
 use crate::gpu::{Context, layout};
@@ -58,11 +58,7 @@ pub fn build(
             detail: "the SH lightmap is not finite (non-finite lighting?)".into(),
         });
     }
-    let scale = if max_abs > F16_TABLE_MAX {
-        F16_TABLE_MAX / max_abs
-    } else {
-        1.0
-    };
+    let scale = f16_range_scale(max_abs);
     let mut groups: Vec<Vec<f16>> = vec![vec![f16::ZERO; texels * 4]; SHLMAP_GROUPS];
     for t in 0..texels {
         for (k, rgb) in map.texel(t).iter().enumerate() {
