@@ -1,4 +1,5 @@
-//! Link fix for Debian's shaderc (see README "Set-up").
+//! Two jobs: the link fix for Debian's shaderc (see README "Set-up"), and the registry of
+//! embedded GLSL sources (`embed_glsl_sources`).
 //!
 //! Debian's `libshaderc.so` is under-linked and its `libshaderc_combined.a` does not contain
 //! glslang or SPIRV-Tools, so shaderc-sys (feature `prefer-static-linking`, with
@@ -6,6 +7,49 @@
 //! glslang's static libraries in one link group so their mutual references resolve.
 
 fn main() {
+    link_shaderc();
+    embed_glsl_sources();
+}
+
+/// Writes `$OUT_DIR/glsl_sources.rs`: every file under `glsl/` as `(path under glsl/,
+/// include_str!(…))`, sorted, so `gpu::shader` embeds the shaders without naming any (each
+/// technique names its own, `technique::fragment_shader`).
+fn embed_glsl_sources() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl");
+    println!("cargo:rerun-if-changed={}", root.display());
+    let mut files = Vec::new();
+    let mut dirs = vec![root.clone()];
+    while let Some(dir) = dirs.pop() {
+        println!("cargo:rerun-if-changed={}", dir.display());
+        for entry in std::fs::read_dir(&dir).expect("glsl/ is readable") {
+            let path = entry.expect("glsl/ entry").path();
+            if path.is_dir() {
+                dirs.push(path);
+            } else if matches!(
+                path.extension().and_then(|e| e.to_str()),
+                Some("glsl" | "vert" | "frag" | "comp")
+            ) {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    let mut out = String::from("&[\n");
+    for path in &files {
+        let rel = path.strip_prefix(&root).expect("under glsl/");
+        let rel = rel.to_str().expect("UTF-8 shader path").replace('\\', "/");
+        out += &format!(
+            "    ({rel:?}, include_str!({:?})),\n",
+            path.display().to_string()
+        );
+    }
+    out += "]\n";
+    let dest =
+        std::path::Path::new(&std::env::var("OUT_DIR").expect("OUT_DIR")).join("glsl_sources.rs");
+    std::fs::write(dest, out).expect("OUT_DIR is writable");
+}
+
+fn link_shaderc() {
     let dir = std::env::var("SHADERC_LIB_DIR")
         .unwrap_or_else(|_| "/usr/lib/x86_64-linux-gnu".to_string());
     println!("cargo:rerun-if-env-changed=SHADERC_LIB_DIR");

@@ -59,7 +59,7 @@ fn bench_scene(c: &mut Criterion, name: &str, mesh: &Mesh, res: u32, rays: u32) 
     let texels = rasterize(mesh, res);
     let tracer = Tracer::new(mesh);
     let s = settings(rays);
-    let traced = bake_visibility(&tracer, &texels, &s).rays_traced;
+    let traced = bake_visibility(&tracer, &texels, &s).stats.rays_traced;
     let mut g = c.benchmark_group(format!("visibility_bake/{name}"));
     g.sample_size(10);
     g.throughput(Throughput::Elements(traced));

@@ -8,14 +8,13 @@ use std::time::Instant;
 use anyhow::{Context as _, Result, bail};
 use clap::{Args, Parser, Subcommand};
 
+use shvis::bench::BenchSettings;
 use shvis::gpu::{Context, ContextDesc};
-use shvis::prepare::{PrepareSettings, Prepared, bake_scene_ao, prepare, resolve_scene};
+use shvis::prepare::{PrepareSettings, bake_scene_ao, prepare, resolve_scene};
 use shvis::render::{FrameSettings, SceneGpu};
-use shvis::report::image::{write_exr, write_frame, write_png};
-use shvis::report::metrics::TimingStats;
-use shvis::report::table::{BenchRow, BenchTable};
-use shvis::technique::{self, HwPath, TechniqueId};
-use shvis::{bake, report};
+use shvis::report::image::write_frame;
+use shvis::technique::{self, HwPath, Technique};
+use shvis::{bake, report, tools};
 
 /// Largest frame side accepted before asking the device (which may allow less).
 const MAX_FRAME_SIDE: u32 = 16384;
@@ -37,7 +36,7 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
-    /// Bake lightmap data (ambient occlusion) and write it as EXR for inspection.
+    /// Bake SH visibility and ambient occlusion and write them as EXR layers for inspection.
     Bake(BakeArgs),
     /// Render one technique on one hardware path to a PNG or EXR.
     Render(RenderArgs),
@@ -149,6 +148,10 @@ struct GpuArgs {
 struct BakeArgs {
     #[command(flatten)]
     scene: SceneArgs,
+    /// Also run the standalone cosine-sampled AO bake (`bake::ao`) and print its figures;
+    /// the AO layer written is the visibility bake's, as the techniques use.
+    #[arg(long)]
+    separate_ao: bool,
     /// Output directory (ao.exr).
     #[arg(long)]
     out: PathBuf,
@@ -163,9 +166,10 @@ struct RenderArgs {
     /// `sky` (built-in) or an .exr/.hdr equirectangular environment map.
     #[arg(long, default_value = "sky")]
     env: String,
-    /// Technique name (see `shvis bench`).
+    /// Technique name (see `shvis bench`): unc3…unc6, pca4…pca24, pca4w…pca24w, shlmap,
+    /// preconv, sh2.
     #[arg(long)]
-    technique: TechniqueId,
+    technique: Technique,
     /// Hardware path: dx9 or dx10.
     #[arg(long, default_value = "dx10")]
     path: HwPath,
@@ -272,8 +276,6 @@ pub fn run(cli: Cli) -> Result<()> {
 }
 
 fn run_study_params(a: StudyParamsArgs) -> Result<()> {
-    use shvis::sh::Order;
-    use shvis::sphere::Parameterization;
     use shvis::study::{params, params_gpu};
     if a.directions == 0 || a.directions > 100_000_000 {
         bail!(
@@ -284,38 +286,11 @@ fn run_study_params(a: StudyParamsArgs) -> Result<()> {
     create_dir(&a.out)?;
     let started = Instant::now();
     let points = params::run_study(a.directions, a.seed);
-    log::info!(
-        "CPU emulation: {} parameterization × resolution × order points at {} directions in {:.1} s",
-        points.len(),
-        a.directions,
-        started.elapsed().as_secs_f64()
-    );
     let mut written = params::write_report(&points, &a.out)?;
     if !a.no_gpu {
-        let gpu_started = Instant::now();
         let ctx = open_gpu(&a.gpu)?;
-        let mut directions =
-            params::study_directions(a.directions.min(a.gpu_directions.max(1)), a.seed);
-        directions.truncate(a.gpu_directions.max(1));
-        let configs: Vec<(Parameterization, u32)> = Parameterization::ALL
-            .iter()
-            .flat_map(|&p| params::resolutions(p).iter().map(move |&r| (p, r)))
-            .collect();
-        let gpu_points = params_gpu::run_gpu_study(&ctx, &configs, Order::SIX, &directions)?;
-        let path = a.out.join("gpu.csv");
-        let csv = params_gpu::gpu_csv(&gpu_points);
-        std::fs::write(&path, csv).with_context(|| format!("{}: cannot write", path.display()))?;
-        let md_path = a.out.join("params.md");
-        let mut md = std::fs::read_to_string(&md_path).unwrap_or_default();
-        md += &params_gpu::gpu_summary_markdown(&gpu_points, ctx.device_name(), directions.len());
-        std::fs::write(&md_path, md)
-            .with_context(|| format!("{}: cannot write", md_path.display()))?;
-        written.push(path);
-        log::info!(
-            "GPU reconstruction on {} in {:.1} s",
-            ctx.device_name(),
-            gpu_started.elapsed().as_secs_f64()
-        );
+        let csv = params_gpu::run_and_write(&ctx, &a.out, a.directions, a.gpu_directions, a.seed)?;
+        written.push(csv);
         check_validation(&ctx, a.gpu.validate)?;
     }
     for p in &written {
@@ -325,73 +300,18 @@ fn run_study_params(a: StudyParamsArgs) -> Result<()> {
     Ok(())
 }
 
-/// 17 significant digits: enough to round-trip an f64.
-fn fmt17(v: f64) -> String {
-    format!("{v:.16e}")
-}
-
-fn parse_direction(text: &str, what: &str) -> Result<glam::DVec3> {
-    let parts: Vec<&str> = text
-        .split(|c: char| c == ',' || c.is_whitespace())
-        .filter(|p| !p.is_empty())
-        .collect();
-    let values: Vec<f64> = parts
-        .iter()
-        .map(|p| p.parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| anyhow::anyhow!("{what}: '{text}' is not three numbers"))?;
-    let [x, y, z] = values[..] else {
-        bail!("{what}: '{text}' is not three numbers");
-    };
-    Ok(shvis::sh::unit_dir(glam::DVec3::new(x, y, z)).with_context(|| what.to_string())?)
-}
-
 fn run_sh(c: ShCommand) -> Result<()> {
-    use std::io::{BufRead, Write};
-
-    use shvis::sh::{Order, basis::eval_basis, zonal};
-    let stdout = std::io::stdout();
-    let mut out = std::io::BufWriter::new(stdout.lock());
+    use std::io::Write;
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     match c {
-        ShCommand::Eval { order } => {
-            let order = Order::new(order)?;
-            let mut values = vec![0.0; order.coeff_count()];
-            for (i, line) in std::io::stdin().lock().lines().enumerate() {
-                let line = line.context("reading stdin")?;
-                if line.trim().is_empty() || line.trim_start().starts_with('#') {
-                    continue;
-                }
-                let dir = parse_direction(&line, &format!("stdin line {}", i + 1))?;
-                eval_basis(order, dir, &mut values);
-                let text: Vec<String> = values.iter().map(|&v| fmt17(v)).collect();
-                writeln!(out, "{}", text.join(" "))?;
-            }
-        }
-        ShCommand::Project { env, order } => {
-            let order = Order::new(order)?;
-            let env = shvis::env::resolve(&env)?;
-            for c in shvis::env::project::project_sh(&env, order) {
-                writeln!(out, "{} {} {}", fmt17(c[0]), fmt17(c[1]), fmt17(c[2]))?;
-            }
-        }
+        ShCommand::Eval { order } => tools::eval(order, std::io::stdin().lock(), &mut out)?,
+        ShCommand::Project { env, order } => tools::project(&env, order, &mut out)?,
         ShCommand::Irradiance {
             env,
             normal,
             order,
             exact,
-        } => {
-            let n = parse_direction(&normal, "--normal")?;
-            let order = order.map(Order::new).transpose()?;
-            let env = shvis::env::resolve(&env)?;
-            let e = if exact {
-                shvis::env::project::irradiance_brute_force(&env, n)
-            } else {
-                let order = order.unwrap_or(Order::THREE);
-                let radiance = shvis::env::project::project_sh(&env, order);
-                zonal::eval_rgb(&zonal::irradiance_from_radiance(&radiance, order), order, n)
-            };
-            writeln!(out, "{} {} {}", fmt17(e[0]), fmt17(e[1]), fmt17(e[2]))?;
-        }
+        } => tools::irradiance(&env, &normal, order, exact, &mut out)?,
     }
     out.flush()?;
     Ok(())
@@ -437,21 +357,20 @@ fn run_bake(a: BakeArgs) -> Result<()> {
     let settings = prepare_settings(&a.scene, "sky", None)?;
     let scene = resolve_scene(&a.scene.scene, vis_res)?;
     create_dir(&a.out)?;
-    let ao = bake_scene_ao(&scene, vis_res, rays, a.scene.seed, true)?;
-    let covered = ao.covered.iter().filter(|&&c| c).count();
-    println!(
-        "AO bake: {}² texels ({covered} covered) × {rays} rays, {} triangles: {:.2} s, {:.2} Mrays/s",
-        vis_res,
-        scene.mesh.triangle_count(),
-        ao.seconds,
-        ao.rays_per_second() / 1e6
-    );
+    if a.separate_ao {
+        let ao = bake_scene_ao(&scene, vis_res, rays, a.scene.seed, true)?;
+        println!(
+            "separate AO bake: {vis_res}² texels ({} covered) × {rays} rays: {}",
+            ao.covered.iter().filter(|&&c| c).count(),
+            ao.stats
+        );
+    }
     let visibility = shvis::prepare::bake_scene_visibility(&scene, vis_res, rays, &settings)?;
     println!(
-        "visibility bake: order {} × {rays} rays: {:.2} s, {:.2} Mrays/s",
+        "visibility and AO bake: order {} × {rays} rays, {} triangles: {}",
         visibility.order,
-        visibility.seconds,
-        visibility.rays_per_second() / 1e6
+        scene.mesh.triangle_count(),
+        visibility.stats
     );
     shvis::bake::cache::write_exr_layers(&a.out, &visibility)?;
     println!(
@@ -465,7 +384,7 @@ fn run_render(a: RenderArgs) -> Result<()> {
     check_output_extension(&a.out)?;
     // The device first: a missing GPU should not cost a bake.
     let ctx = open_gpu(&a.gpu)?;
-    let bounces = (a.technique == TechniqueId::Shlmap).then_some(a.bounces);
+    let bounces = a.technique.needs().sh_lightmap.then_some(a.bounces);
     let prepared = prepare(&prepare_settings(&a.scene, &a.env, bounces)?)?;
     let settings = FrameSettings {
         width: a.width,
@@ -475,7 +394,7 @@ fn run_render(a: RenderArgs) -> Result<()> {
     };
     let scene_gpu = SceneGpu::new(&ctx, &prepared.scene, &settings)?;
     let tech = technique::build(&ctx, &scene_gpu, a.technique, a.path, &prepared.inputs())?;
-    let frame = scene_gpu.render(&tech, 0, 1)?;
+    let frame = tech.render(&scene_gpu, 0, 1)?;
     write_frame(&a.out, &frame, a.exposure)?;
     check_validation(&ctx, a.gpu.validate)?;
     println!("wrote {} ({})", a.out.display(), tech.label());
@@ -555,154 +474,25 @@ where
 }
 
 fn run_bench(a: BenchArgs) -> Result<()> {
-    let techniques = parse_list(&a.techniques, TechniqueId::ALL)?;
-    let paths = parse_list(&a.paths, HwPath::ALL)?;
+    let settings = BenchSettings {
+        techniques: parse_list(&a.techniques, Technique::ALL)?,
+        paths: parse_list(&a.paths, HwPath::ALL)?,
+        frames: a.frames,
+        warmup: a.warmup,
+        width: a.width,
+        height: a.height,
+        exposure: a.exposure,
+        ref_spp: a.ref_spp,
+        bounces: a.bounces,
+        seed: a.scene.seed,
+        out: a.out.clone(),
+    };
     create_dir(&a.out)?;
     let started = Instant::now();
-    let with_shlmap = techniques.contains(&TechniqueId::Shlmap);
-    let prepared: Prepared = prepare(&prepare_settings(
-        &a.scene,
-        &a.env,
-        with_shlmap.then_some(a.bounces),
-    )?)?;
+    let bounces = settings.needs_sh_lightmap().then_some(a.bounces);
+    let prepared = prepare(&prepare_settings(&a.scene, &a.env, bounces)?)?;
     let ctx = open_gpu(&a.gpu)?;
-    if !ctx.supports_timestamps() {
-        bail!(
-            "{}: the graphics queue has no timestamps, frames cannot be timed",
-            ctx.device_name()
-        );
-    }
-    let settings = FrameSettings {
-        width: a.width,
-        height: a.height,
-        flat_normals: false,
-        ..FrameSettings::default()
-    };
-    let reference = if a.ref_spp > 0 {
-        let image = shvis::reference::render_reference(
-            &ctx,
-            &prepared.scene,
-            &prepared.env,
-            &shvis::reference::ReferenceSettings {
-                width: a.width,
-                height: a.height,
-                spp: a.ref_spp,
-                seed: a.scene.seed,
-                bounces: if with_shlmap { a.bounces } else { 0 },
-            },
-        )?;
-        log::info!(
-            "reference: {} spp in {:.1} s, relative noise {:.4}",
-            a.ref_spp,
-            image.seconds,
-            image.rel_noise
-        );
-        write_exr(&a.out.join("reference.exr"), &image.frame)?;
-        write_png(&a.out.join("reference.png"), &image.frame, a.exposure)?;
-        if let Some(b) = &image.bounced {
-            log::info!(
-                "reference with {} bounces: relative noise {:.4}",
-                b.bounces,
-                b.rel_noise
-            );
-            let name = format!("reference_bounces{}", b.bounces);
-            write_exr(&a.out.join(format!("{name}.exr")), &b.frame)?;
-            write_png(&a.out.join(format!("{name}.png")), &b.frame, a.exposure)?;
-        }
-        Some(image)
-    } else {
-        None
-    };
-    let scene_gpu = SceneGpu::new(&ctx, &prepared.scene, &settings)?;
-    let mut rows = Vec::new();
-    for &t in &techniques {
-        for &p in &paths {
-            let tech = technique::build(&ctx, &scene_gpu, t, p, &prepared.inputs())?;
-            let frame = scene_gpu.render(&tech, a.warmup, a.frames)?;
-            let stats = TimingStats::from_ms(&frame.ms);
-            // shlmap models inter-reflection: it meets the reference that has it.
-            let (reference_frame, reference_kind) = match &reference {
-                None => (None, "none".to_string()),
-                Some(r) => match (&r.bounced, t) {
-                    (Some(b), TechniqueId::Shlmap) => {
-                        (Some(&b.frame), format!("{} bounces", b.bounces))
-                    }
-                    _ => (Some(&r.frame), "direct".to_string()),
-                },
-            };
-            let error =
-                reference_frame.and_then(|r| shvis::report::metrics::image_error(&frame, r));
-            if t == TechniqueId::Shlmap {
-                if let Some(e) = reference
-                    .as_ref()
-                    .and_then(|r| shvis::report::metrics::image_error(&frame, &r.frame))
-                {
-                    log::info!(
-                        "{}: relative RMSE against the direct-only reference {:.4}",
-                        tech.label(),
-                        e.rel_rmse
-                    );
-                }
-            }
-            write_png(
-                &a.out.join(format!("{}.png", tech.label())),
-                &frame,
-                a.exposure,
-            )?;
-            write_exr(&a.out.join(format!("{}.exr", tech.label())), &frame)?;
-            rows.push(BenchRow {
-                technique: t.to_string(),
-                path: p.to_string(),
-                ms_median: stats.map(|s| s.ms_median),
-                ms_min: stats.map(|s| s.ms_min),
-                ms_max: stats.map(|s| s.ms_max),
-                frames: frame.ms.len(),
-                rel_rmse: error.map(|e| e.rel_rmse),
-                psnr: error.map(|e| e.psnr),
-                texel_bytes: tech.stats.texel_bytes,
-                table_bytes: tech.stats.table_bytes,
-                textures_bound: tech.stats.textures_bound,
-                lookups_per_pixel: tech.stats.lookups_per_pixel,
-                ratio_to_preconv: None,
-                paper_ms: t.paper_ms(),
-                paper_ratio_to_preconv: t.paper_ratio_to_preconv(),
-                reference: reference_kind,
-            });
-        }
-    }
-    shvis::report::table::fill_ratios_to_preconv(&mut rows);
-    let table = BenchTable {
-        reference_spp: a.ref_spp,
-        reference_rel_noise: reference.as_ref().map(|r| r.rel_noise),
-        reference_bounces: reference
-            .as_ref()
-            .and_then(|r| r.bounced.as_ref())
-            .map_or(0, |b| b.bounces),
-        reference_bounced_rel_noise: reference
-            .as_ref()
-            .and_then(|r| r.bounced.as_ref())
-            .map(|b| b.rel_noise),
-        device: ctx.device_name().to_string(),
-        width: a.width,
-        height: a.height,
-        vis_res: a.scene.vis_res,
-        results: rows,
-    };
-    table.write(&a.out)?;
-    for path in &paths {
-        match shvis::report::plot::write_pca_error_plot(&table.results, path.name(), &a.out) {
-            Ok(files) => files
-                .iter()
-                .for_each(|f| log::info!("wrote {}", f.display())),
-            Err(e) => log::warn!("{e}"),
-        }
-    }
-    match shvis::report::plot::write_speed_error_plot(&table, &a.out) {
-        Ok(files) => files
-            .iter()
-            .for_each(|f| log::info!("wrote {}", f.display())),
-        Err(e) => log::warn!("{e}"),
-    }
+    let table = shvis::bench::run(&ctx, &prepared, &settings)?;
     println!("{}", table.to_markdown());
     println!(
         "wrote {}/table.md, table.json and images in {:.1} s",

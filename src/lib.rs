@@ -8,7 +8,9 @@
 #![deny(unsafe_code)]
 
 pub mod bake;
+pub mod bench;
 pub mod env;
+pub mod files;
 #[allow(unsafe_code)]
 pub mod gpu;
 pub mod prepare;
@@ -20,3 +22,4 @@ pub mod sh;
 pub mod sphere;
 pub mod study;
 pub mod technique;
+pub mod tools;

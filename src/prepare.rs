@@ -2,19 +2,20 @@
 //! the scene and the environment by name or path, bake the lightmap data, and prepare the
 //! lighting (SH projection, clamped-cosine convolution).
 
-use std::time::Instant;
-
+use std::cell::OnceCell;
 use std::path::PathBuf;
+use std::time::Instant;
 
 use crate::bake::ao::{AoMap, AoSettings, bake_ao};
 use crate::bake::cache::{default_cache_dir, load_or_bake_visibility};
 use crate::bake::pca::{PcaModel, fit};
-use crate::bake::raster::rasterize;
+use crate::bake::raster::{LightmapTexels, rasterize};
 use crate::bake::shlmap::{ShLightmap, ShLightmapSettings, bake_sh_lightmap};
 use crate::bake::trace::Tracer;
 use crate::bake::visibility::{VisibilityMap, VisibilitySettings, bake_visibility};
 use crate::bake::{self, BakeError};
 use crate::env::{self, EnvError, EnvMap};
+use crate::scene::Mesh;
 use crate::scene::{Scene, SceneError, gltf, house};
 use crate::sh::{Order, zonal};
 use crate::technique::Inputs;
@@ -143,13 +144,13 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
         return Err(PrepareError::TableRes(settings.table_res));
     }
     let scene = resolve_scene(&settings.scene, vis_res)?;
-    let visibility = bake_scene_visibility(&scene, vis_res, rays, settings)?;
+    let geometry = BakeGeometry::new(&scene.mesh, vis_res);
+    let visibility = bake_visibility_cached(&geometry, rays, settings)?;
     let ao = AoMap {
         res: visibility.res,
         values: visibility.ao.clone(),
         covered: visibility.covered.clone(),
-        rays_traced: visibility.rays_traced,
-        seconds: visibility.seconds,
+        stats: visibility.stats,
     };
     let t = Instant::now();
     let pca = fit(
@@ -179,12 +180,10 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
         t.elapsed().as_secs_f64() * 1e3
     );
     let sh_lightmap = settings.sh_lightmap_bounces.map(|bounces| {
-        let texels = rasterize(&scene.mesh, vis_res);
-        let tracer = Tracer::new(&scene.mesh);
         bake_sh_lightmap(
             &scene,
-            &tracer,
-            &texels,
+            geometry.tracer(),
+            geometry.texels(),
             &radiance_sh,
             &ShLightmapSettings {
                 rays,
@@ -194,6 +193,7 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
             },
         )
     });
+    drop(geometry);
     Ok(Prepared {
         sh_lightmap,
         scene,
@@ -208,10 +208,44 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
     })
 }
 
+/// The lightmap texels of a mesh and its ray tracer, each built on first use and then
+/// shared by the bakes of one `prepare` (a cached visibility bake needs neither).
+pub struct BakeGeometry<'a> {
+    mesh: &'a Mesh,
+    res: u32,
+    texels: OnceCell<LightmapTexels>,
+    tracer: OnceCell<Tracer>,
+}
+
+impl<'a> BakeGeometry<'a> {
+    pub fn new(mesh: &'a Mesh, res: u32) -> Self {
+        BakeGeometry {
+            mesh,
+            res,
+            texels: OnceCell::new(),
+            tracer: OnceCell::new(),
+        }
+    }
+    pub fn texels(&self) -> &LightmapTexels {
+        self.texels.get_or_init(|| rasterize(self.mesh, self.res))
+    }
+    pub fn tracer(&self) -> &Tracer {
+        self.tracer.get_or_init(|| Tracer::new(self.mesh))
+    }
+}
+
 /// Rasterizes the lightmap and bakes SH visibility, through the bake cache.
 pub fn bake_scene_visibility(
     scene: &Scene,
     vis_res: u32,
+    rays: u32,
+    settings: &PrepareSettings,
+) -> Result<VisibilityMap, BakeError> {
+    bake_visibility_cached(&BakeGeometry::new(&scene.mesh, vis_res), rays, settings)
+}
+
+fn bake_visibility_cached(
+    geometry: &BakeGeometry<'_>,
     rays: u32,
     settings: &PrepareSettings,
 ) -> Result<VisibilityMap, BakeError> {
@@ -222,19 +256,13 @@ pub fn bake_scene_visibility(
         progress: settings.progress,
     };
     let cache_dir = settings.cache_dir.clone().unwrap_or_else(default_cache_dir);
-    load_or_bake_visibility(&cache_dir, &scene.mesh, vis_res, &vis_settings, || {
-        let texels = rasterize(&scene.mesh, vis_res);
-        let tracer = Tracer::new(&scene.mesh);
-        let map = bake_visibility(&tracer, &texels, &vis_settings);
-        log::info!(
-            "visibility bake: {} texels × {rays} rays at order {} in {:.2} s = {:.2} Mrays/s",
-            texels.covered_count(),
-            settings.order,
-            map.seconds,
-            map.rays_per_second() / 1e6
-        );
-        map
-    })
+    load_or_bake_visibility(
+        &cache_dir,
+        geometry.mesh,
+        geometry.res,
+        &vis_settings,
+        || bake_visibility(geometry.tracer(), geometry.texels(), &vis_settings),
+    )
 }
 
 /// Rasterizes the lightmap and bakes ambient occlusion.

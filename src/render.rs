@@ -1,6 +1,7 @@
 //! The GPU side of a scene shared by all techniques — mesh buffers, material textures
 //! (with CPU-built mip chains), samplers, the per-frame uniform block, the offscreen
-//! target — and the frame loop that renders a technique and reads the image back.
+//! target — and the frame loop that renders a mesh pipeline and reads the image back.
+//! Techniques build on it (`technique::TechniqueGpu::render`); it knows none of them.
 
 use std::sync::Arc;
 
@@ -11,7 +12,6 @@ use crate::gpu::{
     Sampler, SamplerKind, ShaderStage, VertexLayout, compile_glsl, layout,
 };
 use crate::scene::{Scene, Texture8, Vertex};
-use crate::technique::TechniqueGpu;
 
 /// How a frame is rendered.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -202,17 +202,6 @@ impl SceneGpu {
         )
     }
 
-    /// Renders `technique`: `warmup` untimed frames, then `frames` timed ones, and reads
-    /// the last image back.
-    pub fn render(
-        &self,
-        technique: &TechniqueGpu,
-        warmup: u32,
-        frames: u32,
-    ) -> Result<Frame, GpuError> {
-        self.render_pipeline(&technique.pipeline, warmup, frames)
-    }
-
     /// Renders with any mesh pipeline built for this scene's target (e.g. G-buffer passes).
     pub fn render_pipeline(
         &self,
@@ -328,4 +317,60 @@ pub fn mip_chain(tex: &Texture8, srgb: bool) -> Vec<Texture8> {
         });
     }
     levels
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn texture(width: u32, height: u32, texel: impl Fn(u32, u32) -> [u8; 4]) -> Texture8 {
+        Texture8 {
+            width,
+            height,
+            texels: (0..height)
+                .flat_map(|y| (0..width).map(move |x| (x, y)))
+                .map(|(x, y)| texel(x, y))
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn mip_chain_halves_to_one_texel_with_box_averages() {
+        let tex = texture(8, 2, |x, y| [(x * 30) as u8, (y * 200) as u8, 17, 255]);
+        let levels = mip_chain(&tex, false);
+        let sizes: Vec<(u32, u32)> = levels.iter().map(|l| (l.width, l.height)).collect();
+        assert_eq!(sizes, [(8, 2), (4, 1), (2, 1), (1, 1)]);
+        assert_eq!(levels[0].texels, tex.texels);
+        // Level 1 texel x averages level-0 texels 2x, 2x + 1 in rows 0 and 1.
+        for x in 0..4u32 {
+            let t = levels[1].texels[x as usize];
+            assert_eq!(
+                t[0],
+                ((2 * x * 30 + (2 * x + 1) * 30) as f32 / 2.0).round() as u8
+            );
+            assert_eq!(t[1], 100);
+            assert_eq!(t[2], 17);
+        }
+        // 1×1: the whole texture's mean.
+        let mean_r = (0..8).map(|x| x * 30).sum::<u32>() as f32 / 8.0;
+        assert!((levels[3].texels[0][0] as f32 - mean_r).abs() <= 1.0);
+    }
+
+    #[test]
+    fn srgb_mip_chain_averages_in_linear_light() {
+        // Black and white stripes: the linear mean is 0.5, which sRGB encodes as 188, not 128.
+        let tex = texture(2, 2, |x, _| {
+            if x == 0 {
+                [0, 0, 0, 255]
+            } else {
+                [255, 255, 255, 0]
+            }
+        });
+        let srgb = mip_chain(&tex, true);
+        let linear = mip_chain(&tex, false);
+        assert_eq!(srgb[1].texels[0][0], 188);
+        assert_eq!(linear[1].texels[0][0], 128);
+        // Alpha is linear either way.
+        assert_eq!(srgb[1].texels[0][3], 128);
+    }
 }

@@ -7,27 +7,10 @@ use glam::Vec3;
 use shvis::bake::ao::{AoSettings, ao_at, bake_ao};
 use shvis::bake::raster::rasterize;
 use shvis::bake::trace::Tracer;
-use shvis::scene::{Mesh, Vertex, house};
+use shvis::scene::{Mesh, house};
 
-/// Appends a quad with corners `p` (counter-clockwise seen from the front) and lightmap
-/// corners `uv` (all zero for a quad that is not baked: zero UV area, skipped).
-fn quad(m: &mut Mesh, p: [Vec3; 4], uv: [[f32; 2]; 4]) {
-    let normal = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
-    let base = m.vertices.len() as u32;
-    for k in 0..4 {
-        m.vertices.push(Vertex {
-            position: p[k].to_array(),
-            normal: normal.to_array(),
-            uv_lightmap: uv[k],
-            ..Vertex::default()
-        });
-    }
-    m.indices
-        .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
-}
-
-const FULL_UV: [[f32; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
-const NO_UV: [[f32; 2]; 4] = [[0.0; 2]; 4];
+mod common;
+use common::{FULL_UV, NO_UV, quad};
 
 /// Floor y = 0 over [−h, h]², facing +Y, carrying the whole lightmap.
 fn floor(m: &mut Mesh, h: f32) {
@@ -51,7 +34,7 @@ fn open_plane_is_unoccluded_everywhere() {
     assert_eq!(texels.covered_count(), 256);
     let ao = bake_ao(&Tracer::new(&m), &texels, &settings(256));
     assert!(ao.values.iter().all(|&v| v == 1.0), "{:?}", ao.values);
-    assert_eq!(ao.rays_traced, 256 * 256);
+    assert_eq!(ao.stats.rays_traced, 256 * 256);
 }
 
 /// Rays per estimate in the inner-corner test.
@@ -152,7 +135,7 @@ fn house_bake(threads: usize) -> Result<Vec<u32>, Box<dyn std::error::Error>> {
         .num_threads(threads)
         .build()?;
     let ao = pool.install(|| bake_ao(&tracer, &texels, &settings(64)));
-    assert_eq!(ao.rays_traced, texels.require_covered()? as u64 * 64);
+    assert_eq!(ao.stats.rays_traced, texels.require_covered()? as u64 * 64);
     Ok(ao.values.iter().map(|v| v.to_bits()).collect())
 }
 

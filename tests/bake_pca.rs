@@ -62,8 +62,7 @@ fn map(res: u32, order: Order, f: impl Fn(usize) -> Vec<f64>) -> VisibilityMap {
         coeffs,
         covered: vec![true; texels],
         ao: vec![1.0; texels],
-        rays_traced: 0,
-        seconds: 0.0,
+        stats: shvis::bake::BakeStats::default(),
     }
 }
 

@@ -21,7 +21,10 @@ use shvis::bake::directions::{DirectionSet, ShProjector, above_horizon};
 use shvis::bake::raster::{LightmapTexels, rasterize};
 use shvis::bake::trace::Tracer;
 use shvis::bake::visibility::{VisibilityMap, VisibilitySettings, bake_visibility};
-use shvis::scene::{Mesh, Vertex, house};
+use shvis::scene::{Mesh, house};
+
+mod common;
+use common::{FULL_UV, NO_UV, quad};
 use shvis::sh::basis::eval_basis;
 use shvis::sh::{Order, gauss_legendre};
 
@@ -49,26 +52,6 @@ fn quadrature_bound(rays: u32) -> f64 {
 const F32_ROUND: f64 = 1e-6;
 
 // ---------------------------------------------------------------- scene helpers
-
-/// Appends a quad with corners `p` (counter-clockwise seen from the front) and lightmap
-/// corners `uv` (all zero for a quad that is not baked: zero UV area, skipped).
-fn quad(m: &mut Mesh, p: [Vec3; 4], uv: [[f32; 2]; 4]) {
-    let normal = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
-    let base = m.vertices.len() as u32;
-    for k in 0..4 {
-        m.vertices.push(Vertex {
-            position: p[k].to_array(),
-            normal: normal.to_array(),
-            uv_lightmap: uv[k],
-            ..Vertex::default()
-        });
-    }
-    m.indices
-        .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
-}
-
-const FULL_UV: [[f32; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
-const NO_UV: [[f32; 2]; 4] = [[0.0; 2]; 4];
 
 /// Horizontal rectangle y = 0 over [x0, x1] × [z0, z1], facing +Y.
 fn floor_rect(m: &mut Mesh, x0: f32, x1: f32, z0: f32, z1: f32, uv: [[f32; 2]; 4]) {
@@ -272,7 +255,7 @@ fn open_plane_projects_the_upper_hemisphere() {
     );
     assert!(map.ao.iter().all(|&a| a == 1.0), "an open plane has AO 1");
     // Only the traced half of the directions counts.
-    let per_texel = map.rays_traced as f64 / 256.0;
+    let per_texel = map.stats.rays_traced as f64 / 256.0;
     assert!(
         (per_texel - 512.0).abs() < 32.0,
         "{per_texel} rays per texel"
@@ -314,7 +297,7 @@ fn closed_box_floor_is_exactly_black() {
         );
         assert_eq!(map.ao[t], 0.0);
     }
-    assert!(map.rays_traced > 0);
+    assert!(map.stats.rays_traced > 0);
 }
 
 #[test]
@@ -489,7 +472,7 @@ fn coherent_bake_equals_single_ray_reference_bit_for_bit() {
         let s = settings(200, 11); // not a multiple of 64: partial mask words
         let map = bake_visibility(&tracer, &texels, &s);
         let (coeffs, ao, traced) = reference_bake(&tracer, &texels, &s);
-        assert_eq!(map.rays_traced, traced, "{name}");
+        assert_eq!(map.stats.rays_traced, traced, "{name}");
         for t in (0..texels.covered.len()).filter(|&t| texels.covered[t]) {
             let got: Vec<u32> = map.texel(t).iter().map(|c| c.to_bits()).collect();
             let want: Vec<u32> = coeffs[t].iter().map(|c| c.to_bits()).collect();
@@ -524,7 +507,7 @@ fn bakes_are_bit_identical_for_one_and_two_threads() {
             .zip(&two.ao)
             .all(|(a, b)| a.to_bits() == b.to_bits())
     );
-    assert_eq!(one.rays_traced, two.rays_traced);
+    assert_eq!(one.stats.rays_traced, two.stats.rays_traced);
 }
 
 #[test]
@@ -585,7 +568,8 @@ fn load_or_bake(dir: &std::path::Path, s: &VisibilitySettings) -> (VisibilityMap
 /// Equal bakes up to their wall-clock time.
 fn same_bake(a: &VisibilityMap, b: &VisibilityMap) -> bool {
     let bits = |m: &VisibilityMap| m.coeffs.iter().map(|c| c.to_bits()).collect::<Vec<_>>();
-    (a.res, a.order, &a.covered, a.rays_traced) == (b.res, b.order, &b.covered, b.rays_traced)
+    (a.res, a.order, &a.covered, a.stats.rays_traced)
+        == (b.res, b.order, &b.covered, b.stats.rays_traced)
         && bits(a) == bits(b)
         && a.ao
             .iter()
@@ -736,9 +720,9 @@ fn throughput_report() {
              ({threads} threads); CPU {cpu:.2} s → {:.1} Mrays/s on {threads} idle cores",
             tracer.triangle_count(),
             texels.covered_count(),
-            map.seconds,
-            map.rays_per_second() * 1e-6,
-            map.rays_traced as f64 / cpu.max(1e-9) * threads as f64 * 1e-6,
+            map.stats.seconds,
+            map.stats.rays_per_second() * 1e-6,
+            map.stats.rays_traced as f64 / cpu.max(1e-9) * threads as f64 * 1e-6,
         );
         // The same rays one by one (Tracer::occluded), trace only, same parallelism.
         let dirs = DirectionSet::new(rays, 1);

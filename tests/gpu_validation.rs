@@ -4,7 +4,7 @@
 mod common;
 
 use shvis::render::FrameSettings;
-use shvis::technique::{HwPath, TechniqueId};
+use shvis::technique::{HwPath, Technique};
 
 #[test]
 fn every_technique_and_path_is_validation_clean() {
@@ -16,7 +16,7 @@ fn every_technique_and_path_is_validation_clean() {
         flat_normals: false,
         ..FrameSettings::default()
     };
-    for &id in TechniqueId::ALL {
+    for &id in Technique::ALL {
         for &path in HwPath::ALL {
             let frame = common::render(&ctx, prepared, id, path, &settings);
             let covered = (0..frame.height)

@@ -4,7 +4,8 @@
 mod common;
 
 use shvis::report::metrics::image_error;
-use shvis::technique::{HwPath, TechniqueId};
+use shvis::sh::Order;
+use shvis::technique::{HwPath, Technique};
 
 /// pcaNw and pcaN compute the same ∫ L V H₃ from the same 8-bit weights; they differ by the
 /// table's bilinear reconstruction over normals (32² per face) and its f16 storage —
@@ -16,13 +17,18 @@ fn error_falls_with_basis_size_and_weights_only_matches() {
     let ctx = common::validated_context();
     let prepared = common::house();
     let (reference, settings) = common::house_reference(&ctx);
-    let pairs = [
-        (TechniqueId::Pca4, TechniqueId::Pca4w),
-        (TechniqueId::Pca8, TechniqueId::Pca8w),
-        (TechniqueId::Pca12, TechniqueId::Pca12w),
-        (TechniqueId::Pca16, TechniqueId::Pca16w),
-        (TechniqueId::Pca24, TechniqueId::Pca24w),
-    ];
+    let pairs = [4, 8, 12, 16, 24].map(|m| {
+        (
+            Technique::Pca {
+                m,
+                weights_only: false,
+            },
+            Technique::Pca {
+                m,
+                weights_only: true,
+            },
+        )
+    });
     let mut errors = Vec::new();
     for (table, weights_only) in pairs {
         let a = common::render(&ctx, prepared, table, HwPath::Dx10, &settings);
@@ -36,7 +42,13 @@ fn error_falls_with_basis_size_and_weights_only_matches() {
         );
         errors.push(e);
     }
-    let unc6 = common::render(&ctx, prepared, TechniqueId::Unc6, HwPath::Dx10, &settings);
+    let unc6 = common::render(
+        &ctx,
+        prepared,
+        Technique::Unc { order: Order::SIX },
+        HwPath::Dx10,
+        &settings,
+    );
     let e_unc6 = image_error(&unc6, &reference.frame)
         .expect("overlap")
         .rel_rmse;

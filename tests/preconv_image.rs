@@ -8,7 +8,7 @@ mod common;
 use glam::Vec3;
 use shvis::render::{Frame, FrameSettings};
 use shvis::scene::house;
-use shvis::technique::{HwPath, TechniqueId};
+use shvis::technique::{HwPath, Technique};
 
 const WIDTH: u32 = 640;
 const HEIGHT: u32 = 400;
@@ -31,7 +31,7 @@ fn render(flat_normals: bool) -> Frame {
     common::render(
         &ctx,
         common::house(),
-        TechniqueId::Preconv,
+        Technique::Preconv,
         HwPath::Dx10,
         &FrameSettings {
             width: WIDTH,

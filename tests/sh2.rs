@@ -26,7 +26,7 @@ fn generated_product_include_is_current() {
 #[test]
 fn sh2_error_is_below_preconv_and_paths_agree() {
     use shvis::report::metrics::image_error;
-    use shvis::technique::{HwPath, TechniqueId};
+    use shvis::technique::{HwPath, Technique};
     let ctx = common::validated_context();
     let (reference, settings) = common::house_reference(&ctx);
     let prepared = common::house();
@@ -36,7 +36,7 @@ fn sh2_error_is_below_preconv_and_paths_agree() {
             let frame = common::render(&ctx, prepared, t, path, &settings);
             image_error(&frame, &reference.frame).unwrap().rel_rmse
         };
-        let (e_sh2, e_preconv) = (e(TechniqueId::Sh2), e(TechniqueId::Preconv));
+        let (e_sh2, e_preconv) = (e(Technique::Sh2), e(Technique::Preconv));
         println!(
             "{path}: relative RMSE sh2 {e_sh2:.4}, preconv {e_preconv:.4} (reference noise {:.4})",
             reference.rel_noise

@@ -13,7 +13,7 @@ use shvis::env::EnvMap;
 use shvis::report::metrics::image_error;
 use shvis::scene::{Camera, Material, Mesh, Scene, Texture8, Vertex, lightmap_uv};
 use shvis::sh::Order;
-use shvis::technique::{HwPath, TechniqueId};
+use shvis::technique::{HwPath, Technique};
 
 /// Appends the quad a, b, c, d (counter-clockwise seen from the side `normal` points to).
 fn quad(mesh: &mut Mesh, corners: [[f32; 3]; 4], normal: [f32; 3], tint: f32) {
@@ -208,7 +208,7 @@ fn shlmap_meets_the_reference_with_two_bounces() {
     let prepared = common::house();
     let mut errors = vec![];
     for &path in HwPath::ALL {
-        let frame = common::render(&ctx, prepared, TechniqueId::Shlmap, path, &settings);
+        let frame = common::render(&ctx, prepared, Technique::Shlmap, path, &settings);
         let against_bounced = image_error(&frame, &bounced.frame).unwrap().rel_rmse;
         let against_direct = image_error(&frame, &reference.frame).unwrap().rel_rmse;
         println!(
@@ -272,8 +272,7 @@ fn shlmap_tracks_strong_inter_reflection() {
         res,
         values: vec![1.0; (res * res) as usize],
         covered: map.covered.clone(),
-        rays_traced: 0,
-        seconds: 0.0,
+        stats: shvis::bake::BakeStats::default(),
     };
     let radiance = shvis::env::project::project_sh(&env, Order::new(8).unwrap());
     let irradiance = shvis::sh::zonal::irradiance_from_radiance(&radiance[..9], Order::THREE);
@@ -288,8 +287,8 @@ fn shlmap_tracks_strong_inter_reflection() {
         h_order: Order::THREE,
     };
     for &path in HwPath::ALL {
-        let tech = shvis::technique::build(&ctx, &gpu, TechniqueId::Shlmap, path, &inputs).unwrap();
-        let frame = gpu.render(&tech, 0, 1).unwrap();
+        let tech = shvis::technique::build(&ctx, &gpu, Technique::Shlmap, path, &inputs).unwrap();
+        let frame = tech.render(&gpu, 0, 1).unwrap();
         let e_bounced = image_error(&frame, &bounced.frame).unwrap().rel_rmse;
         let e_direct = image_error(&frame, &reference.frame).unwrap().rel_rmse;
         println!(

@@ -10,7 +10,7 @@ use shvis::render::{FrameSettings, SceneGpu};
 use shvis::report::metrics::image_error;
 use shvis::sh::Order;
 use shvis::sh::zonal::irradiance_from_radiance;
-use shvis::technique::{self, HwPath, Inputs, TechniqueId};
+use shvis::technique::{self, HwPath, Inputs, Technique};
 
 /// dx9 and dx10 store the same L×H in different parameterizations at the same
 /// `--table-res`; their images may differ by the parameterization error, measured here at
@@ -23,7 +23,8 @@ fn error_falls_with_order_and_paths_agree() {
     let prepared = common::house();
     let (reference, settings) = common::house_reference(&ctx);
     let mut errors = Vec::new();
-    for id in [TechniqueId::Unc3, TechniqueId::Unc4, TechniqueId::Unc6] {
+    for order in [Order::THREE, Order::FOUR, Order::SIX] {
+        let id = Technique::Unc { order };
         let mut per_path = Vec::new();
         for path in [HwPath::Dx9, HwPath::Dx10] {
             let frame = common::render(&ctx, prepared, id, path, &settings);
@@ -75,10 +76,10 @@ fn hdr_sun_renders_finite_on_both_paths() {
             ..prepared.inputs()
         };
         let scene = SceneGpu::new(&ctx, &prepared.scene, &settings).unwrap();
-        for id in [TechniqueId::Unc6, TechniqueId::Preconv] {
+        for id in [Technique::Unc { order: Order::SIX }, Technique::Preconv] {
             for path in [HwPath::Dx9, HwPath::Dx10] {
                 let tech = technique::build(&ctx, &scene, id, path, &inputs).unwrap();
-                let frame = scene.render(&tech, 0, 1).unwrap();
+                let frame = tech.render(&scene, 0, 1).unwrap();
                 let finite = frame.rgba.iter().flatten().all(|c| c.is_finite());
                 let lit = frame
                     .rgba

@@ -4,7 +4,7 @@
 #ifndef SHVIS_COMMON_GLSL
 #define SHVIS_COMMON_GLSL
 
-const float PI = 3.14159265358979323846;
+#include "math.glsl"
 
 layout(std140, set = 0, binding = SHVIS_BINDING_FRAME) uniform FrameParams {
     layout(offset = 0) mat4 clip_from_world;

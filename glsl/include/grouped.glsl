@@ -1,4 +1,5 @@
-// The fragment body shared by unc.frag and pca.frag (src/technique/grouped.rs):
+// The fragment body shared by unc.frag and pca.frag (src/technique/unc.rs and pca.rs;
+// layouts in src/technique/texels.rs and tables.rs):
 //   radiance = albedo/π · (mean(n) + Σ_g dot(texel_g(uv), table_{c,g}(n)))
 // GROUPS (≤ 9) texel groups of 4 values; tables per colour c and group g, 4 values per RGBA
 // texel; SHVIS_WITH_MEAN adds an RGB mean table (PCA's V_e term). dx9: texel groups in
@@ -18,20 +19,21 @@ layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform Groupe
     layout(offset = 0) vec4 unscale_res;
 } params;
 
+#define SHVIS_PER_TEXEL_GROUPS GROUPS
+#include "per_texel.glsl"
+#include "diffuse_out.glsl"
+#define SAMPLE_TEXEL(g) SAMPLE_PER_TEXEL(g)
+
 #if SHVIS_PATH_DX9
-layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0) uniform sampler2D texel_tex[GROUPS];
 layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0 + 1) uniform sampler2D table_tex[3];
 #if SHVIS_WITH_MEAN
 layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0 + 2) uniform sampler2D mean_tex;
 #endif
-#define SAMPLE_TEXEL(g) texture(texel_tex[g], in_uv_lightmap)
 // Sphere g of colour c: hemisphere squares at columns 2g (y ≥ 0) and 2g + 1 (y < 0).
 #define SAMPLE_TABLE(c, g) texture(table_tex[c], vec2((2.0 * float(g) + hemi.z + hemi.x) / (2.0 * float(GROUPS)), hemi.y))
 #define SAMPLE_MEAN() texture(mean_tex, vec2((hemi.z + hemi.x) / 2.0, hemi.y)).rgb
 #else
-layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0) uniform sampler2DArray texel_tex;
 layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0 + 1) uniform samplerCubeArray table_tex;
-#define SAMPLE_TEXEL(g) texture(texel_tex, vec3(in_uv_lightmap, float(g)))
 #define SAMPLE_TABLE(c, g) texture(table_tex, vec4(n, float((c) * GROUPS + (g))))
 #define SAMPLE_MEAN() texture(table_tex, vec4(n, float(3 * GROUPS))).rgb
 #endif
@@ -40,8 +42,6 @@ layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0 + 1) uniform samplerC
     vec4 v = SAMPLE_TEXEL(g); \
     sum += vec3(dot(v, SAMPLE_TABLE(0, g)), dot(v, SAMPLE_TABLE(1, g)), dot(v, SAMPLE_TABLE(2, g))); \
 }
-
-layout(location = 0) out vec4 out_radiance;
 
 void main() {
     vec3 n = shading_normal();
@@ -82,7 +82,7 @@ void main() {
 #error "at most 9 groups (order-6 visibility, 36 values)"
 #endif
     vec3 irradiance = max(sum * params.unscale_res.x, vec3(0.0));
-    out_radiance = vec4(material_albedo() / PI * irradiance, 1.0);
+    write_diffuse(irradiance);
 }
 
 #endif

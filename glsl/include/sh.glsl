@@ -3,14 +3,15 @@
 #ifndef SHVIS_SH_GLSL
 #define SHVIS_SH_GLSL
 
+#include "math.glsl"
+
 // The 9 basis functions of order 3 (bands 0..2) at unit direction d.
 void sh_eval_order3(vec3 d, out float y[9]) {
-    const float pi = 3.14159265358979323846;
-    const float k00 = 0.5 * sqrt(1.0 / pi);
-    const float k1 = sqrt(3.0 / (4.0 * pi));
-    const float k2 = 0.5 * sqrt(15.0 / pi);
-    const float k20 = 0.25 * sqrt(5.0 / pi);
-    const float k22 = 0.25 * sqrt(15.0 / pi);
+    const float k00 = 0.5 * sqrt(1.0 / PI);
+    const float k1 = sqrt(3.0 / (4.0 * PI));
+    const float k2 = 0.5 * sqrt(15.0 / PI);
+    const float k20 = 0.25 * sqrt(5.0 / PI);
+    const float k22 = 0.25 * sqrt(15.0 / PI);
     y[0] = k00;
     y[1] = -k1 * d.y;
     y[2] = k1 * d.z;
@@ -38,8 +39,7 @@ vec3 sh_eval_rgb_order3(vec4 c[9], vec3 d) {
 // clamped-cosine convolution (band factors A_l = π, 2π/3, π/4; src/sh/zonal.rs) evaluated
 // at unit n. Used where radiance, not irradiance, reaches the shader (shlmap, sh2).
 vec3 sh_irradiance_order3(vec3 radiance[9], vec3 n) {
-    const float pi = 3.14159265358979323846;
-    const float a[3] = float[3](pi, 2.0 * pi / 3.0, pi / 4.0);
+    const float a[3] = float[3](PI, 2.0 * PI / 3.0, PI / 4.0);
     float y[9];
     sh_eval_order3(n, y);
     vec3 sum = radiance[0] * (a[0] * y[0]);

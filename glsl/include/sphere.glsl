@@ -6,9 +6,11 @@
 #ifndef SHVIS_SPHERE_GLSL
 #define SHVIS_SPHERE_GLSL
 
+#include "math.glsl"
+
 // Unit disk → square [−1, 1]² (Shirley & Chiu 1997); src/sphere/concentric.rs.
 vec2 concentric_disk_to_square(vec2 q) {
-    const float quarter_pi = 0.78539816339744831;
+    const float quarter_pi = PI / 4.0;
     float r = length(q);
     if (r == 0.0) {
         return vec2(0.0);

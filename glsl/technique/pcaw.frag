@@ -16,15 +16,10 @@ layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform PcaWei
     layout(offset = 0) vec4 coeffs[(BASIS_COUNT + 1) * 9];
 } params;
 
-#if SHVIS_PATH_DX9
-layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0) uniform sampler2D weight_tex[GROUPS];
-#define SAMPLE_WEIGHTS(g) texture(weight_tex[g], in_uv_lightmap)
-#else
-layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0) uniform sampler2DArray weight_tex;
-#define SAMPLE_WEIGHTS(g) texture(weight_tex, vec3(in_uv_lightmap, float(g)))
-#endif
-
-layout(location = 0) out vec4 out_radiance;
+#define SHVIS_PER_TEXEL_GROUPS GROUPS
+#include "per_texel.glsl"
+#include "diffuse_out.glsl"
+#define SAMPLE_WEIGHTS(g) SAMPLE_PER_TEXEL(g)
 
 void main() {
     vec4 e[9];
@@ -63,5 +58,5 @@ void main() {
         }
     }
     vec3 irradiance = max(sh_eval_rgb_order3(e, shading_normal()), vec3(0.0));
-    out_radiance = vec4(material_albedo() / PI * irradiance, 1.0);
+    write_diffuse(irradiance);
 }

@@ -12,19 +12,13 @@ layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform Sh2Par
     layout(offset = 0) vec4 lighting_sh[9]; // order-3 radiance, RGB in .rgb
 } params;
 
-#if SHVIS_PATH_DX9
-layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0) uniform sampler2D vis_tex;
-vec4 sample_visibility(vec2 uv) { return texture(vis_tex, uv); }
-#else
-layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0) uniform sampler2DArray vis_tex;
-vec4 sample_visibility(vec2 uv) { return texture(vis_tex, vec3(uv, 0.0)); }
-#endif
-
-layout(location = 0) out vec4 out_radiance;
+#define SHVIS_PER_TEXEL_GROUPS 1
+#include "per_texel.glsl"
+#include "diffuse_out.glsl"
 
 void main() {
     vec3 incident[9];
-    sh_product_l3_v2(params.lighting_sh, sample_visibility(in_uv_lightmap), incident);
+    sh_product_l3_v2(params.lighting_sh, SAMPLE_PER_TEXEL(0), incident);
     vec3 irradiance = max(sh_irradiance_order3(incident, shading_normal()), vec3(0.0));
-    out_radiance = vec4(material_albedo() / PI * irradiance, 1.0);
+    write_diffuse(irradiance);
 }

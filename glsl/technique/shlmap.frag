@@ -13,19 +13,14 @@ layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform ShLigh
     layout(offset = 0) vec4 unscale;
 } params;
 
-#if SHVIS_PATH_DX9
-layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0) uniform sampler2D coeff_tex[SHVIS_SHLMAP_GROUPS];
-#define SAMPLE_GROUP(g) texture(coeff_tex[g], in_uv_lightmap)
-#else
-layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0) uniform sampler2DArray coeff_tex;
-#define SAMPLE_GROUP(g) texture(coeff_tex, vec3(in_uv_lightmap, float(g)))
-#endif
+#define SHVIS_PER_TEXEL_GROUPS SHVIS_SHLMAP_GROUPS
+#include "per_texel.glsl"
+#include "diffuse_out.glsl"
+#define SAMPLE_GROUP(g) SAMPLE_PER_TEXEL(g)
 
 #if SHVIS_SHLMAP_GROUPS != 7
 #error "the unpacking below is written for 27 values in 7 groups"
 #endif
-
-layout(location = 0) out vec4 out_radiance;
 
 void main() {
     vec4 g0 = SAMPLE_GROUP(0), g1 = SAMPLE_GROUP(1), g2 = SAMPLE_GROUP(2),
@@ -36,5 +31,5 @@ void main() {
         g3.xyz, vec3(g3.w, g4.xy), vec3(g4.zw, g5.x), g5.yzw,
         g6.xyz);
     vec3 irradiance = sh_irradiance_order3(radiance, shading_normal()) * params.unscale.x;
-    out_radiance = vec4(material_albedo() / PI * max(irradiance, vec3(0.0)), 1.0);
+    write_diffuse(max(irradiance, vec3(0.0)));
 }

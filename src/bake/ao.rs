@@ -24,6 +24,8 @@ use glam::{DVec2, Vec3};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
+use super::BakeStats;
+use super::directions::{splitmix64, unit_f64};
 use super::raster::{LightmapTexels, dilate};
 use super::trace::Tracer;
 
@@ -50,34 +52,8 @@ pub struct AoMap {
     pub values: Vec<f32>,
     /// Which texels were baked (the rest are dilated or 1).
     pub covered: Vec<bool>,
-    /// Rays traced in total.
-    pub rays_traced: u64,
-    /// Wall-clock time of the bake, seconds.
-    pub seconds: f64,
-}
-
-impl AoMap {
-    /// Bake throughput, rays per second (0 when nothing was timed).
-    pub fn rays_per_second(&self) -> f64 {
-        if self.seconds > 0.0 {
-            self.rays_traced as f64 / self.seconds
-        } else {
-            0.0
-        }
-    }
-}
-
-/// SplitMix64 finalizer (Steele et al. 2014): a well-mixed 64-bit hash.
-fn splitmix64(mut x: u64) -> u64 {
-    x = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    x ^ (x >> 31)
-}
-
-/// Uniform in [0, 1) from the top 53 bits of `h`.
-fn unit_f64(h: u64) -> f64 {
-    (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    /// Rays and time of the bake.
+    pub stats: BakeStats,
 }
 
 /// Cranley–Patterson shift of texel `texel_index` under `seed`.
@@ -205,14 +181,15 @@ pub fn bake_ao(tracer: &Tracer, texels: &LightmapTexels, settings: &AoSettings) 
         res: texels.res,
         values,
         covered: texels.covered.clone(),
-        rays_traced: rays_done.into_inner(),
-        seconds: start.elapsed().as_secs_f64(),
+        stats: BakeStats {
+            rays_traced: rays_done.into_inner(),
+            seconds: start.elapsed().as_secs_f64(),
+        },
     };
     log::info!(
-        "AO bake: {covered} texels × {} rays in {:.2} s = {:.2} Mrays/s",
+        "AO bake: {covered} texels × {} rays: {}",
         settings.rays,
-        map.seconds,
-        map.rays_per_second() * 1e-6
+        map.stats
     );
     map
 }

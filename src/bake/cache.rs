@@ -182,8 +182,8 @@ pub fn encode_visibility(map: &VisibilityMap, key: u64) -> Vec<u8> {
     let mut payload = Vec::with_capacity(24 + 4 * map.coeffs.len() + 5 * texels);
     payload.extend_from_slice(&map.res.to_le_bytes());
     payload.extend_from_slice(&map.order.get().to_le_bytes());
-    payload.extend_from_slice(&map.rays_traced.to_le_bytes());
-    payload.extend_from_slice(&map.seconds.to_le_bytes());
+    payload.extend_from_slice(&map.stats.rays_traced.to_le_bytes());
+    payload.extend_from_slice(&map.stats.seconds.to_le_bytes());
     for c in &map.coeffs {
         payload.extend_from_slice(&c.to_le_bytes());
     }
@@ -314,8 +314,10 @@ pub fn decode_visibility(
         coeffs,
         covered,
         ao,
-        rays_traced,
-        seconds,
+        stats: super::BakeStats {
+            rays_traced,
+            seconds,
+        },
     })
 }
 
@@ -361,6 +363,7 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), BakeError> {
 /// [`BakeError::Io`] when `dir` cannot be created, [`BakeError::Exr`] when a file
 /// cannot be written.
 pub fn write_exr_layers(dir: &Path, map: &VisibilityMap) -> Result<(), BakeError> {
+    use crate::files::EXR_ENCODING;
     use exr::prelude::{Image, SpecificChannels, WritableImage};
     fs::create_dir_all(dir).map_err(|source| BakeError::Io {
         path: dir.to_path_buf(),
@@ -383,16 +386,20 @@ pub fn write_exr_layers(dir: &Path, map: &VisibilityMap) -> Result<(), BakeError
                 0.0
             }
         };
-        exr::prelude::write_rgba_file(&path, res, res, |x, y| {
+        let channels = SpecificChannels::rgba(|p: exr::math::Vec2<usize>| {
+            let (x, y) = (p.0, p.1);
             (c(x, y, 0), c(x, y, 1), c(x, y, 2), c(x, y, 3))
-        })
-        .map_err(|e| exr_err(&path, e))?;
+        });
+        Image::from_encoded_channels((res, res), EXR_ENCODING, channels)
+            .write()
+            .to_file(&path)
+            .map_err(|e| exr_err(&path, e))?;
     }
     let path = dir.join("ao.exr");
     let channels = SpecificChannels::build()
         .with_channel("Y")
         .with_pixel_fn(|p: exr::math::Vec2<usize>| (map.ao[p.1 * res + p.0],));
-    Image::from_channels((res, res), channels)
+    Image::from_encoded_channels((res, res), EXR_ENCODING, channels)
         .write()
         .to_file(&path)
         .map_err(|e| exr_err(&path, e))

@@ -61,7 +61,7 @@ pub(crate) fn splitmix64(mut x: u64) -> u64 {
 }
 
 /// Uniform in [0, 1) from the top 53 bits of `h`.
-fn unit_f64(h: u64) -> f64 {
+pub(crate) fn unit_f64(h: u64) -> f64 {
     (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
 }
 

@@ -25,6 +25,38 @@ pub mod surface;
 pub mod trace;
 pub mod visibility;
 
+/// Work and time of one bake, shared by every bake that traces rays.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BakeStats {
+    /// Rays traced in total (directions below a texel's horizon are not traced).
+    pub rays_traced: u64,
+    /// Wall-clock time of the bake, seconds.
+    pub seconds: f64,
+}
+
+impl BakeStats {
+    /// Throughput, traced rays per second (0 when nothing was timed).
+    pub fn rays_per_second(&self) -> f64 {
+        if self.seconds > 0.0 {
+            self.rays_traced as f64 / self.seconds
+        } else {
+            0.0
+        }
+    }
+}
+
+impl std::fmt::Display for BakeStats {
+    /// "1.59 s, 49.00 Mrays/s"
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:.2} s, {:.2} Mrays/s",
+            self.seconds,
+            self.rays_per_second() * 1e-6
+        )
+    }
+}
+
 /// Fewest rays per texel.
 pub const MIN_RAYS: u32 = 1;
 /// Most rays per texel.

@@ -375,8 +375,7 @@ mod tests {
             coeffs: (0..texels * n).map(|i| f(i / n, i % n)).collect(),
             covered: vec![true; texels],
             ao: vec![1.0; texels],
-            rays_traced: 0,
-            seconds: 0.0,
+            stats: crate::bake::BakeStats::default(),
         }
     }
 

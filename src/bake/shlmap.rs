@@ -40,6 +40,7 @@ use glam::{DVec3, Vec3};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
+use super::BakeStats;
 use super::directions::{DirectionSet, above_horizon};
 use super::raster::{LightmapTexels, dilate};
 use super::surface::SurfaceReader;
@@ -73,8 +74,8 @@ pub struct ShLightmap {
     /// Texel-major, `SH_LIGHTMAP_COEFFS` RGB triples per texel (res² × 9).
     pub coeffs: Vec<[f32; 3]>,
     pub covered: Vec<bool>,
-    pub rays_traced: u64,
-    pub seconds: f64,
+    /// Rays and time of the bake, all bounces.
+    pub stats: BakeStats,
 }
 
 impl ShLightmap {
@@ -229,16 +230,17 @@ pub fn bake_sh_lightmap(
         bounces: settings.bounces,
         coeffs: planes.iter().flat_map(|p| p.as_rgb()).collect(),
         covered: texels.covered.clone(),
-        rays_traced: rays_done.into_inner(),
-        seconds: start.elapsed().as_secs_f64(),
+        stats: BakeStats {
+            rays_traced: rays_done.into_inner(),
+            seconds: start.elapsed().as_secs_f64(),
+        },
     };
     log::info!(
-        "SH lightmap bake: {} texels × {} directions, {} bounces in {:.2} s = {:.2} Mrays/s",
+        "SH lightmap bake: {} texels × {} directions, {} bounces: {}",
         covered.len(),
         settings.rays,
         settings.bounces,
-        map.seconds,
-        map.rays_traced as f64 / map.seconds.max(1e-9) * 1e-6
+        map.stats
     );
     map
 }

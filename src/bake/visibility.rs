@@ -47,6 +47,7 @@ use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
+use super::BakeStats;
 use super::directions::{DirectionSet, ShProjector, above_horizon};
 use super::raster::{LightmapTexels, dilate};
 use super::trace::{PACKET_RAYS, RayPacket, Tracer};
@@ -95,22 +96,11 @@ pub struct VisibilityMap {
     /// Cosine-weighted escaping fraction of the same rays, in [0, 1]; gutters dilated,
     /// 1 further out.
     pub ao: Vec<f32>,
-    /// Rays traced in total (directions below a texel's horizon are not traced).
-    pub rays_traced: u64,
-    /// Wall-clock time of the bake, seconds.
-    pub seconds: f64,
+    /// Rays and time of the bake.
+    pub stats: BakeStats,
 }
 
 impl VisibilityMap {
-    /// Bake throughput, traced rays per second (0 when nothing was timed).
-    pub fn rays_per_second(&self) -> f64 {
-        if self.seconds > 0.0 {
-            self.rays_traced as f64 / self.seconds
-        } else {
-            0.0
-        }
-    }
-
     /// The order² coefficients of texel `index` (row-major y·res + x).
     ///
     /// # Panics
@@ -312,16 +302,17 @@ pub fn bake_visibility(
         coeffs,
         covered: texels.covered.clone(),
         ao,
-        rays_traced: rays_done.into_inner(),
-        seconds: start.elapsed().as_secs_f64(),
+        stats: BakeStats {
+            rays_traced: rays_done.into_inner(),
+            seconds: start.elapsed().as_secs_f64(),
+        },
     };
     log::info!(
-        "visibility bake: {} texels × {} directions (order {}) in {:.2} s = {:.2} Mrays/s traced",
+        "visibility bake: {} texels × {} directions (order {}): {} traced",
         order.len(),
         settings.rays,
         settings.order.get(),
-        map.seconds,
-        map.rays_per_second() * 1e-6
+        map.stats
     );
     map
 }

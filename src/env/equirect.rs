@@ -156,14 +156,18 @@ pub(super) fn save_exr(map: &EnvMap, path: &Path) -> Result<(), EnvError> {
             ),
         });
     }
-    exr::prelude::write_rgb_file(path, w, h, |x, y| {
-        let t = map.texels[y * w + x];
+    use exr::prelude::{Image, SpecificChannels, WritableImage};
+    let channels = SpecificChannels::rgb(|p: exr::math::Vec2<usize>| {
+        let t = map.texels[p.1 * w + p.0];
         (t[0], t[1], t[2])
-    })
-    .map_err(|e| EnvError::Write {
-        path: path.to_owned(),
-        detail: e.to_string(),
-    })
+    });
+    Image::from_encoded_channels((w, h), crate::files::EXR_ENCODING, channels)
+        .write()
+        .to_file(path)
+        .map_err(|e| EnvError::Write {
+            path: path.to_owned(),
+            detail: e.to_string(),
+        })
 }
 
 #[cfg(test)]

@@ -23,6 +23,12 @@ pub struct ImageDesc {
 }
 
 impl ImageDesc {
+    /// Bytes of mip level 0 over all layers (0 for a format shvis does not upload).
+    pub fn level0_bytes(&self) -> u64 {
+        let texel = format_texel_bytes(self.format).unwrap_or(0) as u64;
+        texel * self.width as u64 * self.height as u64 * self.layers as u64
+    }
+
     /// A sampled 2D texture that is filled by upload.
     pub fn texture_2d(format: vk::Format, width: u32, height: u32) -> Self {
         ImageDesc {

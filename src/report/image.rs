@@ -24,11 +24,19 @@ pub fn write_frame(path: &Path, frame: &Frame, exposure_ev: f32) -> Result<(), R
 
 /// Linear RGBA f32 OpenEXR.
 pub fn write_exr(path: &Path, frame: &Frame) -> Result<(), ReportError> {
+    use exr::prelude::{Image, SpecificChannels, WritableImage};
     let w = frame.width as usize;
-    exr::prelude::write_rgba_file(path, w, frame.height as usize, |x, y| {
-        let t = frame.rgba[y * w + x];
+    let channels = SpecificChannels::rgba(|p: exr::math::Vec2<usize>| {
+        let t = frame.rgba[p.1 * w + p.0];
         (t[0], t[1], t[2], t[3])
-    })
+    });
+    Image::from_encoded_channels(
+        (w, frame.height as usize),
+        crate::files::EXR_ENCODING,
+        channels,
+    )
+    .write()
+    .to_file(path)
     .map_err(|e| ReportError::Write {
         path: path.to_path_buf(),
         detail: e.to_string(),

@@ -4,7 +4,12 @@
 use std::path::{Path, PathBuf};
 
 use super::ReportError;
-use super::table::BenchRow;
+use super::table::{BenchRow, RowReference};
+use crate::sh::Order;
+use crate::technique::{HwPath, Technique};
+
+/// The uncompressed row the PCA plot compares with.
+const UNC6: Technique = Technique::Unc { order: Order::SIX };
 
 /// TrueType fonts tried, in order, for plot labels after `$SHVIS_FONT`. plotters is built
 /// with `ab_glyph` (no system font lookup), so a font file must be registered by hand.
@@ -74,32 +79,29 @@ where
 /// the rows hold no errors).
 pub fn write_pca_error_plot(
     rows: &[BenchRow],
-    path: &str,
+    path: HwPath,
     dir: &Path,
 ) -> Result<Vec<PathBuf>, ReportError> {
     use plotters::prelude::*;
     let series = |weights_only: bool| -> Vec<(f64, f64)> {
         rows.iter()
-            .filter(|r| {
-                r.path == path
-                    && r.technique.starts_with("pca")
-                    && r.technique.ends_with('w') == weights_only
-            })
-            .filter_map(|r| {
-                let m: f64 = r
-                    .technique
-                    .trim_start_matches("pca")
-                    .trim_end_matches('w')
-                    .parse()
-                    .ok()?;
-                Some((m, r.rel_rmse?))
+            .filter(|r| r.path == path)
+            .filter_map(|r| match r.technique {
+                Technique::Pca { m, weights_only: w } if w == weights_only => {
+                    Some((f64::from(m), r.rel_rmse?))
+                }
+                Technique::Pca { .. }
+                | Technique::Unc { .. }
+                | Technique::Shlmap
+                | Technique::Preconv
+                | Technique::Sh2 => None,
             })
             .collect()
     };
     let (table, weights) = (series(false), series(true));
     let unc6 = rows
         .iter()
-        .find(|r| r.path == path && r.technique == "unc6")
+        .find(|r| r.path == path && r.technique == UNC6)
         .and_then(|r| r.rel_rmse);
     if table.is_empty() && weights.is_empty() {
         return Ok(vec![]);
@@ -135,7 +137,7 @@ pub fn write_pca_error_plot(
 }
 
 struct PcaPlot<'a> {
-    path: &'a str,
+    path: HwPath,
     table: &'a [(f64, f64)],
     weights: &'a [(f64, f64)],
     unc6: Option<f64>,
@@ -171,7 +173,10 @@ where
         .y_desc("relative RMSE")
         .draw()
         .map_err(|e| format!("{e:?}"))?;
-    let styles = [("pcaN (tables)", &BLUE), ("pcaNw (weights only)", &RED)];
+    let styles = [
+        ("a table per basis vector", &BLUE),
+        ("weights only (basis in uniforms)", &RED),
+    ];
     for ((name, colour), data) in styles.iter().zip([d.table, d.weights]) {
         let c = *colour;
         chart
@@ -190,7 +195,7 @@ where
                 BLACK.stroke_width(1),
             ))
             .map_err(|e| format!("{e:?}"))?
-            .label("unc6")
+            .label(UNC6.name())
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
     }
     chart
@@ -237,14 +242,14 @@ pub fn write_speed_error_plot(
         .results
         .iter()
         .filter_map(|r| {
-            let starred = r.reference != "direct";
+            let starred = r.reference != RowReference::Direct;
             Some(SpeedErrorPoint {
                 label: if starred {
                     format!("{}*", r.technique)
                 } else {
-                    r.technique.clone()
+                    r.technique.name()
                 },
-                path: r.path.clone(),
+                path: r.path.to_string(),
                 ms: r.ms_median.filter(|&m| m > 0.0)?,
                 error: r.rel_rmse?,
                 on_front: false,
@@ -280,7 +285,7 @@ pub fn write_speed_error_plot(
     let starred = table
         .results
         .iter()
-        .find(|r| r.reference != "direct" && r.reference != "none")
+        .find(|r| matches!(r.reference, RowReference::Bounced(_)))
         .map(|r| {
             format!(
                 "{}* against the reference with {}",

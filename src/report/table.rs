@@ -6,12 +6,40 @@ use std::path::Path;
 use serde::Serialize;
 
 use super::ReportError;
+use crate::technique::{HwPath, Technique};
+
+/// What a row's error is measured against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RowReference {
+    /// No reference was rendered.
+    None,
+    /// The direct-light reference.
+    Direct,
+    /// The reference with this many bounces of inter-reflection.
+    Bounced(u32),
+}
+
+impl std::fmt::Display for RowReference {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RowReference::None => f.write_str("none"),
+            RowReference::Direct => f.write_str("direct"),
+            RowReference::Bounced(n) => write!(f, "{n} bounces"),
+        }
+    }
+}
+
+impl Serialize for RowReference {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
 
 /// One technique × path row.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct BenchRow {
-    pub technique: String,
-    pub path: String,
+    pub technique: Technique,
+    pub path: HwPath,
     pub ms_median: Option<f64>,
     pub ms_min: Option<f64>,
     pub ms_max: Option<f64>,
@@ -28,17 +56,16 @@ pub struct BenchRow {
     pub paper_ms: Option<f64>,
     /// The paper's ratio to its `preconv`.
     pub paper_ratio_to_preconv: Option<f64>,
-    /// What `rel_rmse` is measured against: "direct" (the direct-light reference),
-    /// "N bounces" (with inter-reflection, for `shlmap`) or "none".
-    pub reference: String,
+    /// What `rel_rmse` is measured against (JSON: "direct", "N bounces" or "none").
+    pub reference: RowReference,
 }
 
 /// Fills `ratio_to_preconv` of every row from the `preconv` row of its path.
 pub fn fill_ratios_to_preconv(rows: &mut [BenchRow]) {
-    let preconv: Vec<(String, f64)> = rows
+    let preconv: Vec<(HwPath, f64)> = rows
         .iter()
-        .filter(|r| r.technique == "preconv")
-        .filter_map(|r| Some((r.path.clone(), r.ms_median?)))
+        .filter(|r| r.technique == Technique::Preconv)
+        .filter_map(|r| Some((r.path, r.ms_median?)))
         .collect();
     for row in rows.iter_mut() {
         row.ratio_to_preconv = preconv
@@ -94,9 +121,11 @@ impl BenchTable {
         s += "| technique | path | ms median | ms min | ms max | frames | ×preconv | paper ×preconv | rel. RMSE | PSNR dB | texel bytes | table bytes | textures | lookups/px |\n";
         s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
         for r in &self.results {
-            let rmse = match (r.rel_rmse, r.reference.as_str()) {
-                (Some(e), kind) if kind != "direct" => format!("{e:.4} ({kind})"),
-                (e, _) => opt(e, 4),
+            let rmse = match (r.rel_rmse, r.reference) {
+                (Some(e), RowReference::Bounced(_)) => format!("{e:.4} ({})", r.reference),
+                (e, RowReference::Direct | RowReference::None | RowReference::Bounced(_)) => {
+                    opt(e, 4)
+                }
             };
             s += &format!(
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",

@@ -83,6 +83,9 @@ pub enum StudyError {
         /// What plotters reported.
         message: String,
     },
+    /// The GPU half of the study failed.
+    #[error(transparent)]
+    Gpu(#[from] crate::gpu::GpuError),
 }
 
 /// One point of Figure 8: the MSE of one parameterization at one resolution and order.

@@ -16,6 +16,7 @@ use ash::vk;
 use glam::DVec3;
 use gpu_allocator::MemoryLocation;
 
+use super::params::StudyError;
 use crate::gpu::{
     Buffer, ComputePipeline, ComputePipelineDesc, Context, GpuError, Image, ImageDesc, Resource,
     Sampler, SamplerKind, ShaderStage, compile_glsl,
@@ -237,4 +238,37 @@ pub fn gpu_summary_markdown(points: &[GpuStudyPoint], device: &str, directions: 
          that uses exactly 8 bits shows differences near 1e-3 here).\n"
     );
     s
+}
+
+/// The GPU half of `shvis study params`: reconstructs every parameterization × resolution
+/// on `ctx` at the first `gpu_directions` of the study's `directions` (same `seed`), writes
+/// `gpu.csv` into `dir` and appends the summary to its `params.md`. Returns the CSV path.
+///
+/// # Errors
+/// The GPU's, or [`StudyError::Io`] when a file cannot be written.
+pub fn run_and_write(
+    ctx: &Arc<Context>,
+    dir: &std::path::Path,
+    directions: usize,
+    gpu_directions: usize,
+    seed: u64,
+) -> Result<std::path::PathBuf, StudyError> {
+    let mut dirs = super::params::study_directions(directions.min(gpu_directions.max(1)), seed);
+    dirs.truncate(gpu_directions.max(1));
+    let configs: Vec<(Parameterization, u32)> = Parameterization::ALL
+        .iter()
+        .flat_map(|&p| super::params::resolutions(p).iter().map(move |&r| (p, r)))
+        .collect();
+    let points = run_gpu_study(ctx, &configs, Order::SIX, &dirs)?;
+    let io = |path: &std::path::Path| {
+        let path = path.to_path_buf();
+        move |source| StudyError::Io { path, source }
+    };
+    let csv_path = dir.join("gpu.csv");
+    std::fs::write(&csv_path, gpu_csv(&points)).map_err(io(&csv_path))?;
+    let md_path = dir.join("params.md");
+    let mut md = std::fs::read_to_string(&md_path).unwrap_or_default();
+    md += &gpu_summary_markdown(&points, ctx.device_name(), dirs.len());
+    std::fs::write(&md_path, md).map_err(io(&md_path))?;
+    Ok(csv_path)
 }

@@ -6,11 +6,11 @@
 //! into the basis and the mean (so the shader reads weights in [0, 1] straight from RGBA8
 //! textures, M/4 of them). Eq. (6) then needs, per lighting:
 //!
-//! - `pcaN`: a colour table per basis vector and one for the mean,
+//! - `pcaM`: a colour table per basis vector and one for the mean,
 //!   T_k(n) = ∫ L V_k H_n = Σ_j V_kj (L×H_n)_j, built from the order-6 L×H table (`bake::lxh`)
-//!   and laid out like `unc*` (`technique::grouped`: 4 basis vectors per RGBA texel, per
+//!   and laid out like `unc*` (`super::tables`: 4 basis vectors per RGBA texel, per
 //!   colour) — M + 1 dependent lookups per pixel;
-//! - `pcaNw`: per basis vector the order-3 SH of V_k·L (Gaunt product, `sh::product`),
+//! - `pcaMw`: per basis vector the order-3 SH of V_k·L (Gaunt product, `sh::product`),
 //!   already multiplied by the clamped-cosine factors A_l, in a uniform block; the shader
 //!   sums the weighted vectors and evaluates at the normal — no dependent lookups.
 //!
@@ -22,12 +22,13 @@ use std::sync::Arc;
 
 use ash::vk;
 
-use super::grouped::{self, upload_normal_tables, upload_texel_groups};
-use super::unc::table_map;
-use super::{HwPath, Inputs, TechniqueError, TechniqueGpu, TechniqueId, TechniqueStats};
+use super::finish::{TextureSlot, finish};
+use super::tables::{TableParams, table_map, upload_normal_tables};
+use super::texels::{VALUES_PER_TEXEL, pack_groups, upload_texel_groups};
+use super::{HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu};
 use crate::bake::lxh::{LxhMatrices, build_table};
 use crate::bake::pca::{PcaModel, QuantizedPca};
-use crate::gpu::{Buffer, Context, Resource, ShaderStage, compile_glsl, layout};
+use crate::gpu::{Context, Image};
 use crate::render::SceneGpu;
 use crate::sh::Order;
 use crate::sh::product::product;
@@ -36,20 +37,18 @@ use crate::sh::zonal::clamped_cosine_convolution;
 /// Bits per stored weight.
 pub const WEIGHT_BITS: u32 = 8;
 
-/// (M, weights-only) of a `pca*` technique.
-pub fn basis_size(id: TechniqueId) -> (usize, bool) {
-    use TechniqueId::*;
-    match id {
-        Pca4 => (4, false),
-        Pca8 => (8, false),
-        Pca12 => (12, false),
-        Pca16 => (16, false),
-        Pca24 => (24, false),
-        Pca4w => (4, true),
-        Pca8w => (8, true),
-        Pca12w => (12, true),
-        Pca16w => (16, true),
-        _ => (24, true),
+/// Order of the lighting the weights-only variant multiplies the basis with.
+const WEIGHTS_ONLY_LIGHTING_ORDER: u32 = 8;
+
+/// The fragment shader of `pca{m}` / `pca{m}w`.
+pub fn fragment_shader(m: u32, weights_only: bool) -> ShaderVariant {
+    ShaderVariant {
+        path: if weights_only {
+            "technique/pcaw.frag"
+        } else {
+            "technique/pca.frag"
+        },
+        defines: vec![("PCA_GROUPS", m.div_ceil(VALUES_PER_TEXEL as u32))],
     }
 }
 
@@ -71,12 +70,14 @@ pub fn quantized_prefix(model: &PcaModel, m: usize) -> QuantizedPca {
 pub fn build(
     ctx: &Arc<Context>,
     scene: &SceneGpu,
-    id: TechniqueId,
+    m: u32,
+    weights_only: bool,
     path: HwPath,
     inputs: &Inputs<'_>,
 ) -> Result<TechniqueGpu, TechniqueError> {
-    let label = format!("{id}.{path}");
-    let (m, weights_only) = basis_size(id);
+    let technique = Technique::Pca { m, weights_only };
+    let label = format!("{technique}.{path}");
+    let m = m as usize;
     let model = inputs.pca.ok_or_else(|| TechniqueError::Input {
         label: label.clone(),
         detail: "needs the PCA of the visibility bake".into(),
@@ -91,95 +92,90 @@ pub fn build(
         });
     }
     let q = quantized_prefix(model, m);
-    let groups = m / 4;
-    let n = model.order.coeff_count();
-    let texels = (q.res * q.res) as usize;
-    let mut weight_groups: Vec<Vec<u8>> = vec![vec![0u8; texels * 4]; groups];
-    for t in 0..texels {
-        for k in 0..m {
-            weight_groups[k / 4][t * 4 + k % 4] = q.weights_unorm[t * m + k] as u8;
-        }
+    let weights = upload_weights(ctx, path, &q, &label)?;
+    let mut slots = vec![TextureSlot::per_texel(weights)];
+    if weights_only {
+        let block = weights_only_block(&q, model.order, inputs.radiance_sh);
+        return finish(
+            ctx,
+            scene,
+            technique,
+            path,
+            bytemuck::cast_slice(&block),
+            slots,
+        );
     }
-    let weight_bytes: Vec<&[u8]> = weight_groups.iter().map(|g| g.as_slice()).collect();
-    let texel_images = upload_texel_groups(
+    let (table_slots, params) = upload_tables(ctx, path, &q, model.order, inputs, &label)?;
+    slots.extend(table_slots);
+    finish(
+        ctx,
+        scene,
+        technique,
+        path,
+        bytemuck::bytes_of(&params),
+        slots,
+    )
+}
+
+/// The quantized weights, 4 per RGBA8 texel.
+fn upload_weights(
+    ctx: &Arc<Context>,
+    path: HwPath,
+    q: &QuantizedPca,
+    label: &str,
+) -> Result<Vec<Image>, TechniqueError> {
+    let texels = (q.res * q.res) as usize;
+    let groups = pack_groups(texels, q.m, |t, k| q.weights_unorm[t * q.m + k] as u8);
+    let bytes: Vec<&[u8]> = groups.iter().map(|g| g.as_slice()).collect();
+    upload_texel_groups(
         ctx,
         path,
         q.res,
         vk::Format::R8G8B8A8_UNORM,
-        &weight_bytes,
+        &bytes,
         &format!("{label}.weights"),
-    )?;
-    let texel_bytes = (groups * texels * 4) as u64;
+    )
+}
 
-    if weights_only {
-        // Per basis vector and the mean: A_l · SH₃(V_k · L), RGB in .xyz.
-        let l_order = Order::new(8).expect("valid order");
-        let coeffs_of = |v: &[f64]| -> [[f32; 4]; 9] {
-            let mut out = [[0.0f32; 4]; 9];
-            for c in 0..3 {
-                let l: Vec<f64> = inputs.radiance_sh[..l_order.coeff_count()]
-                    .iter()
-                    .map(|rgb| rgb[c])
-                    .collect();
-                let vl = product(&l, l_order, v, model.order, Order::THREE);
-                for (i, o) in out.iter_mut().enumerate() {
-                    let band = (i as f64).sqrt().floor() as u32;
-                    o[c] = (clamped_cosine_convolution(band) * vl[i]) as f32;
-                }
+/// Uniforms of glsl/technique/pcaw.frag: per basis vector, then the mean, the order-3 SH
+/// of V_k·L times A_l, RGB in .xyz.
+fn weights_only_block(q: &QuantizedPca, order: Order, radiance_sh: &[[f64; 3]]) -> Vec<[f32; 4]> {
+    let l_order = Order::new(WEIGHTS_ONLY_LIGHTING_ORDER).expect("valid order");
+    let coeffs_of = |v: &[f64]| -> [[f32; 4]; 9] {
+        let mut out = [[0.0f32; 4]; 9];
+        for c in 0..3 {
+            let l: Vec<f64> = radiance_sh[..l_order.coeff_count()]
+                .iter()
+                .map(|rgb| rgb[c])
+                .collect();
+            let vl = product(&l, l_order, v, order, Order::THREE);
+            for (i, o) in out.iter_mut().enumerate() {
+                let band = (i as f64).sqrt().floor() as u32;
+                o[c] = (clamped_cosine_convolution(band) * vl[i]) as f32;
             }
-            out
-        };
-        let mut block: Vec<[f32; 4]> = Vec::with_capacity((m + 1) * 9);
-        for k in 0..m {
-            block.extend(coeffs_of(&q.basis[k]));
         }
-        block.extend(coeffs_of(&q.mean));
-        let params = Buffer::with_data(
-            ctx,
-            bytemuck::cast_slice(&block),
-            vk::BufferUsageFlags::UNIFORM_BUFFER,
-            &format!("{label}.params"),
-        )?;
-        let all: Vec<_> = texel_images.iter().collect();
-        super::check_path_rules(&label, path, &all)?;
-        let fragment = compile_glsl(
-            "technique/pcaw.frag",
-            ShaderStage::Fragment,
-            &[path.shader_define(), ("PCA_GROUPS", groups as u32)],
-        )?;
-        let sampler = scene.lightmap_sampler();
-        let mut resources = scene.common_resources();
-        resources.push((layout::BINDING_TECHNIQUE_PARAMS, Resource::Uniform(&params)));
-        resources.push((
-            layout::BINDING_TECHNIQUE_TEXTURE0,
-            match path {
-                HwPath::Dx9 => {
-                    Resource::TextureArray(texel_images.iter().map(|i| (i, sampler)).collect())
-                }
-                HwPath::Dx10 => Resource::Texture(&texel_images[0], sampler),
-            },
-        ));
-        let pipeline = scene.mesh_pipeline(ctx, &label, &fragment, &resources)?;
-        drop(resources);
-        let textures_bound = layout::MATERIAL_TEXTURES + texel_images.len() as u32;
-        return Ok(TechniqueGpu {
-            id,
-            path,
-            pipeline,
-            stats: TechniqueStats {
-                texel_bytes,
-                table_bytes: params.size(),
-                textures_bound,
-                lookups_per_pixel: layout::MATERIAL_TEXTURES + groups as u32,
-            },
-            _images: texel_images,
-            _buffers: vec![params],
-        });
-    }
+        out
+    };
+    q.basis
+        .iter()
+        .chain(std::iter::once(&q.mean))
+        .flat_map(|v| coeffs_of(v))
+        .collect()
+}
 
-    // Tables T_k(n) = Σ_j V_kj (L×H_n)_j and the mean's, from the order-6 L×H table.
-    let matrices = LxhMatrices::new(inputs.radiance_sh, model.order, inputs.h_order);
-    let map = table_map(path, inputs.table_res, &label)?;
+/// Tables T_k(n) = Σ_j V_kj (L×H_n)_j and the mean's, from the order-6 L×H table.
+fn upload_tables(
+    ctx: &Arc<Context>,
+    path: HwPath,
+    q: &QuantizedPca,
+    order: Order,
+    inputs: &Inputs<'_>,
+    label: &str,
+) -> Result<(Vec<TextureSlot>, TableParams), TechniqueError> {
+    let n = order.coeff_count();
+    let m = q.m;
+    let matrices = LxhMatrices::new(inputs.radiance_sh, order, inputs.h_order);
+    let map = table_map(path, inputs.table_res, label)?;
     let lxh = build_table(&matrices, map);
     let project = |t: usize, v: &[f64]| -> [f32; 3] {
         let mut s = [0.0f64; 3];
@@ -198,32 +194,79 @@ pub fn build(
         .collect();
     let mean_table: Vec<[f32; 3]> = (0..samples).map(|t| project(t, &q.mean)).collect();
     let mean_fn = |t: usize| mean_table[t];
-    let (table_images, unscale) = upload_normal_tables(
+    let tables = upload_normal_tables(
         ctx,
         path,
         map,
-        groups,
-        |t, g, c| std::array::from_fn(|k| basis_tables[t * m + 4 * g + k][c]),
+        m.div_ceil(VALUES_PER_TEXEL),
+        |t, g, c| std::array::from_fn(|k| basis_tables[t * m + VALUES_PER_TEXEL * g + k][c]),
         Some(&mean_fn),
         &format!("{label}.tables"),
     )?;
-    grouped::finish(
-        ctx,
-        scene,
-        id,
-        path,
-        "technique/pca.frag",
-        &[("PCA_GROUPS", groups as u32)],
-        texel_images,
-        table_images,
-        true,
-        unscale,
-        inputs.table_res,
-        TechniqueStats {
-            texel_bytes,
-            table_bytes: (samples * (3 * groups + 1) * 8) as u64,
-            textures_bound: 0, // filled in by `finish`
-            lookups_per_pixel: layout::MATERIAL_TEXTURES + (4 * groups + 1) as u32,
-        },
-    )
+    let params = TableParams {
+        unscale_res: [tables.unscale, inputs.table_res as f32, 0.0, 0.0],
+    };
+    Ok((tables.slots, params))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A model with `full` orthonormal axis vectors and weights that are a known function
+    /// of (texel, k).
+    fn model(full: usize, texels: usize) -> PcaModel {
+        let n = 36;
+        PcaModel {
+            order: Order::SIX,
+            mean: (0..n).map(|j| 0.01 * j as f64).collect(),
+            basis: (0..full)
+                .map(|k| (0..n).map(|j| if j == k { 1.0 } else { 0.0 }).collect())
+                .collect(),
+            eigenvalues: vec![1.0; n],
+            weights: (0..texels * full)
+                .map(|i| ((i % full) as f32 - 3.0) * 0.25 + (i / full) as f32 * 0.125)
+                .collect(),
+            res: (texels as f64).sqrt() as u32,
+        }
+    }
+
+    #[test]
+    fn quantized_prefix_is_the_first_m_vectors_within_a_quantization_step() {
+        let full = model(24, 16);
+        for m in [4usize, 8, 12, 24] {
+            let q = quantized_prefix(&full, m);
+            assert_eq!((q.m, q.basis.len()), (m, m));
+            assert_eq!(q.weights_unorm.len(), 16 * m);
+            for t in 0..16 {
+                // The prefix reconstructs mean + the first m weighted vectors of the full
+                // model, to within half a quantization step per weight.
+                let want: Vec<f64> = (0..36)
+                    .map(|j| {
+                        full.mean[j]
+                            + (0..m)
+                                .map(|k| full.weights[t * 24 + k] as f64 * full.basis[k][j])
+                                .sum::<f64>()
+                    })
+                    .collect();
+                let got = q.reconstruct(t);
+                let step = 0.5
+                    * q.basis
+                        .iter()
+                        .map(|b| b.iter().fold(0.0f64, |a, v| a.max(v.abs())))
+                        .fold(0.0, f64::max)
+                    / 255.0;
+                for j in 0..36 {
+                    assert!(
+                        (got[j] - want[j]).abs() <= step + 1e-9,
+                        "m {m} t {t} j {j}: {} vs {}",
+                        got[j],
+                        want[j]
+                    );
+                }
+            }
+        }
+        // Asking for more vectors than the fit has gives them all.
+        assert_eq!(quantized_prefix(&model(8, 4), 12).m, 8);
+    }
 }

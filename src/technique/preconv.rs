@@ -12,8 +12,9 @@ use std::sync::Arc;
 use ash::vk;
 use half::f16;
 
-use super::{HwPath, Inputs, TechniqueError, TechniqueGpu, TechniqueId, TechniqueStats};
-use crate::gpu::{Context, Image, ImageDesc, layout};
+use super::finish::{TextureSlot, finish};
+use super::{HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu};
+use crate::gpu::{Context, Image, ImageDesc};
 use crate::render::SceneGpu;
 
 /// Uniforms of glsl/technique/preconv.frag, block `PreconvParams` (std140).
@@ -25,13 +26,21 @@ pub struct PreconvParams {
 }
 const _: () = assert!(std::mem::size_of::<PreconvParams>() == 144);
 
+/// The fragment shader of `preconv`.
+pub fn fragment_shader() -> ShaderVariant {
+    ShaderVariant {
+        path: "technique/preconv.frag",
+        defines: vec![],
+    }
+}
+
 pub fn build(
     ctx: &Arc<Context>,
     scene: &SceneGpu,
     path: HwPath,
     inputs: &Inputs<'_>,
 ) -> Result<TechniqueGpu, TechniqueError> {
-    let label = format!("preconv.{path}");
+    let label = format!("{}.{path}", Technique::Preconv);
     if inputs.irradiance_sh.len() < 9 {
         return Err(TechniqueError::Input {
             label,
@@ -54,20 +63,12 @@ pub fn build(
     for (dst, src) in params.irradiance_sh.iter_mut().zip(inputs.irradiance_sh) {
         *dst = [src[0] as f32, src[1] as f32, src[2] as f32, 0.0];
     }
-    super::finish_per_texel(
+    finish(
         ctx,
         scene,
-        TechniqueId::Preconv,
+        Technique::Preconv,
         path,
-        "technique/preconv.frag",
-        &[],
         bytemuck::bytes_of(&params),
-        vec![ao_image],
-        TechniqueStats {
-            texel_bytes: ao_bytes.len() as u64,
-            table_bytes: std::mem::size_of::<PreconvParams>() as u64,
-            textures_bound: layout::MATERIAL_TEXTURES + 1,
-            lookups_per_pixel: layout::MATERIAL_TEXTURES + 1,
-        },
+        vec![TextureSlot::per_texel(vec![ao_image])],
     )
 }

@@ -22,9 +22,10 @@ use std::sync::Arc;
 use ash::vk;
 use half::f16;
 
-use super::grouped::upload_texel_groups;
-use super::{HwPath, Inputs, TechniqueError, TechniqueGpu, TechniqueId, TechniqueStats};
-use crate::gpu::{Context, layout};
+use super::finish::{TextureSlot, finish};
+use super::texels::upload_texel_groups;
+use super::{HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu};
+use crate::gpu::Context;
 use crate::render::SceneGpu;
 use crate::sh::Order;
 use crate::sh::product::gaunt_tensor;
@@ -37,6 +38,14 @@ pub struct Sh2Params {
     pub lighting_sh: [[f32; 4]; 9],
 }
 const _: () = assert!(std::mem::size_of::<Sh2Params>() == 144);
+
+/// The fragment shader of `sh2`.
+pub fn fragment_shader() -> ShaderVariant {
+    ShaderVariant {
+        path: "technique/sh2.frag",
+        defines: vec![],
+    }
+}
 
 /// The text of `glsl/include/sh_product.glsl`: `sh_product_l3_v2`, the order-3 projection
 /// of (order-3 RGB lighting) × (order-2 scalar visibility), one line per output coefficient.
@@ -84,7 +93,7 @@ pub fn build(
     path: HwPath,
     inputs: &Inputs<'_>,
 ) -> Result<TechniqueGpu, TechniqueError> {
-    let label = format!("sh2.{path}");
+    let label = format!("{}.{path}", Technique::Sh2);
     let vis = inputs.visibility.ok_or_else(|| TechniqueError::Input {
         label: label.clone(),
         detail: "needs the SH visibility bake".into(),
@@ -126,20 +135,12 @@ pub fn build(
             detail: "order-3 lighting is not finite in f32".into(),
         });
     }
-    super::finish_per_texel(
+    finish(
         ctx,
         scene,
-        TechniqueId::Sh2,
+        Technique::Sh2,
         path,
-        "technique/sh2.frag",
-        &[],
         bytemuck::bytes_of(&params),
-        images,
-        TechniqueStats {
-            texel_bytes: bytes.len() as u64,
-            table_bytes: std::mem::size_of::<Sh2Params>() as u64,
-            textures_bound: layout::MATERIAL_TEXTURES + 1,
-            lookups_per_pixel: layout::MATERIAL_TEXTURES + 1,
-        },
+        vec![TextureSlot::per_texel(images)],
     )
 }

@@ -11,21 +11,23 @@
 //! RGB coefficients, value 3k + c) packed 4 per RGBA16F texel into 7 groups (the last
 //! padded), 56 bytes. dx9 binds 7 2D textures (9 with the material's, ≤ 16), dx10 one
 //! 7-layer 2D array. Values are scaled into f16's range like the L×H tables
-//! ([`super::grouped::f16_range_scale`]) and the shader multiplies back.
+//! ([`super::tables::f16_range_scale`]) and the shader multiplies back.
 
 use std::sync::Arc;
 
 use ash::vk;
 use half::f16;
 
-use super::grouped::{f16_range_scale, upload_texel_groups};
-use super::{HwPath, Inputs, TechniqueError, TechniqueGpu, TechniqueId, TechniqueStats};
+use super::finish::{TextureSlot, finish};
+use super::tables::f16_range_scale;
+use super::texels::{VALUES_PER_TEXEL, pack_groups, upload_texel_groups};
+use super::{HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu};
 use crate::bake::shlmap::SH_LIGHTMAP_COEFFS;
-use crate::gpu::{Context, layout};
+use crate::gpu::Context;
 use crate::render::SceneGpu;
 
 /// RGBA groups per texel: ⌈27 / 4⌉.
-pub const SHLMAP_GROUPS: usize = (3 * SH_LIGHTMAP_COEFFS).div_ceil(4);
+pub const SHLMAP_GROUPS: usize = (3 * SH_LIGHTMAP_COEFFS).div_ceil(VALUES_PER_TEXEL);
 
 /// Uniforms of glsl/technique/shlmap.frag, block `ShLightmapParams` (std140).
 #[repr(C)]
@@ -35,13 +37,21 @@ pub struct ShLightmapParams {
     pub unscale: [f32; 4],
 }
 
+/// The fragment shader of `shlmap`.
+pub fn fragment_shader() -> ShaderVariant {
+    ShaderVariant {
+        path: "technique/shlmap.frag",
+        defines: vec![("SHLMAP_GROUPS", SHLMAP_GROUPS as u32)],
+    }
+}
+
 pub fn build(
     ctx: &Arc<Context>,
     scene: &SceneGpu,
     path: HwPath,
     inputs: &Inputs<'_>,
 ) -> Result<TechniqueGpu, TechniqueError> {
-    let label = format!("shlmap.{path}");
+    let label = format!("{}.{path}", Technique::Shlmap);
     let map = inputs.sh_lightmap.ok_or_else(|| TechniqueError::Input {
         label: label.clone(),
         detail: "needs the SH lightmap bake".into(),
@@ -59,15 +69,10 @@ pub fn build(
         });
     }
     let scale = f16_range_scale(max_abs);
-    let mut groups: Vec<Vec<f16>> = vec![vec![f16::ZERO; texels * 4]; SHLMAP_GROUPS];
-    for t in 0..texels {
-        for (k, rgb) in map.texel(t).iter().enumerate() {
-            for (c, &v) in rgb.iter().enumerate() {
-                let value = 3 * k + c;
-                groups[value / 4][t * 4 + value % 4] = f16::from_f32(v * scale);
-            }
-        }
-    }
+    // Value 3k + c of a texel is colour c of coefficient k.
+    let groups = pack_groups(texels, 3 * SH_LIGHTMAP_COEFFS, |t, value| {
+        f16::from_f32(map.texel(t)[value / 3][value % 3] * scale)
+    });
     let bytes: Vec<&[u8]> = groups.iter().map(|g| bytemuck::cast_slice(g)).collect();
     let images = upload_texel_groups(
         ctx,
@@ -80,21 +85,12 @@ pub fn build(
     let params = ShLightmapParams {
         unscale: [1.0 / scale, 0.0, 0.0, 0.0],
     };
-    let textures_bound = layout::MATERIAL_TEXTURES + images.len() as u32;
-    super::finish_per_texel(
+    finish(
         ctx,
         scene,
-        TechniqueId::Shlmap,
+        Technique::Shlmap,
         path,
-        "technique/shlmap.frag",
-        &[("SHLMAP_GROUPS", SHLMAP_GROUPS as u32)],
         bytemuck::bytes_of(&params),
-        images,
-        TechniqueStats {
-            texel_bytes: (SHLMAP_GROUPS * texels * 8) as u64,
-            table_bytes: std::mem::size_of::<ShLightmapParams>() as u64,
-            textures_bound,
-            lookups_per_pixel: layout::MATERIAL_TEXTURES + SHLMAP_GROUPS as u32,
-        },
+        vec![TextureSlot::per_texel(images)],
     )
 }

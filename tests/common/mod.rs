@@ -4,10 +4,12 @@
 
 use std::sync::{Arc, OnceLock};
 
+use glam::Vec3;
 use shvis::gpu::{Context, ContextDesc};
 use shvis::prepare::{PrepareSettings, Prepared, prepare};
 use shvis::render::{Frame, FrameSettings, SceneGpu};
-use shvis::technique::{self, HwPath, TechniqueId};
+use shvis::scene::{Mesh, Vertex};
+use shvis::technique::{self, HwPath, Technique};
 
 /// Lightmap resolution of test bakes: small, yet a texel is ~10 cm on the house.
 pub const TEST_VIS_RES: u32 = 128;
@@ -60,14 +62,14 @@ pub fn assert_validation_clean(ctx: &Context, what: &str) {
 pub fn render(
     ctx: &Arc<Context>,
     prepared: &Prepared,
-    id: TechniqueId,
+    id: Technique,
     path: HwPath,
     settings: &FrameSettings,
 ) -> Frame {
     let scene = SceneGpu::new(ctx, &prepared.scene, settings).expect("scene uploads");
     let tech =
         technique::build(ctx, &scene, id, path, &prepared.inputs()).expect("technique builds");
-    let frame = scene.render(&tech, 1, 2).expect("frames render");
+    let frame = tech.render(&scene, 1, 2).expect("frames render");
     drop(tech);
     drop(scene);
     assert_validation_clean(ctx, &format!("{id}.{path}"));
@@ -102,3 +104,25 @@ pub fn house_reference(ctx: &Arc<Context>) -> (shvis::reference::ReferenceImage,
     };
     (reference, settings)
 }
+
+/// Appends a quad with corners `p` (counter-clockwise seen from the front) and lightmap
+/// corners `uv` (all zero for a quad that is not baked: zero UV area, skipped).
+pub fn quad(m: &mut Mesh, p: [Vec3; 4], uv: [[f32; 2]; 4]) {
+    let normal = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
+    let base = m.vertices.len() as u32;
+    for k in 0..4 {
+        m.vertices.push(Vertex {
+            position: p[k].to_array(),
+            normal: normal.to_array(),
+            uv_lightmap: uv[k],
+            ..Vertex::default()
+        });
+    }
+    m.indices
+        .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
+}
+
+/// Lightmap corners covering the whole lightmap.
+pub const FULL_UV: [[f32; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+/// Lightmap corners of a quad that is not baked (zero UV area).
+pub const NO_UV: [[f32; 2]; 4] = [[0.0; 2]; 4];

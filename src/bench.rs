@@ -1,0 +1,253 @@
+//! `shvis bench` as a library (DESIGN §4): render the reference(s), time every
+//! technique × path on the same scene, measure each against the reference its spec names
+//! ([`Technique::reference`]), and write the cost table, images and plots.
+//!
+//! A row's error is the relative RMSE of its image against the reference over covered
+//! pixels (`report::metrics`); its time is the median of `frames` timed frames after
+//! `warmup` untimed ones (`gpu::pass`: timestamps around the scene pass).
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use crate::gpu::{Context, GpuError};
+use crate::prepare::Prepared;
+use crate::reference::{ReferenceImage, ReferenceSettings, render_reference};
+use crate::render::{Frame, FrameSettings, SceneGpu};
+use crate::report::ReportError;
+use crate::report::image::{write_exr, write_png};
+use crate::report::metrics::{TimingStats, image_error};
+use crate::report::plot::{write_pca_error_plot, write_speed_error_plot};
+use crate::report::table::{BenchRow, BenchTable, RowReference, fill_ratios_to_preconv};
+use crate::technique::{self, HwPath, ReferenceModel, Technique, TechniqueError};
+
+/// What a bench run does.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BenchSettings {
+    pub techniques: Vec<Technique>,
+    pub paths: Vec<HwPath>,
+    /// Timed frames per technique × path.
+    pub frames: u32,
+    /// Untimed frames before them.
+    pub warmup: u32,
+    pub width: u32,
+    pub height: u32,
+    /// Exposure in EV of the PNG images.
+    pub exposure: f32,
+    /// Samples per pixel of the reference (0: no reference, no error columns).
+    pub ref_spp: u32,
+    /// Bounces of the inter-reflected reference (and of the SH lightmap bake).
+    pub bounces: u32,
+    /// Seed of the reference's sampling.
+    pub seed: u64,
+    /// Output directory (must exist).
+    pub out: PathBuf,
+}
+
+impl BenchSettings {
+    /// Whether a technique of the run needs the SH lightmap bake (and so the
+    /// inter-reflected reference).
+    pub fn needs_sh_lightmap(&self) -> bool {
+        self.techniques.iter().any(|t| t.needs().sh_lightmap)
+    }
+}
+
+/// Errors of a bench run.
+#[derive(Debug, thiserror::Error)]
+pub enum BenchError {
+    #[error("{device}: the graphics queue has no timestamps, frames cannot be timed")]
+    NoTimestamps { device: String },
+    #[error(transparent)]
+    Technique(#[from] TechniqueError),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Report(#[from] ReportError),
+}
+
+/// Runs the bench on `prepared` and writes its files into `settings.out`: table.md,
+/// table.json, an image per row (PNG + EXR), the reference(s), the plots. Returns the table.
+pub fn run(
+    ctx: &Arc<Context>,
+    prepared: &Prepared,
+    settings: &BenchSettings,
+) -> Result<BenchTable, BenchError> {
+    if !ctx.supports_timestamps() {
+        return Err(BenchError::NoTimestamps {
+            device: ctx.device_name().to_string(),
+        });
+    }
+    let started = Instant::now();
+    let reference = render_references(ctx, prepared, settings)?;
+    let frame_settings = FrameSettings {
+        width: settings.width,
+        height: settings.height,
+        flat_normals: false,
+        ..FrameSettings::default()
+    };
+    let scene = SceneGpu::new(ctx, &prepared.scene, &frame_settings)?;
+    let mut rows = Vec::new();
+    for &technique in &settings.techniques {
+        for &path in &settings.paths {
+            rows.push(measure_row(
+                ctx,
+                &scene,
+                prepared,
+                technique,
+                path,
+                reference.as_ref(),
+                settings,
+            )?);
+        }
+    }
+    fill_ratios_to_preconv(&mut rows);
+    let bounced = reference.as_ref().and_then(|r| r.bounced.as_ref());
+    let table = BenchTable {
+        reference_spp: settings.ref_spp,
+        reference_rel_noise: reference.as_ref().map(|r| r.rel_noise),
+        reference_bounces: bounced.map_or(0, |b| b.bounces),
+        reference_bounced_rel_noise: bounced.map(|b| b.rel_noise),
+        device: ctx.device_name().to_string(),
+        width: settings.width,
+        height: settings.height,
+        vis_res: prepared.visibility.res,
+        results: rows,
+    };
+    table.write(&settings.out)?;
+    write_plots(&table, &settings.paths, &settings.out);
+    log::info!(
+        "bench: {} rows in {:.1} s",
+        table.results.len(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(table)
+}
+
+/// The direct reference and, when a technique needs it, the inter-reflected one; both
+/// written as `reference*.{exr,png}`.
+fn render_references(
+    ctx: &Arc<Context>,
+    prepared: &Prepared,
+    settings: &BenchSettings,
+) -> Result<Option<ReferenceImage>, BenchError> {
+    if settings.ref_spp == 0 {
+        return Ok(None);
+    }
+    let image = render_reference(
+        ctx,
+        &prepared.scene,
+        &prepared.env,
+        &ReferenceSettings {
+            width: settings.width,
+            height: settings.height,
+            spp: settings.ref_spp,
+            seed: settings.seed,
+            bounces: if settings.needs_sh_lightmap() {
+                settings.bounces
+            } else {
+                0
+            },
+        },
+    )?;
+    log::info!(
+        "reference: {} spp in {:.1} s, relative noise {:.4}",
+        settings.ref_spp,
+        image.seconds,
+        image.rel_noise
+    );
+    write_images(&settings.out, "reference", &image.frame, settings.exposure)?;
+    if let Some(b) = &image.bounced {
+        log::info!(
+            "reference with {} bounces: relative noise {:.4}",
+            b.bounces,
+            b.rel_noise
+        );
+        let name = format!("reference_bounces{}", b.bounces);
+        write_images(&settings.out, &name, &b.frame, settings.exposure)?;
+    }
+    Ok(Some(image))
+}
+
+/// The reference a technique is measured against, and how the row names it.
+fn reference_for<'a>(
+    technique: Technique,
+    reference: Option<&'a ReferenceImage>,
+) -> (Option<&'a Frame>, RowReference) {
+    let Some(r) = reference else {
+        return (None, RowReference::None);
+    };
+    match (technique.reference(), &r.bounced) {
+        (ReferenceModel::InterReflected, Some(b)) => {
+            (Some(&b.frame), RowReference::Bounced(b.bounces))
+        }
+        (ReferenceModel::InterReflected, None) | (ReferenceModel::Direct, _) => {
+            (Some(&r.frame), RowReference::Direct)
+        }
+    }
+}
+
+/// Builds, times, writes and measures one technique × path.
+fn measure_row(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    prepared: &Prepared,
+    technique: Technique,
+    path: HwPath,
+    reference: Option<&ReferenceImage>,
+    settings: &BenchSettings,
+) -> Result<BenchRow, BenchError> {
+    let tech = technique::build(ctx, scene, technique, path, &prepared.inputs())?;
+    let frame = tech.render(scene, settings.warmup, settings.frames)?;
+    let timing = TimingStats::from_ms(&frame.ms);
+    let (reference_frame, reference_kind) = reference_for(technique, reference);
+    let error = reference_frame.and_then(|r| image_error(&frame, r));
+    if let (RowReference::Bounced(_), Some(direct)) = (reference_kind, reference) {
+        if let Some(e) = image_error(&frame, &direct.frame) {
+            log::info!(
+                "{}: relative RMSE against the direct-only reference {:.4}",
+                tech.label(),
+                e.rel_rmse
+            );
+        }
+    }
+    write_images(&settings.out, &tech.label(), &frame, settings.exposure)?;
+    Ok(BenchRow {
+        technique,
+        path,
+        ms_median: timing.map(|s| s.ms_median),
+        ms_min: timing.map(|s| s.ms_min),
+        ms_max: timing.map(|s| s.ms_max),
+        frames: frame.ms.len(),
+        rel_rmse: error.map(|e| e.rel_rmse),
+        psnr: error.map(|e| e.psnr),
+        texel_bytes: tech.stats.texel_bytes,
+        table_bytes: tech.stats.table_bytes,
+        textures_bound: tech.stats.textures_bound,
+        lookups_per_pixel: tech.stats.lookups_per_pixel,
+        ratio_to_preconv: None,
+        paper_ms: technique.paper_ms(),
+        paper_ratio_to_preconv: technique.paper_ratio_to_preconv(),
+        reference: reference_kind,
+    })
+}
+
+/// `{name}.png` (with `exposure`) and `{name}.exr` in `dir`.
+fn write_images(dir: &Path, name: &str, frame: &Frame, exposure: f32) -> Result<(), ReportError> {
+    write_exr(&dir.join(format!("{name}.exr")), frame)?;
+    write_png(&dir.join(format!("{name}.png")), frame, exposure)
+}
+
+/// The PCA plot per path and the speed/error plot; a plot that cannot be drawn (no font)
+/// is a warning, not a failed bench.
+fn write_plots(table: &BenchTable, paths: &[HwPath], dir: &Path) {
+    let report = |result: Result<Vec<PathBuf>, ReportError>| match result {
+        Ok(files) => files
+            .iter()
+            .for_each(|f| log::info!("wrote {}", f.display())),
+        Err(e) => log::warn!("{e}"),
+    };
+    for &path in paths {
+        report(write_pca_error_plot(&table.results, path, dir));
+    }
+    report(write_speed_error_plot(table, dir));
+}

@@ -1,0 +1,93 @@
+//! Per-texel (lightmap) data on the GPU: values packed 4 per RGBA texel into groups, and
+//! their images on each path (DESIGN §2):
+//!
+//! ```text
+//! group g of texel t = values 4g … 4g+3 of t (the last group padded with zeros)
+//! dx9:  one 2D texture per group            (sampler2D per_texel_tex[G])
+//! dx10: one 2D array, layer g = group g      (sampler2DArray per_texel_tex)
+//! ```
+//!
+//! Shaders read them through `glsl/include/per_texel.glsl`.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::{HwPath, TechniqueError};
+use crate::gpu::{Context, Image, ImageDesc};
+
+/// Values per RGBA texel.
+pub const VALUES_PER_TEXEL: usize = 4;
+
+/// Packs `values` values per texel into ⌈values/4⌉ RGBA groups: `groups[g][4t + k]` is
+/// value `4g + k` of texel `t` (`value(t, j)`), `T::default()` past the last value.
+pub fn pack_groups<T: Copy + Default>(
+    texels: usize,
+    values: usize,
+    value: impl Fn(usize, usize) -> T,
+) -> Vec<Vec<T>> {
+    let groups = values.div_ceil(VALUES_PER_TEXEL);
+    let mut out = vec![vec![T::default(); texels * VALUES_PER_TEXEL]; groups];
+    for t in 0..texels {
+        for j in 0..values {
+            out[j / VALUES_PER_TEXEL][t * VALUES_PER_TEXEL + j % VALUES_PER_TEXEL] = value(t, j);
+        }
+    }
+    out
+}
+
+/// Uploads per-texel groups (`groups[g]` = res² texels of `format`): one 2D texture per
+/// group on dx9, one 2D array on dx10.
+pub fn upload_texel_groups(
+    ctx: &Arc<Context>,
+    path: HwPath,
+    res: u32,
+    format: vk::Format,
+    groups: &[&[u8]],
+    name: &str,
+) -> Result<Vec<Image>, TechniqueError> {
+    Ok(match path {
+        HwPath::Dx9 => groups
+            .iter()
+            .enumerate()
+            .map(|(g, bytes)| {
+                Image::with_data(
+                    ctx,
+                    &ImageDesc::texture_2d(format, res, res),
+                    &[vec![*bytes]],
+                    &format!("{name}.{g}"),
+                )
+            })
+            .collect::<Result<_, _>>()?,
+        HwPath::Dx10 => vec![Image::with_data(
+            ctx,
+            &ImageDesc::texture_2d_array(format, res, res, groups.len() as u32),
+            &[groups.to_vec()],
+            name,
+        )?],
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn groups_hold_four_consecutive_values_and_pad_with_zeros() {
+        // Value j of texel t encoded as 100 t + j + 1 (0 is the padding).
+        let groups = pack_groups(3, 9, |t, j| (100 * t + j + 1) as u32);
+        assert_eq!(groups.len(), 3);
+        for (g, group) in groups.iter().enumerate() {
+            assert_eq!(group.len(), 3 * 4);
+            for t in 0..3 {
+                for k in 0..4 {
+                    let j = 4 * g + k;
+                    let want = if j < 9 { (100 * t + j + 1) as u32 } else { 0 };
+                    assert_eq!(group[4 * t + k], want, "group {g} texel {t} lane {k}");
+                }
+            }
+        }
+        assert_eq!(pack_groups(5, 4, |_, _| 1u8).len(), 1);
+        assert!(pack_groups(5, 0, |_, _| 1u8).is_empty());
+    }
+}
