@@ -12,9 +12,9 @@ use shvis::bench::BenchSettings;
 use shvis::gpu::{Context, ContextDesc};
 use shvis::prepare::{PrepareSettings, bake_scene_ao, prepare, resolve_scene};
 use shvis::render::{FrameSettings, SceneGpu};
-use shvis::report::image::write_frame;
+use shvis::report::image::{frame_format, write_frame};
 use shvis::technique::{self, HwPath, Technique};
-use shvis::{bake, report, tools};
+use shvis::{bake, tools};
 
 /// Largest frame side accepted before asking the device (which may allow less).
 const MAX_FRAME_SIDE: u32 = 16384;
@@ -381,7 +381,7 @@ fn run_bake(a: BakeArgs) -> Result<()> {
 }
 
 fn run_render(a: RenderArgs) -> Result<()> {
-    check_output_extension(&a.out)?;
+    frame_format(&a.out)?;
     // The device first: a missing GPU should not cost a bake.
     let ctx = open_gpu(&a.gpu)?;
     let bounces = a.technique.needs().sh_lightmap.then_some(a.bounces);
@@ -402,7 +402,7 @@ fn run_render(a: RenderArgs) -> Result<()> {
 }
 
 fn run_reference(a: ReferenceArgs) -> Result<()> {
-    check_output_extension(&a.out)?;
+    frame_format(&a.out)?;
     let ctx = open_gpu(&a.gpu)?;
     let vis_res = bake::validate_res(a.vis_res)?;
     let env = shvis::env::resolve(&a.env)?;
@@ -435,20 +435,6 @@ fn run_reference(a: ReferenceArgs) -> Result<()> {
     );
     println!("wrote {}", a.out.display());
     Ok(())
-}
-
-fn check_output_extension(path: &Path) -> Result<()> {
-    match path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-    {
-        Some(e) if e == "png" || e == "exr" => Ok(()),
-        _ => Err(report::ReportError::Extension {
-            path: path.to_path_buf(),
-        }
-        .into()),
-    }
 }
 
 /// With `--validate`, any validation error or warning fails the command.

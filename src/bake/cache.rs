@@ -36,6 +36,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use rayon::prelude::*;
+
 use super::BakeError;
 use super::directions::splitmix64;
 use super::visibility::{VisibilityMap, VisibilitySettings};
@@ -376,7 +378,9 @@ pub fn write_exr_layers(dir: &Path, map: &VisibilityMap) -> Result<(), BakeError
         path: path.to_path_buf(),
         detail: e.to_string(),
     };
-    for k in 0..n2.div_ceil(4) {
+    // One file per job on rayon's pool (each written single-threaded): exr's own
+    // per-file parallelism starts threads for every file and leaves most of them idle.
+    let write_layer = |k: usize| -> Result<(), BakeError> {
         let path = dir.join(format!("visibility_{k}.exr"));
         let c = |x: usize, y: usize, j: usize| {
             let i = 4 * k + j;
@@ -392,22 +396,81 @@ pub fn write_exr_layers(dir: &Path, map: &VisibilityMap) -> Result<(), BakeError
         });
         Image::from_encoded_channels((res, res), EXR_ENCODING, channels)
             .write()
+            .non_parallel()
             .to_file(&path)
-            .map_err(|e| exr_err(&path, e))?;
-    }
-    let path = dir.join("ao.exr");
-    let channels = SpecificChannels::build()
-        .with_channel("Y")
-        .with_pixel_fn(|p: exr::math::Vec2<usize>| (map.ao[p.1 * res + p.0],));
-    Image::from_encoded_channels((res, res), EXR_ENCODING, channels)
-        .write()
-        .to_file(&path)
-        .map_err(|e| exr_err(&path, e))
+            .map_err(|e| exr_err(&path, e))
+    };
+    let write_ao = || -> Result<(), BakeError> {
+        let path = dir.join("ao.exr");
+        let channels = SpecificChannels::build()
+            .with_channel("Y")
+            .with_pixel_fn(|p: exr::math::Vec2<usize>| (map.ao[p.1 * res + p.0],));
+        Image::from_encoded_channels((res, res), EXR_ENCODING, channels)
+            .write()
+            .non_parallel()
+            .to_file(&path)
+            .map_err(|e| exr_err(&path, e))
+    };
+    let layers = n2.div_ceil(4);
+    (0..=layers)
+        .into_par_iter()
+        .map(|k| {
+            if k < layers {
+                write_layer(k)
+            } else {
+                write_ao()
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn exr_layers_are_byte_identical_for_any_thread_count() {
+        let (res, order) = (70u32, Order::SIX);
+        let n = order.coeff_count();
+        let texels = (res * res) as usize;
+        let map = VisibilityMap {
+            res,
+            order,
+            // Incompressible-looking values, so RLE blocks differ in size.
+            coeffs: (0..texels * n)
+                .map(|i| (splitmix64(i as u64) >> 40) as f32 * 1e-7)
+                .collect(),
+            covered: vec![true; texels],
+            ao: (0..texels).map(|i| (i % 97) as f32 / 97.0).collect(),
+            stats: super::super::BakeStats::default(),
+        };
+        let root = std::env::temp_dir().join(format!("shvis-exr-order-{}", std::process::id()));
+        let mut files: Vec<Vec<(String, Vec<u8>)>> = Vec::new();
+        for threads in [1, 3] {
+            let dir = root.join(threads.to_string());
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| write_exr_layers(&dir, &map)).unwrap();
+            let mut entries: Vec<(String, Vec<u8>)> = fs::read_dir(&dir)
+                .unwrap()
+                .map(|e| {
+                    let path = e.unwrap().path();
+                    let name = path.file_name().unwrap().to_string_lossy().into_owned();
+                    (name, fs::read(&path).unwrap())
+                })
+                .collect();
+            entries.sort();
+            files.push(entries);
+        }
+        let _ = fs::remove_dir_all(&root);
+        assert_eq!(files[0].len(), 10);
+        for (a, b) in files[0].iter().zip(&files[1]) {
+            assert_eq!(a.0, b.0);
+            assert!(a.1 == b.1, "{} differs between 1 and 3 threads", a.0);
+        }
+    }
 
     #[test]
     fn one_flipped_byte_changes_the_hash() {

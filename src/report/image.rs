@@ -6,19 +6,39 @@ use std::path::Path;
 use super::ReportError;
 use crate::render::Frame;
 
-/// Writes `frame` as EXR or PNG by the extension of `path`.
-pub fn write_frame(path: &Path, frame: &Frame, exposure_ev: f32) -> Result<(), ReportError> {
+/// The image formats a frame can be written as.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameFormat {
+    /// Linear f32 OpenEXR.
+    Exr,
+    /// 8-bit sRGB PNG after exposure.
+    Png,
+}
+
+/// The format `path`'s extension asks for (checked before any work is done).
+///
+/// # Errors
+/// [`ReportError::Extension`] for anything but `.exr` / `.png` (any case).
+pub fn frame_format(path: &Path) -> Result<FrameFormat, ReportError> {
     match path
         .extension()
         .and_then(|e| e.to_str())
         .map(|e| e.to_ascii_lowercase())
         .as_deref()
     {
-        Some("exr") => write_exr(path, frame),
-        Some("png") => write_png(path, frame, exposure_ev),
+        Some("exr") => Ok(FrameFormat::Exr),
+        Some("png") => Ok(FrameFormat::Png),
         _ => Err(ReportError::Extension {
             path: path.to_path_buf(),
         }),
+    }
+}
+
+/// Writes `frame` as EXR or PNG by the extension of `path`.
+pub fn write_frame(path: &Path, frame: &Frame, exposure_ev: f32) -> Result<(), ReportError> {
+    match frame_format(path)? {
+        FrameFormat::Exr => write_exr(path, frame),
+        FrameFormat::Png => write_png(path, frame, exposure_ev),
     }
 }
 
@@ -77,4 +97,36 @@ pub fn to_srgb8(frame: &Frame, exposure_ev: f32) -> Vec<u8> {
             (s * 255.0).round() as u8
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exr_frames_with_equal_pixels_are_equal_bytes() {
+        let (width, height) = (256u32, 256u32);
+        let frame = Frame {
+            width,
+            height,
+            rgba: (0..width * height)
+                .map(|i| {
+                    let v = (i.wrapping_mul(2_654_435_761) >> 8) as f32 * 1e-6;
+                    [v, v * 0.5, 1.0 - v, 1.0]
+                })
+                .collect(),
+            ms: vec![],
+        };
+        let dir = std::env::temp_dir().join(format!("shvis-exr-frame-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let bytes: Vec<Vec<u8>> = (0..4)
+            .map(|k| {
+                let path = dir.join(format!("{k}.exr"));
+                write_exr(&path, &frame).unwrap();
+                std::fs::read(&path).unwrap()
+            })
+            .collect();
+        let _ = std::fs::remove_dir_all(&dir);
+        assert!(bytes.windows(2).all(|w| w[0] == w[1]));
+    }
 }

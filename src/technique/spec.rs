@@ -1,8 +1,8 @@
 //! What a technique *is*, without a GPU: a family with its parameters ([`Technique`]) and
 //! the hardware path it runs on ([`HwPath`]) (DESIGN §2).
 //!
-//! Every question the rest of the tool asks about a technique — its CLI name and how such a
-//! name parses (`unc6`, `pca12w`), the paper's ms/frame, what it needs from the bake, which
+//! Every question the rest of the tool asks about a technique — its CLI name, the family's
+//! valid parameters (which is what a name such as `unc6` or `pca12w` parses into), the paper's ms/frame, what it needs from the bake, which
 //! reference its error is measured against, whether it can follow changing lighting — is
 //! answered here by an exhaustive `match` on the family. There is deliberately no wildcard
 //! arm over families: adding one is a compile error in each of these matches (and in
@@ -205,31 +205,31 @@ impl Technique {
         }
     }
 
-    /// Parses a name without listing the known ones on failure (see [`FromStr`]).
-    fn parse_name(s: &str) -> Option<Technique> {
-        let number = |digits: &str| -> Option<u32> {
-            (!digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()))
-                .then(|| digits.parse().ok())
-                .flatten()
-        };
-        if let Some(digits) = s.strip_prefix("unc") {
-            let order = number(digits).filter(|o| UNC_ORDERS.contains(o))?;
-            return Some(Technique::Unc {
-                order: Order::new(order).ok()?,
-            });
+    /// Every technique of this one's family that a name may denote: each valid parameter.
+    pub fn family_members(self) -> Vec<Technique> {
+        match self {
+            Technique::Unc { .. } => UNC_ORDERS
+                .filter_map(|o| Order::new(o).ok())
+                .map(|order| Technique::Unc { order })
+                .collect(),
+            Technique::Pca { .. } => (PCA_VECTORS_PER_TEXEL..=PCA_MAX_VECTORS)
+                .step_by(PCA_VECTORS_PER_TEXEL as usize)
+                .flat_map(|m| [false, true].map(|weights_only| Technique::Pca { m, weights_only }))
+                .collect(),
+            Technique::Shlmap | Technique::Preconv | Technique::Sh2 => vec![self],
         }
-        if let Some(rest) = s.strip_prefix("pca") {
-            let (digits, weights_only) = match rest.strip_suffix('w') {
-                Some(d) => (d, true),
-                None => (rest, false),
-            };
-            let m = number(digits)
-                .filter(|&m| m > 0 && m <= PCA_MAX_VECTORS && m % PCA_VECTORS_PER_TEXEL == 0)?;
-            return Some(Technique::Pca { m, weights_only });
-        }
-        [Technique::Shlmap, Technique::Preconv, Technique::Sh2]
-            .into_iter()
-            .find(|t| t.name() == s)
+    }
+
+    /// Every technique a CLI name can denote: the families of [`Technique::ALL`] with all
+    /// their parameters. Parsing is the inverse of [`Technique::name`] over this set.
+    pub fn nameable() -> Vec<Technique> {
+        let mut all: Vec<Technique> = Technique::ALL
+            .iter()
+            .flat_map(|t| t.family_members())
+            .collect();
+        let mut seen = std::collections::HashSet::new();
+        all.retain(|t| seen.insert(*t));
+        all
     }
 }
 
@@ -242,7 +242,8 @@ impl fmt::Display for Technique {
 impl FromStr for Technique {
     type Err = ParseError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Technique::parse_name(s).ok_or_else(|| ParseError::UnknownTechnique {
+        let found = Technique::nameable().into_iter().find(|t| t.name() == s);
+        found.ok_or_else(|| ParseError::UnknownTechnique {
             name: s.to_string(),
             known: format!(
                 "{} (and uncO for O in {}..={}, pcaM/pcaMw for M a multiple of {} up to {})",
