@@ -413,3 +413,20 @@ impl Pcg32 {
         ((hi << 26) | lo) as f64 / (1u64 << 53) as f64
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::gpu::{ShaderStage, compile_glsl};
+
+    #[test]
+    fn every_g_buffer_output_compiles() {
+        for output in 0..4 {
+            compile_glsl(
+                "reference/gbuffer.frag",
+                ShaderStage::Fragment,
+                &[("GBUFFER", 1), ("GBUFFER_OUTPUT", output)],
+            )
+            .unwrap();
+        }
+    }
+}

@@ -151,7 +151,7 @@ impl SceneGpu {
             )?,
             frame,
             vertex_spirv: compile_glsl(
-                "technique/mesh.vert",
+                "scene/mesh.vert",
                 ShaderStage::Vertex,
                 &[("GBUFFER", settings.float32_target as u32)],
             )?,
@@ -322,6 +322,18 @@ pub fn mip_chain(tex: &Texture8, srgb: bool) -> Vec<Texture8> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_mesh_vertex_shader_compiles_for_techniques_and_g_buffers() {
+        for gbuffer in [0, 1] {
+            compile_glsl(
+                "scene/mesh.vert",
+                ShaderStage::Vertex,
+                &[("GBUFFER", gbuffer)],
+            )
+            .unwrap();
+        }
+    }
 
     fn texture(width: u32, height: u32, texel: impl Fn(u32, u32) -> [u8; 4]) -> Texture8 {
         Texture8 {

@@ -3,7 +3,7 @@
 //!
 //! `house` builds the procedural default scene, `gltf` loads glTF 2.0 files; `tangent`
 //! (MikkTSpace frames) and `lightmap_uv` (chart packing, generated lightmap UVs) serve both.
-//! The vertex layout here is the one the GPU reads (`glsl/technique/mesh.vert`), so it is
+//! The vertex layout here is the one the GPU reads (`glsl/scene/mesh.vert`), so it is
 //! `#[repr(C)]` + `Pod`.
 
 pub mod gltf;

@@ -272,3 +272,20 @@ pub fn run_and_write(
     std::fs::write(&md_path, md).map_err(io(&md_path))?;
     Ok(csv_path)
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::gpu::{ShaderStage, compile_glsl};
+
+    #[test]
+    fn the_reconstruction_shader_compiles_for_every_parameterization() {
+        for param in 0..4 {
+            compile_glsl(
+                "study/reconstruct.comp",
+                ShaderStage::Compute,
+                &[("STUDY_PARAM", param)],
+            )
+            .unwrap();
+        }
+    }
+}

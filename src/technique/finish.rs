@@ -12,7 +12,7 @@ use std::sync::Arc;
 use ash::vk;
 
 use super::{HwPath, Technique, TechniqueError, TechniqueGpu, TechniqueStats};
-use crate::gpu::{self, Context, Image, layout};
+use crate::gpu::{self, Context, Image, ImageDesc, layout};
 use crate::render::SceneGpu;
 
 /// What one binding's images hold.
@@ -46,42 +46,57 @@ impl TextureSlot {
         }
     }
 
+    /// What [`stats`] needs to know of the slot.
+    pub fn layout(&self) -> SlotLayout {
+        SlotLayout {
+            kind: self.kind,
+            images: self.images.iter().map(|i| *i.desc()).collect(),
+        }
+    }
+}
+
+/// A slot's kind and image descriptions.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SlotLayout {
+    pub kind: SlotKind,
+    pub images: Vec<ImageDesc>,
+}
+
+impl SlotLayout {
     /// Texture fetches per pixel from this slot.
     pub fn lookups(&self) -> u32 {
         self.images
             .iter()
-            .map(|image| {
-                let d = image.desc();
-                match self.kind {
-                    SlotKind::PerTexel => d.layers,
-                    SlotKind::NormalTable => match d.view_type {
-                        vk::ImageViewType::CUBE | vk::ImageViewType::CUBE_ARRAY => d.layers / 6,
-                        _ => d.width / (2 * d.height) * d.layers,
-                    },
-                }
+            .map(|d| match self.kind {
+                SlotKind::PerTexel => d.layers,
+                SlotKind::NormalTable => match d.view_type {
+                    vk::ImageViewType::CUBE | vk::ImageViewType::CUBE_ARRAY => d.layers / 6,
+                    // dx9 strips: each sphere is two res × res hemisphere squares.
+                    _ => d.width / (2 * d.height) * d.layers,
+                },
             })
             .sum()
     }
 
     /// Bytes of GPU memory the slot's data takes (level 0 of every layer).
     pub fn bytes(&self) -> u64 {
-        self.images.iter().map(|i| i.desc().level0_bytes()).sum()
+        self.images.iter().map(ImageDesc::level0_bytes).sum()
     }
 }
 
-/// The cost-table columns of a technique with `params` bytes of uniforms and `slots`.
-pub fn stats(params: &[u8], slots: &[TextureSlot]) -> TechniqueStats {
+/// The cost-table columns of a technique with `params_bytes` of uniforms and `slots`.
+pub fn stats(params_bytes: usize, slots: &[SlotLayout]) -> TechniqueStats {
     let of_kind = |kind: SlotKind| slots.iter().filter(move |s| s.kind == kind);
     TechniqueStats {
-        texel_bytes: of_kind(SlotKind::PerTexel).map(TextureSlot::bytes).sum(),
+        texel_bytes: of_kind(SlotKind::PerTexel).map(SlotLayout::bytes).sum(),
         table_bytes: of_kind(SlotKind::NormalTable)
-            .map(TextureSlot::bytes)
+            .map(SlotLayout::bytes)
             .sum::<u64>()
-            + params.len() as u64,
+            + params_bytes as u64,
         textures_bound: layout::MATERIAL_TEXTURES
             + slots.iter().map(|s| s.images.len() as u32).sum::<u32>(),
         lookups_per_pixel: layout::MATERIAL_TEXTURES
-            + slots.iter().map(TextureSlot::lookups).sum::<u32>(),
+            + slots.iter().map(SlotLayout::lookups).sum::<u32>(),
     }
 }
 
@@ -99,7 +114,8 @@ pub fn finish(
     let label = format!("{technique}.{path}");
     let images: Vec<&Image> = slots.iter().flat_map(|s| &s.images).collect();
     check_path_rules(&label, path, &images)?;
-    let stats = stats(params, &slots);
+    let layouts: Vec<SlotLayout> = slots.iter().map(TextureSlot::layout).collect();
+    let stats = stats(params.len(), &layouts);
     let params_buffer = gpu::Buffer::with_data(
         ctx,
         params,
@@ -169,4 +185,55 @@ pub fn check_path_rules(
         });
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const F16X4: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+
+    fn slot(kind: SlotKind, images: Vec<ImageDesc>) -> SlotLayout {
+        SlotLayout { kind, images }
+    }
+
+    #[test]
+    fn dx9_unc6_counts_its_textures_lookups_and_bytes() {
+        // 9 visibility groups at 512², 3 colour strips of 9 spheres at 32².
+        let texels = slot(
+            SlotKind::PerTexel,
+            vec![ImageDesc::texture_2d(F16X4, 512, 512); 9],
+        );
+        let tables = slot(
+            SlotKind::NormalTable,
+            vec![ImageDesc::texture_2d(F16X4, 9 * 2 * 32, 32); 3],
+        );
+        let s = stats(16, &[texels, tables]);
+        assert_eq!(s.textures_bound, 2 + 9 + 3);
+        assert_eq!(s.lookups_per_pixel, 2 + 9 + 27);
+        assert_eq!(s.texel_bytes, 9 * 512 * 512 * 8);
+        assert_eq!(s.table_bytes, 3 * 9 * 2 * 32 * 32 * 8 + 16);
+    }
+
+    #[test]
+    fn dx10_pca4_counts_cubes_and_layers() {
+        // One weight layer (RGBA8) and one cube array: 3 colour cubes + the mean.
+        let weights = slot(
+            SlotKind::PerTexel,
+            vec![ImageDesc::texture_2d_array(
+                vk::Format::R8G8B8A8_UNORM,
+                256,
+                256,
+                1,
+            )],
+        );
+        let tables = slot(
+            SlotKind::NormalTable,
+            vec![ImageDesc::texture_cube_array(F16X4, 32, 4)],
+        );
+        let s = stats(0, &[weights, tables]);
+        assert_eq!((s.textures_bound, s.lookups_per_pixel), (4, 2 + 1 + 4));
+        assert_eq!(s.texel_bytes, 256 * 256 * 4);
+        assert_eq!(s.table_bytes, 4 * 6 * 32 * 32 * 8);
+    }
 }
