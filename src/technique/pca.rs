@@ -203,9 +203,7 @@ fn upload_tables(
         Some(&mean_fn),
         &format!("{label}.tables"),
     )?;
-    let params = TableParams {
-        unscale_res: [tables.unscale, inputs.table_res as f32, 0.0, 0.0],
-    };
+    let params = tables.params(inputs.table_res);
     Ok((tables.slots, params))
 }
 

@@ -112,6 +112,15 @@ pub struct NormalTables {
     pub unscale: f32,
 }
 
+impl NormalTables {
+    /// The uniform block the shader decodes these tables with (`table_res` per side).
+    pub fn params(&self, table_res: u32) -> TableParams {
+        TableParams {
+            unscale_res: [self.unscale, table_res as f32, 0.0, 0.0],
+        }
+    }
+}
+
 /// Uploads tables at the texel centres of `map` (dual paraboloid for dx9, cube for dx10):
 /// `value(t, g, c)` is the RGBA of sample t, group g, colour c; `mean(t)` the RGB of the
 /// optional mean table.

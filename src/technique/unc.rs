@@ -17,7 +17,7 @@ use ash::vk;
 use half::f16;
 
 use super::finish::{TextureSlot, finish};
-use super::tables::{TableParams, table_map, upload_normal_tables};
+use super::tables::{table_map, upload_normal_tables};
 use super::texels::{VALUES_PER_TEXEL, pack_groups, upload_texel_groups};
 use super::{HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu};
 use crate::bake::lxh::{LxhMatrices, build_table};
@@ -97,9 +97,7 @@ pub fn build(
         None,
         &format!("{label}.lxh"),
     )?;
-    let params = TableParams {
-        unscale_res: [tables.unscale, inputs.table_res as f32, 0.0, 0.0],
-    };
+    let params = tables.params(inputs.table_res);
     let mut slots = vec![TextureSlot::per_texel(texel_images)];
     slots.extend(tables.slots);
     finish(
