@@ -15,6 +15,7 @@ use crate::prepare::Prepared;
 use crate::reference::{ReferenceImage, ReferenceSettings, render_reference};
 use crate::render::{Frame, FrameSettings, SceneGpu};
 use crate::report::ReportError;
+use crate::report::figures::{DIFFERENCE_SCALE, FIGURES, difference, write_figures};
 use crate::report::image::{write_exr, write_png};
 use crate::report::metrics::{TimingStats, image_error};
 use crate::report::plot::{write_pca_error_plot, write_speed_error_plot};
@@ -38,6 +39,8 @@ pub struct BenchSettings {
     pub ref_spp: u32,
     /// Bounces of the inter-reflected reference (and of the SH lightmap bake).
     pub bounces: u32,
+    /// Integrate the pixel footprint in the reference (`reference::ReferenceSettings`).
+    pub footprint_reference: bool,
     /// Seed of the reference's sampling.
     pub seed: u64,
     /// Output directory (must exist).
@@ -87,19 +90,38 @@ pub fn run(
     };
     let scene = SceneGpu::new(ctx, &prepared.scene, &frame_settings)?;
     let mut rows = Vec::new();
+    // The images the figures need, kept until they are drawn.
+    let mut figure_frames = std::collections::HashMap::new();
     for &technique in &settings.techniques {
         for &path in &settings.paths {
-            rows.push(measure_row(
-                ctx,
-                &scene,
-                prepared,
-                technique,
-                path,
-                reference.as_ref(),
-                settings,
-            )?);
+            let reference = reference.as_ref();
+            let (row, frame) =
+                measure_row(ctx, &scene, prepared, technique, path, reference, settings)?;
+            rows.push(row);
+            if FIGURES
+                .iter()
+                .any(|f| f.techniques().any(|t| t == technique))
+            {
+                figure_frames.insert((technique, path), frame);
+            }
         }
     }
+    for &path in &settings.paths {
+        let written = write_figures(
+            &settings.out,
+            path,
+            reference.as_ref().map(|r| &r.frame),
+            &|t| figure_frames.get(&(t, path)).cloned(),
+            settings.exposure,
+        );
+        match written {
+            Ok(files) => files
+                .iter()
+                .for_each(|f| log::info!("wrote {}", f.display())),
+            Err(e) => log::warn!("{e}"),
+        }
+    }
+    drop(figure_frames);
     fill_ratios_to_preconv(&mut rows);
     let bounced = reference.as_ref().and_then(|r| r.bounced.as_ref());
     let table = BenchTable {
@@ -147,11 +169,14 @@ fn render_references(
             } else {
                 0
             },
+            footprint: settings.footprint_reference,
         },
     )?;
     log::info!(
-        "reference: {} spp in {:.1} s, relative noise {:.4}",
+        "reference: {} spp ({}×{} sub-pixel strata) in {:.1} s, relative noise {:.4}",
         settings.ref_spp,
+        image.strata.side,
+        image.strata.side,
         image.seconds,
         image.rel_noise
     );
@@ -186,7 +211,7 @@ fn reference_for<'a>(
     }
 }
 
-/// Builds, times, writes and measures one technique × path.
+/// Builds, times, writes and measures one technique × path; returns its row and image.
 fn measure_row(
     ctx: &Arc<Context>,
     scene: &SceneGpu,
@@ -195,7 +220,7 @@ fn measure_row(
     path: HwPath,
     reference: Option<&ReferenceImage>,
     settings: &BenchSettings,
-) -> Result<BenchRow, BenchError> {
+) -> Result<(BenchRow, Frame), BenchError> {
     let tech = technique::build(ctx, scene, technique, path, &prepared.inputs())?;
     let frame = tech.render(scene, settings.warmup, settings.frames)?;
     let timing = TimingStats::from_ms(&frame.ms);
@@ -211,7 +236,12 @@ fn measure_row(
         }
     }
     write_images(&settings.out, &tech.label(), &frame, settings.exposure)?;
-    Ok(BenchRow {
+    if let Some(r) = reference_frame {
+        let diff = difference(&frame, r, DIFFERENCE_SCALE);
+        let name = format!("{}.diff{DIFFERENCE_SCALE}.png", tech.label());
+        write_png(&settings.out.join(name), &diff, settings.exposure)?;
+    }
+    let row = BenchRow {
         technique,
         path,
         ms_median: timing.map(|s| s.ms_median),
@@ -228,7 +258,8 @@ fn measure_row(
         paper_ms: technique.paper_ms(),
         paper_ratio_to_preconv: technique.paper_ratio_to_preconv(),
         reference: reference_kind,
-    })
+    };
+    Ok((row, frame))
 }
 
 /// `{name}.png` (with `exposure`) and `{name}.exr` in `dir`.

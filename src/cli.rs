@@ -217,6 +217,10 @@ struct ReferenceArgs {
     /// but shlmap; shlmap bakes 2 by default).
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
     bounces: u32,
+    /// One G-buffer sample at each pixel centre with MIP-filtered textures (the techniques'
+    /// own sampling) instead of integrating the pixel footprint at full texture resolution.
+    #[arg(long)]
+    point: bool,
     #[command(flatten)]
     gpu: GpuArgs,
     /// Output image: .exr (linear) or .png (sRGB).
@@ -254,6 +258,10 @@ struct BenchArgs {
     /// Samples per pixel of the reference the errors are measured against (0: no errors).
     #[arg(long, default_value_t = 64)]
     ref_spp: u32,
+    /// Measure against the point-sampled reference (the techniques' own pixel sampling)
+    /// instead of the footprint reference.
+    #[arg(long)]
+    point_reference: bool,
     /// Bounces of inter-reflection in shlmap's bake and in the reference it is measured
     /// against (the other techniques model direct light and meet the direct reference).
     #[arg(long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
@@ -417,6 +425,7 @@ fn run_reference(a: ReferenceArgs) -> Result<()> {
             spp: a.spp,
             seed: a.seed,
             bounces: a.bounces,
+            footprint: !a.point,
         },
     )?;
     let (frame, noise) = match &image.bounced {
@@ -425,8 +434,12 @@ fn run_reference(a: ReferenceArgs) -> Result<()> {
     };
     write_frame(&a.out, frame, a.exposure)?;
     check_validation(&ctx, a.gpu.validate)?;
+    let sampling = match image.strata.side {
+        1 if a.point => "point-sampled".to_string(),
+        side => format!("footprint {side}×{side} strata"),
+    };
     println!(
-        "reference: {} spp, {} bounces, {:.1} M rays in {:.1} s; noise (relative standard error of the image) {:.4}",
+        "reference: {} spp, {sampling}, {} bounces, {:.1} M rays in {:.1} s; noise (relative standard error of the image) {:.4}",
         a.spp,
         a.bounces,
         image.rays as f64 / 1e6,
@@ -470,6 +483,7 @@ fn run_bench(a: BenchArgs) -> Result<()> {
         exposure: a.exposure,
         ref_spp: a.ref_spp,
         bounces: a.bounces,
+        footprint_reference: !a.point_reference,
         seed: a.scene.seed,
         out: a.out.clone(),
     };

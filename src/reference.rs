@@ -61,6 +61,52 @@ pub struct ReferenceSettings {
     pub seed: u64,
     /// Reflections of light added in [`ReferenceImage::bounced`] (0: direct light only).
     pub bounces: u32,
+    /// Integrate each pixel's footprint (box filter, stratified sub-pixel positions, the
+    /// material textures at full resolution); `false`: one G-buffer sample at the pixel
+    /// centre with MIP-filtered textures, the techniques' own sampling (`--point`).
+    pub footprint: bool,
+}
+
+/// Most sub-pixel strata per side of the footprint reference (8 × 8 = 64 G-buffer sets).
+pub const MAX_STRATA_SIDE: u32 = 8;
+
+/// The sub-pixel strata of a reference: `side`² cells of the pixel, each sampled at one
+/// jittered position shared by all pixels; sample s of a pixel belongs to cell s mod side².
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Strata {
+    pub side: u32,
+}
+
+impl Strata {
+    /// ⌊√spp⌋ per side (at most [`MAX_STRATA_SIDE`]) for the footprint, 1 for point sampling.
+    pub fn new(settings: &ReferenceSettings) -> Strata {
+        let side = if settings.footprint {
+            ((settings.spp as f64).sqrt().floor() as u32).clamp(1, MAX_STRATA_SIDE)
+        } else {
+            1
+        };
+        Strata { side }
+    }
+
+    pub fn count(self) -> u32 {
+        self.side * self.side
+    }
+
+    /// Samples of `spp` that fall in stratum `j`.
+    pub fn samples_in(self, j: u32, spp: u32) -> u32 {
+        (spp - j).div_ceil(self.count())
+    }
+
+    /// Sub-pixel position (x, y in [0, 1)², y down) of stratum `j` under `seed`.
+    pub fn position(self, j: u32, seed: u64) -> [f32; 2] {
+        let mut rng = Pcg32::new(seed ^ 0x5354_5241_5441, u64::from(j)); // "STRATA"
+        let (cx, cy) = (j % self.side, j / self.side);
+        let k = self.side as f64;
+        [
+            ((cx as f64 + rng.next_f64()) / k) as f32,
+            ((cy as f64 + rng.next_f64()) / k) as f32,
+        ]
+    }
 }
 
 /// The reference image and how noisy it is.
@@ -73,6 +119,8 @@ pub struct ReferenceImage {
     pub bounced: Option<BouncedImage>,
     pub seconds: f64,
     pub rays: u64,
+    /// How the pixel footprint was sampled (1 × 1: point sampling).
+    pub strata: Strata,
 }
 
 /// The reference with inter-reflection.
@@ -108,27 +156,54 @@ struct PixelSums {
 }
 
 impl PixelSums {
-    fn add(&mut self, v: Vec3) {
+    /// Adds the sample `v` · `k` (per channel).
+    fn add(&mut self, v: Vec3, k: [f64; 3]) {
         for c in 0..3 {
-            let v = v[c] as f64;
+            let v = v[c] as f64 * k[c];
             self.sum[c] += v;
             self.sum_sq[c] += v * v;
         }
     }
 
-    /// Writes albedo/π × the mean into `out` and adds to the noise sums.
-    fn finish(&self, spp: u32, albedo: &[f32; 4], out: &mut [f32; 4], noise: &mut NoiseSums) {
+    /// Writes `k` × the mean of `spp` samples into `out` (alpha `coverage`) and adds to the
+    /// noise sums.
+    fn finish(
+        &self,
+        spp: u32,
+        k: [f64; 3],
+        coverage: f32,
+        out: &mut [f32; 4],
+        noise: &mut NoiseSums,
+    ) {
         let n = spp as f64;
         for c in 0..3 {
             let mean = self.sum[c] / n;
             let var_of_mean = (self.sum_sq[c] / n - mean * mean).max(0.0) / n;
-            let k = albedo[c] as f64 / std::f64::consts::PI;
-            out[c] = (k * mean) as f32;
-            noise.var += k * k * var_of_mean;
-            noise.sq += (k * mean).powi(2);
+            out[c] = (k[c] * mean) as f32;
+            noise.var += k[c] * k[c] * var_of_mean;
+            noise.sq += (k[c] * mean).powi(2);
         }
-        out[3] = 1.0;
+        out[3] = coverage;
     }
+}
+
+/// What one pixel has gathered over the strata.
+#[derive(Clone, Copy, Default)]
+struct PixelAccumulator {
+    direct: PixelSums,
+    total: PixelSums,
+    /// Samples that landed on geometry (the rest see the background, radiance 0).
+    covered: u32,
+    /// Point sampling: the pixel's albedo/π, applied to the mean.
+    scale: [f64; 3],
+}
+
+/// The four G-buffer images of one sub-pixel position.
+struct GBuffer {
+    position: Frame,
+    normal: Frame,
+    albedo: Frame,
+    vertex_normal: Frame,
 }
 
 /// Renders the reference for `scene` under `env` from the scene's camera.
@@ -145,7 +220,7 @@ pub fn render_reference(
         });
     }
     let start = Instant::now();
-    let gpu = SceneGpu::new(
+    let mut gpu = SceneGpu::new(
         ctx,
         scene,
         &FrameSettings {
@@ -155,26 +230,7 @@ pub fn render_reference(
             float32_target: true,
         },
     )?;
-    let mut passes = Vec::with_capacity(4);
-    for output in 0..4u32 {
-        let name = format!(
-            "reference.gbuffer.{}",
-            ["position", "normal", "albedo", "vertex_normal"][output as usize]
-        );
-        let fragment = compile_glsl(
-            "reference/gbuffer.frag",
-            ShaderStage::Fragment,
-            &[("GBUFFER", 1), ("GBUFFER_OUTPUT", output)],
-        )?;
-        let pipeline = gpu.mesh_pipeline(ctx, &name, &fragment, &gpu.common_resources())?;
-        passes.push(gpu.render_pipeline(&pipeline, 0, 1)?);
-    }
-    let [position, normal, albedo, vertex_normal] =
-        <[Frame; 4]>::try_from(passes).map_err(|_| GpuError::Invalid {
-            what: "reference".into(),
-            detail: "G-buffer passes".into(),
-        })?;
-
+    let pipelines = gbuffer_pipelines(ctx, &gpu, settings.footprint)?;
     let tracer = Tracer::new(&scene.mesh);
     let sampler = EnvSampler::new(env);
     let surfaces = SurfaceReader::new(scene);
@@ -183,61 +239,158 @@ pub fn render_reference(
         sampler: &sampler,
         surfaces: &surfaces,
     };
-    let (w, h) = (settings.width as usize, settings.height as usize);
-    let bounces = settings.bounces;
-    type Row = (Vec<[f32; 4]>, Vec<[f32; 4]>, NoiseSums, NoiseSums, u64);
-    let rows: Vec<Row> = (0..h)
-        .into_par_iter()
-        .map(|y| {
-            let mut row = vec![[0.0f32; 4]; w];
-            let mut row_bounced = vec![[0.0f32; 4]; if bounces > 0 { w } else { 0 }];
-            let (mut noise, mut noise_bounced, mut rays) =
-                (NoiseSums::default(), NoiseSums::default(), 0u64);
-            for x in 0..w {
-                let i = y * w + x;
-                if position.rgba[i][3] < 0.5 {
-                    continue;
-                }
-                let p = Vec3::from_slice(&position.rgba[i][..3]);
-                let n_s = Vec3::from_slice(&normal.rgba[i][..3]).normalize_or_zero();
-                let n_g = Vec3::from_slice(&vertex_normal.rgba[i][..3]).normalize_or_zero();
-                let origin = tracer.offset_origin(p, n_g);
-                let mut rng = Pcg32::new(settings.seed, i as u64);
-                let (mut direct, mut total) = (PixelSums::default(), PixelSums::default());
-                for _ in 0..settings.spp {
-                    let d = paths.direct(origin, n_s, n_g, &mut rng, &mut rays);
-                    direct.add(d);
-                    if bounces > 0 {
-                        let g = paths.indirect(origin, n_s, n_g, bounces - 1, &mut rng, &mut rays);
-                        total.add(d + g);
-                    }
-                }
-                let albedo = &albedo.rgba[i];
-                direct.finish(settings.spp, albedo, &mut row[x], &mut noise);
+    let strata = Strata::new(settings);
+    let w = settings.width as usize;
+    let mut pixels = vec![PixelAccumulator::default(); w * settings.height as usize];
+    let mut rays = 0u64;
+    for j in 0..strata.count().min(settings.spp) {
+        if settings.footprint {
+            let [sx, sy] = strata.position(j, settings.seed);
+            gpu.set_jitter([0.5 - sx, 0.5 - sy])?;
+        }
+        let mut frames = Vec::with_capacity(4);
+        for pipeline in &pipelines {
+            frames.push(gpu.render_pipeline(pipeline, 0, 1)?);
+        }
+        let [position, normal, albedo, vertex_normal] =
+            <[Frame; 4]>::try_from(frames).map_err(|_| GpuError::Invalid {
+                what: "reference".into(),
+                detail: "G-buffer passes".into(),
+            })?;
+        let gbuffer = GBuffer {
+            position,
+            normal,
+            albedo,
+            vertex_normal,
+        };
+        let job = StratumJob {
+            paths: &paths,
+            gbuffer: &gbuffer,
+            settings,
+            strata,
+            stratum: j,
+        };
+        rays += pixels
+            .par_chunks_mut(w)
+            .enumerate()
+            .map(|(y, row)| job.accumulate_row(y, row))
+            .sum::<u64>();
+    }
+    Ok(finish_image(&pixels, settings, strata, start, rays))
+}
+
+/// The four G-buffer pipelines (position, shading normal, albedo, vertex normal); with
+/// `level0` the material textures are read at full resolution.
+fn gbuffer_pipelines(
+    ctx: &Arc<Context>,
+    gpu: &SceneGpu,
+    level0: bool,
+) -> Result<Vec<crate::gpu::MeshPipeline>, GpuError> {
+    (0..4u32)
+        .map(|output| {
+            let name = format!(
+                "reference.gbuffer.{}",
+                ["position", "normal", "albedo", "vertex_normal"][output as usize]
+            );
+            let fragment = compile_glsl(
+                "reference/gbuffer.frag",
+                ShaderStage::Fragment,
+                &[
+                    ("GBUFFER", 1),
+                    ("GBUFFER_OUTPUT", output),
+                    ("MATERIAL_LEVEL0", level0 as u32),
+                ],
+            )?;
+            gpu.mesh_pipeline(ctx, &name, &fragment, &gpu.common_resources())
+        })
+        .collect()
+}
+
+/// The samples of one stratum for every pixel.
+struct StratumJob<'a> {
+    paths: &'a Paths<'a>,
+    gbuffer: &'a GBuffer,
+    settings: &'a ReferenceSettings,
+    strata: Strata,
+    stratum: u32,
+}
+
+impl StratumJob<'_> {
+    /// Adds this stratum's samples of row `y` to `row`; returns the rays traced.
+    fn accumulate_row(&self, y: usize, row: &mut [PixelAccumulator]) -> u64 {
+        let (g, settings) = (self.gbuffer, self.settings);
+        let (tracer, w) = (self.paths.tracer, settings.width as usize);
+        let n = self.strata.samples_in(self.stratum, settings.spp);
+        let bounces = settings.bounces;
+        let mut rays = 0u64;
+        for (x, acc) in row.iter_mut().enumerate() {
+            let i = y * w + x;
+            if g.position.rgba[i][3] < 0.5 {
+                continue;
+            }
+            let p = Vec3::from_slice(&g.position.rgba[i][..3]);
+            let n_s = Vec3::from_slice(&g.normal.rgba[i][..3]).normalize_or_zero();
+            let n_g = Vec3::from_slice(&g.vertex_normal.rgba[i][..3]).normalize_or_zero();
+            let origin = tracer.offset_origin(p, n_g);
+            let albedo_over_pi =
+                std::array::from_fn(|c| g.albedo.rgba[i][c] as f64 / std::f64::consts::PI);
+            // Point sampling scales the mean by the one albedo; the footprint each sample.
+            let k = if settings.footprint {
+                albedo_over_pi
+            } else {
+                acc.scale = albedo_over_pi;
+                [1.0; 3]
+            };
+            let stream = i as u64 * u64::from(self.strata.count()) + u64::from(self.stratum);
+            let mut rng = Pcg32::new(settings.seed, stream);
+            for _ in 0..n {
+                let d = self.paths.direct(origin, n_s, n_g, &mut rng, &mut rays);
+                acc.direct.add(d, k);
                 if bounces > 0 {
-                    total.finish(
-                        settings.spp,
-                        albedo,
-                        &mut row_bounced[x],
-                        &mut noise_bounced,
-                    );
+                    let e = self
+                        .paths
+                        .indirect(origin, n_s, n_g, bounces - 1, &mut rng, &mut rays);
+                    acc.total.add(d + e, k);
                 }
             }
-            (row, row_bounced, noise, noise_bounced, rays)
-        })
-        .collect();
-    let mut rgba = Vec::with_capacity(w * h);
-    let mut rgba_bounced = Vec::with_capacity(if bounces > 0 { w * h } else { 0 });
-    let (mut noise, mut noise_bounced, mut rays) =
-        (NoiseSums::default(), NoiseSums::default(), 0u64);
-    for (row, row_bounced, n, nb, r) in rows {
-        rgba.extend(row);
-        rgba_bounced.extend(row_bounced);
-        noise.var += n.var;
-        noise.sq += n.sq;
-        noise_bounced.var += nb.var;
-        noise_bounced.sq += nb.sq;
-        rays += r;
+            acc.covered += n;
+        }
+        rays
+    }
+}
+
+/// Means, coverage and noise of the accumulated pixels.
+fn finish_image(
+    pixels: &[PixelAccumulator],
+    settings: &ReferenceSettings,
+    strata: Strata,
+    start: Instant,
+    rays: u64,
+) -> ReferenceImage {
+    let bounces = settings.bounces;
+    let mut rgba = vec![[0.0f32; 4]; pixels.len()];
+    let mut rgba_bounced = vec![[0.0f32; 4]; if bounces > 0 { pixels.len() } else { 0 }];
+    let (mut noise, mut noise_bounced) = (NoiseSums::default(), NoiseSums::default());
+    for (i, acc) in pixels.iter().enumerate() {
+        if acc.covered == 0 {
+            continue;
+        }
+        let (k, coverage) = if settings.footprint {
+            ([1.0; 3], acc.covered as f32 / settings.spp as f32)
+        } else {
+            (acc.scale, 1.0)
+        };
+        acc.direct
+            .finish(settings.spp, k, coverage, &mut rgba[i], &mut noise);
+        if bounces > 0 {
+            acc.total.finish(
+                settings.spp,
+                k,
+                coverage,
+                &mut rgba_bounced[i],
+                &mut noise_bounced,
+            );
+        }
     }
     let frame = |rgba| Frame {
         width: settings.width,
@@ -245,7 +398,7 @@ pub fn render_reference(
         rgba,
         ms: vec![],
     };
-    Ok(ReferenceImage {
+    ReferenceImage {
         frame: frame(rgba),
         rel_noise: noise.rel_noise(),
         bounced: (bounces > 0).then(|| BouncedImage {
@@ -255,7 +408,8 @@ pub fn render_reference(
         }),
         seconds: start.elapsed().as_secs_f64(),
         rays,
-    })
+        strata,
+    }
 }
 
 /// The estimators of the module doc over one scene and environment.
@@ -424,7 +578,11 @@ mod tests {
             compile_glsl(
                 "reference/gbuffer.frag",
                 ShaderStage::Fragment,
-                &[("GBUFFER", 1), ("GBUFFER_OUTPUT", output)],
+                &[
+                    ("GBUFFER", 1),
+                    ("GBUFFER_OUTPUT", output),
+                    ("MATERIAL_LEVEL0", output % 2),
+                ],
             )
             .unwrap();
         }

@@ -44,6 +44,8 @@ pub struct SceneGpu {
     material_sampler: Sampler,
     lightmap_sampler: Sampler,
     frame: Buffer,
+    /// The frame block as uploaded with no jitter ([`Self::set_jitter`]).
+    frame_params: layout::FrameParams,
     vertex_spirv: Vec<u32>,
     vertex_layout: VertexLayout,
 }
@@ -150,6 +152,7 @@ impl SceneGpu {
                 "scene.lightmap_sampler",
             )?,
             frame,
+            frame_params: params,
             vertex_spirv: compile_glsl(
                 "scene/mesh.vert",
                 ShaderStage::Vertex,
@@ -173,6 +176,26 @@ impl SceneGpu {
             ),
         ]
     }
+    /// Shifts every later frame by `offset_px` pixels (x right, y down; (0, 0) renders
+    /// pixel centres, ±0.5 the pixel's edges): the sub-pixel positions of the reference's
+    /// footprint integration. Applied in clip space, x_clip += 2·dx/width · w_clip, so the
+    /// rasterizer samples the scene at (x + ½ − dx, y + ½ − dy) of the unshifted image.
+    pub fn set_jitter(&mut self, offset_px: [f32; 2]) -> Result<(), GpuError> {
+        let (w, h) = (self.target.width() as f32, self.target.height() as f32);
+        let shift = glam::Mat4::from_cols(
+            glam::Vec4::X,
+            glam::Vec4::Y,
+            glam::Vec4::Z,
+            glam::Vec4::new(2.0 * offset_px[0] / w, 2.0 * offset_px[1] / h, 0.0, 1.0),
+        );
+        let base = glam::Mat4::from_cols_array_2d(&self.frame_params.clip_from_world);
+        let params = layout::FrameParams {
+            clip_from_world: (shift * base).to_cols_array_2d(),
+            ..self.frame_params
+        };
+        self.frame.write(bytemuck::bytes_of(&params))
+    }
+
     pub fn target(&self) -> &RenderTarget {
         &self.target
     }

@@ -95,6 +95,7 @@ fn render(env: &EnvMap) -> (Frame, f64) {
             spp: 32,
             seed: 1,
             bounces: 0,
+            footprint: true,
         },
     )
     .expect("reference renders");
@@ -147,6 +148,7 @@ fn bounces_add_nothing_on_an_open_plane() {
             spp: 8,
             seed: 2,
             bounces: 2,
+            footprint: true,
         },
     )
     .expect("reference renders");

@@ -258,6 +258,7 @@ fn shlmap_tracks_strong_inter_reflection() {
             spp: 256,
             seed: 9,
             bounces: 2,
+            footprint: true,
         },
     )
     .expect("reference renders");

@@ -26,9 +26,18 @@ layout(location = 4) in vec3 in_albedo_tint;
 layout(location = 5) in vec3 in_position_world;
 #endif
 
+// Material textures through their MIP chains (what every technique does), or at full
+// resolution with SHVIS_MATERIAL_LEVEL0 (the footprint reference, which integrates the
+// pixel footprint itself).
+#if defined(SHVIS_MATERIAL_LEVEL0) && SHVIS_MATERIAL_LEVEL0
+#define SAMPLE_MATERIAL(tex, uv) textureLod(tex, uv, 0.0)
+#else
+#define SAMPLE_MATERIAL(tex, uv) texture(tex, uv)
+#endif
+
 // Linear albedo: the sRGB texture is decoded by the sampler.
 vec3 material_albedo() {
-    return texture(albedo_tex, in_uv_material).rgb * in_albedo_tint;
+    return SAMPLE_MATERIAL(albedo_tex, in_uv_material).rgb * in_albedo_tint;
 }
 
 // World-space shading normal from the tangent-space normal map (glTF convention, DESIGN §1:
@@ -43,7 +52,7 @@ vec3 shading_normal() {
     }
     t /= t_len;
     vec3 b = cross(n, t) * in_tangent_world.w;
-    vec3 m = texture(normal_tex, in_uv_material).xyz * 2.0 - 1.0;
+    vec3 m = SAMPLE_MATERIAL(normal_tex, in_uv_material).xyz * 2.0 - 1.0;
     m.xy *= frame.normal_scale;
     vec3 w = t * m.x + b * m.y + n * m.z;
     float w_len = length(w);

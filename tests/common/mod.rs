@@ -94,6 +94,7 @@ pub fn house_reference(ctx: &Arc<Context>) -> (shvis::reference::ReferenceImage,
             spp: 64,
             seed: 3,
             bounces: shvis::bake::shlmap::DEFAULT_BOUNCES,
+            footprint: true,
         },
     )
     .expect("reference renders");
