@@ -19,7 +19,9 @@ use crate::report::figures::{DIFFERENCE_SCALE, FIGURES, difference, write_figure
 use crate::report::image::{write_exr, write_png};
 use crate::report::metrics::{TimingStats, image_error};
 use crate::report::plot::{write_pca_error_plot, write_speed_error_plot};
-use crate::report::table::{BenchRow, BenchTable, RowReference, fill_ratios_to_preconv};
+use crate::report::table::{
+    AttributionKind, AttributionStep, BenchRow, BenchTable, RowReference, fill_ratios_to_preconv,
+};
 use crate::technique::{self, HwPath, ReferenceModel, Technique, TechniqueError};
 
 /// What a bench run does.
@@ -110,7 +112,7 @@ pub fn run(
         let written = write_figures(
             &settings.out,
             path,
-            reference.as_ref().map(|r| &r.frame),
+            reference.as_ref().map(|r| &r.main.frame),
             &|t| figure_frames.get(&(t, path)).cloned(),
             settings.exposure,
         );
@@ -123,10 +125,10 @@ pub fn run(
     }
     drop(figure_frames);
     fill_ratios_to_preconv(&mut rows);
-    let bounced = reference.as_ref().and_then(|r| r.bounced.as_ref());
+    let bounced = reference.as_ref().and_then(|r| r.main.bounced.as_ref());
     let table = BenchTable {
         reference_spp: settings.ref_spp,
-        reference_rel_noise: reference.as_ref().map(|r| r.rel_noise),
+        reference_rel_noise: reference.as_ref().map(|r| r.main.rel_noise),
         reference_bounces: bounced.map_or(0, |b| b.bounces),
         reference_bounced_rel_noise: bounced.map(|b| b.rel_noise),
         device: ctx.device_name().to_string(),
@@ -145,70 +147,106 @@ pub fn run(
     Ok(table)
 }
 
-/// The direct reference and, when a technique needs it, the inter-reflected one; both
-/// written as `reference*.{exr,png}`.
+/// The references a bench measures against.
+pub struct References {
+    /// What the error column is against: the footprint reference (or the point one with
+    /// `--point-reference`), with the inter-reflected image when a technique needs it.
+    pub main: ReferenceImage,
+    /// With a footprint `main`: the point-sampled reference from the same samples'
+    /// settings, the first rung of the error attribution.
+    pub point: Option<ReferenceImage>,
+}
+
+/// The references: `main`, written as `reference*.{exr,png}`, and with a footprint main
+/// the point-sampled one as `reference_point*.{exr,png}`.
 fn render_references(
     ctx: &Arc<Context>,
     prepared: &Prepared,
     settings: &BenchSettings,
-) -> Result<Option<ReferenceImage>, BenchError> {
+) -> Result<Option<References>, BenchError> {
     if settings.ref_spp == 0 {
         return Ok(None);
     }
-    let image = render_reference(
-        ctx,
-        &prepared.scene,
-        &prepared.env,
-        &ReferenceSettings {
-            width: settings.width,
-            height: settings.height,
-            spp: settings.ref_spp,
-            seed: settings.seed,
-            bounces: if settings.needs_sh_lightmap() {
-                settings.bounces
-            } else {
-                0
+    let render = |footprint: bool, name: &str| -> Result<ReferenceImage, BenchError> {
+        let image = render_reference(
+            ctx,
+            &prepared.scene,
+            &prepared.env,
+            &ReferenceSettings {
+                width: settings.width,
+                height: settings.height,
+                spp: settings.ref_spp,
+                seed: settings.seed,
+                bounces: if settings.needs_sh_lightmap() {
+                    settings.bounces
+                } else {
+                    0
+                },
+                footprint,
             },
-            footprint: settings.footprint_reference,
-        },
-    )?;
-    log::info!(
-        "reference: {} spp ({}×{} sub-pixel strata) in {:.1} s, relative noise {:.4}",
-        settings.ref_spp,
-        image.strata.side,
-        image.strata.side,
-        image.seconds,
-        image.rel_noise
-    );
-    write_images(&settings.out, "reference", &image.frame, settings.exposure)?;
-    if let Some(b) = &image.bounced {
+        )?;
         log::info!(
-            "reference with {} bounces: relative noise {:.4}",
-            b.bounces,
-            b.rel_noise
+            "{name}: {} spp ({}×{} sub-pixel strata) in {:.1} s, relative noise {:.4}",
+            settings.ref_spp,
+            image.strata.side,
+            image.strata.side,
+            image.seconds,
+            image.rel_noise
         );
-        let name = format!("reference_bounces{}", b.bounces);
-        write_images(&settings.out, &name, &b.frame, settings.exposure)?;
-    }
-    Ok(Some(image))
+        write_images(&settings.out, name, &image.frame, settings.exposure)?;
+        if let Some(b) = &image.bounced {
+            log::info!(
+                "{name} with {} bounces: relative noise {:.4}",
+                b.bounces,
+                b.rel_noise
+            );
+            let file = format!("{name}_bounces{}", b.bounces);
+            write_images(&settings.out, &file, &b.frame, settings.exposure)?;
+        }
+        Ok(image)
+    };
+    let main = render(settings.footprint_reference, "reference")?;
+    let point = if settings.footprint_reference {
+        Some(render(false, "reference_point")?)
+    } else {
+        None
+    };
+    Ok(Some(References { main, point }))
 }
 
-/// The reference a technique is measured against, and how the row names it.
-fn reference_for<'a>(
-    technique: Technique,
-    reference: Option<&'a ReferenceImage>,
-) -> (Option<&'a Frame>, RowReference) {
-    let Some(r) = reference else {
-        return (None, RowReference::None);
-    };
-    match (technique.reference(), &r.bounced) {
-        (ReferenceModel::InterReflected, Some(b)) => {
-            (Some(&b.frame), RowReference::Bounced(b.bounces))
-        }
+/// The image of `reference` a technique is measured against, and how the row names it.
+fn reference_for(technique: Technique, reference: &ReferenceImage) -> (&Frame, RowReference) {
+    match (technique.reference(), &reference.bounced) {
+        (ReferenceModel::InterReflected, Some(b)) => (&b.frame, RowReference::Bounced(b.bounces)),
         (ReferenceModel::InterReflected, None) | (ReferenceModel::Direct, _) => {
-            (Some(&r.frame), RowReference::Direct)
+            (&reference.frame, RowReference::Direct)
         }
     }
+}
+
+/// The attribution rungs of a row: footprint → point reference (pixel filtering, the
+/// MIP-filtered normal map) and point reference → the technique's image.
+fn attribution(
+    technique: Technique,
+    frame: &Frame,
+    references: Option<&References>,
+) -> Vec<AttributionStep> {
+    let Some((r, Some(point))) = references.map(|r| (r, r.point.as_ref())) else {
+        return vec![];
+    };
+    let (footprint, _) = reference_for(technique, &r.main);
+    let (point, _) = reference_for(technique, point);
+    let rel = |a: &Frame, b: &Frame| image_error(a, b).map(|e| e.rel_rmse);
+    vec![
+        AttributionStep {
+            step: AttributionKind::PixelFootprint,
+            rel_rmse: rel(point, footprint),
+        },
+        AttributionStep {
+            step: AttributionKind::Technique,
+            rel_rmse: rel(frame, point),
+        },
+    ]
 }
 
 /// Builds, times, writes and measures one technique × path; returns its row and image.
@@ -218,16 +256,22 @@ fn measure_row(
     prepared: &Prepared,
     technique: Technique,
     path: HwPath,
-    reference: Option<&ReferenceImage>,
+    references: Option<&References>,
     settings: &BenchSettings,
 ) -> Result<(BenchRow, Frame), BenchError> {
     let tech = technique::build(ctx, scene, technique, path, &prepared.inputs())?;
     let frame = tech.render(scene, settings.warmup, settings.frames)?;
     let timing = TimingStats::from_ms(&frame.ms);
-    let (reference_frame, reference_kind) = reference_for(technique, reference);
+    let (reference_frame, reference_kind) = match references {
+        Some(r) => {
+            let (f, kind) = reference_for(technique, &r.main);
+            (Some(f), kind)
+        }
+        None => (None, RowReference::None),
+    };
     let error = reference_frame.and_then(|r| image_error(&frame, r));
-    if let (RowReference::Bounced(_), Some(direct)) = (reference_kind, reference) {
-        if let Some(e) = image_error(&frame, &direct.frame) {
+    if let (RowReference::Bounced(_), Some(r)) = (reference_kind, references) {
+        if let Some(e) = image_error(&frame, &r.main.frame) {
             log::info!(
                 "{}: relative RMSE against the direct-only reference {:.4}",
                 tech.label(),
@@ -258,6 +302,7 @@ fn measure_row(
         paper_ms: technique.paper_ms(),
         paper_ratio_to_preconv: technique.paper_ratio_to_preconv(),
         reference: reference_kind,
+        attribution: attribution(technique, &frame, references),
     };
     Ok((row, frame))
 }

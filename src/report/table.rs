@@ -35,6 +35,40 @@ impl Serialize for RowReference {
     }
 }
 
+/// A rung of the error attribution ladder.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AttributionKind {
+    /// Footprint reference → point-sampled reference: the error of sampling the pixel at
+    /// its centre with MIP-filtered material textures.
+    PixelFootprint,
+    /// Point-sampled reference → the technique's GPU image: everything the technique
+    /// itself approximates (visibility, lighting and clamped-cosine truncation, tables,
+    /// compression, texel filtering, f16).
+    Technique,
+}
+
+impl AttributionKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            AttributionKind::PixelFootprint => "pixel footprint → point sampling",
+            AttributionKind::Technique => "point sampling → technique",
+        }
+    }
+}
+
+impl Serialize for AttributionKind {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+/// One rung: the relative RMSE between its two images.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct AttributionStep {
+    pub step: AttributionKind,
+    pub rel_rmse: Option<f64>,
+}
+
 /// One technique × path row.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct BenchRow {
@@ -58,6 +92,8 @@ pub struct BenchRow {
     pub paper_ratio_to_preconv: Option<f64>,
     /// What `rel_rmse` is measured against (JSON: "direct", "N bounces" or "none").
     pub reference: RowReference,
+    /// Where `rel_rmse` comes from, rung by rung (empty without a footprint reference).
+    pub attribution: Vec<AttributionStep>,
 }
 
 /// Fills `ratio_to_preconv` of every row from the `preconv` row of its path.
@@ -145,6 +181,31 @@ impl BenchTable {
                 r.lookups_per_pixel
             );
         }
+        s += &self.attribution_markdown();
+        s
+    }
+
+    /// The attribution table (empty when no row has rungs).
+    fn attribution_markdown(&self) -> String {
+        let Some(first) = self.results.iter().find(|r| !r.attribution.is_empty()) else {
+            return String::new();
+        };
+        let mut s = String::from(
+            "\nError attribution (relative RMSE of each rung; the total is the row's error):\n\n| technique | path |",
+        );
+        for step in &first.attribution {
+            s += &format!(" {} |", step.step.name());
+        }
+        s += " total |\n|---|---|";
+        s += &"---:|".repeat(first.attribution.len() + 1);
+        s += "\n";
+        for r in self.results.iter().filter(|r| !r.attribution.is_empty()) {
+            s += &format!("| {} | {} |", r.technique, r.path);
+            for step in &r.attribution {
+                s += &format!(" {} |", opt(step.rel_rmse, 4));
+            }
+            s += &format!(" {} |\n", opt(r.rel_rmse, 4));
+        }
         s
     }
 
@@ -160,5 +221,94 @@ impl BenchTable {
         let json = serde_json::to_string_pretty(self).map_err(|e| err(&json_path, &e))?;
         std::fs::write(&json_path, json + "\n").map_err(|e| err(&json_path, &e))?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(technique: Technique, ms: f64, attribution: Vec<AttributionStep>) -> BenchRow {
+        BenchRow {
+            technique,
+            path: HwPath::Dx10,
+            ms_median: Some(ms),
+            ms_min: Some(ms),
+            ms_max: Some(ms),
+            frames: 1,
+            rel_rmse: Some(0.25),
+            psnr: Some(30.0),
+            texel_bytes: 8,
+            table_bytes: 16,
+            textures_bound: 3,
+            lookups_per_pixel: 3,
+            ratio_to_preconv: None,
+            paper_ms: technique.paper_ms(),
+            paper_ratio_to_preconv: technique.paper_ratio_to_preconv(),
+            reference: RowReference::Direct,
+            attribution,
+        }
+    }
+
+    #[test]
+    fn ratios_use_the_preconv_row_of_the_same_path() {
+        let mut rows = vec![
+            row(Technique::Sh2, 3.0, vec![]),
+            row(Technique::Preconv, 2.0, vec![]),
+        ];
+        rows[0].path = HwPath::Dx9;
+        rows.push(row(Technique::Sh2, 4.0, vec![]));
+        fill_ratios_to_preconv(&mut rows);
+        assert_eq!(rows[0].ratio_to_preconv, None, "no dx9 preconv row");
+        assert_eq!(rows[2].ratio_to_preconv, Some(2.0));
+    }
+
+    #[test]
+    fn attribution_rungs_reach_the_markdown_and_the_json() {
+        let steps = vec![
+            AttributionStep {
+                step: AttributionKind::PixelFootprint,
+                rel_rmse: Some(0.125),
+            },
+            AttributionStep {
+                step: AttributionKind::Technique,
+                rel_rmse: Some(0.5),
+            },
+        ];
+        let table = BenchTable {
+            device: "test".into(),
+            width: 4,
+            height: 4,
+            vis_res: 16,
+            reference_spp: 4,
+            reference_rel_noise: Some(0.1),
+            reference_bounces: 0,
+            reference_bounced_rel_noise: None,
+            results: vec![
+                row(Technique::Preconv, 1.0, steps),
+                row(Technique::Sh2, 1.0, vec![]),
+            ],
+        };
+        let md = table.to_markdown();
+        assert!(
+            md.contains(
+                "| pixel footprint → point sampling | point sampling → technique | total |"
+            ),
+            "{md}"
+        );
+        assert!(
+            md.contains("| preconv | dx10 | 0.1250 | 0.5000 | 0.2500 |"),
+            "{md}"
+        );
+        assert!(
+            !md.contains("| sh2 | dx10 | 0."),
+            "a row without rungs has no attribution line"
+        );
+        let json = serde_json::to_value(&table).unwrap();
+        let rung = &json["results"][0]["attribution"][1];
+        assert_eq!(rung["step"], "point sampling → technique");
+        assert_eq!(rung["rel_rmse"], 0.5);
+        assert_eq!(json["results"][0]["technique"], "preconv");
+        assert_eq!(json["results"][0]["reference"], "direct");
     }
 }
