@@ -113,7 +113,7 @@ pub fn run(
             &settings.out,
             path,
             reference.as_ref().map(|r| &r.main.frame),
-            &|t| figure_frames.get(&(t, path)).cloned(),
+            &|t| figure_frames.get(&(t, path)),
             settings.exposure,
         );
         match written {

@@ -22,7 +22,6 @@ layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform Groupe
 #define SHVIS_PER_TEXEL_GROUPS GROUPS
 #include "per_texel.glsl"
 #include "diffuse_out.glsl"
-#define SAMPLE_TEXEL(g) SAMPLE_PER_TEXEL(g)
 
 #if SHVIS_PATH_DX9
 layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0 + 1) uniform sampler2D table_tex[3];
@@ -39,7 +38,7 @@ layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0 + 1) uniform samplerC
 #endif
 
 #define ACCUMULATE(g) { \
-    vec4 v = SAMPLE_TEXEL(g); \
+    vec4 v = SAMPLE_PER_TEXEL(g); \
     sum += vec3(dot(v, SAMPLE_TABLE(0, g)), dot(v, SAMPLE_TABLE(1, g)), dot(v, SAMPLE_TABLE(2, g))); \
 }
 

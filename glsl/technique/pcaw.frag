@@ -19,7 +19,6 @@ layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform PcaWei
 #define SHVIS_PER_TEXEL_GROUPS GROUPS
 #include "per_texel.glsl"
 #include "diffuse_out.glsl"
-#define SAMPLE_WEIGHTS(g) SAMPLE_PER_TEXEL(g)
 
 void main() {
     vec4 e[9];
@@ -30,27 +29,27 @@ void main() {
 #if SHVIS_PATH_DX9
         // Constant indices for the sampler array: unrolled by the compiler per g below.
         vec4 w = vec4(0.0);
-        if (g == 0) w = SAMPLE_WEIGHTS(0);
+        if (g == 0) w = SAMPLE_PER_TEXEL(0);
 #if GROUPS > 1
-        if (g == 1) w = SAMPLE_WEIGHTS(1);
+        if (g == 1) w = SAMPLE_PER_TEXEL(1);
 #endif
 #if GROUPS > 2
-        if (g == 2) w = SAMPLE_WEIGHTS(2);
+        if (g == 2) w = SAMPLE_PER_TEXEL(2);
 #endif
 #if GROUPS > 3
-        if (g == 3) w = SAMPLE_WEIGHTS(3);
+        if (g == 3) w = SAMPLE_PER_TEXEL(3);
 #endif
 #if GROUPS > 4
-        if (g == 4) w = SAMPLE_WEIGHTS(4);
+        if (g == 4) w = SAMPLE_PER_TEXEL(4);
 #endif
 #if GROUPS > 5
-        if (g == 5) w = SAMPLE_WEIGHTS(5);
+        if (g == 5) w = SAMPLE_PER_TEXEL(5);
 #endif
 #if GROUPS > 6
 #error "at most 6 groups (24 basis vectors)"
 #endif
 #else
-        vec4 w = SAMPLE_WEIGHTS(g);
+        vec4 w = SAMPLE_PER_TEXEL(g);
 #endif
         for (int i = 0; i < 9; ++i) {
             e[i] += w.x * params.coeffs[9 * (4 * g) + i] + w.y * params.coeffs[9 * (4 * g + 1) + i]

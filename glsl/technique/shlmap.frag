@@ -16,16 +16,15 @@ layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform ShLigh
 #define SHVIS_PER_TEXEL_GROUPS SHVIS_SHLMAP_GROUPS
 #include "per_texel.glsl"
 #include "diffuse_out.glsl"
-#define SAMPLE_GROUP(g) SAMPLE_PER_TEXEL(g)
 
 #if SHVIS_SHLMAP_GROUPS != 7
 #error "the unpacking below is written for 27 values in 7 groups"
 #endif
 
 void main() {
-    vec4 g0 = SAMPLE_GROUP(0), g1 = SAMPLE_GROUP(1), g2 = SAMPLE_GROUP(2),
-         g3 = SAMPLE_GROUP(3), g4 = SAMPLE_GROUP(4), g5 = SAMPLE_GROUP(5),
-         g6 = SAMPLE_GROUP(6);
+    vec4 g0 = SAMPLE_PER_TEXEL(0), g1 = SAMPLE_PER_TEXEL(1), g2 = SAMPLE_PER_TEXEL(2),
+         g3 = SAMPLE_PER_TEXEL(3), g4 = SAMPLE_PER_TEXEL(4), g5 = SAMPLE_PER_TEXEL(5),
+         g6 = SAMPLE_PER_TEXEL(6);
     vec3 radiance[9] = vec3[9](
         g0.xyz, vec3(g0.w, g1.xy), vec3(g1.zw, g2.x), g2.yzw,
         g3.xyz, vec3(g3.w, g4.xy), vec3(g4.zw, g5.x), g5.yzw,

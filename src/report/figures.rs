@@ -7,6 +7,7 @@
 //! Fig. 6  unc3 · unc4 · unc6 / ×4 differences to unc6 (unc6: to the reference)
 //! ```
 
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use super::ReportError;
@@ -101,41 +102,35 @@ pub fn difference(a: &Frame, b: &Frame, scale: f32) -> Frame {
 /// Writes `{figure}_{path}.png` for every figure whose images `image` can find (`None`:
 /// the technique was not run). Tiles are the frames at `exposure`, captioned. Returns the
 /// files written.
-pub fn write_figures(
+pub fn write_figures<'a>(
     dir: &Path,
     path: HwPath,
     reference: Option<&Frame>,
-    image: &dyn Fn(Technique) -> Option<Frame>,
+    image: &dyn Fn(Technique) -> Option<&'a Frame>,
     exposure: f32,
 ) -> Result<Vec<PathBuf>, ReportError> {
     let mut written = Vec::new();
     for fig in FIGURES {
-        let frames: Option<Vec<(Technique, Frame)>> =
-            fig.techniques().map(|t| Some((t, image(t)?))).collect();
-        let Some(frames) = frames else { continue };
-        let find = |t: Technique| &frames.iter().find(|(u, _)| *u == t).expect("listed").1;
-        let top: Vec<(String, Frame)> = fig
-            .top
-            .iter()
-            .map(|&t| (t.name(), find(t).clone()))
-            .collect();
-        let bottom: Vec<(String, Frame)> = match fig.differences_to {
-            None => fig
-                .bottom
-                .iter()
-                .map(|&t| (t.name(), find(t).clone()))
-                .collect(),
+        if fig.techniques().any(|t| image(t).is_none()) {
+            continue;
+        }
+        let find = |t: Technique| image(t).expect("checked above");
+        let tile = |t: Technique| (t.name(), Cow::Borrowed(find(t)));
+        let top: Vec<(String, Cow<'_, Frame>)> = fig.top.iter().map(|&t| tile(t)).collect();
+        let bottom: Vec<(String, Cow<'_, Frame>)> = match fig.differences_to {
+            None => fig.bottom.iter().map(|&t| tile(t)).collect(),
             Some(base) => fig
                 .top
                 .iter()
                 .filter_map(|&t| {
                     if t != base {
                         let label = format!("|{t} − {base}| ×{DIFFERENCE_SCALE}");
-                        Some((label, difference(find(t), find(base), DIFFERENCE_SCALE)))
+                        let d = difference(find(t), find(base), DIFFERENCE_SCALE);
+                        Some((label, Cow::Owned(d)))
                     } else {
                         let r = reference?;
                         let label = format!("|{t} − reference| ×{DIFFERENCE_SCALE}");
-                        Some((label, difference(find(t), r, DIFFERENCE_SCALE)))
+                        Some((label, Cow::Owned(difference(find(t), r, DIFFERENCE_SCALE))))
                     }
                 })
                 .collect(),
@@ -150,7 +145,7 @@ pub fn write_figures(
 /// Tiles `rows` (all frames one size) into one PNG with a caption band above each tile.
 pub fn write_sheet(
     file: &Path,
-    rows: &[Vec<(String, Frame)>],
+    rows: &[Vec<(String, Cow<'_, Frame>)>],
     exposure: f32,
 ) -> Result<(), ReportError> {
     let err = |detail: String| ReportError::Write {
@@ -196,7 +191,7 @@ pub fn write_sheet(
 fn draw_captions(
     rgb: &mut [u8],
     size: (u32, u32),
-    rows: &[Vec<(String, Frame)>],
+    rows: &[Vec<(String, Cow<'_, Frame>)>],
     tile: (u32, u32),
 ) -> Result<(), String> {
     use plotters::prelude::*;

@@ -151,6 +151,31 @@ pub fn finish(
     })
 }
 
+/// The ending of the table-driven families (`unc*`, `pca*`, glsl/include/grouped.glsl):
+/// the per-texel groups at TEXTURE0, the normal-indexed tables after them, and the tables'
+/// decoding block (f16 unscale, texels per side) as the uniforms.
+pub fn finish_with_tables(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    technique: Technique,
+    path: HwPath,
+    per_texel: Vec<Image>,
+    tables: super::tables::NormalTables,
+    table_res: u32,
+) -> Result<TechniqueGpu, TechniqueError> {
+    let params = tables.params(table_res);
+    let mut slots = vec![TextureSlot::per_texel(per_texel)];
+    slots.extend(tables.slots);
+    finish(
+        ctx,
+        scene,
+        technique,
+        path,
+        bytemuck::bytes_of(&params),
+        slots,
+    )
+}
+
 /// Enforces the `dx9` rules in code (DESIGN §2): only 2D textures, at most
 /// `DX9_MAX_TEXTURES` per draw counting albedo and normal map.
 pub fn check_path_rules(

@@ -87,6 +87,16 @@ pub fn fragment_shader(technique: Technique) -> ShaderVariant {
     }
 }
 
+/// Order-3 RGB SH coefficients as a std140 `vec4[9]` (RGB in .xyz): the uniform blocks of
+/// `preconv` (irradiance) and `sh2` (radiance).
+pub(crate) fn rgb_order3_block(coeffs: &[[f64; 3]]) -> [[f32; 4]; 9] {
+    let mut block = [[0.0f32; 4]; 9];
+    for (dst, src) in block.iter_mut().zip(coeffs) {
+        *dst = [src[0] as f32, src[1] as f32, src[2] as f32, 0.0];
+    }
+    block
+}
+
 /// A technique ready to draw: its pipeline and the resources it owns.
 pub struct TechniqueGpu {
     pub technique: Technique,

@@ -22,8 +22,8 @@ use std::sync::Arc;
 
 use ash::vk;
 
-use super::finish::{TextureSlot, finish};
-use super::tables::{TableParams, table_map, upload_normal_tables};
+use super::finish::{TextureSlot, finish, finish_with_tables};
+use super::tables::{NormalTables, table_map, upload_normal_tables};
 use super::texels::{VALUES_PER_TEXEL, pack_groups, upload_texel_groups};
 use super::{HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu};
 use crate::bake::lxh::{LxhMatrices, build_table};
@@ -93,9 +93,9 @@ pub fn build(
     }
     let q = quantized_prefix(model, m);
     let weights = upload_weights(ctx, path, &q, &label)?;
-    let mut slots = vec![TextureSlot::per_texel(weights)];
     if weights_only {
         let block = weights_only_block(&q, model.order, inputs.radiance_sh);
+        let slots = vec![TextureSlot::per_texel(weights)];
         return finish(
             ctx,
             scene,
@@ -105,15 +105,15 @@ pub fn build(
             slots,
         );
     }
-    let (table_slots, params) = upload_tables(ctx, path, &q, model.order, inputs, &label)?;
-    slots.extend(table_slots);
-    finish(
+    let tables = upload_tables(ctx, path, &q, model.order, inputs, &label)?;
+    finish_with_tables(
         ctx,
         scene,
         technique,
         path,
-        bytemuck::bytes_of(&params),
-        slots,
+        weights,
+        tables,
+        inputs.table_res,
     )
 }
 
@@ -171,7 +171,7 @@ fn upload_tables(
     order: Order,
     inputs: &Inputs<'_>,
     label: &str,
-) -> Result<(Vec<TextureSlot>, TableParams), TechniqueError> {
+) -> Result<NormalTables, TechniqueError> {
     let n = order.coeff_count();
     let m = q.m;
     let matrices = LxhMatrices::new(inputs.radiance_sh, order, inputs.h_order);
@@ -194,7 +194,7 @@ fn upload_tables(
         .collect();
     let mean_table: Vec<[f32; 3]> = (0..samples).map(|t| project(t, &q.mean)).collect();
     let mean_fn = |t: usize| mean_table[t];
-    let tables = upload_normal_tables(
+    upload_normal_tables(
         ctx,
         path,
         map,
@@ -202,9 +202,7 @@ fn upload_tables(
         |t, g, c| std::array::from_fn(|k| basis_tables[t * m + VALUES_PER_TEXEL * g + k][c]),
         Some(&mean_fn),
         &format!("{label}.tables"),
-    )?;
-    let params = tables.params(inputs.table_res);
-    Ok((tables.slots, params))
+    )
 }
 
 #[cfg(test)]

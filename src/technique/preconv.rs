@@ -5,7 +5,7 @@
 //! the normal-mapped normal, so shadows of the sun are not modelled at all — only
 //! how open each texel is. Per texel: one f16 (R16_SFLOAT, 2 bytes). Per lighting: 9 RGB
 //! coefficients in a uniform block. dx9 binds AO as a 2D texture, dx10 as a one-layer
-//! 2D array, the rest is shared (glsl/technique/preconv.frag).
+//! 2D array (`super::texels`), the rest is shared (glsl/technique/preconv.frag).
 
 use std::sync::Arc;
 
@@ -13,8 +13,11 @@ use ash::vk;
 use half::f16;
 
 use super::finish::{TextureSlot, finish};
-use super::{HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu};
-use crate::gpu::{Context, Image, ImageDesc};
+use super::texels::upload_texel_groups;
+use super::{
+    HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu, rgb_order3_block,
+};
+use crate::gpu::Context;
 use crate::render::SceneGpu;
 
 /// Uniforms of glsl/technique/preconv.frag, block `PreconvParams` (std140).
@@ -52,23 +55,23 @@ pub fn build(
     }
     let ao = inputs.ao;
     let ao_f16: Vec<f16> = ao.values.iter().map(|&a| f16::from_f32(a)).collect();
-    let ao_bytes: &[u8] = bytemuck::cast_slice(&ao_f16);
-    let desc = match path {
-        HwPath::Dx9 => ImageDesc::texture_2d(vk::Format::R16_SFLOAT, ao.res, ao.res),
-        HwPath::Dx10 => ImageDesc::texture_2d_array(vk::Format::R16_SFLOAT, ao.res, ao.res, 1),
+    let images = upload_texel_groups(
+        ctx,
+        path,
+        ao.res,
+        vk::Format::R16_SFLOAT,
+        &[bytemuck::cast_slice(&ao_f16)],
+        &format!("{label}.ao"),
+    )?;
+    let params = PreconvParams {
+        irradiance_sh: rgb_order3_block(inputs.irradiance_sh),
     };
-    let ao_image = Image::with_data(ctx, &desc, &[vec![ao_bytes]], &format!("{label}.ao"))?;
-
-    let mut params = PreconvParams::default();
-    for (dst, src) in params.irradiance_sh.iter_mut().zip(inputs.irradiance_sh) {
-        *dst = [src[0] as f32, src[1] as f32, src[2] as f32, 0.0];
-    }
     finish(
         ctx,
         scene,
         Technique::Preconv,
         path,
         bytemuck::bytes_of(&params),
-        vec![TextureSlot::per_texel(vec![ao_image])],
+        vec![TextureSlot::per_texel(images)],
     )
 }

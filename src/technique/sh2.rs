@@ -23,8 +23,10 @@ use ash::vk;
 use half::f16;
 
 use super::finish::{TextureSlot, finish};
-use super::texels::upload_texel_groups;
-use super::{HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu};
+use super::texels::{pack_groups, upload_texel_groups};
+use super::{
+    HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu, rgb_order3_block,
+};
 use crate::gpu::Context;
 use crate::render::SceneGpu;
 use crate::sh::Order;
@@ -112,23 +114,21 @@ pub fn build(
     let stride = vis.order.coeff_count();
     // SH projection is hierarchical: the first 4 coefficients of the order-6 bake are the
     // order-2 projection.
-    let v: Vec<f16> = (0..texels)
-        .flat_map(|t| (0..4).map(move |j| (t, j)))
-        .map(|(t, j)| f16::from_f32(vis.coeffs[t * stride + j]))
-        .collect();
-    let bytes: &[u8] = bytemuck::cast_slice(&v);
+    let groups = pack_groups(texels, Order::TWO.coeff_count(), |t, j| {
+        f16::from_f32(vis.coeffs[t * stride + j])
+    });
+    let bytes: Vec<&[u8]> = groups.iter().map(|g| bytemuck::cast_slice(g)).collect();
     let images = upload_texel_groups(
         ctx,
         path,
         vis.res,
         vk::Format::R16G16B16A16_SFLOAT,
-        &[bytes],
+        &bytes,
         &format!("{label}.visibility"),
     )?;
-    let mut params = Sh2Params::default();
-    for (dst, src) in params.lighting_sh.iter_mut().zip(inputs.radiance_sh) {
-        *dst = [src[0] as f32, src[1] as f32, src[2] as f32, 0.0];
-    }
+    let params = Sh2Params {
+        lighting_sh: rgb_order3_block(inputs.radiance_sh),
+    };
     if params.lighting_sh.iter().flatten().any(|v| !v.is_finite()) {
         return Err(TechniqueError::Input {
             label,

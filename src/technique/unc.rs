@@ -16,7 +16,7 @@ use std::sync::Arc;
 use ash::vk;
 use half::f16;
 
-use super::finish::{TextureSlot, finish};
+use super::finish::finish_with_tables;
 use super::tables::{table_map, upload_normal_tables};
 use super::texels::{VALUES_PER_TEXEL, pack_groups, upload_texel_groups};
 use super::{HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu};
@@ -97,15 +97,13 @@ pub fn build(
         None,
         &format!("{label}.lxh"),
     )?;
-    let params = tables.params(inputs.table_res);
-    let mut slots = vec![TextureSlot::per_texel(texel_images)];
-    slots.extend(tables.slots);
-    finish(
+    finish_with_tables(
         ctx,
         scene,
         technique,
         path,
-        bytemuck::bytes_of(&params),
-        slots,
+        texel_images,
+        tables,
+        inputs.table_res,
     )
 }
