@@ -10,13 +10,14 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
+use crate::attribution::{LadderPixels, cpu_rungs};
 use crate::gpu::{Context, GpuError};
 use crate::prepare::Prepared;
 use crate::reference::{ReferenceImage, ReferenceSettings, render_reference};
 use crate::render::{Frame, FrameSettings, SceneGpu};
 use crate::report::ReportError;
 use crate::report::figures::{DIFFERENCE_SCALE, FIGURES, difference, write_figures};
-use crate::report::image::{write_exr, write_png};
+use crate::report::image::{write_exr, write_exr_half, write_png};
 use crate::report::metrics::{TimingStats, image_error};
 use crate::report::plot::{write_pca_error_plot, write_speed_error_plot};
 use crate::report::table::{
@@ -90,6 +91,14 @@ pub fn run(
         flat_normals: false,
         ..FrameSettings::default()
     };
+    let ladder = match reference.as_ref().and_then(|r| r.point.as_ref()) {
+        Some(_) => Some(ladder_pixels(ctx, prepared, settings)?),
+        None => None,
+    };
+    let mut ladder = Ladder {
+        pixels: ladder,
+        written: std::collections::HashSet::new(),
+    };
     let scene = SceneGpu::new(ctx, &prepared.scene, &frame_settings)?;
     let mut rows = Vec::new();
     // The images the figures need, kept until they are drawn.
@@ -97,8 +106,16 @@ pub fn run(
     for &technique in &settings.techniques {
         for &path in &settings.paths {
             let reference = reference.as_ref();
-            let (row, frame) =
-                measure_row(ctx, &scene, prepared, technique, path, reference, settings)?;
+            let (row, frame) = measure_row(
+                ctx,
+                &scene,
+                prepared,
+                technique,
+                path,
+                reference,
+                &mut ladder,
+                settings,
+            )?;
             rows.push(row);
             if FIGURES
                 .iter()
@@ -224,32 +241,102 @@ fn reference_for(technique: Technique, reference: &ReferenceImage) -> (&Frame, R
     }
 }
 
-/// The attribution rungs of a row: footprint → point reference (pixel filtering, the
-/// MIP-filtered normal map) and point reference → the technique's image.
+/// The error ladder's state over a bench: the per-pixel data of the CPU rungs and the
+/// rung images already written (rungs shared by rows are written once).
+struct Ladder {
+    pixels: Option<LadderPixels>,
+    written: std::collections::HashSet<String>,
+}
+
+/// Renders the point G-buffer and traces the per-pixel visibility of the ladder.
+fn ladder_pixels(
+    ctx: &Arc<Context>,
+    prepared: &Prepared,
+    settings: &BenchSettings,
+) -> Result<LadderPixels, BenchError> {
+    let pixels = LadderPixels::new(ctx, prepared, settings.width, settings.height)?;
+    log::info!(
+        "error ladder: {} pixels, visibility traced per pixel ({} rays) and exact lighting tabulated in {:.1} s",
+        pixels.len(),
+        pixels.rays_traced(),
+        pixels.seconds
+    );
+    std::fs::create_dir_all(settings.out.join(LADDER_DIR)).map_err(|e| ReportError::Write {
+        path: settings.out.join(LADDER_DIR),
+        detail: e.to_string(),
+    })?;
+    Ok(pixels)
+}
+
+/// Folder of the ladder's CPU rung images, inside the bench's output.
+pub const LADDER_DIR: &str = "ladder";
+
+/// The file stem of the reference image `frame` was taken from (`reference_for`).
+fn reference_stem(name: &str, kind: RowReference) -> String {
+    match kind {
+        RowReference::Bounced(n) => format!("{name}_bounces{n}"),
+        RowReference::Direct | RowReference::None => name.to_string(),
+    }
+}
+
+/// The attribution ladder of a row (`crate::attribution`): footprint → point reference,
+/// the technique's CPU rungs (written to `ladder/`), then the GPU image `frame`; a
+/// technique without CPU rungs (`shlmap`) steps from the point reference to its image.
+#[allow(clippy::too_many_arguments)]
 fn attribution(
+    prepared: &Prepared,
     technique: Technique,
+    path: HwPath,
     frame: &Frame,
     references: Option<&References>,
-) -> Vec<AttributionStep> {
+    ladder: &mut Ladder,
+    settings: &BenchSettings,
+) -> Result<Vec<AttributionStep>, BenchError> {
     let Some((r, Some(point))) = references.map(|r| (r, r.point.as_ref())) else {
-        return vec![];
+        return Ok(vec![]);
     };
     let (footprint, _) = reference_for(technique, &r.main);
-    let (point, _) = reference_for(technique, point);
+    let (point, kind) = reference_for(technique, point);
     let rel = |a: &Frame, b: &Frame| image_error(a, b).map(|e| e.rel_rmse);
-    vec![
-        AttributionStep {
-            step: AttributionKind::PixelFootprint,
-            rel_rmse: rel(point, footprint),
+    let mut steps = vec![AttributionStep {
+        step: AttributionKind::PixelFootprint,
+        rel_rmse: rel(point, footprint),
+        image: format!("{}.exr", reference_stem("reference_point", kind)),
+    }];
+    let rungs = match (&ladder.pixels, technique.reference()) {
+        (Some(pixels), ReferenceModel::Direct) => cpu_rungs(pixels, prepared, technique, path)?,
+        _ => vec![],
+    };
+    let mut previous = point;
+    for rung in &rungs {
+        let image = format!("{LADDER_DIR}/{}.exr", rung.stem);
+        if ladder.written.insert(rung.stem.clone()) {
+            let dir = settings.out.join(LADDER_DIR);
+            write_exr_half(&dir.join(format!("{}.exr", rung.stem)), &rung.frame)?;
+            let png = dir.join(format!("{}.png", rung.stem));
+            write_png(&png, &rung.frame, settings.exposure)?;
+        }
+        steps.push(AttributionStep {
+            step: rung.step,
+            rel_rmse: rel(&rung.frame, previous),
+            image,
+        });
+        previous = &rung.frame;
+    }
+    steps.push(AttributionStep {
+        step: if rungs.is_empty() {
+            AttributionKind::Technique
+        } else {
+            AttributionKind::Gpu
         },
-        AttributionStep {
-            step: AttributionKind::Technique,
-            rel_rmse: rel(frame, point),
-        },
-    ]
+        rel_rmse: rel(frame, previous),
+        image: format!("{technique}.{path}.exr"),
+    });
+    Ok(steps)
 }
 
 /// Builds, times, writes and measures one technique × path; returns its row and image.
+#[allow(clippy::too_many_arguments)]
 fn measure_row(
     ctx: &Arc<Context>,
     scene: &SceneGpu,
@@ -257,6 +344,7 @@ fn measure_row(
     technique: Technique,
     path: HwPath,
     references: Option<&References>,
+    ladder: &mut Ladder,
     settings: &BenchSettings,
 ) -> Result<(BenchRow, Frame), BenchError> {
     let tech = technique::build(ctx, scene, technique, path, &prepared.inputs())?;
@@ -302,7 +390,9 @@ fn measure_row(
         paper_ms: technique.paper_ms(),
         paper_ratio_to_preconv: technique.paper_ratio_to_preconv(),
         reference: reference_kind,
-        attribution: attribution(technique, &frame, references),
+        attribution: attribution(
+            prepared, technique, path, &frame, references, ladder, settings,
+        )?,
     };
     Ok((row, frame))
 }

@@ -7,6 +7,7 @@
 //! `technique` is where they meet. Unsafe code lives in `gpu` only.
 #![deny(unsafe_code)]
 
+pub mod attribution;
 pub mod bake;
 pub mod bench;
 pub mod env;

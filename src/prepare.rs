@@ -72,6 +72,9 @@ pub struct Prepared {
     pub ao: AoMap,
     /// SH visibility per lightmap texel.
     pub visibility: VisibilityMap,
+    /// How `visibility` was traced (rays, seed, order): what the error ladder repeats at
+    /// each pixel.
+    pub visibility_settings: VisibilitySettings,
     /// PCA of `visibility` with `PCA_MAX_BASIS` vectors (`pca*` use prefixes of it).
     pub pca: PcaModel,
     /// SH of the environment's radiance, RGB, to order `LIGHTING_ORDER` (≥ visibility + 2).
@@ -200,6 +203,12 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
         env,
         ao,
         visibility,
+        visibility_settings: VisibilitySettings {
+            order: settings.order,
+            rays,
+            seed: settings.seed,
+            progress: false,
+        },
         pca,
         radiance_sh,
         irradiance_sh,

@@ -230,7 +230,7 @@ pub fn render_reference(
             float32_target: true,
         },
     )?;
-    let pipelines = gbuffer_pipelines(ctx, &gpu, settings.footprint)?;
+    let pipelines = gbuffer_pipelines(ctx, &gpu, settings.footprint, 4)?;
     let tracer = Tracer::new(&scene.mesh);
     let sampler = EnvSampler::new(env);
     let surfaces = SurfaceReader::new(scene);
@@ -279,18 +279,71 @@ pub fn render_reference(
     Ok(finish_image(&pixels, settings, strata, start, rays))
 }
 
-/// The four G-buffer pipelines (position, shading normal, albedo, vertex normal); with
-/// `level0` the material textures are read at full resolution.
+/// The point-sampled G-buffer with the lightmap UV: what the techniques' fragment shaders
+/// see at each pixel centre, for the CPU rungs of the error ladder (`crate::attribution`).
+pub struct PointGBuffer {
+    pub position: Frame,
+    /// Normal-mapped shading normal (MIP-filtered normal map, as the techniques read it).
+    pub normal: Frame,
+    /// Linear albedo (MIP-filtered).
+    pub albedo: Frame,
+    /// Interpolated vertex normal (the tangent plane of "V = 0 below").
+    pub vertex_normal: Frame,
+    /// Lightmap UV in .xy.
+    pub uv_lightmap: Frame,
+}
+
+/// Renders [`PointGBuffer`] of `scene` from its camera (RGBA32F, no jitter).
+pub fn render_point_gbuffer(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    width: u32,
+    height: u32,
+) -> Result<PointGBuffer, GpuError> {
+    let gpu = SceneGpu::new(
+        ctx,
+        scene,
+        &FrameSettings {
+            width,
+            height,
+            flat_normals: false,
+            float32_target: true,
+        },
+    )?;
+    let mut frames = Vec::with_capacity(5);
+    for pipeline in &gbuffer_pipelines(ctx, &gpu, false, 5)? {
+        frames.push(gpu.render_pipeline(pipeline, 0, 1)?);
+    }
+    let mut frames = frames.into_iter();
+    let mut next = || frames.next().expect("five G-buffer passes");
+    Ok(PointGBuffer {
+        position: next(),
+        normal: next(),
+        albedo: next(),
+        vertex_normal: next(),
+        uv_lightmap: next(),
+    })
+}
+
+/// The first `outputs` G-buffer pipelines (position, shading normal, albedo, vertex normal,
+/// lightmap UV); with `level0` the material textures are read at full resolution.
 fn gbuffer_pipelines(
     ctx: &Arc<Context>,
     gpu: &SceneGpu,
     level0: bool,
+    outputs: u32,
 ) -> Result<Vec<crate::gpu::MeshPipeline>, GpuError> {
-    (0..4u32)
+    (0..outputs)
         .map(|output| {
             let name = format!(
                 "reference.gbuffer.{}",
-                ["position", "normal", "albedo", "vertex_normal"][output as usize]
+                [
+                    "position",
+                    "normal",
+                    "albedo",
+                    "vertex_normal",
+                    "uv_lightmap"
+                ][output as usize]
             );
             let fragment = compile_glsl(
                 "reference/gbuffer.frag",
@@ -574,7 +627,7 @@ mod tests {
 
     #[test]
     fn every_g_buffer_output_compiles() {
-        for output in 0..4 {
+        for output in 0..5 {
             compile_glsl(
                 "reference/gbuffer.frag",
                 ShaderStage::Fragment,

@@ -1,7 +1,8 @@
 // G-buffer passes of the reference renderer (src/reference.rs): the same rasterization,
 // normal mapping and texture sampling as the techniques, one quantity per pass into an
 // RGBA32F target. SHVIS_GBUFFER_OUTPUT: 0 world position, 1 shading normal (normal-mapped),
-// 2 linear albedo, 3 interpolated vertex normal (the tangent plane of "V = 0 below").
+// 2 linear albedo, 3 interpolated vertex normal (the tangent plane of "V = 0 below"),
+// 4 lightmap UV (the error ladder's texel lookups, src/attribution).
 #version 450
 #extension GL_GOOGLE_include_directive : require
 #define SHVIS_FRAGMENT 1
@@ -16,7 +17,9 @@ void main() {
     out_value = vec4(shading_normal(), 1.0);
 #elif SHVIS_GBUFFER_OUTPUT == 2
     out_value = vec4(material_albedo(), 1.0);
-#else
+#elif SHVIS_GBUFFER_OUTPUT == 3
     out_value = vec4(normalize(in_normal_world), 1.0);
+#else
+    out_value = vec4(in_uv_lightmap, 0.0, 1.0);
 #endif
 }

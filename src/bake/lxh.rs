@@ -50,6 +50,22 @@ impl LxhMatrices {
     /// prep projects to that order).
     pub fn new(radiance_sh: &[[f64; 3]], v_order: Order, h_order: Order) -> LxhMatrices {
         let l_order = Order::new(v_order.get() + 2).unwrap_or(v_order);
+        LxhMatrices::with_lighting_order(radiance_sh, l_order, v_order, h_order)
+    }
+
+    /// As [`new`](Self::new) with the lighting truncated to `l_order` instead of O + 2.
+    /// With `h_order` ≥ `l_order` + `v_order` − 1 the clamped cosine is not truncated at all
+    /// (L·V has no band beyond that), so `shade` is ∫ L_l V H dω exactly — the error
+    /// ladder's "lighting truncated, cosine exact" rung (`crate::attribution`).
+    ///
+    /// # Panics
+    /// If `radiance_sh` is shorter than `l_order`² (a programming error).
+    pub fn with_lighting_order(
+        radiance_sh: &[[f64; 3]],
+        l_order: Order,
+        v_order: Order,
+        h_order: Order,
+    ) -> LxhMatrices {
         assert!(
             radiance_sh.len() >= l_order.coeff_count(),
             "L×H needs lighting of order {l_order}, got {} coefficients",

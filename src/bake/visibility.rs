@@ -135,6 +135,28 @@ fn texel_order(texels: &LightmapTexels) -> Vec<u32> {
     let covered: Vec<u32> = (0..texels.covered.len() as u32)
         .filter(|&i| texels.covered[i as usize])
         .collect();
+    coherent_order(&SurfacePoints::of(texels), covered)
+}
+
+/// Where rays leave: world positions and unit geometric normals, indexed alike.
+#[derive(Clone, Copy)]
+struct SurfacePoints<'a> {
+    position: &'a [Vec3],
+    normal: &'a [Vec3],
+}
+
+impl<'a> SurfacePoints<'a> {
+    fn of(texels: &'a LightmapTexels) -> Self {
+        SurfacePoints {
+            position: &texels.position,
+            normal: &texels.normal,
+        }
+    }
+}
+
+/// `points` sorted for coherent packets: by the dominant axis of the normal, then along a
+/// Morton curve of the positions (ties by index).
+fn coherent_order(texels: &SurfacePoints<'_>, covered: Vec<u32>) -> Vec<u32> {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     for &i in &covered {
         let p = texels.position[i as usize];
@@ -182,7 +204,7 @@ struct GroupResult {
 /// Traces and projects one group of ≤ [`PACKET_RAYS`] texels (module doc).
 fn bake_group(
     tracer: &Tracer,
-    texels: &LightmapTexels,
+    texels: &SurfacePoints<'_>,
     dirs: &DirectionSet,
     projector: &ShProjector,
     group: &[u32],
@@ -255,6 +277,7 @@ pub fn bake_visibility(
     let dirs = DirectionSet::new(settings.rays, settings.seed);
     let projector = ShProjector::new(&dirs, settings.order);
     let order = texel_order(texels);
+    let points = SurfacePoints::of(texels);
     let progress = if settings.progress {
         let bar = ProgressBar::new(order.len() as u64);
         let style = ProgressStyle::with_template(
@@ -272,7 +295,7 @@ pub fn bake_visibility(
     let results: Vec<GroupResult> = groups
         .par_iter()
         .map(|group| {
-            let result = bake_group(tracer, texels, &dirs, &projector, group);
+            let result = bake_group(tracer, &points, &dirs, &projector, group);
             let total = rays_done.fetch_add(result.rays, Ordering::Relaxed) + result.rays;
             if settings.progress {
                 let s = start.elapsed().as_secs_f64().max(1e-9);
@@ -315,6 +338,64 @@ pub fn bake_visibility(
         map.stats
     );
     map
+}
+
+/// SH visibility and AO at arbitrary surface points, as [`bake_visibility`] computes them
+/// per texel (same direction set, packets, projection and AO estimator), without a
+/// lightmap: the error ladder's visibility at each pixel (`crate::attribution`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointVisibility {
+    pub order: Order,
+    /// `order²` coefficients per point, point-major.
+    pub coeffs: Vec<f32>,
+    pub ao: Vec<f32>,
+    pub rays_traced: u64,
+}
+
+impl PointVisibility {
+    /// The coefficients of point `i`.
+    pub fn point(&self, i: usize) -> &[f32] {
+        let n2 = self.order.coeff_count();
+        &self.coeffs[i * n2..(i + 1) * n2]
+    }
+}
+
+/// [`PointVisibility`] of points `position[i]` with unit geometric normals `normal[i]`.
+///
+/// # Panics
+/// If the slices differ in length (a bug of the caller).
+pub fn bake_points(
+    tracer: &Tracer,
+    position: &[Vec3],
+    normal: &[Vec3],
+    settings: &VisibilitySettings,
+) -> PointVisibility {
+    assert_eq!(position.len(), normal.len(), "one normal per point");
+    let n2 = settings.order.coeff_count();
+    let dirs = DirectionSet::new(settings.rays, settings.seed);
+    let projector = ShProjector::new(&dirs, settings.order);
+    let points = SurfacePoints { position, normal };
+    let order = coherent_order(&points, (0..position.len() as u32).collect());
+    let groups: Vec<&[u32]> = order.chunks(PACKET_RAYS).collect();
+    let results: Vec<GroupResult> = groups
+        .par_iter()
+        .map(|group| bake_group(tracer, &points, &dirs, &projector, group))
+        .collect();
+    let mut out = PointVisibility {
+        order: settings.order,
+        coeffs: vec![0.0; position.len() * n2],
+        ao: vec![1.0; position.len()],
+        rays_traced: 0,
+    };
+    for (group, result) in groups.iter().zip(&results) {
+        for (k, &i) in group.iter().enumerate() {
+            let i = i as usize;
+            out.coeffs[i * n2..(i + 1) * n2].copy_from_slice(&result.coeffs[k * n2..(k + 1) * n2]);
+            out.ao[i] = result.ao[k];
+        }
+        out.rays_traced += result.rays;
+    }
+    out
 }
 
 /// [`dilate`] of texel-major vectors of `n2` coefficients, four coefficients per plane,

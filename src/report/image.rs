@@ -63,6 +63,28 @@ pub fn write_exr(path: &Path, frame: &Frame) -> Result<(), ReportError> {
     })
 }
 
+/// As [`write_exr`] with half-float channels (half the bytes): for the error ladder's
+/// intermediate images, whose rung errors are computed from the f32 frames in memory.
+pub fn write_exr_half(path: &Path, frame: &Frame) -> Result<(), ReportError> {
+    use exr::prelude::{Image, SpecificChannels, WritableImage, f16};
+    let w = frame.width as usize;
+    let channels = SpecificChannels::rgba(|p: exr::math::Vec2<usize>| {
+        let t = frame.rgba[p.1 * w + p.0].map(f16::from_f32);
+        (t[0], t[1], t[2], t[3])
+    });
+    Image::from_encoded_channels(
+        (w, frame.height as usize),
+        crate::files::EXR_ENCODING,
+        channels,
+    )
+    .write()
+    .to_file(path)
+    .map_err(|e| ReportError::Write {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    })
+}
+
 /// 8-bit sRGB PNG of `frame · 2^exposure_ev`.
 pub fn write_png(path: &Path, frame: &Frame, exposure_ev: f32) -> Result<(), ReportError> {
     let bytes = to_srgb8(frame, exposure_ev);

@@ -35,15 +35,38 @@ impl Serialize for RowReference {
     }
 }
 
-/// A rung of the error attribution ladder.
+/// A rung of the error attribution ladder (`crate::attribution`): what the step from the
+/// previous image to this one stops idealising.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AttributionKind {
     /// Footprint reference → point-sampled reference: the error of sampling the pixel at
     /// its centre with MIP-filtered material textures.
     PixelFootprint,
-    /// Point-sampled reference → the technique's GPU image: everything the technique
-    /// itself approximates (visibility, lighting and clamped-cosine truncation, tables,
-    /// compression, texel filtering, f16).
+    /// Exact visibility → its SH projection (order O, the bake's rays) at the pixel.
+    VisibilityOrder,
+    /// Exact visibility → the pixel's ambient occlusion (`preconv`).
+    AmbientOcclusion,
+    /// Order-O visibility → mean + M principal vectors (`pca*`).
+    PcaCompression,
+    /// Exact lighting → its SH to the technique's order (O + 2; 3 for `sh2`).
+    LightingOrder,
+    /// Exact clamped cosine → its SH to the H order (the paper's 3).
+    CosineOrder,
+    /// `sh2`: the L·V product and the clamped cosine truncated to order 3 (its shader's
+    /// math).
+    ProductOrder,
+    /// `preconv`: irradiance truncated to order 3.
+    IrradianceOrder,
+    /// Exact L×H (or PCA T_k) → the table: parameterization, resolution, bilinear, f16.
+    NormalTable,
+    /// Per-pixel data → the lightmap's texels: resolution, bilinear filtering, storage
+    /// (f16, or 8-bit PCA weights).
+    LightmapTexels,
+    /// The last CPU rung → the technique's GPU image (f32 arithmetic, filter weights,
+    /// the f16 target).
+    Gpu,
+    /// Point-sampled reference → the technique's GPU image in one step, for a technique
+    /// without CPU rungs (`shlmap`).
     Technique,
 }
 
@@ -51,6 +74,16 @@ impl AttributionKind {
     pub fn name(self) -> &'static str {
         match self {
             AttributionKind::PixelFootprint => "pixel footprint → point sampling",
+            AttributionKind::VisibilityOrder => "visibility → SH order",
+            AttributionKind::AmbientOcclusion => "visibility → AO",
+            AttributionKind::PcaCompression => "PCA compression",
+            AttributionKind::LightingOrder => "lighting → SH order",
+            AttributionKind::CosineOrder => "clamped cosine → H order",
+            AttributionKind::ProductOrder => "L·V product → order 3",
+            AttributionKind::IrradianceOrder => "irradiance → order 3",
+            AttributionKind::NormalTable => "normal table",
+            AttributionKind::LightmapTexels => "lightmap texels",
+            AttributionKind::Gpu => "CPU → GPU",
             AttributionKind::Technique => "point sampling → technique",
         }
     }
@@ -63,10 +96,13 @@ impl Serialize for AttributionKind {
 }
 
 /// One rung: the relative RMSE between its two images.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct AttributionStep {
     pub step: AttributionKind,
     pub rel_rmse: Option<f64>,
+    /// The image this step arrives at, relative to the bench's output folder (the ladder
+    /// starts at `reference.exr`, or `reference_bounces{N}.exr` for `shlmap`).
+    pub image: String,
 }
 
 /// One technique × path row.
@@ -185,26 +221,43 @@ impl BenchTable {
         s
     }
 
-    /// The attribution table (empty when no row has rungs).
+    /// The attribution ladders, one line per row (empty when no row has rungs): each
+    /// rung's relative RMSE and its share of the rungs' summed squares (errors of
+    /// independent steps add in quadrature), then the row's total error.
     fn attribution_markdown(&self) -> String {
-        let Some(first) = self.results.iter().find(|r| !r.attribution.is_empty()) else {
+        if self.results.iter().all(|r| r.attribution.is_empty()) {
             return String::new();
-        };
-        let mut s = String::from(
-            "\nError attribution (relative RMSE of each rung; the total is the row's error):\n\n| technique | path |",
-        );
-        for step in &first.attribution {
-            s += &format!(" {} |", step.step.name());
         }
-        s += " total |\n|---|---|";
-        s += &"---:|".repeat(first.attribution.len() + 1);
-        s += "\n";
+        let mut s = String::from(
+            "\nError attribution: relative RMSE of each rung against the previous image \
+             (its share of Σ rung²), from the reference to the GPU image; total = the row's \
+             error, √Σ rung² beside it:\n\n| technique | path | rungs | total | √Σ rung² |\n|---|---|---|---:|---:|\n",
+        );
         for r in self.results.iter().filter(|r| !r.attribution.is_empty()) {
-            s += &format!("| {} | {} |", r.technique, r.path);
-            for step in &r.attribution {
-                s += &format!(" {} |", opt(step.rel_rmse, 4));
-            }
-            s += &format!(" {} |\n", opt(r.rel_rmse, 4));
+            let sum_sq: f64 = r
+                .attribution
+                .iter()
+                .filter_map(|a| a.rel_rmse)
+                .map(|e| e * e)
+                .sum();
+            let rungs: Vec<String> = r
+                .attribution
+                .iter()
+                .map(|a| match a.rel_rmse {
+                    Some(e) if sum_sq > 0.0 => {
+                        format!("{} {e:.4} ({:.0}%)", a.step.name(), 100.0 * e * e / sum_sq)
+                    }
+                    e => format!("{} {}", a.step.name(), opt(e, 4)),
+                })
+                .collect();
+            s += &format!(
+                "| {} | {} | {} | {} | {:.4} |\n",
+                r.technique,
+                r.path,
+                rungs.join(" · "),
+                opt(r.rel_rmse, 4),
+                sum_sq.sqrt()
+            );
         }
         s
     }
@@ -268,11 +321,13 @@ mod tests {
         let steps = vec![
             AttributionStep {
                 step: AttributionKind::PixelFootprint,
-                rel_rmse: Some(0.125),
+                rel_rmse: Some(0.3),
+                image: "reference_point.exr".into(),
             },
             AttributionStep {
                 step: AttributionKind::Technique,
-                rel_rmse: Some(0.5),
+                rel_rmse: Some(0.4),
+                image: "preconv.dx10.exr".into(),
             },
         ];
         let table = BenchTable {
@@ -290,24 +345,22 @@ mod tests {
             ],
         };
         let md = table.to_markdown();
+        // 0.3² : 0.4² = 36% : 64% of Σ rung² = 0.25, √ = 0.5.
         assert!(
             md.contains(
-                "| pixel footprint → point sampling | point sampling → technique | total |"
+                "| preconv | dx10 | pixel footprint → point sampling 0.3000 (36%) · point sampling → technique 0.4000 (64%) | 0.2500 | 0.5000 |"
             ),
             "{md}"
         );
         assert!(
-            md.contains("| preconv | dx10 | 0.1250 | 0.5000 | 0.2500 |"),
-            "{md}"
-        );
-        assert!(
-            !md.contains("| sh2 | dx10 | 0."),
+            !md.contains("| sh2 | dx10 | pixel"),
             "a row without rungs has no attribution line"
         );
         let json = serde_json::to_value(&table).unwrap();
         let rung = &json["results"][0]["attribution"][1];
         assert_eq!(rung["step"], "point sampling → technique");
-        assert_eq!(rung["rel_rmse"], 0.5);
+        assert_eq!(rung["rel_rmse"], 0.4);
+        assert_eq!(rung["image"], "preconv.dx10.exr");
         assert_eq!(json["results"][0]["technique"], "preconv");
         assert_eq!(json["results"][0]["reference"], "direct");
     }

@@ -139,7 +139,11 @@ fn upload_weights(
 
 /// Uniforms of glsl/technique/pcaw.frag: per basis vector, then the mean, the order-3 SH
 /// of V_k·L times A_l, RGB in .xyz.
-fn weights_only_block(q: &QuantizedPca, order: Order, radiance_sh: &[[f64; 3]]) -> Vec<[f32; 4]> {
+pub fn weights_only_block(
+    q: &QuantizedPca,
+    order: Order,
+    radiance_sh: &[[f64; 3]],
+) -> Vec<[f32; 4]> {
     let l_order = Order::new(WEIGHTS_ONLY_LIGHTING_ORDER).expect("valid order");
     let coeffs_of = |v: &[f64]| -> [[f32; 4]; 9] {
         let mut out = [[0.0f32; 4]; 9];

@@ -1,0 +1,565 @@
+//! The error attribution ladder (issue 14): for a technique, a sequence of images from the
+//! footprint reference to its GPU output, each rung removing one idealisation, so that the
+//! cost table's error is explained step by step. The rungs between the point-sampled
+//! reference and the GPU image are evaluated here, on the CPU in f64, at every covered
+//! pixel of the point G-buffer (`reference::render_point_gbuffer`: the position, shading
+//! normal, albedo and lightmap UV the technique's fragment shader sees):
+//!
+//! ```text
+//! rung                     irradiance I at the pixel (radiance = albedo/π · max(0, I))
+//! point reference          ∫ L V H_n dω, V the exact binary visibility (Monte Carlo)
+//! visibility → order O     Σ_j V_j G_j(n),  V_j = ∫ V y_j at the pixel, G_j = ∫ L H_n y_j
+//! lighting → order O+2     ∫ L_{O+2} V_O H_n dω   (H exact: the Gaunt product to order 2O+1)
+//! clamped cosine → H order ∫ L_{O+2} V_O H_3 dω   (bake::lxh, the paper's eq. (4) in f64)
+//! normal table             Σ_j V_j T̃_j(n): the L×H table at its texel centres, f16 with
+//!                          its range scale, read with the path's parameterization and
+//!                          bilinear filter (sphere::SphereMap::bilinear_taps)
+//! lightmap texels          Σ_j Ṽ_j(uv) T̃_j(n): V from the f16 lightmap, bilinear at uv
+//! GPU                      the technique's bench image
+//! ```
+//!
+//! V_j at the pixel is traced exactly as the bake traces a texel (`bake::visibility::
+//! bake_points`: same directions, same projection), from the pixel's own point along its
+//! interpolated vertex normal. G_j uses the full environment map ([`exact_light`]).
+//! `pca*` add "PCA compression" after the visibility rung (V projected onto the mean and
+//! first M principal vectors, unquantized) and read M + 1 tables or, weights-only, the
+//! uniform block of order-3 SH; `preconv` replaces V by the pixel's AO, then truncates
+//! irradiance to order 3; `sh2` truncates V to order 2, lighting to order 3 (cosine exact),
+//! then the product and the cosine to order 3 (its shader's math). `shlmap`'s rungs would
+//! need the inter-reflected radiance at each pixel; it keeps the two-rung attribution.
+//!
+//! Each rung's error is the relative RMSE between consecutive images (`report::metrics`),
+//! so the rungs telescope from the reference to the GPU image. The last CPU rung differs
+//! from the GPU only by arithmetic precision (f32 shading, 8-bit filter weights, the f16
+//! target).
+
+pub mod exact_light;
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::{DVec3, Vec3};
+use half::f16;
+use rayon::prelude::*;
+
+use crate::bake::lxh::{LxhMatrices, build_table};
+use crate::bake::visibility::{PointVisibility, bake_points};
+use crate::gpu::{Context, GpuError};
+use crate::prepare::Prepared;
+use crate::reference::render_point_gbuffer;
+use crate::render::Frame;
+use crate::report::table::AttributionKind;
+use crate::sh::Order;
+use crate::sh::basis::eval_basis;
+use crate::sphere::SphereMap;
+use crate::technique::pca::{quantized_prefix, weights_only_block};
+use crate::technique::tables::{f16_range_scale, table_map};
+use crate::technique::{HwPath, Technique, TechniqueError};
+use exact_light::ExactLightTable;
+
+/// What every rung needs at each covered pixel, computed once per bench.
+pub struct LadderPixels {
+    width: u32,
+    height: u32,
+    /// Frame index of each covered pixel.
+    index: Vec<usize>,
+    normal: Vec<DVec3>,
+    albedo_over_pi: Vec<[f64; 3]>,
+    uv: Vec<[f32; 2]>,
+    /// Visibility (bake order) and AO at each pixel.
+    vis: PointVisibility,
+    exact: ExactLightTable,
+    pub seconds: f64,
+}
+
+impl LadderPixels {
+    /// Renders the point G-buffer, traces the visibility at each covered pixel and
+    /// tabulates the exact-lighting integrals.
+    pub fn new(
+        ctx: &Arc<Context>,
+        prepared: &Prepared,
+        width: u32,
+        height: u32,
+    ) -> Result<LadderPixels, GpuError> {
+        let start = Instant::now();
+        let g = render_point_gbuffer(ctx, &prepared.scene, width, height)?;
+        let index: Vec<usize> = (0..g.position.rgba.len())
+            .filter(|&i| g.position.rgba[i][3] >= 0.5)
+            .collect();
+        let v3 = |f: &Frame, i: usize| Vec3::from_slice(&f.rgba[i][..3]);
+        let normals_g: Vec<Vec3> = index
+            .iter()
+            .map(|&i| v3(&g.vertex_normal, i).normalize_or_zero())
+            .collect();
+        let tracer = crate::bake::trace::Tracer::new(&prepared.scene.mesh);
+        let positions: Vec<Vec3> = index.iter().map(|&i| v3(&g.position, i)).collect();
+        let vis = bake_points(
+            &tracer,
+            &positions,
+            &normals_g,
+            &prepared.visibility_settings,
+        );
+        let exact = ExactLightTable::new(&prepared.env, prepared.visibility_settings.order);
+        let pi = std::f64::consts::PI;
+        Ok(LadderPixels {
+            width,
+            height,
+            normal: index
+                .iter()
+                .map(|&i| v3(&g.normal, i).as_dvec3().normalize_or_zero())
+                .collect(),
+            albedo_over_pi: index
+                .iter()
+                .map(|&i| std::array::from_fn(|c| g.albedo.rgba[i][c] as f64 / pi))
+                .collect(),
+            uv: index
+                .iter()
+                .map(|&i| [g.uv_lightmap.rgba[i][0], g.uv_lightmap.rgba[i][1]])
+                .collect(),
+            index,
+            vis,
+            exact,
+            seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// Covered pixels.
+    pub fn len(&self) -> usize {
+        self.index.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.index.is_empty()
+    }
+
+    /// Rays traced for the per-pixel visibility.
+    pub fn rays_traced(&self) -> u64 {
+        self.vis.rays_traced
+    }
+
+    /// The first `n2` visibility coefficients at pixel `k`, f64.
+    fn visibility(&self, k: usize, n2: usize) -> [f64; 36] {
+        let mut v = [0.0; 36];
+        for (o, &c) in v.iter_mut().zip(&self.vis.point(k)[..n2]) {
+            *o = f64::from(c);
+        }
+        v
+    }
+
+    /// The image of irradiance `irradiance(k)` at covered pixel k (module doc's radiance).
+    fn image(&self, irradiance: impl Fn(usize) -> [f64; 3] + Sync) -> Frame {
+        let values: Vec<[f32; 4]> = (0..self.len())
+            .into_par_iter()
+            .map(|k| {
+                let e = irradiance(k);
+                let a = self.albedo_over_pi[k];
+                [
+                    (a[0] * e[0].max(0.0)) as f32,
+                    (a[1] * e[1].max(0.0)) as f32,
+                    (a[2] * e[2].max(0.0)) as f32,
+                    1.0,
+                ]
+            })
+            .collect();
+        let mut rgba = vec![[0.0f32; 4]; (self.width * self.height) as usize];
+        for (&i, v) in self.index.iter().zip(values) {
+            rgba[i] = v;
+        }
+        Frame {
+            width: self.width,
+            height: self.height,
+            rgba,
+            ms: vec![],
+        }
+    }
+}
+
+/// One CPU rung: the step that leads to it, a file stem naming the image (equal stems are
+/// equal images, so shared rungs are written once) and the image.
+pub struct Rung {
+    pub step: AttributionKind,
+    pub stem: String,
+    pub frame: Frame,
+}
+
+/// Σ_j v_j t_j per colour over the first `n` values.
+fn dot_rgb(v: &[f64], t: &[[f64; 3]], n: usize) -> [f64; 3] {
+    let mut s = [0.0; 3];
+    for (vj, tj) in v[..n].iter().zip(&t[..n]) {
+        for c in 0..3 {
+            s[c] += vj * tj[c];
+        }
+    }
+    s
+}
+
+/// `m.shade(n, v)` without allocations (h order ≤ 16, O ≤ 6).
+fn shade(m: &LxhMatrices, n: DVec3, v: &[f64]) -> [f64; 3] {
+    let mut h = [0.0; 256];
+    let mut out = [[0.0; 3]; 36];
+    let (hn, vn) = (m.h_order.coeff_count(), m.v_order.coeff_count());
+    m.eval_into(n, &mut h[..hn], &mut out[..vn]);
+    dot_rgb(v, &out, vn)
+}
+
+/// The exact-cosine product of lighting of order `l` with visibility of order `v`
+/// (`LxhMatrices::with_lighting_order` with H to order l + v − 1).
+fn exact_cosine(radiance_sh: &[[f64; 3]], l: u32, v: Order) -> LxhMatrices {
+    let order = |n: u32| Order::new(n).expect("orders of the ladder are ≤ 16");
+    LxhMatrices::with_lighting_order(radiance_sh, order(l), v, order(l + v.get() - 1))
+}
+
+/// Bilinear taps of a res² lightmap texture at `uv` (clamp to edge, texel centres at
+/// (i + ½)/res), as the GPU's `LinearClamp` sampler.
+fn lightmap_taps(res: u32, uv: [f32; 2]) -> ([usize; 4], [f64; 4]) {
+    let last = f64::from(res - 1);
+    let x = f64::from(uv[0]) * f64::from(res) - 0.5;
+    let y = f64::from(uv[1]) * f64::from(res) - 0.5;
+    let (x0, y0) = (x.floor(), y.floor());
+    let (a, b) = (x - x0, y - y0);
+    let c = |v: f64| v.clamp(0.0, last) as usize;
+    let (i0, i1, j0, j1) = (c(x0), c(x0 + 1.0), c(y0), c(y0 + 1.0));
+    let r = res as usize;
+    (
+        [j0 * r + i0, j0 * r + i1, j1 * r + i0, j1 * r + i1],
+        [(1.0 - a) * (1.0 - b), a * (1.0 - b), (1.0 - a) * b, a * b],
+    )
+}
+
+/// `n` per-texel values at `uv`, bilinear; `texel(t, j)` is value j of texel t as stored.
+fn lightmap_bilinear(
+    res: u32,
+    uv: [f32; 2],
+    n: usize,
+    texel: impl Fn(usize, usize) -> f64,
+) -> [f64; 36] {
+    let (index, weight) = lightmap_taps(res, uv);
+    let mut out = [0.0; 36];
+    for (&t, &w) in index.iter().zip(&weight) {
+        if w == 0.0 {
+            continue;
+        }
+        for (j, o) in out.iter_mut().enumerate().take(n) {
+            *o += w * texel(t, j);
+        }
+    }
+    out
+}
+
+fn f16_round(v: f32) -> f64 {
+    f64::from(f16::from_f32(v).to_f32())
+}
+
+/// A normal-indexed table as the GPU stores it: `count` RGB values per texel of `map`,
+/// range-scaled and rounded to f16 (`technique::tables`), read back bilinearly.
+struct StoredTable {
+    map: SphereMap,
+    count: usize,
+    values: Vec<[f64; 3]>,
+    /// What the shader multiplies its sums by.
+    unscale: f64,
+}
+
+impl StoredTable {
+    fn new(map: SphereMap, count: usize, value: impl Fn(usize, usize) -> [f32; 3]) -> Self {
+        let samples = map.sample_count();
+        let raw: Vec<[f32; 3]> = (0..samples * count)
+            .map(|i| value(i / count, i % count))
+            .collect();
+        let max_abs = raw.iter().flatten().fold(0.0f32, |m, v| m.max(v.abs()));
+        let scale = f16_range_scale(max_abs);
+        StoredTable {
+            map,
+            count,
+            values: raw
+                .iter()
+                .map(|v| v.map(|x| f16_round(x * scale)))
+                .collect(),
+            unscale: f64::from(1.0 / scale),
+        }
+    }
+
+    /// The `count` values at `n`, bilinear (not yet unscaled).
+    fn eval(&self, n: DVec3) -> [[f64; 3]; 36] {
+        let taps = self.map.bilinear_taps(n);
+        let mut out = [[0.0; 3]; 36];
+        for (&i, &w) in taps.index.iter().zip(&taps.weight) {
+            if w == 0.0 {
+                continue;
+            }
+            let base = i as usize * self.count;
+            for (o, v) in out.iter_mut().zip(&self.values[base..base + self.count]) {
+                for c in 0..3 {
+                    o[c] += w * v[c];
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Builds the CPU rungs of `technique` on `path` (module doc); empty for `shlmap`.
+pub fn cpu_rungs(
+    px: &LadderPixels,
+    prepared: &Prepared,
+    technique: Technique,
+    path: HwPath,
+) -> Result<Vec<Rung>, TechniqueError> {
+    let radiance = &prepared.radiance_sh;
+    let label = format!("{technique}.{path}");
+    let mut rungs = Vec::new();
+    let mut push = |step: AttributionKind, stem: String, frame: Frame| {
+        rungs.push(Rung { step, stem, frame });
+    };
+    let exact = |k: usize| {
+        let mut g = [[0.0; 3]; 36];
+        px.exact.eval(px.normal[k], &mut g);
+        g
+    };
+    let vis_res = prepared.visibility.res;
+    let bake_n2 = prepared.visibility.order.coeff_count();
+    let lightmap_v = |k: usize, n2: usize| {
+        lightmap_bilinear(vis_res, px.uv[k], n2, |t, j| {
+            f16_round(prepared.visibility.coeffs[t * bake_n2 + j])
+        })
+    };
+    let visibility_rung = |order: Order| {
+        let n2 = order.coeff_count();
+        let frame = px.image(|k| dot_rgb(&px.visibility(k, n2), &exact(k), n2));
+        (format!("visibility_order{order}"), frame)
+    };
+    match technique {
+        Technique::Unc { order } => {
+            let n2 = order.coeff_count();
+            let (stem, frame) = visibility_rung(order);
+            push(AttributionKind::VisibilityOrder, stem, frame);
+            let lighting = exact_cosine(radiance, order.get() + 2, order);
+            push(
+                AttributionKind::LightingOrder,
+                format!("{technique}.lighting_order"),
+                px.image(|k| shade(&lighting, px.normal[k], &px.visibility(k, n2))),
+            );
+            let lxh = LxhMatrices::new(radiance, order, prepared.h_order);
+            push(
+                AttributionKind::CosineOrder,
+                format!("{technique}.cosine_order"),
+                px.image(|k| shade(&lxh, px.normal[k], &px.visibility(k, n2))),
+            );
+            let map = table_map(path, prepared.table_res, &label)?;
+            let table = build_table(&lxh, map);
+            let stored = StoredTable::new(map, n2, |t, j| table.values[t * n2 + j]);
+            let table_dot = |v: &[f64], k: usize| {
+                dot_rgb(v, &stored.eval(px.normal[k]), n2).map(|x| x * stored.unscale)
+            };
+            push(
+                AttributionKind::NormalTable,
+                format!("{label}.normal_table"),
+                px.image(|k| table_dot(&px.visibility(k, n2), k)),
+            );
+            push(
+                AttributionKind::LightmapTexels,
+                format!("{label}.lightmap"),
+                px.image(|k| table_dot(&lightmap_v(k, n2), k)),
+            );
+        }
+        Technique::Pca { m, weights_only } => {
+            let model = &prepared.pca;
+            let order = model.order;
+            let n2 = order.coeff_count();
+            let m = (m as usize).min(model.basis.len());
+            let (stem, frame) = visibility_rung(order);
+            push(AttributionKind::VisibilityOrder, stem, frame);
+            // V_e + Σ_k (V_k·(V − V_e)) V_k over the first m (orthonormal) vectors.
+            let compressed = |k: usize| {
+                let v = px.visibility(k, n2);
+                let mut out = [0.0; 36];
+                out[..n2].copy_from_slice(&model.mean[..n2]);
+                for b in &model.basis[..m] {
+                    let w: f64 = (0..n2).map(|j| b[j] * (v[j] - model.mean[j])).sum();
+                    for j in 0..n2 {
+                        out[j] += w * b[j];
+                    }
+                }
+                out
+            };
+            let base = format!("pca{m}");
+            push(
+                AttributionKind::PcaCompression,
+                format!("{base}.pca_compression"),
+                px.image(|k| dot_rgb(&compressed(k), &exact(k), n2)),
+            );
+            let lighting = exact_cosine(radiance, order.get() + 2, order);
+            push(
+                AttributionKind::LightingOrder,
+                format!("{base}.lighting_order"),
+                px.image(|k| shade(&lighting, px.normal[k], &compressed(k))),
+            );
+            let lxh = LxhMatrices::new(radiance, order, prepared.h_order);
+            push(
+                AttributionKind::CosineOrder,
+                format!("{base}.cosine_order"),
+                px.image(|k| shade(&lxh, px.normal[k], &compressed(k))),
+            );
+            let q = quantized_prefix(model, m);
+            // The stored weights, bilinear: UNORM8 reads as q / 255.
+            let unorm = f64::from((1u32 << q.bits) - 1);
+            let lightmap_u = |k: usize| {
+                lightmap_bilinear(q.res, px.uv[k], q.m, |t, i| {
+                    f64::from(q.weights_unorm[t * q.m + i]) / unorm
+                })
+            };
+            if weights_only {
+                let block = weights_only_block(&q, order, radiance);
+                push(
+                    AttributionKind::LightmapTexels,
+                    format!("{technique}.lightmap"),
+                    px.image(|k| {
+                        let u = lightmap_u(k);
+                        let mut y = [0.0; 9];
+                        eval_basis(Order::THREE, px.normal[k], &mut y);
+                        let mut e = [0.0; 3];
+                        for (i, yi) in y.iter().enumerate() {
+                            for c in 0..3 {
+                                let mut coeff = f64::from(block[9 * q.m + i][c]);
+                                for (b, ub) in u[..q.m].iter().enumerate() {
+                                    coeff += ub * f64::from(block[9 * b + i][c]);
+                                }
+                                e[c] += coeff * yi;
+                            }
+                        }
+                        e
+                    }),
+                );
+            } else {
+                // Basis tables T_k = Σ_j V_kj (L×H)_j and the mean's, as pca.rs builds them.
+                let map = table_map(path, prepared.table_res, &label)?;
+                let table = build_table(&lxh, map);
+                let project = |t: usize, v: &[f64]| -> [f32; 3] {
+                    let mut s = [0.0f64; 3];
+                    for (j, vj) in v.iter().enumerate().take(n2) {
+                        let e = table.values[t * n2 + j];
+                        for c in 0..3 {
+                            s[c] += vj * e[c] as f64;
+                        }
+                    }
+                    s.map(|x| x as f32)
+                };
+                let stored = StoredTable::new(map, q.m + 1, |t, i| {
+                    project(t, if i < q.m { &q.basis[i] } else { &q.mean })
+                });
+                let tables_dot = |u: &[f64], k: usize| {
+                    let t = stored.eval(px.normal[k]);
+                    let mut s = t[q.m];
+                    for (ui, ti) in u[..q.m].iter().zip(&t) {
+                        for c in 0..3 {
+                            s[c] += ui * ti[c];
+                        }
+                    }
+                    s.map(|x| x * stored.unscale)
+                };
+                // The compressed V in the quantized basis's coordinates, unrounded.
+                let continuous_u = |k: usize| {
+                    let v = compressed(k);
+                    let mut u = [0.0; 36];
+                    for (ui, b) in u.iter_mut().zip(&q.basis) {
+                        let norm2: f64 = b.iter().map(|x| x * x).sum();
+                        if norm2 > 0.0 {
+                            *ui = (0..n2).map(|j| b[j] * (v[j] - q.mean[j])).sum::<f64>() / norm2;
+                        }
+                    }
+                    u
+                };
+                push(
+                    AttributionKind::NormalTable,
+                    format!("{label}.normal_table"),
+                    px.image(|k| tables_dot(&continuous_u(k), k)),
+                );
+                push(
+                    AttributionKind::LightmapTexels,
+                    format!("{label}.lightmap"),
+                    px.image(|k| tables_dot(&lightmap_u(k), k)),
+                );
+            }
+        }
+        Technique::Preconv => {
+            let y00 = 0.5 / std::f64::consts::PI.sqrt();
+            let ao = |k: usize| f64::from(px.vis.ao[k]);
+            push(
+                AttributionKind::AmbientOcclusion,
+                "preconv.ambient_occlusion".into(),
+                // ∫ L H_n = G_0 / y_00.
+                px.image(|k| exact(k)[0].map(|g| ao(k) * g / y00)),
+            );
+            let e3 = |k: usize| {
+                crate::sh::zonal::eval_rgb(&prepared.irradiance_sh, Order::THREE, px.normal[k])
+                    .map(|e| e.max(0.0))
+            };
+            push(
+                AttributionKind::IrradianceOrder,
+                "preconv.irradiance_order".into(),
+                px.image(|k| e3(k).map(|e| ao(k) * e)),
+            );
+            let ao_map = &prepared.ao;
+            push(
+                AttributionKind::LightmapTexels,
+                "preconv.lightmap".into(),
+                px.image(|k| {
+                    let a = lightmap_bilinear(ao_map.res, px.uv[k], 1, |t, _| {
+                        f16_round(ao_map.values[t])
+                    })[0];
+                    e3(k).map(|e| a * e)
+                }),
+            );
+        }
+        Technique::Sh2 => {
+            let order = Order::TWO;
+            let n2 = order.coeff_count();
+            let (stem, frame) = visibility_rung(order);
+            push(AttributionKind::VisibilityOrder, stem, frame);
+            let lighting = exact_cosine(radiance, 3, order);
+            push(
+                AttributionKind::LightingOrder,
+                "sh2.lighting_order".into(),
+                px.image(|k| shade(&lighting, px.normal[k], &px.visibility(k, n2))),
+            );
+            let product =
+                LxhMatrices::with_lighting_order(radiance, Order::THREE, order, Order::THREE);
+            push(
+                AttributionKind::ProductOrder,
+                "sh2.product_order".into(),
+                px.image(|k| shade(&product, px.normal[k], &px.visibility(k, n2))),
+            );
+            push(
+                AttributionKind::LightmapTexels,
+                "sh2.lightmap".into(),
+                px.image(|k| shade(&product, px.normal[k], &lightmap_v(k, n2))),
+            );
+        }
+        Technique::Shlmap => {}
+    }
+    Ok(rungs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lightmap_taps_match_clamp_to_edge_bilinear() {
+        // At a texel centre: that texel alone.
+        let (i, w) = lightmap_taps(4, [1.5 / 4.0, 2.5 / 4.0]);
+        let total: f64 = i
+            .iter()
+            .zip(&w)
+            .filter(|(t, _)| **t == 2 * 4 + 1)
+            .map(|(_, w)| w)
+            .sum();
+        assert!((total - 1.0).abs() < 1e-12, "{i:?} {w:?}");
+        // Half-way between texels 0 and 1 of row 0, and past the edge: clamped.
+        let (i, w) = lightmap_taps(4, [1.0 / 4.0, 0.0]);
+        assert_eq!((i[0], i[1]), (0, 1));
+        assert!((w[0] + w[2] - 0.5).abs() < 1e-12 && (w[1] + w[3] - 0.5).abs() < 1e-12);
+        let (i, _) = lightmap_taps(4, [1.0, 1.0]);
+        assert!(i.iter().all(|&t| t == 15));
+    }
+}

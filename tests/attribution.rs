@@ -1,0 +1,180 @@
+//! The error attribution ladder of the bench (issue 14, `shvis::attribution`): on the test
+//! house, every row's rungs go from the footprint reference to the technique's own bench
+//! image, every rung's image is written and is the image its error was measured on, the
+//! visibility-truncation rung falls towards order 6, and the last CPU rung meets the GPU
+//! at f16 level. Real Vulkan on lavapipe with validation on.
+
+mod common;
+
+use std::path::Path;
+
+use shvis::bench::{BenchSettings, LADDER_DIR, run};
+use shvis::report::table::{AttributionKind, BenchRow};
+use shvis::technique::{HwPath, Technique};
+
+/// RGBA of an EXR file, as f32.
+fn read_exr(path: &Path) -> (usize, Vec<[f32; 4]>) {
+    use exr::prelude::read_first_rgba_layer_from_file;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |size, _| {
+            (
+                size.width(),
+                vec![[0.0f32; 4]; size.width() * size.height()],
+            )
+        },
+        |(w, px): &mut (usize, Vec<[f32; 4]>), pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = [r, g, b, a];
+        },
+    )
+    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    image.layer_data.channel_data.pixels
+}
+
+/// Relative RMSE of `test` against `reference` over pixels covered in both.
+fn rel_rmse(test: &[[f32; 4]], reference: &[[f32; 4]]) -> f64 {
+    let (mut se, mut sq) = (0.0f64, 0.0f64);
+    for (t, r) in test.iter().zip(reference) {
+        if t[3] < 0.5 || r[3] < 0.5 {
+            continue;
+        }
+        for c in 0..3 {
+            se += (f64::from(t[c]) - f64::from(r[c])).powi(2);
+            sq += f64::from(r[c]).powi(2);
+        }
+    }
+    (se / sq).sqrt()
+}
+
+fn step(row: &BenchRow, kind: AttributionKind) -> f64 {
+    row.attribution
+        .iter()
+        .find(|s| s.step == kind)
+        .and_then(|s| s.rel_rmse)
+        .unwrap_or_else(|| panic!("{} {}: no {kind:?} rung", row.technique, row.path))
+}
+
+#[test]
+fn ladders_telescope_from_the_reference_to_the_bench_image() {
+    let ctx = common::validated_context();
+    let prepared = common::house();
+    let out_dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("attribution-bench");
+    let _ = std::fs::remove_dir_all(&out_dir);
+    std::fs::create_dir_all(&out_dir).expect("output folder");
+    let techniques: Vec<Technique> = [
+        "unc3", "unc4", "unc6", "pca16", "pca16w", "preconv", "sh2", "shlmap",
+    ]
+    .iter()
+    .map(|t| t.parse().expect("technique name"))
+    .collect();
+    let table = run(
+        &ctx,
+        prepared,
+        &BenchSettings {
+            techniques: techniques.clone(),
+            paths: vec![HwPath::Dx9, HwPath::Dx10],
+            frames: 1,
+            warmup: 0,
+            width: 160,
+            height: 100,
+            exposure: 0.0,
+            ref_spp: 16,
+            bounces: shvis::bake::shlmap::DEFAULT_BOUNCES,
+            footprint_reference: true,
+            seed: 5,
+            out: out_dir.clone(),
+        },
+    )
+    .expect("bench runs");
+    common::assert_validation_clean(&ctx, "bench with the error ladder");
+    eprintln!("{}", table.to_markdown());
+    assert_eq!(table.results.len(), techniques.len() * 2);
+
+    for row in &table.results {
+        let label = format!("{}.{}", row.technique, row.path);
+        let steps = &row.attribution;
+        // Footprint → point first; the GPU image last, and it is the bench's own output.
+        assert_eq!(steps[0].step, AttributionKind::PixelFootprint, "{label}");
+        let last = steps.last().expect("rungs");
+        assert_eq!(last.image, format!("{label}.exr"), "{label}");
+        let with_cpu_rungs = row.technique != Technique::Shlmap;
+        let final_kind = if with_cpu_rungs {
+            AttributionKind::Gpu
+        } else {
+            AttributionKind::Technique
+        };
+        assert_eq!(last.step, final_kind, "{label}");
+        if with_cpu_rungs {
+            assert!(steps.len() >= 5, "{label}: {steps:?}");
+            assert!(
+                steps[1..steps.len() - 1]
+                    .iter()
+                    .all(|s| s.image.starts_with(LADDER_DIR))
+            );
+        }
+        // Every rung's image exists, and the errors were measured on those images: the
+        // ladder starts at the reference the row is measured against.
+        let start = match row.reference {
+            shvis::report::table::RowReference::Bounced(n) => format!("reference_bounces{n}.exr"),
+            _ => "reference.exr".to_string(),
+        };
+        let mut previous = read_exr(&out_dir.join(&start)).1;
+        for s in steps {
+            let path = out_dir.join(&s.image);
+            let png = path.with_extension("png");
+            assert!(png.is_file(), "{}", png.display());
+            let image = read_exr(&path).1;
+            let measured = s.rel_rmse.expect("rung error");
+            let recomputed = rel_rmse(&image, &previous);
+            // Ladder images are stored in f16: ≲ 5e-4 relative per image.
+            assert!(
+                (recomputed - measured).abs() <= 1.5e-3 + 0.01 * measured,
+                "{label} {:?}: {recomputed} from the files, {measured} in the table",
+                s.step
+            );
+            previous = image;
+        }
+        // The last CPU rung meets the GPU at f16 level: f16 textures ≲ 2e-3; pca's 8-bit
+        // weights are filtered at 8-bit precision on lavapipe (≈ 3e-3, README).
+        if with_cpu_rungs {
+            let gpu = step(row, AttributionKind::Gpu);
+            let bound = match row.technique {
+                Technique::Pca { .. } => 5e-3,
+                _ => 2e-3,
+            };
+            assert!(gpu <= bound, "{label}: CPU → GPU {gpu}");
+        }
+    }
+
+    let row = |name: &str, path: HwPath| {
+        let t: Technique = name.parse().unwrap();
+        table
+            .results
+            .iter()
+            .find(|r| r.technique == t && r.path == path)
+            .expect("row")
+    };
+    for path in [HwPath::Dx9, HwPath::Dx10] {
+        // Visibility truncation falls towards order 6; the rungs before it are shared.
+        let vis = |t: &str| step(row(t, path), AttributionKind::VisibilityOrder);
+        assert!(
+            vis("unc6") < vis("unc4") && vis("unc6") < vis("unc3"),
+            "{path}: {} {} {}",
+            vis("unc3"),
+            vis("unc4"),
+            vis("unc6")
+        );
+        assert_eq!(vis("unc6"), vis("pca16"));
+        // PCA adds its compression step; the weights-only variant has no table rung.
+        assert!(step(row("pca16", path), AttributionKind::PcaCompression) > 0.0);
+        assert!(
+            row("pca16w", path)
+                .attribution
+                .iter()
+                .all(|s| s.step != AttributionKind::NormalTable)
+        );
+        // sh2's product is exact for order-3 lighting and order-2 visibility (the clamped
+        // cosine has no band 3): its rung is at rounding level.
+        assert!(step(row("sh2", path), AttributionKind::ProductOrder) < 1e-6);
+    }
+}
