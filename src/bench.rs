@@ -16,7 +16,9 @@ use crate::prepare::Prepared;
 use crate::reference::{ReferenceImage, ReferenceSettings, render_reference};
 use crate::render::{Frame, FrameSettings, SceneGpu};
 use crate::report::ReportError;
-use crate::report::figures::{DIFFERENCE_SCALE, FIGURES, difference, write_figures};
+use crate::report::figures::{
+    DIFFERENCE_SCALE, FIGURES, difference, write_figures, write_ladder_sheet,
+};
 use crate::report::image::{write_exr, write_exr_half, write_png};
 use crate::report::metrics::{TimingStats, image_error};
 use crate::report::plot::{write_pca_error_plot, write_speed_error_plot};
@@ -322,6 +324,20 @@ fn attribution(
             image,
         });
         previous = &rung.frame;
+    }
+    let mut sheet: Vec<(String, &Frame)> = vec![
+        ("reference".into(), footprint),
+        ("point reference".into(), point),
+    ];
+    sheet.extend(rungs.iter().map(|r| (r.step.name().to_string(), &r.frame)));
+    sheet.push(("GPU".into(), frame));
+    let file = settings
+        .out
+        .join(LADDER_DIR)
+        .join(format!("{technique}.{path}.sheet.png"));
+    match write_ladder_sheet(&file, &sheet, settings.exposure) {
+        Ok(()) => log::info!("wrote {}", file.display()),
+        Err(e) => log::warn!("{e}"),
     }
     steps.push(AttributionStep {
         step: if rungs.is_empty() {

@@ -25,13 +25,16 @@
 //! first M principal vectors, unquantized) and read M + 1 tables or, weights-only, the
 //! uniform block of order-3 SH; `preconv` replaces V by the pixel's AO, then truncates
 //! irradiance to order 3; `sh2` truncates V to order 2, lighting to order 3 (cosine exact),
-//! then the product and the cosine to order 3 (its shader's math). `shlmap`'s rungs would
-//! need the inter-reflected radiance at each pixel; it keeps the two-rung attribution.
+//! then the product and the cosine to order 3 (its shader's math — a rung that measures 0,
+//! since L₃·V₂ has no band above 3 and the clamped cosine's band 3 vanishes). `shlmap`'s
+//! rungs would need the inter-reflected radiance at each pixel; it keeps the two-rung
+//! attribution (footprint → point → GPU).
 //!
 //! Each rung's error is the relative RMSE between consecutive images (`report::metrics`),
 //! so the rungs telescope from the reference to the GPU image. The last CPU rung differs
-//! from the GPU only by arithmetic precision (f32 shading, 8-bit filter weights, the f16
-//! target).
+//! from the GPU only by arithmetic precision: f32 shading and the f16 target, ≈ 4·10⁻⁴ on
+//! lavapipe; `pca*` reach ≈ 3·10⁻³ there, differences of about one 8-bit weight step that
+//! llvmpipe's filtering of the RGBA8 weight textures adds (README, "Error attribution").
 
 pub mod exact_light;
 

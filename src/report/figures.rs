@@ -142,6 +142,73 @@ pub fn write_figures<'a>(
     Ok(written)
 }
 
+/// Tiles no wider than this in ladder sheets (frames are box-filtered down to fit).
+pub const LADDER_TILE_WIDTH: u32 = 400;
+
+/// An error ladder as one sheet: the rungs' images left to right (captioned), and below
+/// each rung after the first its ×4 difference to the previous one. Tiles are box-filtered
+/// to at most [`LADDER_TILE_WIDTH`] wide.
+pub fn write_ladder_sheet(
+    file: &Path,
+    rungs: &[(String, &Frame)],
+    exposure: f32,
+) -> Result<(), ReportError> {
+    let factor = rungs
+        .first()
+        .map_or(1, |(_, f)| f.width.div_ceil(LADDER_TILE_WIDTH).max(1));
+    let small: Vec<Frame> = rungs.iter().map(|(_, f)| downsample(f, factor)).collect();
+    let top = rungs
+        .iter()
+        .zip(&small)
+        .map(|((label, _), f)| (label.clone(), Cow::Borrowed(f)))
+        .collect();
+    let bottom = small
+        .windows(2)
+        .zip(&rungs[1..])
+        .map(|(pair, (label, _))| {
+            let d = difference(&pair[1], &pair[0], DIFFERENCE_SCALE);
+            (format!("Δ {label} ×{DIFFERENCE_SCALE}"), Cow::Owned(d))
+        })
+        .collect();
+    write_sheet(file, &[top, bottom], exposure)
+}
+
+/// `frame` box-filtered by `factor` per axis (covered pixels only; alpha = coverage).
+fn downsample(frame: &Frame, factor: u32) -> Frame {
+    if factor <= 1 {
+        return frame.clone();
+    }
+    let (w, h) = (frame.width / factor, frame.height / factor);
+    let mut rgba = vec![[0.0f32; 4]; (w * h) as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let (mut sum, mut covered) = ([0.0f32; 3], 0u32);
+            for dy in 0..factor {
+                for dx in 0..factor {
+                    let p =
+                        frame.rgba[((y * factor + dy) * frame.width + x * factor + dx) as usize];
+                    if p[3] >= 0.5 {
+                        covered += 1;
+                        for c in 0..3 {
+                            sum[c] += p[c];
+                        }
+                    }
+                }
+            }
+            if covered > 0 {
+                let n = covered as f32;
+                rgba[(y * w + x) as usize] = [sum[0] / n, sum[1] / n, sum[2] / n, 1.0];
+            }
+        }
+    }
+    Frame {
+        width: w,
+        height: h,
+        rgba,
+        ms: vec![],
+    }
+}
+
 /// Tiles `rows` (all frames one size) into one PNG with a caption band above each tile.
 pub fn write_sheet(
     file: &Path,
