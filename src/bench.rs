@@ -282,8 +282,8 @@ fn reference_stem(name: &str, kind: RowReference) -> String {
 }
 
 /// The attribution ladder of a row (`crate::attribution`): footprint → point reference,
-/// the technique's CPU rungs (written to `ladder/`), then the GPU image `frame`; a
-/// technique without CPU rungs (`shlmap`) steps from the point reference to its image.
+/// the technique's CPU rungs (written to `ladder/`), then the GPU image `frame`; without
+/// CPU rungs it steps from the point reference to the image.
 #[allow(clippy::too_many_arguments)]
 fn attribution(
     prepared: &Prepared,
@@ -305,9 +305,9 @@ fn attribution(
         rel_rmse: rel(point, footprint),
         image: format!("{}.exr", reference_stem("reference_point", kind)),
     }];
-    let rungs = match (&ladder.pixels, technique.reference()) {
-        (Some(pixels), ReferenceModel::Direct) => cpu_rungs(pixels, prepared, technique, path)?,
-        _ => vec![],
+    let rungs = match &ladder.pixels {
+        Some(pixels) => cpu_rungs(pixels, prepared, technique, path)?,
+        None => vec![],
     };
     let mut previous = point;
     for rung in &rungs {

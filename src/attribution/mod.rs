@@ -27,7 +27,7 @@
 //! irradiance to order 3; `sh2` truncates V to order 2, lighting to order 3 (cosine exact),
 //! then the product and the cosine to order 3 (its shader's math — a rung that measures 0,
 //! since L₃·V₂ has no band above 3 and the clamped cosine's band 3 vanishes). `shlmap`'s
-//! rungs would need the inter-reflected radiance at each pixel; it keeps the two-rung
+//! rungs need the inter-reflected radiance at each pixel; it keeps the two-rung
 //! attribution (footprint → point → GPU).
 //!
 //! Each rung's error is the relative RMSE between consecutive images (`report::metrics`),
@@ -46,6 +46,7 @@ use half::f16;
 use rayon::prelude::*;
 
 use crate::bake::lxh::{LxhMatrices, build_table};
+use crate::bake::shlmap::{ShLightmapSettings, radiance_at_points};
 use crate::bake::visibility::{PointVisibility, bake_points};
 use crate::gpu::{Context, GpuError};
 use crate::prepare::Prepared;
@@ -54,6 +55,7 @@ use crate::render::Frame;
 use crate::report::table::AttributionKind;
 use crate::sh::Order;
 use crate::sh::basis::eval_basis;
+use crate::sh::zonal::clamped_cosine_convolution;
 use crate::sphere::SphereMap;
 use crate::technique::pca::{quantized_prefix, weights_only_block};
 use crate::technique::tables::{f16_range_scale, table_map};
@@ -69,8 +71,13 @@ pub struct LadderPixels {
     normal: Vec<DVec3>,
     albedo_over_pi: Vec<[f64; 3]>,
     uv: Vec<[f32; 2]>,
+    position: Vec<Vec3>,
+    /// Interpolated vertex normal (the horizon of the rays).
+    normal_g: Vec<Vec3>,
     /// Visibility (bake order) and AO at each pixel.
     vis: PointVisibility,
+    /// `shlmap`'s incident-radiance SH at each pixel, gathered on first use.
+    sh_radiance: std::sync::OnceLock<Vec<[[f64; 3]; 9]>>,
     exact: ExactLightTable,
     pub seconds: f64,
 }
@@ -120,7 +127,10 @@ impl LadderPixels {
                 .map(|&i| [g.uv_lightmap.rgba[i][0], g.uv_lightmap.rgba[i][1]])
                 .collect(),
             index,
+            position: positions,
+            normal_g: normals_g,
             vis,
+            sh_radiance: std::sync::OnceLock::new(),
             exact,
             seconds: start.elapsed().as_secs_f64(),
         })
@@ -301,7 +311,8 @@ impl StoredTable {
     }
 }
 
-/// Builds the CPU rungs of `technique` on `path` (module doc); empty for `shlmap`.
+/// Builds the CPU rungs of `technique` on `path` (module doc); empty for `shlmap` without
+/// an SH lightmap bake.
 pub fn cpu_rungs(
     px: &LadderPixels,
     prepared: &Prepared,
@@ -538,7 +549,73 @@ pub fn cpu_rungs(
                 px.image(|k| shade(&product, px.normal[k], &lightmap_v(k, n2))),
             );
         }
-        Technique::Shlmap => {}
+        Technique::Shlmap => {
+            let Some(map) = prepared.sh_lightmap.as_ref() else {
+                return Ok(rungs);
+            };
+            let settings = ShLightmapSettings {
+                rays: prepared.visibility_settings.rays,
+                seed: prepared.visibility_settings.seed,
+                bounces: map.bounces,
+                progress: false,
+            };
+            let gathered = px.sh_radiance.get_or_init(|| {
+                let tracer = crate::bake::trace::Tracer::new(&prepared.scene.mesh);
+                radiance_at_points(
+                    &prepared.scene,
+                    &tracer,
+                    map,
+                    radiance,
+                    &settings,
+                    &px.position,
+                    &px.normal_g,
+                )
+            });
+            // Σ_k A_l(k) c_k y_k(n): eq. (2) at the shading normal.
+            let convolve = |c: &[[f64; 3]], n: DVec3| {
+                let mut y = [0.0; 9];
+                eval_basis(Order::THREE, n, &mut y);
+                let mut e = [0.0; 3];
+                for (k, (ck, yk)) in c.iter().zip(&y).enumerate() {
+                    let a = clamped_cosine_convolution(if k == 0 {
+                        0
+                    } else if k < 4 {
+                        1
+                    } else {
+                        2
+                    });
+                    for ch in 0..3 {
+                        e[ch] += a * ck[ch] * yk;
+                    }
+                }
+                e
+            };
+            push(
+                AttributionKind::RadianceOrder,
+                "shlmap.radiance_order".into(),
+                px.image(|k| convolve(&gathered[k], px.normal[k])),
+            );
+            let max_abs = map
+                .coeffs
+                .iter()
+                .flatten()
+                .fold(0.0f32, |m, v| m.max(v.abs()));
+            let scale = f16_range_scale(max_abs);
+            let unscale = f64::from(1.0 / scale);
+            push(
+                AttributionKind::LightmapTexels,
+                "shlmap.lightmap".into(),
+                px.image(|k| {
+                    let v = lightmap_bilinear(map.res, px.uv[k], 27, |t, j| {
+                        f16_round(map.texel(t)[j / 3][j % 3] * scale)
+                    });
+                    let c: Vec<[f64; 3]> = (0..9)
+                        .map(|i| std::array::from_fn(|ch| v[3 * i + ch] * unscale))
+                        .collect();
+                    convolve(&c, px.normal[k])
+                }),
+            );
+        }
     }
     Ok(rungs)
 }

@@ -63,9 +63,14 @@ impl LightmapTexels {
 
     /// Row-major index of the texel whose area contains `uv` (clamped to the lightmap).
     pub fn texel_index(&self, uv: [f32; 2]) -> usize {
-        let to_texel = |c: f32| ((c * self.res as f32).floor().max(0.0) as u32).min(self.res - 1);
-        (to_texel(uv[1]) * self.res + to_texel(uv[0])) as usize
+        texel_index_of(self.res, uv)
     }
+}
+
+/// Row-major index of the texel of a `res`² lightmap whose area contains `uv` (clamped).
+pub fn texel_index_of(res: u32, uv: [f32; 2]) -> usize {
+    let to_texel = |c: f32| ((c * res as f32).floor().max(0.0) as u32).min(res - 1);
+    (to_texel(uv[1]) * res + to_texel(uv[0])) as usize
 }
 
 /// 2D cross product (signed parallelogram area).

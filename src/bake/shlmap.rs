@@ -42,7 +42,7 @@ use rayon::prelude::*;
 
 use super::BakeStats;
 use super::directions::{DirectionSet, above_horizon};
-use super::raster::{LightmapTexels, dilate};
+use super::raster::{LightmapTexels, dilate, texel_index_of};
 use super::surface::SurfaceReader;
 use super::trace::Tracer;
 use super::visibility::DILATION_PASSES;
@@ -74,6 +74,10 @@ pub struct ShLightmap {
     /// Texel-major, `SH_LIGHTMAP_COEFFS` RGB triples per texel (res² × 9).
     pub coeffs: Vec<[f32; 3]>,
     pub covered: Vec<bool>,
+    /// With `bounces` > 0: the irradiance E_{N−1} of eq. (2) per texel (dilated) that the
+    /// last bounce read at its hits — what [`radiance_at_points`] reads to gather the same
+    /// light at other points. Empty for a direct-only bake.
+    pub bounce_source: Vec<Vec3>,
     /// Rays and time of the bake, all bounces.
     pub stats: BakeStats,
 }
@@ -167,6 +171,7 @@ pub fn bake_sh_lightmap(
         .collect();
     bar.finish_and_clear();
     let mut current = direct.clone();
+    let mut bounce_source = Vec::new();
 
     for bounce in 1..=settings.bounces {
         // Irradiance of the previous bounce at every texel, dilated into the gutters.
@@ -218,6 +223,7 @@ pub fn bake_sh_lightmap(
             })
             .collect();
         bar.finish_and_clear();
+        bounce_source = irradiance;
     }
 
     let mut planes = vec![Sh9Rgb::default(); res * res];
@@ -230,6 +236,7 @@ pub fn bake_sh_lightmap(
         bounces: settings.bounces,
         coeffs: planes.iter().flat_map(|p| p.as_rgb()).collect(),
         covered: texels.covered.clone(),
+        bounce_source,
         stats: BakeStats {
             rays_traced: rays_done.into_inner(),
             seconds: start.elapsed().as_secs_f64(),
@@ -243,6 +250,78 @@ pub fn bake_sh_lightmap(
         map.stats
     );
     map
+}
+
+/// Eq. (1) at arbitrary points `position[i]` with unit geometric normals `normal[i]`, as
+/// the last pass of the bake that made `map` gathers it at a texel: the same directions
+/// (`settings`' rays and seed), the environment's SH at each direction, and light bounced
+/// off the surfaces hit read from `map.bounce_source` (the error ladder's per-pixel
+/// `shlmap` rung, `crate::attribution`). Returns the 9 RGB coefficients per point.
+///
+/// # Panics
+/// If the slices differ in length (a bug of the caller).
+pub fn radiance_at_points(
+    scene: &Scene,
+    tracer: &Tracer,
+    map: &ShLightmap,
+    radiance_sh: &[[f64; 3]],
+    settings: &ShLightmapSettings,
+    position: &[Vec3],
+    normal: &[Vec3],
+) -> Vec<[[f64; 3]; SH_LIGHTMAP_COEFFS]> {
+    assert_eq!(position.len(), normal.len(), "one normal per point");
+    let dirs = DirectionSet::new(settings.rays, settings.seed);
+    let weight = dirs.weight();
+    let lighting_order = Order::new((radiance_sh.len() as f64).sqrt() as u32).unwrap_or(Order::ONE);
+    let basis: Vec<[f64; SH_LIGHTMAP_COEFFS]> = dirs
+        .dirs()
+        .iter()
+        .map(|d| {
+            let mut y = [0.0; SH_LIGHTMAP_COEFFS];
+            eval_basis(Order::THREE, d.as_dvec3().normalize(), &mut y);
+            y
+        })
+        .collect();
+    let env: Vec<[f64; 3]> = dirs
+        .dirs()
+        .iter()
+        .map(|d| zonal::eval_rgb(radiance_sh, lighting_order, d.as_dvec3().normalize()))
+        .collect();
+    let surfaces = SurfaceReader::new(scene);
+    let bounced = !map.bounce_source.is_empty();
+    position
+        .par_iter()
+        .zip(normal)
+        .with_min_len(64)
+        .map(|(&p, &n)| {
+            let origin = tracer.offset_origin(p, n);
+            let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
+            for (r, &d) in dirs.dirs().iter().enumerate() {
+                if !above_horizon(n, d) {
+                    continue;
+                }
+                if !bounced {
+                    if !tracer.occluded(origin, d, f32::INFINITY) {
+                        accumulate(&mut sum, &basis[r], env[r]);
+                    }
+                    continue;
+                }
+                match tracer.closest_hit(origin, d) {
+                    None => accumulate(&mut sum, &basis[r], env[r]),
+                    Some(hit) => {
+                        let surface = surfaces.at(&hit, origin, d);
+                        if surface.front_face {
+                            let t = texel_index_of(map.res, surface.uv_lightmap.into());
+                            let radiance =
+                                surface.albedo * map.bounce_source[t] / std::f32::consts::PI;
+                            accumulate(&mut sum, &basis[r], radiance.as_dvec3().into());
+                        }
+                    }
+                }
+            }
+            sum.map(|c| c.map(|v| v * weight))
+        })
+        .collect()
 }
 
 fn accumulate(

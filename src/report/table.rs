@@ -57,6 +57,10 @@ pub enum AttributionKind {
     ProductOrder,
     /// `preconv`: irradiance truncated to order 3.
     IrradianceOrder,
+    /// `shlmap`: incident radiance with inter-reflection → its order-3 SH at the pixel,
+    /// gathered as the bake gathers a texel (the bake's rays, the environment's SH,
+    /// bounced light from the lightmap).
+    RadianceOrder,
     /// Exact L×H (or PCA T_k) → the table: parameterization, resolution, bilinear, f16.
     NormalTable,
     /// Per-pixel data → the lightmap's texels: resolution, bilinear filtering, storage
@@ -66,7 +70,7 @@ pub enum AttributionKind {
     /// the f16 target).
     Gpu,
     /// Point-sampled reference → the technique's GPU image in one step, for a technique
-    /// without CPU rungs (`shlmap`).
+    /// without CPU rungs (`shlmap` when its lightmap was not baked).
     Technique,
 }
 
@@ -81,6 +85,7 @@ impl AttributionKind {
             AttributionKind::CosineOrder => "clamped cosine → H order",
             AttributionKind::ProductOrder => "L·V product → order 3",
             AttributionKind::IrradianceOrder => "irradiance → order 3",
+            AttributionKind::RadianceOrder => "incident radiance → order-3 SH",
             AttributionKind::NormalTable => "normal table",
             AttributionKind::LightmapTexels => "lightmap texels",
             AttributionKind::Gpu => "CPU → GPU",
