@@ -374,14 +374,14 @@ fn measure_row(
         None => (None, RowReference::None),
     };
     let error = reference_frame.and_then(|r| image_error(&frame, r));
-    if let (RowReference::Bounced(_), Some(r)) = (reference_kind, references) {
-        if let Some(e) = image_error(&frame, &r.main.frame) {
-            log::info!(
-                "{}: relative RMSE against the direct-only reference {:.4}",
-                tech.label(),
-                e.rel_rmse
-            );
-        }
+    if let (RowReference::Bounced(_), Some(r)) = (reference_kind, references)
+        && let Some(e) = image_error(&frame, &r.main.frame)
+    {
+        log::info!(
+            "{}: relative RMSE against the direct-only reference {:.4}",
+            tech.label(),
+            e.rel_rmse
+        );
     }
     write_images(&settings.out, &tech.label(), &frame, settings.exposure)?;
     if let Some(r) = reference_frame {

@@ -459,9 +459,9 @@ fn check_validation(ctx: &Context, validate: bool) -> Result<()> {
     Ok(())
 }
 
-fn parse_list<T: std::str::FromStr>(list: &str, all: &[T]) -> Result<Vec<T>>
+fn parse_list<T>(list: &str, all: &[T]) -> Result<Vec<T>>
 where
-    T: Copy,
+    T: std::str::FromStr + Copy,
     T::Err: std::error::Error + Send + Sync + 'static,
 {
     if list == "all" {

@@ -342,7 +342,7 @@ mod tests {
         let order = Order::SIX;
         let mut mask = vec![0u64; set.mask_words()];
         for r in 0..set.len() {
-            if splitmix64(r as u64) % 3 != 0 {
+            if !splitmix64(r as u64).is_multiple_of(3) {
                 mask[r / 64] |= 1 << (r % 64);
             }
         }
