@@ -61,23 +61,57 @@ fn product_matrix(c: &mut Criterion) {
     });
 }
 
-/// L×H table build (§3.3): order-6 visibility, H order 3, 32² per hemisphere, both
-/// layouts; the product matrices are built once per lighting and included.
+/// L×H table build (§3.3): order-6 visibility, H order 3, 32² per hemisphere (dual
+/// paraboloid) and 6 × 32² (cube), one core. `direct`: every normal on its own (the build
+/// before issue 15); `symmetric`: the mirror-orbit build with its orbits found once;
+/// `rebuild`: product matrices for new lighting plus the symmetric build.
 fn lxh_table(c: &mut Criterion) {
-    use shvis::bake::lxh::{LxhMatrices, build_table};
+    use shvis::bake::lxh::{LxhMatrices, SymmetricBuild, build_table_direct};
     use shvis::sphere::{Parameterization, SphereMap};
     let env = sky(128, &SkyParams::default());
     let radiance = project_sh(&env, Order::new(8).expect("valid"));
     let mut g = c.benchmark_group("lxh_table");
+    let m = LxhMatrices::new(&radiance, Order::SIX, Order::THREE);
     for kind in [Parameterization::DualParaboloid, Parameterization::CubeDx10] {
         let map = SphereMap::new(kind, 32).expect("valid");
-        g.bench_function(format!("order6_h3_{kind}_32"), |b| {
+        g.bench_function(format!("direct_order6_h3_{kind}_32"), |b| {
+            b.iter(|| black_box(build_table_direct(black_box(&m), map)))
+        });
+        let build = SymmetricBuild::new(map);
+        g.bench_function(format!("symmetric_order6_h3_{kind}_32"), |b| {
+            b.iter(|| black_box(build.build(black_box(&m))))
+        });
+        g.bench_function(format!("rebuild_order6_h3_{kind}_32"), |b| {
             b.iter(|| {
                 let m = LxhMatrices::new(black_box(&radiance), Order::SIX, Order::THREE);
-                black_box(build_table(&m, map))
+                black_box(build.build(&m))
             })
         });
     }
+    // The alternative of §3.3: blend two built tables (they are linear in L) instead of
+    // rebuilding from blended lighting.
+    let map = SphereMap::new(Parameterization::DualParaboloid, 32).expect("valid");
+    let a = SymmetricBuild::new(map).build(&m);
+    let b = SymmetricBuild::new(map).build(&LxhMatrices::new(
+        &radiance
+            .iter()
+            .map(|c| [c[2], c[1], c[0]])
+            .collect::<Vec<_>>(),
+        Order::SIX,
+        Order::THREE,
+    ));
+    g.bench_function("blend_tables_order6_dual-paraboloid_32", |bch| {
+        bch.iter(|| {
+            let t = black_box(0.3f32);
+            let blended: Vec<[f32; 3]> = a
+                .values
+                .iter()
+                .zip(&b.values)
+                .map(|(x, y)| std::array::from_fn(|c| (1.0 - t) * x[c] + t * y[c]))
+                .collect();
+            black_box(blended)
+        })
+    });
     g.finish();
 }
 

@@ -29,6 +29,7 @@
 
 pub mod equirect;
 pub mod project;
+pub mod schedule;
 pub mod sky;
 
 use std::f64::consts::PI;
