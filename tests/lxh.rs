@@ -104,7 +104,7 @@ fn mirror_parity_rules_match_the_basis() {
             for l in 0..8u32 {
                 for m in -(l as i32)..=(l as i32) {
                     let k = (l as i32 * (l as i32 + 1) + m) as usize;
-                    let sign = if (parity_class(l, m) & g).count_ones() % 2 == 0 {
+                    let sign = if (parity_class(l, m) & g).count_ones().is_multiple_of(2) {
                         1.0
                     } else {
                         -1.0
