@@ -8,8 +8,9 @@
 //!   sample type, converted to f32; other channels ignored), largest resolution level.
 //! - Radiance RGBE via `image`'s HDR decoder (f32 RGB).
 //!
-//! Validation, in this order: non-empty ([`EnvError::Empty`]), 2:1
-//! ([`EnvError::Shape`]), every channel finite ([`EnvError::NonFinite`] with the count
+//! Validation, in this order: non-empty ([`EnvError::Empty`]), 2:1 or 1:1
+//! ([`EnvError::Shape`]; 1:1 is a Debevec angular probe, resampled onto an equirect map by
+//! [`super::angular`]), every channel finite ([`EnvError::NonFinite`] with the count
 //! and the first texel in row-major order; DESIGN §6), negative values clamped to 0 with
 //! one `log::warn!` giving their count (they are not radiance, but some tools emit tiny
 //! negatives from filtering).
@@ -17,6 +18,7 @@
 use std::io::Cursor;
 use std::path::Path;
 
+use super::angular::AngularProbe;
 use super::{EnvError, EnvMap};
 
 const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
@@ -103,7 +105,7 @@ fn validate(mut map: EnvMap, path: &Path) -> Result<EnvMap, EnvError> {
             height,
         });
     }
-    if width != 2 * height {
+    if width != 2 * height && width != height {
         return Err(EnvError::Shape {
             path: path.to_owned(),
             width,
@@ -138,6 +140,18 @@ fn validate(mut map: EnvMap, path: &Path) -> Result<EnvMap, EnvError> {
             "{}: {negative} texels have negative radiance; clamped to 0",
             path.display()
         );
+    }
+    if width == height {
+        let probe = AngularProbe {
+            size: width,
+            texels: map.texels,
+        };
+        log::info!(
+            "{}: {width}×{width} read as a Debevec angular probe, resampled to {}×{width} equirect",
+            path.display(),
+            2 * width
+        );
+        return Ok(probe.to_equirect(2 * width));
     }
     Ok(map)
 }
@@ -201,23 +215,32 @@ mod tests {
             validate(empty, Path::new("e.exr")),
             Err(EnvError::Empty { .. })
         ));
-        let square = EnvMap {
-            width: 2,
+        let odd = EnvMap {
+            width: 3,
             height: 2,
-            texels: vec![[0.0; 3]; 4],
+            texels: vec![[0.0; 3]; 6],
         };
-        let e = validate(square, Path::new("sq.exr")).unwrap_err();
+        let e = validate(odd, Path::new("odd.exr")).unwrap_err();
         assert!(
             matches!(
                 e,
                 EnvError::Shape {
-                    width: 2,
+                    width: 3,
                     height: 2,
                     ..
                 }
             ),
             "{e}"
         );
+        // 1:1 is an angular probe, resampled onto a 2:1 map (a constant stays constant).
+        let square = EnvMap {
+            width: 8,
+            height: 8,
+            texels: vec![[0.5; 3]; 64],
+        };
+        let map = validate(square, Path::new("probe.exr")).expect("a probe loads");
+        assert_eq!((map.width, map.height), (16, 8));
+        assert!(map.texels.iter().flatten().all(|&v| (v - 0.5).abs() < 1e-6));
     }
 
     #[test]

@@ -25,8 +25,10 @@
 //! Loading: OpenEXR (first layer with R, G, B channels, any sample type, as f32) and
 //! Radiance RGBE `.hdr`, detected by magic bytes, never by extension. Every texel must be
 //! finite (NaN/Inf is an error naming the first one, DESIGN §6); negative values are
-//! clamped to 0 with a warning. Debevec angular probes (1:1) are not read here yet.
+//! clamped to 0 with a warning. A 1:1 image is a Debevec angular probe ([`angular`]),
+//! resampled onto a 2:1 map on load.
 
+pub mod angular;
 pub mod equirect;
 pub mod project;
 pub mod schedule;
@@ -83,7 +85,7 @@ pub enum EnvError {
     },
     /// Not 2:1.
     #[error(
-        "{}: {width}×{height} is not a 2:1 equirectangular image (width must be twice the height)",
+        "{}: {width}×{height} is neither a 2:1 equirectangular map nor a 1:1 angular probe",
         .path.display()
     )]
     Shape {
