@@ -63,8 +63,9 @@ fn product_matrix(c: &mut Criterion) {
 
 /// L×H table build (§3.3): order-6 visibility, H order 3, 32² per hemisphere (dual
 /// paraboloid) and 6 × 32² (cube), one core. `direct`: every normal on its own (the build
-/// before issue 15); `symmetric`: the mirror-orbit build with its orbits found once;
-/// `rebuild`: product matrices for new lighting plus the symmetric build.
+/// before issue 15); `symmetric`: the mirror-orbit build with its orbits found once, into
+/// a new table; `symmetric_in_place`: the same into an existing table (the per-frame path);
+/// `rebuild`: product matrices for new lighting plus the in-place build.
 fn lxh_table(c: &mut Criterion) {
     use shvis::bake::lxh::{LxhMatrices, SymmetricBuild, build_table_direct};
     use shvis::sphere::{Parameterization, SphereMap};
@@ -81,10 +82,14 @@ fn lxh_table(c: &mut Criterion) {
         g.bench_function(format!("symmetric_order6_h3_{kind}_32"), |b| {
             b.iter(|| black_box(build.build(black_box(&m))))
         });
+        let mut table = build.build(&m);
+        g.bench_function(format!("symmetric_in_place_order6_h3_{kind}_32"), |b| {
+            b.iter(|| build.rebuild(black_box(&m), &mut table))
+        });
         g.bench_function(format!("rebuild_order6_h3_{kind}_32"), |b| {
             b.iter(|| {
                 let m = LxhMatrices::new(black_box(&radiance), Order::SIX, Order::THREE);
-                black_box(build.build(&m))
+                build.rebuild(&m, &mut table)
             })
         });
     }

@@ -238,8 +238,9 @@ pub fn parity_class(l: u32, m: i32) -> u32 {
 /// evaluated on their own.
 pub struct SymmetricBuild {
     map: SphereMap,
-    /// Per representative texel: its images under the 8 mirrors (texel index or none).
-    orbits: Vec<(usize, [Option<usize>; 8])>,
+    /// Per orbit: the representative's normal and its images under the 8 mirrors (texel
+    /// index or none; image 0 is the representative itself).
+    orbits: Vec<(DVec3, [Option<usize>; 8])>,
     /// Per texel in an orbit: another texel with the same centre (a dual map's equator
     /// ring, in both hemispheres), which gets the same values.
     alias_of: Vec<Option<usize>>,
@@ -295,7 +296,7 @@ impl SymmetricBuild {
                     done[u] = true;
                 }
             }
-            orbits.push((t, images));
+            orbits.push((d, images));
         }
         // A texel whose centre is another's (a dual map's equator ring, in both
         // hemispheres) copies it; the rest are evaluated on their own.
@@ -344,21 +345,32 @@ impl SymmetricBuild {
 
     /// The table for `m`, stored as f32 ([`LxhTable`]).
     pub fn build(&self, m: &LxhMatrices) -> LxhTable {
-        let vn = m.v_order.coeff_count();
-        let mut values = vec![[0.0f32; 3]; self.map.sample_count() * vn];
-        self.build_into(m, |t, v| {
-            for (dst, src) in values[t * vn..(t + 1) * vn]
-                .iter_mut()
-                .zip(v.chunks_exact(3))
-            {
-                *dst = [src[0] as f32, src[1] as f32, src[2] as f32];
-            }
-        });
-        LxhTable {
+        let mut table = LxhTable {
             map: self.map,
             v_order: m.v_order,
-            values,
-        }
+            values: vec![[0.0f32; 3]; self.map.sample_count() * m.v_order.coeff_count()],
+        };
+        self.rebuild(m, &mut table);
+        table
+    }
+
+    /// Overwrites `table` (same map and visibility order) with the table for `m`, reusing
+    /// its memory: the per-frame path of dynamic lighting.
+    ///
+    /// # Panics
+    /// If `table` was built for another map or order (a bug of the caller).
+    pub fn rebuild(&self, m: &LxhMatrices, table: &mut LxhTable) {
+        assert!(
+            table.map == self.map && table.v_order == m.v_order,
+            "table of another map or order"
+        );
+        let width = 3 * m.v_order.coeff_count();
+        let flat: &mut [f32] = bytemuck::cast_slice_mut(&mut table.values);
+        self.build_into(m, |t, v| {
+            for (dst, src) in flat[t * width..(t + 1) * width].iter_mut().zip(v) {
+                *dst = *src as f32;
+            }
+        });
     }
 
     /// Calls `write(t, values)` once per texel t with its 3·O² colour-interleaved values.
@@ -435,11 +447,22 @@ impl<W: FnMut(usize, &[f64])> pulp::WithSimd for OrbitPass<'_, W> {
         let mut partial = vec![0.0; 8 * width];
         let mut single = vec![0.0; width];
         for (rep, images) in &build.orbits {
-            eval_basis(h_order, dir_of(*rep), &mut y);
-            partial.fill(0.0);
+            eval_basis(h_order, *rep, &mut y);
+            // The first row of a class is assigned, later ones added; empty classes zeroed.
+            let mut started = [false; 8];
             for (k, &yk) in y.iter().enumerate() {
-                let p = &mut partial[class[k] as usize * width..][..width];
-                axpy(p, yk, &rows[k * width..(k + 1) * width]);
+                let c = class[k] as usize;
+                let p = &mut partial[c * width..][..width];
+                let row = &rows[k * width..(k + 1) * width];
+                if started[c] {
+                    axpy(p, yk, row);
+                } else {
+                    scale_into(p, yk, row);
+                    started[c] = true;
+                }
+            }
+            for c in (0..8).filter(|&c| !started[c]) {
+                partial[c * width..][..width].fill(0.0);
             }
             for bit in [1usize, 2, 4] {
                 for c in (0..8).filter(|c| c & bit == 0) {
@@ -465,6 +488,14 @@ impl<W: FnMut(usize, &[f64])> pulp::WithSimd for OrbitPass<'_, W> {
             }
             write(t, &single);
         }
+    }
+}
+
+/// dst = a · x, elementwise.
+#[inline(always)]
+fn scale_into(dst: &mut [f64], a: f64, x: &[f64]) {
+    for (d, x) in dst.iter_mut().zip(x) {
+        *d = a * x;
     }
 }
 
