@@ -45,6 +45,10 @@ enum Command {
     Reference(ReferenceArgs),
     /// Time every technique × path and write table.md, table.json and images.
     Bench(BenchArgs),
+    /// Dynamic lighting (§3.3): turn the environment about +Y over a run of frames, rebuild
+    /// each technique's lighting data every K frames, and report rebuild and GPU times and
+    /// the errors at sampled frames (static and lag).
+    Relight(RelightArgs),
     /// SH utilities for checking the math from outside (17 significant digits).
     #[command(subcommand)]
     Sh(ShCommand),
@@ -271,6 +275,78 @@ struct BenchArgs {
     out: PathBuf,
 }
 
+#[derive(Args, Debug)]
+struct RelightArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    #[arg(long, default_value = "sky")]
+    env: String,
+    /// `all` or a comma-separated list of technique names (shlmap's lighting is baked in:
+    /// it is reported, not run).
+    #[arg(long, default_value = "unc3,unc4,unc6,pca4,pca16,pca16w,sh2,preconv")]
+    techniques: String,
+    #[arg(long, default_value = "dx9,dx10")]
+    paths: String,
+    /// Frames of the run.
+    #[arg(long, default_value_t = 48, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    frames: u32,
+    /// Rebuild the lighting-dependent data every this many frames.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    every: u32,
+    /// Full turns of the environment over the run.
+    #[arg(long, default_value_t = 1.0)]
+    turns: f64,
+    /// Frames at which errors are measured.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    samples: u32,
+    #[arg(long, default_value_t = 320, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 200, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Samples per pixel of each sampled frame's reference.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=65_536))]
+    ref_spp: u32,
+    #[arg(long, default_value = "relight-out")]
+    out: PathBuf,
+}
+
+fn run_relight(a: RelightArgs) -> Result<()> {
+    if !a.turns.is_finite() {
+        bail!("--turns {} is not a finite number", a.turns);
+    }
+    let settings = shvis::relight::RelightSettings {
+        techniques: parse_list(&a.techniques, Technique::ALL)?,
+        paths: parse_list(&a.paths, HwPath::ALL)?,
+        frames: a.frames,
+        every: a.every,
+        turns: a.turns,
+        samples: a.samples,
+        width: a.width,
+        height: a.height,
+        ref_spp: a.ref_spp,
+        seed: a.scene.seed,
+        exposure: a.exposure,
+        out: a.out.clone(),
+    };
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    let prepared = prepare(&prepare_settings(&a.scene, &a.env, None)?)?;
+    let ctx = open_gpu(&a.gpu)?;
+    let table = shvis::relight::run(&ctx, &prepared, &settings)?;
+    println!("{}", table.to_markdown());
+    println!(
+        "wrote {}/relight.md, relight.json and images in {:.1} s",
+        a.out.display(),
+        started.elapsed().as_secs_f64()
+    );
+    check_validation(&ctx, a.gpu.validate)?;
+    Ok(())
+}
+
 /// Parses the arguments and runs the command.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
@@ -278,6 +354,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(a) => run_render(a).context("render"),
         Command::Reference(a) => run_reference(a).context("reference"),
         Command::Bench(a) => run_bench(a).context("bench"),
+        Command::Relight(a) => run_relight(a).context("relight"),
         Command::Sh(c) => run_sh(c).context("sh"),
         Command::Study(StudyCommand::Params(a)) => run_study_params(a).context("study params"),
     }

@@ -16,6 +16,7 @@ pub mod files;
 pub mod gpu;
 pub mod prepare;
 pub mod reference;
+pub mod relight;
 pub mod render;
 pub mod report;
 pub mod scene;

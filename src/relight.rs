@@ -1,0 +1,424 @@
+//! `shvis relight` (issue 15): the environment turns about +Y over the run
+//! ([`crate::env::schedule`]) and every technique with dynamic lighting follows it.
+//!
+//! Per technique × path and frame f of N: every K frames (`every`) the lighting-dependent
+//! data is rebuilt from the schedule's SH at that frame, L_{K⌊f/K⌋} — today by building the
+//! technique's GPU data again (`technique::build`: tables, uniforms, and the per-texel
+//! textures too; a table-only, double-buffered upload that keeps frames running is not
+//! built) — and one frame is rendered and timed. At a few sampled frames the image is
+//! compared with the point-sampled reference of the environment rotated to that frame
+//! (the map resampled, `EnvMap::sample_bilinear`), and with the same technique built for
+//! that frame's exact lighting: the **static** error at the same lighting and the **lag**
+//! error of tables that are up to K − 1 frames old are reported separately.
+//!
+//! Writes `relight.md`, `relight.json`, the sampled frames and their references (PNG), and
+//! one animated PNG per technique × path of the whole run.
+
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::env::EnvMap;
+use crate::env::schedule::{LightingSchedule, rotation_about_y};
+use crate::gpu::{Context, GpuError};
+use crate::prepare::Prepared;
+use crate::reference::{ReferenceSettings, render_reference};
+use crate::render::{Frame, FrameSettings, SceneGpu};
+use crate::report::ReportError;
+use crate::report::image::{to_srgb8, write_png};
+use crate::report::metrics::{TimingStats, image_error};
+use crate::sh::Order;
+use crate::sh::zonal::irradiance_from_radiance;
+use crate::technique::{self, HwPath, Inputs, Technique, TechniqueError};
+
+/// What a relight run does.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RelightSettings {
+    pub techniques: Vec<Technique>,
+    pub paths: Vec<HwPath>,
+    /// Frames of the run (one full turn of `turns` over them).
+    pub frames: u32,
+    /// Rebuild the lighting-dependent data every this many frames (≥ 1).
+    pub every: u32,
+    /// Full turns of the environment over the run.
+    pub turns: f64,
+    /// Frames at which errors are measured (spread over the run).
+    pub samples: u32,
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel of each sampled frame's reference.
+    pub ref_spp: u32,
+    pub seed: u64,
+    pub exposure: f32,
+    pub out: PathBuf,
+}
+
+/// Errors of a relight run.
+#[derive(Debug, thiserror::Error)]
+pub enum RelightError {
+    #[error("relight: {0}")]
+    Settings(String),
+    #[error(transparent)]
+    Technique(#[from] TechniqueError),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Report(#[from] ReportError),
+}
+
+/// Errors at one sampled frame.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SampledFrame {
+    pub frame: u32,
+    /// Rotation of the environment at this frame, degrees.
+    pub degrees: f64,
+    /// Frames since the data was last rebuilt.
+    pub lag_frames: u32,
+    /// The run's image against the reference.
+    pub rel_rmse: Option<f64>,
+    /// The technique built for this frame's exact lighting, against the reference.
+    pub static_rel_rmse: Option<f64>,
+    /// The run's image against that static image: what the lag costs.
+    pub lag_rel_rmse: Option<f64>,
+}
+
+/// One technique × path of the run.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RelightRow {
+    pub technique: Technique,
+    pub path: HwPath,
+    /// Rebuilds of the lighting-dependent data during the run.
+    pub updates: u32,
+    /// Median ms of one rebuild (CPU build and upload together).
+    pub rebuild_ms_median: f64,
+    /// GPU ms per frame over the run (timestamps).
+    pub gpu_ms_median: Option<f64>,
+    pub gpu_ms_min: Option<f64>,
+    pub gpu_ms_max: Option<f64>,
+    pub sampled: Vec<SampledFrame>,
+}
+
+/// The run's table.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RelightTable {
+    pub device: String,
+    pub width: u32,
+    pub height: u32,
+    pub frames: u32,
+    pub every: u32,
+    pub turns: f64,
+    pub reference_spp: u32,
+    pub results: Vec<RelightRow>,
+    /// Techniques asked for whose lighting is baked in (`shlmap`): not run.
+    pub static_only: Vec<Technique>,
+}
+
+impl RelightTable {
+    pub fn to_markdown(&self) -> String {
+        let mut s = format!(
+            "device: {} · {}×{} · {} frames, {} turn(s), data rebuilt every {} frames · references {} spp (point-sampled)\n\n",
+            self.device,
+            self.width,
+            self.height,
+            self.frames,
+            self.turns,
+            self.every,
+            self.reference_spp
+        );
+        s += "| technique | path | rebuilds | rebuild ms | GPU ms median | min | max | sampled frames: error (static, lag) |\n";
+        s += "|---|---|---:|---:|---:|---:|---:|---|\n";
+        let opt = |v: Option<f64>, d: usize| v.map_or("—".to_string(), |v| format!("{v:.d$}"));
+        for r in &self.results {
+            let sampled: Vec<String> = r
+                .sampled
+                .iter()
+                .map(|f| {
+                    format!(
+                        "f{} {:.0}°: {} ({}, {})",
+                        f.frame,
+                        f.degrees,
+                        opt(f.rel_rmse, 4),
+                        opt(f.static_rel_rmse, 4),
+                        opt(f.lag_rel_rmse, 4)
+                    )
+                })
+                .collect();
+            s += &format!(
+                "| {} | {} | {} | {:.1} | {} | {} | {} | {} |\n",
+                r.technique,
+                r.path,
+                r.updates,
+                r.rebuild_ms_median,
+                opt(r.gpu_ms_median, 3),
+                opt(r.gpu_ms_min, 3),
+                opt(r.gpu_ms_max, 3),
+                sampled.join(" · ")
+            );
+        }
+        for t in &self.static_only {
+            s += &format!(
+                "\n{t}: its lighting is baked into the lightmap; it cannot follow a changing environment and was not run.\n"
+            );
+        }
+        s
+    }
+}
+
+/// The sampled frames: `samples` frames spread over the run, midway between rebuilds
+/// where possible (so the lag shows).
+pub fn sampled_frames(frames: u32, samples: u32, every: u32) -> Vec<u32> {
+    let mut out: Vec<u32> = (0..samples)
+        .map(|i| {
+            let f = ((f64::from(i) + 0.5) * f64::from(frames) / f64::from(samples.max(1))) as u32;
+            (f - f % every + every / 2).min(frames.saturating_sub(1))
+        })
+        .collect();
+    out.dedup();
+    out
+}
+
+/// The environment map turned by `angle` about +Y (g(ω) = f(Rᵀω), as `sh::rotate`).
+fn rotated_env(env: &EnvMap, angle: f64) -> EnvMap {
+    let r = rotation_about_y(angle);
+    EnvMap::from_fn(env.width, env.height, |d| {
+        env.sample_bilinear(r.transpose() * d)
+    })
+}
+
+/// Runs the schedule (module doc) and writes its files into `settings.out` (must exist).
+pub fn run(
+    ctx: &Arc<Context>,
+    prepared: &Prepared,
+    settings: &RelightSettings,
+) -> Result<RelightTable, RelightError> {
+    if settings.frames == 0 || settings.every == 0 {
+        return Err(RelightError::Settings(
+            "--frames and --every must be at least 1".into(),
+        ));
+    }
+    let order = Order::new((prepared.radiance_sh.len() as f64).sqrt() as u32)
+        .map_err(|e| RelightError::Settings(e.to_string()))?;
+    let schedule = LightingSchedule::rotating(
+        order,
+        prepared.radiance_sh.clone(),
+        settings.turns,
+        settings.frames,
+    );
+    let scene = SceneGpu::new(
+        ctx,
+        &prepared.scene,
+        &FrameSettings {
+            width: settings.width,
+            height: settings.height,
+            ..FrameSettings::default()
+        },
+    )?;
+    let sampled = sampled_frames(settings.frames, settings.samples, settings.every);
+    // References of the sampled frames' lighting.
+    let mut references = Vec::new();
+    for &f in &sampled {
+        let env = rotated_env(&prepared.env, schedule.angle(f));
+        let reference = render_reference(
+            ctx,
+            &prepared.scene,
+            &env,
+            &ReferenceSettings {
+                width: settings.width,
+                height: settings.height,
+                spp: settings.ref_spp,
+                seed: settings.seed,
+                bounces: 0,
+                footprint: false,
+            },
+        )?;
+        write_png(
+            &settings.out.join(format!("reference.f{f}.png")),
+            &reference.frame,
+            settings.exposure,
+        )?;
+        log::info!(
+            "relight: reference at frame {f} in {:.1} s (noise {:.4})",
+            reference.seconds,
+            reference.rel_noise
+        );
+        references.push(reference.frame);
+    }
+    let mut rows = Vec::new();
+    let mut static_only = Vec::new();
+    for &technique in &settings.techniques {
+        if !technique.dynamic_lighting() {
+            static_only.push(technique);
+            continue;
+        }
+        for &path in &settings.paths {
+            rows.push(run_row(
+                ctx,
+                &scene,
+                prepared,
+                &schedule,
+                technique,
+                path,
+                &sampled,
+                &references,
+                settings,
+            )?);
+        }
+    }
+    let table = RelightTable {
+        device: ctx.device_name().to_string(),
+        width: settings.width,
+        height: settings.height,
+        frames: settings.frames,
+        every: settings.every,
+        turns: settings.turns,
+        reference_spp: settings.ref_spp,
+        results: rows,
+        static_only,
+    };
+    let write = |name: &str, text: String| -> Result<(), ReportError> {
+        let path = settings.out.join(name);
+        std::fs::write(&path, text).map_err(|e| ReportError::Write {
+            path,
+            detail: e.to_string(),
+        })
+    };
+    write("relight.md", table.to_markdown())?;
+    let json = serde_json::to_string_pretty(&table).map_err(|e| ReportError::Write {
+        path: settings.out.join("relight.json"),
+        detail: e.to_string(),
+    })?;
+    write("relight.json", json + "\n")?;
+    Ok(table)
+}
+
+/// The lighting inputs of `prepared` with radiance `radiance_sh` (irradiance derived).
+fn with_lighting<'a>(
+    prepared: &'a Prepared,
+    radiance_sh: &'a [[f64; 3]],
+    irradiance_sh: &'a [[f64; 3]],
+) -> Inputs<'a> {
+    Inputs {
+        radiance_sh,
+        irradiance_sh,
+        ..prepared.inputs()
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run_row(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    prepared: &Prepared,
+    schedule: &LightingSchedule,
+    technique: Technique,
+    path: HwPath,
+    sampled: &[u32],
+    references: &[Frame],
+    settings: &RelightSettings,
+) -> Result<RelightRow, RelightError> {
+    let label = format!("{technique}.{path}");
+    let build = |frame: u32| -> Result<(technique::TechniqueGpu, f64), RelightError> {
+        let radiance = schedule.at(frame);
+        let irradiance = irradiance_from_radiance(&radiance[..9], Order::THREE);
+        let start = Instant::now();
+        let tech = technique::build(
+            ctx,
+            scene,
+            technique,
+            path,
+            &with_lighting(prepared, &radiance, &irradiance),
+        )?;
+        Ok((tech, start.elapsed().as_secs_f64() * 1e3))
+    };
+    let (mut rebuild_ms, mut gpu_ms, mut frames_srgb) = (Vec::new(), Vec::new(), Vec::new());
+    let mut sampled_rows = Vec::new();
+    let mut current = None;
+    for f in 0..settings.frames {
+        if f % settings.every == 0 {
+            drop(current.take());
+            let (tech, ms) = build(f)?;
+            rebuild_ms.push(ms);
+            current = Some(tech);
+        }
+        let tech = current.as_ref().expect("built at frame 0");
+        let frame = tech.render(scene, 0, 1)?;
+        gpu_ms.extend_from_slice(&frame.ms);
+        frames_srgb.push(to_srgb8(&frame, settings.exposure));
+        if let Some(k) = sampled.iter().position(|&s| s == f) {
+            let reference = &references[k];
+            write_png(
+                &settings.out.join(format!("{label}.f{f}.png")),
+                &frame,
+                settings.exposure,
+            )?;
+            let (exact, _) = build(f)?;
+            let static_frame = exact.render(scene, 0, 1)?;
+            drop(exact);
+            sampled_rows.push(SampledFrame {
+                frame: f,
+                degrees: schedule.angle(f).to_degrees(),
+                lag_frames: f % settings.every,
+                rel_rmse: image_error(&frame, reference).map(|e| e.rel_rmse),
+                static_rel_rmse: image_error(&static_frame, reference).map(|e| e.rel_rmse),
+                lag_rel_rmse: image_error(&frame, &static_frame).map(|e| e.rel_rmse),
+            });
+        }
+    }
+    drop(current);
+    write_apng(
+        &settings.out.join(format!("{label}.apng.png")),
+        settings.width,
+        settings.height,
+        &frames_srgb,
+    )?;
+    let timing = TimingStats::from_ms(&gpu_ms);
+    rebuild_ms.sort_by(f64::total_cmp);
+    log::info!("relight: {label} done");
+    Ok(RelightRow {
+        technique,
+        path,
+        updates: rebuild_ms.len() as u32,
+        rebuild_ms_median: rebuild_ms[rebuild_ms.len() / 2],
+        gpu_ms_median: timing.map(|t| t.ms_median),
+        gpu_ms_min: timing.map(|t| t.ms_min),
+        gpu_ms_max: timing.map(|t| t.ms_max),
+        sampled: sampled_rows,
+    })
+}
+
+/// An animated PNG of 8-bit sRGB frames at 12 frames per second, looping.
+fn write_apng(path: &Path, width: u32, height: u32, frames: &[Vec<u8>]) -> Result<(), ReportError> {
+    let err = |e: png::EncodingError| ReportError::Write {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    };
+    let file = std::fs::File::create(path).map_err(|e| ReportError::Write {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    })?;
+    let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_animated(frames.len() as u32, 0).map_err(err)?;
+    encoder.set_frame_delay(1, 12).map_err(err)?;
+    let mut writer = encoder.write_header().map_err(err)?;
+    for frame in frames {
+        writer.write_image_data(frame).map_err(err)?;
+    }
+    writer.finish().map_err(err)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sampled_frames_sit_between_rebuilds() {
+        assert_eq!(sampled_frames(48, 4, 8), vec![4, 20, 28, 44]);
+        assert_eq!(sampled_frames(10, 3, 1), vec![1, 5, 8]);
+        assert!(sampled_frames(48, 4, 8).iter().all(|f| f % 8 == 4));
+    }
+}

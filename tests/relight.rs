@@ -1,0 +1,82 @@
+//! `shvis relight` (issue 15, `shvis::relight`) on the test house: every dynamic technique
+//! × path follows a rotating environment with validation clean across its rebuilds, a
+//! rebuild every frame has no lag error and one every other frame has, shlmap is reported
+//! as static, and the animation has one frame per frame of the run.
+
+mod common;
+
+use std::path::Path;
+
+use shvis::relight::{RelightSettings, run};
+use shvis::technique::{HwPath, Technique};
+
+fn settings(out: &Path, every: u32) -> RelightSettings {
+    RelightSettings {
+        techniques: ["unc3", "pca4", "pca4w", "sh2", "preconv", "shlmap"]
+            .iter()
+            .map(|t| t.parse::<Technique>().expect("technique"))
+            .collect(),
+        paths: vec![HwPath::Dx9, HwPath::Dx10],
+        frames: 4,
+        every,
+        turns: 0.25,
+        samples: 2,
+        width: 64,
+        height: 40,
+        ref_spp: 4,
+        seed: 1,
+        exposure: 0.0,
+        out: out.to_path_buf(),
+    }
+}
+
+#[test]
+fn dynamic_techniques_follow_a_rotating_environment() {
+    let ctx = common::validated_context();
+    let prepared = common::house();
+    for every in [1, 2] {
+        let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("relight-{every}"));
+        let _ = std::fs::remove_dir_all(&out);
+        std::fs::create_dir_all(&out).expect("output folder");
+        let table = run(&ctx, prepared, &settings(&out, every)).expect("relight runs");
+        common::assert_validation_clean(&ctx, &format!("relight every {every}"));
+        assert_eq!(table.static_only, vec![Technique::Shlmap]);
+        assert_eq!(table.results.len(), 5 * 2);
+        for row in &table.results {
+            let label = format!("{}.{}", row.technique, row.path);
+            assert_eq!(row.updates, 4 / every, "{label}");
+            assert!(row.gpu_ms_median.is_some(), "{label}: timestamps");
+            assert!(!row.sampled.is_empty(), "{label}");
+            for f in &row.sampled {
+                let (err, stat, lag) = (
+                    f.rel_rmse.expect("error"),
+                    f.static_rel_rmse.expect("static error"),
+                    f.lag_rel_rmse.expect("lag error"),
+                );
+                assert!(err.is_finite() && stat > 0.0, "{label}: {f:?}");
+                if f.lag_frames == 0 {
+                    // The run's data was built for this very frame: the static image.
+                    assert!(lag < 1e-6 && (err - stat).abs() < 1e-6, "{label}: {f:?}");
+                } else {
+                    assert!(lag > 0.0, "{label}: {f:?}");
+                }
+            }
+            // One animation frame per frame of the run.
+            let file = std::fs::File::open(out.join(format!("{label}.apng.png"))).expect("apng");
+            let reader = png::Decoder::new(std::io::BufReader::new(file))
+                .read_info()
+                .expect("a PNG");
+            let frames = reader.info().animation_control().map(|a| a.num_frames);
+            assert_eq!(frames, Some(4), "{label}");
+        }
+        if every == 2 {
+            assert!(
+                table
+                    .results
+                    .iter()
+                    .flat_map(|r| &r.sampled)
+                    .any(|f| f.lag_frames > 0)
+            );
+        }
+    }
+}
