@@ -380,6 +380,12 @@ pub fn cpu_rungs(
             let model = &prepared.pca;
             let order = model.order;
             let n2 = order.coeff_count();
+            if n2 > 36 {
+                log::warn!(
+                    "{label}: the error ladder handles PCA of visibility up to order 6, the bake has order {order}; no CPU rungs"
+                );
+                return Ok(rungs);
+            }
             let m = (m as usize).min(model.basis.len());
             let (stem, frame) = visibility_rung(order);
             push(AttributionKind::VisibilityOrder, stem, frame);
