@@ -254,15 +254,7 @@ impl SymmetricBuild {
     pub fn new(map: SphereMap) -> SymmetricBuild {
         let res = map.res();
         let samples = map.sample_count();
-        let dir_of = |t: usize| {
-            let r2 = (res * res) as usize;
-            let (face, rest) = ((t / r2) as u32, t % r2);
-            map.texel_center_dir(
-                face,
-                (rest % res as usize) as u32,
-                (rest / res as usize) as u32,
-            )
-        };
+        let dir_of = |t: usize| texel_dir(map, t);
         let index_of = |d: DVec3| -> Option<usize> {
             let (face, uv) = map.dir_to_texcoord(d);
             let (i, j) = (uv.x * f64::from(res) - 0.5, uv.y * f64::from(res) - 0.5);
@@ -430,16 +422,7 @@ impl<W: FnMut(usize, &[f64])> pulp::WithSimd for OrbitPass<'_, W> {
         } = self;
         let hn = h_order.coeff_count();
         let map = build.map;
-        let res = map.res();
-        let dir_of = |t: usize| {
-            let r2 = (res * res) as usize;
-            let (face, rest) = ((t / r2) as u32, t % r2);
-            map.texel_center_dir(
-                face,
-                (rest % res as usize) as u32,
-                (rest / res as usize) as u32,
-            )
-        };
+        let dir_of = |t: usize| texel_dir(map, t);
 
         let mut y = vec![0.0; hn];
         // P_c per parity class, then in place their Walsh–Hadamard transform: entry g
@@ -489,6 +472,13 @@ impl<W: FnMut(usize, &[f64])> pulp::WithSimd for OrbitPass<'_, W> {
             write(t, &single);
         }
     }
+}
+
+/// Centre direction of flat texel index `t` (`SphereMap::texel_index`) of `map`.
+fn texel_dir(map: SphereMap, t: usize) -> DVec3 {
+    let res = map.res() as usize;
+    let (face, rest) = ((t / (res * res)) as u32, t % (res * res));
+    map.texel_center_dir(face, (rest % res) as u32, (rest / res) as u32)
 }
 
 /// dst = a · x, elementwise.

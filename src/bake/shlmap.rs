@@ -119,22 +119,7 @@ pub fn bake_sh_lightmap(
     let res = texels.res as usize;
     let dirs = DirectionSet::new(settings.rays, settings.seed);
     let weight = dirs.weight();
-    // Per direction: the 9 basis values and the environment's radiance.
-    let lighting_order = Order::new((radiance_sh.len() as f64).sqrt() as u32).unwrap_or(Order::ONE);
-    let basis: Vec<[f64; SH_LIGHTMAP_COEFFS]> = dirs
-        .dirs()
-        .iter()
-        .map(|d| {
-            let mut y = [0.0; SH_LIGHTMAP_COEFFS];
-            eval_basis(Order::THREE, d.as_dvec3().normalize(), &mut y);
-            y
-        })
-        .collect();
-    let env: Vec<[f64; 3]> = dirs
-        .dirs()
-        .iter()
-        .map(|d| zonal::eval_rgb(radiance_sh, lighting_order, d.as_dvec3().normalize()))
-        .collect();
+    let (basis, env) = direction_tables(&dirs, radiance_sh);
     let surfaces = SurfaceReader::new(scene);
     let covered: Vec<u32> = (0..res * res)
         .filter(|&i| texels.covered[i])
@@ -272,21 +257,7 @@ pub fn radiance_at_points(
     assert_eq!(position.len(), normal.len(), "one normal per point");
     let dirs = DirectionSet::new(settings.rays, settings.seed);
     let weight = dirs.weight();
-    let lighting_order = Order::new((radiance_sh.len() as f64).sqrt() as u32).unwrap_or(Order::ONE);
-    let basis: Vec<[f64; SH_LIGHTMAP_COEFFS]> = dirs
-        .dirs()
-        .iter()
-        .map(|d| {
-            let mut y = [0.0; SH_LIGHTMAP_COEFFS];
-            eval_basis(Order::THREE, d.as_dvec3().normalize(), &mut y);
-            y
-        })
-        .collect();
-    let env: Vec<[f64; 3]> = dirs
-        .dirs()
-        .iter()
-        .map(|d| zonal::eval_rgb(radiance_sh, lighting_order, d.as_dvec3().normalize()))
-        .collect();
+    let (basis, env) = direction_tables(&dirs, radiance_sh);
     let surfaces = SurfaceReader::new(scene);
     let bounced = !map.bounce_source.is_empty();
     position
@@ -322,6 +293,24 @@ pub fn radiance_at_points(
             sum.map(|c| c.map(|v| v * weight))
         })
         .collect()
+}
+
+/// Per direction of `dirs`: the 9 order-3 basis values and the environment's radiance from
+/// its SH `radiance_sh` (any order ≥ 1).
+fn direction_tables(
+    dirs: &DirectionSet,
+    radiance_sh: &[[f64; 3]],
+) -> (Vec<[f64; SH_LIGHTMAP_COEFFS]>, Vec<[f64; 3]>) {
+    let lighting_order = Order::new((radiance_sh.len() as f64).sqrt() as u32).unwrap_or(Order::ONE);
+    dirs.dirs()
+        .iter()
+        .map(|d| {
+            let d = d.as_dvec3().normalize();
+            let mut y = [0.0; SH_LIGHTMAP_COEFFS];
+            eval_basis(Order::THREE, d, &mut y);
+            (y, zonal::eval_rgb(radiance_sh, lighting_order, d))
+        })
+        .unzip()
 }
 
 fn accumulate(

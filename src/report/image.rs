@@ -44,33 +44,26 @@ pub fn write_frame(path: &Path, frame: &Frame, exposure_ev: f32) -> Result<(), R
 
 /// Linear RGBA f32 OpenEXR.
 pub fn write_exr(path: &Path, frame: &Frame) -> Result<(), ReportError> {
-    use exr::prelude::{Image, SpecificChannels, WritableImage};
-    let w = frame.width as usize;
-    let channels = SpecificChannels::rgba(|p: exr::math::Vec2<usize>| {
-        let t = frame.rgba[p.1 * w + p.0];
-        (t[0], t[1], t[2], t[3])
-    });
-    Image::from_encoded_channels(
-        (w, frame.height as usize),
-        crate::files::EXR_ENCODING,
-        channels,
-    )
-    .write()
-    .to_file(path)
-    .map_err(|e| ReportError::Write {
-        path: path.to_path_buf(),
-        detail: e.to_string(),
-    })
+    write_rgba_exr(path, frame, |v| v)
 }
 
 /// As [`write_exr`] with half-float channels (half the bytes): for the error ladder's
 /// intermediate images, whose rung errors are computed from the f32 frames in memory.
 pub fn write_exr_half(path: &Path, frame: &Frame) -> Result<(), ReportError> {
-    use exr::prelude::{Image, SpecificChannels, WritableImage, f16};
+    write_rgba_exr(path, frame, exr::prelude::f16::from_f32)
+}
+
+/// RGBA OpenEXR of `frame` with samples `convert(v)`.
+fn write_rgba_exr<T: exr::prelude::IntoSample>(
+    path: &Path,
+    frame: &Frame,
+    convert: impl Fn(f32) -> T + Sync,
+) -> Result<(), ReportError> {
+    use exr::prelude::{Image, SpecificChannels, WritableImage};
     let w = frame.width as usize;
     let channels = SpecificChannels::rgba(|p: exr::math::Vec2<usize>| {
-        let t = frame.rgba[p.1 * w + p.0].map(f16::from_f32);
-        (t[0], t[1], t[2], t[3])
+        let t = frame.rgba[p.1 * w + p.0];
+        (convert(t[0]), convert(t[1]), convert(t[2]), convert(t[3]))
     });
     Image::from_encoded_channels(
         (w, frame.height as usize),
