@@ -337,14 +337,23 @@ fn run_relight(a: RelightArgs) -> Result<()> {
     let prepared = prepare(&prepare_settings(&a.scene, &a.env, None)?)?;
     let ctx = open_gpu(&a.gpu)?;
     let table = shvis::relight::run(&ctx, &prepared, &settings)?;
-    println!("{}", table.to_markdown());
+    print_table(
+        &table.to_markdown(),
+        &a.out,
+        "relight.md, relight.json",
+        started,
+    );
+    check_validation(&ctx, a.gpu.validate)
+}
+
+/// Prints a run's markdown table and where its files went.
+fn print_table(markdown: &str, out: &std::path::Path, tables: &str, started: Instant) {
+    println!("{markdown}");
     println!(
-        "wrote {}/relight.md, relight.json and images in {:.1} s",
-        a.out.display(),
+        "wrote {}/{tables} and images in {:.1} s",
+        out.display(),
         started.elapsed().as_secs_f64()
     );
-    check_validation(&ctx, a.gpu.validate)?;
-    Ok(())
 }
 
 /// Parses the arguments and runs the command.
@@ -570,12 +579,11 @@ fn run_bench(a: BenchArgs) -> Result<()> {
     let prepared = prepare(&prepare_settings(&a.scene, &a.env, bounces)?)?;
     let ctx = open_gpu(&a.gpu)?;
     let table = shvis::bench::run(&ctx, &prepared, &settings)?;
-    println!("{}", table.to_markdown());
-    println!(
-        "wrote {}/table.md, table.json and images in {:.1} s",
-        a.out.display(),
-        started.elapsed().as_secs_f64()
+    print_table(
+        &table.to_markdown(),
+        &a.out,
+        "table.md, table.json",
+        started,
     );
-    check_validation(&ctx, a.gpu.validate)?;
-    Ok(())
+    check_validation(&ctx, a.gpu.validate)
 }

@@ -58,7 +58,7 @@ use crate::sh::basis::eval_basis;
 use crate::sh::zonal::clamped_cosine_convolution;
 use crate::sphere::SphereMap;
 use crate::technique::pca::{quantized_prefix, weights_only_block};
-use crate::technique::tables::{f16_range_scale, table_map};
+use crate::technique::tables::{f16_range_scale, max_abs, table_map};
 use crate::technique::{HwPath, Technique, TechniqueError};
 use exact_light::ExactLightTable;
 
@@ -279,8 +279,7 @@ impl StoredTable {
         let raw: Vec<[f32; 3]> = (0..samples * count)
             .map(|i| value(i / count, i % count))
             .collect();
-        let max_abs = raw.iter().flatten().fold(0.0f32, |m, v| m.max(v.abs()));
-        let scale = f16_range_scale(max_abs);
+        let scale = f16_range_scale(max_abs(raw.iter().flatten().copied()));
         StoredTable {
             map,
             count,
@@ -601,12 +600,8 @@ pub fn cpu_rungs(
                 "shlmap.radiance_order".into(),
                 px.image(|k| convolve(&gathered[k], px.normal[k])),
             );
-            let max_abs = map
-                .coeffs
-                .iter()
-                .flatten()
-                .fold(0.0f32, |m, v| m.max(v.abs()));
-            let scale = f16_range_scale(max_abs);
+            // As the technique stores it (finite: the bench built it first).
+            let scale = crate::technique::shlmap::stored_scale(map).unwrap_or(1.0);
             let unscale = f64::from(1.0 / scale);
             push(
                 AttributionKind::LightmapTexels,

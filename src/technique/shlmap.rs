@@ -19,10 +19,10 @@ use ash::vk;
 use half::f16;
 
 use super::finish::{TextureSlot, finish};
-use super::tables::f16_range_scale;
+use super::tables::{f16_range_scale, max_abs};
 use super::texels::{VALUES_PER_TEXEL, pack_groups, upload_texel_groups};
 use super::{HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu};
-use crate::bake::shlmap::SH_LIGHTMAP_COEFFS;
+use crate::bake::shlmap::{SH_LIGHTMAP_COEFFS, ShLightmap};
 use crate::gpu::Context;
 use crate::render::SceneGpu;
 
@@ -45,6 +45,13 @@ pub fn fragment_shader() -> ShaderVariant {
     }
 }
 
+/// The factor the lightmap's values are multiplied by before f16 storage (the shader
+/// divides it out), or `None` when a value is not finite.
+pub fn stored_scale(map: &ShLightmap) -> Option<f32> {
+    let max_abs = max_abs(map.coeffs.iter().flatten().copied());
+    max_abs.is_finite().then(|| f16_range_scale(max_abs))
+}
+
 pub fn build(
     ctx: &Arc<Context>,
     scene: &SceneGpu,
@@ -57,18 +64,12 @@ pub fn build(
         detail: "needs the SH lightmap bake".into(),
     })?;
     let texels = (map.res * map.res) as usize;
-    let max_abs = map
-        .coeffs
-        .iter()
-        .flatten()
-        .fold(0.0f32, |m, v| m.max(v.abs()));
-    if !max_abs.is_finite() {
+    let Some(scale) = stored_scale(map) else {
         return Err(TechniqueError::Input {
             label,
             detail: "the SH lightmap is not finite (non-finite lighting?)".into(),
         });
-    }
-    let scale = f16_range_scale(max_abs);
+    };
     // Value 3k + c of a texel is colour c of coefficient k.
     let groups = pack_groups(texels, 3 * SH_LIGHTMAP_COEFFS, |t, value| {
         f16::from_f32(map.texel(t)[value / 3][value % 3] * scale)

@@ -39,6 +39,12 @@ pub fn f16_range_scale(max_abs: f32) -> f32 {
     }
 }
 
+/// Largest magnitude of `values` (NaN-propagating only through `max`, so callers check
+/// the result with `is_finite`); what [`f16_range_scale`] is given.
+pub fn max_abs(values: impl IntoIterator<Item = f32>) -> f32 {
+    values.into_iter().fold(0.0f32, |m, v| m.max(v.abs()))
+}
+
 /// Uniforms of glsl/include/grouped.glsl, block `GroupedParams` (std140).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
@@ -133,17 +139,11 @@ pub fn upload_normal_tables(
     mean: Option<&dyn Fn(usize) -> [f32; 3]>,
     name: &str,
 ) -> Result<NormalTables, TechniqueError> {
-    let mut max_abs = 0.0f32;
-    for t in 0..map.sample_count() {
-        for g in 0..groups {
-            for c in 0..3 {
-                max_abs = value(t, g, c).iter().fold(max_abs, |m, v| m.max(v.abs()));
-            }
-        }
-        if let Some(mean) = mean {
-            max_abs = mean(t).iter().fold(max_abs, |m, v| m.max(v.abs()));
-        }
-    }
+    let value = &value;
+    let max_abs = max_abs((0..map.sample_count()).flat_map(|t| {
+        let tables = (0..groups).flat_map(move |g| (0..3).flat_map(move |c| value(t, g, c)));
+        tables.chain(mean.map_or([0.0; 3], |m| m(t)))
+    }));
     if !max_abs.is_finite() {
         return Err(TechniqueError::Input {
             label: name.into(),
