@@ -167,7 +167,8 @@ struct RenderArgs {
     scene: SceneArgs,
     #[command(flatten)]
     gpu: GpuArgs,
-    /// `sky` (built-in) or an .exr/.hdr equirectangular environment map.
+    /// `sky` (built-in), an .exr/.hdr equirectangular map (2:1) or angular probe (1:1,
+    /// detected by content; `angular:PATH` forces it).
     #[arg(long, default_value = "sky")]
     env: String,
     /// Technique name (see `shvis bench`): unc3…unc6, pca4…pca24, pca4w…pca24w, shlmap,
@@ -295,6 +296,11 @@ struct RelightArgs {
     /// Rebuild the lighting-dependent data every this many frames.
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     every: u32,
+    /// Build and upload between two frames, waiting for the copy (the stalling baseline),
+    /// instead of building on a worker thread and swapping the double-buffered tables in
+    /// when their copy has landed.
+    #[arg(long)]
+    blocking_upload: bool,
     /// Full turns of the environment over the run.
     #[arg(long, default_value_t = 1.0)]
     turns: f64,
@@ -323,6 +329,11 @@ fn run_relight(a: RelightArgs) -> Result<()> {
         paths: parse_list(&a.paths, HwPath::ALL)?,
         frames: a.frames,
         every: a.every,
+        upload: if a.blocking_upload {
+            shvis::relight::UploadMode::Blocking
+        } else {
+            shvis::relight::UploadMode::Overlapped
+        },
         turns: a.turns,
         samples: a.samples,
         width: a.width,

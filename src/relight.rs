@@ -1,15 +1,23 @@
 //! `shvis relight` (issue 15): the environment turns about +Y over the run
 //! ([`crate::env::schedule`]) and every technique with dynamic lighting follows it.
 //!
-//! Per technique × path and frame f of N: every K frames (`every`) the lighting-dependent
-//! data is rebuilt from the schedule's SH at that frame, L_{K⌊f/K⌋} — today by building the
-//! technique's GPU data again (`technique::build`: tables, uniforms, and the per-texel
-//! textures too; a table-only, double-buffered upload that keeps frames running is not
-//! built) — and one frame is rendered and timed. At a few sampled frames the image is
-//! compared with the point-sampled reference of the environment rotated to that frame
-//! (the map resampled, `EnvMap::sample_bilinear`), and with the same technique built for
-//! that frame's exact lighting: the **static** error at the same lighting and the **lag**
-//! error of tables that are up to K − 1 frames old are reported separately.
+//! Per technique × path the technique is built once with two copies of its lighting data
+//! (`technique::build_dynamic`: the per-texel bake data is uploaded once and never again).
+//! Every K frames (`every`) its lighting data — L×H or T_k tables, uniforms
+//! (`technique::lighting`) — is rebuilt for the schedule's SH at that frame:
+//!
+//! - **overlapped** (default): a worker thread builds it on the CPU while the frame loop
+//!   keeps drawing with the front copy; once built, the loop writes the back copy's
+//!   uniforms, submits the staging copy of its tables without waiting
+//!   (`gpu::PendingUpload`) and swaps the copies when the GPU has landed it. Frames never
+//!   wait for a build or a copy; the lighting a frame shows may be a few frames old;
+//! - **blocking** (`--blocking-upload`): build, upload and wait between two frames.
+//!
+//! Each frame is rendered and timed. At a few sampled frames the image is compared with the
+//! point-sampled reference of the environment rotated to that frame (the map resampled,
+//! `EnvMap::sample_bilinear`), and with the same technique built for that frame's exact
+//! lighting: the **static** error at the same lighting and the **lag** error of data that
+//! is `lag_frames` old are reported separately.
 //!
 //! Writes `relight.md`, `relight.json`, the sampled frames and their references (PNG), and
 //! one animated PNG per technique × path of the whole run.
@@ -32,7 +40,7 @@ use crate::report::image::{to_srgb8, write_png};
 use crate::report::metrics::{TimingStats, image_error};
 use crate::sh::Order;
 use crate::sh::zonal::irradiance_from_radiance;
-use crate::technique::{self, HwPath, Inputs, Technique, TechniqueError};
+use crate::technique::{self, HwPath, Inputs, LightingData, Technique, TechniqueError};
 
 /// What a relight run does.
 #[derive(Clone, Debug, PartialEq)]
@@ -43,6 +51,8 @@ pub struct RelightSettings {
     pub frames: u32,
     /// Rebuild the lighting-dependent data every this many frames (≥ 1).
     pub every: u32,
+    /// How updates reach the GPU.
+    pub upload: UploadMode,
     /// Full turns of the environment over the run.
     pub turns: f64,
     /// Frames at which errors are measured (spread over the run).
@@ -54,6 +64,26 @@ pub struct RelightSettings {
     pub seed: u64,
     pub exposure: f32,
     pub out: PathBuf,
+}
+
+/// How the lighting data is rebuilt and uploaded during the frame loop.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum UploadMode {
+    /// The CPU build runs on a worker thread while frames keep drawing with the front set;
+    /// its upload is submitted without waiting and swapped in when the GPU has copied it.
+    Overlapped,
+    /// Build, upload and wait between two frames (the baseline that stalls the loop).
+    Blocking,
+}
+
+impl std::fmt::Display for UploadMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            UploadMode::Overlapped => "overlapped",
+            UploadMode::Blocking => "blocking",
+        })
+    }
 }
 
 /// Errors of a relight run.
@@ -90,10 +120,19 @@ pub struct SampledFrame {
 pub struct RelightRow {
     pub technique: Technique,
     pub path: HwPath,
-    /// Rebuilds of the lighting-dependent data during the run.
+    /// Updates of the lighting-dependent data swapped in during the run.
     pub updates: u32,
-    /// Median ms of one rebuild (CPU build and upload together).
-    pub rebuild_ms_median: f64,
+    /// Rebuilds due while the previous one was still being built (overlapped mode).
+    pub skipped_updates: u32,
+    /// Median ms of one CPU build of the lighting data (tables, uniforms).
+    pub cpu_build_ms_median: Option<f64>,
+    /// Median ms the frame loop spent on one upload: writing the uniforms, staging the
+    /// tables and submitting their copy (blocking mode: and waiting for it).
+    pub upload_ms_median: Option<f64>,
+    /// Median frames from a rebuild's request to its swap (0 in blocking mode).
+    pub swap_latency_frames_median: Option<f64>,
+    /// Bytes one update uploads (tables and uniforms).
+    pub table_bytes: u64,
     /// GPU ms per frame over the run (timestamps).
     pub gpu_ms_median: Option<f64>,
     pub gpu_ms_min: Option<f64>,
@@ -109,6 +148,7 @@ pub struct RelightTable {
     pub height: u32,
     pub frames: u32,
     pub every: u32,
+    pub upload: UploadMode,
     pub turns: f64,
     pub reference_spp: u32,
     pub results: Vec<RelightRow>,
@@ -119,17 +159,18 @@ pub struct RelightTable {
 impl RelightTable {
     pub fn to_markdown(&self) -> String {
         let mut s = format!(
-            "device: {} · {}×{} · {} frames, {} turn(s), data rebuilt every {} frames · references {} spp (point-sampled)\n\n",
+            "device: {} · {}×{} · {} frames, {} turn(s), lighting data rebuilt every {} frames, {} upload · references {} spp (point-sampled)\n\n",
             self.device,
             self.width,
             self.height,
             self.frames,
             self.turns,
             self.every,
+            self.upload,
             self.reference_spp
         );
-        s += "| technique | path | rebuilds | rebuild ms | GPU ms median | min | max | sampled frames: error (static, lag) |\n";
-        s += "|---|---|---:|---:|---:|---:|---:|---|\n";
+        s += "| technique | path | updates | KiB per update | CPU build ms | upload ms | swap latency (frames) | GPU ms median | min | max | sampled frames: error (static, lag) |\n";
+        s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
         let opt = |v: Option<f64>, d: usize| v.map_or("—".to_string(), |v| format!("{v:.d$}"));
         for r in &self.results {
             let sampled: Vec<String> = r
@@ -146,12 +187,19 @@ impl RelightTable {
                     )
                 })
                 .collect();
+            let updates = match r.skipped_updates {
+                0 => r.updates.to_string(),
+                n => format!("{} ({n} skipped)", r.updates),
+            };
             s += &format!(
-                "| {} | {} | {} | {:.1} | {} | {} | {} | {} |\n",
+                "| {} | {} | {} | {:.1} | {} | {} | {} | {} | {} | {} | {} |\n",
                 r.technique,
                 r.path,
-                r.updates,
-                r.rebuild_ms_median,
+                updates,
+                r.table_bytes as f64 / 1024.0,
+                opt(r.cpu_build_ms_median, 2),
+                opt(r.upload_ms_median, 2),
+                opt(r.swap_latency_frames_median, 0),
                 opt(r.gpu_ms_median, 3),
                 opt(r.gpu_ms_min, 3),
                 opt(r.gpu_ms_max, 3),
@@ -273,6 +321,7 @@ pub fn run(
         height: settings.height,
         frames: settings.frames,
         every: settings.every,
+        upload: settings.upload,
         turns: settings.turns,
         reference_spp: settings.ref_spp,
         results: rows,
@@ -307,6 +356,31 @@ fn with_lighting<'a>(
     }
 }
 
+/// Lighting and its order-3 irradiance at `frame` of `schedule`.
+fn lighting_at(schedule: &LightingSchedule, frame: u32) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    let radiance = schedule.at(frame);
+    let irradiance = irradiance_from_radiance(&radiance[..9], Order::THREE);
+    (radiance, irradiance)
+}
+
+/// What the frame loop measured of the lighting updates.
+#[derive(Default)]
+struct UpdateTimes {
+    cpu_ms: Vec<f64>,
+    upload_ms: Vec<f64>,
+    /// Frames from each rebuild's request to its swap.
+    latency: Vec<f64>,
+    /// Rebuild requests dropped because the previous one was still being built.
+    skipped: u32,
+}
+
+/// A CPU build running on the worker: the frame whose lighting it builds, and its result
+/// with the build's ms.
+type Building<'s> = (
+    u32,
+    std::thread::ScopedJoinHandle<'s, Result<(LightingData, f64), TechniqueError>>,
+);
+
 #[allow(clippy::too_many_arguments)]
 fn run_row(
     ctx: &Arc<Context>,
@@ -320,54 +394,113 @@ fn run_row(
     settings: &RelightSettings,
 ) -> Result<RelightRow, RelightError> {
     let label = format!("{technique}.{path}");
-    let build = |frame: u32| -> Result<(technique::TechniqueGpu, f64), RelightError> {
-        let radiance = schedule.at(frame);
-        let irradiance = irradiance_from_radiance(&radiance[..9], Order::THREE);
+    let (radiance, irradiance) = lighting_at(schedule, 0);
+    let (mut tech, recipe) = technique::build_dynamic(
+        ctx,
+        scene,
+        technique,
+        path,
+        &with_lighting(prepared, &radiance, &irradiance),
+    )?;
+    let recipe = &recipe;
+    let build_cpu = move |frame: u32| -> Result<(LightingData, f64), TechniqueError> {
         let start = Instant::now();
-        let tech = technique::build(
-            ctx,
-            scene,
-            technique,
-            path,
-            &with_lighting(prepared, &radiance, &irradiance),
-        )?;
-        Ok((tech, start.elapsed().as_secs_f64() * 1e3))
+        let (radiance, irradiance) = lighting_at(schedule, frame);
+        let data = recipe.build(&radiance, &irradiance)?;
+        Ok((data, start.elapsed().as_secs_f64() * 1e3))
     };
-    let (mut rebuild_ms, mut gpu_ms, mut frames_srgb) = (Vec::new(), Vec::new(), Vec::new());
-    let mut sampled_rows = Vec::new();
-    let mut current = None;
-    for f in 0..settings.frames {
-        if f % settings.every == 0 {
-            drop(current.take());
-            let (tech, ms) = build(f)?;
-            rebuild_ms.push(ms);
-            current = Some(tech);
+    let mut times = UpdateTimes::default();
+    let (mut gpu_ms, mut frames_srgb, mut sampled_rows) = (Vec::new(), Vec::new(), Vec::new());
+    // The frame whose lighting the front set holds, and the one an upload in flight holds
+    // (the frame its rebuild was requested at).
+    let mut in_use = 0u32;
+    let mut uploading: Option<u32> = None;
+    std::thread::scope(|scope| -> Result<(), RelightError> {
+        let mut building: Option<Building<'_>> = None;
+        for f in 0..settings.frames {
+            let due = f > 0 && f % settings.every == 0;
+            match settings.upload {
+                UploadMode::Blocking if due => {
+                    let (data, cpu_ms) = build_cpu(f)?;
+                    let start = Instant::now();
+                    tech.begin_update(&data)?;
+                    tech.finish_update()?;
+                    times.upload_ms.push(start.elapsed().as_secs_f64() * 1e3);
+                    times.cpu_ms.push(cpu_ms);
+                    times.latency.push(0.0);
+                    in_use = f;
+                }
+                UploadMode::Blocking => {}
+                UploadMode::Overlapped => {
+                    // An upload the GPU has landed is swapped in…
+                    if tech.poll_update()? {
+                        let lit = uploading.take().expect("an upload was pending");
+                        times.latency.push(f64::from(f - lit));
+                        in_use = lit;
+                    }
+                    // …a finished build goes up as soon as the back set is free…
+                    let ready = building.as_ref().is_some_and(|(_, h)| h.is_finished());
+                    if ready && !tech.update_pending() {
+                        let (requested, handle) = building.take().expect("checked above");
+                        let (data, cpu_ms) = handle.join().map_err(|_| {
+                            RelightError::Settings(format!("{label}: the table build panicked"))
+                        })??;
+                        let start = Instant::now();
+                        tech.begin_update(&data)?;
+                        times.upload_ms.push(start.elapsed().as_secs_f64() * 1e3);
+                        times.cpu_ms.push(cpu_ms);
+                        uploading = Some(requested);
+                    }
+                    // …and a due rebuild starts on the worker unless one is running.
+                    if due {
+                        if building.is_some() {
+                            times.skipped += 1;
+                        } else {
+                            building = Some((f, scope.spawn(move || build_cpu(f))));
+                        }
+                    }
+                }
+            }
+            let frame = tech.render(scene, 0, 1)?;
+            gpu_ms.extend_from_slice(&frame.ms);
+            frames_srgb.push(to_srgb8(&frame, settings.exposure));
+            if let Some(k) = sampled.iter().position(|&s| s == f) {
+                write_png(
+                    &settings.out.join(format!("{label}.f{f}.png")),
+                    &frame,
+                    settings.exposure,
+                )?;
+                let (radiance, irradiance) = lighting_at(schedule, f);
+                let exact = technique::build(
+                    ctx,
+                    scene,
+                    technique,
+                    path,
+                    &with_lighting(prepared, &radiance, &irradiance),
+                )?;
+                let static_frame = exact.render(scene, 0, 1)?;
+                let reference = &references[k];
+                sampled_rows.push(SampledFrame {
+                    frame: f,
+                    degrees: schedule.angle(f).to_degrees(),
+                    lag_frames: f - in_use,
+                    rel_rmse: image_error(&frame, reference).map(|e| e.rel_rmse),
+                    static_rel_rmse: image_error(&static_frame, reference).map(|e| e.rel_rmse),
+                    lag_rel_rmse: image_error(&frame, &static_frame).map(|e| e.rel_rmse),
+                });
+            }
         }
-        let tech = current.as_ref().expect("built at frame 0");
-        let frame = tech.render(scene, 0, 1)?;
-        gpu_ms.extend_from_slice(&frame.ms);
-        frames_srgb.push(to_srgb8(&frame, settings.exposure));
-        if let Some(k) = sampled.iter().position(|&s| s == f) {
-            let reference = &references[k];
-            write_png(
-                &settings.out.join(format!("{label}.f{f}.png")),
-                &frame,
-                settings.exposure,
-            )?;
-            let (exact, _) = build(f)?;
-            let static_frame = exact.render(scene, 0, 1)?;
-            drop(exact);
-            sampled_rows.push(SampledFrame {
-                frame: f,
-                degrees: schedule.angle(f).to_degrees(),
-                lag_frames: f % settings.every,
-                rel_rmse: image_error(&frame, reference).map(|e| e.rel_rmse),
-                static_rel_rmse: image_error(&static_frame, reference).map(|e| e.rel_rmse),
-                lag_rel_rmse: image_error(&frame, &static_frame).map(|e| e.rel_rmse),
-            });
+        // A build still running at the end is joined (its result unused).
+        if let Some((_, handle)) = building.take() {
+            let _ = handle.join();
         }
-    }
-    drop(current);
+        if uploading.take().is_some() {
+            tech.finish_update()?;
+        }
+        Ok(())
+    })?;
+    let table_bytes = tech.stats.table_bytes;
+    drop(tech);
     write_apng(
         &settings.out.join(format!("{label}.apng.png")),
         settings.width,
@@ -375,18 +508,27 @@ fn run_row(
         &frames_srgb,
     )?;
     let timing = TimingStats::from_ms(&gpu_ms);
-    rebuild_ms.sort_by(f64::total_cmp);
     log::info!("relight: {label} done");
     Ok(RelightRow {
         technique,
         path,
-        updates: rebuild_ms.len() as u32,
-        rebuild_ms_median: rebuild_ms[rebuild_ms.len() / 2],
+        updates: times.cpu_ms.len() as u32,
+        skipped_updates: times.skipped,
+        cpu_build_ms_median: median(&mut times.cpu_ms),
+        upload_ms_median: median(&mut times.upload_ms),
+        swap_latency_frames_median: median(&mut times.latency),
+        table_bytes,
         gpu_ms_median: timing.map(|t| t.ms_median),
         gpu_ms_min: timing.map(|t| t.ms_min),
         gpu_ms_max: timing.map(|t| t.ms_max),
         sampled: sampled_rows,
     })
+}
+
+/// Median of `values` (sorted in place), `None` when empty.
+fn median(values: &mut [f64]) -> Option<f64> {
+    values.sort_by(f64::total_cmp);
+    values.get(values.len() / 2).copied()
 }
 
 /// An animated PNG of 8-bit sRGB frames at 12 frames per second, looping.

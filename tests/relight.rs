@@ -1,16 +1,17 @@
 //! `shvis relight` (issue 15, `shvis::relight`) on the test house: every dynamic technique
-//! × path follows a rotating environment with validation clean across its rebuilds, a
-//! rebuild every frame has no lag error and one every other frame has, shlmap is reported
-//! as static, and the animation has one frame per frame of the run.
+//! × path follows a rotating environment with validation clean across its table swaps
+//! (blocking and overlapped uploads), a blocking rebuild every frame has no lag error and
+//! one every other frame has, a frame whose data is current equals the static image,
+//! shlmap is reported as static, and the animation has one frame per frame of the run.
 
 mod common;
 
 use std::path::Path;
 
-use shvis::relight::{RelightSettings, run};
+use shvis::relight::{RelightSettings, UploadMode, run};
 use shvis::technique::{HwPath, Technique};
 
-fn settings(out: &Path, every: u32) -> RelightSettings {
+fn settings(out: &Path, every: u32, upload: UploadMode) -> RelightSettings {
     RelightSettings {
         techniques: ["unc3", "pca4", "pca4w", "sh2", "preconv", "shlmap"]
             .iter()
@@ -19,6 +20,7 @@ fn settings(out: &Path, every: u32) -> RelightSettings {
         paths: vec![HwPath::Dx9, HwPath::Dx10],
         frames: 4,
         every,
+        upload,
         turns: 0.25,
         samples: 2,
         width: 64,
@@ -34,17 +36,40 @@ fn settings(out: &Path, every: u32) -> RelightSettings {
 fn dynamic_techniques_follow_a_rotating_environment() {
     let ctx = common::validated_context();
     let prepared = common::house();
-    for every in [1, 2] {
-        let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("relight-{every}"));
+    let runs = [
+        (1, UploadMode::Blocking),
+        (2, UploadMode::Blocking),
+        (1, UploadMode::Overlapped),
+    ];
+    for (every, upload) in runs {
+        let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("relight-{every}-{upload}"));
         let _ = std::fs::remove_dir_all(&out);
         std::fs::create_dir_all(&out).expect("output folder");
-        let table = run(&ctx, prepared, &settings(&out, every)).expect("relight runs");
-        common::assert_validation_clean(&ctx, &format!("relight every {every}"));
+        let table = run(&ctx, prepared, &settings(&out, every, upload)).expect("relight runs");
+        common::assert_validation_clean(&ctx, &format!("relight every {every}, {upload}"));
         assert_eq!(table.static_only, vec![Technique::Shlmap]);
         assert_eq!(table.results.len(), 5 * 2);
         for row in &table.results {
             let label = format!("{}.{}", row.technique, row.path);
-            assert_eq!(row.updates, 4 / every, "{label}");
+            // Rebuilds are due at frames K, 2K, … < 4 (frame 0's data comes with the build).
+            let due = (4 - 1) / every;
+            match upload {
+                UploadMode::Blocking => {
+                    assert_eq!(row.updates, due, "{label}");
+                    assert_eq!(row.swap_latency_frames_median, Some(0.0), "{label}");
+                }
+                UploadMode::Overlapped => {
+                    assert!(row.updates + row.skipped_updates <= due, "{label}: {row:?}");
+                }
+            }
+            if row.updates > 0 {
+                assert!(
+                    row.cpu_build_ms_median.is_some_and(|ms| ms > 0.0),
+                    "{label}"
+                );
+                assert!(row.upload_ms_median.is_some(), "{label}");
+            }
+            assert!(row.table_bytes > 0, "{label}");
             assert!(row.gpu_ms_median.is_some(), "{label}: timestamps");
             assert!(!row.sampled.is_empty(), "{label}");
             for f in &row.sampled {
@@ -69,7 +94,7 @@ fn dynamic_techniques_follow_a_rotating_environment() {
             let frames = reader.info().animation_control().map(|a| a.num_frames);
             assert_eq!(frames, Some(4), "{label}");
         }
-        if every == 2 {
+        if every == 2 && upload == UploadMode::Blocking {
             assert!(
                 table
                     .results

@@ -428,7 +428,7 @@ pub fn cpu_rungs(
                 })
             };
             if weights_only {
-                let block = weights_only_block(&q, order, radiance);
+                let block = weights_only_block(&q.basis, &q.mean, order, radiance);
                 push(
                     AttributionKind::LightmapTexels,
                     format!("{technique}.lightmap"),

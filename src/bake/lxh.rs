@@ -327,6 +327,11 @@ impl SymmetricBuild {
         )
     }
 
+    /// The sphere map whose texel centres this build covers.
+    pub fn map(&self) -> SphereMap {
+        self.map
+    }
+
     /// The table for `m` over this build's map, f64, `values[t·O²·3 + 3j + c]`.
     pub fn build_f64(&self, m: &LxhMatrices) -> Vec<f64> {
         let width = 3 * m.v_order.coeff_count();

@@ -49,6 +49,36 @@ const NODES: usize = 4;
 const RIM_SPLIT: u32 = 8;
 
 impl AngularProbe {
+    /// Share of the image's luminance in pixels wholly outside the disk (which an angular
+    /// probe leaves black). A 1:1 image with light there is not a clean probe — a cropped
+    /// panorama, a mirror-ball photo with its surroundings — and is not read as one unless
+    /// asked for (`angular:` in `--env`, [`super::equirect::load`]).
+    pub fn light_outside_disk(&self) -> f64 {
+        let n = f64::from(self.size);
+        let (mut outside, mut total) = (0.0f64, 0.0f64);
+        for (i, t) in self.texels.iter().enumerate() {
+            let lum = f64::from(0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2]).max(0.0);
+            let (col, row) = (
+                (i % self.size as usize) as f64,
+                (i / self.size as usize) as f64,
+            );
+            // The pixel's point nearest the centre, in disk coordinates a, b ∈ [−1, 1].
+            let nearest = |lo: f64| {
+                let (a0, a1) = (2.0 * lo / n - 1.0, 2.0 * (lo + 1.0) / n - 1.0);
+                if a0 <= 0.0 && a1 >= 0.0 {
+                    0.0
+                } else {
+                    a0.abs().min(a1.abs())
+                }
+            };
+            if nearest(col).hypot(nearest(row)) > 1.0 {
+                outside += lum;
+            }
+            total += lum;
+        }
+        if total > 0.0 { outside / total } else { 0.0 }
+    }
+
     /// Image coordinates (s, t) ∈ [0, 1]² of direction `d` (non-zero).
     pub fn dir_to_st(d: DVec3) -> DVec2 {
         let d = d.normalize();

@@ -24,12 +24,32 @@ use super::{EnvError, EnvMap};
 const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 const RADIANCE_MAGICS: [&[u8]; 2] = [b"#?RADIANCE", b"#?RGBE"];
 
-/// Loads an OpenEXR or Radiance HDR equirectangular map and validates it (module doc).
+/// How a 1:1 image is read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SquareLayout {
+    /// As an angular probe if the content says so: no light outside the inscribed disk
+    /// (at most [`MAX_LIGHT_OUTSIDE_DISK`] of it); otherwise [`EnvError::Ambiguous`].
+    Detect,
+    /// As an angular probe whatever lies outside the disk (ignored).
+    Angular,
+}
+
+/// Share of a 1:1 image's light allowed outside its disk for detection as a probe.
+pub const MAX_LIGHT_OUTSIDE_DISK: f64 = 1e-3;
+
+/// Loads an OpenEXR or Radiance HDR equirectangular map (or angular probe) and validates it
+/// (module doc), telling 1:1 images apart by their content ([`SquareLayout::Detect`]).
 ///
 /// # Errors
 /// [`EnvError::Io`] (cannot read), [`EnvError::Format`] (neither format, or decoding
-/// failed), [`EnvError::Empty`], [`EnvError::Shape`] (not 2:1), [`EnvError::NonFinite`].
+/// failed), [`EnvError::Empty`], [`EnvError::Shape`] (not 2:1 or 1:1),
+/// [`EnvError::NonFinite`], [`EnvError::Ambiguous`].
 pub fn load(path: &Path) -> Result<EnvMap, EnvError> {
+    load_as(path, SquareLayout::Detect)
+}
+
+/// [`load`], with the reading of a 1:1 image given.
+pub fn load_as(path: &Path, square: SquareLayout) -> Result<EnvMap, EnvError> {
     let bytes = std::fs::read(path).map_err(|source| EnvError::Io {
         path: path.to_owned(),
         source,
@@ -53,7 +73,7 @@ pub fn load(path: &Path) -> Result<EnvMap, EnvError> {
             head.join(" ")
         )));
     };
-    validate(map, path)
+    validate(map, path, square)
 }
 
 fn decode_exr(bytes: &[u8]) -> Result<EnvMap, exr::error::Error> {
@@ -96,7 +116,7 @@ fn decode_hdr(bytes: &[u8]) -> Result<EnvMap, image::ImageError> {
 }
 
 /// Shape and value checks of the module doc; clamps negatives in place.
-fn validate(mut map: EnvMap, path: &Path) -> Result<EnvMap, EnvError> {
+fn validate(mut map: EnvMap, path: &Path, square: SquareLayout) -> Result<EnvMap, EnvError> {
     let (width, height) = (map.width, map.height);
     if width == 0 || height == 0 {
         return Err(EnvError::Empty {
@@ -146,6 +166,14 @@ fn validate(mut map: EnvMap, path: &Path) -> Result<EnvMap, EnvError> {
             size: width,
             texels: map.texels,
         };
+        let outside = probe.light_outside_disk();
+        if square == SquareLayout::Detect && outside > MAX_LIGHT_OUTSIDE_DISK {
+            return Err(EnvError::Ambiguous {
+                path: path.to_owned(),
+                width,
+                outside,
+            });
+        }
         log::info!(
             "{}: {width}×{width} read as a Debevec angular probe, resampled to {}×{width} equirect",
             path.display(),
@@ -200,7 +228,8 @@ mod tests {
             height: 2,
             texels: vec![[-1.0, 0.5, -0.0]; 8],
         };
-        let ok = validate(map, Path::new("neg.exr")).expect("negatives are not an error");
+        let ok = validate(map, Path::new("neg.exr"), SquareLayout::Detect)
+            .expect("negatives are not an error");
         assert!(ok.texels.iter().all(|t| *t == [0.0, 0.5, 0.0]));
     }
 
@@ -212,7 +241,7 @@ mod tests {
             texels: vec![],
         };
         assert!(matches!(
-            validate(empty, Path::new("e.exr")),
+            validate(empty, Path::new("e.exr"), SquareLayout::Detect),
             Err(EnvError::Empty { .. })
         ));
         let odd = EnvMap {
@@ -220,7 +249,7 @@ mod tests {
             height: 2,
             texels: vec![[0.0; 3]; 6],
         };
-        let e = validate(odd, Path::new("odd.exr")).unwrap_err();
+        let e = validate(odd, Path::new("odd.exr"), SquareLayout::Detect).unwrap_err();
         assert!(
             matches!(
                 e,
@@ -232,15 +261,33 @@ mod tests {
             ),
             "{e}"
         );
-        // 1:1 is an angular probe, resampled onto a 2:1 map (a constant stays constant).
+        // A 1:1 image lit outside its disk is ambiguous: refused unless read as a probe on
+        // request, which resamples it onto a 2:1 map (a constant stays constant).
         let square = EnvMap {
             width: 8,
             height: 8,
             texels: vec![[0.5; 3]; 64],
         };
-        let map = validate(square, Path::new("probe.exr")).expect("a probe loads");
+        let e = validate(square.clone(), Path::new("sq.exr"), SquareLayout::Detect).unwrap_err();
+        assert!(
+            matches!(e, EnvError::Ambiguous { width: 8, outside, .. } if outside > 0.1),
+            "{e}"
+        );
+        assert!(e.to_string().contains("angular:sq.exr"), "{e}");
+        let map = validate(square, Path::new("probe.exr"), SquareLayout::Angular)
+            .expect("a probe loads when asked for");
         assert_eq!((map.width, map.height), (16, 8));
         assert!(map.texels.iter().flatten().all(|&v| (v - 0.5).abs() < 1e-6));
+        // A probe, black outside its disk, is detected by its content.
+        let probe = AngularProbe::from_fn(16, |d| [1.0 + d.x as f32, 1.0, 0.5]);
+        assert_eq!(probe.light_outside_disk(), 0.0);
+        let detected = EnvMap {
+            width: 16,
+            height: 16,
+            texels: probe.texels,
+        };
+        let map = validate(detected, Path::new("p.exr"), SquareLayout::Detect).expect("detected");
+        assert_eq!((map.width, map.height), (32, 16));
     }
 
     #[test]

@@ -26,7 +26,9 @@
 //! Radiance RGBE `.hdr`, detected by magic bytes, never by extension. Every texel must be
 //! finite (NaN/Inf is an error naming the first one, DESIGN §6); negative values are
 //! clamped to 0 with a warning. A 1:1 image is a Debevec angular probe ([`angular`]),
-//! resampled onto a 2:1 map on load.
+//! resampled onto a 2:1 map on load — when its content says so (no light outside the
+//! inscribed disk); otherwise it is refused as ambiguous unless the path is given as
+//! `angular:PATH` ([`resolve`]).
 
 pub mod angular;
 pub mod equirect;
@@ -95,6 +97,19 @@ pub enum EnvError {
         width: u32,
         /// Height in texels.
         height: u32,
+    },
+    /// A 1:1 image with light outside its inscribed disk: not recognisably an angular probe.
+    #[error(
+        "{}: {width}×{width} has {:.1}% of its light outside the inscribed disk, so it is not read as an angular probe (a mirror ball, a cropped panorama?); to read it as one anyway, pass --env angular:{}",
+        .path.display(), 100.0 * .outside, .path.display()
+    )]
+    Ambiguous {
+        /// The file.
+        path: PathBuf,
+        /// Side in texels.
+        width: u32,
+        /// Share of the luminance outside the disk.
+        outside: f64,
     },
     /// Some texels are NaN or infinite.
     #[error(
@@ -221,15 +236,22 @@ impl EnvMap {
     }
 }
 
+/// Prefix of an `--env` path that reads a 1:1 image as an angular probe whatever its
+/// content ([`equirect::SquareLayout::Angular`]).
+pub const ANGULAR_PREFIX: &str = "angular:";
+
 /// `--env` argument → map: [`BUILTIN_SKY`] ("sky") is the procedural sky
-/// ([`sky::sky`], [`BUILTIN_SKY_WIDTH`] × half, default [`sky::SkyParams`]); anything else
-/// is a path loaded by [`equirect::load`].
+/// ([`sky::sky`], [`BUILTIN_SKY_WIDTH`] × half, default [`sky::SkyParams`]);
+/// `angular:PATH` a 1:1 image read as an angular probe; anything else a path loaded by
+/// [`equirect::load`] (1:1 images detected by content).
 ///
 /// # Errors
 /// Whatever [`equirect::load`] reports for the file.
 pub fn resolve(name_or_path: &str) -> Result<EnvMap, EnvError> {
     if name_or_path == BUILTIN_SKY {
         Ok(sky::sky(BUILTIN_SKY_WIDTH, &sky::SkyParams::default()))
+    } else if let Some(path) = name_or_path.strip_prefix(ANGULAR_PREFIX) {
+        equirect::load_as(Path::new(path), equirect::SquareLayout::Angular)
     } else {
         equirect::load(Path::new(name_or_path))
     }

@@ -449,14 +449,11 @@ impl Context {
         unsafe { self.device.free_command_buffers(*pool, &[cmd]) };
     }
 
-    /// Submits one recorded command buffer and blocks until the GPU has finished it.
-    pub(crate) fn submit_and_wait(
-        &self,
-        cmd: vk::CommandBuffer,
-        name: &str,
-    ) -> Result<(), GpuError> {
-        // SAFETY: a fence is created, waited on and destroyed within this function; the
-        // queue is only used from the thread holding the context (no concurrent submits).
+    /// Submits one recorded command buffer with a fresh fence, which the caller waits on
+    /// and destroys.
+    pub(crate) fn submit(&self, cmd: vk::CommandBuffer, name: &str) -> Result<vk::Fence, GpuError> {
+        // SAFETY: the fence is fresh; the queue is only used from the thread holding the
+        // context (no concurrent submits).
         unsafe {
             let fence = self
                 .device
@@ -465,15 +462,29 @@ impl Context {
             self.set_name(fence, &format!("{name}.fence"));
             let cmds = [cmd];
             let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+            match self.device.queue_submit(self.queue, &[submit], fence) {
+                Ok(()) => Ok(fence),
+                Err(e) => {
+                    self.device.destroy_fence(fence, None);
+                    Err(GpuError::vulkan("vkQueueSubmit", name, e))
+                }
+            }
+        }
+    }
+
+    /// Submits one recorded command buffer and blocks until the GPU has finished it.
+    pub(crate) fn submit_and_wait(
+        &self,
+        cmd: vk::CommandBuffer,
+        name: &str,
+    ) -> Result<(), GpuError> {
+        let fence = self.submit(cmd, name)?;
+        // SAFETY: the fence was created by `submit`, is waited on and destroyed here.
+        unsafe {
             let result = self
                 .device
-                .queue_submit(self.queue, &[submit], fence)
-                .map_err(|e| GpuError::vulkan("vkQueueSubmit", name, e))
-                .and_then(|_| {
-                    self.device
-                        .wait_for_fences(&[fence], true, u64::MAX)
-                        .map_err(|e| GpuError::vulkan("vkWaitForFences", name, e))
-                });
+                .wait_for_fences(&[fence], true, u64::MAX)
+                .map_err(|e| GpuError::vulkan("vkWaitForFences", name, e));
             self.device.destroy_fence(fence, None);
             result
         }

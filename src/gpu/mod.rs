@@ -18,7 +18,7 @@ pub mod layout;
 pub mod pass;
 pub mod shader;
 pub mod target;
-mod upload;
+pub mod upload;
 
 pub use buffer::Buffer;
 pub use compute::{ComputePipeline, ComputePipelineDesc};
@@ -28,6 +28,7 @@ pub use image::{Image, ImageDesc, Sampler, SamplerKind};
 pub use pass::{MeshBuffers, MeshPipeline, MeshPipelineDesc, VertexLayout};
 pub use shader::{ShaderStage, compile_glsl};
 pub use target::RenderTarget;
+pub use upload::PendingUpload;
 
 use ash::vk;
 

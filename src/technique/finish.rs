@@ -11,6 +11,7 @@ use std::sync::Arc;
 
 use ash::vk;
 
+use super::lighting::{LightingData, LightingSet};
 use super::{HwPath, Technique, TechniqueError, TechniqueGpu, TechniqueStats};
 use crate::gpu::{self, Context, Image, ImageDesc, layout};
 use crate::render::SceneGpu;
@@ -100,80 +101,80 @@ pub fn stats(params_bytes: usize, slots: &[SlotLayout]) -> TechniqueStats {
     }
 }
 
-/// Makes `technique` on `path` drawable: checks the path rules, uploads `params` as its
-/// uniform block, compiles its fragment shader ([`super::fragment_shader`]) and builds the
-/// pipeline over `slots`.
+/// Makes `technique` on `path` drawable with `sets` copies of its lighting data (1, or 2
+/// for double-buffered dynamic lighting, `super::lighting`): checks the path rules, uploads
+/// each copy's uniform block and tables, compiles the fragment shader
+/// ([`super::fragment_shader`]) once and builds one pipeline per copy over the per-texel
+/// images (binding TEXTURE0) and that copy's tables (the bindings after it).
 pub fn finish(
     ctx: &Arc<Context>,
     scene: &SceneGpu,
     technique: Technique,
     path: HwPath,
-    params: &[u8],
-    slots: Vec<TextureSlot>,
+    per_texel: Vec<Image>,
+    lighting: &LightingData,
+    sets: usize,
 ) -> Result<TechniqueGpu, TechniqueError> {
     let label = format!("{technique}.{path}");
-    let images: Vec<&Image> = slots.iter().flat_map(|s| &s.images).collect();
-    check_path_rules(&label, path, &images)?;
-    let layouts: Vec<SlotLayout> = slots.iter().map(TextureSlot::layout).collect();
-    let stats = stats(params.len(), &layouts);
-    let params_buffer = gpu::Buffer::with_data(
-        ctx,
-        params,
-        vk::BufferUsageFlags::UNIFORM_BUFFER,
-        &format!("{label}.params"),
-    )?;
+    let per_texel = TextureSlot::per_texel(per_texel);
     let shader = super::fragment_shader(technique);
     let mut defines = vec![path.shader_define()];
     defines.extend_from_slice(&shader.defines);
     let fragment = gpu::compile_glsl(shader.path, gpu::ShaderStage::Fragment, &defines)?;
     let sampler = scene.lightmap_sampler();
-    let mut resources = scene.common_resources();
-    resources.push((
-        layout::BINDING_TECHNIQUE_PARAMS,
-        gpu::Resource::Uniform(&params_buffer),
-    ));
-    for (binding, slot) in (layout::BINDING_TECHNIQUE_TEXTURE0..).zip(&slots) {
-        let resource = match slot.images.as_slice() {
-            [one] => gpu::Resource::Texture(one, sampler),
-            many => gpu::Resource::TextureArray(many.iter().map(|i| (i, sampler)).collect()),
+    let mut built = Vec::with_capacity(sets);
+    let mut stats = TechniqueStats::default();
+    for set in 0..sets.max(1) {
+        // Set 0 keeps the plain names; a second copy is "….b".
+        let suffix = if set == 0 {
+            String::new()
+        } else {
+            format!(".{}", (b'a' + set as u8) as char)
         };
-        resources.push((binding, resource));
+        let table_slots = match &lighting.tables {
+            Some(tables) => tables.upload(ctx, &suffix)?,
+            None => Vec::new(),
+        };
+        let slots: Vec<&TextureSlot> = std::iter::once(&per_texel).chain(&table_slots).collect();
+        let images: Vec<&Image> = slots.iter().flat_map(|s| &s.images).collect();
+        check_path_rules(&label, path, &images)?;
+        let layouts: Vec<SlotLayout> = slots.iter().map(|s| s.layout()).collect();
+        stats = self::stats(lighting.params.len(), &layouts);
+        let params = gpu::Buffer::with_data(
+            ctx,
+            &lighting.params,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            &format!("{label}.params{suffix}"),
+        )?;
+        let mut resources = scene.common_resources();
+        resources.push((
+            layout::BINDING_TECHNIQUE_PARAMS,
+            gpu::Resource::Uniform(&params),
+        ));
+        for (binding, slot) in (layout::BINDING_TECHNIQUE_TEXTURE0..).zip(&slots) {
+            let resource = match slot.images.as_slice() {
+                [one] => gpu::Resource::Texture(one, sampler),
+                many => gpu::Resource::TextureArray(many.iter().map(|i| (i, sampler)).collect()),
+            };
+            resources.push((binding, resource));
+        }
+        let pipeline =
+            scene.mesh_pipeline(ctx, &format!("{label}{suffix}"), &fragment, &resources)?;
+        drop(resources);
+        built.push(LightingSet {
+            pipeline,
+            params,
+            tables: table_slots.into_iter().flat_map(|s| s.images).collect(),
+        });
     }
-    let pipeline = scene.mesh_pipeline(ctx, &label, &fragment, &resources)?;
-    drop(resources);
-    Ok(TechniqueGpu {
-        technique,
-        path,
-        pipeline,
-        stats,
-        _images: slots.into_iter().flat_map(|s| s.images).collect(),
-        _buffers: vec![params_buffer],
-    })
-}
-
-/// The ending of the table-driven families (`unc*`, `pca*`, glsl/include/grouped.glsl):
-/// the per-texel groups at TEXTURE0, the normal-indexed tables after them, and the tables'
-/// decoding block (f16 unscale, texels per side) as the uniforms.
-pub fn finish_with_tables(
-    ctx: &Arc<Context>,
-    scene: &SceneGpu,
-    technique: Technique,
-    path: HwPath,
-    per_texel: Vec<Image>,
-    tables: super::tables::NormalTables,
-    table_res: u32,
-) -> Result<TechniqueGpu, TechniqueError> {
-    let params = tables.params(table_res);
-    let mut slots = vec![TextureSlot::per_texel(per_texel)];
-    slots.extend(tables.slots);
-    finish(
+    Ok(TechniqueGpu::new(
         ctx,
-        scene,
         technique,
         path,
-        bytemuck::bytes_of(&params),
-        slots,
-    )
+        stats,
+        per_texel.images,
+        built,
+    ))
 }
 
 /// Enforces the `dx9` rules in code (DESIGN §2): only 2D textures, at most

@@ -6,13 +6,19 @@
 //!   uploads and which fragment shader it runs (`fragment_shader`).
 //! - [`texels`] (per-texel groups) and [`tables`] (normal-indexed tables): the data layouts
 //!   the families share.
+//! - [`lighting`]: the lighting-dependent half of each technique (uniforms, tables) and
+//!   its recipe, so lighting can change without touching the per-texel data (§3.3).
 //! - [`finish`]: the one path from uploaded data to a drawable [`TechniqueGpu`], with the
 //!   path rules and the cost table's memory and lookup columns.
 //!
-//! [`build`] and [`fragment_shader`] dispatch on the family by exhaustive matches; README
+//! Each family provides `per_texel` (uploads its bake data, returns its lighting recipe)
+//! and `lighting` (CPU: the lighting-dependent data). [`build`] / [`build_dynamic`],
+//! [`LightingRecipe::build`] and [`fragment_shader`] dispatch on the family by exhaustive
+//! matches; README
 //! "How to add a technique" lists the places a new family touches.
 
 pub mod finish;
+pub mod lighting;
 pub mod pca;
 pub mod preconv;
 pub mod sh2;
@@ -24,13 +30,16 @@ pub mod unc;
 
 use std::sync::Arc;
 
+pub use lighting::{LightingData, LightingRecipe};
 pub use spec::{BakeNeeds, HwPath, ParseError, ReferenceModel, Technique};
+
+use lighting::LightingSet;
 
 use crate::bake::ao::AoMap;
 use crate::bake::pca::PcaModel;
 use crate::bake::shlmap::ShLightmap;
 use crate::bake::visibility::VisibilityMap;
-use crate::gpu::{self, Context, GpuError, Image, MeshPipeline};
+use crate::gpu::{self, Context, GpuError, Image};
 use crate::render::{Frame, SceneGpu};
 use crate::sh::Order;
 
@@ -97,30 +106,134 @@ pub(crate) fn rgb_order3_block(coeffs: &[[f64; 3]]) -> [[f32; 4]; 9] {
     block
 }
 
-/// A technique ready to draw: its pipeline and the resources it owns.
+/// A technique ready to draw: its per-texel images and one or two copies of its lighting
+/// data ([`lighting`]), each with its pipeline.
 pub struct TechniqueGpu {
     pub technique: Technique,
     pub path: HwPath,
-    pub pipeline: MeshPipeline,
     pub stats: TechniqueStats,
-    _images: Vec<Image>,
-    _buffers: Vec<gpu::Buffer>,
+    // Declared first so it drops (waiting for the GPU) before the images it writes.
+    /// The set an update is going into, and its table copy (none for uniforms only).
+    pending: Option<(usize, Option<gpu::PendingUpload>)>,
+    sets: Vec<LightingSet>,
+    front: usize,
+    _per_texel: Vec<Image>,
+    ctx: Arc<Context>,
 }
 
 impl TechniqueGpu {
+    fn new(
+        ctx: &Arc<Context>,
+        technique: Technique,
+        path: HwPath,
+        stats: TechniqueStats,
+        per_texel: Vec<Image>,
+        sets: Vec<LightingSet>,
+    ) -> Self {
+        TechniqueGpu {
+            technique,
+            path,
+            stats,
+            pending: None,
+            sets,
+            front: 0,
+            _per_texel: per_texel,
+            ctx: ctx.clone(),
+        }
+    }
+
     /// "preconv.dx10": debug label and timestamp row.
     pub fn label(&self) -> String {
         format!("{}.{}", self.technique, self.path)
     }
 
-    /// Renders `scene` with this technique: `warmup` untimed frames, then `frames` timed
-    /// ones, and reads the last image back.
+    /// Renders `scene` with this technique's front lighting set: `warmup` untimed frames,
+    /// then `frames` timed ones, and reads the last image back. Waits for its frames, so no
+    /// set is in use by the GPU between calls.
     pub fn render(&self, scene: &SceneGpu, warmup: u32, frames: u32) -> Result<Frame, GpuError> {
-        scene.render_pipeline(&self.pipeline, warmup, frames)
+        scene.render_pipeline(&self.sets[self.front].pipeline, warmup, frames)
+    }
+
+    /// Copies of the lighting data (2 when built with [`build_dynamic`]).
+    pub fn lighting_sets(&self) -> usize {
+        self.sets.len()
+    }
+
+    /// Whether an update started by [`Self::begin_update`] has not been swapped in yet.
+    pub fn update_pending(&self) -> bool {
+        self.pending.is_some()
+    }
+
+    /// Starts replacing the lighting data with `data` without waiting for the GPU: writes
+    /// the back set's uniforms and submits the copy of its tables; frames keep drawing with
+    /// the front set until [`Self::poll_update`] (or [`Self::finish_update`]) swaps them.
+    pub fn begin_update(&mut self, data: &LightingData) -> Result<(), TechniqueError> {
+        let label = self.label();
+        if self.sets.len() < 2 {
+            return Err(TechniqueError::Input {
+                label,
+                detail: "built with one lighting set; build it with build_dynamic to update it"
+                    .into(),
+            });
+        }
+        if self.pending.is_some() {
+            return Err(TechniqueError::Input {
+                label,
+                detail: "a lighting update is still in flight".into(),
+            });
+        }
+        let back = (self.front + 1) % self.sets.len();
+        let set = &mut self.sets[back];
+        set.check_layout(data, &label)?;
+        // The back set is idle: every frame drawn with it has completed (`render` waits).
+        set.params.write(&data.params)?;
+        let upload = match &data.tables {
+            Some(tables) => {
+                let levels: Vec<_> = (0..tables.images.len())
+                    .map(|i| tables.image_levels(i))
+                    .collect();
+                let uploads: Vec<(&Image, &[Vec<&[u8]>])> = set
+                    .tables
+                    .iter()
+                    .zip(&levels)
+                    .map(|(image, l)| (image, l.as_slice()))
+                    .collect();
+                let name = format!("{label}.update");
+                Some(gpu::PendingUpload::submit(&self.ctx, &uploads, &name)?)
+            }
+            None => None,
+        };
+        self.pending = Some((back, upload));
+        Ok(())
+    }
+
+    /// Swaps in the pending update if the GPU has finished its copy; true when it did.
+    pub fn poll_update(&mut self) -> Result<bool, TechniqueError> {
+        let done = match &self.pending {
+            Some((_, Some(upload))) => upload.is_done()?,
+            Some((_, None)) => true,
+            None => return Ok(false),
+        };
+        if done {
+            let (back, _) = self.pending.take().expect("checked above");
+            self.front = back;
+        }
+        Ok(done)
+    }
+
+    /// Waits for the pending update, if any, and swaps it in.
+    pub fn finish_update(&mut self) -> Result<(), TechniqueError> {
+        if let Some((back, upload)) = self.pending.take() {
+            if let Some(upload) = upload {
+                upload.wait()?;
+            }
+            self.front = back;
+        }
+        Ok(())
     }
 }
 
-/// Builds `technique` on `path` for `scene`.
+/// Builds `technique` on `path` for `scene` with one copy of its lighting data.
 pub fn build(
     ctx: &Arc<Context>,
     scene: &SceneGpu,
@@ -128,13 +241,57 @@ pub fn build(
     path: HwPath,
     inputs: &Inputs<'_>,
 ) -> Result<TechniqueGpu, TechniqueError> {
-    match technique {
-        Technique::Unc { order } => unc::build(ctx, scene, order, path, inputs),
-        Technique::Pca { m, weights_only } => pca::build(ctx, scene, m, weights_only, path, inputs),
-        Technique::Shlmap => shlmap::build(ctx, scene, path, inputs),
-        Technique::Preconv => preconv::build(ctx, scene, path, inputs),
-        Technique::Sh2 => sh2::build(ctx, scene, path, inputs),
+    Ok(build_sets(ctx, scene, technique, path, inputs, 1)?.0)
+}
+
+/// Builds `technique` for lighting that changes: two copies of its lighting data to swap
+/// between ([`TechniqueGpu::begin_update`]), and the recipe that builds new data. Refuses
+/// techniques whose lighting is baked in (`shlmap`).
+pub fn build_dynamic(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    technique: Technique,
+    path: HwPath,
+    inputs: &Inputs<'_>,
+) -> Result<(TechniqueGpu, LightingRecipe), TechniqueError> {
+    if !technique.dynamic_lighting() {
+        return Err(TechniqueError::Input {
+            label: format!("{technique}.{path}"),
+            detail:
+                "its lighting is baked into the lightmap; it cannot follow a changing environment"
+                    .into(),
+        });
     }
+    build_sets(ctx, scene, technique, path, inputs, 2)
+}
+
+fn build_sets(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    technique: Technique,
+    path: HwPath,
+    inputs: &Inputs<'_>,
+    sets: usize,
+) -> Result<(TechniqueGpu, LightingRecipe), TechniqueError> {
+    let label = format!("{technique}.{path}");
+    let (per_texel, recipe) = match technique {
+        Technique::Unc { order } => unc::per_texel(ctx, order, path, inputs, &label)?,
+        Technique::Pca { m, weights_only } => {
+            pca::per_texel(ctx, m, weights_only, path, inputs, &label)?
+        }
+        Technique::Shlmap => shlmap::per_texel(ctx, path, inputs, &label)?,
+        Technique::Preconv => preconv::per_texel(ctx, path, inputs, &label)?,
+        Technique::Sh2 => sh2::per_texel(ctx, path, inputs, &label)?,
+    };
+    let recipe = LightingRecipe {
+        technique,
+        path,
+        h_order: inputs.h_order,
+        recipe,
+    };
+    let data = recipe.build(inputs.radiance_sh, inputs.irradiance_sh)?;
+    let gpu = finish::finish(ctx, scene, technique, path, per_texel, &data, sets)?;
+    Ok((gpu, recipe))
 }
 
 /// Errors of building a technique.

@@ -22,14 +22,13 @@ use std::sync::Arc;
 
 use ash::vk;
 
-use super::finish::{TextureSlot, finish, finish_with_tables};
-use super::tables::{NormalTables, table_map, upload_normal_tables};
+use super::lighting::{LightingData, Recipe};
+use super::tables::{NormalTableData, lxh_matrices, normal_table_data, table_map};
 use super::texels::{VALUES_PER_TEXEL, pack_groups, upload_texel_groups};
-use super::{HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu};
-use crate::bake::lxh::{LxhMatrices, build_table};
+use super::{HwPath, Inputs, ShaderVariant, TechniqueError};
+use crate::bake::lxh::SymmetricBuild;
 use crate::bake::pca::{PcaModel, QuantizedPca};
 use crate::gpu::{Context, Image};
-use crate::render::SceneGpu;
 use crate::sh::Order;
 use crate::sh::product::product;
 use crate::sh::zonal::clamped_cosine_convolution;
@@ -67,24 +66,24 @@ pub fn quantized_prefix(model: &PcaModel, m: usize) -> QuantizedPca {
     truncated.quantize(WEIGHT_BITS)
 }
 
-pub fn build(
+/// Quantizes the first `m` vectors and uploads their weights; returns them and the recipe
+/// of the lighting data ([`lighting`]: the quantized basis and mean).
+pub(crate) fn per_texel(
     ctx: &Arc<Context>,
-    scene: &SceneGpu,
     m: u32,
     weights_only: bool,
     path: HwPath,
     inputs: &Inputs<'_>,
-) -> Result<TechniqueGpu, TechniqueError> {
-    let technique = Technique::Pca { m, weights_only };
-    let label = format!("{technique}.{path}");
+    label: &str,
+) -> Result<(Vec<Image>, Recipe), TechniqueError> {
     let m = m as usize;
     let model = inputs.pca.ok_or_else(|| TechniqueError::Input {
-        label: label.clone(),
+        label: label.into(),
         detail: "needs the PCA of the visibility bake".into(),
     })?;
     if model.basis.len() < m {
         return Err(TechniqueError::Input {
-            label,
+            label: label.into(),
             detail: format!(
                 "needs {m} principal vectors, the fit has {}",
                 model.basis.len()
@@ -92,29 +91,59 @@ pub fn build(
         });
     }
     let q = quantized_prefix(model, m);
-    let weights = upload_weights(ctx, path, &q, &label)?;
-    if weights_only {
-        let block = weights_only_block(&q, model.order, inputs.radiance_sh);
-        let slots = vec![TextureSlot::per_texel(weights)];
-        return finish(
-            ctx,
-            scene,
-            technique,
-            path,
-            bytemuck::cast_slice(&block),
-            slots,
-        );
-    }
-    let tables = upload_tables(ctx, path, &q, model.order, inputs, &label)?;
-    finish_with_tables(
-        ctx,
-        scene,
-        technique,
-        path,
+    let weights = upload_weights(ctx, path, &q, label)?;
+    let table = if weights_only {
+        None
+    } else {
+        let map = table_map(path, inputs.table_res, label)?;
+        Some(Arc::new(SymmetricBuild::new(map)))
+    };
+    Ok((
         weights,
-        tables,
-        inputs.table_res,
-    )
+        Recipe::Pca {
+            order: model.order,
+            table,
+            basis: q.basis,
+            mean: q.mean,
+        },
+    ))
+}
+
+/// The lighting data of a quantized basis (`basis`, `mean`, visibility order `order`):
+/// with `table` (`pcaM`) the tables T_k(n) and T_e(n) over its map and their decoding
+/// block; without (`pcaMw`) the V_k·L uniform block.
+#[allow(clippy::too_many_arguments)]
+pub fn lighting(
+    basis: &[Vec<f64>],
+    mean: &[f64],
+    order: Order,
+    path: HwPath,
+    table: Option<&SymmetricBuild>,
+    h_order: Order,
+    radiance_sh: &[[f64; 3]],
+    label: &str,
+) -> Result<LightingData, TechniqueError> {
+    let Some(table) = table else {
+        let need = Order::new(WEIGHTS_ONLY_LIGHTING_ORDER)
+            .expect("valid order")
+            .coeff_count();
+        if radiance_sh.len() < need {
+            return Err(TechniqueError::Input {
+                label: label.into(),
+                detail: format!(
+                    "needs lighting with {need} SH coefficients, got {}",
+                    radiance_sh.len()
+                ),
+            });
+        }
+        let block = weights_only_block(basis, mean, order, radiance_sh);
+        return Ok(LightingData::params(bytemuck::cast_slice(&block).to_vec()));
+    };
+    let tables = tables_data(basis, mean, order, path, table, h_order, radiance_sh, label)?;
+    Ok(LightingData {
+        params: bytemuck::bytes_of(&tables.params(table.map().res())).to_vec(),
+        tables: Some(tables),
+    })
 }
 
 /// The quantized weights, 4 per RGBA8 texel.
@@ -140,7 +169,8 @@ fn upload_weights(
 /// Uniforms of glsl/technique/pcaw.frag: per basis vector, then the mean, the order-3 SH
 /// of V_k·L times A_l, RGB in .xyz.
 pub fn weights_only_block(
-    q: &QuantizedPca,
+    basis: &[Vec<f64>],
+    mean: &[f64],
     order: Order,
     radiance_sh: &[[f64; 3]],
 ) -> Vec<[f32; 4]> {
@@ -160,27 +190,31 @@ pub fn weights_only_block(
         }
         out
     };
-    q.basis
+    basis
         .iter()
-        .chain(std::iter::once(&q.mean))
-        .flat_map(|v| coeffs_of(v))
+        .map(Vec::as_slice)
+        .chain(std::iter::once(mean))
+        .flat_map(coeffs_of)
         .collect()
 }
 
 /// Tables T_k(n) = Σ_j V_kj (L×H_n)_j and the mean's, from the order-6 L×H table.
-fn upload_tables(
-    ctx: &Arc<Context>,
-    path: HwPath,
-    q: &QuantizedPca,
+#[allow(clippy::too_many_arguments)]
+fn tables_data(
+    basis: &[Vec<f64>],
+    mean: &[f64],
     order: Order,
-    inputs: &Inputs<'_>,
+    path: HwPath,
+    table: &SymmetricBuild,
+    h_order: Order,
+    radiance_sh: &[[f64; 3]],
     label: &str,
-) -> Result<NormalTables, TechniqueError> {
+) -> Result<NormalTableData, TechniqueError> {
     let n = order.coeff_count();
-    let m = q.m;
-    let matrices = LxhMatrices::new(inputs.radiance_sh, order, inputs.h_order);
-    let map = table_map(path, inputs.table_res, label)?;
-    let lxh = build_table(&matrices, map);
+    let m = basis.len();
+    let matrices = lxh_matrices(radiance_sh, order, h_order, label)?;
+    let map = table.map();
+    let lxh = table.build(&matrices);
     let project = |t: usize, v: &[f64]| -> [f32; 3] {
         let mut s = [0.0f64; 3];
         for (j, vj) in v.iter().enumerate().take(n) {
@@ -193,17 +227,25 @@ fn upload_tables(
     };
     let samples = map.sample_count();
     let basis_tables: Vec<[f32; 3]> = (0..samples)
-        .flat_map(|t| q.basis.iter().map(move |b| (t, b)))
+        .flat_map(|t| basis.iter().map(move |b| (t, b)))
         .map(|(t, b)| project(t, b))
         .collect();
-    let mean_table: Vec<[f32; 3]> = (0..samples).map(|t| project(t, &q.mean)).collect();
+    let mean_table: Vec<[f32; 3]> = (0..samples).map(|t| project(t, mean)).collect();
     let mean_fn = |t: usize| mean_table[t];
-    upload_normal_tables(
-        ctx,
+    normal_table_data(
         path,
         map,
         m.div_ceil(VALUES_PER_TEXEL),
-        |t, g, c| std::array::from_fn(|k| basis_tables[t * m + VALUES_PER_TEXEL * g + k][c]),
+        |t, g, c| {
+            std::array::from_fn(|lane| {
+                let k = VALUES_PER_TEXEL * g + lane;
+                if k < m {
+                    basis_tables[t * m + k][c]
+                } else {
+                    0.0
+                }
+            })
+        },
         Some(&mean_fn),
         &format!("{label}.tables"),
     )

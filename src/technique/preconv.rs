@@ -12,13 +12,10 @@ use std::sync::Arc;
 use ash::vk;
 use half::f16;
 
-use super::finish::{TextureSlot, finish};
+use super::lighting::{LightingData, Recipe};
 use super::texels::upload_texel_groups;
-use super::{
-    HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu, rgb_order3_block,
-};
-use crate::gpu::Context;
-use crate::render::SceneGpu;
+use super::{HwPath, Inputs, ShaderVariant, TechniqueError, rgb_order3_block};
+use crate::gpu::{Context, Image};
 
 /// Uniforms of glsl/technique/preconv.frag, block `PreconvParams` (std140).
 #[repr(C)]
@@ -37,22 +34,13 @@ pub fn fragment_shader() -> ShaderVariant {
     }
 }
 
-pub fn build(
+/// Uploads the ambient occlusion; returns it and the recipe of the lighting data.
+pub(crate) fn per_texel(
     ctx: &Arc<Context>,
-    scene: &SceneGpu,
     path: HwPath,
     inputs: &Inputs<'_>,
-) -> Result<TechniqueGpu, TechniqueError> {
-    let label = format!("{}.{path}", Technique::Preconv);
-    if inputs.irradiance_sh.len() < 9 {
-        return Err(TechniqueError::Input {
-            label,
-            detail: format!(
-                "needs order-3 irradiance (9 coefficients), got {}",
-                inputs.irradiance_sh.len()
-            ),
-        });
-    }
+    label: &str,
+) -> Result<(Vec<Image>, Recipe), TechniqueError> {
     let ao = inputs.ao;
     let ao_f16: Vec<f16> = ao.values.iter().map(|&a| f16::from_f32(a)).collect();
     let images = upload_texel_groups(
@@ -63,15 +51,22 @@ pub fn build(
         &[bytemuck::cast_slice(&ao_f16)],
         &format!("{label}.ao"),
     )?;
+    Ok((images, Recipe::Preconv))
+}
+
+/// The uniform block of order-3 irradiance `irradiance_sh`.
+pub fn lighting(irradiance_sh: &[[f64; 3]], label: &str) -> Result<LightingData, TechniqueError> {
+    if irradiance_sh.len() < 9 {
+        return Err(TechniqueError::Input {
+            label: label.into(),
+            detail: format!(
+                "needs order-3 irradiance (9 coefficients), got {}",
+                irradiance_sh.len()
+            ),
+        });
+    }
     let params = PreconvParams {
-        irradiance_sh: rgb_order3_block(inputs.irradiance_sh),
+        irradiance_sh: rgb_order3_block(irradiance_sh),
     };
-    finish(
-        ctx,
-        scene,
-        Technique::Preconv,
-        path,
-        bytemuck::bytes_of(&params),
-        vec![TextureSlot::per_texel(images)],
-    )
+    Ok(LightingData::params(bytemuck::bytes_of(&params).to_vec()))
 }

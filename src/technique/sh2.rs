@@ -22,13 +22,10 @@ use std::sync::Arc;
 use ash::vk;
 use half::f16;
 
-use super::finish::{TextureSlot, finish};
+use super::lighting::{LightingData, Recipe};
 use super::texels::{pack_groups, upload_texel_groups};
-use super::{
-    HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu, rgb_order3_block,
-};
-use crate::gpu::Context;
-use crate::render::SceneGpu;
+use super::{HwPath, Inputs, ShaderVariant, TechniqueError, rgb_order3_block};
+use crate::gpu::{Context, Image};
 use crate::sh::Order;
 use crate::sh::product::gaunt_tensor;
 
@@ -89,25 +86,21 @@ pub fn product_glsl() -> String {
     s
 }
 
-pub fn build(
+/// Uploads the order-2 visibility; returns it and the recipe of the lighting data.
+pub(crate) fn per_texel(
     ctx: &Arc<Context>,
-    scene: &SceneGpu,
     path: HwPath,
     inputs: &Inputs<'_>,
-) -> Result<TechniqueGpu, TechniqueError> {
-    let label = format!("{}.{path}", Technique::Sh2);
+    label: &str,
+) -> Result<(Vec<Image>, Recipe), TechniqueError> {
     let vis = inputs.visibility.ok_or_else(|| TechniqueError::Input {
-        label: label.clone(),
+        label: label.into(),
         detail: "needs the SH visibility bake".into(),
     })?;
-    if vis.order < Order::TWO || inputs.radiance_sh.len() < 9 {
+    if vis.order < Order::TWO {
         return Err(TechniqueError::Input {
-            label,
-            detail: format!(
-                "needs visibility of order 2 and lighting of order 3, got orders {} and {} coefficients",
-                vis.order,
-                inputs.radiance_sh.len()
-            ),
+            label: label.into(),
+            detail: format!("needs visibility of order 2, the bake has {}", vis.order),
         });
     }
     let texels = (vis.res * vis.res) as usize;
@@ -126,21 +119,28 @@ pub fn build(
         &bytes,
         &format!("{label}.visibility"),
     )?;
+    Ok((images, Recipe::Sh2))
+}
+
+/// The uniform block of order-3 radiance `radiance_sh`.
+pub fn lighting(radiance_sh: &[[f64; 3]], label: &str) -> Result<LightingData, TechniqueError> {
+    if radiance_sh.len() < 9 {
+        return Err(TechniqueError::Input {
+            label: label.into(),
+            detail: format!(
+                "needs lighting of order 3 (9 coefficients), got {}",
+                radiance_sh.len()
+            ),
+        });
+    }
     let params = Sh2Params {
-        lighting_sh: rgb_order3_block(inputs.radiance_sh),
+        lighting_sh: rgb_order3_block(radiance_sh),
     };
     if params.lighting_sh.iter().flatten().any(|v| !v.is_finite()) {
         return Err(TechniqueError::Input {
-            label,
+            label: label.into(),
             detail: "order-3 lighting is not finite in f32".into(),
         });
     }
-    finish(
-        ctx,
-        scene,
-        Technique::Sh2,
-        path,
-        bytemuck::bytes_of(&params),
-        vec![TextureSlot::per_texel(images)],
-    )
+    Ok(LightingData::params(bytemuck::bytes_of(&params).to_vec()))
 }

@@ -18,13 +18,12 @@ use std::sync::Arc;
 use ash::vk;
 use half::f16;
 
-use super::finish::{TextureSlot, finish};
+use super::lighting::{LightingData, Recipe};
 use super::tables::{f16_range_scale, max_abs};
 use super::texels::{VALUES_PER_TEXEL, pack_groups, upload_texel_groups};
-use super::{HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu};
+use super::{HwPath, Inputs, ShaderVariant, TechniqueError};
 use crate::bake::shlmap::{SH_LIGHTMAP_COEFFS, ShLightmap};
-use crate::gpu::Context;
-use crate::render::SceneGpu;
+use crate::gpu::{Context, Image};
 
 /// RGBA groups per texel: ⌈27 / 4⌉.
 pub const SHLMAP_GROUPS: usize = (3 * SH_LIGHTMAP_COEFFS).div_ceil(VALUES_PER_TEXEL);
@@ -52,21 +51,22 @@ pub fn stored_scale(map: &ShLightmap) -> Option<f32> {
     max_abs.is_finite().then(|| f16_range_scale(max_abs))
 }
 
-pub fn build(
+/// Uploads the SH lightmap, range-scaled into f16; returns it and a recipe that always
+/// gives the block undoing that scale (the lighting is baked in).
+pub(crate) fn per_texel(
     ctx: &Arc<Context>,
-    scene: &SceneGpu,
     path: HwPath,
     inputs: &Inputs<'_>,
-) -> Result<TechniqueGpu, TechniqueError> {
-    let label = format!("{}.{path}", Technique::Shlmap);
+    label: &str,
+) -> Result<(Vec<Image>, Recipe), TechniqueError> {
     let map = inputs.sh_lightmap.ok_or_else(|| TechniqueError::Input {
-        label: label.clone(),
+        label: label.into(),
         detail: "needs the SH lightmap bake".into(),
     })?;
     let texels = (map.res * map.res) as usize;
     let Some(scale) = stored_scale(map) else {
         return Err(TechniqueError::Input {
-            label,
+            label: label.into(),
             detail: "the SH lightmap is not finite (non-finite lighting?)".into(),
         });
     };
@@ -86,12 +86,8 @@ pub fn build(
     let params = ShLightmapParams {
         unscale: [1.0 / scale, 0.0, 0.0, 0.0],
     };
-    finish(
-        ctx,
-        scene,
-        Technique::Shlmap,
-        path,
-        bytemuck::bytes_of(&params),
-        vec![TextureSlot::per_texel(images)],
-    )
+    Ok((
+        images,
+        Recipe::Baked(LightingData::params(bytemuck::bytes_of(&params).to_vec())),
+    ))
 }

@@ -22,7 +22,9 @@ use half::f16;
 
 use super::finish::TextureSlot;
 use super::{HwPath, TechniqueError};
+use crate::bake::lxh::LxhMatrices;
 use crate::gpu::{Context, Image, ImageDesc};
+use crate::sh::Order;
 use crate::sphere::{Parameterization, SphereMap};
 
 /// Largest table magnitude stored in f16: far below 65504, so filtering and the products
@@ -51,6 +53,27 @@ pub fn max_abs(values: impl IntoIterator<Item = f32>) -> f32 {
 pub struct TableParams {
     /// x: 1/scale of the tables' f16 range scaling; y: table texels per side.
     pub unscale_res: [f32; 4],
+}
+
+/// The L×H product matrices of visibility order `v_order` for `radiance_sh`, or an input
+/// error when the lighting has fewer than the (O + 2)² coefficients they need.
+pub fn lxh_matrices(
+    radiance_sh: &[[f64; 3]],
+    v_order: Order,
+    h_order: Order,
+    label: &str,
+) -> Result<LxhMatrices, TechniqueError> {
+    let need = Order::new(v_order.get() + 2).map_or(v_order.coeff_count(), |o| o.coeff_count());
+    if radiance_sh.len() < need {
+        return Err(TechniqueError::Input {
+            label: label.into(),
+            detail: format!(
+                "needs lighting with {need} SH coefficients, got {}",
+                radiance_sh.len()
+            ),
+        });
+    }
+    Ok(LxhMatrices::new(radiance_sh, v_order, h_order))
 }
 
 /// The tables' parameterization on each path.
@@ -110,35 +133,82 @@ pub fn dx10_cube_layers(
     layers
 }
 
-/// A table set ready to bind, and the factor the shader multiplies sums by.
-pub struct NormalTables {
-    /// dx9: the colour strips (one binding) and the mean strip (the next); dx10: one cube
-    /// array.
-    pub slots: Vec<TextureSlot>,
+/// One table image's description and f16 RGBA texels per layer, on the CPU.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TableImage {
+    pub desc: ImageDesc,
+    pub layers: Vec<Vec<f16>>,
+    /// Debug name of the image ("unc6.dx9.lxh.red").
+    pub name: String,
+}
+
+/// A table set on the CPU, laid out as the GPU binds it, and the factor the shader
+/// multiplies sums by: what a lighting change recomputes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NormalTableData {
+    /// The images in binding order.
+    pub images: Vec<TableImage>,
+    /// Images per binding: dx9 `[3]` or `[3, 1]` (colours, mean), dx10 `[1]`.
+    pub slot_sizes: Vec<usize>,
     pub unscale: f32,
 }
 
-impl NormalTables {
+impl NormalTableData {
     /// The uniform block the shader decodes these tables with (`table_res` per side).
     pub fn params(&self, table_res: u32) -> TableParams {
         TableParams {
             unscale_res: [self.unscale, table_res as f32, 0.0, 0.0],
         }
     }
+
+    /// The texel bytes of image `i`, one slice per layer (level 0 only).
+    pub fn image_levels(&self, i: usize) -> Vec<Vec<&[u8]>> {
+        vec![
+            self.images[i]
+                .layers
+                .iter()
+                .map(|l| bytemuck::cast_slice(l))
+                .collect(),
+        ]
+    }
+
+    /// Creates and fills the images, `suffix` appended to their names, grouped into the
+    /// slots they bind as.
+    pub fn upload(
+        &self,
+        ctx: &Arc<Context>,
+        suffix: &str,
+    ) -> Result<Vec<TextureSlot>, TechniqueError> {
+        let mut images = Vec::with_capacity(self.images.len());
+        for (i, table) in self.images.iter().enumerate() {
+            let name = format!("{}{suffix}", table.name);
+            images.push(Image::with_data(
+                ctx,
+                &table.desc,
+                &self.image_levels(i),
+                &name,
+            )?);
+        }
+        let mut images = images.into_iter();
+        Ok(self
+            .slot_sizes
+            .iter()
+            .map(|&n| TextureSlot::normal_tables(images.by_ref().take(n).collect()))
+            .collect())
+    }
 }
 
-/// Uploads tables at the texel centres of `map` (dual paraboloid for dx9, cube for dx10):
+/// Tables at the texel centres of `map` (dual paraboloid for dx9, cube for dx10):
 /// `value(t, g, c)` is the RGBA of sample t, group g, colour c; `mean(t)` the RGB of the
-/// optional mean table.
-pub fn upload_normal_tables(
-    ctx: &Arc<Context>,
+/// optional mean table. Range-scaled into f16 (module doc).
+pub fn normal_table_data(
     path: HwPath,
     map: SphereMap,
     groups: usize,
     value: impl Fn(usize, usize, usize) -> [f32; 4],
     mean: Option<&dyn Fn(usize) -> [f32; 3]>,
     name: &str,
-) -> Result<NormalTables, TechniqueError> {
+) -> Result<NormalTableData, TechniqueError> {
     let value = &value;
     let max_abs = max_abs((0..map.sample_count()).flat_map(|t| {
         let tables = (0..groups).flat_map(move |g| (0..3).flat_map(move |c| value(t, g, c)));
@@ -166,30 +236,27 @@ pub fn upload_normal_tables(
     };
     let fmt = vk::Format::R16G16B16A16_SFLOAT;
     let tr = map.res();
-    let slots = match path {
+    let (images, slot_sizes) = match path {
         HwPath::Dx9 => {
-            let strip_image =
-                |spheres: usize, texel: &dyn Fn(usize, usize) -> [f32; 4], n: &str| {
-                    let (width, texels) = dx9_strip(map, spheres, texel);
-                    let data = to_f16(&texels);
-                    Image::with_data(
-                        ctx,
-                        &ImageDesc::texture_2d(fmt, width, tr),
-                        &[vec![bytemuck::cast_slice(&data)]],
-                        &format!("{name}.{n}"),
-                    )
-                };
-            let colours = ["red", "green", "blue"]
+            let strip = |spheres: usize, texel: &dyn Fn(usize, usize) -> [f32; 4], n: &str| {
+                let (width, texels) = dx9_strip(map, spheres, texel);
+                TableImage {
+                    desc: ImageDesc::texture_2d(fmt, width, tr),
+                    layers: vec![to_f16(&texels)],
+                    name: format!("{name}.{n}"),
+                }
+            };
+            let mut images: Vec<TableImage> = ["red", "green", "blue"]
                 .iter()
                 .enumerate()
-                .map(|(c, n)| strip_image(groups, &|t, g| value(t, g, c), n))
-                .collect::<Result<Vec<_>, _>>()?;
-            let mut slots = vec![TextureSlot::normal_tables(colours)];
+                .map(|(c, n)| strip(groups, &|t, g| value(t, g, c), n))
+                .collect();
+            let mut slot_sizes = vec![3];
             if mean.is_some() {
-                let image = strip_image(1, &|t, _| mean_rgba(t), "mean")?;
-                slots.push(TextureSlot::normal_tables(vec![image]));
+                images.push(strip(1, &|t, _| mean_rgba(t), "mean"));
+                slot_sizes.push(1);
             }
-            slots
+            (images, slot_sizes)
         }
         HwPath::Dx10 => {
             let cubes = 3 * groups + mean.is_some() as usize;
@@ -200,19 +267,17 @@ pub fn upload_normal_tables(
                     mean_rgba(t)
                 }
             });
-            let data: Vec<Vec<f16>> = layers.iter().map(|l| to_f16(l)).collect();
-            let bytes: Vec<&[u8]> = data.iter().map(|l| bytemuck::cast_slice(l)).collect();
-            let image = Image::with_data(
-                ctx,
-                &ImageDesc::texture_cube_array(fmt, tr, cubes as u32),
-                &[bytes],
-                name,
-            )?;
-            vec![TextureSlot::normal_tables(vec![image])]
+            let image = TableImage {
+                desc: ImageDesc::texture_cube_array(fmt, tr, cubes as u32),
+                layers: layers.iter().map(|l| to_f16(l)).collect(),
+                name: name.to_string(),
+            };
+            (vec![image], vec![1])
         }
     };
-    Ok(NormalTables {
-        slots,
+    Ok(NormalTableData {
+        images,
+        slot_sizes,
         unscale: 1.0 / scale,
     })
 }

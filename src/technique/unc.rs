@@ -16,13 +16,12 @@ use std::sync::Arc;
 use ash::vk;
 use half::f16;
 
-use super::finish::finish_with_tables;
-use super::tables::{table_map, upload_normal_tables};
+use super::lighting::{LightingData, Recipe};
+use super::tables::{lxh_matrices, normal_table_data, table_map};
 use super::texels::{VALUES_PER_TEXEL, pack_groups, upload_texel_groups};
-use super::{HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu};
-use crate::bake::lxh::{LxhMatrices, build_table};
-use crate::gpu::Context;
-use crate::render::SceneGpu;
+use super::{HwPath, Inputs, ShaderVariant, TechniqueError};
+use crate::bake::lxh::SymmetricBuild;
+use crate::gpu::{Context, Image};
 use crate::sh::Order;
 
 /// RGBA groups of order-`order` visibility.
@@ -38,24 +37,23 @@ pub fn fragment_shader(order: Order) -> ShaderVariant {
     }
 }
 
-pub fn build(
+/// Uploads the first O² visibility coefficients per texel; returns them and the recipe of
+/// the lighting data ([`lighting`]).
+pub(crate) fn per_texel(
     ctx: &Arc<Context>,
-    scene: &SceneGpu,
     order: Order,
     path: HwPath,
     inputs: &Inputs<'_>,
-) -> Result<TechniqueGpu, TechniqueError> {
-    let technique = Technique::Unc { order };
-    let label = format!("{technique}.{path}");
+    label: &str,
+) -> Result<(Vec<Image>, Recipe), TechniqueError> {
     let n = order.coeff_count();
-    let groups = groups(order);
     let vis = inputs.visibility.ok_or_else(|| TechniqueError::Input {
-        label: label.clone(),
+        label: label.into(),
         detail: "needs the SH visibility bake".into(),
     })?;
     if vis.order < order {
         return Err(TechniqueError::Input {
-            label,
+            label: label.into(),
             detail: format!(
                 "needs visibility of order {order}, the bake has {}",
                 vis.order
@@ -66,7 +64,7 @@ pub fn build(
     let stride = vis.order.coeff_count();
     let vis_groups = pack_groups(texels, n, |t, j| f16::from_f32(vis.coeffs[t * stride + j]));
     let vis_bytes: Vec<&[u8]> = vis_groups.iter().map(|g| bytemuck::cast_slice(g)).collect();
-    let texel_images = upload_texel_groups(
+    let images = upload_texel_groups(
         ctx,
         path,
         vis.res,
@@ -74,16 +72,29 @@ pub fn build(
         &vis_bytes,
         &format!("{label}.visibility"),
     )?;
+    let map = table_map(path, inputs.table_res, label)?;
+    let table = Arc::new(SymmetricBuild::new(map));
+    Ok((images, Recipe::Unc { order, table }))
+}
 
-    // The L×H table for this lighting.
-    let matrices = LxhMatrices::new(inputs.radiance_sh, order, inputs.h_order);
-    let map = table_map(path, inputs.table_res, &label)?;
-    let table = build_table(&matrices, map);
-    let tables = upload_normal_tables(
-        ctx,
+/// The L×H table of order `order` for `radiance_sh` over `table`'s map (`bake::lxh`), in
+/// ⌈O²/4⌉ groups per colour, and its decoding block.
+pub fn lighting(
+    order: Order,
+    path: HwPath,
+    table: &SymmetricBuild,
+    h_order: Order,
+    radiance_sh: &[[f64; 3]],
+    label: &str,
+) -> Result<LightingData, TechniqueError> {
+    let n = order.coeff_count();
+    let matrices = lxh_matrices(radiance_sh, order, h_order, label)?;
+    let map = table.map();
+    let table = table.build(&matrices);
+    let tables = normal_table_data(
         path,
         map,
-        groups,
+        groups(order),
         |t, g, c| {
             std::array::from_fn(|k| {
                 let j = VALUES_PER_TEXEL * g + k;
@@ -97,13 +108,8 @@ pub fn build(
         None,
         &format!("{label}.lxh"),
     )?;
-    finish_with_tables(
-        ctx,
-        scene,
-        technique,
-        path,
-        texel_images,
-        tables,
-        inputs.table_res,
-    )
+    Ok(LightingData {
+        params: bytemuck::bytes_of(&tables.params(map.res())).to_vec(),
+        tables: Some(tables),
+    })
 }

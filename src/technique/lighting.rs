@@ -1,0 +1,160 @@
+//! The lighting-dependent half of a technique (Iwanicki–Sloan §3.3; issue 15): what has to
+//! be recomputed and uploaded when the environment changes, kept apart from the per-texel
+//! bake data, which never changes.
+//!
+//! - [`LightingData`]: a uniform block and the normal-indexed tables, on the CPU, laid out
+//!   as the GPU binds them — unc: L×H tables; pca: T_k tables; pcaNw: the V_k·L block;
+//!   preconv / sh2: order-3 irradiance / radiance.
+//! - [`LightingRecipe`]: everything a technique needs to build its `LightingData` from new
+//!   SH lighting (for pca the quantized basis), owned and `Send`, so a worker thread can
+//!   build the next tables while frames run.
+//! - [`LightingSet`]: one GPU copy of that data with the pipeline bound to it. A technique
+//!   built for dynamic lighting has two (`technique::build_dynamic`): frames draw with the
+//!   front one while the back one is refilled through a staging copy that is submitted
+//!   without waiting (`gpu::PendingUpload`), then they swap — double buffering.
+//!
+//! `shlmap`'s lighting is baked into its lightmap: its recipe returns the same block for any
+//! lighting, and `build_dynamic` refuses it.
+
+use std::sync::Arc;
+
+use super::tables::NormalTableData;
+use super::{HwPath, Technique, TechniqueError};
+use crate::bake::lxh::SymmetricBuild;
+use crate::gpu::{self, Image, MeshPipeline};
+use crate::sh::Order;
+
+/// A technique's lighting-dependent data (module doc).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightingData {
+    /// The technique's uniform block (std140 bytes).
+    pub params: Vec<u8>,
+    /// Its normal-indexed tables, if it has any.
+    pub tables: Option<NormalTableData>,
+}
+
+impl LightingData {
+    /// A uniform block only.
+    pub fn params(params: Vec<u8>) -> Self {
+        LightingData {
+            params,
+            tables: None,
+        }
+    }
+
+    /// Bytes the tables' texels take (what an update uploads besides the uniforms).
+    pub fn table_bytes(&self) -> usize {
+        self.tables.as_ref().map_or(0, |t| {
+            t.images
+                .iter()
+                .flat_map(|i| &i.layers)
+                .map(|l| 2 * l.len())
+                .sum()
+        })
+    }
+}
+
+/// What each family needs besides the lighting.
+#[derive(Clone)]
+pub(crate) enum Recipe {
+    Unc {
+        order: Order,
+        /// The symmetric build over the path's table map (orbits found once).
+        table: Arc<SymmetricBuild>,
+    },
+    Pca {
+        order: Order,
+        /// As `Unc`; `None` for the weights-only variant, which has no tables.
+        table: Option<Arc<SymmetricBuild>>,
+        /// The quantized basis V_k' and mean V_e' (`bake::pca::QuantizedPca`).
+        basis: Vec<Vec<f64>>,
+        mean: Vec<f64>,
+    },
+    Preconv,
+    Sh2,
+    /// Lighting baked into the per-texel data (`shlmap`): the data never changes.
+    Baked(LightingData),
+}
+
+/// Builds a technique's [`LightingData`] for any SH lighting (module doc).
+#[derive(Clone)]
+pub struct LightingRecipe {
+    pub technique: Technique,
+    pub path: HwPath,
+    /// Clamped-cosine order of the L×H product.
+    pub h_order: Order,
+    pub(crate) recipe: Recipe,
+}
+
+impl LightingRecipe {
+    /// "unc6.dx10".
+    pub fn label(&self) -> String {
+        format!("{}.{}", self.technique, self.path)
+    }
+
+    /// Whether the data follows the lighting (false for `shlmap`).
+    pub fn is_dynamic(&self) -> bool {
+        !matches!(self.recipe, Recipe::Baked(_))
+    }
+
+    /// The data for radiance `radiance_sh` (to the visibility order + 2) and its order-3
+    /// irradiance `irradiance_sh`.
+    pub fn build(
+        &self,
+        radiance_sh: &[[f64; 3]],
+        irradiance_sh: &[[f64; 3]],
+    ) -> Result<LightingData, TechniqueError> {
+        let label = self.label();
+        match &self.recipe {
+            Recipe::Unc { order, table } => {
+                super::unc::lighting(*order, self.path, table, self.h_order, radiance_sh, &label)
+            }
+            Recipe::Pca {
+                order,
+                table,
+                basis,
+                mean,
+            } => super::pca::lighting(
+                basis,
+                mean,
+                *order,
+                self.path,
+                table.as_deref(),
+                self.h_order,
+                radiance_sh,
+                &label,
+            ),
+            Recipe::Preconv => super::preconv::lighting(irradiance_sh, &label),
+            Recipe::Sh2 => super::sh2::lighting(radiance_sh, &label),
+            Recipe::Baked(data) => Ok(data.clone()),
+        }
+    }
+}
+
+/// One GPU copy of a technique's lighting data and the pipeline that reads it.
+pub(crate) struct LightingSet {
+    pub pipeline: MeshPipeline,
+    pub params: gpu::Buffer,
+    /// In binding order (`NormalTableData::images`).
+    pub tables: Vec<Image>,
+}
+
+impl LightingSet {
+    /// Checks `data` has this set's layout: same uniform size, same table images.
+    pub fn check_layout(&self, data: &LightingData, label: &str) -> Result<(), TechniqueError> {
+        let tables = data.tables.as_ref().map_or(&[][..], |t| &t.images[..]);
+        let same_tables = tables.len() == self.tables.len()
+            && tables
+                .iter()
+                .zip(&self.tables)
+                .all(|(t, i)| t.desc == *i.desc());
+        if data.params.len() as u64 != self.params.size() || !same_tables {
+            return Err(TechniqueError::Input {
+                label: label.into(),
+                detail: "a lighting update does not have the layout the technique was built with"
+                    .into(),
+            });
+        }
+        Ok(())
+    }
+}
