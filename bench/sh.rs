@@ -120,5 +120,74 @@ fn lxh_table(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, sh_eval, env_projection, product_matrix, lxh_table);
+/// One lighting update of a technique on the CPU (issue 15): `LightingRecipe::build` —
+/// product matrices, the symmetric table build, the technique's own tables (T_k for pca),
+/// layout per path and f16 range scaling — for the paper's 32² tables. What `shvis
+/// relight` reports as "CPU build ms", here without the GPU competing for the cores.
+fn lighting_update(c: &mut Criterion) {
+    use shvis::bake::ao::AoMap;
+    use shvis::bake::pca::PcaModel;
+    use shvis::bake::visibility::VisibilityMap;
+    use shvis::sh::zonal::irradiance_from_radiance;
+    use shvis::technique::{HwPath, Inputs, LightingRecipe, Technique};
+    let env = sky(128, &SkyParams::default());
+    let radiance = project_sh(&env, Order::new(8).expect("valid"));
+    let irradiance = irradiance_from_radiance(&radiance[..9], Order::THREE);
+    // Bake data of 2 × 2 texels: the recipes only keep its order and (pca) basis.
+    let (res, n) = (2u32, 36usize);
+    let visibility = VisibilityMap {
+        res,
+        order: Order::SIX,
+        coeffs: (0..4 * n).map(|i| (i as f32 * 0.37).sin()).collect(),
+        covered: vec![true; 4],
+        ao: vec![0.5; 4],
+        stats: Default::default(),
+    };
+    let ao = AoMap {
+        res,
+        values: vec![0.5; 4],
+        covered: vec![true; 4],
+        stats: Default::default(),
+    };
+    let pca = PcaModel {
+        order: Order::SIX,
+        mean: (0..n).map(|j| 0.1 / (1.0 + j as f64)).collect(),
+        basis: (0..24)
+            .map(|k| (0..n).map(|j| if j == k { 1.0 } else { 0.0 }).collect())
+            .collect(),
+        eigenvalues: vec![1.0; n],
+        weights: (0..4 * 24).map(|i| (i as f32 * 0.11).cos()).collect(),
+        res,
+    };
+    let inputs = Inputs {
+        ao: &ao,
+        irradiance_sh: &irradiance,
+        radiance_sh: &radiance,
+        visibility: Some(&visibility),
+        pca: Some(&pca),
+        sh_lightmap: None,
+        table_res: 32,
+        h_order: Order::THREE,
+    };
+    let mut g = c.benchmark_group("lighting_update");
+    for name in ["unc6", "pca16", "pca16w", "sh2"] {
+        let technique: Technique = name.parse().expect("technique");
+        for &path in HwPath::ALL {
+            let recipe = LightingRecipe::new(technique, path, &inputs).expect("recipe");
+            g.bench_function(format!("{name}_{path}_32"), |b| {
+                b.iter(|| black_box(recipe.build(black_box(&radiance), &irradiance)))
+            });
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(
+    benches,
+    sh_eval,
+    env_projection,
+    product_matrix,
+    lxh_table,
+    lighting_update
+);
 criterion_main!(benches);

@@ -7,10 +7,11 @@
 //! (`technique::lighting`) — is rebuilt for the schedule's SH at that frame:
 //!
 //! - **overlapped** (default): a worker thread builds it on the CPU while the frame loop
-//!   keeps drawing with the front copy; once built, the loop writes the back copy's
-//!   uniforms, submits the staging copy of its tables without waiting
-//!   (`gpu::PendingUpload`) and swaps the copies when the GPU has landed it. Frames never
-//!   wait for a build or a copy; the lighting a frame shows may be a few frames old;
+//!   keeps drawing with the front copy; at the first frame after the build finished, the
+//!   loop writes the back copy's uniforms, submits the staging copy of its tables without
+//!   waiting (`gpu::PendingUpload`) and makes it the front copy — the GPU orders the
+//!   frame after the copy. Frames never wait for a build or a copy; the lighting a frame
+//!   shows is at least one frame old (`swap latency`);
 //! - **blocking** (`--blocking-upload`): build, upload and wait between two frames.
 //!
 //! Each frame is rendered and timed. At a few sampled frames the image is compared with the
@@ -129,7 +130,8 @@ pub struct RelightRow {
     /// Median ms the frame loop spent on one upload: writing the uniforms, staging the
     /// tables and submitting their copy (blocking mode: and waiting for it).
     pub upload_ms_median: Option<f64>,
-    /// Median frames from a rebuild's request to its swap (0 in blocking mode).
+    /// Median frames from a rebuild's request to the first frame drawing it (0 in blocking
+    /// mode).
     pub swap_latency_frames_median: Option<f64>,
     /// Bytes one update uploads (tables and uniforms).
     pub table_bytes: u64,
@@ -411,10 +413,8 @@ fn run_row(
     };
     let mut times = UpdateTimes::default();
     let (mut gpu_ms, mut frames_srgb, mut sampled_rows) = (Vec::new(), Vec::new(), Vec::new());
-    // The frame whose lighting the front set holds, and the one an upload in flight holds
-    // (the frame its rebuild was requested at).
+    // The frame whose lighting the front set holds.
     let mut in_use = 0u32;
-    let mut uploading: Option<u32> = None;
     std::thread::scope(|scope| -> Result<(), RelightError> {
         let mut building: Option<Building<'_>> = None;
         for f in 0..settings.frames {
@@ -423,8 +423,8 @@ fn run_row(
                 UploadMode::Blocking if due => {
                     let (data, cpu_ms) = build_cpu(f)?;
                     let start = Instant::now();
-                    tech.begin_update(&data)?;
-                    tech.finish_update()?;
+                    tech.update_lighting(&data)?;
+                    tech.wait_for_upload()?;
                     times.upload_ms.push(start.elapsed().as_secs_f64() * 1e3);
                     times.cpu_ms.push(cpu_ms);
                     times.latency.push(0.0);
@@ -432,24 +432,18 @@ fn run_row(
                 }
                 UploadMode::Blocking => {}
                 UploadMode::Overlapped => {
-                    // An upload the GPU has landed is swapped in…
-                    if tech.poll_update()? {
-                        let lit = uploading.take().expect("an upload was pending");
-                        times.latency.push(f64::from(f - lit));
-                        in_use = lit;
-                    }
-                    // …a finished build goes up as soon as the back set is free…
-                    let ready = building.as_ref().is_some_and(|(_, h)| h.is_finished());
-                    if ready && !tech.update_pending() {
+                    // A finished build goes up at once (the frame below draws it)…
+                    if building.as_ref().is_some_and(|(_, h)| h.is_finished()) {
                         let (requested, handle) = building.take().expect("checked above");
                         let (data, cpu_ms) = handle.join().map_err(|_| {
                             RelightError::Settings(format!("{label}: the table build panicked"))
                         })??;
                         let start = Instant::now();
-                        tech.begin_update(&data)?;
+                        tech.update_lighting(&data)?;
                         times.upload_ms.push(start.elapsed().as_secs_f64() * 1e3);
                         times.cpu_ms.push(cpu_ms);
-                        uploading = Some(requested);
+                        times.latency.push(f64::from(f - requested));
+                        in_use = requested;
                     }
                     // …and a due rebuild starts on the worker unless one is running.
                     if due {
@@ -494,9 +488,7 @@ fn run_row(
         if let Some((_, handle)) = building.take() {
             let _ = handle.join();
         }
-        if uploading.take().is_some() {
-            tech.finish_update()?;
-        }
+        tech.wait_for_upload()?;
         Ok(())
     })?;
     let table_bytes = tech.stats.table_bytes;

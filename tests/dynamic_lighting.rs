@@ -1,6 +1,7 @@
 //! Dynamic lighting on the GPU (issue 15, `technique::lighting`): every technique built with
-//! two lighting sets swaps new tables in with validation clean, draws the old lighting
-//! until the swap and exactly the new one after it; the tables of blended lighting are the
+//! two lighting sets takes new tables with validation clean, the frame right after the
+//! non-blocking update draws exactly the new data and the other set keeps the old; the
+//! tables of blended lighting are the
 //! blend of the two tables to f16 precision as uploaded, and render as the blend of the two
 //! images.
 
@@ -80,26 +81,22 @@ fn every_dynamic_technique_swaps_its_tables_with_validation_clean() {
                 "{label}: a quarter turn of the sun changes the image"
             );
             let data_b = recipe.build(&lb, &eb).expect("lighting data");
-            tech.begin_update(&data_b).expect("update starts");
-            // Until the swap, frames draw the front set: the old lighting, untouched.
-            let during = tech.render(&scene, 0, 1).expect("renders");
-            assert_eq!(max_difference(&during, &before), 0.0, "{label}: front set");
-            tech.finish_update().expect("update lands");
-            assert!(!tech.update_pending(), "{label}");
+            tech.update_lighting(&data_b).expect("update submits");
+            // The very next frame, submitted without waiting for the copy, draws exactly
+            // the new data: the GPU orders it after the copy.
             let after = tech.render(&scene, 0, 1).expect("renders");
             assert_eq!(
                 max_difference(&after, &static_b),
                 0.0,
-                "{label}: the swapped-in set is the static build's data"
+                "{label}: the updated set is the static build's data"
             );
-            // And back again through the other set.
-            tech.begin_update(&recipe.build(&la, &ea).unwrap())
-                .expect("update starts");
-            while !tech.poll_update().expect("polls") {
-                std::thread::yield_now();
-            }
+            // And back through the other set, which kept the old data intact.
+            tech.update_lighting(&recipe.build(&la, &ea).unwrap())
+                .expect("update submits");
             let back = tech.render(&scene, 0, 1).expect("renders");
             assert_eq!(max_difference(&back, &before), 0.0, "{label}: swapped back");
+            tech.wait_for_upload().expect("the copy lands");
+            assert!(!tech.upload_in_flight().unwrap(), "{label}");
             common::assert_validation_clean(&ctx, &format!("{label} across table swaps"));
         }
     }
@@ -129,7 +126,7 @@ fn every_dynamic_technique_swaps_its_tables_with_validation_clean() {
     )
     .unwrap();
     let err = unc4
-        .begin_update(&unc6.build(&lb, &eb).unwrap())
+        .update_lighting(&unc6.build(&lb, &eb).unwrap())
         .expect_err("unc6's tables do not fit unc4's sets");
     assert!(err.to_string().contains("layout"), "{err}");
     let mut single = technique::build(
@@ -142,7 +139,7 @@ fn every_dynamic_technique_swaps_its_tables_with_validation_clean() {
     .unwrap();
     assert!(
         single
-            .begin_update(&LightingData::params(vec![0; 16]))
+            .update_lighting(&LightingData::params(vec![0; 16]))
             .is_err()
     );
     common::assert_validation_clean(&ctx, "refused updates");
@@ -154,7 +151,7 @@ fn decoded(data: &LightingData) -> Vec<f32> {
     tables
         .images
         .iter()
-        .flat_map(|i| i.layers.iter().flatten())
+        .flat_map(|i| i.layers.iter().flatten().flatten())
         .map(|v| v.to_f32() * tables.unscale)
         .collect()
 }
@@ -178,8 +175,7 @@ fn tables_of_blended_lighting_are_the_blend_of_the_tables_in_f16() {
                 recipe.build(&la, &ea).unwrap(),
                 recipe.build(&lb, &eb).unwrap(),
             );
-            tech.begin_update(&b).unwrap();
-            tech.finish_update().unwrap();
+            tech.update_lighting(&b).unwrap();
             let image_b = tech.render(&scene, 0, 1).unwrap();
             for t in [0.3, 0.5] {
                 let lt = blend(&la, &lb, t);
@@ -210,8 +206,7 @@ fn tables_of_blended_lighting_are_the_blend_of_the_tables_in_f16() {
                 // On the GPU: the image of the blended tables is the blend of the images,
                 // wherever the shader's clamp of negative irradiance (SH ringing) did not
                 // act — a clamped channel is exactly 0 in one of the three images.
-                tech.begin_update(&of_blend).unwrap();
-                tech.finish_update().unwrap();
+                tech.update_lighting(&of_blend).unwrap();
                 let image_t = tech.render(&scene, 0, 1).unwrap();
                 let scale = max_value(&image_a).max(max_value(&image_b));
                 let (mut worst, mut compared, mut covered) = (0.0f32, 0usize, 0usize);

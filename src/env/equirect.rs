@@ -270,7 +270,7 @@ mod tests {
         };
         let e = validate(square.clone(), Path::new("sq.exr"), SquareLayout::Detect).unwrap_err();
         assert!(
-            matches!(e, EnvError::Ambiguous { width: 8, outside, .. } if outside > 0.1),
+            matches!(e, EnvError::Ambiguous { width: 8, outside, .. } if outside > 0.05),
             "{e}"
         );
         assert!(e.to_string().contains("angular:sq.exr"), "{e}");

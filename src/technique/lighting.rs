@@ -9,9 +9,11 @@
 //!   SH lighting (for pca the quantized basis), owned and `Send`, so a worker thread can
 //!   build the next tables while frames run.
 //! - [`LightingSet`]: one GPU copy of that data with the pipeline bound to it. A technique
-//!   built for dynamic lighting has two (`technique::build_dynamic`): frames draw with the
-//!   front one while the back one is refilled through a staging copy that is submitted
-//!   without waiting (`gpu::PendingUpload`), then they swap — double buffering.
+//!   built for dynamic lighting has two (`technique::build_dynamic`): an update refills
+//!   the back one — uniforms written, tables through a staging copy submitted without
+//!   waiting (`gpu::PendingUpload`) — and makes it the front one; later frames are ordered
+//!   after the copy on the GPU, earlier ones keep the old set — double buffering, with the
+//!   CPU never waiting (`TechniqueGpu::update_lighting`).
 //!
 //! `shlmap`'s lighting is baked into its lightmap: its recipe returns the same block for any
 //! lighting, and `build_dynamic` refuses it.
@@ -48,7 +50,7 @@ impl LightingData {
             t.images
                 .iter()
                 .flat_map(|i| &i.layers)
-                .map(|l| 2 * l.len())
+                .map(|l| std::mem::size_of_val(l.as_slice()))
                 .sum()
         })
     }
@@ -90,6 +92,16 @@ impl LightingRecipe {
     /// "unc6.dx10".
     pub fn label(&self) -> String {
         format!("{}.{}", self.technique, self.path)
+    }
+
+    /// The recipe of `technique` on `path` for the bake data of `inputs`, without a GPU
+    /// (benchmarks and tests of the rebuild; `technique::build_dynamic` returns the same).
+    pub fn new(
+        technique: Technique,
+        path: HwPath,
+        inputs: &super::Inputs<'_>,
+    ) -> Result<Self, TechniqueError> {
+        Ok(super::prepare(technique, path, inputs)?.1)
     }
 
     /// Whether the data follows the lighting (false for `shlmap`).

@@ -113,8 +113,8 @@ pub struct TechniqueGpu {
     pub path: HwPath,
     pub stats: TechniqueStats,
     // Declared first so it drops (waiting for the GPU) before the images it writes.
-    /// The set an update is going into, and its table copy (none for uniforms only).
-    pending: Option<(usize, Option<gpu::PendingUpload>)>,
+    /// The last update's table copy, until it is known to have landed.
+    upload: Option<gpu::PendingUpload>,
     sets: Vec<LightingSet>,
     front: usize,
     _per_texel: Vec<Image>,
@@ -134,7 +134,7 @@ impl TechniqueGpu {
             technique,
             path,
             stats,
-            pending: None,
+            upload: None,
             sets,
             front: 0,
             _per_texel: per_texel,
@@ -159,15 +159,15 @@ impl TechniqueGpu {
         self.sets.len()
     }
 
-    /// Whether an update started by [`Self::begin_update`] has not been swapped in yet.
-    pub fn update_pending(&self) -> bool {
-        self.pending.is_some()
-    }
-
-    /// Starts replacing the lighting data with `data` without waiting for the GPU: writes
-    /// the back set's uniforms and submits the copy of its tables; frames keep drawing with
-    /// the front set until [`Self::poll_update`] (or [`Self::finish_update`]) swaps them.
-    pub fn begin_update(&mut self, data: &LightingData) -> Result<(), TechniqueError> {
+    /// Replaces the lighting data with `data` without waiting for the GPU (double
+    /// buffering, [`lighting`]): writes the back set's uniforms, submits the staging copy of
+    /// its tables and makes it the front set. Frames submitted from now on draw the new
+    /// data — the GPU orders them after the copy (its closing barrier), so the CPU never
+    /// waits — while the old set stays intact for frames that were already submitted.
+    ///
+    /// The back set must not be read by frames in flight; [`Self::render`] waits for its
+    /// frames, so between calls it never is.
+    pub fn update_lighting(&mut self, data: &LightingData) -> Result<(), TechniqueError> {
         let label = self.label();
         if self.sets.len() < 2 {
             return Err(TechniqueError::Input {
@@ -176,58 +176,46 @@ impl TechniqueGpu {
                     .into(),
             });
         }
-        if self.pending.is_some() {
-            return Err(TechniqueError::Input {
-                label,
-                detail: "a lighting update is still in flight".into(),
-            });
-        }
         let back = (self.front + 1) % self.sets.len();
         let set = &mut self.sets[back];
         set.check_layout(data, &label)?;
-        // The back set is idle: every frame drawn with it has completed (`render` waits).
         set.params.write(&data.params)?;
-        let upload = match &data.tables {
-            Some(tables) => {
-                let levels: Vec<_> = (0..tables.images.len())
-                    .map(|i| tables.image_levels(i))
-                    .collect();
-                let uploads: Vec<(&Image, &[Vec<&[u8]>])> = set
-                    .tables
-                    .iter()
-                    .zip(&levels)
-                    .map(|(image, l)| (image, l.as_slice()))
-                    .collect();
-                let name = format!("{label}.update");
-                Some(gpu::PendingUpload::submit(&self.ctx, &uploads, &name)?)
-            }
-            None => None,
-        };
-        self.pending = Some((back, upload));
+        // The previous copy went into the other set; its staging buffer is released once
+        // the GPU is done with it (dropping waits, and by now it has long landed).
+        self.upload = None;
+        if let Some(tables) = &data.tables {
+            let levels: Vec<_> = (0..tables.images.len())
+                .map(|i| tables.image_levels(i))
+                .collect();
+            let uploads: Vec<(&Image, &[Vec<&[u8]>])> = set
+                .tables
+                .iter()
+                .zip(&levels)
+                .map(|(image, l)| (image, l.as_slice()))
+                .collect();
+            let name = format!("{label}.update");
+            self.upload = Some(gpu::PendingUpload::submit(&self.ctx, &uploads, &name)?);
+        }
+        self.front = back;
         Ok(())
     }
 
-    /// Swaps in the pending update if the GPU has finished its copy; true when it did.
-    pub fn poll_update(&mut self) -> Result<bool, TechniqueError> {
-        let done = match &self.pending {
-            Some((_, Some(upload))) => upload.is_done()?,
-            Some((_, None)) => true,
-            None => return Ok(false),
+    /// Whether the last update's table copy is still running on the GPU (never blocks).
+    pub fn upload_in_flight(&mut self) -> Result<bool, TechniqueError> {
+        let done = match &self.upload {
+            Some(upload) => upload.is_done()?,
+            None => true,
         };
         if done {
-            let (back, _) = self.pending.take().expect("checked above");
-            self.front = back;
+            self.upload = None;
         }
-        Ok(done)
+        Ok(!done)
     }
 
-    /// Waits for the pending update, if any, and swaps it in.
-    pub fn finish_update(&mut self) -> Result<(), TechniqueError> {
-        if let Some((back, upload)) = self.pending.take() {
-            if let Some(upload) = upload {
-                upload.wait()?;
-            }
-            self.front = back;
+    /// Blocks until the last update's table copy has landed.
+    pub fn wait_for_upload(&mut self) -> Result<(), TechniqueError> {
+        if let Some(upload) = self.upload.take() {
+            upload.wait()?;
         }
         Ok(())
     }
@@ -245,7 +233,7 @@ pub fn build(
 }
 
 /// Builds `technique` for lighting that changes: two copies of its lighting data to swap
-/// between ([`TechniqueGpu::begin_update`]), and the recipe that builds new data. Refuses
+/// between ([`TechniqueGpu::update_lighting`]), and the recipe that builds new data. Refuses
 /// techniques whose lighting is baked in (`shlmap`).
 pub fn build_dynamic(
     ctx: &Arc<Context>,
@@ -265,6 +253,29 @@ pub fn build_dynamic(
     build_sets(ctx, scene, technique, path, inputs, 2)
 }
 
+/// The CPU half of a build: the per-texel data to upload and the lighting recipe.
+fn prepare(
+    technique: Technique,
+    path: HwPath,
+    inputs: &Inputs<'_>,
+) -> Result<(texels::TexelGroups, LightingRecipe), TechniqueError> {
+    let label = format!("{technique}.{path}");
+    let (texels, recipe) = match technique {
+        Technique::Unc { order } => unc::prepare(order, path, inputs, &label)?,
+        Technique::Pca { m, weights_only } => pca::prepare(m, weights_only, path, inputs, &label)?,
+        Technique::Shlmap => shlmap::prepare(inputs, &label)?,
+        Technique::Preconv => preconv::prepare(inputs, &label),
+        Technique::Sh2 => sh2::prepare(inputs, &label)?,
+    };
+    let recipe = LightingRecipe {
+        technique,
+        path,
+        h_order: inputs.h_order,
+        recipe,
+    };
+    Ok((texels, recipe))
+}
+
 fn build_sets(
     ctx: &Arc<Context>,
     scene: &SceneGpu,
@@ -273,22 +284,8 @@ fn build_sets(
     inputs: &Inputs<'_>,
     sets: usize,
 ) -> Result<(TechniqueGpu, LightingRecipe), TechniqueError> {
-    let label = format!("{technique}.{path}");
-    let (per_texel, recipe) = match technique {
-        Technique::Unc { order } => unc::per_texel(ctx, order, path, inputs, &label)?,
-        Technique::Pca { m, weights_only } => {
-            pca::per_texel(ctx, m, weights_only, path, inputs, &label)?
-        }
-        Technique::Shlmap => shlmap::per_texel(ctx, path, inputs, &label)?,
-        Technique::Preconv => preconv::per_texel(ctx, path, inputs, &label)?,
-        Technique::Sh2 => sh2::per_texel(ctx, path, inputs, &label)?,
-    };
-    let recipe = LightingRecipe {
-        technique,
-        path,
-        h_order: inputs.h_order,
-        recipe,
-    };
+    let (texels, recipe) = prepare(technique, path, inputs)?;
+    let per_texel = texels.upload(ctx, path)?;
     let data = recipe.build(inputs.radiance_sh, inputs.irradiance_sh)?;
     let gpu = finish::finish(ctx, scene, technique, path, per_texel, &data, sets)?;
     Ok((gpu, recipe))

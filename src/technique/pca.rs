@@ -24,11 +24,10 @@ use ash::vk;
 
 use super::lighting::{LightingData, Recipe};
 use super::tables::{NormalTableData, lxh_matrices, normal_table_data, table_map};
-use super::texels::{VALUES_PER_TEXEL, pack_groups, upload_texel_groups};
+use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
 use super::{HwPath, Inputs, ShaderVariant, TechniqueError};
 use crate::bake::lxh::SymmetricBuild;
 use crate::bake::pca::{PcaModel, QuantizedPca};
-use crate::gpu::{Context, Image};
 use crate::sh::Order;
 use crate::sh::product::product;
 use crate::sh::zonal::clamped_cosine_convolution;
@@ -66,16 +65,15 @@ pub fn quantized_prefix(model: &PcaModel, m: usize) -> QuantizedPca {
     truncated.quantize(WEIGHT_BITS)
 }
 
-/// Quantizes the first `m` vectors and uploads their weights; returns them and the recipe
-/// of the lighting data ([`lighting`]: the quantized basis and mean).
-pub(crate) fn per_texel(
-    ctx: &Arc<Context>,
+/// The first `m` vectors quantized: their weights per texel, and the recipe of the lighting
+/// data ([`lighting`]: the quantized basis and mean).
+pub(crate) fn prepare(
     m: u32,
     weights_only: bool,
     path: HwPath,
     inputs: &Inputs<'_>,
     label: &str,
-) -> Result<(Vec<Image>, Recipe), TechniqueError> {
+) -> Result<(TexelGroups, Recipe), TechniqueError> {
     let m = m as usize;
     let model = inputs.pca.ok_or_else(|| TechniqueError::Input {
         label: label.into(),
@@ -91,7 +89,7 @@ pub(crate) fn per_texel(
         });
     }
     let q = quantized_prefix(model, m);
-    let weights = upload_weights(ctx, path, &q, label)?;
+    let weights = weight_groups(&q, label);
     let table = if weights_only {
         None
     } else {
@@ -147,22 +145,14 @@ pub fn lighting(
 }
 
 /// The quantized weights, 4 per RGBA8 texel.
-fn upload_weights(
-    ctx: &Arc<Context>,
-    path: HwPath,
-    q: &QuantizedPca,
-    label: &str,
-) -> Result<Vec<Image>, TechniqueError> {
+fn weight_groups(q: &QuantizedPca, label: &str) -> TexelGroups {
     let texels = (q.res * q.res) as usize;
     let groups = pack_groups(texels, q.m, |t, k| q.weights_unorm[t * q.m + k] as u8);
-    let bytes: Vec<&[u8]> = groups.iter().map(|g| g.as_slice()).collect();
-    upload_texel_groups(
-        ctx,
-        path,
-        q.res,
+    TexelGroups::new(
         vk::Format::R8G8B8A8_UNORM,
-        &bytes,
-        &format!("{label}.weights"),
+        q.res,
+        &groups,
+        format!("{label}.weights"),
     )
 }
 

@@ -7,15 +7,12 @@
 //! coefficients in a uniform block. dx9 binds AO as a 2D texture, dx10 as a one-layer
 //! 2D array (`super::texels`), the rest is shared (glsl/technique/preconv.frag).
 
-use std::sync::Arc;
-
 use ash::vk;
 use half::f16;
 
 use super::lighting::{LightingData, Recipe};
-use super::texels::upload_texel_groups;
-use super::{HwPath, Inputs, ShaderVariant, TechniqueError, rgb_order3_block};
-use crate::gpu::{Context, Image};
+use super::texels::TexelGroups;
+use super::{Inputs, ShaderVariant, TechniqueError, rgb_order3_block};
 
 /// Uniforms of glsl/technique/preconv.frag, block `PreconvParams` (std140).
 #[repr(C)]
@@ -34,24 +31,17 @@ pub fn fragment_shader() -> ShaderVariant {
     }
 }
 
-/// Uploads the ambient occlusion; returns it and the recipe of the lighting data.
-pub(crate) fn per_texel(
-    ctx: &Arc<Context>,
-    path: HwPath,
-    inputs: &Inputs<'_>,
-    label: &str,
-) -> Result<(Vec<Image>, Recipe), TechniqueError> {
+/// The ambient occlusion per texel, and the recipe of the lighting data.
+pub(crate) fn prepare(inputs: &Inputs<'_>, label: &str) -> (TexelGroups, Recipe) {
     let ao = inputs.ao;
     let ao_f16: Vec<f16> = ao.values.iter().map(|&a| f16::from_f32(a)).collect();
-    let images = upload_texel_groups(
-        ctx,
-        path,
-        ao.res,
+    let texels = TexelGroups::new(
         vk::Format::R16_SFLOAT,
-        &[bytemuck::cast_slice(&ao_f16)],
-        &format!("{label}.ao"),
-    )?;
-    Ok((images, Recipe::Preconv))
+        ao.res,
+        &[ao_f16],
+        format!("{label}.ao"),
+    );
+    (texels, Recipe::Preconv)
 }
 
 /// The uniform block of order-3 irradiance `irradiance_sh`.

@@ -17,15 +17,13 @@
 //! one 2D texture, dx10 a one-layer 2D array.
 
 use std::fmt::Write as _;
-use std::sync::Arc;
 
 use ash::vk;
 use half::f16;
 
 use super::lighting::{LightingData, Recipe};
-use super::texels::{pack_groups, upload_texel_groups};
-use super::{HwPath, Inputs, ShaderVariant, TechniqueError, rgb_order3_block};
-use crate::gpu::{Context, Image};
+use super::texels::{TexelGroups, pack_groups};
+use super::{Inputs, ShaderVariant, TechniqueError, rgb_order3_block};
 use crate::sh::Order;
 use crate::sh::product::gaunt_tensor;
 
@@ -86,13 +84,11 @@ pub fn product_glsl() -> String {
     s
 }
 
-/// Uploads the order-2 visibility; returns it and the recipe of the lighting data.
-pub(crate) fn per_texel(
-    ctx: &Arc<Context>,
-    path: HwPath,
+/// The order-2 visibility per texel, and the recipe of the lighting data.
+pub(crate) fn prepare(
     inputs: &Inputs<'_>,
     label: &str,
-) -> Result<(Vec<Image>, Recipe), TechniqueError> {
+) -> Result<(TexelGroups, Recipe), TechniqueError> {
     let vis = inputs.visibility.ok_or_else(|| TechniqueError::Input {
         label: label.into(),
         detail: "needs the SH visibility bake".into(),
@@ -110,16 +106,13 @@ pub(crate) fn per_texel(
     let groups = pack_groups(texels, Order::TWO.coeff_count(), |t, j| {
         f16::from_f32(vis.coeffs[t * stride + j])
     });
-    let bytes: Vec<&[u8]> = groups.iter().map(|g| bytemuck::cast_slice(g)).collect();
-    let images = upload_texel_groups(
-        ctx,
-        path,
-        vis.res,
+    let texels = TexelGroups::new(
         vk::Format::R16G16B16A16_SFLOAT,
-        &bytes,
-        &format!("{label}.visibility"),
-    )?;
-    Ok((images, Recipe::Sh2))
+        vis.res,
+        &groups,
+        format!("{label}.visibility"),
+    );
+    Ok((texels, Recipe::Sh2))
 }
 
 /// The uniform block of order-3 radiance `radiance_sh`.

@@ -13,17 +13,14 @@
 //! 7-layer 2D array. Values are scaled into f16's range like the L×H tables
 //! ([`super::tables::f16_range_scale`]) and the shader multiplies back.
 
-use std::sync::Arc;
-
 use ash::vk;
 use half::f16;
 
 use super::lighting::{LightingData, Recipe};
 use super::tables::{f16_range_scale, max_abs};
-use super::texels::{VALUES_PER_TEXEL, pack_groups, upload_texel_groups};
-use super::{HwPath, Inputs, ShaderVariant, TechniqueError};
+use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
+use super::{Inputs, ShaderVariant, TechniqueError};
 use crate::bake::shlmap::{SH_LIGHTMAP_COEFFS, ShLightmap};
-use crate::gpu::{Context, Image};
 
 /// RGBA groups per texel: ⌈27 / 4⌉.
 pub const SHLMAP_GROUPS: usize = (3 * SH_LIGHTMAP_COEFFS).div_ceil(VALUES_PER_TEXEL);
@@ -51,14 +48,12 @@ pub fn stored_scale(map: &ShLightmap) -> Option<f32> {
     max_abs.is_finite().then(|| f16_range_scale(max_abs))
 }
 
-/// Uploads the SH lightmap, range-scaled into f16; returns it and a recipe that always
-/// gives the block undoing that scale (the lighting is baked in).
-pub(crate) fn per_texel(
-    ctx: &Arc<Context>,
-    path: HwPath,
+/// The SH lightmap, range-scaled into f16, and a recipe that always gives the block undoing
+/// that scale (the lighting is baked in).
+pub(crate) fn prepare(
     inputs: &Inputs<'_>,
     label: &str,
-) -> Result<(Vec<Image>, Recipe), TechniqueError> {
+) -> Result<(TexelGroups, Recipe), TechniqueError> {
     let map = inputs.sh_lightmap.ok_or_else(|| TechniqueError::Input {
         label: label.into(),
         detail: "needs the SH lightmap bake".into(),
@@ -74,20 +69,17 @@ pub(crate) fn per_texel(
     let groups = pack_groups(texels, 3 * SH_LIGHTMAP_COEFFS, |t, value| {
         f16::from_f32(map.texel(t)[value / 3][value % 3] * scale)
     });
-    let bytes: Vec<&[u8]> = groups.iter().map(|g| bytemuck::cast_slice(g)).collect();
-    let images = upload_texel_groups(
-        ctx,
-        path,
-        map.res,
+    let texels = TexelGroups::new(
         vk::Format::R16G16B16A16_SFLOAT,
-        &bytes,
-        &format!("{label}.radiance_sh"),
-    )?;
+        map.res,
+        &groups,
+        format!("{label}.radiance_sh"),
+    );
     let params = ShLightmapParams {
         unscale: [1.0 / scale, 0.0, 0.0, 0.0],
     };
     Ok((
-        images,
+        texels,
         Recipe::Baked(LightingData::params(bytemuck::bytes_of(&params).to_vec())),
     ))
 }

@@ -19,6 +19,7 @@ use std::sync::Arc;
 
 use ash::vk;
 use half::f16;
+use half::slice::HalfFloatSliceExt;
 
 use super::finish::TextureSlot;
 use super::{HwPath, TechniqueError};
@@ -41,10 +42,16 @@ pub fn f16_range_scale(max_abs: f32) -> f32 {
     }
 }
 
-/// Largest magnitude of `values` (NaN-propagating only through `max`, so callers check
-/// the result with `is_finite`); what [`f16_range_scale`] is given.
+/// Largest magnitude of `values`, NaN if any is NaN (`f32::max` alone would skip it), so
+/// callers check the result with `is_finite`; what [`f16_range_scale`] is given.
 pub fn max_abs(values: impl IntoIterator<Item = f32>) -> f32 {
-    values.into_iter().fold(0.0f32, |m, v| m.max(v.abs()))
+    values.into_iter().fold(0.0f32, |m, v| {
+        if m.is_nan() || v.is_nan() {
+            f32::NAN
+        } else {
+            m.max(v.abs())
+        }
+    })
 }
 
 /// Uniforms of glsl/include/grouped.glsl, block `GroupedParams` (std140).
@@ -88,56 +95,12 @@ pub fn table_map(path: HwPath, table_res: u32, label: &str) -> Result<SphereMap,
     })
 }
 
-/// dx9: `spheres` dual-paraboloid spheres side by side, row-major RGBA texels of a
-/// (spheres · 2 · res) × res texture; `texel(t, s)` is sample t (`SphereMap::texel_index`)
-/// of sphere s. Returns the width and the texels.
-pub fn dx9_strip(
-    map: SphereMap,
-    spheres: usize,
-    texel: impl Fn(usize, usize) -> [f32; 4],
-) -> (u32, Vec<[f32; 4]>) {
-    let tr = map.res() as usize;
-    let width = spheres * 2 * tr;
-    let mut texels = Vec::with_capacity(width * tr);
-    for y in 0..tr {
-        for x in 0..width {
-            let (sphere, within) = (x / (2 * tr), x % (2 * tr));
-            let (hemi, i) = (within / tr, within % tr);
-            texels.push(texel(
-                map.texel_index(hemi as u32, i as u32, y as u32),
-                sphere,
-            ));
-        }
-    }
-    (width as u32, texels)
-}
-
-/// dx10: `cubes` cubes of 6 faces each, layer 6c + f, row-major RGBA texels per face;
-/// `texel(t, c)` is sample t of cube c.
-pub fn dx10_cube_layers(
-    map: SphereMap,
-    cubes: usize,
-    texel: impl Fn(usize, usize) -> [f32; 4],
-) -> Vec<Vec<[f32; 4]>> {
-    let tr = map.res();
-    let mut layers = Vec::with_capacity(cubes * 6);
-    for cube in 0..cubes {
-        for face in 0..6u32 {
-            let face_texels = (0..tr)
-                .flat_map(|j| (0..tr).map(move |i| (i, j)))
-                .map(|(i, j)| texel(map.texel_index(face, i, j), cube))
-                .collect();
-            layers.push(face_texels);
-        }
-    }
-    layers
-}
-
-/// One table image's description and f16 RGBA texels per layer, on the CPU.
+/// One table image's description and RGBA16F texels per layer, on the CPU.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TableImage {
     pub desc: ImageDesc,
-    pub layers: Vec<Vec<f16>>,
+    /// RGBA texels per layer.
+    pub layers: Vec<Vec<[f16; 4]>>,
     /// Debug name of the image ("unc6.dx9.lxh.red").
     pub name: String,
 }
@@ -200,7 +163,9 @@ impl NormalTableData {
 
 /// Tables at the texel centres of `map` (dual paraboloid for dx9, cube for dx10):
 /// `value(t, g, c)` is the RGBA of sample t, group g, colour c; `mean(t)` the RGB of the
-/// optional mean table. Range-scaled into f16 (module doc).
+/// optional mean table. Range-scaled into f16 (module doc) and laid out as the module doc
+/// draws: sample t = face·res² + j·res + i (`SphereMap::texel_index`) is texel (i, j) of
+/// hemisphere / cube face `face`.
 pub fn normal_table_data(
     path: HwPath,
     map: SphereMap,
@@ -209,11 +174,29 @@ pub fn normal_table_data(
     mean: Option<&dyn Fn(usize) -> [f32; 3]>,
     name: &str,
 ) -> Result<NormalTableData, TechniqueError> {
-    let value = &value;
-    let max_abs = max_abs((0..map.sample_count()).flat_map(|t| {
-        let tables = (0..groups).flat_map(move |g| (0..3).flat_map(move |c| value(t, g, c)));
-        tables.chain(mean.map_or([0.0; 3], |m| m(t)))
-    }));
+    // Plane p: colour c, group g at p = c·groups + g, the mean last; planes[p·samples + t].
+    // Filled sample-major (each sample's values are read once, in order) with plain loops:
+    // the table rebuild of `shvis relight` runs through here.
+    let samples = map.sample_count();
+    let face_texels = (map.res() * map.res()) as usize;
+    let plane_count = 3 * groups + usize::from(mean.is_some());
+    let mut planes = vec![[0.0f32; 4]; plane_count * samples];
+    for t in 0..samples {
+        for c in 0..3 {
+            for g in 0..groups {
+                planes[(c * groups + g) * samples + t] = value(t, g, c);
+            }
+        }
+        if let Some(m) = mean {
+            let [r, g, b] = m(t);
+            planes[3 * groups * samples + t] = [r, g, b, 0.0];
+        }
+    }
+    let max_abs = max_abs(
+        bytemuck::cast_slice::<[f32; 4], f32>(&planes)
+            .iter()
+            .copied(),
+    );
     if !max_abs.is_finite() {
         return Err(TechniqueError::Input {
             label: name.into(),
@@ -221,27 +204,42 @@ pub fn normal_table_data(
         });
     }
     let scale = f16_range_scale(max_abs);
-    let to_f16 = |texels: &[[f32; 4]]| -> Vec<f16> {
-        texels
-            .iter()
-            .flatten()
-            .map(|&v| f16::from_f32(v * scale))
-            .collect()
+    let to_f16 = |texels: &[[f32; 4]]| -> Vec<[f16; 4]> {
+        let mut out = vec![[f16::ZERO; 4]; texels.len()];
+        let (src, dst) = (
+            bytemuck::cast_slice::<[f32; 4], f32>(texels),
+            bytemuck::cast_slice_mut::<[f16; 4], f16>(&mut out),
+        );
+        let mut scaled = [0.0f32; 256];
+        for (s, d) in src.chunks(scaled.len()).zip(dst.chunks_mut(scaled.len())) {
+            for (x, v) in scaled.iter_mut().zip(s) {
+                *x = v * scale;
+            }
+            d.convert_from_f32_slice(&scaled[..s.len()]);
+        }
+        out
     };
-    let mean_rgba = |t: usize| -> [f32; 4] {
-        mean.map_or([0.0; 4], |m| {
-            let [r, g, b] = m(t);
-            [r, g, b, 0.0]
-        })
-    };
+    let plane = |p: usize| &planes[p * samples..(p + 1) * samples];
     let fmt = vk::Format::R16G16B16A16_SFLOAT;
     let tr = map.res();
+    let res = tr as usize;
     let (images, slot_sizes) = match path {
         HwPath::Dx9 => {
-            let strip = |spheres: usize, texel: &dyn Fn(usize, usize) -> [f32; 4], n: &str| {
-                let (width, texels) = dx9_strip(map, spheres, texel);
+            // Strip of planes p0 … p0 + spheres − 1: row y is, per sphere, row y of its +Y
+            // hemisphere then row y of its −Y one.
+            let strip = |p0: usize, spheres: usize, n: &str| {
+                let width = spheres * 2 * res;
+                let mut texels = Vec::with_capacity(width * res);
+                for y in 0..res {
+                    for p in p0..p0 + spheres {
+                        for hemi in 0..2 {
+                            let start = hemi * face_texels + y * res;
+                            texels.extend_from_slice(&plane(p)[start..start + res]);
+                        }
+                    }
+                }
                 TableImage {
-                    desc: ImageDesc::texture_2d(fmt, width, tr),
+                    desc: ImageDesc::texture_2d(fmt, width as u32, tr),
                     layers: vec![to_f16(&texels)],
                     name: format!("{name}.{n}"),
                 }
@@ -249,27 +247,20 @@ pub fn normal_table_data(
             let mut images: Vec<TableImage> = ["red", "green", "blue"]
                 .iter()
                 .enumerate()
-                .map(|(c, n)| strip(groups, &|t, g| value(t, g, c), n))
+                .map(|(c, n)| strip(c * groups, groups, n))
                 .collect();
             let mut slot_sizes = vec![3];
             if mean.is_some() {
-                images.push(strip(1, &|t, _| mean_rgba(t), "mean"));
+                images.push(strip(3 * groups, 1, "mean"));
                 slot_sizes.push(1);
             }
             (images, slot_sizes)
         }
         HwPath::Dx10 => {
-            let cubes = 3 * groups + mean.is_some() as usize;
-            let layers = dx10_cube_layers(map, cubes, |t, cube| {
-                if cube < 3 * groups {
-                    value(t, cube % groups, cube / groups)
-                } else {
-                    mean_rgba(t)
-                }
-            });
+            // Cube p is plane p; its layer f is face f's samples, already row-major.
             let image = TableImage {
-                desc: ImageDesc::texture_cube_array(fmt, tr, cubes as u32),
-                layers: layers.iter().map(|l| to_f16(l)).collect(),
+                desc: ImageDesc::texture_cube_array(fmt, tr, plane_count as u32),
+                layers: planes.chunks(face_texels).map(to_f16).collect(),
                 name: name.to_string(),
             };
             (vec![image], vec![1])
@@ -303,46 +294,83 @@ mod tests {
     }
 
     #[test]
-    fn dx9_strip_puts_sphere_s_hemisphere_h_at_columns_2s_plus_h() {
+    fn max_abs_sees_nan_and_infinity() {
+        assert_eq!(max_abs([1.0, -3.0, 2.0]), 3.0);
+        assert!(max_abs([1.0, f32::NAN, 2.0]).is_nan());
+        assert!(max_abs([f32::NAN, 2.0]).is_nan());
+        assert_eq!(max_abs([1.0, f32::NEG_INFINITY]), f32::INFINITY);
+    }
+
+    /// Value of sample t (< 54), group g (< 3), colour c, lane k: a distinct integer below
+    /// 2048, so exact in f16.
+    fn encode(t: usize, g: usize, c: usize) -> [f32; 4] {
+        std::array::from_fn(|k| (((t * 3 + g) * 3 + c) * 4 + k) as f32)
+    }
+
+    #[test]
+    fn dx9_strip_puts_sphere_g_hemisphere_h_at_columns_2g_plus_h() {
         let map = SphereMap::new(Parameterization::DualParaboloid, 4).unwrap();
         let tr = 4usize;
-        let encode = |t: usize, s: usize| [t as f32, s as f32, 0.0, 1.0];
-        let (width, texels) = dx9_strip(map, 3, encode);
-        assert_eq!(width as usize, 3 * 2 * tr);
-        assert_eq!(texels.len(), 3 * 2 * tr * tr);
-        for y in 0..tr {
-            for s in 0..3 {
-                for hemi in 0..2 {
-                    for i in 0..tr {
-                        let x = s * 2 * tr + hemi * tr + i;
-                        let t = map.texel_index(hemi as u32, i as u32, y as u32);
-                        assert_eq!(texels[y * width as usize + x], encode(t, s), "x {x} y {y}");
+        let mean = |t: usize| [t as f32, 1.0, 2.0];
+        let data = normal_table_data(HwPath::Dx9, map, 3, encode, Some(&mean), "t").unwrap();
+        assert_eq!(data.slot_sizes, vec![3, 1]);
+        assert_eq!(data.unscale, 1.0);
+        for c in 0..3 {
+            let image = &data.images[c];
+            assert_eq!(
+                (image.desc.width, image.desc.height),
+                (3 * 2 * tr as u32, tr as u32)
+            );
+            let texels = &image.layers[0];
+            for y in 0..tr {
+                for g in 0..3 {
+                    for hemi in 0..2 {
+                        for i in 0..tr {
+                            let x = g * 2 * tr + hemi * tr + i;
+                            let t = map.texel_index(hemi as u32, i as u32, y as u32);
+                            let got = texels[y * 3 * 2 * tr + x].map(f16::to_f32);
+                            assert_eq!(got, encode(t, g, c), "colour {c} x {x} y {y}");
+                        }
                     }
                 }
             }
         }
-        // Every sample of every sphere appears exactly once.
-        let mut seen = vec![0u32; map.sample_count() * 3];
-        for v in &texels {
-            seen[v[1] as usize * map.sample_count() + v[0] as usize] += 1;
+        let mean_strip = &data.images[3].layers[0];
+        for (x, y) in [(0, 0), (5, 2), (7, 3)] {
+            let t = map.texel_index((x / tr) as u32, (x % tr) as u32, y as u32);
+            let got = mean_strip[y * 2 * tr + x].map(f16::to_f32);
+            assert_eq!(got, [t as f32, 1.0, 2.0, 0.0]);
         }
-        assert!(seen.iter().all(|&n| n == 1));
     }
 
     #[test]
     fn dx10_layers_are_cube_major_then_face() {
         let map = SphereMap::new(Parameterization::CubeDx10, 3).unwrap();
-        let layers = dx10_cube_layers(map, 2, |t, c| [t as f32, c as f32, 0.0, 0.0]);
-        assert_eq!(layers.len(), 12);
-        for (l, layer) in layers.iter().enumerate() {
+        let data = normal_table_data(HwPath::Dx10, map, 2, encode, None, "t").unwrap();
+        let image = &data.images[0];
+        assert_eq!(image.desc.layers, 6 * 3 * 2);
+        assert_eq!(image.layers.len(), 36);
+        for (l, layer) in image.layers.iter().enumerate() {
+            // Cube c·groups + g holds colour c, group g.
             let (cube, face) = (l / 6, (l % 6) as u32);
+            let (c, g) = (cube / 2, cube % 2);
             for j in 0..3u32 {
                 for i in 0..3u32 {
-                    let v = layer[(j * 3 + i) as usize];
-                    assert_eq!(v[0] as usize, map.texel_index(face, i, j));
-                    assert_eq!(v[1] as usize, cube);
+                    let got = layer[(j * 3 + i) as usize].map(f16::to_f32);
+                    assert_eq!(got, encode(map.texel_index(face, i, j), g, c));
                 }
             }
         }
+    }
+
+    #[test]
+    fn tables_out_of_f16_range_are_scaled_and_non_finite_ones_refused() {
+        let map = SphereMap::new(Parameterization::CubeDx10, 2).unwrap();
+        let big = |t: usize, _: usize, _: usize| [1e6 * (t + 1) as f32, 0.0, -1.0, 0.0];
+        let data = normal_table_data(HwPath::Dx10, map, 1, big, None, "t").unwrap();
+        let top = data.images[0].layers[0][3][0].to_f32() * data.unscale;
+        assert!((top / 4e6 - 1.0).abs() < 1e-3, "{top}");
+        let nan = |t: usize, _: usize, _: usize| [if t == 5 { f32::NAN } else { 1.0 }; 4];
+        assert!(normal_table_data(HwPath::Dx9, map, 1, nan, None, "t").is_err());
     }
 }

@@ -36,6 +36,43 @@ pub fn pack_groups<T: Copy + Default>(
     out
 }
 
+/// A technique's per-texel data on the CPU: ⌈values/4⌉ groups of res² texels of `format`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TexelGroups {
+    pub format: vk::Format,
+    pub res: u32,
+    /// Texel bytes per group.
+    pub groups: Vec<Vec<u8>>,
+    /// Debug name of the images ("unc6.dx9.visibility").
+    pub name: String,
+}
+
+impl TexelGroups {
+    /// Groups of plain-old-data texels (`pack_groups`' output).
+    pub fn new<T: bytemuck::Pod>(
+        format: vk::Format,
+        res: u32,
+        groups: &[Vec<T>],
+        name: String,
+    ) -> Self {
+        TexelGroups {
+            format,
+            res,
+            groups: groups
+                .iter()
+                .map(|g| bytemuck::cast_slice(g).to_vec())
+                .collect(),
+            name,
+        }
+    }
+
+    /// Uploads the groups on `path` ([`upload_texel_groups`]).
+    pub fn upload(&self, ctx: &Arc<Context>, path: HwPath) -> Result<Vec<Image>, TechniqueError> {
+        let bytes: Vec<&[u8]> = self.groups.iter().map(Vec::as_slice).collect();
+        upload_texel_groups(ctx, path, self.res, self.format, &bytes, &self.name)
+    }
+}
+
 /// Uploads per-texel groups (`groups[g]` = res² texels of `format`): one 2D texture per
 /// group on dx9, one 2D array on dx10.
 pub fn upload_texel_groups(

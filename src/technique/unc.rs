@@ -18,10 +18,9 @@ use half::f16;
 
 use super::lighting::{LightingData, Recipe};
 use super::tables::{lxh_matrices, normal_table_data, table_map};
-use super::texels::{VALUES_PER_TEXEL, pack_groups, upload_texel_groups};
+use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
 use super::{HwPath, Inputs, ShaderVariant, TechniqueError};
 use crate::bake::lxh::SymmetricBuild;
-use crate::gpu::{Context, Image};
 use crate::sh::Order;
 
 /// RGBA groups of order-`order` visibility.
@@ -37,15 +36,14 @@ pub fn fragment_shader(order: Order) -> ShaderVariant {
     }
 }
 
-/// Uploads the first O² visibility coefficients per texel; returns them and the recipe of
-/// the lighting data ([`lighting`]).
-pub(crate) fn per_texel(
-    ctx: &Arc<Context>,
+/// The first O² visibility coefficients per texel, and the recipe of the lighting data
+/// ([`lighting`]).
+pub(crate) fn prepare(
     order: Order,
     path: HwPath,
     inputs: &Inputs<'_>,
     label: &str,
-) -> Result<(Vec<Image>, Recipe), TechniqueError> {
+) -> Result<(TexelGroups, Recipe), TechniqueError> {
     let n = order.coeff_count();
     let vis = inputs.visibility.ok_or_else(|| TechniqueError::Input {
         label: label.into(),
@@ -63,18 +61,15 @@ pub(crate) fn per_texel(
     let texels = (vis.res * vis.res) as usize;
     let stride = vis.order.coeff_count();
     let vis_groups = pack_groups(texels, n, |t, j| f16::from_f32(vis.coeffs[t * stride + j]));
-    let vis_bytes: Vec<&[u8]> = vis_groups.iter().map(|g| bytemuck::cast_slice(g)).collect();
-    let images = upload_texel_groups(
-        ctx,
-        path,
-        vis.res,
+    let texels = TexelGroups::new(
         vk::Format::R16G16B16A16_SFLOAT,
-        &vis_bytes,
-        &format!("{label}.visibility"),
-    )?;
+        vis.res,
+        &vis_groups,
+        format!("{label}.visibility"),
+    );
     let map = table_map(path, inputs.table_res, label)?;
     let table = Arc::new(SymmetricBuild::new(map));
-    Ok((images, Recipe::Unc { order, table }))
+    Ok((texels, Recipe::Unc { order, table }))
 }
 
 /// The L×H table of order `order` for `radiance_sh` over `table`'s map (`bake::lxh`), in
