@@ -304,6 +304,9 @@ struct RelightArgs {
     /// Full turns of the environment over the run.
     #[arg(long, default_value_t = 1.0)]
     turns: f64,
+    /// Cross-fade from --env to this environment over the run (time of day).
+    #[arg(long)]
+    fade_to: Option<String>,
     /// Frames at which errors are measured.
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
     samples: u32,
@@ -335,6 +338,7 @@ fn run_relight(a: RelightArgs) -> Result<()> {
             shvis::relight::UploadMode::Overlapped
         },
         turns: a.turns,
+        fade_to: a.fade_to.as_deref().map(shvis::env::resolve).transpose()?,
         samples: a.samples,
         width: a.width,
         height: a.height,

@@ -1,6 +1,9 @@
 //! `shvis relight` (issue 15): the environment turns about +Y over the run
 //! ([`crate::env::schedule`]) and every technique with dynamic lighting follows it.
 //!
+//! With `--fade-to ENV` the environment also cross-fades to a second one over the run
+//! (time of day; the SH blended, the references' maps blended texel by texel).
+//!
 //! Per technique × path the technique is built once with two copies of its lighting data
 //! (`technique::build_dynamic`: the per-texel bake data is uploaded once and never again).
 //! Every K frames (`every`) its lighting data — L×H or T_k tables, uniforms
@@ -56,6 +59,8 @@ pub struct RelightSettings {
     pub upload: UploadMode,
     /// Full turns of the environment over the run.
     pub turns: f64,
+    /// An environment cross-faded to over the run (time of day), if any.
+    pub fade_to: Option<EnvMap>,
     /// Frames at which errors are measured (spread over the run).
     pub samples: u32,
     pub width: u32,
@@ -152,6 +157,8 @@ pub struct RelightTable {
     pub every: u32,
     pub upload: UploadMode,
     pub turns: f64,
+    /// Whether the run cross-faded to a second environment.
+    pub faded: bool,
     pub reference_spp: u32,
     pub results: Vec<RelightRow>,
     /// Techniques asked for whose lighting is baked in (`shlmap`): not run.
@@ -161,12 +168,17 @@ pub struct RelightTable {
 impl RelightTable {
     pub fn to_markdown(&self) -> String {
         let mut s = format!(
-            "device: {} · {}×{} · {} frames, {} turn(s), lighting data rebuilt every {} frames, {} upload · references {} spp (point-sampled)\n\n",
+            "device: {} · {}×{} · {} frames, {} turn(s){}, lighting data rebuilt every {} frames, {} upload · references {} spp (point-sampled)\n\n",
             self.device,
             self.width,
             self.height,
             self.frames,
             self.turns,
+            if self.faded {
+                " and a cross-fade to a second environment"
+            } else {
+                ""
+            },
             self.every,
             self.upload,
             self.reference_spp
@@ -230,11 +242,26 @@ pub fn sampled_frames(frames: u32, samples: u32, every: u32) -> Vec<u32> {
     out
 }
 
-/// The environment map turned by `angle` about +Y (g(ω) = f(Rᵀω), as `sh::rotate`).
-fn rotated_env(env: &EnvMap, angle: f64) -> EnvMap {
-    let r = rotation_about_y(angle);
+/// The environment of the schedule's `frame` as a map, for its reference: `env` faded
+/// towards `to` by the schedule's weight, turned by its angle about +Y (g(ω) = f(Rᵀω), as
+/// `sh::rotate`), at `env`'s resolution.
+fn scheduled_env(
+    env: &EnvMap,
+    to: Option<&EnvMap>,
+    schedule: &LightingSchedule,
+    frame: u32,
+) -> EnvMap {
+    let r = rotation_about_y(schedule.angle(frame)).transpose();
+    let t = schedule.fade(frame) as f32;
     EnvMap::from_fn(env.width, env.height, |d| {
-        env.sample_bilinear(r.transpose() * d)
+        let a = env.sample_bilinear(r * d);
+        match to {
+            Some(to) if t > 0.0 => {
+                let b = to.sample_bilinear(r * d);
+                std::array::from_fn(|c| (1.0 - t) * a[c] + t * b[c])
+            }
+            _ => a,
+        }
     })
 }
 
@@ -251,12 +278,17 @@ pub fn run(
     }
     let order = Order::new((prepared.radiance_sh.len() as f64).sqrt() as u32)
         .map_err(|e| RelightError::Settings(e.to_string()))?;
-    let schedule = LightingSchedule::rotating(
+    let mut schedule = LightingSchedule::rotating(
         order,
         prepared.radiance_sh.clone(),
         settings.turns,
         settings.frames,
     );
+    if let Some(to) = &settings.fade_to {
+        // Time of day: from the scene's environment to `to` over the whole run.
+        schedule.to = Some(crate::env::project::project_sh(to, order));
+        schedule.fade_frames = settings.frames.saturating_sub(1);
+    }
     let scene = SceneGpu::new(
         ctx,
         &prepared.scene,
@@ -270,7 +302,7 @@ pub fn run(
     // References of the sampled frames' lighting.
     let mut references = Vec::new();
     for &f in &sampled {
-        let env = rotated_env(&prepared.env, schedule.angle(f));
+        let env = scheduled_env(&prepared.env, settings.fade_to.as_ref(), &schedule, f);
         let reference = render_reference(
             ctx,
             &prepared.scene,
@@ -325,6 +357,7 @@ pub fn run(
         every: settings.every,
         upload: settings.upload,
         turns: settings.turns,
+        faded: settings.fade_to.is_some(),
         reference_spp: settings.ref_spp,
         results: rows,
         static_only,

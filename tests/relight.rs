@@ -22,6 +22,7 @@ fn settings(out: &Path, every: u32, upload: UploadMode) -> RelightSettings {
         every,
         upload,
         turns: 0.25,
+        fade_to: None,
         samples: 2,
         width: 64,
         height: 40,
@@ -36,16 +37,28 @@ fn settings(out: &Path, every: u32, upload: UploadMode) -> RelightSettings {
 fn dynamic_techniques_follow_a_rotating_environment() {
     let ctx = common::validated_context();
     let prepared = common::house();
+    // The last run also cross-fades to an overcast, uniform sky (time of day).
+    let overcast = shvis::env::EnvMap::from_fn(64, 32, |_| [0.9, 0.95, 1.0]);
     let runs = [
-        (1, UploadMode::Blocking),
-        (2, UploadMode::Blocking),
-        (1, UploadMode::Overlapped),
+        (1, UploadMode::Blocking, None),
+        (2, UploadMode::Blocking, None),
+        (1, UploadMode::Overlapped, Some(overcast)),
     ];
-    for (every, upload) in runs {
+    for (every, upload, fade_to) in runs {
         let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("relight-{every}-{upload}"));
         let _ = std::fs::remove_dir_all(&out);
         std::fs::create_dir_all(&out).expect("output folder");
-        let table = run(&ctx, prepared, &settings(&out, every, upload)).expect("relight runs");
+        let faded = fade_to.is_some();
+        let table = run(
+            &ctx,
+            prepared,
+            &RelightSettings {
+                fade_to,
+                ..settings(&out, every, upload)
+            },
+        )
+        .expect("relight runs");
+        assert_eq!(table.faded, faded);
         common::assert_validation_clean(&ctx, &format!("relight every {every}, {upload}"));
         assert_eq!(table.static_only, vec![Technique::Shlmap]);
         assert_eq!(table.results.len(), 5 * 2);
