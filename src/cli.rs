@@ -62,6 +62,18 @@ enum StudyCommand {
     /// Appendix A / Figure 8: MSE of SH basis functions stored in four sphere
     /// parameterizations against total samples (CPU emulation and real texture hardware).
     Params(StudyParamsArgs),
+    /// Issue 16: visibility reconstruction error against storage for global PCA, VQ and
+    /// static / iterative CPCA fitted to the same bake.
+    Compression(StudyCompressionArgs),
+}
+
+#[derive(Args, Debug)]
+struct StudyCompressionArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Output directory: compression.md, compression.json.
+    #[arg(long, default_value = "study-out")]
+    out: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -381,7 +393,37 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Relight(a) => run_relight(a).context("relight"),
         Command::Sh(c) => run_sh(c).context("sh"),
         Command::Study(StudyCommand::Params(a)) => run_study_params(a).context("study params"),
+        Command::Study(StudyCommand::Compression(a)) => {
+            run_study_compression(a).context("study compression")
+        }
     }
+}
+
+fn run_study_compression(a: StudyCompressionArgs) -> Result<()> {
+    use shvis::study::compression;
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    let prepared = prepare(&prepare_settings(&a.scene, "sky", None)?)?;
+    let rows = compression::run(
+        &prepared.visibility,
+        &compression::default_configs(),
+        a.scene.table_res,
+        a.scene.seed,
+    )?;
+    let markdown = compression::to_markdown(&rows, prepared.visibility.res, a.scene.table_res);
+    std::fs::write(a.out.join("compression.md"), &markdown).context("compression.md")?;
+    std::fs::write(
+        a.out.join("compression.json"),
+        serde_json::to_string_pretty(&rows)? + "\n",
+    )
+    .context("compression.json")?;
+    print_table(
+        &markdown,
+        &a.out,
+        "compression.md, compression.json",
+        started,
+    );
+    Ok(())
 }
 
 fn run_study_params(a: StudyParamsArgs) -> Result<()> {

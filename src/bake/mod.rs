@@ -16,6 +16,7 @@
 
 pub mod ao;
 pub mod cache;
+pub mod cluster;
 pub mod directions;
 pub mod lxh;
 pub mod pca;
@@ -77,6 +78,8 @@ pub enum BakeError {
     EmptyLightmap,
     #[error("PCA basis size {m} is out of range 1..={n}")]
     PcaBasisOutOfRange { m: usize, n: usize },
+    #[error("cluster count {k} is out of range 1..=65536")]
+    ClusterCountOutOfRange { k: usize },
     #[error("{}: cannot {action}: {source}", .path.display())]
     Io {
         path: std::path::PathBuf,

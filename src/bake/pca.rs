@@ -90,47 +90,10 @@ pub fn fit(vis: &VisibilityMap, m: usize) -> Result<PcaModel, BakeError> {
     if covered.is_empty() {
         return Err(BakeError::EmptyLightmap);
     }
-    let count = covered.len() as f64;
-
-    // Two passes: the mean, then the centred covariance (upper triangle, mirrored).
-    let mut mean = vec![0.0f64; n];
-    for &t in &covered {
-        for (acc, &v) in mean.iter_mut().zip(vis.texel(t)) {
-            *acc += f64::from(v);
-        }
-    }
-    mean.iter_mut().for_each(|v| *v /= count);
-    let mut cov = DMatrix::<f64>::zeros(n, n);
+    let (mean, eigenvalues, mut basis) =
+        principal_subspace(covered.iter().map(|&t| vis.texel(t)), n);
+    basis.truncate(m);
     let mut d = vec![0.0f64; n];
-    for &t in &covered {
-        for ((d, &v), &mu) in d.iter_mut().zip(vis.texel(t)).zip(&mean) {
-            *d = f64::from(v) - mu;
-        }
-        for i in 0..n {
-            for j in i..n {
-                cov[(i, j)] += d[i] * d[j];
-            }
-        }
-    }
-    for i in 0..n {
-        for j in i..n {
-            cov[(i, j)] /= count;
-            cov[(j, i)] = cov[(i, j)];
-        }
-    }
-
-    let eig = cov.symmetric_eigen();
-    let mut pairs: Vec<(f64, Vec<f64>)> = (0..n)
-        .map(|k| {
-            let mut v: Vec<f64> = eig.eigenvectors.column(k).iter().copied().collect();
-            fix_sign(&mut v);
-            (eig.eigenvalues[k].max(0.0), v)
-        })
-        .collect();
-    // Stable sort on decreasing eigenvalue; NaN cannot occur for a finite covariance.
-    pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
-    let eigenvalues: Vec<f64> = pairs.iter().map(|p| p.0).collect();
-    let basis: Vec<Vec<f64>> = pairs.into_iter().take(m).map(|p| p.1).collect();
 
     let mut weights = vec![0.0f32; texels * m];
     for t in 0..texels {
@@ -155,6 +118,58 @@ pub fn fit(vis: &VisibilityMap, m: usize) -> Result<PcaModel, BakeError> {
     })
 }
 
+/// The mean, the covariance eigenvalues (decreasing, clamped ≥ 0) and all n eigenvectors
+/// (module doc's conventions: sorted by decreasing eigenvalue, signs fixed) of `vectors`,
+/// each of `n` values, accumulated in f64 in the order given — so a fit is deterministic
+/// for a given order of its vectors. No vectors: a zero mean and zero eigenvalues.
+pub(crate) fn principal_subspace<'a>(
+    vectors: impl Iterator<Item = &'a [f32]> + Clone,
+    n: usize,
+) -> (Vec<f64>, Vec<f64>, Vec<Vec<f64>>) {
+    // Two passes: the mean, then the centred covariance (upper triangle, mirrored).
+    let mut mean = vec![0.0f64; n];
+    let mut count = 0usize;
+    for v in vectors.clone() {
+        for (acc, &c) in mean.iter_mut().zip(v) {
+            *acc += f64::from(c);
+        }
+        count += 1;
+    }
+    let count = count.max(1) as f64;
+    mean.iter_mut().for_each(|v| *v /= count);
+    let mut cov = DMatrix::<f64>::zeros(n, n);
+    let mut d = vec![0.0f64; n];
+    for v in vectors {
+        for ((d, &c), &mu) in d.iter_mut().zip(v).zip(&mean) {
+            *d = f64::from(c) - mu;
+        }
+        for i in 0..n {
+            for j in i..n {
+                cov[(i, j)] += d[i] * d[j];
+            }
+        }
+    }
+    for i in 0..n {
+        for j in i..n {
+            cov[(i, j)] /= count;
+            cov[(j, i)] = cov[(i, j)];
+        }
+    }
+    let eig = cov.symmetric_eigen();
+    let mut pairs: Vec<(f64, Vec<f64>)> = (0..n)
+        .map(|k| {
+            let mut v: Vec<f64> = eig.eigenvectors.column(k).iter().copied().collect();
+            fix_sign(&mut v);
+            (eig.eigenvalues[k].max(0.0), v)
+        })
+        .collect();
+    // Stable sort on decreasing eigenvalue; NaN cannot occur for a finite covariance.
+    pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let eigenvalues = pairs.iter().map(|p| p.0).collect();
+    let basis = pairs.into_iter().map(|p| p.1).collect();
+    (mean, eigenvalues, basis)
+}
+
 /// Makes the largest-magnitude component (the first on a tie) positive.
 fn fix_sign(v: &mut [f64]) {
     let mut big = 0;
@@ -168,7 +183,7 @@ fn fix_sign(v: &mut [f64]) {
     }
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 

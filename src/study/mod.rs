@@ -5,5 +5,9 @@
 //!   of [`crate::sphere`] reconstructs SH basis functions under hardware bilinear
 //!   filtering, as MSE against total texel count (`shvis study params`).
 
+//! - [`compression`]: issue 16 — visibility error against storage for PCA, VQ and CPCA
+//!   (`shvis study compression`).
+
+pub mod compression;
 pub mod params;
 pub mod params_gpu;

@@ -1,0 +1,196 @@
+//! Compression of the baked visibility against storage (issue 16, `shvis study
+//! compression`): global PCA (`bake::pca`), VQ and static / iterative CPCA
+//! (`bake::cluster`) fitted to the same order-6 visibility, each with the bytes it would
+//! take on the GPU and its reconstruction error.
+//!
+//! Storage, as the `pca*` techniques lay it out (`technique::pca`, `technique::tables`):
+//!
+//! ```text
+//! per texel   ⌈M/4⌉ · 4 bytes of RGBA8 weights, plus a cluster index (1 byte ≤ 256
+//!             clusters, else 2) for VQ and CPCA
+//! tables      per cluster 3 · ⌈M/4⌉ + 1 RGBA16F spheres (colour T_k groups and the mean),
+//!             a sphere being 2 · res² texels of 8 bytes (dx9 dual paraboloid)
+//! ```
+//!
+//! The error is the RMS over covered texels of the coefficient L2 error, which is the L2
+//! error of the visibility function over the sphere (the SH basis is orthonormal), before
+//! weight quantization. It does not depend on the lighting; what each model costs in image
+//! error under a given environment is the renderer's to measure.
+
+use std::fmt::Write as _;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::bake::BakeError;
+use crate::bake::cluster::{self, Clustering};
+use crate::bake::pca;
+use crate::bake::visibility::VisibilityMap;
+
+/// The model of one row.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Model {
+    Pca,
+    Vq,
+    /// VQ clusters, then PCA per cluster.
+    CpcaStatic,
+    /// Clusters refined by reassignment to the best affine subspace.
+    CpcaIterative,
+}
+
+impl Model {
+    fn name(self) -> &'static str {
+        match self {
+            Model::Pca => "PCA",
+            Model::Vq => "VQ",
+            Model::CpcaStatic => "static CPCA",
+            Model::CpcaIterative => "iterative CPCA",
+        }
+    }
+}
+
+/// One fitted model.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Row {
+    pub model: Model,
+    /// Clusters (1 for PCA).
+    pub k: usize,
+    /// Vectors per cluster (0 for VQ).
+    pub m: usize,
+    pub bytes_per_texel: usize,
+    pub texel_bytes: u64,
+    pub table_bytes: u64,
+    pub total_bytes: u64,
+    /// RMS visibility error over covered texels.
+    pub rms_error: f64,
+    /// Clusters that ended with a covered texel.
+    pub clusters_used: usize,
+    pub seconds: f64,
+}
+
+/// Bytes of a model with `k` clusters of `m` vectors (module doc) over a `res`² lightmap
+/// with `table_res`² tables.
+pub fn storage(k: usize, m: usize, res: u32, table_res: u32, indexed: bool) -> (usize, u64, u64) {
+    let groups = m.div_ceil(4);
+    let index = match (indexed, k) {
+        (false, _) => 0,
+        (true, ..=256) => 1,
+        (true, _) => 2,
+    };
+    let per_texel = 4 * groups + index;
+    let texel_bytes = per_texel as u64 * u64::from(res) * u64::from(res);
+    let sphere = 2 * u64::from(table_res) * u64::from(table_res) * 8;
+    let table_bytes = k as u64 * (3 * groups as u64 + 1) * sphere;
+    (per_texel, texel_bytes, table_bytes)
+}
+
+/// The default rows: PCA at 4…16 vectors, VQ at 16…256 clusters, CPCA at 8 and 32
+/// clusters of 3…15 vectors, static and iterative.
+pub fn default_configs() -> Vec<(Model, usize, usize)> {
+    let mut configs: Vec<(Model, usize, usize)> =
+        [4, 8, 12, 16].iter().map(|&m| (Model::Pca, 1, m)).collect();
+    configs.extend([16, 64, 256].iter().map(|&k| (Model::Vq, k, 0)));
+    for model in [Model::CpcaStatic, Model::CpcaIterative] {
+        for k in [8, 32] {
+            for m in [3, 7, 11, 15] {
+                configs.push((model, k, m));
+            }
+        }
+    }
+    configs
+}
+
+/// Fits every `(model, k, m)` of `configs` to `vis`.
+pub fn run(
+    vis: &VisibilityMap,
+    configs: &[(Model, usize, usize)],
+    table_res: u32,
+    seed: u64,
+) -> Result<Vec<Row>, BakeError> {
+    let mut rows = Vec::with_capacity(configs.len());
+    for &(model, k, m) in configs {
+        let start = Instant::now();
+        let (rms_error, clusters_used) = match model {
+            Model::Pca => (pca::fit(vis, m)?.rms_reconstruction_error(vis), 1),
+            Model::Vq | Model::CpcaStatic | Model::CpcaIterative => {
+                let clustering = match model {
+                    Model::CpcaIterative => Clustering::Iterative,
+                    _ => Clustering::KMeans,
+                };
+                let m = if model == Model::Vq { 0 } else { m };
+                let fit = cluster::fit(vis, k, m, clustering, seed)?;
+                (fit.rms_reconstruction_error(vis), fit.clusters_used())
+            }
+        };
+        let (bytes_per_texel, texel_bytes, table_bytes) =
+            storage(k, m, vis.res, table_res, model != Model::Pca);
+        rows.push(Row {
+            model,
+            k,
+            m,
+            bytes_per_texel,
+            texel_bytes,
+            table_bytes,
+            total_bytes: texel_bytes + table_bytes,
+            rms_error,
+            clusters_used,
+            seconds: start.elapsed().as_secs_f64(),
+        });
+        log::info!(
+            "compression: {} K={k} M={m}: {rms_error:.5} in {:.1} s",
+            model.name(),
+            start.elapsed().as_secs_f64()
+        );
+    }
+    Ok(rows)
+}
+
+/// The rows as a markdown table, sorted by total bytes.
+pub fn to_markdown(rows: &[Row], res: u32, table_res: u32) -> String {
+    let mut sorted: Vec<&Row> = rows.iter().collect();
+    sorted.sort_by_key(|r| (r.total_bytes, r.model as u8));
+    let mut s = format!(
+        "Visibility compression against storage: {res}² lightmap, {table_res}² tables (dx9 layout), RMS visibility error over covered texels (unquantized weights)\n\n\
+         | model | K | M | bytes/texel | texel KiB | table KiB | total KiB | RMS error | clusters used | s |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+    );
+    for r in sorted {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {:.0} | {:.0} | {:.0} | {:.5} | {} | {:.1} |",
+            r.model.name(),
+            r.k,
+            r.m,
+            r.bytes_per_texel,
+            r.texel_bytes as f64 / 1024.0,
+            r.table_bytes as f64 / 1024.0,
+            r.total_bytes as f64 / 1024.0,
+            r.rms_error,
+            r.clusters_used,
+            r.seconds
+        );
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn storage_counts_weights_index_and_tables() {
+        // pca16 at 512², 32² tables: 16 B per texel, 13 spheres of 16 KiB (the cost table's
+        // 213008 bytes less the 16-byte uniform block).
+        let (b, texels, tables) = storage(1, 16, 512, 32, false);
+        assert_eq!((b, texels, tables), (16, 16 * 512 * 512, 13 * 16384));
+        // CPCA 32 × 7: index + 2 RGBA8 groups; 32 clusters of 7 spheres.
+        assert_eq!(storage(32, 7, 512, 32, true).0, 9);
+        assert_eq!(storage(32, 7, 512, 32, true).2, 32 * 7 * 16384);
+        // VQ: an index only (2 bytes past 256 clusters), one mean sphere per cluster.
+        assert_eq!(
+            storage(1024, 0, 512, 32, true),
+            (2, 2 * 512 * 512, 1024 * 16384)
+        );
+    }
+}
