@@ -96,6 +96,26 @@ pub fn fragment_shader(technique: Technique) -> ShaderVariant {
     }
 }
 
+/// An input error unless `coeffs` has at least `need` SH coefficients (`what`: "lighting",
+/// "irradiance"), so a too-short lighting is one clear line, not a panic in the maths.
+pub(crate) fn require_coefficients(
+    coeffs: &[[f64; 3]],
+    need: usize,
+    what: &str,
+    label: &str,
+) -> Result<(), TechniqueError> {
+    if coeffs.len() < need {
+        return Err(TechniqueError::Input {
+            label: label.into(),
+            detail: format!(
+                "needs {what} with {need} SH coefficients, got {}",
+                coeffs.len()
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// Order-3 RGB SH coefficients as a std140 `vec4[9]` (RGB in .xyz): the uniform blocks of
 /// `preconv` (irradiance) and `sh2` (radiance).
 pub(crate) fn rgb_order3_block(coeffs: &[[f64; 3]]) -> [[f32; 4]; 9] {

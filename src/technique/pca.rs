@@ -23,7 +23,7 @@ use std::sync::Arc;
 use ash::vk;
 
 use super::lighting::{LightingData, Recipe};
-use super::tables::{NormalTableData, lxh_matrices, normal_table_data, table_map};
+use super::tables::{NormalTableData, lxh_table, normal_table_data, table_map};
 use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
 use super::{HwPath, Inputs, ShaderVariant, TechniqueError};
 use crate::bake::lxh::SymmetricBuild;
@@ -125,15 +125,7 @@ pub fn lighting(
         let need = Order::new(WEIGHTS_ONLY_LIGHTING_ORDER)
             .expect("valid order")
             .coeff_count();
-        if radiance_sh.len() < need {
-            return Err(TechniqueError::Input {
-                label: label.into(),
-                detail: format!(
-                    "needs lighting with {need} SH coefficients, got {}",
-                    radiance_sh.len()
-                ),
-            });
-        }
+        super::require_coefficients(radiance_sh, need, "lighting", label)?;
         let block = weights_only_block(basis, mean, order, radiance_sh);
         return Ok(LightingData::params(bytemuck::cast_slice(&block).to_vec()));
     };
@@ -202,9 +194,8 @@ fn tables_data(
 ) -> Result<NormalTableData, TechniqueError> {
     let n = order.coeff_count();
     let m = basis.len();
-    let matrices = lxh_matrices(radiance_sh, order, h_order, label)?;
     let map = table.map();
-    let lxh = table.build(&matrices);
+    let lxh = lxh_table(table, radiance_sh, order, h_order, label)?;
     let project = |t: usize, v: &[f64]| -> [f32; 3] {
         let mut s = [0.0f64; 3];
         for (j, vj) in v.iter().enumerate().take(n) {

@@ -46,15 +46,7 @@ pub(crate) fn prepare(inputs: &Inputs<'_>, label: &str) -> (TexelGroups, Recipe)
 
 /// The uniform block of order-3 irradiance `irradiance_sh`.
 pub fn lighting(irradiance_sh: &[[f64; 3]], label: &str) -> Result<LightingData, TechniqueError> {
-    if irradiance_sh.len() < 9 {
-        return Err(TechniqueError::Input {
-            label: label.into(),
-            detail: format!(
-                "needs order-3 irradiance (9 coefficients), got {}",
-                irradiance_sh.len()
-            ),
-        });
-    }
+    super::require_coefficients(irradiance_sh, 9, "irradiance", label)?;
     let params = PreconvParams {
         irradiance_sh: rgb_order3_block(irradiance_sh),
     };

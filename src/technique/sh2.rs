@@ -117,15 +117,7 @@ pub(crate) fn prepare(
 
 /// The uniform block of order-3 radiance `radiance_sh`.
 pub fn lighting(radiance_sh: &[[f64; 3]], label: &str) -> Result<LightingData, TechniqueError> {
-    if radiance_sh.len() < 9 {
-        return Err(TechniqueError::Input {
-            label: label.into(),
-            detail: format!(
-                "needs lighting of order 3 (9 coefficients), got {}",
-                radiance_sh.len()
-            ),
-        });
-    }
+    super::require_coefficients(radiance_sh, 9, "lighting", label)?;
     let params = Sh2Params {
         lighting_sh: rgb_order3_block(radiance_sh),
     };

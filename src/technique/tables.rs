@@ -23,7 +23,7 @@ use half::slice::HalfFloatSliceExt;
 
 use super::finish::TextureSlot;
 use super::{HwPath, TechniqueError};
-use crate::bake::lxh::LxhMatrices;
+use crate::bake::lxh::{LxhMatrices, LxhTable, SymmetricBuild};
 use crate::gpu::{Context, Image, ImageDesc};
 use crate::sh::Order;
 use crate::sphere::{Parameterization, SphereMap};
@@ -62,25 +62,19 @@ pub struct TableParams {
     pub unscale_res: [f32; 4],
 }
 
-/// The L×H product matrices of visibility order `v_order` for `radiance_sh`, or an input
-/// error when the lighting has fewer than the (O + 2)² coefficients they need.
-pub fn lxh_matrices(
+/// The L×H table of visibility order `v_order` for `radiance_sh` over `build`'s map
+/// (`bake::lxh`: product matrices, then the symmetric build), or an input error when the
+/// lighting has fewer than the (O + 2)² coefficients the product needs.
+pub fn lxh_table(
+    build: &SymmetricBuild,
     radiance_sh: &[[f64; 3]],
     v_order: Order,
     h_order: Order,
     label: &str,
-) -> Result<LxhMatrices, TechniqueError> {
+) -> Result<LxhTable, TechniqueError> {
     let need = Order::new(v_order.get() + 2).map_or(v_order.coeff_count(), |o| o.coeff_count());
-    if radiance_sh.len() < need {
-        return Err(TechniqueError::Input {
-            label: label.into(),
-            detail: format!(
-                "needs lighting with {need} SH coefficients, got {}",
-                radiance_sh.len()
-            ),
-        });
-    }
-    Ok(LxhMatrices::new(radiance_sh, v_order, h_order))
+    super::require_coefficients(radiance_sh, need, "lighting", label)?;
+    Ok(build.build(&LxhMatrices::new(radiance_sh, v_order, h_order)))
 }
 
 /// The tables' parameterization on each path.

@@ -17,7 +17,7 @@ use ash::vk;
 use half::f16;
 
 use super::lighting::{LightingData, Recipe};
-use super::tables::{lxh_matrices, normal_table_data, table_map};
+use super::tables::{lxh_table, normal_table_data, table_map};
 use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
 use super::{HwPath, Inputs, ShaderVariant, TechniqueError};
 use crate::bake::lxh::SymmetricBuild;
@@ -83,9 +83,8 @@ pub fn lighting(
     label: &str,
 ) -> Result<LightingData, TechniqueError> {
     let n = order.coeff_count();
-    let matrices = lxh_matrices(radiance_sh, order, h_order, label)?;
     let map = table.map();
-    let table = table.build(&matrices);
+    let table = lxh_table(table, radiance_sh, order, h_order, label)?;
     let tables = normal_table_data(
         path,
         map,
