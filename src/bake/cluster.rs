@@ -37,7 +37,7 @@ use rayon::prelude::*;
 
 use super::BakeError;
 use super::directions::{splitmix64, unit_f64};
-use super::pca::{dot, principal_subspace};
+use super::pca::{dot, principal_subspace, rms};
 use super::visibility::VisibilityMap;
 use crate::sh::Order;
 
@@ -434,30 +434,16 @@ impl ClusteredModel {
     /// RMS over covered texels of the coefficient L2 error against `vis` (= the L2 error
     /// of the visibility function, the SH basis being orthonormal).
     pub fn rms_reconstruction_error(&self, vis: &VisibilityMap) -> f64 {
-        let covered: Vec<usize> = (0..vis.covered.len()).filter(|&t| vis.covered[t]).collect();
-        let sum: f64 = covered
-            .iter()
-            .map(|&t| {
-                self.reconstruct(t)
-                    .iter()
-                    .zip(vis.texel(t))
-                    .map(|(a, &b)| (a - f64::from(b)).powi(2))
-                    .sum::<f64>()
-            })
-            .sum();
-        (sum / covered.len().max(1) as f64).sqrt()
+        let texels = (self.res as usize).pow(2);
+        rms((0..texels).filter(|&t| vis.covered[t]).map(|t| {
+            let v = vis.texel(t).iter().map(|&c| f64::from(c)).collect();
+            (v, self.reconstruct(t))
+        }))
     }
 
     /// Clusters with at least one covered texel.
     pub fn clusters_used(&self) -> usize {
         self.clusters.iter().filter(|c| c.members > 0).count()
-    }
-
-    /// Bytes per texel on the GPU: the cluster index (1 byte up to 256 clusters, else 2)
-    /// and M 8-bit weights.
-    pub fn bytes_per_texel(&self) -> usize {
-        let index = if self.clusters.len() <= 256 { 1 } else { 2 };
-        index + self.m
     }
 }
 

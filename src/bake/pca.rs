@@ -199,7 +199,7 @@ fn combine(mean: &[f64], basis: &[Vec<f64>], w: impl Iterator<Item = f64>) -> Ve
 }
 
 /// RMS over texels of the per-texel coefficient L2 distance.
-fn rms(pairs: impl Iterator<Item = (Vec<f64>, Vec<f64>)>) -> f64 {
+pub(crate) fn rms(pairs: impl Iterator<Item = (Vec<f64>, Vec<f64>)>) -> f64 {
     let (mut sum, mut count) = (0.0f64, 0usize);
     for (a, b) in pairs {
         sum += a.iter().zip(&b).map(|(x, y)| (x - y).powi(2)).sum::<f64>();

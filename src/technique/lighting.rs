@@ -43,17 +43,6 @@ impl LightingData {
             tables: None,
         }
     }
-
-    /// Bytes the tables' texels take (what an update uploads besides the uniforms).
-    pub fn table_bytes(&self) -> usize {
-        self.tables.as_ref().map_or(0, |t| {
-            t.images
-                .iter()
-                .flat_map(|i| &i.layers)
-                .map(|l| std::mem::size_of_val(l.as_slice()))
-                .sum()
-        })
-    }
 }
 
 /// What each family needs besides the lighting.
@@ -102,11 +91,6 @@ impl LightingRecipe {
         inputs: &super::Inputs<'_>,
     ) -> Result<Self, TechniqueError> {
         Ok(super::prepare(technique, path, inputs)?.1)
-    }
-
-    /// Whether the data follows the lighting (false for `shlmap`).
-    pub fn is_dynamic(&self) -> bool {
-        !matches!(self.recipe, Recipe::Baked(_))
     }
 
     /// The data for radiance `radiance_sh` (to the visibility order + 2) and its order-3
