@@ -165,6 +165,7 @@ fn lighting_update(c: &mut Criterion) {
         radiance_sh: &radiance,
         visibility: Some(&visibility),
         pca: Some(&pca),
+        clusters: &[],
         sh_lightmap: None,
         table_res: 32,
         h_order: Order::THREE,

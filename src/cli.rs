@@ -361,7 +361,8 @@ fn run_relight(a: RelightArgs) -> Result<()> {
     };
     create_dir(&a.out)?;
     let started = Instant::now();
-    let prepared = prepare(&prepare_settings(&a.scene, &a.env, None)?)?;
+    let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, None)?)?;
+    prepared.fit_clusters(&settings.techniques)?;
     let ctx = open_gpu(&a.gpu)?;
     let table = shvis::relight::run(&ctx, &prepared, &settings)?;
     print_table(
@@ -536,7 +537,8 @@ fn run_render(a: RenderArgs) -> Result<()> {
     // The device first: a missing GPU should not cost a bake.
     let ctx = open_gpu(&a.gpu)?;
     let bounces = a.technique.needs().sh_lightmap.then_some(a.bounces);
-    let prepared = prepare(&prepare_settings(&a.scene, &a.env, bounces)?)?;
+    let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, bounces)?)?;
+    prepared.fit_clusters(&[a.technique])?;
     let settings = FrameSettings {
         width: a.width,
         height: a.height,
@@ -633,7 +635,8 @@ fn run_bench(a: BenchArgs) -> Result<()> {
     create_dir(&a.out)?;
     let started = Instant::now();
     let bounces = settings.needs_sh_lightmap().then_some(a.bounces);
-    let prepared = prepare(&prepare_settings(&a.scene, &a.env, bounces)?)?;
+    let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, bounces)?)?;
+    prepared.fit_clusters(&settings.techniques)?;
     let ctx = open_gpu(&a.gpu)?;
     let table = shvis::bench::run(&ctx, &prepared, &settings)?;
     print_table(

@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use crate::bake::ao::{AoMap, AoSettings, bake_ao};
 use crate::bake::cache::{default_cache_dir, load_or_bake_visibility};
+use crate::bake::cluster::{self, ClusteredModel};
 use crate::bake::pca::{PcaModel, fit};
 use crate::bake::raster::{LightmapTexels, rasterize};
 use crate::bake::shlmap::{ShLightmap, ShLightmapSettings, bake_sh_lightmap};
@@ -18,7 +19,7 @@ use crate::env::{self, EnvError, EnvMap};
 use crate::scene::Mesh;
 use crate::scene::{Scene, SceneError, gltf, house};
 use crate::sh::{Order, zonal};
-use crate::technique::Inputs;
+use crate::technique::{Inputs, Technique};
 
 /// What to prepare.
 #[derive(Clone, Debug, PartialEq)]
@@ -85,6 +86,11 @@ pub struct Prepared {
     pub h_order: Order,
     /// Order-3 SH of incident radiance with inter-reflection, when asked for.
     pub sh_lightmap: Option<ShLightmap>,
+    /// VQ / CPCA fits of `visibility` the techniques of the run need
+    /// ([`Prepared::fit_clusters`]).
+    pub clusters: Vec<ClusteredModel>,
+    /// Seed of the cluster fits (the bake's seed).
+    pub seed: u64,
 }
 
 /// Order of the lighting projection: L×H of order-6 visibility needs lighting of order 8
@@ -98,6 +104,40 @@ pub const PCA_MAX_BASIS: usize = 24;
 pub const TABLE_RES_RANGE: std::ops::RangeInclusive<u32> = 4..=256;
 
 impl Prepared {
+    /// Fits the VQ / CPCA models `techniques` need that are not fitted yet (k-means with
+    /// the bake's seed, `bake::cluster`), logging each fit's time and error.
+    pub fn fit_clusters(&mut self, techniques: &[Technique]) -> Result<(), PrepareError> {
+        for need in techniques.iter().filter_map(|t| t.cluster_need()) {
+            let have = self.clusters.iter().any(|c| {
+                c.clusters.len() == need.k as usize
+                    && c.m == need.m as usize
+                    && c.clustering == need.clustering
+            });
+            if have {
+                continue;
+            }
+            let t = Instant::now();
+            let model = cluster::fit(
+                &self.visibility,
+                need.k as usize,
+                need.m as usize,
+                need.clustering,
+                self.seed,
+            )?;
+            log::info!(
+                "{:?} {} × {}: {} iterations in {:.1} s, RMS visibility error {:.4}",
+                need.clustering,
+                need.k,
+                need.m,
+                model.iterations,
+                t.elapsed().as_secs_f64(),
+                model.rms_reconstruction_error(&self.visibility)
+            );
+            self.clusters.push(model);
+        }
+        Ok(())
+    }
+
     pub fn inputs(&self) -> Inputs<'_> {
         Inputs {
             ao: &self.ao,
@@ -105,6 +145,7 @@ impl Prepared {
             radiance_sh: &self.radiance_sh,
             visibility: Some(&self.visibility),
             pca: Some(&self.pca),
+            clusters: &self.clusters,
             sh_lightmap: self.sh_lightmap.as_ref(),
             table_res: self.table_res,
             h_order: self.h_order,
@@ -214,6 +255,8 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
         irradiance_sh,
         table_res: settings.table_res,
         h_order: settings.h_order,
+        clusters: Vec::new(),
+        seed: settings.seed,
     })
 }
 

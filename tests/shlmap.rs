@@ -283,6 +283,7 @@ fn shlmap_tracks_strong_inter_reflection() {
         radiance_sh: &radiance,
         visibility: None,
         pca: None,
+        clusters: &[],
         sh_lightmap: Some(&map),
         table_res: 16,
         h_order: Order::THREE,

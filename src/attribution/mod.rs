@@ -500,6 +500,37 @@ pub fn cpu_rungs(
                 );
             }
         }
+        Technique::Vq { .. } | Technique::Cpca { .. } => {
+            let need = technique.cluster_need().expect("a clustered technique");
+            let model = crate::technique::cluster::find(&prepared.inputs(), need, &label)?;
+            let order = model.order;
+            let n2 = order.coeff_count();
+            let (stem, frame) = visibility_rung(order);
+            push(AttributionKind::VisibilityOrder, stem, frame);
+            let compressed = |k: usize| {
+                let mut out = [0.0; 36];
+                out[..n2].copy_from_slice(&model.compress(&px.visibility(k, n2)[..n2]));
+                out
+            };
+            let base = technique.name();
+            push(
+                AttributionKind::PcaCompression,
+                format!("{base}.compression"),
+                px.image(|k| dot_rgb(&compressed(k), &exact(k), n2)),
+            );
+            let lighting = exact_cosine(radiance, order.get() + 2, order);
+            push(
+                AttributionKind::LightingOrder,
+                format!("{base}.lighting_order"),
+                px.image(|k| shade(&lighting, px.normal[k], &compressed(k))),
+            );
+            let lxh = LxhMatrices::new(radiance, order, prepared.h_order);
+            push(
+                AttributionKind::CosineOrder,
+                format!("{base}.cosine_order"),
+                px.image(|k| shade(&lxh, px.normal[k], &compressed(k))),
+            );
+        }
         Technique::Preconv => {
             let y00 = 0.5 / std::f64::consts::PI.sqrt();
             let ao = |k: usize| f64::from(px.vis.ao[k]);

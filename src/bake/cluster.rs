@@ -47,7 +47,7 @@ pub const KMEANS_MAX_ITERATIONS: u32 = 100;
 pub const CPCA_MAX_ROUNDS: u32 = 30;
 
 /// How the clusters of a [`ClusteredModel`] were found.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Clustering {
     /// k-means; M = 0 gives VQ, M > 0 static CPCA.
     KMeans,
@@ -441,9 +441,137 @@ impl ClusteredModel {
         }))
     }
 
+    /// `v` (n coefficients) in the model: projected on the cluster that reconstructs it
+    /// best (VQ: the nearest mean), as the fit assigns gutter texels.
+    pub fn compress(&self, v: &[f64]) -> Vec<f64> {
+        let v32: Vec<f32> = v.iter().map(|&x| x as f32).collect();
+        let (c, _) = best(self.clusters.len(), |c| {
+            let cluster = &self.clusters[c];
+            if cluster.members == 0 {
+                f64::INFINITY
+            } else if self.m == 0 {
+                squared_distance(&v32, &cluster.mean)
+            } else {
+                subspace_error(&v32, cluster)
+            }
+        });
+        let cluster = &self.clusters[c as usize];
+        let d: Vec<f64> = v.iter().zip(&cluster.mean).map(|(a, b)| a - b).collect();
+        super::pca::combine(
+            &cluster.mean,
+            &cluster.basis,
+            cluster.basis.iter().map(|b| dot(b, &d)),
+        )
+    }
+
     /// Clusters with at least one covered texel.
     pub fn clusters_used(&self) -> usize {
         self.clusters.iter().filter(|c| c.members > 0).count()
+    }
+}
+
+/// A clustered model with its weights as 8-bit UNORM, each cluster's per-vector range
+/// pushed into its basis and mean as `bake::pca::PcaModel::quantize` does for one
+/// cluster: V ≈ μ_C' + Σ_k (q_k / 255) B_C,k'.
+#[derive(Clone, Debug, PartialEq)]
+pub struct QuantizedClusters {
+    pub order: Order,
+    pub res: u32,
+    pub m: usize,
+    /// Per cluster: μ_C' = μ_C + Σ_k lo_C,k B_C,k.
+    pub means: Vec<Vec<f64>>,
+    /// Per cluster, M vectors B_C,k' = (hi_C,k − lo_C,k) B_C,k.
+    pub bases: Vec<Vec<Vec<f64>>>,
+    /// Texel-major, M per texel.
+    pub weights_unorm: Vec<u8>,
+    /// Cluster of every texel (row-major).
+    pub cluster_of: Vec<u32>,
+}
+
+impl QuantizedClusters {
+    /// μ_C' + Σ_k (q_k / 255) B_C,k' of `texel`.
+    pub fn reconstruct(&self, texel: usize) -> Vec<f64> {
+        let c = self.cluster_of[texel] as usize;
+        let q = &self.weights_unorm[texel * self.m..(texel + 1) * self.m];
+        super::pca::combine(
+            &self.means[c],
+            &self.bases[c],
+            q.iter().map(|&q| f64::from(q) / 255.0),
+        )
+    }
+}
+
+impl ClusteredModel {
+    /// The weights as 8-bit UNORM per cluster and vector range ([`QuantizedClusters`]),
+    /// over every texel the fit stored (covered and gutter texels alike).
+    pub fn quantize(&self) -> QuantizedClusters {
+        let (k, m) = (self.clusters.len(), self.m);
+        let mut lo = vec![vec![f64::INFINITY; m]; k];
+        let mut hi = vec![vec![f64::NEG_INFINITY; m]; k];
+        for (t, &c) in self.cluster_of.iter().enumerate() {
+            for j in 0..m {
+                let w = f64::from(self.weights[t * m + j]);
+                lo[c as usize][j] = lo[c as usize][j].min(w);
+                hi[c as usize][j] = hi[c as usize][j].max(w);
+            }
+        }
+        let scale: Vec<Vec<f64>> = (0..k)
+            .map(|c| {
+                (0..m)
+                    .map(|j| (hi[c][j] - lo[c][j]).max(0.0))
+                    .map(|s| if s.is_finite() { s } else { 0.0 })
+                    .collect()
+            })
+            .collect();
+        let lo: Vec<Vec<f64>> = lo
+            .into_iter()
+            .map(|l| {
+                l.into_iter()
+                    .map(|v| if v.is_finite() { v } else { 0.0 })
+                    .collect()
+            })
+            .collect();
+        let means = (0..k)
+            .map(|c| {
+                let cl = &self.clusters[c];
+                super::pca::combine(&cl.mean, &cl.basis, lo[c].iter().copied())
+            })
+            .collect();
+        let bases = (0..k)
+            .map(|c| {
+                self.clusters[c]
+                    .basis
+                    .iter()
+                    .zip(&scale[c])
+                    .map(|(b, &s)| b.iter().map(|x| x * s).collect())
+                    .collect()
+            })
+            .collect();
+        let weights_unorm = self
+            .cluster_of
+            .iter()
+            .enumerate()
+            .flat_map(|(t, &c)| {
+                let (c, lo, scale) = (c as usize, &lo, &scale);
+                (0..m).map(move |j| {
+                    if scale[c][j] == 0.0 {
+                        0
+                    } else {
+                        let u = (f64::from(self.weights[t * m + j]) - lo[c][j]) / scale[c][j];
+                        (u * 255.0).round().clamp(0.0, 255.0) as u8
+                    }
+                })
+            })
+            .collect();
+        QuantizedClusters {
+            order: self.order,
+            res: self.res,
+            m,
+            means,
+            bases,
+            weights_unorm,
+            cluster_of: self.cluster_of.clone(),
+        }
     }
 }
 
@@ -560,5 +688,30 @@ mod tests {
         assert_eq!(model.rms_reconstruction_error(&vis), 0.0);
         assert!(fit(&vis, 0, 0, Clustering::KMeans, 0).is_err());
         assert!(fit(&vis, 2, 5, Clustering::KMeans, 0).is_err());
+    }
+
+    #[test]
+    fn quantized_clusters_reconstruct_within_half_a_step_per_vector() {
+        let vis = map(8, blobs);
+        let model = fit(&vis, 4, 2, Clustering::Iterative, 3).unwrap();
+        let q = model.quantize();
+        assert_eq!(q.weights_unorm.len(), 64 * 2);
+        for t in 0..64 {
+            let c = q.cluster_of[t] as usize;
+            // Rounding moves each weight by at most half a step of its vector's range.
+            let bound: f64 = q.bases[c]
+                .iter()
+                .map(|b| dot(b, b).sqrt() / (2.0 * 255.0))
+                .sum();
+            let want = model.reconstruct(t);
+            let got = q.reconstruct(t);
+            let err = rms(std::iter::once((want, got)));
+            assert!(err <= bound + 1e-9, "texel {t}: {err} > {bound}");
+        }
+        // A cluster whose members share a weight gets a zero vector, not a NaN.
+        let same = map(4, |_| vec![1.0, 2.0, 3.0, 4.0]);
+        let q = fit(&same, 1, 2, Clustering::KMeans, 0).unwrap().quantize();
+        assert!(q.bases[0].iter().flatten().all(|&x| x == 0.0));
+        assert_eq!(q.reconstruct(5), vec![1.0, 2.0, 3.0, 4.0]);
     }
 }

@@ -188,7 +188,7 @@ pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// mean + Σ_k w_k basis_k.
-fn combine(mean: &[f64], basis: &[Vec<f64>], w: impl Iterator<Item = f64>) -> Vec<f64> {
+pub(crate) fn combine(mean: &[f64], basis: &[Vec<f64>], w: impl Iterator<Item = f64>) -> Vec<f64> {
     let mut v = mean.to_vec();
     for (b, w) in basis.iter().zip(w) {
         for (acc, &c) in v.iter_mut().zip(b) {

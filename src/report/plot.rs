@@ -94,7 +94,9 @@ pub fn write_pca_error_plot(
                 | Technique::Unc { .. }
                 | Technique::Shlmap
                 | Technique::Preconv
-                | Technique::Sh2 => None,
+                | Technique::Sh2
+                | Technique::Vq { .. }
+                | Technique::Cpca { .. } => None,
             })
             .collect()
     };

@@ -85,9 +85,19 @@ impl SlotLayout {
     }
 }
 
-/// The cost-table columns of a technique with `params_bytes` of uniforms and `slots`.
-pub fn stats(params_bytes: usize, slots: &[SlotLayout]) -> TechniqueStats {
+/// The cost-table columns of a technique with `params_bytes` of uniforms and `slots`;
+/// `per_texel_lookups` overrides one fetch per per-texel layer for shaders that read the
+/// lightmap otherwise (the clustered techniques' taps, `super::cluster`).
+pub fn stats(
+    params_bytes: usize,
+    slots: &[SlotLayout],
+    per_texel_lookups: Option<u32>,
+) -> TechniqueStats {
     let of_kind = |kind: SlotKind| slots.iter().filter(move |s| s.kind == kind);
+    let slot_lookups = |s: &SlotLayout| match (s.kind, per_texel_lookups) {
+        (SlotKind::PerTexel, Some(n)) => n,
+        _ => s.lookups(),
+    };
     TechniqueStats {
         texel_bytes: of_kind(SlotKind::PerTexel).map(SlotLayout::bytes).sum(),
         table_bytes: of_kind(SlotKind::NormalTable)
@@ -96,8 +106,7 @@ pub fn stats(params_bytes: usize, slots: &[SlotLayout]) -> TechniqueStats {
             + params_bytes as u64,
         textures_bound: layout::MATERIAL_TEXTURES
             + slots.iter().map(|s| s.images.len() as u32).sum::<u32>(),
-        lookups_per_pixel: layout::MATERIAL_TEXTURES
-            + slots.iter().map(SlotLayout::lookups).sum::<u32>(),
+        lookups_per_pixel: layout::MATERIAL_TEXTURES + slots.iter().map(slot_lookups).sum::<u32>(),
     }
 }
 
@@ -139,7 +148,11 @@ pub fn finish(
         let images: Vec<&Image> = slots.iter().flat_map(|s| &s.images).collect();
         check_path_rules(&label, path, &images)?;
         let layouts: Vec<SlotLayout> = slots.iter().map(|s| s.layout()).collect();
-        stats = self::stats(lighting.params.len(), &layouts);
+        stats = self::stats(
+            lighting.params.len(),
+            &layouts,
+            super::per_texel_lookups(technique),
+        );
         let params = gpu::Buffer::with_data(
             ctx,
             &lighting.params,
@@ -234,7 +247,7 @@ mod tests {
             SlotKind::NormalTable,
             vec![ImageDesc::texture_2d(F16X4, 9 * 2 * 32, 32); 3],
         );
-        let s = stats(16, &[texels, tables]);
+        let s = stats(16, &[texels, tables], None);
         assert_eq!(s.textures_bound, 2 + 9 + 3);
         assert_eq!(s.lookups_per_pixel, 2 + 9 + 27);
         assert_eq!(s.texel_bytes, 9 * 512 * 512 * 8);
@@ -257,7 +270,7 @@ mod tests {
             SlotKind::NormalTable,
             vec![ImageDesc::texture_cube_array(F16X4, 32, 4)],
         );
-        let s = stats(0, &[weights, tables]);
+        let s = stats(0, &[weights, tables], None);
         assert_eq!((s.textures_bound, s.lookups_per_pixel), (4, 2 + 1 + 4));
         assert_eq!(s.texel_bytes, 256 * 256 * 4);
         assert_eq!(s.table_bytes, 4 * 6 * 32 * 32 * 8);

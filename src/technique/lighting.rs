@@ -63,6 +63,12 @@ pub(crate) enum Recipe {
     },
     Preconv,
     Sh2,
+    /// `vqK` / `cpcaK_M`: per cluster the quantized basis and mean (M = 0: VQ).
+    Clustered {
+        order: Order,
+        bases: Vec<Vec<Vec<f64>>>,
+        means: Vec<Vec<f64>>,
+    },
     /// Lighting baked into the per-texel data (`shlmap`): the data never changes.
     Baked(LightingData),
 }
@@ -122,6 +128,11 @@ impl LightingRecipe {
             ),
             Recipe::Preconv => super::preconv::lighting(irradiance_sh, &label),
             Recipe::Sh2 => super::sh2::lighting(radiance_sh, &label),
+            Recipe::Clustered {
+                order,
+                bases,
+                means,
+            } => super::cluster::lighting(bases, means, *order, radiance_sh, &label),
             Recipe::Baked(data) => Ok(data.clone()),
         }
     }

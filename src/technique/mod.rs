@@ -17,6 +17,7 @@
 //! matches; README
 //! "How to add a technique" lists the places a new family touches.
 
+pub mod cluster;
 pub mod finish;
 pub mod lighting;
 pub mod pca;
@@ -31,11 +32,12 @@ pub mod unc;
 use std::sync::Arc;
 
 pub use lighting::{LightingData, LightingRecipe};
-pub use spec::{BakeNeeds, HwPath, ParseError, ReferenceModel, Technique};
+pub use spec::{BakeNeeds, ClusterNeed, HwPath, ParseError, ReferenceModel, SeamMode, Technique};
 
 use lighting::LightingSet;
 
 use crate::bake::ao::AoMap;
+use crate::bake::cluster::ClusteredModel;
 use crate::bake::pca::PcaModel;
 use crate::bake::shlmap::ShLightmap;
 use crate::bake::visibility::VisibilityMap;
@@ -55,6 +57,8 @@ pub struct Inputs<'a> {
     pub visibility: Option<&'a VisibilityMap>,
     /// PCA of the visibility with the largest basis any `pca*` uses (24 vectors).
     pub pca: Option<&'a PcaModel>,
+    /// VQ / CPCA fits of the visibility (`vqK`, `cpcaK_M`), found by their `ClusterNeed`.
+    pub clusters: &'a [ClusteredModel],
     /// Order-3 SH of incident radiance with inter-reflection per texel (`shlmap`).
     pub sh_lightmap: Option<&'a ShLightmap>,
     /// L×H table texels per hemisphere / face side.
@@ -93,6 +97,22 @@ pub fn fragment_shader(technique: Technique) -> ShaderVariant {
         Technique::Shlmap => shlmap::fragment_shader(),
         Technique::Preconv => preconv::fragment_shader(),
         Technique::Sh2 => sh2::fragment_shader(),
+        Technique::Vq { k, seams } => cluster::fragment_shader(k, 0, seams),
+        Technique::Cpca { k, m, seams } => cluster::fragment_shader(k, m, seams),
+    }
+}
+
+/// Per-texel fetches per pixel where a family's shader does not read each per-texel layer
+/// once (`finish::stats`).
+pub fn per_texel_lookups(technique: Technique) -> Option<u32> {
+    match technique {
+        Technique::Vq { seams, .. } => Some(cluster::per_texel_lookups(0, seams)),
+        Technique::Cpca { m, seams, .. } => Some(cluster::per_texel_lookups(m, seams)),
+        Technique::Unc { .. }
+        | Technique::Pca { .. }
+        | Technique::Shlmap
+        | Technique::Preconv
+        | Technique::Sh2 => None,
     }
 }
 
@@ -286,6 +306,10 @@ fn prepare(
         Technique::Shlmap => shlmap::prepare(inputs, &label)?,
         Technique::Preconv => preconv::prepare(inputs, &label),
         Technique::Sh2 => sh2::prepare(inputs, &label)?,
+        Technique::Vq { .. } | Technique::Cpca { .. } => {
+            let need = technique.cluster_need().expect("a clustered technique");
+            cluster::prepare(need, inputs, &label)?
+        }
     };
     let recipe = LightingRecipe {
         technique,
@@ -329,7 +353,16 @@ mod tests {
 
     #[test]
     fn every_registered_fragment_shader_compiles_on_both_paths() {
-        let beyond_the_table = ["unc2", "unc5", "pca20", "pca20w"];
+        let beyond_the_table = [
+            "unc2",
+            "unc5",
+            "pca20",
+            "pca20w",
+            "vq16n",
+            "cpca32_11",
+            "cpca4_3n",
+            "cpca4_15",
+        ];
         let techniques = Technique::ALL
             .iter()
             .copied()

@@ -38,6 +38,11 @@ pub const WEIGHT_BITS: u32 = 8;
 /// Order of the lighting the weights-only variant multiplies the basis with.
 const WEIGHTS_ONLY_LIGHTING_ORDER: u32 = 8;
 
+/// Order of the lighting the weights-only blocks are built from.
+pub fn weights_only_lighting_order() -> Order {
+    Order::new(WEIGHTS_ONLY_LIGHTING_ORDER).expect("valid order")
+}
+
 /// The fragment shader of `pca{m}` / `pca{m}w`.
 pub fn fragment_shader(m: u32, weights_only: bool) -> ShaderVariant {
     ShaderVariant {

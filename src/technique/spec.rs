@@ -29,6 +29,33 @@ pub enum Technique {
     Preconv,
     /// `sh2`: order-2 visibility per texel, the SH product in the shader (§5).
     Sh2,
+    /// `vqK`: each texel's order-6 visibility replaced by its k-means cluster's mean (VQ,
+    /// PRT course); a cluster index per texel, per cluster SH(μ_C·L) in uniforms.
+    Vq { k: u32, seams: SeamMode },
+    /// `cpcaK_M`: iterative CPCA, K clusters of M vectors (PRT course); a cluster index
+    /// and M 8-bit weights per texel, per cluster and vector SH(B_C,k·L) in uniforms
+    /// (the weights-only route of `pcaMw`, one block per cluster).
+    Cpca { k: u32, m: u32, seams: SeamMode },
+}
+
+/// How a clustered technique crosses cluster boundaries in the lightmap.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SeamMode {
+    /// The mitigation (no suffix): the 4 bilinear taps are fetched with their own cluster
+    /// index, each reconstructed in its cluster and the results blended bilinearly.
+    Blended,
+    /// Suffix `n`: the weights bilinearly filtered across the boundary and decoded in the
+    /// nearest texel's cluster (the known artifact); VQ without weights is nearest texel.
+    Naive,
+}
+
+/// The clustered model a technique reads from the bake.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ClusterNeed {
+    pub k: u32,
+    /// Vectors per cluster (0: VQ).
+    pub m: u32,
+    pub clustering: crate::bake::cluster::Clustering,
 }
 
 /// Visibility orders a `uncO` name may ask for: the shader packs at most 9 RGBA groups
@@ -38,6 +65,21 @@ pub const UNC_ORDERS: std::ops::RangeInclusive<u32> = 2..=6;
 pub const PCA_MAX_VECTORS: u32 = 24;
 /// PCA weights are packed 4 per RGBA8 texel, so M is a multiple of this.
 pub const PCA_VECTORS_PER_TEXEL: u32 = 4;
+
+/// VQ cluster counts a `vqK` name may ask for.
+pub const VQ_CLUSTERS: &[u32] = &[16, 32, 64, 128, 256];
+/// CPCA cluster counts and vectors per cluster a `cpcaK_M` name may ask for. M + 1 values
+/// (weights and the cluster index) fill whole RGBA texels.
+pub const CPCA_CLUSTERS: &[u32] = &[4, 8, 16, 32];
+pub const CPCA_VECTORS: &[u32] = &[3, 7, 11, 15];
+/// vec4s a clustered technique's uniform block may hold: 64 KiB, the `maxUniformBufferRange`
+/// of the drivers this project runs on (lavapipe, NVIDIA); 9 per cluster and vector + mean.
+pub const CLUSTER_UNIFORM_VEC4S: u32 = 4096;
+
+/// Whether K clusters of M vectors fit the clustered uniform block.
+pub fn clusters_fit_uniforms(k: u32, m: u32) -> bool {
+    k * (m + 1) * 9 <= CLUSTER_UNIFORM_VEC4S
+}
 
 /// The paper's cost table (GeForce GTX 295, 1280×800, 512² visibility; DESIGN §3), by
 /// parameter where the family has one.
@@ -58,6 +100,8 @@ pub struct BakeNeeds {
     pub sh_lightmap: bool,
     /// Scalar ambient occlusion per texel.
     pub ao: bool,
+    /// A VQ / CPCA model of the order-6 visibility.
+    pub clusters: Option<ClusterNeed>,
 }
 
 /// Which ground truth a technique's error is measured against.
@@ -120,6 +164,25 @@ impl Technique {
         Technique::Shlmap,
         Technique::Preconv,
         Technique::Sh2,
+        Technique::Vq {
+            k: 256,
+            seams: SeamMode::Blended,
+        },
+        Technique::Cpca {
+            k: 8,
+            m: 7,
+            seams: SeamMode::Blended,
+        },
+        Technique::Cpca {
+            k: 8,
+            m: 11,
+            seams: SeamMode::Blended,
+        },
+        Technique::Cpca {
+            k: 8,
+            m: 11,
+            seams: SeamMode::Naive,
+        },
     ];
 
     /// The CLI name: `unc6`, `pca12`, `pca12w`, `shlmap`, `preconv`, `sh2`.
@@ -132,6 +195,30 @@ impl Technique {
             Technique::Shlmap => "shlmap".into(),
             Technique::Preconv => "preconv".into(),
             Technique::Sh2 => "sh2".into(),
+            Technique::Vq { k, seams } => format!("vq{k}{}", seams.suffix()),
+            Technique::Cpca { k, m, seams } => format!("cpca{k}_{m}{}", seams.suffix()),
+        }
+    }
+
+    /// The clustered model it reads, for `vqK` and `cpcaK_M`.
+    pub fn cluster_need(self) -> Option<ClusterNeed> {
+        use crate::bake::cluster::Clustering;
+        match self {
+            Technique::Vq { k, .. } => Some(ClusterNeed {
+                k,
+                m: 0,
+                clustering: Clustering::KMeans,
+            }),
+            Technique::Cpca { k, m, .. } => Some(ClusterNeed {
+                k,
+                m,
+                clustering: Clustering::Iterative,
+            }),
+            Technique::Unc { .. }
+            | Technique::Pca { .. }
+            | Technique::Shlmap
+            | Technique::Preconv
+            | Technique::Sh2 => None,
         }
     }
 
@@ -149,6 +236,7 @@ impl Technique {
             Technique::Shlmap => Some(PAPER_SHLMAP_MS),
             Technique::Preconv => Some(PAPER_PRECONV_MS),
             Technique::Sh2 => Some(PAPER_SH2_MS),
+            Technique::Vq { .. } | Technique::Cpca { .. } => None,
         }
     }
 
@@ -181,6 +269,11 @@ impl Technique {
                 visibility: Some(Order::TWO),
                 ..BakeNeeds::default()
             },
+            Technique::Vq { .. } | Technique::Cpca { .. } => BakeNeeds {
+                visibility: Some(Order::SIX),
+                clusters: self.cluster_need(),
+                ..BakeNeeds::default()
+            },
         }
     }
 
@@ -188,9 +281,12 @@ impl Technique {
     pub fn reference(self) -> ReferenceModel {
         match self {
             Technique::Shlmap => ReferenceModel::InterReflected,
-            Technique::Unc { .. } | Technique::Pca { .. } | Technique::Preconv | Technique::Sh2 => {
-                ReferenceModel::Direct
-            }
+            Technique::Unc { .. }
+            | Technique::Pca { .. }
+            | Technique::Preconv
+            | Technique::Sh2
+            | Technique::Vq { .. }
+            | Technique::Cpca { .. } => ReferenceModel::Direct,
         }
     }
 
@@ -199,9 +295,12 @@ impl Technique {
     pub fn dynamic_lighting(self) -> bool {
         match self {
             Technique::Shlmap => false,
-            Technique::Unc { .. } | Technique::Pca { .. } | Technique::Preconv | Technique::Sh2 => {
-                true
-            }
+            Technique::Unc { .. }
+            | Technique::Pca { .. }
+            | Technique::Preconv
+            | Technique::Sh2
+            | Technique::Vq { .. }
+            | Technique::Cpca { .. } => true,
         }
     }
 
@@ -215,6 +314,16 @@ impl Technique {
             Technique::Pca { .. } => (PCA_VECTORS_PER_TEXEL..=PCA_MAX_VECTORS)
                 .step_by(PCA_VECTORS_PER_TEXEL as usize)
                 .flat_map(|m| [false, true].map(|weights_only| Technique::Pca { m, weights_only }))
+                .collect(),
+            Technique::Vq { .. } => VQ_CLUSTERS
+                .iter()
+                .flat_map(|&k| SeamMode::ALL.map(|seams| Technique::Vq { k, seams }))
+                .collect(),
+            Technique::Cpca { .. } => CPCA_CLUSTERS
+                .iter()
+                .flat_map(|&k| CPCA_VECTORS.iter().map(move |&m| (k, m)))
+                .filter(|&(k, m)| clusters_fit_uniforms(k, m))
+                .flat_map(|(k, m)| SeamMode::ALL.map(|seams| Technique::Cpca { k, m, seams }))
                 .collect(),
             Technique::Shlmap | Technique::Preconv | Technique::Sh2 => vec![self],
         }
@@ -233,6 +342,17 @@ impl Technique {
     }
 }
 
+impl SeamMode {
+    pub const ALL: [SeamMode; 2] = [SeamMode::Blended, SeamMode::Naive];
+
+    fn suffix(self) -> &'static str {
+        match self {
+            SeamMode::Blended => "",
+            SeamMode::Naive => "n",
+        }
+    }
+}
+
 impl fmt::Display for Technique {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(&self.name())
@@ -246,12 +366,17 @@ impl FromStr for Technique {
         found.ok_or_else(|| ParseError::UnknownTechnique {
             name: s.to_string(),
             known: format!(
-                "{} (and uncO for O in {}..={}, pcaM/pcaMw for M a multiple of {} up to {})",
+                "{} (and uncO for O in {}..={}, pcaM/pcaMw for M a multiple of {} up to {}, \
+                 vqK[n] for K in {:?}, cpcaK_M[n] for K in {:?}, M in {:?}, K·(M+1) ≤ {})",
                 join_names(Technique::ALL.iter().map(|t| t.name())),
                 UNC_ORDERS.start(),
                 UNC_ORDERS.end(),
                 PCA_VECTORS_PER_TEXEL,
-                PCA_MAX_VECTORS
+                PCA_MAX_VECTORS,
+                VQ_CLUSTERS,
+                CPCA_CLUSTERS,
+                CPCA_VECTORS,
+                CLUSTER_UNIFORM_VEC4S / 9
             ),
         })
     }
@@ -360,9 +485,45 @@ mod tests {
                 weights_only: true
             }
         );
+        assert_eq!(
+            "cpca8_11n".parse::<Technique>().unwrap(),
+            Technique::Cpca {
+                k: 8,
+                m: 11,
+                seams: SeamMode::Naive
+            }
+        );
+        assert_eq!(
+            "vq64"
+                .parse::<Technique>()
+                .unwrap()
+                .cluster_need()
+                .unwrap()
+                .m,
+            0
+        );
         for bad in [
-            "unc", "unc1", "unc7", "unc+6", "unc06x", "pca", "pca0", "pca6", "pca28", "pcaw",
-            "pca4ww", "pca-4", "sh3", "Preconv", "",
+            "cpca32_15",
+            "cpca8_4",
+            "cpca8",
+            "vq5",
+            "vq256w",
+            "cpca8_11nn",
+            "unc",
+            "unc1",
+            "unc7",
+            "unc+6",
+            "unc06x",
+            "pca",
+            "pca0",
+            "pca6",
+            "pca28",
+            "pcaw",
+            "pca4ww",
+            "pca-4",
+            "sh3",
+            "Preconv",
+            "",
         ] {
             assert!(bad.parse::<Technique>().is_err(), "{bad:?} parsed");
         }

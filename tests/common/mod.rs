@@ -22,7 +22,7 @@ pub const TEST_TABLE_RES: u32 = 16;
 pub fn house() -> &'static Prepared {
     static PREPARED: OnceLock<Prepared> = OnceLock::new();
     PREPARED.get_or_init(|| {
-        prepare(&PrepareSettings {
+        let mut prepared = prepare(&PrepareSettings {
             vis_res: TEST_VIS_RES,
             rays: TEST_RAYS,
             table_res: TEST_TABLE_RES,
@@ -30,7 +30,11 @@ pub fn house() -> &'static Prepared {
             sh_lightmap_bounces: Some(shvis::bake::shlmap::DEFAULT_BOUNCES),
             ..PrepareSettings::default()
         })
-        .expect("the built-in scene prepares")
+        .expect("the built-in scene prepares");
+        prepared
+            .fit_clusters(Technique::ALL)
+            .expect("the cost table's cluster fits");
+        prepared
     })
 }
 

@@ -1,0 +1,182 @@
+//! `vqK` and `cpcaK_M`: VQ and iterative CPCA of the order-6 visibility (`bake::cluster`,
+//! after the PRT course; issue 16) on both paths.
+//!
+//! Per texel: M 8-bit UNORM weights in the cluster's quantized basis, then the cluster index
+//! as UNORM8 (K ≤ 256), packed 4 values per RGBA8 texel (`super::texels`; VQ, M = 0, is
+//! one R8 texel). Per lighting: per cluster C the weights-only block of `pcaMw`
+//! (`super::pca::weights_only_block`): for each vector B_C,k' and the mean μ_C' the order-3
+//! SH of B·L times the clamped-cosine factors A_l, so radiance = albedo/π ·
+//! E(n) with E = Σ_i (μ_C,i + Σ_k w_k B_C,k,i) y_i(n) — the per-cluster work on the CPU, the
+//! linear combination on the GPU.
+//!
+//! Across a cluster boundary the bilinearly filtered weights of two clusters mean nothing
+//! in either basis; [`SeamMode::Blended`] decodes each of the four bilinear taps in its own
+//! cluster and blends the results (glsl/technique/cluster.frag), [`SeamMode::Naive`]
+//! shows the artifact.
+//!
+//! Both paths take the per-cluster block as uniforms (`spec::CLUSTER_UNIFORM_VEC4S`, 64
+//! KiB); dx9's constant-register budget is not modelled, as for `pcaMw`.
+
+use ash::vk;
+
+use super::lighting::{LightingData, Recipe};
+use super::spec::{ClusterNeed, SeamMode, clusters_fit_uniforms};
+use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
+use super::{Inputs, ShaderVariant, TechniqueError};
+use crate::bake::cluster::{ClusteredModel, QuantizedClusters};
+use crate::sh::Order;
+
+/// The fragment shader of `vqK` / `cpcaK_M`.
+pub fn fragment_shader(k: u32, m: u32, seams: SeamMode) -> ShaderVariant {
+    ShaderVariant {
+        path: "technique/cluster.frag",
+        defines: vec![
+            ("CLUSTERS", k),
+            ("CLUSTER_VECTORS", m),
+            ("SEAM_BLEND", (seams == SeamMode::Blended) as u32),
+        ],
+    }
+}
+
+/// RGBA groups per texel: M weights and the index.
+pub fn texel_groups(m: u32) -> u32 {
+    (m + 1).div_ceil(VALUES_PER_TEXEL as u32)
+}
+
+/// Per-texel fetches of the shader: 4 unfiltered taps of every group (blended), or every
+/// group filtered plus the nearest texel's index group (naive; VQ reads only the index).
+pub fn per_texel_lookups(m: u32, seams: SeamMode) -> u32 {
+    let groups = texel_groups(m);
+    match seams {
+        SeamMode::Blended => 4 * groups,
+        SeamMode::Naive if m == 0 => 1,
+        SeamMode::Naive => groups + 1,
+    }
+}
+
+/// The model `need` names among `inputs.clusters`.
+pub fn find<'a>(
+    inputs: &Inputs<'a>,
+    need: ClusterNeed,
+    label: &str,
+) -> Result<&'a ClusteredModel, TechniqueError> {
+    inputs
+        .clusters
+        .iter()
+        .find(|c| {
+            c.clusters.len() == need.k as usize
+                && c.m == need.m as usize
+                && c.clustering == need.clustering
+        })
+        .ok_or_else(|| TechniqueError::Input {
+            label: label.into(),
+            detail: format!(
+                "needs a {:?} fit of {} clusters × {} vectors of the visibility \
+                 (Prepared::fit_clusters)",
+                need.clustering, need.k, need.m
+            ),
+        })
+}
+
+/// The quantized model's weights and indices per texel, and the recipe of its lighting
+/// data.
+pub(crate) fn prepare(
+    need: ClusterNeed,
+    inputs: &Inputs<'_>,
+    label: &str,
+) -> Result<(TexelGroups, Recipe), TechniqueError> {
+    if need.k > 256 || !clusters_fit_uniforms(need.k, need.m) {
+        return Err(TechniqueError::Input {
+            label: label.into(),
+            detail: format!(
+                "{} clusters × {} vectors do not fit an 8-bit index and a 64 KiB uniform block",
+                need.k, need.m
+            ),
+        });
+    }
+    let model = find(inputs, need, label)?;
+    let q = model.quantize();
+    Ok((
+        texel_data(&q, label),
+        Recipe::Clustered {
+            order: q.order,
+            bases: q.bases,
+            means: q.means,
+        },
+    ))
+}
+
+/// Weights then the index per texel (module doc).
+fn texel_data(q: &QuantizedClusters, label: &str) -> TexelGroups {
+    let texels = (q.res * q.res) as usize;
+    let name = format!("{label}.weights_index");
+    if q.m == 0 {
+        let index: Vec<u8> = q.cluster_of.iter().map(|&c| c as u8).collect();
+        return TexelGroups::new(vk::Format::R8_UNORM, q.res, &[index], name);
+    }
+    let groups = pack_groups(texels, q.m + 1, |t, j| {
+        if j < q.m {
+            q.weights_unorm[t * q.m + j]
+        } else {
+            q.cluster_of[t] as u8
+        }
+    });
+    TexelGroups::new(vk::Format::R8G8B8A8_UNORM, q.res, &groups, name)
+}
+
+/// The uniform block (glsl/technique/cluster.frag): per cluster its `pcaMw` block.
+pub fn lighting(
+    bases: &[Vec<Vec<f64>>],
+    means: &[Vec<f64>],
+    order: Order,
+    radiance_sh: &[[f64; 3]],
+    label: &str,
+) -> Result<LightingData, TechniqueError> {
+    super::require_coefficients(
+        radiance_sh,
+        super::pca::weights_only_lighting_order().coeff_count(),
+        "lighting",
+        label,
+    )?;
+    let block: Vec<[f32; 4]> = bases
+        .iter()
+        .zip(means)
+        .flat_map(|(basis, mean)| super::pca::weights_only_block(basis, mean, order, radiance_sh))
+        .collect();
+    Ok(LightingData::params(bytemuck::cast_slice(&block).to_vec()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn index_follows_the_weights_and_lookups_count_the_taps() {
+        let q = QuantizedClusters {
+            order: Order::TWO,
+            res: 2,
+            m: 3,
+            means: vec![vec![0.0; 4]; 3],
+            bases: vec![vec![vec![0.0; 4]; 3]; 3],
+            weights_unorm: (0..12).map(|i| i as u8 * 10).collect(),
+            cluster_of: vec![2, 0, 1, 2],
+        };
+        let groups = texel_data(&q, "t");
+        assert_eq!(groups.groups.len(), 1);
+        assert_eq!(&groups.groups[0][..8], &[0, 10, 20, 2, 30, 40, 50, 0]);
+        assert_eq!(per_texel_lookups(11, SeamMode::Blended), 12);
+        assert_eq!(per_texel_lookups(11, SeamMode::Naive), 4);
+        assert_eq!(per_texel_lookups(0, SeamMode::Naive), 1);
+        assert_eq!(per_texel_lookups(0, SeamMode::Blended), 4);
+        let vq = QuantizedClusters {
+            m: 0,
+            weights_unorm: vec![],
+            ..q
+        };
+        let g = texel_data(&vq, "v");
+        assert_eq!(
+            (g.format, g.groups[0].clone()),
+            (vk::Format::R8_UNORM, vec![2, 0, 1, 2])
+        );
+    }
+}
