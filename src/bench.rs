@@ -21,7 +21,7 @@ use crate::report::figures::{
 };
 use crate::report::image::{write_exr, write_exr_half, write_png};
 use crate::report::metrics::{TimingStats, image_error};
-use crate::report::plot::{write_pca_error_plot, write_speed_error_plot};
+use crate::report::plot::{CostAxis, write_error_plot, write_pca_error_plot};
 use crate::report::table::{
     AttributionKind, AttributionStep, BenchRow, BenchTable, RowReference, fill_ratios_to_preconv,
 };
@@ -419,7 +419,7 @@ fn write_images(dir: &Path, name: &str, frame: &Frame, exposure: f32) -> Result<
     write_png(&dir.join(format!("{name}.png")), frame, exposure)
 }
 
-/// The PCA plot per path and the speed/error plot; a plot that cannot be drawn (no font)
+/// The PCA plot per path and the speed/error and storage/error plots; a plot that cannot be drawn (no font)
 /// is a warning, not a failed bench.
 fn write_plots(table: &BenchTable, paths: &[HwPath], dir: &Path) {
     let report = |result: Result<Vec<PathBuf>, ReportError>| match result {
@@ -431,5 +431,6 @@ fn write_plots(table: &BenchTable, paths: &[HwPath], dir: &Path) {
     for &path in paths {
         report(write_pca_error_plot(&table.results, path, dir));
     }
-    report(write_speed_error_plot(table, dir));
+    report(write_error_plot(table, dir, CostAxis::Time));
+    report(write_error_plot(table, dir, CostAxis::Storage));
 }

@@ -65,6 +65,33 @@ enum StudyCommand {
     /// Issue 16: visibility reconstruction error against storage for global PCA, VQ and
     /// static / iterative CPCA fitted to the same bake.
     Compression(StudyCompressionArgs),
+    /// Issue 16: the screen-space discontinuity at cluster boundaries of a clustered
+    /// technique (vqK, cpcaK_M) with the 4-tap seam blending and without it.
+    Seams(StudySeamsArgs),
+}
+
+#[derive(Args, Debug)]
+struct StudySeamsArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Environment (as for `render`).
+    #[arg(long, default_value = "sky")]
+    env: String,
+    /// Clustered technique(s), comma-separated; each is measured with both seam modes.
+    #[arg(long, value_delimiter = ',', default_value = "cpca8_11,vq256")]
+    techniques: Vec<Technique>,
+    /// Hardware paths, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "dx9,dx10")]
+    paths: Vec<HwPath>,
+    #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Output directory: seams.md, seams.json.
+    #[arg(long, default_value = "study-out")]
+    out: PathBuf,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 #[derive(Args, Debug)]
@@ -397,6 +424,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Study(StudyCommand::Compression(a)) => {
             run_study_compression(a).context("study compression")
         }
+        Command::Study(StudyCommand::Seams(a)) => run_study_seams(a).context("study seams"),
     }
 }
 
@@ -425,6 +453,35 @@ fn run_study_compression(a: StudyCompressionArgs) -> Result<()> {
         started,
     );
     Ok(())
+}
+
+fn run_study_seams(a: StudySeamsArgs) -> Result<()> {
+    use shvis::study::seams;
+    if let Some(t) = a.techniques.iter().find(|t| t.cluster_need().is_none()) {
+        bail!("{t} is not a clustered technique (vqK, cpcaK_M)");
+    }
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    let ctx = open_gpu(&a.gpu)?;
+    let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, None)?)?;
+    prepared.fit_clusters(&a.techniques)?;
+    let mut rows = Vec::new();
+    for &technique in &a.techniques {
+        for &path in &a.paths {
+            rows.extend(seams::measure(
+                &ctx, &prepared, technique, path, a.width, a.height,
+            )?);
+        }
+    }
+    let markdown = seams::to_markdown(&rows, a.width, a.height);
+    std::fs::write(a.out.join("seams.md"), &markdown).context("seams.md")?;
+    std::fs::write(
+        a.out.join("seams.json"),
+        serde_json::to_string_pretty(&rows)? + "\n",
+    )
+    .context("seams.json")?;
+    print_table(&markdown, &a.out, "seams.md, seams.json", started);
+    check_validation(&ctx, a.gpu.validate)
 }
 
 fn run_study_params(a: StudyParamsArgs) -> Result<()> {

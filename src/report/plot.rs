@@ -232,13 +232,70 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
     front
 }
 
-/// Writes `speed_error.svg` and `.png`: relative RMSE against median ms (log axis) for
-/// every row with both, one colour and marker per path, the Pareto front of each path
-/// drawn as a staircase through its points (filled markers; dominated points hollow).
-/// Returns the files written (none when no row has both figures).
-pub fn write_speed_error_plot(
+/// The x axis of an error plot: what a row costs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CostAxis {
+    /// Median ms per frame (`speed_error.*`).
+    Time,
+    /// GPU bytes of per-texel data plus tables and uniforms (`storage_error.*`).
+    Storage,
+}
+
+impl CostAxis {
+    fn stem(self) -> &'static str {
+        match self {
+            CostAxis::Time => "speed_error",
+            CostAxis::Storage => "storage_error",
+        }
+    }
+
+    fn of(self, row: &super::table::BenchRow) -> Option<f64> {
+        match self {
+            CostAxis::Time => row.ms_median.filter(|&m| m > 0.0),
+            CostAxis::Storage => {
+                Some((row.texel_bytes + row.table_bytes) as f64).filter(|&b| b > 0.0)
+            }
+        }
+    }
+
+    fn label(self, x: f64) -> String {
+        match self {
+            CostAxis::Time if x >= 10.0 => format!("{x:.0}"),
+            CostAxis::Time => format!("{x:.2}"),
+            CostAxis::Storage => {
+                let kib = x / 1024.0;
+                if kib >= 1024.0 {
+                    format!("{:.1} Mi", kib / 1024.0)
+                } else {
+                    format!("{kib:.0} Ki")
+                }
+            }
+        }
+    }
+
+    fn description(self) -> &'static str {
+        match self {
+            CostAxis::Time => "ms per frame, median (log scale)",
+            CostAxis::Storage => "bytes on the GPU: per-texel data + tables + uniforms (log scale)",
+        }
+    }
+
+    fn title(self) -> &'static str {
+        match self {
+            CostAxis::Time => "Speed against error",
+            CostAxis::Storage => "Storage against error",
+        }
+    }
+}
+
+/// Writes `{speed,storage}_error.svg` and `.png`: relative RMSE against the row's cost
+/// (`axis`, log scale) for every row with both, one colour and marker per path, the Pareto
+/// front of each path drawn as a staircase through its points (filled markers; dominated
+/// points hollow). Returns the files written (none when no row has both figures).
+pub fn write_error_plot(
     table: &super::table::BenchTable,
     dir: &Path,
+    axis: CostAxis,
 ) -> Result<Vec<PathBuf>, ReportError> {
     let points: Vec<SpeedErrorPoint> = table
         .results
@@ -252,7 +309,7 @@ pub fn write_speed_error_plot(
                     r.technique.name()
                 },
                 path: r.path.to_string(),
-                ms: r.ms_median.filter(|&m| m > 0.0)?,
+                ms: axis.of(r)?,
                 error: r.rel_rmse?,
                 on_front: false,
             })
@@ -263,7 +320,6 @@ pub fn write_speed_error_plot(
     }
     let mut points = points;
     let mut paths: Vec<String> = points.iter().map(|p| p.path.clone()).collect();
-    paths.dedup();
     paths.sort();
     paths.dedup();
     for path in &paths {
@@ -278,7 +334,7 @@ pub fn write_speed_error_plot(
             points[idx[k]].on_front = true;
         }
     }
-    let svg = dir.join("speed_error.svg");
+    let svg = dir.join(format!("{}.svg", axis.stem()));
     let err = |path: &Path, e: String| ReportError::Write {
         path: path.to_path_buf(),
         detail: e,
@@ -295,20 +351,24 @@ pub fn write_speed_error_plot(
             )
         });
     let title = format!(
-        "Speed against error · {} · {}×{}",
-        table.device, table.width, table.height
+        "{} · {} · {}×{}",
+        axis.title(),
+        table.device,
+        table.width,
+        table.height
     );
     let data = SpeedErrorPlot {
         title: &title,
         note: starred.as_deref(),
         points: &points,
         paths: &paths,
+        axis,
     };
     use plotters::prelude::{IntoDrawingArea, SVGBackend};
     let size = (1100, 700);
     draw_speed_error(SVGBackend::new(&svg, size).into_drawing_area(), &data)
         .map_err(|e| err(&svg, e))?;
-    let png = dir.join("speed_error.png");
+    let png = dir.join(format!("{}.png", axis.stem()));
     write_png_plot(&png, size, |root| draw_speed_error(root, &data)).map_err(|e| err(&png, e))?;
     Ok(vec![svg, png])
 }
@@ -316,6 +376,7 @@ pub fn write_speed_error_plot(
 struct SpeedErrorPoint {
     label: String,
     path: String,
+    /// The cost (x): ms or bytes.
     ms: f64,
     error: f64,
     on_front: bool,
@@ -326,6 +387,7 @@ struct SpeedErrorPlot<'a> {
     note: Option<&'a str>,
     points: &'a [SpeedErrorPoint],
     paths: &'a [String],
+    axis: CostAxis,
 }
 
 fn draw_speed_error<DB: plotters::prelude::DrawingBackend>(
@@ -358,17 +420,10 @@ where
     chart
         .configure_mesh()
         .x_labels(12)
-        .x_label_formatter(&|x| {
-            let ms = x.exp();
-            if ms >= 10.0 {
-                format!("{ms:.0}")
-            } else {
-                format!("{ms:.2}")
-            }
-        })
+        .x_label_formatter(&|x| d.axis.label(x.exp()))
         .x_desc(match d.note {
-            Some(n) => format!("ms per frame, median (log scale)    [{n}]"),
-            None => "ms per frame, median (log scale)".to_string(),
+            Some(n) => format!("{}    [{n}]", d.axis.description()),
+            None => d.axis.description().to_string(),
         })
         .y_desc("relative RMSE against the reference")
         .draw()

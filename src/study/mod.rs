@@ -7,7 +7,10 @@
 
 //! - [`compression`]: issue 16 — visibility error against storage for PCA, VQ and CPCA
 //!   (`shvis study compression`).
+//! - [`seams`]: issue 16 — the screen-space discontinuity at cluster boundaries of the
+//!   clustered techniques, with and without the seam mitigation (`shvis study seams`).
 
 pub mod compression;
 pub mod params;
 pub mod params_gpu;
+pub mod seams;

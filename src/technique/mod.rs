@@ -98,7 +98,7 @@ pub fn fragment_shader(technique: Technique) -> ShaderVariant {
         Technique::Preconv => preconv::fragment_shader(),
         Technique::Sh2 => sh2::fragment_shader(),
         Technique::Vq { k, seams } => cluster::fragment_shader(k, 0, seams),
-        Technique::Cpca { k, m, seams } => cluster::fragment_shader(k, m, seams),
+        Technique::Cpca { k, m, seams, .. } => cluster::fragment_shader(k, m, seams),
     }
 }
 

@@ -32,10 +32,16 @@ pub enum Technique {
     /// `vqK`: each texel's order-6 visibility replaced by its k-means cluster's mean (VQ,
     /// PRT course); a cluster index per texel, per cluster SH(μ_C·L) in uniforms.
     Vq { k: u32, seams: SeamMode },
-    /// `cpcaK_M`: iterative CPCA, K clusters of M vectors (PRT course); a cluster index
-    /// and M 8-bit weights per texel, per cluster and vector SH(B_C,k·L) in uniforms
+    /// `cpcaK_M`: iterative CPCA, K clusters of M vectors (PRT course); `cpcaK_Ms`
+    /// (`iterative: false`): static CPCA (k-means clusters, then a PCA each). A cluster
+    /// index and M 8-bit weights per texel, per cluster and vector SH(B_C,k·L) in uniforms
     /// (the weights-only route of `pcaMw`, one block per cluster).
-    Cpca { k: u32, m: u32, seams: SeamMode },
+    Cpca {
+        k: u32,
+        m: u32,
+        iterative: bool,
+        seams: SeamMode,
+    },
 }
 
 /// How a clustered technique crosses cluster boundaries in the lightmap.
@@ -171,16 +177,25 @@ impl Technique {
         Technique::Cpca {
             k: 8,
             m: 7,
+            iterative: true,
             seams: SeamMode::Blended,
         },
         Technique::Cpca {
             k: 8,
             m: 11,
+            iterative: true,
             seams: SeamMode::Blended,
         },
         Technique::Cpca {
             k: 8,
             m: 11,
+            iterative: false,
+            seams: SeamMode::Blended,
+        },
+        Technique::Cpca {
+            k: 8,
+            m: 11,
+            iterative: true,
             seams: SeamMode::Naive,
         },
     ];
@@ -196,7 +211,16 @@ impl Technique {
             Technique::Preconv => "preconv".into(),
             Technique::Sh2 => "sh2".into(),
             Technique::Vq { k, seams } => format!("vq{k}{}", seams.suffix()),
-            Technique::Cpca { k, m, seams } => format!("cpca{k}_{m}{}", seams.suffix()),
+            Technique::Cpca {
+                k,
+                m,
+                iterative,
+                seams,
+            } => format!(
+                "cpca{k}_{m}{}{}",
+                if iterative { "" } else { "s" },
+                seams.suffix()
+            ),
         }
     }
 
@@ -209,10 +233,16 @@ impl Technique {
                 m: 0,
                 clustering: Clustering::KMeans,
             }),
-            Technique::Cpca { k, m, .. } => Some(ClusterNeed {
+            Technique::Cpca {
+                k, m, iterative, ..
+            } => Some(ClusterNeed {
                 k,
                 m,
-                clustering: Clustering::Iterative,
+                clustering: if iterative {
+                    Clustering::Iterative
+                } else {
+                    Clustering::KMeans
+                },
             }),
             Technique::Unc { .. }
             | Technique::Pca { .. }
@@ -323,7 +353,16 @@ impl Technique {
                 .iter()
                 .flat_map(|&k| CPCA_VECTORS.iter().map(move |&m| (k, m)))
                 .filter(|&(k, m)| clusters_fit_uniforms(k, m))
-                .flat_map(|(k, m)| SeamMode::ALL.map(|seams| Technique::Cpca { k, m, seams }))
+                .flat_map(|(k, m)| {
+                    [true, false].into_iter().flat_map(move |iterative| {
+                        SeamMode::ALL.map(|seams| Technique::Cpca {
+                            k,
+                            m,
+                            iterative,
+                            seams,
+                        })
+                    })
+                })
                 .collect(),
             Technique::Shlmap | Technique::Preconv | Technique::Sh2 => vec![self],
         }
@@ -490,7 +529,8 @@ mod tests {
             Technique::Cpca {
                 k: 8,
                 m: 11,
-                seams: SeamMode::Naive
+                iterative: true,
+                seams: SeamMode::Naive,
             }
         );
         assert_eq!(
