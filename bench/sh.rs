@@ -166,6 +166,7 @@ fn lighting_update(c: &mut Criterion) {
         visibility: Some(&visibility),
         pca: Some(&pca),
         clusters: &[],
+        vertex_pca: &[],
         sh_lightmap: None,
         table_res: 32,
         h_order: Order::THREE,

@@ -389,7 +389,7 @@ fn run_relight(a: RelightArgs) -> Result<()> {
     create_dir(&a.out)?;
     let started = Instant::now();
     let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, None)?)?;
-    prepared.fit_clusters(&settings.techniques)?;
+    prepared.prepare_techniques(&settings.techniques)?;
     let ctx = open_gpu(&a.gpu)?;
     let table = shvis::relight::run(&ctx, &prepared, &settings)?;
     print_table(
@@ -464,7 +464,7 @@ fn run_study_seams(a: StudySeamsArgs) -> Result<()> {
     let started = Instant::now();
     let ctx = open_gpu(&a.gpu)?;
     let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, None)?)?;
-    prepared.fit_clusters(&a.techniques)?;
+    prepared.prepare_techniques(&a.techniques)?;
     let mut rows = Vec::new();
     for &technique in &a.techniques {
         for &path in &a.paths {
@@ -595,7 +595,7 @@ fn run_render(a: RenderArgs) -> Result<()> {
     let ctx = open_gpu(&a.gpu)?;
     let bounces = a.technique.needs().sh_lightmap.then_some(a.bounces);
     let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, bounces)?)?;
-    prepared.fit_clusters(&[a.technique])?;
+    prepared.prepare_techniques(&[a.technique])?;
     let settings = FrameSettings {
         width: a.width,
         height: a.height,
@@ -693,7 +693,7 @@ fn run_bench(a: BenchArgs) -> Result<()> {
     let started = Instant::now();
     let bounces = settings.needs_sh_lightmap().then_some(a.bounces);
     let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, bounces)?)?;
-    prepared.fit_clusters(&settings.techniques)?;
+    prepared.prepare_techniques(&settings.techniques)?;
     let ctx = open_gpu(&a.gpu)?;
     let table = shvis::bench::run(&ctx, &prepared, &settings)?;
     print_table(

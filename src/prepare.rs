@@ -13,6 +13,7 @@ use crate::bake::pca::{PcaModel, fit};
 use crate::bake::raster::{LightmapTexels, rasterize};
 use crate::bake::shlmap::{ShLightmap, ShLightmapSettings, bake_sh_lightmap};
 use crate::bake::trace::Tracer;
+use crate::bake::vertex_pca::{VertexPca, bake_vertex_pca};
 use crate::bake::visibility::{VisibilityMap, VisibilitySettings, bake_visibility};
 use crate::bake::{self, BakeError};
 use crate::env::{self, EnvError, EnvMap};
@@ -91,6 +92,8 @@ pub struct Prepared {
     pub clusters: Vec<ClusteredModel>,
     /// Seed of the cluster fits (the bake's seed).
     pub seed: u64,
+    /// Visibility baked at mesh vertices for `pcaMv` ([`Prepared::bake_vertex_pca`]).
+    pub vertex_pca: Vec<VertexPca>,
 }
 
 /// Order of the lighting projection: L×H of order-6 visibility needs lighting of order 8
@@ -138,6 +141,49 @@ impl Prepared {
         Ok(())
     }
 
+    /// Bakes the per-vertex visibility `techniques` (`pcaMv`) need that is not baked yet,
+    /// with the lightmap bake's rays and seed, logging vertex counts, time and error.
+    pub fn bake_vertex_pca(&mut self, techniques: &[Technique]) {
+        let mut tracer = None;
+        for &t in techniques {
+            let Technique::PcaVertex { m, max_edge_cm } = t else {
+                continue;
+            };
+            let edge = max_edge_cm.map(|cm| cm as f32 / 100.0);
+            if self
+                .vertex_pca
+                .iter()
+                .any(|v| v.m == m as usize && v.max_edge == edge)
+            {
+                continue;
+            }
+            let start = Instant::now();
+            let tracer = tracer.get_or_insert_with(|| Tracer::new(&self.scene.mesh));
+            let q = crate::technique::pca::quantized_prefix(&self.pca, m as usize);
+            let settings = VisibilitySettings {
+                progress: false,
+                ..self.visibility_settings
+            };
+            let bake = bake_vertex_pca(tracer, &self.scene.mesh, edge, &q, &settings);
+            log::info!(
+                "{t}: {} vertices, {} triangles baked in {:.1} s; RMS visibility error {:.4}, {} weights clamped",
+                bake.mesh.vertices.len(),
+                bake.mesh.triangle_count(),
+                start.elapsed().as_secs_f64(),
+                bake.rms_error,
+                bake.clamped
+            );
+            self.vertex_pca.push(bake);
+        }
+    }
+
+    /// Everything the run's techniques need beyond the bake: cluster fits and vertex bakes.
+    pub fn prepare_techniques(&mut self, techniques: &[Technique]) -> Result<(), PrepareError> {
+        self.fit_clusters(techniques)?;
+        self.bake_vertex_pca(techniques);
+        Ok(())
+    }
+
     pub fn inputs(&self) -> Inputs<'_> {
         Inputs {
             ao: &self.ao,
@@ -146,6 +192,7 @@ impl Prepared {
             visibility: Some(&self.visibility),
             pca: Some(&self.pca),
             clusters: &self.clusters,
+            vertex_pca: &self.vertex_pca,
             sh_lightmap: self.sh_lightmap.as_ref(),
             table_res: self.table_res,
             h_order: self.h_order,
@@ -257,6 +304,7 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
         h_order: settings.h_order,
         clusters: Vec::new(),
         seed: settings.seed,
+        vertex_pca: Vec::new(),
     })
 }
 

@@ -225,6 +225,28 @@ impl SceneGpu {
         )
     }
 
+    /// The layout of the scene's vertex buffer (`scene::Vertex`).
+    pub fn vertex_layout(&self) -> &VertexLayout {
+        &self.vertex_layout
+    }
+
+    /// Renders `mesh` (a technique's own, over the same surface) with `pipeline`.
+    pub fn render_pipeline_on(
+        &self,
+        pipeline: &MeshPipeline,
+        mesh: &MeshBuffers,
+        warmup: u32,
+        frames: u32,
+    ) -> Result<Frame, GpuError> {
+        let ms = pipeline.render_frames(&self.target, mesh, warmup, frames)?;
+        Ok(Frame {
+            width: self.target.width(),
+            height: self.target.height(),
+            rgba: self.target.read_rgba()?,
+            ms,
+        })
+    }
+
     /// Renders with any mesh pipeline built for this scene's target (e.g. G-buffer passes).
     pub fn render_pipeline(
         &self,

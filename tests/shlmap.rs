@@ -284,6 +284,7 @@ fn shlmap_tracks_strong_inter_reflection() {
         visibility: None,
         pca: None,
         clusters: &[],
+        vertex_pca: &[],
         sh_lightmap: Some(&map),
         table_res: 16,
         h_order: Order::THREE,

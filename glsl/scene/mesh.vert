@@ -1,5 +1,7 @@
 // The mesh pass's vertex shader, shared by every technique: world-space attributes to the
-// fragment stage (glsl/include/common.glsl), clip position from FrameParams.
+// fragment stage (glsl/include/common.glsl), clip position from FrameParams. With
+// SHVIS_VERTEX_WEIGHT_GROUPS > 0 (pcaMv, src/technique/vertex.rs) it also passes that many
+// RGBA8 groups of per-vertex PCA weights on, for the rasterizer to interpolate.
 #version 450
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
@@ -19,6 +21,10 @@ layout(location = 4) out vec3 out_albedo_tint;
 #if defined(SHVIS_GBUFFER) && SHVIS_GBUFFER
 layout(location = 5) out vec3 out_position_world; // only the reference's G-buffer reads it
 #endif
+#if defined(SHVIS_VERTEX_WEIGHT_GROUPS) && SHVIS_VERTEX_WEIGHT_GROUPS > 0
+layout(location = 6) in vec4 vertex_weights[SHVIS_VERTEX_WEIGHT_GROUPS];
+layout(location = 6) out vec4 out_vertex_weights[SHVIS_VERTEX_WEIGHT_GROUPS];
+#endif
 
 void main() {
     out_normal_world = normal;
@@ -28,6 +34,11 @@ void main() {
     out_albedo_tint = albedo_tint;
 #if defined(SHVIS_GBUFFER) && SHVIS_GBUFFER
     out_position_world = position;
+#endif
+#if defined(SHVIS_VERTEX_WEIGHT_GROUPS) && SHVIS_VERTEX_WEIGHT_GROUPS > 0
+    for (int g = 0; g < SHVIS_VERTEX_WEIGHT_GROUPS; ++g) {
+        out_vertex_weights[g] = vertex_weights[g];
+    }
 #endif
     gl_Position = frame.clip_from_world * vec4(position, 1.0);
 }

@@ -2,6 +2,8 @@
 // src/technique/pca.rs): per basis vector (and the mean) the order-3 SH of V_k·L, already
 // convolved with the clamped cosine (A_l folded in), sits in a uniform block; the shader
 // sums w_k times them and evaluates at the normal — no dependent texture lookups.
+// SHVIS_VERTEX_WEIGHTS (pcaMv, src/technique/vertex.rs): the weights come interpolated from
+// the vertex stream instead of the lightmap.
 #version 450
 #extension GL_GOOGLE_include_directive : require
 #define SHVIS_FRAGMENT 1
@@ -16,8 +18,12 @@ layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform PcaWei
     layout(offset = 0) vec4 coeffs[(BASIS_COUNT + 1) * 9];
 } params;
 
+#if defined(SHVIS_VERTEX_WEIGHTS) && SHVIS_VERTEX_WEIGHTS
+layout(location = 6) in vec4 in_vertex_weights[GROUPS];
+#else
 #define SHVIS_PER_TEXEL_GROUPS GROUPS
 #include "per_texel.glsl"
+#endif
 #include "diffuse_out.glsl"
 
 void main() {
@@ -26,7 +32,9 @@ void main() {
         e[i] = params.coeffs[9 * BASIS_COUNT + i];
     }
     for (int g = 0; g < GROUPS; ++g) {
-#if SHVIS_PATH_DX9
+#if defined(SHVIS_VERTEX_WEIGHTS) && SHVIS_VERTEX_WEIGHTS
+        vec4 w = in_vertex_weights[g];
+#elif SHVIS_PATH_DX9
         // Constant indices for the sampler array: unrolled by the compiler per g below.
         vec4 w = vec4(0.0);
         if (g == 0) w = SAMPLE_PER_TEXEL(0);

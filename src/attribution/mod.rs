@@ -531,6 +531,8 @@ pub fn cpu_rungs(
                 px.image(|k| shade(&lxh, px.normal[k], &compressed(k))),
             );
         }
+        // The CPU ladder walks lightmap texels; per-vertex weights have none.
+        Technique::PcaVertex { .. } => {}
         Technique::Preconv => {
             let y00 = 0.5 / std::f64::consts::PI.sqrt();
             let ao = |k: usize| f64::from(px.vis.ao[k]);

@@ -24,6 +24,7 @@ pub mod raster;
 pub mod shlmap;
 pub mod surface;
 pub mod trace;
+pub mod vertex_pca;
 pub mod visibility;
 
 /// Work and time of one bake, shared by every bake that traces rays.

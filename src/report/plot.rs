@@ -96,7 +96,8 @@ pub fn write_pca_error_plot(
                 | Technique::Preconv
                 | Technique::Sh2
                 | Technique::Vq { .. }
-                | Technique::Cpca { .. } => None,
+                | Technique::Cpca { .. }
+                | Technique::PcaVertex { .. } => None,
             })
             .collect()
     };

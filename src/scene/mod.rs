@@ -9,6 +9,7 @@
 pub mod gltf;
 pub mod house;
 pub mod lightmap_uv;
+pub mod subdivide;
 pub mod tangent;
 
 use glam::{Mat4, Vec3, Vec4};

@@ -28,6 +28,7 @@ pub mod spec;
 pub mod tables;
 pub mod texels;
 pub mod unc;
+pub mod vertex;
 
 use std::sync::Arc;
 
@@ -40,6 +41,7 @@ use crate::bake::ao::AoMap;
 use crate::bake::cluster::ClusteredModel;
 use crate::bake::pca::PcaModel;
 use crate::bake::shlmap::ShLightmap;
+use crate::bake::vertex_pca::VertexPca;
 use crate::bake::visibility::VisibilityMap;
 use crate::gpu::{self, Context, GpuError, Image};
 use crate::render::{Frame, SceneGpu};
@@ -59,6 +61,8 @@ pub struct Inputs<'a> {
     pub pca: Option<&'a PcaModel>,
     /// VQ / CPCA fits of the visibility (`vqK`, `cpcaK_M`), found by their `ClusterNeed`.
     pub clusters: &'a [ClusteredModel],
+    /// Visibility baked at mesh vertices (`pcaMv`), found by M and edge length.
+    pub vertex_pca: &'a [VertexPca],
     /// Order-3 SH of incident radiance with inter-reflection per texel (`shlmap`).
     pub sh_lightmap: Option<&'a ShLightmap>,
     /// L×H table texels per hemisphere / face side.
@@ -99,6 +103,7 @@ pub fn fragment_shader(technique: Technique) -> ShaderVariant {
         Technique::Sh2 => sh2::fragment_shader(),
         Technique::Vq { k, seams } => cluster::fragment_shader(k, 0, seams),
         Technique::Cpca { k, m, seams, .. } => cluster::fragment_shader(k, m, seams),
+        Technique::PcaVertex { m, .. } => vertex::fragment_shader(m),
     }
 }
 
@@ -112,7 +117,8 @@ pub fn per_texel_lookups(technique: Technique) -> Option<u32> {
         | Technique::Pca { .. }
         | Technique::Shlmap
         | Technique::Preconv
-        | Technique::Sh2 => None,
+        | Technique::Sh2
+        | Technique::PcaVertex { .. } => None,
     }
 }
 
@@ -158,6 +164,9 @@ pub struct TechniqueGpu {
     sets: Vec<LightingSet>,
     front: usize,
     _per_texel: Vec<Image>,
+    /// The technique's own mesh (`pcaMv`: the scene's surface with weights per vertex);
+    /// `None` draws the scene's.
+    mesh: Option<gpu::MeshBuffers>,
     ctx: Arc<Context>,
 }
 
@@ -178,6 +187,7 @@ impl TechniqueGpu {
             sets,
             front: 0,
             _per_texel: per_texel,
+            mesh: None,
             ctx: ctx.clone(),
         }
     }
@@ -191,7 +201,11 @@ impl TechniqueGpu {
     /// then `frames` timed ones, and reads the last image back. Waits for its frames, so no
     /// set is in use by the GPU between calls.
     pub fn render(&self, scene: &SceneGpu, warmup: u32, frames: u32) -> Result<Frame, GpuError> {
-        scene.render_pipeline(&self.sets[self.front].pipeline, warmup, frames)
+        let pipeline = &self.sets[self.front].pipeline;
+        match &self.mesh {
+            Some(mesh) => scene.render_pipeline_on(pipeline, mesh, warmup, frames),
+            None => scene.render_pipeline(pipeline, warmup, frames),
+        }
     }
 
     /// Copies of the lighting data (2 when built with [`build_dynamic`]).
@@ -310,6 +324,7 @@ fn prepare(
             let need = technique.cluster_need().expect("a clustered technique");
             cluster::prepare(need, inputs, &label)?
         }
+        Technique::PcaVertex { m, .. } => vertex::prepare(m, inputs, &label)?,
     };
     let recipe = LightingRecipe {
         technique,
@@ -329,8 +344,12 @@ fn build_sets(
     sets: usize,
 ) -> Result<(TechniqueGpu, LightingRecipe), TechniqueError> {
     let (texels, recipe) = prepare(technique, path, inputs)?;
-    let per_texel = texels.upload(ctx, path)?;
     let data = recipe.build(inputs.radiance_sh, inputs.irradiance_sh)?;
+    if let Technique::PcaVertex { .. } = technique {
+        let gpu = vertex::finish(ctx, scene, technique, path, inputs, &data, sets)?;
+        return Ok((gpu, recipe));
+    }
+    let per_texel = texels.upload(ctx, path)?;
     let gpu = finish::finish(ctx, scene, technique, path, per_texel, &data, sets)?;
     Ok((gpu, recipe))
 }

@@ -42,6 +42,10 @@ pub enum Technique {
         iterative: bool,
         seams: SeamMode,
     },
+    /// `pcaMv` / `pcaMvE`: the first M weights of the lightmap's PCA basis baked at the
+    /// vertices of the mesh (subdivided so no edge exceeds E cm; none: as authored), in a
+    /// vertex stream, interpolated and shaded as `pcaMw`.
+    PcaVertex { m: u32, max_edge_cm: Option<u32> },
 }
 
 /// How a clustered technique crosses cluster boundaries in the lightmap.
@@ -71,6 +75,9 @@ pub const UNC_ORDERS: std::ops::RangeInclusive<u32> = 2..=6;
 pub const PCA_MAX_VECTORS: u32 = 24;
 /// PCA weights are packed 4 per RGBA8 texel, so M is a multiple of this.
 pub const PCA_VECTORS_PER_TEXEL: u32 = 4;
+
+/// Edge lengths (cm) a `pcaMvE` name may subdivide the mesh to.
+pub const VERTEX_EDGES_CM: &[u32] = &[100, 50, 25, 10];
 
 /// VQ cluster counts a `vqK` name may ask for.
 pub const VQ_CLUSTERS: &[u32] = &[16, 32, 64, 128, 256];
@@ -198,6 +205,14 @@ impl Technique {
             iterative: true,
             seams: SeamMode::Naive,
         },
+        Technique::PcaVertex {
+            m: 12,
+            max_edge_cm: None,
+        },
+        Technique::PcaVertex {
+            m: 12,
+            max_edge_cm: Some(25),
+        },
     ];
 
     /// The CLI name: `unc6`, `pca12`, `pca12w`, `shlmap`, `preconv`, `sh2`.
@@ -221,6 +236,10 @@ impl Technique {
                 if iterative { "" } else { "s" },
                 seams.suffix()
             ),
+            Technique::PcaVertex { m, max_edge_cm } => match max_edge_cm {
+                Some(cm) => format!("pca{m}v{cm}"),
+                None => format!("pca{m}v"),
+            },
         }
     }
 
@@ -248,7 +267,8 @@ impl Technique {
             | Technique::Pca { .. }
             | Technique::Shlmap
             | Technique::Preconv
-            | Technique::Sh2 => None,
+            | Technique::Sh2
+            | Technique::PcaVertex { .. } => None,
         }
     }
 
@@ -266,7 +286,7 @@ impl Technique {
             Technique::Shlmap => Some(PAPER_SHLMAP_MS),
             Technique::Preconv => Some(PAPER_PRECONV_MS),
             Technique::Sh2 => Some(PAPER_SH2_MS),
-            Technique::Vq { .. } | Technique::Cpca { .. } => None,
+            Technique::Vq { .. } | Technique::Cpca { .. } | Technique::PcaVertex { .. } => None,
         }
     }
 
@@ -304,6 +324,11 @@ impl Technique {
                 clusters: self.cluster_need(),
                 ..BakeNeeds::default()
             },
+            Technique::PcaVertex { m, .. } => BakeNeeds {
+                visibility: Some(Order::SIX),
+                pca_vectors: Some(m),
+                ..BakeNeeds::default()
+            },
         }
     }
 
@@ -316,7 +341,8 @@ impl Technique {
             | Technique::Preconv
             | Technique::Sh2
             | Technique::Vq { .. }
-            | Technique::Cpca { .. } => ReferenceModel::Direct,
+            | Technique::Cpca { .. }
+            | Technique::PcaVertex { .. } => ReferenceModel::Direct,
         }
     }
 
@@ -330,7 +356,8 @@ impl Technique {
             | Technique::Preconv
             | Technique::Sh2
             | Technique::Vq { .. }
-            | Technique::Cpca { .. } => true,
+            | Technique::Cpca { .. }
+            | Technique::PcaVertex { .. } => true,
         }
     }
 
@@ -362,6 +389,14 @@ impl Technique {
                             seams,
                         })
                     })
+                })
+                .collect(),
+            Technique::PcaVertex { .. } => (PCA_VECTORS_PER_TEXEL..=PCA_MAX_VECTORS)
+                .step_by(PCA_VECTORS_PER_TEXEL as usize)
+                .flat_map(|m| {
+                    std::iter::once(None)
+                        .chain(VERTEX_EDGES_CM.iter().copied().map(Some))
+                        .map(move |max_edge_cm| Technique::PcaVertex { m, max_edge_cm })
                 })
                 .collect(),
             Technique::Shlmap | Technique::Preconv | Technique::Sh2 => vec![self],
@@ -406,7 +441,8 @@ impl FromStr for Technique {
             name: s.to_string(),
             known: format!(
                 "{} (and uncO for O in {}..={}, pcaM/pcaMw for M a multiple of {} up to {}, \
-                 vqK[n] for K in {:?}, cpcaK_M[n] for K in {:?}, M in {:?}, K·(M+1) ≤ {})",
+                 vqK[n] for K in {:?}, cpcaK_M[s][n] for K in {:?}, M in {:?}, K·(M+1) ≤ {}, \
+                 pcaMv[E] for E in {:?} cm)",
                 join_names(Technique::ALL.iter().map(|t| t.name())),
                 UNC_ORDERS.start(),
                 UNC_ORDERS.end(),
@@ -415,7 +451,8 @@ impl FromStr for Technique {
                 VQ_CLUSTERS,
                 CPCA_CLUSTERS,
                 CPCA_VECTORS,
-                CLUSTER_UNIFORM_VEC4S / 9
+                CLUSTER_UNIFORM_VEC4S / 9,
+                VERTEX_EDGES_CM
             ),
         })
     }

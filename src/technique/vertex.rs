@@ -1,0 +1,228 @@
+//! `pcaMv` / `pcaMvE`: per-vertex PCA weights (issue 16; `bake::vertex_pca`). The weights
+//! ride in the vertex buffer after the scene's attributes — ⌈M/4⌉ RGBA8 UNORM groups at
+//! locations 6… (glsl/scene/mesh.vert) — and the rasterizer interpolates them; the fragment
+//! shader is `pcaMw`'s (glsl/technique/pcaw.frag with SHVIS_VERTEX_WEIGHTS) over the same
+//! uniform block, so `pcaMv` against `pcaMw` is vertices against lightmap texels and
+//! nothing else. The technique draws its own (possibly subdivided) mesh of the same
+//! surface. Vertex streams and uniforms exist on both paths; no texture is bound beyond the
+//! material's.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::lighting::{LightingData, LightingSet, Recipe};
+use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
+use super::{
+    HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu, TechniqueStats,
+};
+use crate::bake::vertex_pca::VertexPca;
+use crate::gpu::{
+    self, Context, MeshBuffers, MeshPipeline, MeshPipelineDesc, VertexLayout, layout,
+};
+use crate::render::SceneGpu;
+use crate::scene::Vertex;
+
+/// Vertex location of the first weight group (after the scene's attributes 0–5).
+pub const FIRST_WEIGHT_LOCATION: u32 = 6;
+
+/// The fragment shader of `pcaMv`.
+pub fn fragment_shader(m: u32) -> ShaderVariant {
+    ShaderVariant {
+        path: "technique/pcaw.frag",
+        defines: vec![
+            ("PCA_GROUPS", m.div_ceil(VALUES_PER_TEXEL as u32)),
+            ("VERTEX_WEIGHTS", 1),
+        ],
+    }
+}
+
+/// The vertex bake `max_edge_cm` names among `inputs.vertex_pca`.
+pub fn find<'a>(
+    inputs: &Inputs<'a>,
+    m: u32,
+    max_edge_cm: Option<u32>,
+    label: &str,
+) -> Result<&'a VertexPca, TechniqueError> {
+    let edge = max_edge_cm.map(|cm| cm as f32 / 100.0);
+    inputs
+        .vertex_pca
+        .iter()
+        .find(|v| v.m == m as usize && v.max_edge == edge)
+        .ok_or_else(|| TechniqueError::Input {
+            label: label.into(),
+            detail: format!(
+                "needs the visibility baked at the mesh's vertices for {m} weights{} \
+                 (Prepared::bake_vertex_pca)",
+                max_edge_cm.map_or(String::new(), |cm| format!(", edges ≤ {cm} cm"))
+            ),
+        })
+}
+
+/// No per-texel data; the recipe is `pcaMw`'s over the lightmap's quantized basis.
+pub(crate) fn prepare(
+    m: u32,
+    inputs: &Inputs<'_>,
+    label: &str,
+) -> Result<(TexelGroups, Recipe), TechniqueError> {
+    let model = inputs.pca.ok_or_else(|| TechniqueError::Input {
+        label: label.into(),
+        detail: "needs the PCA of the visibility bake".into(),
+    })?;
+    let q = super::pca::quantized_prefix(model, m as usize);
+    let none = TexelGroups::new::<u8>(vk::Format::R8G8B8A8_UNORM, 0, &[], format!("{label}.none"));
+    Ok((
+        none,
+        Recipe::Pca {
+            order: model.order,
+            table: None,
+            basis: q.basis,
+            mean: q.mean,
+        },
+    ))
+}
+
+/// The scene's vertex layout with the weight groups appended.
+fn weighted_layout(base: &VertexLayout, groups: u32) -> VertexLayout {
+    let mut attributes = base.attributes.clone();
+    let offset = std::mem::size_of::<Vertex>() as u32;
+    attributes.extend((0..groups).map(|g| {
+        (
+            FIRST_WEIGHT_LOCATION + g,
+            vk::Format::R8G8B8A8_UNORM,
+            offset + 4 * g,
+        )
+    }));
+    VertexLayout {
+        stride: offset + 4 * groups,
+        attributes,
+    }
+}
+
+/// Interleaves each vertex with its weight groups.
+fn interleave(bake: &VertexPca, groups: usize) -> Vec<u8> {
+    let n = bake.mesh.vertices.len();
+    let packed = pack_groups(n, bake.m, |v, k| bake.weights_unorm[v * bake.m + k]);
+    let mut bytes = Vec::with_capacity(n * (std::mem::size_of::<Vertex>() + 4 * groups));
+    for (v, vertex) in bake.mesh.vertices.iter().enumerate() {
+        bytes.extend_from_slice(bytemuck::bytes_of(vertex));
+        for group in &packed {
+            bytes.extend_from_slice(&group[4 * v..4 * v + 4]);
+        }
+    }
+    bytes
+}
+
+/// Builds `pcaMv` with `sets` copies of its uniform block (`super::finish`'s job for the
+/// texel techniques, here over the technique's own mesh and vertex stream).
+pub(crate) fn finish(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    technique: Technique,
+    path: HwPath,
+    inputs: &Inputs<'_>,
+    lighting: &LightingData,
+    sets: usize,
+) -> Result<TechniqueGpu, TechniqueError> {
+    let Technique::PcaVertex { m, max_edge_cm } = technique else {
+        unreachable!("vertex::finish builds pcaMv only");
+    };
+    let label = format!("{technique}.{path}");
+    let bake = find(inputs, m, max_edge_cm, &label)?;
+    let groups = m.div_ceil(VALUES_PER_TEXEL as u32);
+    let mesh = MeshBuffers::new(
+        ctx,
+        &interleave(bake, groups as usize),
+        &bake.mesh.indices,
+        &format!("{label}.mesh"),
+    )?;
+    let vertex_layout = weighted_layout(scene.vertex_layout(), groups);
+    let vertex = gpu::compile_glsl(
+        "scene/mesh.vert",
+        gpu::ShaderStage::Vertex,
+        &[("GBUFFER", 0), ("VERTEX_WEIGHT_GROUPS", groups)],
+    )?;
+    let shader = fragment_shader(m);
+    let mut defines = vec![path.shader_define()];
+    defines.extend_from_slice(&shader.defines);
+    let fragment = gpu::compile_glsl(shader.path, gpu::ShaderStage::Fragment, &defines)?;
+    let mut built = Vec::with_capacity(sets);
+    for set in 0..sets.max(1) {
+        let suffix = if set == 0 {
+            String::new()
+        } else {
+            format!(".{}", (b'a' + set as u8) as char)
+        };
+        let params = gpu::Buffer::with_data(
+            ctx,
+            &lighting.params,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            &format!("{label}.params{suffix}"),
+        )?;
+        let mut resources = scene.common_resources();
+        resources.push((
+            layout::BINDING_TECHNIQUE_PARAMS,
+            gpu::Resource::Uniform(&params),
+        ));
+        let pipeline = MeshPipeline::new(
+            ctx,
+            scene.target(),
+            &MeshPipelineDesc {
+                name: &format!("{label}{suffix}"),
+                vertex_spirv: &vertex,
+                fragment_spirv: &fragment,
+                vertex_layout: &vertex_layout,
+                resources: &resources,
+            },
+        )?;
+        drop(resources);
+        built.push(LightingSet {
+            pipeline,
+            params,
+            tables: Vec::new(),
+        });
+    }
+    let stats = TechniqueStats {
+        texel_bytes: (bake.mesh.vertices.len() * 4 * groups as usize) as u64,
+        table_bytes: lighting.params.len() as u64,
+        textures_bound: layout::MATERIAL_TEXTURES,
+        lookups_per_pixel: layout::MATERIAL_TEXTURES,
+    };
+    let mut gpu = TechniqueGpu::new(ctx, technique, path, stats, Vec::new(), built);
+    gpu.mesh = Some(mesh);
+    Ok(gpu)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn weights_follow_each_vertex_in_the_stream() {
+        let vertex = Vertex::default();
+        let bake = VertexPca {
+            max_edge: None,
+            mesh: crate::scene::Mesh {
+                vertices: vec![vertex; 2],
+                indices: vec![0, 1, 0],
+            },
+            m: 5,
+            weights_unorm: (1..=10).collect(),
+            clamped: 0,
+            rms_error: 0.0,
+            rays_traced: 0,
+        };
+        let bytes = interleave(&bake, 2);
+        let stride = std::mem::size_of::<Vertex>() + 8;
+        assert_eq!(bytes.len(), 2 * stride);
+        let w = &bytes[stride + stride - 8..];
+        assert_eq!(w, &[6, 7, 8, 9, 10, 0, 0, 0]);
+        let base = VertexLayout {
+            stride: std::mem::size_of::<Vertex>() as u32,
+            attributes: vec![(0, vk::Format::R32G32B32_SFLOAT, 0)],
+        };
+        let l = weighted_layout(&base, 2);
+        assert_eq!(l.stride as usize, stride);
+        assert_eq!(l.attributes.last().unwrap().0, FIRST_WEIGHT_LOCATION + 1);
+    }
+}
