@@ -113,3 +113,17 @@ fn seam_blending_removes_the_cluster_boundary_jump_on_both_paths() {
     }
     common::assert_validation_clean(&ctx, "seams");
 }
+
+#[test]
+fn per_vertex_pca_gets_closer_to_the_lightmap_as_the_mesh_is_subdivided() {
+    let ctx = common::validated_context();
+    for &path in HwPath::ALL {
+        let e = errors_against_unc6(&ctx, &["pca12v", "pca12v25", "pca12w"], path);
+        println!(
+            "{path}: rel. RMSE against unc6 — pca12v {:.4}, pca12v25 {:.4}, pca12w {:.4}",
+            e[0], e[1], e[2]
+        );
+        assert!(e[1] < 0.7 * e[0], "{path}: subdivided {} vs authored {}", e[1], e[0]);
+    }
+    common::assert_validation_clean(&ctx, "pcaMv");
+}

@@ -32,8 +32,8 @@ pub fn house() -> &'static Prepared {
         })
         .expect("the built-in scene prepares");
         prepared
-            .fit_clusters(Technique::ALL)
-            .expect("the cost table's cluster fits");
+            .prepare_techniques(Technique::ALL)
+            .expect("the cost table's cluster fits and vertex bakes");
         prepared
     })
 }
