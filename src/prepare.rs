@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use crate::bake::ao::{AoMap, AoSettings, bake_ao};
-use crate::bake::cache::{default_cache_dir, load_or_bake_visibility};
+use crate::bake::cache::{default_cache_dir, load_or_bake_visibility, load_or_fit_clusters};
 use crate::bake::cluster::{self, ClusteredModel};
 use crate::bake::pca::{PcaModel, fit};
 use crate::bake::raster::{LightmapTexels, rasterize};
@@ -92,6 +92,8 @@ pub struct Prepared {
     pub clusters: Vec<ClusteredModel>,
     /// Seed of the cluster fits (the bake's seed).
     pub seed: u64,
+    /// Where bakes and fits are cached.
+    pub cache_dir: PathBuf,
     /// Visibility baked at mesh vertices for `pcaMv` ([`Prepared::bake_vertex_pca`]).
     pub vertex_pca: Vec<VertexPca>,
 }
@@ -120,15 +122,18 @@ impl Prepared {
                 continue;
             }
             let t = Instant::now();
-            let model = cluster::fit(
+            let (k, m) = (need.k as usize, need.m as usize);
+            let model = load_or_fit_clusters(
+                &self.cache_dir,
                 &self.visibility,
-                need.k as usize,
-                need.m as usize,
+                k,
+                m,
                 need.clustering,
                 self.seed,
+                || cluster::fit(&self.visibility, k, m, need.clustering, self.seed),
             )?;
             log::info!(
-                "{:?} {} × {}: {} iterations in {:.1} s, RMS visibility error {:.4}",
+                "{:?} {} × {}: {} iterations, ready in {:.1} s, RMS visibility error {:.4}",
                 need.clustering,
                 need.k,
                 need.m,
@@ -304,6 +309,7 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
         h_order: settings.h_order,
         clusters: Vec::new(),
         seed: settings.seed,
+        cache_dir: settings.cache_dir.clone().unwrap_or_else(default_cache_dir),
         vertex_pca: Vec::new(),
     })
 }

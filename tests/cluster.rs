@@ -123,7 +123,12 @@ fn per_vertex_pca_gets_closer_to_the_lightmap_as_the_mesh_is_subdivided() {
             "{path}: rel. RMSE against unc6 — pca12v {:.4}, pca12v25 {:.4}, pca12w {:.4}",
             e[0], e[1], e[2]
         );
-        assert!(e[1] < 0.7 * e[0], "{path}: subdivided {} vs authored {}", e[1], e[0]);
+        assert!(
+            e[1] < 0.7 * e[0],
+            "{path}: subdivided {} vs authored {}",
+            e[1],
+            e[0]
+        );
     }
     common::assert_validation_clean(&ctx, "pcaMv");
 }

@@ -24,6 +24,9 @@
 //! Files are written atomically: a temporary file in the same directory, fsync, rename
 //! (then a best-effort fsync of the directory), so a crash leaves the old file or none.
 //!
+//! Kind 2 holds a VQ / CPCA fit of a visibility map ([`load_or_fit_clusters`], key over the
+//! map's content, the fit's parameters and `cluster::FIT_VERSION`).
+//!
 //! Bump [`CACHE_FORMAT_VERSION`] whenever the layout *or the bake's results* change.
 //!
 //! [`hash64`] is FNV-1a over little-endian 64-bit words (odd 64-bit FNV prime), bytes of
@@ -39,6 +42,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use rayon::prelude::*;
 
 use super::BakeError;
+use super::cluster::{self, ClusteredModel, Clustering};
 use super::directions::splitmix64;
 use super::visibility::{VisibilityMap, VisibilitySettings};
 use crate::scene::{Mesh, Vertex};
@@ -54,6 +58,8 @@ pub const HEADER_BYTES: usize = 40;
 pub const CACHE_DIR_ENV: &str = "SHVIS_CACHE_DIR";
 /// Kind tag of SH visibility caches.
 const KIND_VISIBILITY: u32 = 1;
+/// Kind tag of VQ / CPCA fit caches.
+const KIND_CLUSTERS: u32 = 2;
 
 /// 64-bit FNV prime.
 const FNV_PRIME: u64 = 0x0000_0100_0000_01b3;
@@ -157,13 +163,31 @@ pub fn load_or_bake_visibility(
 ) -> Result<VisibilityMap, BakeError> {
     let key = visibility_key(mesh, res, settings);
     let path = visibility_cache_path(cache_dir, key);
-    match fs::read(&path) {
-        Ok(bytes) => match decode_visibility(&bytes, key, res, settings.order) {
-            Ok(map) => {
-                log::info!("visibility: using cache {}", path.display());
-                return Ok(map);
+    load_or_build(
+        &path,
+        "visibility",
+        |bytes| decode_visibility(bytes, key, res, settings.order),
+        || Ok(bake()),
+        |map| encode_visibility(map, key),
+    )
+}
+
+/// The value in the cache file at `path` when it decodes, else `build()`'s, written there
+/// (module doc: a missing file is silent, a bad one a warning and a rebuild).
+fn load_or_build<T>(
+    path: &Path,
+    what: &str,
+    decode: impl FnOnce(&[u8]) -> Result<T, String>,
+    build: impl FnOnce() -> Result<T, BakeError>,
+    encode: impl FnOnce(&T) -> Vec<u8>,
+) -> Result<T, BakeError> {
+    match fs::read(path) {
+        Ok(bytes) => match decode(&bytes) {
+            Ok(value) => {
+                log::info!("{what}: using cache {}", path.display());
+                return Ok(value);
             }
-            Err(what) => log::warn!("bake cache {}: {what}; rebuilding", path.display()),
+            Err(e) => log::warn!("bake cache {}: {e}; rebuilding", path.display()),
         },
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             log::debug!("bake cache {}: not there yet", path.display());
@@ -173,9 +197,163 @@ pub fn load_or_bake_visibility(
             path.display()
         ),
     }
-    let map = bake();
-    write_atomically(&path, &encode_visibility(&map, key))?;
-    Ok(map)
+    let value = build()?;
+    write_atomically(path, &encode(&value))?;
+    Ok(value)
+}
+
+/// Cache key of a VQ / CPCA fit (`bake::cluster::fit`) of `vis` with `k` clusters of `m`
+/// vectors, `clustering` and `seed`: the fit's inputs, the visibility by content.
+pub fn clusters_key(
+    vis: &VisibilityMap,
+    k: usize,
+    m: usize,
+    clustering: Clustering,
+    seed: u64,
+) -> u64 {
+    let mut h = Hasher64::default();
+    h.write(b"shvis bake cache");
+    h.write_u64(u64::from(CACHE_FORMAT_VERSION));
+    h.write(b"clusters");
+    h.write_u64(u64::from(cluster::FIT_VERSION));
+    h.write_u64(k as u64);
+    h.write_u64(m as u64);
+    h.write_u64(clustering_tag(clustering).into());
+    h.write_u64(seed);
+    h.write_u64(u64::from(vis.res));
+    h.write_u64(u64::from(vis.order.get()));
+    h.write(bytemuck::cast_slice::<f32, u8>(&vis.coeffs));
+    h.write(
+        &vis.covered
+            .iter()
+            .map(|&c| u8::from(c))
+            .collect::<Vec<u8>>(),
+    );
+    h.finish()
+}
+
+fn clustering_tag(c: Clustering) -> u32 {
+    match c {
+        Clustering::KMeans => 0,
+        Clustering::Iterative => 1,
+    }
+}
+
+/// A VQ / CPCA fit of `vis` from the cache in `cache_dir`, else from `fit()`, then cached
+/// (`clusters-{key:016x}.bin`; as [`load_or_bake_visibility`]).
+///
+/// # Errors
+/// `fit()`'s, or [`BakeError::Io`] when the file cannot be written.
+pub fn load_or_fit_clusters(
+    cache_dir: &Path,
+    vis: &VisibilityMap,
+    k: usize,
+    m: usize,
+    clustering: Clustering,
+    seed: u64,
+    fit: impl FnOnce() -> Result<ClusteredModel, BakeError>,
+) -> Result<ClusteredModel, BakeError> {
+    let key = clusters_key(vis, k, m, clustering, seed);
+    let path = cache_dir.join(format!("clusters-{key:016x}.bin"));
+    load_or_build(
+        &path,
+        "clusters",
+        |bytes| decode_clusters(bytes, key, vis, k, m, clustering),
+        fit,
+        |model| encode_clusters(model, key),
+    )
+}
+
+/// The bytes of a cache file holding `model` under `key`. Payload: k, m, n, res,
+/// clustering, iterations (u32 each); per cluster its members (u64), mean (n f64) and
+/// basis (m·n f64); res² cluster indices (u32); res²·m weights (f32).
+pub fn encode_clusters(model: &ClusteredModel, key: u64) -> Vec<u8> {
+    let n = model.order.coeff_count();
+    let mut p = Vec::new();
+    for v in [
+        model.clusters.len() as u32,
+        model.m as u32,
+        n as u32,
+        model.res,
+        clustering_tag(model.clustering),
+        model.iterations,
+    ] {
+        p.extend_from_slice(&v.to_le_bytes());
+    }
+    for c in &model.clusters {
+        p.extend_from_slice(&(c.members as u64).to_le_bytes());
+        for x in c.mean.iter().chain(c.basis.iter().flatten()) {
+            p.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    for c in &model.cluster_of {
+        p.extend_from_slice(&c.to_le_bytes());
+    }
+    for w in &model.weights {
+        p.extend_from_slice(&w.to_le_bytes());
+    }
+    with_header(KIND_CLUSTERS, key, &p)
+}
+
+/// Parses a clusters cache file for a fit of `vis` with `k` × `m` and `clustering`.
+pub fn decode_clusters(
+    bytes: &[u8],
+    key: u64,
+    vis: &VisibilityMap,
+    k: usize,
+    m: usize,
+    clustering: Clustering,
+) -> Result<ClusteredModel, String> {
+    let payload = payload_of(bytes, KIND_CLUSTERS, "clusters", key)?;
+    let mut r = Reader { bytes: payload };
+    let n = vis.order.coeff_count();
+    let head: Vec<u32> = (0..6).map(|_| r.u32()).collect::<Result<_, _>>()?;
+    let want = [
+        k as u32,
+        m as u32,
+        n as u32,
+        vis.res,
+        clustering_tag(clustering),
+    ];
+    if head[..5] != want {
+        return Err(format!(
+            "holds k, m, n, res, clustering {:?}, expected {want:?}",
+            &head[..5]
+        ));
+    }
+    let mut clusters = Vec::with_capacity(k);
+    for _ in 0..k {
+        let members = r.u64()? as usize;
+        let mean = r.f64s(n)?;
+        let basis = (0..m).map(|_| r.f64s(n)).collect::<Result<_, _>>()?;
+        clusters.push(cluster::Cluster {
+            mean,
+            basis,
+            members,
+        });
+    }
+    let texels = (vis.res as usize).pow(2);
+    let cluster_of: Vec<u32> = (0..texels).map(|_| r.u32()).collect::<Result<_, _>>()?;
+    if cluster_of.iter().any(|&c| c as usize >= k) {
+        return Err("a cluster index is out of range".into());
+    }
+    let weights = r.f32s(texels * m)?;
+    if !r.bytes.is_empty() {
+        return Err(format!(
+            "{} unexpected bytes after the payload",
+            r.bytes.len()
+        ));
+    }
+    Ok(ClusteredModel {
+        order: vis.order,
+        res: vis.res,
+        clustering,
+        m,
+        clusters,
+        cluster_of,
+        weights,
+        iterations: head[5],
+    })
 }
 
 /// The bytes of a cache file holding `map` under `key`.
@@ -193,14 +371,19 @@ pub fn encode_visibility(map: &VisibilityMap, key: u64) -> Vec<u8> {
     for a in &map.ao {
         payload.extend_from_slice(&a.to_le_bytes());
     }
+    with_header(KIND_VISIBILITY, key, &payload)
+}
+
+/// A cache file: the header (module doc) of `kind` and `key`, then `payload`.
+fn with_header(kind: u32, key: u64, payload: &[u8]) -> Vec<u8> {
     let mut out = Vec::with_capacity(HEADER_BYTES + payload.len());
     out.extend_from_slice(&CACHE_MAGIC);
     out.extend_from_slice(&CACHE_FORMAT_VERSION.to_le_bytes());
-    out.extend_from_slice(&KIND_VISIBILITY.to_le_bytes());
+    out.extend_from_slice(&kind.to_le_bytes());
     out.extend_from_slice(&key.to_le_bytes());
     out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    out.extend_from_slice(&hash64(&payload).to_le_bytes());
-    out.extend_from_slice(&payload);
+    out.extend_from_slice(&hash64(payload).to_le_bytes());
+    out.extend_from_slice(payload);
     out
 }
 
@@ -231,6 +414,13 @@ impl<'a> Reader<'a> {
             b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7],
         ]))
     }
+    fn f64s(&mut self, n: usize) -> Result<Vec<f64>, String> {
+        let bytes = self.take(n.checked_mul(8).ok_or("size overflows")?)?;
+        Ok(bytes
+            .chunks_exact(8)
+            .map(|b| f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]))
+            .collect())
+    }
     fn f32s(&mut self, n: usize) -> Result<Vec<f32>, String> {
         let bytes = self.take(n.checked_mul(4).ok_or("size overflows")?)?;
         Ok(bytes
@@ -240,13 +430,14 @@ impl<'a> Reader<'a> {
     }
 }
 
-/// Parses a cache file; `Err` says what is wrong, in a few words.
-pub fn decode_visibility(
-    bytes: &[u8],
+/// The payload of a cache file of `kind` (`kind_name` for the message) under `key`, once
+/// magic, version, kind, key, length and checksum all match.
+fn payload_of<'a>(
+    bytes: &'a [u8],
+    kind_tag: u32,
+    kind_name: &str,
     key: u64,
-    res: u32,
-    order: Order,
-) -> Result<VisibilityMap, String> {
+) -> Result<&'a [u8], String> {
     if bytes.len() < HEADER_BYTES {
         return Err(format!(
             "truncated header ({} of {HEADER_BYTES} bytes)",
@@ -266,10 +457,8 @@ pub fn decode_visibility(
         ));
     }
     let kind = header.u32()?;
-    if kind != KIND_VISIBILITY {
-        return Err(format!(
-            "kind {kind}, expected {KIND_VISIBILITY} (visibility)"
-        ));
+    if kind != kind_tag {
+        return Err(format!("kind {kind}, expected {kind_tag} ({kind_name})"));
     }
     let stored_key = header.u64()?;
     if stored_key != key {
@@ -290,6 +479,17 @@ pub fn decode_visibility(
             "payload checksum {actual:016x}, header says {checksum:016x}"
         ));
     }
+    Ok(payload)
+}
+
+/// Parses a cache file; `Err` says what is wrong, in a few words.
+pub fn decode_visibility(
+    bytes: &[u8],
+    key: u64,
+    res: u32,
+    order: Order,
+) -> Result<VisibilityMap, String> {
+    let payload = payload_of(bytes, KIND_VISIBILITY, "visibility", key)?;
     let mut r = Reader { bytes: payload };
     let (file_res, file_order) = (r.u32()?, r.u32()?);
     if file_res != res || file_order != order.get() {
@@ -485,5 +685,49 @@ mod tests {
         }
         assert_ne!(hash64(&data[..999]), h);
         assert_ne!(hash64(&[]), hash64(&[0]));
+    }
+
+    #[test]
+    fn cluster_fits_round_trip_and_a_damaged_or_foreign_file_is_rejected() {
+        let (res, order) = (6u32, Order::TWO);
+        let texels = (res * res) as usize;
+        let vis = VisibilityMap {
+            res,
+            order,
+            coeffs: (0..texels * 4)
+                .map(|i| ((i * 37 % 11) as f32).sin())
+                .collect(),
+            covered: (0..texels).map(|t| t % 7 != 0).collect(),
+            ao: vec![1.0; texels],
+            stats: Default::default(),
+        };
+        let model = cluster::fit(&vis, 3, 2, Clustering::Iterative, 5).unwrap();
+        let key = clusters_key(&vis, 3, 2, Clustering::Iterative, 5);
+        let bytes = encode_clusters(&model, key);
+        let back = decode_clusters(&bytes, key, &vis, 3, 2, Clustering::Iterative).unwrap();
+        assert_eq!(back, model);
+        // A flipped payload byte fails the checksum; other parameters have other keys.
+        let mut bad = bytes.clone();
+        bad[HEADER_BYTES + 30] ^= 1;
+        let e = decode_clusters(&bad, key, &vis, 3, 2, Clustering::Iterative).unwrap_err();
+        assert!(e.contains("checksum"), "{e}");
+        assert_ne!(key, clusters_key(&vis, 3, 2, Clustering::KMeans, 5));
+        assert_ne!(key, clusters_key(&vis, 3, 2, Clustering::Iterative, 6));
+        let e = decode_clusters(&bytes, key, &vis, 4, 2, Clustering::Iterative).unwrap_err();
+        assert!(e.contains("expected"), "{e}");
+        // Through the directory: fitted once, then read back; a corrupt file is refitted.
+        let dir = std::env::temp_dir().join(format!("shvis-cluster-cache-{}", std::process::id()));
+        let fit = || cluster::fit(&vis, 3, 2, Clustering::Iterative, 5);
+        let first = load_or_fit_clusters(&dir, &vis, 3, 2, Clustering::Iterative, 5, fit).unwrap();
+        let cached = load_or_fit_clusters(&dir, &vis, 3, 2, Clustering::Iterative, 5, || {
+            panic!("a valid cache must not be refitted")
+        })
+        .unwrap();
+        assert_eq!(first, cached);
+        let file = dir.join(format!("clusters-{key:016x}.bin"));
+        std::fs::write(&file, &bad).unwrap();
+        let refit = load_or_fit_clusters(&dir, &vis, 3, 2, Clustering::Iterative, 5, fit).unwrap();
+        assert_eq!(refit, model);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

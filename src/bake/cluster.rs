@@ -41,6 +41,10 @@ use super::pca::{dot, principal_subspace, rms};
 use super::visibility::VisibilityMap;
 use crate::sh::Order;
 
+/// Version of the fit's results: bump it whenever `fit` changes what it returns, so cached
+/// fits (`bake::cache::load_or_fit_clusters`) are rebuilt.
+pub const FIT_VERSION: u32 = 1;
+
 /// Lloyd iterations of k-means at most (it stops when no texel changes cluster).
 pub const KMEANS_MAX_ITERATIONS: u32 = 100;
 /// Reassign-and-refit rounds of iterative CPCA at most.
