@@ -98,9 +98,27 @@ struct StudySeamsArgs {
 struct StudyCompressionArgs {
     #[command(flatten)]
     scene: SceneArgs,
-    /// Output directory: compression.md, compression.json.
+    /// Environment of the on-screen comparison (as for `render`).
+    #[arg(long, default_value = "sky")]
+    env: String,
+    /// Techniques rendered against unc6 (comma-separated).
+    #[arg(long, value_delimiter = ',', default_values_t = shvis::study::compression::SCREEN_TECHNIQUES.iter().map(|t| t.parse::<Technique>().expect("valid")).collect::<Vec<_>>())]
+    techniques: Vec<Technique>,
+    /// Hardware paths of the on-screen comparison.
+    #[arg(long, value_delimiter = ',', default_value = "dx9,dx10")]
+    paths: Vec<HwPath>,
+    #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Only the visibility error (no GPU).
+    #[arg(long)]
+    no_gpu: bool,
+    /// Output directory: compression.md, compression.json, screen.md, screen.json.
     #[arg(long, default_value = "study-out")]
     out: PathBuf,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 #[derive(Args, Debug)]
@@ -432,12 +450,13 @@ fn run_study_compression(a: StudyCompressionArgs) -> Result<()> {
     use shvis::study::compression;
     create_dir(&a.out)?;
     let started = Instant::now();
-    let prepared = prepare(&prepare_settings(&a.scene, "sky", None)?)?;
+    let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, None)?)?;
     let rows = compression::run(
         &prepared.visibility,
         &compression::default_configs(),
         a.scene.table_res,
         a.scene.seed,
+        Some(&prepared.cache_dir),
     )?;
     let markdown = compression::to_markdown(&rows, prepared.visibility.res, a.scene.table_res);
     std::fs::write(a.out.join("compression.md"), &markdown).context("compression.md")?;
@@ -446,13 +465,33 @@ fn run_study_compression(a: StudyCompressionArgs) -> Result<()> {
         serde_json::to_string_pretty(&rows)? + "\n",
     )
     .context("compression.json")?;
+    if a.no_gpu {
+        print_table(
+            &markdown,
+            &a.out,
+            "compression.md, compression.json",
+            started,
+        );
+        return Ok(());
+    }
+    let ctx = open_gpu(&a.gpu)?;
+    prepared.prepare_techniques(&a.techniques)?;
+    let screen =
+        compression::screen_errors(&ctx, &prepared, &a.techniques, &a.paths, a.width, a.height)?;
+    let screen_md = compression::screen_markdown(&screen, &a.env, a.width, a.height);
+    std::fs::write(a.out.join("screen.md"), &screen_md).context("screen.md")?;
+    std::fs::write(
+        a.out.join("screen.json"),
+        serde_json::to_string_pretty(&screen)? + "\n",
+    )
+    .context("screen.json")?;
     print_table(
-        &markdown,
+        &format!("{markdown}\n{screen_md}"),
         &a.out,
-        "compression.md, compression.json",
+        "compression.md, compression.json, screen.md, screen.json",
         started,
     );
-    Ok(())
+    check_validation(&ctx, a.gpu.validate)
 }
 
 fn run_study_seams(a: StudySeamsArgs) -> Result<()> {

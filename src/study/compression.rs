@@ -12,6 +12,11 @@
 //!             a sphere being 2 · res² texels of 8 bytes (dx9 dual paraboloid)
 //! ```
 //!
+//! With a GPU, [`screen_errors`] renders the compression techniques built on these models
+//! (`pcaMw`, `vqK`, `cpcaK_M[s]`, `pcaMv[E]`, whose per-texel layout differs from the table
+//! route above: the index shares the last RGBA8 texel, per-cluster blocks are uniforms) and
+//! measures each image against `unc6`'s.
+//!
 //! The error is the RMS over covered texels of the coefficient L2 error, which is the L2
 //! error of the visibility function over the sphere (the SH basis is orthonormal), before
 //! weight quantization. It does not depend on the lighting; what each model costs in image
@@ -23,9 +28,17 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::bake::BakeError;
+use crate::bake::cache::load_or_fit_clusters;
 use crate::bake::cluster::{self, Clustering};
 use crate::bake::pca;
 use crate::bake::visibility::VisibilityMap;
+use crate::gpu::Context;
+use crate::prepare::Prepared;
+use crate::render::{Frame, FrameSettings, SceneGpu};
+use crate::report::metrics::image_error;
+use crate::sh::Order;
+use crate::technique::{self, HwPath, Technique, TechniqueError, TechniqueStats};
+use std::sync::Arc;
 
 /// The model of one row.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -101,12 +114,14 @@ pub fn default_configs() -> Vec<(Model, usize, usize)> {
     configs
 }
 
-/// Fits every `(model, k, m)` of `configs` to `vis`.
+/// Fits every `(model, k, m)` of `configs` to `vis`, through the bake cache in `cache_dir`
+/// when given (`bake::cache::load_or_fit_clusters`; `seconds` is then the load time).
 pub fn run(
     vis: &VisibilityMap,
     configs: &[(Model, usize, usize)],
     table_res: u32,
     seed: u64,
+    cache_dir: Option<&std::path::Path>,
 ) -> Result<Vec<Row>, BakeError> {
     let mut rows = Vec::with_capacity(configs.len());
     for &(model, k, m) in configs {
@@ -119,7 +134,12 @@ pub fn run(
                     _ => Clustering::KMeans,
                 };
                 let m = if model == Model::Vq { 0 } else { m };
-                let fit = cluster::fit(vis, k, m, clustering, seed)?;
+                let fit = match cache_dir {
+                    Some(dir) => load_or_fit_clusters(dir, vis, k, m, clustering, seed, || {
+                        cluster::fit(vis, k, m, clustering, seed)
+                    })?,
+                    None => cluster::fit(vis, k, m, clustering, seed)?,
+                };
                 (fit.rms_reconstruction_error(vis), fit.clusters_used())
             }
         };
@@ -169,6 +189,101 @@ pub fn to_markdown(rows: &[Row], res: u32, table_res: u32) -> String {
             r.rms_error,
             r.clusters_used,
             r.seconds
+        );
+    }
+    s
+}
+
+/// The compression rows rendered by default ([`screen_errors`]): global PCA (weights-only,
+/// the same route as the clustered rows), VQ, static and iterative CPCA, per-vertex PCA at
+/// three densities.
+pub const SCREEN_TECHNIQUES: &[&str] = &[
+    "pca8w",
+    "pca12w",
+    "pca16w",
+    "vq64",
+    "vq256",
+    "cpca8_7s",
+    "cpca8_7",
+    "cpca8_11s",
+    "cpca8_11",
+    "pca12v",
+    "pca12v50",
+    "pca12v25",
+];
+
+/// One technique's on-screen compression error.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ScreenRow {
+    pub technique: Technique,
+    pub path: HwPath,
+    /// Per-texel (or per-vertex) bytes plus tables and uniforms, as bound on the GPU.
+    pub bytes: u64,
+    pub texel_bytes: u64,
+    /// Relative RMSE of its image against `unc6`'s on the same path: the compression's own
+    /// error on screen, without the reference's noise or the visibility order's error.
+    pub rel_rmse_vs_unc6: f64,
+}
+
+/// Renders `techniques` and `unc6` on each of `paths` at `width` × `height` and compares
+/// (the techniques' bake data must be prepared: `Prepared::prepare_techniques`).
+pub fn screen_errors(
+    ctx: &Arc<Context>,
+    prepared: &Prepared,
+    techniques: &[Technique],
+    paths: &[HwPath],
+    width: u32,
+    height: u32,
+) -> Result<Vec<ScreenRow>, TechniqueError> {
+    let settings = FrameSettings {
+        width,
+        height,
+        ..FrameSettings::default()
+    };
+    let scene = SceneGpu::new(ctx, &prepared.scene, &settings)?;
+    let mut rows = Vec::new();
+    for &path in paths {
+        let render = |t: Technique| -> Result<(Frame, TechniqueStats), TechniqueError> {
+            let gpu = technique::build(ctx, &scene, t, path, &prepared.inputs())?;
+            Ok((gpu.render(&scene, 0, 1)?, gpu.stats))
+        };
+        let (truth, _) = render(Technique::Unc { order: Order::SIX })?;
+        for &t in techniques {
+            let (frame, stats) = render(t)?;
+            let error = image_error(&frame, &truth).ok_or_else(|| TechniqueError::Input {
+                label: format!("{t}.{path}"),
+                detail: "no pixel covered in both images".into(),
+            })?;
+            rows.push(ScreenRow {
+                technique: t,
+                path,
+                bytes: stats.texel_bytes + stats.table_bytes,
+                texel_bytes: stats.texel_bytes,
+                rel_rmse_vs_unc6: error.rel_rmse,
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// The on-screen rows as a markdown table, by path and bytes.
+pub fn screen_markdown(rows: &[ScreenRow], env: &str, width: u32, height: u32) -> String {
+    let mut sorted: Vec<&ScreenRow> = rows.iter().collect();
+    sorted.sort_by_key(|r| (r.path, r.bytes));
+    let mut s = format!(
+        "On screen under {env}, {width}×{height}: relative RMSE against unc6 on the same path (the compression's own error)\n\n\
+         | technique | path | per-texel/vertex KiB | total KiB | rel. RMSE vs unc6 |\n\
+         |---|---|---:|---:|---:|\n"
+    );
+    for r in sorted {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.0} | {:.0} | {:.4} |",
+            r.technique,
+            r.path,
+            r.texel_bytes as f64 / 1024.0,
+            r.bytes as f64 / 1024.0,
+            r.rel_rmse_vs_unc6
         );
     }
     s
