@@ -19,8 +19,10 @@
 //!
 //! The error is the RMS over covered texels of the coefficient L2 error, which is the L2
 //! error of the visibility function over the sphere (the SH basis is orthonormal), before
-//! weight quantization. It does not depend on the lighting; what each model costs in image
-//! error under a given environment is the renderer's to measure.
+//! weight quantization and again with the weights in 8 bits per vector range as the
+//! techniques store them (PCA: one range per vector over the whole map; CPCA: per cluster).
+//! It does not depend on the lighting; what each model costs in image error under a given
+//! environment is the renderer's to measure ([`screen_errors`]).
 
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -30,7 +32,7 @@ use serde::Serialize;
 use crate::bake::BakeError;
 use crate::bake::cache::load_or_fit_clusters;
 use crate::bake::cluster::{self, Clustering};
-use crate::bake::pca;
+use crate::bake::pca::{self, rms};
 use crate::bake::visibility::VisibilityMap;
 use crate::gpu::Context;
 use crate::prepare::Prepared;
@@ -77,6 +79,8 @@ pub struct Row {
     pub total_bytes: u64,
     /// RMS visibility error over covered texels.
     pub rms_error: f64,
+    /// The same with the weights quantized to 8 bits as the techniques store them.
+    pub rms_error_quantized: f64,
     /// Clusters that ended with a covered texel.
     pub clusters_used: usize,
     pub seconds: f64,
@@ -126,8 +130,20 @@ pub fn run(
     let mut rows = Vec::with_capacity(configs.len());
     for &(model, k, m) in configs {
         let start = Instant::now();
-        let (rms_error, clusters_used) = match model {
-            Model::Pca => (pca::fit(vis, m)?.rms_reconstruction_error(vis), 1),
+        let covered = || (0..vis.covered.len()).filter(|&t| vis.covered[t]);
+        let truth = |t: usize| {
+            vis.texel(t)
+                .iter()
+                .map(|&c| f64::from(c))
+                .collect::<Vec<f64>>()
+        };
+        let (rms_error, rms_error_quantized, clusters_used) = match model {
+            Model::Pca => {
+                let fit = pca::fit(vis, m)?;
+                let q = fit.quantize(8);
+                let quantized = rms(covered().map(|t| (truth(t), q.reconstruct(t))));
+                (fit.rms_reconstruction_error(vis), quantized, 1)
+            }
             Model::Vq | Model::CpcaStatic | Model::CpcaIterative => {
                 let clustering = match model {
                     Model::CpcaIterative => Clustering::Iterative,
@@ -140,7 +156,13 @@ pub fn run(
                     })?,
                     None => cluster::fit(vis, k, m, clustering, seed)?,
                 };
-                (fit.rms_reconstruction_error(vis), fit.clusters_used())
+                let q = fit.quantize();
+                let quantized = rms(covered().map(|t| (truth(t), q.reconstruct(t))));
+                (
+                    fit.rms_reconstruction_error(vis),
+                    quantized,
+                    fit.clusters_used(),
+                )
             }
         };
         let (bytes_per_texel, texel_bytes, table_bytes) =
@@ -154,6 +176,7 @@ pub fn run(
             table_bytes,
             total_bytes: texel_bytes + table_bytes,
             rms_error,
+            rms_error_quantized,
             clusters_used,
             seconds: start.elapsed().as_secs_f64(),
         });
@@ -171,14 +194,14 @@ pub fn to_markdown(rows: &[Row], res: u32, table_res: u32) -> String {
     let mut sorted: Vec<&Row> = rows.iter().collect();
     sorted.sort_by_key(|r| (r.total_bytes, r.model as u8));
     let mut s = format!(
-        "Visibility compression against storage: {res}² lightmap, {table_res}² tables (dx9 layout), RMS visibility error over covered texels (unquantized weights)\n\n\
-         | model | K | M | bytes/texel | texel KiB | table KiB | total KiB | RMS error | clusters used | s |\n\
-         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+        "Visibility compression against storage: {res}² lightmap, {table_res}² tables (dx9 layout), RMS visibility error over covered texels (unquantized weights; then with the weights in 8 bits as stored)\n\n\
+         | model | K | M | bytes/texel | texel KiB | table KiB | total KiB | RMS error | 8-bit weights | clusters used | s |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
     );
     for r in sorted {
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {:.0} | {:.0} | {:.0} | {:.5} | {} | {:.1} |",
+            "| {} | {} | {} | {} | {:.0} | {:.0} | {:.0} | {:.5} | {:.5} | {} | {:.1} |",
             r.model.name(),
             r.k,
             r.m,
@@ -187,6 +210,7 @@ pub fn to_markdown(rows: &[Row], res: u32, table_res: u32) -> String {
             r.table_bytes as f64 / 1024.0,
             r.total_bytes as f64 / 1024.0,
             r.rms_error,
+            r.rms_error_quantized,
             r.clusters_used,
             r.seconds
         );
