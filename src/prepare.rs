@@ -20,7 +20,7 @@ use crate::env::{self, EnvError, EnvMap};
 use crate::scene::Mesh;
 use crate::scene::{Scene, SceneError, gltf, house};
 use crate::sh::{Order, zonal};
-use crate::technique::{Inputs, Technique};
+use crate::technique::{Inputs, Technique, vertex};
 
 /// What to prepare.
 #[derive(Clone, Debug, PartialEq)]
@@ -113,12 +113,7 @@ impl Prepared {
     /// the bake's seed, `bake::cluster`), logging each fit's time and error.
     pub fn fit_clusters(&mut self, techniques: &[Technique]) -> Result<(), PrepareError> {
         for need in techniques.iter().filter_map(|t| t.cluster_need()) {
-            let have = self.clusters.iter().any(|c| {
-                c.clusters.len() == need.k as usize
-                    && c.m == need.m as usize
-                    && c.clustering == need.clustering
-            });
-            if have {
+            if self.clusters.iter().any(|c| need.is_met_by(c)) {
                 continue;
             }
             let t = Instant::now();
@@ -154,14 +149,14 @@ impl Prepared {
             let Technique::PcaVertex { m, max_edge_cm } = t else {
                 continue;
             };
-            let edge = max_edge_cm.map(|cm| cm as f32 / 100.0);
             if self
                 .vertex_pca
                 .iter()
-                .any(|v| v.m == m as usize && v.max_edge == edge)
+                .any(|v| vertex::is_bake_of(v, m, max_edge_cm))
             {
                 continue;
             }
+            let edge = vertex::max_edge_m(max_edge_cm);
             let start = Instant::now();
             let tracer = tracer.get_or_insert_with(|| Tracer::new(&self.scene.mesh));
             let q = crate::technique::pca::quantized_prefix(&self.pca, m as usize);

@@ -198,3 +198,15 @@ fn absurd_bounce_count() {
     );
     assert_one_error_line(&out, &["--bounces", "two"]);
 }
+
+#[test]
+fn clustered_names_out_of_range_and_seams_of_an_unclustered_technique() {
+    // 32 clusters × 16 values overflow the 64 KiB uniform block: not a nameable technique.
+    let out = shvis(
+        &["render", "--technique", "cpca32_15", "--out", "x.png"],
+        &[],
+    );
+    assert_one_error_line(&out, &["cpca32_15", "cpcaK_M"]);
+    let out = shvis(&["study", "seams", "--techniques", "unc6"], &[]);
+    assert_one_error_line(&out, &["unc6", "not a clustered technique"]);
+}

@@ -46,6 +46,7 @@ use half::f16;
 use rayon::prelude::*;
 
 use crate::bake::lxh::{LxhMatrices, build_table};
+use crate::bake::raster::texel_index_of;
 use crate::bake::shlmap::{ShLightmapSettings, radiance_at_points};
 use crate::bake::visibility::{PointVisibility, bake_points};
 use crate::gpu::{Context, GpuError};
@@ -59,7 +60,7 @@ use crate::sh::zonal::clamped_cosine_convolution;
 use crate::sphere::SphereMap;
 use crate::technique::pca::{quantized_prefix, weights_only_block};
 use crate::technique::tables::{f16_range_scale, max_abs, table_map};
-use crate::technique::{HwPath, Technique, TechniqueError};
+use crate::technique::{HwPath, SeamMode, Technique, TechniqueError};
 use exact_light::ExactLightTable;
 
 /// What every rung needs at each covered pixel, computed once per bench.
@@ -514,7 +515,7 @@ pub fn cpu_rungs(
             };
             let base = technique.name();
             push(
-                AttributionKind::PcaCompression,
+                AttributionKind::ClusterCompression,
                 format!("{base}.compression"),
                 px.image(|k| dot_rgb(&compressed(k), &exact(k), n2)),
             );
@@ -529,6 +530,46 @@ pub fn cpu_rungs(
                 AttributionKind::CosineOrder,
                 format!("{base}.cosine_order"),
                 px.image(|k| shade(&lxh, px.normal[k], &compressed(k))),
+            );
+            // The stored lightmap as the shader reads it (glsl/technique/cluster.frag).
+            let q = model.quantize();
+            let blended = matches!(
+                technique,
+                Technique::Vq {
+                    seams: SeamMode::Blended,
+                    ..
+                } | Technique::Cpca {
+                    seams: SeamMode::Blended,
+                    ..
+                }
+            );
+            let stored = |k: usize| -> [f64; 36] {
+                let mut out = [0.0; 36];
+                if blended {
+                    let (index, weight) = lightmap_taps(q.res, px.uv[k]);
+                    for (&t, &w) in index.iter().zip(&weight) {
+                        for (o, v) in out.iter_mut().zip(q.reconstruct(t)) {
+                            *o += w * v;
+                        }
+                    }
+                } else {
+                    let c = q.cluster_of[texel_index_of(q.res, px.uv[k])] as usize;
+                    let u = lightmap_bilinear(q.res, px.uv[k], q.m, |t, i| {
+                        f64::from(q.weights_unorm[t * q.m + i]) / 255.0
+                    });
+                    out[..n2].copy_from_slice(&q.means[c][..n2]);
+                    for (b, ub) in q.bases[c].iter().zip(&u) {
+                        for (o, bj) in out.iter_mut().zip(b) {
+                            *o += ub * bj;
+                        }
+                    }
+                }
+                out
+            };
+            push(
+                AttributionKind::LightmapTexels,
+                format!("{label}.lightmap"),
+                px.image(|k| shade(&lxh, px.normal[k], &stored(k))),
             );
         }
         // The CPU ladder walks lightmap texels; per-vertex weights have none.

@@ -48,6 +48,8 @@ pub enum AttributionKind {
     AmbientOcclusion,
     /// Order-O visibility → mean + M principal vectors (`pca*`).
     PcaCompression,
+    /// Order-O visibility → its best cluster's mean + M vectors (`vqK`, `cpcaK_M`).
+    ClusterCompression,
     /// Exact lighting → its SH to the technique's order (O + 2; 3 for `sh2`).
     LightingOrder,
     /// Exact clamped cosine → its SH to the H order (the paper's 3).
@@ -63,8 +65,8 @@ pub enum AttributionKind {
     RadianceOrder,
     /// Exact L×H (or PCA T_k) → the table: parameterization, resolution, bilinear, f16.
     NormalTable,
-    /// Per-pixel data → the lightmap's texels: resolution, bilinear filtering, storage
-    /// (f16, or 8-bit PCA weights).
+    /// Per-pixel data → the lightmap's texels: resolution, bilinear filtering (clustered:
+    /// the 4-tap blend or the filtered weights), storage (f16, or 8-bit weights).
     LightmapTexels,
     /// The last CPU rung → the technique's GPU image (f32 arithmetic, filter weights,
     /// the f16 target).
@@ -81,6 +83,7 @@ impl AttributionKind {
             AttributionKind::VisibilityOrder => "visibility → SH order",
             AttributionKind::AmbientOcclusion => "visibility → AO",
             AttributionKind::PcaCompression => "PCA compression",
+            AttributionKind::ClusterCompression => "VQ/CPCA compression",
             AttributionKind::LightingOrder => "lighting → SH order",
             AttributionKind::CosineOrder => "clamped cosine → H order",
             AttributionKind::ProductOrder => "L·V product → order 3",

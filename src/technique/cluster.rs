@@ -63,11 +63,7 @@ pub fn find<'a>(
     inputs
         .clusters
         .iter()
-        .find(|c| {
-            c.clusters.len() == need.k as usize
-                && c.m == need.m as usize
-                && c.clustering == need.clustering
-        })
+        .find(|c| need.is_met_by(c))
         .ok_or_else(|| TechniqueError::Input {
             label: label.into(),
             detail: format!(

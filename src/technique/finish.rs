@@ -134,12 +134,7 @@ pub fn finish(
     let mut built = Vec::with_capacity(sets);
     let mut stats = TechniqueStats::default();
     for set in 0..sets.max(1) {
-        // Set 0 keeps the plain names; a second copy is "….b".
-        let suffix = if set == 0 {
-            String::new()
-        } else {
-            format!(".{}", (b'a' + set as u8) as char)
-        };
+        let suffix = set_suffix(set);
         let table_slots = match &lighting.tables {
             Some(tables) => tables.upload(ctx, &suffix)?,
             None => Vec::new(),
@@ -188,6 +183,16 @@ pub fn finish(
         per_texel.images,
         built,
     ))
+}
+
+/// The debug-name suffix of lighting set `set`: set 0 keeps the plain names, a second copy
+/// is "….b".
+pub(crate) fn set_suffix(set: usize) -> String {
+    if set == 0 {
+        String::new()
+    } else {
+        format!(".{}", (b'a' + set as u8) as char)
+    }
 }
 
 /// Enforces the `dx9` rules in code (DESIGN §2): only 2D textures, at most

@@ -416,6 +416,15 @@ impl Technique {
     }
 }
 
+impl ClusterNeed {
+    /// Whether `model` is the fit this need names.
+    pub fn is_met_by(&self, model: &crate::bake::cluster::ClusteredModel) -> bool {
+        model.clusters.len() == self.k as usize
+            && model.m == self.m as usize
+            && model.clustering == self.clustering
+    }
+}
+
 impl SeamMode {
     pub const ALL: [SeamMode; 2] = [SeamMode::Blended, SeamMode::Naive];
 

@@ -37,6 +37,16 @@ pub fn fragment_shader(m: u32) -> ShaderVariant {
     }
 }
 
+/// The longest edge in metres of a `pcaMvE` name's E cm.
+pub fn max_edge_m(max_edge_cm: Option<u32>) -> Option<f32> {
+    max_edge_cm.map(|cm| cm as f32 / 100.0)
+}
+
+/// Whether `bake` is the vertex bake of `pcaMv` with `m` weights and `max_edge_cm`.
+pub fn is_bake_of(bake: &VertexPca, m: u32, max_edge_cm: Option<u32>) -> bool {
+    bake.m == m as usize && bake.max_edge == max_edge_m(max_edge_cm)
+}
+
 /// The vertex bake `max_edge_cm` names among `inputs.vertex_pca`.
 pub fn find<'a>(
     inputs: &Inputs<'a>,
@@ -44,11 +54,10 @@ pub fn find<'a>(
     max_edge_cm: Option<u32>,
     label: &str,
 ) -> Result<&'a VertexPca, TechniqueError> {
-    let edge = max_edge_cm.map(|cm| cm as f32 / 100.0);
     inputs
         .vertex_pca
         .iter()
-        .find(|v| v.m == m as usize && v.max_edge == edge)
+        .find(|v| is_bake_of(v, m, max_edge_cm))
         .ok_or_else(|| TechniqueError::Input {
             label: label.into(),
             detail: format!(
@@ -148,11 +157,7 @@ pub(crate) fn finish(
     let fragment = gpu::compile_glsl(shader.path, gpu::ShaderStage::Fragment, &defines)?;
     let mut built = Vec::with_capacity(sets);
     for set in 0..sets.max(1) {
-        let suffix = if set == 0 {
-            String::new()
-        } else {
-            format!(".{}", (b'a' + set as u8) as char)
-        };
+        let suffix = super::finish::set_suffix(set);
         let params = gpu::Buffer::with_data(
             ctx,
             &lighting.params,
