@@ -231,6 +231,8 @@ pub const SCREEN_TECHNIQUES: &[&str] = &[
     "cpca8_7",
     "cpca8_11s",
     "cpca8_11",
+    "cpca8_15s",
+    "cpca8_15",
     "pca12v",
     "pca12v50",
     "pca12v25",

@@ -130,6 +130,7 @@ pub fn finish(
     let mut defines = vec![path.shader_define()];
     defines.extend_from_slice(&shader.defines);
     let fragment = gpu::compile_glsl(shader.path, gpu::ShaderStage::Fragment, &defines)?;
+    check_uniform_size(ctx, lighting.params.len(), &label)?;
     let sampler = scene.lightmap_sampler();
     let mut built = Vec::with_capacity(sets);
     let mut stats = TechniqueStats::default();
@@ -183,6 +184,26 @@ pub fn finish(
         per_texel.images,
         built,
     ))
+}
+
+/// An input error unless a uniform block of `bytes` fits the device's
+/// `maxUniformBufferRange` (the clustered blocks reach 64 KiB; Vulkan guarantees 16 KiB).
+pub(crate) fn check_uniform_size(
+    ctx: &Context,
+    bytes: usize,
+    label: &str,
+) -> Result<(), TechniqueError> {
+    let limit = ctx.limits().max_uniform_buffer_range as usize;
+    if bytes > limit {
+        return Err(TechniqueError::Input {
+            label: label.into(),
+            detail: format!(
+                "needs a {bytes}-byte uniform block; {} allows {limit} (maxUniformBufferRange)",
+                ctx.device_name()
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// The debug-name suffix of lighting set `set`: set 0 keeps the plain names, a second copy

@@ -86,7 +86,8 @@ pub const VQ_CLUSTERS: &[u32] = &[16, 32, 64, 128, 256];
 pub const CPCA_CLUSTERS: &[u32] = &[4, 8, 16, 32];
 pub const CPCA_VECTORS: &[u32] = &[3, 7, 11, 15];
 /// vec4s a clustered technique's uniform block may hold: 64 KiB, the `maxUniformBufferRange`
-/// of the drivers this project runs on (lavapipe, NVIDIA); 9 per cluster and vector + mean.
+/// of the drivers this project runs on (lavapipe, NVIDIA; a device with less refuses the
+/// technique in `finish::check_uniform_size`); 9 per cluster and vector + mean.
 pub const CLUSTER_UNIFORM_VEC4S: u32 = 4096;
 
 /// Whether K clusters of M vectors fit the clustered uniform block.

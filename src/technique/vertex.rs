@@ -137,6 +137,7 @@ pub(crate) fn finish(
         unreachable!("vertex::finish builds pcaMv only");
     };
     let label = format!("{technique}.{path}");
+    super::finish::check_uniform_size(ctx, lighting.params.len(), &label)?;
     let bake = find(inputs, m, max_edge_cm, &label)?;
     let groups = m.div_ceil(VALUES_PER_TEXEL as u32);
     let mesh = MeshBuffers::new(
