@@ -311,6 +311,46 @@ impl StoredTable {
     }
 }
 
+/// The rungs of a compressed visibility (`compressed(k)`, order `order`, at ladder pixel
+/// k): the compression under exact light (`compression`: its kind and stem), then the
+/// lighting and the clamped cosine truncated; with the L×H matrices the later rungs use.
+fn compression_rungs(
+    px: &LadderPixels,
+    prepared: &Prepared,
+    order: Order,
+    compression: (AttributionKind, String),
+    base: &str,
+    compressed: &(dyn Fn(usize) -> [f64; 36] + Sync),
+) -> (Vec<(AttributionKind, String, Frame)>, LxhMatrices) {
+    let radiance = &prepared.radiance_sh;
+    let n2 = order.coeff_count();
+    let exact = |k: usize| {
+        let mut g = [[0.0; 3]; 36];
+        px.exact.eval(px.normal[k], &mut g);
+        g
+    };
+    let lighting = exact_cosine(radiance, order.get() + 2, order);
+    let lxh = LxhMatrices::new(radiance, order, prepared.h_order);
+    let rungs = vec![
+        (
+            compression.0,
+            compression.1,
+            px.image(|k| dot_rgb(&compressed(k), &exact(k), n2)),
+        ),
+        (
+            AttributionKind::LightingOrder,
+            format!("{base}.lighting_order"),
+            px.image(|k| shade(&lighting, px.normal[k], &compressed(k))),
+        ),
+        (
+            AttributionKind::CosineOrder,
+            format!("{base}.cosine_order"),
+            px.image(|k| shade(&lxh, px.normal[k], &compressed(k))),
+        ),
+    ];
+    (rungs, lxh)
+}
+
 /// Builds the CPU rungs of `technique` on `path` (module doc); empty for `shlmap` without
 /// an SH lightmap bake.
 pub fn cpu_rungs(
@@ -403,23 +443,18 @@ pub fn cpu_rungs(
                 out
             };
             let base = format!("pca{m}");
-            push(
-                AttributionKind::PcaCompression,
-                format!("{base}.pca_compression"),
-                px.image(|k| dot_rgb(&compressed(k), &exact(k), n2)),
+            let (shared, lxh) = compression_rungs(
+                px,
+                prepared,
+                order,
+                (
+                    AttributionKind::PcaCompression,
+                    format!("{base}.pca_compression"),
+                ),
+                &base,
+                &compressed,
             );
-            let lighting = exact_cosine(radiance, order.get() + 2, order);
-            push(
-                AttributionKind::LightingOrder,
-                format!("{base}.lighting_order"),
-                px.image(|k| shade(&lighting, px.normal[k], &compressed(k))),
-            );
-            let lxh = LxhMatrices::new(radiance, order, prepared.h_order);
-            push(
-                AttributionKind::CosineOrder,
-                format!("{base}.cosine_order"),
-                px.image(|k| shade(&lxh, px.normal[k], &compressed(k))),
-            );
+            shared.into_iter().for_each(|(k, stem, f)| push(k, stem, f));
             let q = quantized_prefix(model, m);
             // The stored weights, bilinear: UNORM8 reads as q / 255.
             let unorm = f64::from((1u32 << q.bits) - 1);
@@ -514,23 +549,18 @@ pub fn cpu_rungs(
                 out
             };
             let base = technique.name();
-            push(
-                AttributionKind::ClusterCompression,
-                format!("{base}.compression"),
-                px.image(|k| dot_rgb(&compressed(k), &exact(k), n2)),
+            let (shared, lxh) = compression_rungs(
+                px,
+                prepared,
+                order,
+                (
+                    AttributionKind::ClusterCompression,
+                    format!("{base}.compression"),
+                ),
+                &base,
+                &compressed,
             );
-            let lighting = exact_cosine(radiance, order.get() + 2, order);
-            push(
-                AttributionKind::LightingOrder,
-                format!("{base}.lighting_order"),
-                px.image(|k| shade(&lighting, px.normal[k], &compressed(k))),
-            );
-            let lxh = LxhMatrices::new(radiance, order, prepared.h_order);
-            push(
-                AttributionKind::CosineOrder,
-                format!("{base}.cosine_order"),
-                px.image(|k| shade(&lxh, px.normal[k], &compressed(k))),
-            );
+            shared.into_iter().for_each(|(k, stem, f)| push(k, stem, f));
             // The stored lightmap as the shader reads it (glsl/technique/cluster.frag).
             let q = model.quantize();
             let blended = matches!(
