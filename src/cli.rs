@@ -55,6 +55,31 @@ enum Command {
     /// Reproduce the paper's side studies.
     #[command(subcommand)]
     Study(StudyCommand),
+    /// Self-shadowed bump map from a height map (Green, Valve; issue 17): writes the SSBump
+    /// (D · directional occlusion) as 16-bit PNG and EXR, the plain D encoding and scalar AO.
+    Ssbump(SsbumpArgs),
+}
+
+#[derive(Args, Debug)]
+struct SsbumpArgs {
+    /// Height map (any image the `image` crate reads; luminance in [0, 1]).
+    #[arg(long)]
+    height: PathBuf,
+    /// Height of a white texel, in texels.
+    #[arg(long)]
+    scale: f64,
+    /// Rays per texel.
+    #[arg(long, default_value_t = 300, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    rays: u32,
+    /// Bilateral pre-filter: spatial σ in texels (0: off); the range σ is 5 % of the height
+    /// range.
+    #[arg(long, default_value_t = 0.0)]
+    bilateral: f64,
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Output .png: also writes .exr beside it, and `*_d.png` (plain D), `*_ao.png` (AO).
+    #[arg(long)]
+    out: PathBuf,
 }
 
 #[derive(Subcommand, Debug)]
@@ -443,6 +468,7 @@ pub fn run(cli: Cli) -> Result<()> {
             run_study_compression(a).context("study compression")
         }
         Command::Study(StudyCommand::Seams(a)) => run_study_seams(a).context("study seams"),
+        Command::Ssbump(a) => run_ssbump(a).context("ssbump"),
     }
 }
 
@@ -492,6 +518,88 @@ fn run_study_compression(a: StudyCompressionArgs) -> Result<()> {
         started,
     );
     check_validation(&ctx, a.gpu.validate)
+}
+
+fn run_ssbump(a: SsbumpArgs) -> Result<()> {
+    use shvis::bake::ssbump::{HeightField, occlusion, ssbump};
+    if !(a.scale.is_finite() && a.scale > 0.0) {
+        bail!("--scale {} must be positive and finite", a.scale);
+    }
+    if !(a.bilateral.is_finite() && a.bilateral >= 0.0 && a.bilateral <= 64.0) {
+        bail!("--bilateral {} must be in 0..=64 texels", a.bilateral);
+    }
+    if a.out.extension().and_then(|e| e.to_str()) != Some("png") {
+        bail!("{}: the output must be a .png", a.out.display());
+    }
+    let started = Instant::now();
+    let image = image::open(&a.height)
+        .with_context(|| format!("{}: cannot read the height map", a.height.display()))?
+        .to_luma32f();
+    let (width, height) = (image.width() as usize, image.height() as usize);
+    if width * height == 0 || width * height > 16384 * 16384 {
+        bail!(
+            "{}: {width}×{height} is not a usable height map",
+            a.height.display()
+        );
+    }
+    let h: Vec<f64> = image
+        .pixels()
+        .map(|p| f64::from(p.0[0]) * a.scale)
+        .collect();
+    if h.iter().any(|v| !v.is_finite()) {
+        bail!(
+            "{}: the height map has non-finite texels",
+            a.height.display()
+        );
+    }
+    let field = HeightField { width, height, h };
+    let range = field.h.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+        - field.h.iter().copied().fold(f64::INFINITY, f64::min);
+    let field = field.bilateral(a.bilateral, 0.05 * range.max(1e-9));
+    let occ = occlusion(&field, a.rays as usize, a.seed);
+    let (shadowed, plain) = ssbump(&field, &occ);
+    let ao: Vec<[f64; 3]> = occ.ao.iter().map(|&v| [v; 3]).collect();
+    let stem = a.out.with_extension("");
+    let with_suffix =
+        |suffix: &str, ext: &str| PathBuf::from(format!("{}{suffix}.{ext}", stem.display()));
+    for (texels, suffix) in [(&shadowed, ""), (&plain, "_d"), (&ao, "_ao")] {
+        let png = with_suffix(suffix, "png");
+        let data: Vec<u16> = texels
+            .iter()
+            .flat_map(|t| t.map(|v| (v.clamp(0.0, 1.0) * 65535.0).round() as u16))
+            .collect();
+        image::ImageBuffer::<image::Rgb<u16>, Vec<u16>>::from_raw(
+            width as u32,
+            height as u32,
+            data,
+        )
+        .expect("3 channels per texel")
+        .save(&png)
+        .with_context(|| format!("{}: cannot write", png.display()))?;
+        let frame = shvis::render::Frame {
+            width: width as u32,
+            height: height as u32,
+            rgba: texels
+                .iter()
+                .map(|t| [t[0] as f32, t[1] as f32, t[2] as f32, 1.0])
+                .collect(),
+            ms: Vec::new(),
+        };
+        shvis::report::image::write_exr(&with_suffix(suffix, "exr"), &frame)?;
+    }
+    let mean =
+        |i: usize| occ.channels.iter().map(|c| c[i]).sum::<f64>() / occ.channels.len() as f64;
+    println!(
+        "ssbump {width}×{height}, {} rays per texel: mean occlusion {:.4} {:.4} {:.4}, mean AO {:.4}; wrote {} (+ .exr, _d, _ao) in {:.1} s",
+        a.rays,
+        mean(0),
+        mean(1),
+        mean(2),
+        occ.ao.iter().sum::<f64>() / occ.ao.len() as f64,
+        a.out.display(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
 }
 
 fn run_study_seams(a: StudySeamsArgs) -> Result<()> {

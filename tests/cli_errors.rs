@@ -210,3 +210,27 @@ fn clustered_names_out_of_range_and_seams_of_an_unclustered_technique() {
     let out = shvis(&["study", "seams", "--techniques", "unc6"], &[]);
     assert_one_error_line(&out, &["unc6", "not a clustered technique"]);
 }
+
+#[test]
+fn ssbump_bad_height_map_and_scale() {
+    let out = shvis(
+        &[
+            "ssbump",
+            "--height",
+            "/no/such/h.png",
+            "--scale",
+            "2",
+            "--out",
+            "x.png",
+        ],
+        &[],
+    );
+    assert_one_error_line(&out, &["/no/such/h.png", "cannot read"]);
+    let out = shvis(
+        &[
+            "ssbump", "--height", "h.png", "--scale", "0", "--out", "x.png",
+        ],
+        &[],
+    );
+    assert_one_error_line(&out, &["--scale"]);
+}

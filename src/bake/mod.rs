@@ -22,6 +22,7 @@ pub mod lxh;
 pub mod pca;
 pub mod raster;
 pub mod shlmap;
+pub mod ssbump;
 pub mod surface;
 pub mod trace;
 pub mod vertex_pca;

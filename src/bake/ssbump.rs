@@ -1,0 +1,324 @@
+//! Self-shadowed bump maps (Green, "Efficient self-shadowed radiosity normal mapping",
+//! Valve; issue 17, part): the Half-Life 2 tangent-space basis, the D encoding of a normal
+//! (eq. (3)) and its directional occlusion from a height field.
+//!
+//! **Basis.** Eq. (1) as printed lists B₀ twice, and its third vector (−√(2/3), 0, 1/√3) is
+//! not orthogonal to the printed one. The basis meant — and the one the Source SDK ships
+//! (`bumpvects.h`) — is
+//!
+//! ```text
+//! B₀ = ( √(2/3),     0, 1/√3)    B₁ = (−1/√6,  1/√2, 1/√3)    B₂ = (−1/√6, −1/√2, 1/√3)
+//! ```
+//!
+//! orthonormal (test), each 54.7° from the surface normal +Z, 120° apart around it.
+//!
+//! **D encoding.** D_i = saturate(N·B_i)² / Σ_j saturate(N·B_j)²; the unperturbed normal
+//! (0, 0, 1) has N·B_i = 1/√3 for all i, so D = (⅓, ⅓, ⅓) exactly.
+//!
+//! **Directional occlusion.** From every texel of a height field (heights in texels, wrapped
+//! at the borders: bump textures tile), `rays` directions spread uniformly over the upper
+//! hemisphere (a seeded Hammersley set, the same for every texel) are marched through the
+//! bilinearly interpolated field; channel i's occlusion is the visible fraction weighted by
+//! each ray's saturate(ω·B_i) — "a smaller angular distribution centred upon the basis
+//! vector" (the paper's wording) — and scalar AO the visible fraction weighted by ω·N, N the
+//! texel's normal. The SSBump texel is D_i · occlusion_i.
+//!
+//! Tangent space follows DESIGN §1: +X along +u (image right), +Y image up (−v), +Z out.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::directions::{splitmix64, unit_f64};
+
+/// The HL2 basis (module doc).
+pub fn hl2_basis() -> [DVec3; 3] {
+    let (s3, s6, s2) = (3f64.sqrt(), 6f64.sqrt(), 2f64.sqrt());
+    [
+        DVec3::new((2.0f64 / 3.0).sqrt(), 0.0, 1.0 / s3),
+        DVec3::new(-1.0 / s6, 1.0 / s2, 1.0 / s3),
+        DVec3::new(-1.0 / s6, -1.0 / s2, 1.0 / s3),
+    ]
+}
+
+/// Eq. (3): the blend weights of normal `n` (normalized first); the unperturbed weights
+/// for a normal facing away from all three directions.
+pub fn d_encoding(n: DVec3) -> [f64; 3] {
+    let n = n.normalize_or(DVec3::Z);
+    let dp = hl2_basis().map(|b| n.dot(b).clamp(0.0, 1.0).powi(2));
+    let sum: f64 = dp.iter().sum();
+    if sum > 0.0 {
+        dp.map(|d| d / sum)
+    } else {
+        [1.0 / 3.0; 3]
+    }
+}
+
+/// A height field: `width` × `height` heights in texel units, row 0 at the top (image up).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HeightField {
+    pub width: usize,
+    pub height: usize,
+    pub h: Vec<f64>,
+}
+
+impl HeightField {
+    fn at(&self, x: i64, y: i64) -> f64 {
+        let (w, h) = (self.width as i64, self.height as i64);
+        self.h[(y.rem_euclid(h) * w + x.rem_euclid(w)) as usize]
+    }
+
+    /// Bilinear height at continuous texel coordinates (texel centres at integers), wrapped.
+    fn sample(&self, x: f64, y: f64) -> f64 {
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (i, j) = (x0 as i64, y0 as i64);
+        let top = self.at(i, j) * (1.0 - fx) + self.at(i + 1, j) * fx;
+        let bottom = self.at(i, j + 1) * (1.0 - fx) + self.at(i + 1, j + 1) * fx;
+        top * (1.0 - fy) + bottom * fy
+    }
+
+    /// Tangent-space normal at texel (x, y) by central differences (+Y is image up, so
+    /// the row below is −Y).
+    pub fn normal(&self, x: usize, y: usize) -> DVec3 {
+        let (x, y) = (x as i64, y as i64);
+        let dhdx = 0.5 * (self.at(x + 1, y) - self.at(x - 1, y));
+        let dhdy = 0.5 * (self.at(x, y - 1) - self.at(x, y + 1));
+        DVec3::new(-dhdx, -dhdy, 1.0).normalize()
+    }
+
+    /// Edge-preserving smoothing (Tomasi–Manduchi): Gaussian in texels (`sigma_spatial`)
+    /// times Gaussian in height (`sigma_range`, texel units), radius 3σ, wrapped.
+    pub fn bilateral(&self, sigma_spatial: f64, sigma_range: f64) -> HeightField {
+        if sigma_spatial <= 0.0 {
+            return self.clone();
+        }
+        let r = (3.0 * sigma_spatial).ceil() as i64;
+        let h: Vec<f64> = (0..self.width * self.height)
+            .into_par_iter()
+            .map(|t| {
+                let (x, y) = ((t % self.width) as i64, (t / self.width) as i64);
+                let centre = self.h[t];
+                let (mut sum, mut weight) = (0.0, 0.0);
+                for dy in -r..=r {
+                    for dx in -r..=r {
+                        let v = self.at(x + dx, y + dy);
+                        let ds = (dx * dx + dy * dy) as f64 / (2.0 * sigma_spatial * sigma_spatial);
+                        let dr =
+                            (v - centre).powi(2) / (2.0 * sigma_range * sigma_range).max(1e-300);
+                        let w = (-ds - dr).exp();
+                        sum += w * v;
+                        weight += w;
+                    }
+                }
+                sum / weight
+            })
+            .collect();
+        HeightField { h, ..*self }
+    }
+}
+
+/// Per texel: directional occlusion per basis channel and scalar AO.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Occlusion {
+    pub channels: Vec<[f64; 3]>,
+    pub ao: Vec<f64>,
+}
+
+/// `rays` directions uniform over the upper hemisphere (z > 0): a Hammersley set with a
+/// seeded rotation about +Z.
+pub fn hemisphere_directions(rays: usize, seed: u64) -> Vec<DVec3> {
+    let turn = unit_f64(splitmix64(seed)) * std::f64::consts::TAU;
+    (0..rays)
+        .map(|i| {
+            let u = (i as f64 + 0.5) / rays as f64;
+            let v = f64::from((i as u32).reverse_bits()) / 4_294_967_296.0;
+            let z = 1.0 - u; // uniform in z ∈ (0, 1]: uniform solid angle
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = v * std::f64::consts::TAU + turn;
+            DVec3::new(r * phi.cos(), r * phi.sin(), z)
+        })
+        .collect()
+}
+
+/// Whether the ray from the surface at texel (x, y) along `d` leaves the field unblocked:
+/// marched in half-texel steps until it rises above the field's highest point.
+fn escapes(field: &HeightField, top: f64, x: usize, y: usize, d: DVec3) -> bool {
+    let start = field.h[y * field.width + x];
+    let horizontal = d.truncate().length();
+    if horizontal < 1e-12 {
+        return true;
+    }
+    // Image rows grow downward: +Y tangent is −row.
+    let step = 0.5 / horizontal;
+    let mut t = step;
+    loop {
+        let p = DVec3::new(x as f64, y as f64, start) + d * t;
+        if p.z > top {
+            return true;
+        }
+        if field.sample(p.x, 2.0 * y as f64 - p.y) > p.z {
+            return false;
+        }
+        t += step;
+    }
+}
+
+/// Directional occlusion and AO of every texel of `field` with `rays` rays (module doc).
+pub fn occlusion(field: &HeightField, rays: usize, seed: u64) -> Occlusion {
+    let dirs = hemisphere_directions(rays, seed);
+    let basis = hl2_basis();
+    let top = field.h.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let per_texel: Vec<([f64; 3], f64)> = (0..field.width * field.height)
+        .into_par_iter()
+        .map(|t| {
+            let (x, y) = (t % field.width, t / field.width);
+            let n = field.normal(x, y);
+            let (mut vis, mut all) = ([0.0; 3], [0.0; 3]);
+            let (mut ao_vis, mut ao_all) = (0.0, 0.0);
+            for &d in &dirs {
+                let free = escapes(field, top, x, y, d);
+                for i in 0..3 {
+                    let w = d.dot(basis[i]).max(0.0);
+                    all[i] += w;
+                    if free {
+                        vis[i] += w;
+                    }
+                }
+                let w = d.dot(n).max(0.0);
+                ao_all += w;
+                if free {
+                    ao_vis += w;
+                }
+            }
+            let channels =
+                std::array::from_fn(|i| if all[i] > 0.0 { vis[i] / all[i] } else { 1.0 });
+            (channels, if ao_all > 0.0 { ao_vis / ao_all } else { 1.0 })
+        })
+        .collect();
+    Occlusion {
+        channels: per_texel.iter().map(|p| p.0).collect(),
+        ao: per_texel.iter().map(|p| p.1).collect(),
+    }
+}
+
+/// The SSBump texels of `field`: D of each texel's normal times its channel occlusion; and
+/// the plain D encoding.
+pub fn ssbump(field: &HeightField, occ: &Occlusion) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    let plain: Vec<[f64; 3]> = (0..field.width * field.height)
+        .map(|t| d_encoding(field.normal(t % field.width, t / field.width)))
+        .collect();
+    let shadowed = plain
+        .iter()
+        .zip(&occ.channels)
+        .map(|(d, o)| std::array::from_fn(|i| d[i] * o[i]))
+        .collect();
+    (shadowed, plain)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_basis_is_orthonormal_and_flat_normals_encode_to_thirds() {
+        let b = hl2_basis();
+        for i in 0..3 {
+            for j in 0..3 {
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((b[i].dot(b[j]) - want).abs() < 1e-15, "B{i}·B{j}");
+            }
+            // 54.7° from the normal, all three.
+            assert!((b[i].z - 1.0 / 3f64.sqrt()).abs() < 1e-15);
+        }
+        let d = d_encoding(DVec3::Z);
+        assert!(d.iter().all(|&x| (x - 1.0 / 3.0).abs() < 1e-15), "{d:?}");
+        // A normal along B0 puts all weight on channel 0.
+        let d = d_encoding(b[0]);
+        assert!(
+            (d[0] - 1.0).abs() < 1e-15 && d[1] < 1e-15 && d[2] < 1e-15,
+            "{d:?}"
+        );
+    }
+
+    #[test]
+    fn a_flat_field_is_unoccluded() {
+        let field = HeightField {
+            width: 8,
+            height: 8,
+            h: vec![2.0; 64],
+        };
+        let occ = occlusion(&field, 64, 1);
+        assert!(occ.channels.iter().flatten().all(|&o| o == 1.0));
+        assert!(occ.ao.iter().all(|&a| a == 1.0));
+        let (shadowed, plain) = ssbump(&field, &occ);
+        assert_eq!(shadowed, plain);
+    }
+
+    #[test]
+    fn a_v_groove_matches_its_closed_form() {
+        // A groove along image columns, walls at slope tan α, then a plateau: from the
+        // bottom line a direction is blocked iff ω_z < |ω_x| tan α (module doc of the test).
+        let alpha = 40f64.to_radians();
+        let (w, h) = (96usize, 4usize);
+        let centre = 48.0;
+        let plateau = 30.0 * alpha.tan();
+        let field = HeightField {
+            width: w,
+            height: h,
+            h: (0..w * h)
+                .map(|t| {
+                    ((t % w) as f64 - centre)
+                        .abs()
+                        .mul_add(alpha.tan(), 0.0)
+                        .min(plateau)
+                })
+                .collect(),
+        };
+        let rays = 8192;
+        let occ = occlusion(&field, rays, 7);
+        let bottom = 2 * w + centre as usize;
+        // The same visibility region integrated by a fine quadrature over the hemisphere.
+        let basis = hl2_basis();
+        let (mut vis, mut all, mut ao_vis, mut ao_all) = ([0.0; 3], [0.0; 3], 0.0, 0.0);
+        let steps = 800;
+        for iz in 0..steps {
+            let z = (iz as f64 + 0.5) / steps as f64;
+            for ip in 0..steps {
+                let phi = (ip as f64 + 0.5) / steps as f64 * std::f64::consts::TAU;
+                let r = (1.0 - z * z).sqrt();
+                let d = DVec3::new(r * phi.cos(), r * phi.sin(), z);
+                let free = d.z >= d.x.abs() * alpha.tan();
+                for i in 0..3 {
+                    let wt = d.dot(basis[i]).max(0.0);
+                    all[i] += wt;
+                    if free {
+                        vis[i] += wt;
+                    }
+                }
+                ao_all += d.z;
+                if free {
+                    ao_vis += d.z;
+                }
+            }
+        }
+        // Scalar AO at the kink uses the kink's central-difference normal, +Z here.
+        assert!(
+            (ao_vis / ao_all - alpha.cos()).abs() < 2e-3,
+            "quadrature AO vs cos α"
+        );
+        let noise = 3.0 * (0.25 / rays as f64).sqrt();
+        for i in 0..3 {
+            let want = vis[i] / all[i];
+            let got = occ.channels[bottom][i];
+            assert!(
+                (got - want).abs() < noise + 0.01,
+                "channel {i}: {got} vs {want}"
+            );
+        }
+        assert!(
+            (occ.ao[bottom] - alpha.cos()).abs() < noise + 0.01,
+            "{}",
+            occ.ao[bottom]
+        );
+    }
+}
