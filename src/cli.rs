@@ -62,10 +62,11 @@ enum Command {
 
 #[derive(Args, Debug)]
 struct SsbumpArgs {
-    /// Height map (any image the `image` crate reads; luminance in [0, 1]).
+    /// Height map (a PNG or EXR; luminance in [0, 1]), or `house`: the built-in bricks'
+    /// height field in texels, the one their normal map is derived from.
     #[arg(long)]
     height: PathBuf,
-    /// Height of a white texel, in texels.
+    /// Height of a white texel, in texels (with `house`: a factor on its heights).
     #[arg(long)]
     scale: f64,
     /// Rays per texel.
@@ -532,27 +533,34 @@ fn run_ssbump(a: SsbumpArgs) -> Result<()> {
         bail!("{}: the output must be a .png", a.out.display());
     }
     let started = Instant::now();
-    let image = image::open(&a.height)
-        .with_context(|| format!("{}: cannot read the height map", a.height.display()))?
-        .to_luma32f();
-    let (width, height) = (image.width() as usize, image.height() as usize);
-    if width * height == 0 || width * height > 16384 * 16384 {
-        bail!(
-            "{}: {width}×{height} is not a usable height map",
-            a.height.display()
-        );
-    }
-    let h: Vec<f64> = image
-        .pixels()
-        .map(|p| f64::from(p.0[0]) * a.scale)
-        .collect();
-    if h.iter().any(|v| !v.is_finite()) {
-        bail!(
-            "{}: the height map has non-finite texels",
-            a.height.display()
-        );
-    }
-    let field = HeightField { width, height, h };
+    let field = if a.height.as_os_str() == "house" {
+        let mut field = shvis::scene::house::brick_height_field();
+        field.h.iter_mut().for_each(|h| *h *= a.scale);
+        field
+    } else {
+        let image = image::open(&a.height)
+            .with_context(|| format!("{}: cannot read the height map", a.height.display()))?
+            .to_luma32f();
+        let (width, height) = (image.width() as usize, image.height() as usize);
+        if width * height == 0 || width * height > 16384 * 16384 {
+            bail!(
+                "{}: {width}×{height} is not a usable height map",
+                a.height.display()
+            );
+        }
+        let h: Vec<f64> = image
+            .pixels()
+            .map(|p| f64::from(p.0[0]) * a.scale)
+            .collect();
+        if h.iter().any(|v| !v.is_finite()) {
+            bail!(
+                "{}: the height map has non-finite texels",
+                a.height.display()
+            );
+        }
+        HeightField { width, height, h }
+    };
+    let (width, height) = (field.width, field.height);
     let range = field.h.iter().copied().fold(f64::NEG_INFINITY, f64::max)
         - field.h.iter().copied().fold(f64::INFINITY, f64::min);
     let field = field.bilateral(a.bilateral, 0.05 * range.max(1e-9));

@@ -544,6 +544,19 @@ fn brick_albedo() -> Texture8 {
     }
 }
 
+/// The brick height field the normal map is derived from (heights in texels, the texture's
+/// resolution): the surface `shvis ssbump --height house` shadows (issue 17).
+pub fn brick_height_field() -> crate::bake::ssbump::HeightField {
+    let n = TEXTURE_SIZE;
+    crate::bake::ssbump::HeightField {
+        width: n as usize,
+        height: n as usize,
+        h: (0..n * n)
+            .map(|i| f64::from(brick_at(i % n, i / n).0))
+            .collect(),
+    }
+}
+
 /// Tangent-space normal map of the brick height field: central differences with
 /// wrap-around, n ∝ (−∂h/∂x, +∂h/∂y_img, 1) (y_img grows downward, green = image up),
 /// stored as (n·0.5 + 0.5)·255.
@@ -733,6 +746,22 @@ mod tests {
                 (40.0..1240.0).contains(&x) && (40.0..760.0).contains(&y),
                 "{name} at pixel ({x}, {y})"
             );
+        }
+    }
+
+    #[test]
+    fn the_height_field_and_the_normal_map_describe_one_surface() {
+        let field = brick_height_field();
+        let map = brick_normal();
+        for (t, texel) in map.texels.iter().enumerate() {
+            let n = field.normal(t % field.width, t / field.width);
+            for (c, v) in [n.x, n.y, n.z].iter().enumerate() {
+                let stored = f64::from(texel[c]) / 255.0 * 2.0 - 1.0;
+                assert!(
+                    (stored - v).abs() <= 1.0 / 255.0 + 1e-6,
+                    "texel {t} channel {c}"
+                );
+            }
         }
     }
 
