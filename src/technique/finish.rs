@@ -126,10 +126,7 @@ pub fn finish(
 ) -> Result<TechniqueGpu, TechniqueError> {
     let label = format!("{technique}.{path}");
     let per_texel = TextureSlot::per_texel(per_texel);
-    let shader = super::fragment_shader(technique);
-    let mut defines = vec![path.shader_define()];
-    defines.extend_from_slice(&shader.defines);
-    let fragment = gpu::compile_glsl(shader.path, gpu::ShaderStage::Fragment, &defines)?;
+    let fragment = compile_fragment(technique, path)?;
     check_uniform_size(ctx, lighting.params.len(), &label)?;
     let sampler = scene.lightmap_sampler();
     let mut built = Vec::with_capacity(sets);
@@ -149,17 +146,8 @@ pub fn finish(
             &layouts,
             super::per_texel_lookups(technique),
         );
-        let params = gpu::Buffer::with_data(
-            ctx,
-            &lighting.params,
-            vk::BufferUsageFlags::UNIFORM_BUFFER,
-            &format!("{label}.params{suffix}"),
-        )?;
-        let mut resources = scene.common_resources();
-        resources.push((
-            layout::BINDING_TECHNIQUE_PARAMS,
-            gpu::Resource::Uniform(&params),
-        ));
+        let params = params_buffer(ctx, &lighting.params, &label, &suffix)?;
+        let mut resources = base_resources(scene, &params);
         for (binding, slot) in (layout::BINDING_TECHNIQUE_TEXTURE0..).zip(&slots) {
             let resource = match slot.images.as_slice() {
                 [one] => gpu::Resource::Texture(one, sampler),
@@ -184,6 +172,50 @@ pub fn finish(
         per_texel.images,
         built,
     ))
+}
+
+/// `technique`'s fragment shader ([`super::fragment_shader`]) compiled for `path`.
+pub(crate) fn compile_fragment(
+    technique: Technique,
+    path: HwPath,
+) -> Result<Vec<u32>, TechniqueError> {
+    let shader = super::fragment_shader(technique);
+    let mut defines = vec![path.shader_define()];
+    defines.extend_from_slice(&shader.defines);
+    Ok(gpu::compile_glsl(
+        shader.path,
+        gpu::ShaderStage::Fragment,
+        &defines,
+    )?)
+}
+
+/// A lighting set's uniform block "{label}.params{suffix}" holding `params`.
+pub(crate) fn params_buffer(
+    ctx: &Arc<Context>,
+    params: &[u8],
+    label: &str,
+    suffix: &str,
+) -> Result<gpu::Buffer, TechniqueError> {
+    Ok(gpu::Buffer::with_data(
+        ctx,
+        params,
+        vk::BufferUsageFlags::UNIFORM_BUFFER,
+        &format!("{label}.params{suffix}"),
+    )?)
+}
+
+/// The scene's common bindings and the technique's uniform block: what every technique
+/// binds before its own textures.
+pub(crate) fn base_resources<'a>(
+    scene: &'a SceneGpu,
+    params: &'a gpu::Buffer,
+) -> Vec<(u32, gpu::Resource<'a>)> {
+    let mut resources = scene.common_resources();
+    resources.push((
+        layout::BINDING_TECHNIQUE_PARAMS,
+        gpu::Resource::Uniform(params),
+    ));
+    resources
 }
 
 /// An input error unless a uniform block of `bytes` fits the device's

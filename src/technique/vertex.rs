@@ -152,24 +152,12 @@ pub(crate) fn finish(
         gpu::ShaderStage::Vertex,
         &[("GBUFFER", 0), ("VERTEX_WEIGHT_GROUPS", groups)],
     )?;
-    let shader = fragment_shader(m);
-    let mut defines = vec![path.shader_define()];
-    defines.extend_from_slice(&shader.defines);
-    let fragment = gpu::compile_glsl(shader.path, gpu::ShaderStage::Fragment, &defines)?;
+    let fragment = super::finish::compile_fragment(technique, path)?;
     let mut built = Vec::with_capacity(sets);
     for set in 0..sets.max(1) {
         let suffix = super::finish::set_suffix(set);
-        let params = gpu::Buffer::with_data(
-            ctx,
-            &lighting.params,
-            vk::BufferUsageFlags::UNIFORM_BUFFER,
-            &format!("{label}.params{suffix}"),
-        )?;
-        let mut resources = scene.common_resources();
-        resources.push((
-            layout::BINDING_TECHNIQUE_PARAMS,
-            gpu::Resource::Uniform(&params),
-        ));
+        let params = super::finish::params_buffer(ctx, &lighting.params, &label, &suffix)?;
+        let resources = super::finish::base_resources(scene, &params);
         let pipeline = MeshPipeline::new(
             ctx,
             scene.target(),
