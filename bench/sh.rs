@@ -168,6 +168,7 @@ fn lighting_update(c: &mut Criterion) {
         clusters: &[],
         vertex_pca: &[],
         sh_lightmap: None,
+        ssbump: None,
         table_res: 32,
         h_order: Order::THREE,
     };

@@ -94,6 +94,44 @@ enum StudyCommand {
     /// Issue 16: the screen-space discontinuity at cluster boundaries of a clustered
     /// technique (vqK, cpcaK_M) with the 4-tap seam blending and without it.
     Seams(StudySeamsArgs),
+    /// Issue 17: rnm, rnmao, ssbump, shlmap and unc6 against the displaced-geometry
+    /// reference and the flat normal-mapped one, per environment; the Fig. 1 composite.
+    Rnm(StudyRnmArgs),
+}
+
+#[derive(Args, Debug)]
+struct StudyRnmArgs {
+    /// A scene with a height-mapped material small enough to displace.
+    #[arg(long, default_value = "patio")]
+    scene: String,
+    /// Environments, comma-separated (`sky:15`: the grazing low sun; the overcast probe).
+    #[arg(long, value_delimiter = ',', default_value = "sky:15,../shared/assets/env/potsdamer_platz_1k.exr")]
+    envs: Vec<String>,
+    #[arg(long, default_value_t = 256)]
+    vis_res: u32,
+    #[arg(long, default_value_t = 512)]
+    rays: u32,
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Inter-reflection of the lightmap bakes and the references.
+    #[arg(long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
+    bounces: u32,
+    #[arg(long, value_delimiter = ',', default_value = "dx9,dx10")]
+    paths: Vec<HwPath>,
+    #[arg(long, default_value_t = 640, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 400, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Samples per pixel of each reference.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    spp: u32,
+    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Output directory: rnm.md, rnm.json, fig1_<env>.png.
+    #[arg(long, default_value = "study-out")]
+    out: PathBuf,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 #[derive(Args, Debug)]
@@ -198,7 +236,7 @@ enum ShCommand {
 
 #[derive(Args, Debug, Clone)]
 struct SceneArgs {
-    /// `house` (built-in) or a .gltf/.glb file.
+    /// `house` (built-in), `patio` (built-in brick corner, issue 17) or a .gltf/.glb file.
     #[arg(long, default_value = "house")]
     scene: String,
     /// Lightmap texels per side.
@@ -219,6 +257,13 @@ struct SceneArgs {
     /// SH order of the clamped cosine in the L×H product (the paper uses 3).
     #[arg(long, default_value_t = 3)]
     h_order: u32,
+    /// Height map of the scene's material (PNG/EXR luminance), tiled by its UVs like the
+    /// normal map: what `ssbump` and `rnmao` shadow with (replaces the built-in bricks').
+    #[arg(long)]
+    height_map: Option<PathBuf>,
+    /// Height of a white `--height-map` texel, in texels of the map.
+    #[arg(long, default_value_t = 1.0, requires = "height_map")]
+    height_scale: f64,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -282,7 +327,7 @@ struct RenderArgs {
 
 #[derive(Args, Debug)]
 struct ReferenceArgs {
-    /// `house` (built-in) or a .gltf/.glb file.
+    /// `house` (built-in), `patio` (built-in brick corner, issue 17) or a .gltf/.glb file.
     #[arg(long, default_value = "house")]
     scene: String,
     #[arg(long, default_value = "sky")]
@@ -309,6 +354,11 @@ struct ReferenceArgs {
     /// own sampling) instead of integrating the pixel footprint at full texture resolution.
     #[arg(long)]
     point: bool,
+    /// Render the scene's height-mapped surfaces as real displaced micro-geometry (a vertex
+    /// per height texel; flat shading normals): the ground truth of self-shadowing
+    /// (issue 17; small scenes such as `patio`).
+    #[arg(long)]
+    displaced: bool,
     #[command(flatten)]
     gpu: GpuArgs,
     /// Output image: .exr (linear) or .png (sRGB).
@@ -469,6 +519,7 @@ pub fn run(cli: Cli) -> Result<()> {
             run_study_compression(a).context("study compression")
         }
         Command::Study(StudyCommand::Seams(a)) => run_study_seams(a).context("study seams"),
+        Command::Study(StudyCommand::Rnm(a)) => run_study_rnm(a).context("study rnm"),
         Command::Ssbump(a) => run_ssbump(a).context("ssbump"),
     }
 }
@@ -522,7 +573,7 @@ fn run_study_compression(a: StudyCompressionArgs) -> Result<()> {
 }
 
 fn run_ssbump(a: SsbumpArgs) -> Result<()> {
-    use shvis::bake::ssbump::{HeightField, occlusion, ssbump};
+    use shvis::bake::ssbump::{occlusion, ssbump};
     if !(a.scale.is_finite() && a.scale > 0.0) {
         bail!("--scale {} must be positive and finite", a.scale);
     }
@@ -538,27 +589,7 @@ fn run_ssbump(a: SsbumpArgs) -> Result<()> {
         field.h.iter_mut().for_each(|h| *h *= a.scale);
         field
     } else {
-        let image = image::open(&a.height)
-            .with_context(|| format!("{}: cannot read the height map", a.height.display()))?
-            .to_luma32f();
-        let (width, height) = (image.width() as usize, image.height() as usize);
-        if width * height == 0 || width * height > 16384 * 16384 {
-            bail!(
-                "{}: {width}×{height} is not a usable height map",
-                a.height.display()
-            );
-        }
-        let h: Vec<f64> = image
-            .pixels()
-            .map(|p| f64::from(p.0[0]) * a.scale)
-            .collect();
-        if h.iter().any(|v| !v.is_finite()) {
-            bail!(
-                "{}: the height map has non-finite texels",
-                a.height.display()
-            );
-        }
-        HeightField { width, height, h }
+        shvis::scene::load_height_map(&a.height, a.scale)?
     };
     let (width, height) = (field.width, field.height);
     let range = field.h.iter().copied().fold(f64::NEG_INFINITY, f64::max)
@@ -607,6 +638,50 @@ fn run_ssbump(a: SsbumpArgs) -> Result<()> {
         a.out.display(),
         started.elapsed().as_secs_f64()
     );
+    Ok(())
+}
+
+fn run_study_rnm(a: StudyRnmArgs) -> Result<()> {
+    use shvis::study::rnm;
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    let ctx = open_gpu(&a.gpu)?;
+    let settings = rnm::RnmStudySettings {
+        scene: a.scene.clone(),
+        vis_res: a.vis_res,
+        rays: a.rays,
+        seed: a.seed,
+        bounces: a.bounces,
+        width: a.width,
+        height: a.height,
+        spp: a.spp,
+        paths: a.paths.clone(),
+        cache_dir: None,
+    };
+    let mut results = Vec::new();
+    for env in &a.envs {
+        let result = rnm::run_env(&ctx, env, &settings).with_context(|| format!("--env {env}"))?;
+        println!(
+            "{env}: displaced reference {} triangles, noise {:.4} (flat {:.4}); relative RMSE vs displaced / vs flat:",
+            result.displaced_triangles, result.displaced_noise, result.flat_noise
+        );
+        for row in &result.rows {
+            println!(
+                "  {:<7} {:<4} {:<7} {:.4} / {:.4}",
+                row.technique.name(),
+                row.path.name(),
+                row.light_model,
+                row.vs_displaced,
+                row.vs_flat
+            );
+        }
+        results.push(result);
+    }
+    for p in rnm::write_report(&results, &settings, ctx.device_name(), &a.out, a.exposure)? {
+        println!("wrote {}", p.display());
+    }
+    check_validation(&ctx, a.gpu.validate)?;
+    println!("study rnm: {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
 }
 
@@ -698,6 +773,10 @@ fn prepare_settings(
         h_order: shvis::sh::Order::new(scene.h_order).context("--h-order")?,
         cache_dir: None,
         sh_lightmap_bounces,
+        height_map: scene
+            .height_map
+            .clone()
+            .map(|path| (path, scene.height_scale)),
     })
 }
 
@@ -771,7 +850,17 @@ fn run_reference(a: ReferenceArgs) -> Result<()> {
     let ctx = open_gpu(&a.gpu)?;
     let vis_res = bake::validate_res(a.vis_res)?;
     let env = shvis::env::resolve(&a.env)?;
-    let scene = resolve_scene(&a.scene, vis_res)?;
+    let mut scene = resolve_scene(&a.scene, vis_res)?;
+    if a.displaced {
+        let t = Instant::now();
+        scene = shvis::scene::displace::displace(&scene)?;
+        log::info!(
+            "displaced {}: {} triangles in {:.1} s",
+            scene.name,
+            scene.mesh.triangle_count(),
+            t.elapsed().as_secs_f64()
+        );
+    }
     let image = shvis::reference::render_reference(
         &ctx,
         &scene,

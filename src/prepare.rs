@@ -11,6 +11,7 @@ use crate::bake::cache::{default_cache_dir, load_or_bake_visibility, load_or_fit
 use crate::bake::cluster::{self, ClusteredModel};
 use crate::bake::pca::{PcaModel, fit};
 use crate::bake::raster::{LightmapTexels, rasterize};
+use crate::bake::ssbump::{self, SsBumpMaps};
 use crate::bake::shlmap::{ShLightmap, ShLightmapSettings, bake_sh_lightmap};
 use crate::bake::trace::Tracer;
 use crate::bake::vertex_pca::{VertexPca, bake_vertex_pca};
@@ -18,7 +19,7 @@ use crate::bake::visibility::{VisibilityMap, VisibilitySettings, bake_visibility
 use crate::bake::{self, BakeError};
 use crate::env::{self, EnvError, EnvMap};
 use crate::scene::Mesh;
-use crate::scene::{Scene, SceneError, gltf, house};
+use crate::scene::{Scene, SceneError, gltf, house, patio};
 use crate::sh::{Order, zonal};
 use crate::technique::{Inputs, Technique, vertex};
 
@@ -46,6 +47,9 @@ pub struct PrepareSettings {
     pub cache_dir: Option<PathBuf>,
     /// Bake the SH lightmap (`shlmap`) with this many bounces; `None`: skip it.
     pub sh_lightmap_bounces: Option<u32>,
+    /// `--height-map FILE --height-scale S`: the scene material's height field (replaces
+    /// the built-in one), heights in texels = S × value.
+    pub height_map: Option<(PathBuf, f64)>,
 }
 
 impl Default for PrepareSettings {
@@ -62,6 +66,7 @@ impl Default for PrepareSettings {
             h_order: Order::THREE,
             cache_dir: None,
             sh_lightmap_bounces: None,
+            height_map: None,
         }
     }
 }
@@ -96,6 +101,8 @@ pub struct Prepared {
     pub cache_dir: PathBuf,
     /// Visibility baked at mesh vertices for `pcaMv` ([`Prepared::bake_vertex_pca`]).
     pub vertex_pca: Vec<VertexPca>,
+    /// The material's SSBump and AO for `ssbump` / `rnmao` ([`Prepared::bake_ssbump`]).
+    pub ssbump: Option<SsBumpMaps>,
 }
 
 /// Order of the lighting projection: L×H of order-6 visibility needs lighting of order 8
@@ -181,7 +188,29 @@ impl Prepared {
     pub fn prepare_techniques(&mut self, techniques: &[Technique]) -> Result<(), PrepareError> {
         self.fit_clusters(techniques)?;
         self.bake_vertex_pca(techniques);
+        self.bake_ssbump(techniques);
         Ok(())
+    }
+
+    /// Bakes the material's SSBump and AO from its height field when a technique of
+    /// `techniques` reads them and the material has one (without one those techniques
+    /// refuse to build, naming `--height-map`).
+    pub fn bake_ssbump(&mut self, techniques: &[Technique]) {
+        if self.ssbump.is_some() || !techniques.iter().any(|t| t.needs().ssbump) {
+            return;
+        }
+        if let Some(field) = &self.scene.material.height {
+            let t = Instant::now();
+            let maps = SsBumpMaps::bake(field, ssbump::DEFAULT_RAYS, self.seed);
+            log::info!(
+                "SSBump: {}×{} texels × {} rays in {:.2} s",
+                maps.width,
+                maps.height,
+                ssbump::DEFAULT_RAYS,
+                t.elapsed().as_secs_f64()
+            );
+            self.ssbump = Some(maps);
+        }
     }
 
     pub fn inputs(&self) -> Inputs<'_> {
@@ -194,6 +223,7 @@ impl Prepared {
             clusters: &self.clusters,
             vertex_pca: &self.vertex_pca,
             sh_lightmap: self.sh_lightmap.as_ref(),
+            ssbump: self.ssbump.as_ref(),
             table_res: self.table_res,
             h_order: self.h_order,
         }
@@ -219,6 +249,7 @@ pub enum PrepareError {
 pub fn resolve_scene(name: &str, vis_res: u32) -> Result<Scene, SceneError> {
     match name {
         "house" => house::build(vis_res),
+        "patio" => patio::build(vis_res),
         p if p.ends_with(".gltf") || p.ends_with(".glb") => {
             gltf::load(std::path::Path::new(p), vis_res)
         }
@@ -234,7 +265,10 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
     if !TABLE_RES_RANGE.contains(&settings.table_res) {
         return Err(PrepareError::TableRes(settings.table_res));
     }
-    let scene = resolve_scene(&settings.scene, vis_res)?;
+    let mut scene = resolve_scene(&settings.scene, vis_res)?;
+    if let Some((path, scale)) = &settings.height_map {
+        scene.material.height = Some(crate::scene::load_height_map(path, *scale)?);
+    }
     let geometry = BakeGeometry::new(&scene.mesh, vis_res);
     let visibility = bake_visibility_cached(&geometry, rays, settings)?;
     let ao = AoMap {
@@ -306,6 +340,7 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
         seed: settings.seed,
         cache_dir: settings.cache_dir.clone().unwrap_or_else(default_cache_dir),
         vertex_pca: Vec::new(),
+        ssbump: None,
     })
 }
 

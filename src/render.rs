@@ -199,6 +199,12 @@ impl SceneGpu {
     pub fn target(&self) -> &RenderTarget {
         &self.target
     }
+    /// The material textures' sampler (repeat, trilinear): for material-space technique
+    /// textures such as the SSBump.
+    pub fn material_sampler(&self) -> &Sampler {
+        &self.material_sampler
+    }
+
     pub fn lightmap_sampler(&self) -> &Sampler {
         &self.lightmap_sampler
     }

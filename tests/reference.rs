@@ -56,6 +56,7 @@ fn ground_scene() -> Scene {
             albedo: white,
             normal: flat,
             normal_scale: 0.0,
+            height: None,
         },
         camera: Camera {
             position: Vec3::new(0.0, 5.0, 0.5),

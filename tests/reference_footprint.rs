@@ -88,6 +88,7 @@ fn plane_scene(bumpy: bool) -> Scene {
             },
             normal: normal_map(bumpy),
             normal_scale: 1.0,
+            height: None,
         },
         camera: camera(),
     }

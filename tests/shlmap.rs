@@ -91,6 +91,7 @@ fn wall_scene(res: u32) -> Scene {
             albedo: texture([255; 4]),
             normal: texture([128, 128, 255, 255]),
             normal_scale: 0.0,
+            height: None,
         },
         camera: Camera {
             position: Vec3::new(0.0, 4.0, 9.0),
@@ -286,6 +287,7 @@ fn shlmap_tracks_strong_inter_reflection() {
         clusters: &[],
         vertex_pca: &[],
         sh_lightmap: Some(&map),
+        ssbump: None,
         table_res: 16,
         h_order: Order::THREE,
     };

@@ -40,6 +40,18 @@ vec3 material_albedo() {
     return SAMPLE_MATERIAL(albedo_tex, in_uv_material).rgb * in_albedo_tint;
 }
 
+// The normal map's tangent-space normal (x along +u, y image up, z out), x and y scaled by
+// normal_scale, unit; (0, 0, 1) for flat normals or a texel that decodes to zero length.
+vec3 tangent_space_normal() {
+    if (frame.normal_scale == 0.0) {
+        return vec3(0.0, 0.0, 1.0);
+    }
+    vec3 m = SAMPLE_MATERIAL(normal_tex, in_uv_material).xyz * 2.0 - 1.0;
+    m.xy *= frame.normal_scale;
+    float m_len = length(m);
+    return m_len > 1e-6 ? m / m_len : vec3(0.0, 0.0, 1.0);
+}
+
 // World-space shading normal from the tangent-space normal map (glTF convention, DESIGN §1:
 // +Y green = image up; bitangent = w · cross(n, t) points toward decreasing v). A map texel
 // that decodes to a zero-length vector falls back to the interpolated normal.

@@ -658,6 +658,9 @@ pub fn cpu_rungs(
                 px.image(|k| shade(&product, px.normal[k], &lightmap_v(k, n2))),
             );
         }
+        // No ladder for the radiosity-normal-mapping family yet: its error is measured
+        // against the displaced-geometry reference (`study rnm`), not split into rungs.
+        Technique::Rnm { .. } => {}
         Technique::Shlmap => {
             let Some(map) = prepared.sh_lightmap.as_ref() else {
                 return Ok(rungs);

@@ -22,7 +22,7 @@
 
 use std::ops::{Add, Mul};
 
-use glam::{DVec2, Vec3};
+use glam::{DVec2, Vec3, Vec4};
 
 use super::BakeError;
 use crate::scene::Mesh;
@@ -42,6 +42,12 @@ pub struct LightmapTexels {
     pub position: Vec<Vec3>,
     /// Unit geometric normal, world space (zero where not covered).
     pub normal: Vec<Vec3>,
+    /// The normal map's frame at the texel centre: the interpolated vertex normal and
+    /// tangent (with handedness in w), as `glsl/include/common.glsl` builds it per pixel
+    /// — what tangent-space lightmaps (`rnm`, issue 17) are baked in. Zero where not
+    /// covered.
+    pub shading_normal: Vec<Vec3>,
+    pub tangent: Vec<Vec4>,
 }
 
 impl LightmapTexels {
@@ -86,6 +92,8 @@ pub fn rasterize(mesh: &Mesh, res: u32) -> LightmapTexels {
         covered: vec![false; n],
         position: vec![Vec3::ZERO; n],
         normal: vec![Vec3::ZERO; n],
+        shading_normal: vec![Vec3::ZERO; n],
+        tangent: vec![Vec4::ZERO; n],
     };
     let mut degenerate = 0usize;
     for t in 0..mesh.triangle_count() {
@@ -138,6 +146,13 @@ pub fn rasterize(mesh: &Mesh, res: u32) -> LightmapTexels {
                 out.covered[i] = true;
                 out.position[i] = p[0] * w0 as f32 + p[1] * w1 as f32 + p[2] * w2 as f32;
                 out.normal[i] = normal;
+                let (w0, w1, w2) = (w0 as f32, w1 as f32, w2 as f32);
+                let vn = |k: usize| Vec3::from(v[k].normal);
+                let vt = |k: usize| Vec4::from(v[k].tangent);
+                out.shading_normal[i] =
+                    (vn(0) * w0 + vn(1) * w1 + vn(2) * w2).normalize_or(normal);
+                let tangent = vt(0) * w0 + vt(1) * w1 + vt(2) * w2;
+                out.tangent[i] = tangent.truncate().extend(v[0].tangent[3].signum());
             }
         }
     }

@@ -28,6 +28,23 @@
 //! "shade by convolution at the normal". The coefficients of (1) include directions below
 //! the shading normal but above n_g's plane, so a bent normal sees what it should.
 //!
+//! # Radiosity-normal-mapping lightmaps (`rnm`, issue 17)
+//!
+//! The same rays also gather, per texel, the three lightmaps of Green's radiosity normal
+//! mapping: the irradiance around each HL2 basis direction B_i ([`super::ssbump::hl2_basis`])
+//! carried into world space by the texel's normal-map frame (interpolated vertex normal
+//! n_s, tangent t, bitangent w·(n_s × t) — the frame the shader decodes the normal map in):
+//!
+//! ```text
+//! E_i(x) = Σ_{r: n_g·ω_r > 0} w · L_in(x, ω_r) · max(0, ω_r · B_i(x)),   i < 3           (3)
+//! ```
+//!
+//! The lobe is the clamped cosine about B_i, cut by the geometric horizon like (1): it is
+//! what Valve's radiosity tool stores (each bump lightmap is the irradiance a surface facing
+//! B_i would receive), and it makes the shader exact where the normal is a basis vector
+//! (D = e_i). L_in is (1)'s, so the three maps carry the same visibility and
+//! inter-reflection as the SH lightmap and the two compare like for like.
+//!
 //! Texels are independent within a pass and sum their rays in a fixed order, so a bake is
 //! bit-identical for any thread count. Results are dilated [`DILATION_PASSES`] texels
 //! into the gutters, as the visibility bake's are.
@@ -78,6 +95,9 @@ pub struct ShLightmap {
     /// last bounce read at its hits — what [`radiance_at_points`] reads to gather the same
     /// light at other points. Empty for a direct-only bake.
     pub bounce_source: Vec<Vec3>,
+    /// Eq. (3): per texel the RGB irradiance around the three world-space HL2 basis
+    /// directions (dilated like `coeffs`): the `rnm` lightmaps.
+    pub basis_irradiance: Vec<[Vec3; 3]>,
     /// Rays and time of the bake, all bounces.
     pub stats: BakeStats,
 }
@@ -106,6 +126,15 @@ pub fn irradiance_at(coeffs: &[[f32; 3]], n: Vec3) -> Vec3 {
     Vec3::new(e[0] as f32, e[1] as f32, e[2] as f32)
 }
 
+/// The HL2 basis directions at texel `i` in world space (module doc, eq. (3)).
+pub fn world_basis(texels: &LightmapTexels, i: usize) -> [DVec3; 3] {
+    let n = texels.shading_normal[i].normalize_or(texels.normal[i]);
+    let t = crate::scene::tangent::orthonormalize(n, texels.tangent[i]);
+    let b = n.cross(t.truncate()) * t.w;
+    let (n, t, b) = (n.as_dvec3(), t.truncate().as_dvec3(), b.as_dvec3());
+    super::ssbump::hl2_basis().map(|v| (t * v.x + b * v.y + n * v.z).normalize())
+}
+
 /// Bakes the SH lightmap of `scene` under the environment whose radiance SH (RGB, any
 /// order ≥ 1) is `radiance_sh` (see the module doc).
 pub fn bake_sh_lightmap(
@@ -129,7 +158,7 @@ pub fn bake_sh_lightmap(
 
     // Bounce 0: direct light through the visible directions (any-hit rays).
     let bar = progress_bar(settings.progress, covered.len(), "direct");
-    let direct: Vec<Sh9Rgb> = covered
+    let direct: Vec<(Sh9Rgb, BasisIrradiance)> = covered
         .par_iter()
         .with_min_len(64)
         .map(|&i| {
@@ -138,7 +167,9 @@ pub fn bake_sh_lightmap(
                 texels.normal[i],
                 tracer.offset_origin(texels.position[i], texels.normal[i]),
             );
+            let lobes = world_basis(texels, i);
             let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
+            let mut rnm = [DVec3::ZERO; 3];
             let mut rays = 0u64;
             for (r, &d) in dirs.dirs().iter().enumerate() {
                 if !above_horizon(n, d) {
@@ -147,11 +178,15 @@ pub fn bake_sh_lightmap(
                 rays += 1;
                 if !tracer.occluded(origin, d, f32::INFINITY) {
                     accumulate(&mut sum, &basis[r], env[r]);
+                    accumulate_lobes(&mut rnm, &lobes, d, env[r]);
                 }
             }
             rays_done.fetch_add(rays, Ordering::Relaxed);
             bar.inc(1);
-            Sh9Rgb::from_sums(&sum, weight)
+            (
+                Sh9Rgb::from_sums(&sum, weight),
+                BasisIrradiance::from_sums(&rnm, weight),
+            )
         })
         .collect();
     bar.finish_and_clear();
@@ -163,7 +198,8 @@ pub fn bake_sh_lightmap(
         let mut irradiance = vec![Vec3::ZERO; res * res];
         for (k, &i) in covered.iter().enumerate() {
             let i = i as usize;
-            irradiance[i] = irradiance_at(&current[k].as_rgb(), texels.normal[i]).max(Vec3::ZERO);
+            irradiance[i] =
+                irradiance_at(&current[k].0.as_rgb(), texels.normal[i]).max(Vec3::ZERO);
         }
         dilate(
             &mut irradiance,
@@ -184,7 +220,9 @@ pub fn bake_sh_lightmap(
                 let i = i as usize;
                 let n = texels.normal[i];
                 let origin = tracer.offset_origin(texels.position[i], n);
+                let lobes = world_basis(texels, i);
                 let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
+                let mut rnm = [DVec3::ZERO; 3];
                 let mut rays = 0u64;
                 for (r, &d) in dirs.dirs().iter().enumerate() {
                     if !above_horizon(n, d) {
@@ -199,12 +237,16 @@ pub fn bake_sh_lightmap(
                         continue;
                     }
                     let e = irradiance[texels.texel_index(surface.uv_lightmap.into())];
-                    let radiance = surface.albedo * e / std::f32::consts::PI;
-                    accumulate(&mut sum, &basis[r], radiance.as_dvec3().into());
+                    let radiance = (surface.albedo * e / std::f32::consts::PI).as_dvec3();
+                    accumulate(&mut sum, &basis[r], radiance.into());
+                    accumulate_lobes(&mut rnm, &lobes, d, radiance.into());
                 }
                 rays_done.fetch_add(rays, Ordering::Relaxed);
                 bar.inc(1);
-                *direct + Sh9Rgb::from_sums(&sum, weight)
+                (
+                    direct.0 + Sh9Rgb::from_sums(&sum, weight),
+                    direct.1 + BasisIrradiance::from_sums(&rnm, weight),
+                )
             })
             .collect();
         bar.finish_and_clear();
@@ -212,16 +254,20 @@ pub fn bake_sh_lightmap(
     }
 
     let mut planes = vec![Sh9Rgb::default(); res * res];
+    let mut rnm = vec![BasisIrradiance::default(); res * res];
     for (k, &i) in covered.iter().enumerate() {
-        planes[i as usize] = current[k];
+        planes[i as usize] = current[k].0;
+        rnm[i as usize] = current[k].1;
     }
     dilate(&mut planes, &texels.covered, texels.res, DILATION_PASSES);
+    dilate(&mut rnm, &texels.covered, texels.res, DILATION_PASSES);
     let map = ShLightmap {
         res: texels.res,
         bounces: settings.bounces,
         coeffs: planes.iter().flat_map(|p| p.as_rgb()).collect(),
         covered: texels.covered.clone(),
         bounce_source,
+        basis_irradiance: rnm.into_iter().map(|b| b.0).collect(),
         stats: BakeStats {
             rays_traced: rays_done.into_inner(),
             seconds: start.elapsed().as_secs_f64(),
@@ -325,6 +371,14 @@ fn accumulate(
     }
 }
 
+/// Eq. (3)'s sums: `radiance` (RGB) arriving along `d` into each lobe max(0, d·B_i).
+fn accumulate_lobes(sum: &mut [DVec3; 3], lobes: &[DVec3; 3], d: Vec3, radiance: [f64; 3]) {
+    let d = d.as_dvec3();
+    for (s, b) in sum.iter_mut().zip(lobes) {
+        *s += DVec3::from(radiance) * d.dot(*b).max(0.0);
+    }
+}
+
 fn progress_bar(show: bool, len: usize, what: &str) -> ProgressBar {
     if !show {
         return ProgressBar::hidden();
@@ -356,6 +410,30 @@ impl Sh9Rgb {
 
     fn as_rgb(&self) -> [[f32; 3]; SH_LIGHTMAP_COEFFS] {
         std::array::from_fn(|i| [self.0[3 * i], self.0[3 * i + 1], self.0[3 * i + 2]])
+    }
+}
+
+/// Eq. (3)'s three RGB irradiances of a texel, as one value [`dilate`] can average.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct BasisIrradiance([Vec3; 3]);
+
+impl BasisIrradiance {
+    fn from_sums(sum: &[DVec3; 3], weight: f64) -> Self {
+        BasisIrradiance(sum.map(|s| (s * weight).as_vec3()))
+    }
+}
+
+impl Add for BasisIrradiance {
+    type Output = BasisIrradiance;
+    fn add(self, o: BasisIrradiance) -> BasisIrradiance {
+        BasisIrradiance(std::array::from_fn(|k| self.0[k] + o.0[k]))
+    }
+}
+
+impl Mul<f32> for BasisIrradiance {
+    type Output = BasisIrradiance;
+    fn mul(self, s: f32) -> BasisIrradiance {
+        BasisIrradiance(self.0.map(|v| v * s))
     }
 }
 

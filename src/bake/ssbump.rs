@@ -68,7 +68,7 @@ impl HeightField {
     }
 
     /// Bilinear height at continuous texel coordinates (texel centres at integers), wrapped.
-    fn sample(&self, x: f64, y: f64) -> f64 {
+    pub fn sample(&self, x: f64, y: f64) -> f64 {
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let (i, j) = (x0 as i64, y0 as i64);
@@ -213,6 +213,58 @@ pub fn ssbump(field: &HeightField, occ: &Occlusion) -> (Vec<[f64; 3]>, Vec<[f64;
         .map(|(d, o)| std::array::from_fn(|i| d[i] * o[i]))
         .collect();
     (shadowed, plain)
+}
+
+/// Rays per texel of the SSBump bake the techniques use (the `shvis ssbump` default, the
+/// paper's "300 rays").
+pub const DEFAULT_RAYS: usize = 300;
+
+/// What `ssbump` and `rnmao` read from a material's height field: per texel of the field,
+/// RGB = the SSBump (D · directional occlusion), A = scalar AO. Tiled by the material UVs
+/// like the normal map (row 0 at v = 0).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SsBumpMaps {
+    pub width: u32,
+    pub height: u32,
+    pub texels: Vec<[f32; 4]>,
+}
+
+impl SsBumpMaps {
+    /// The self-shadowed maps of `field` with `rays` per texel.
+    pub fn bake(field: &HeightField, rays: usize, seed: u64) -> SsBumpMaps {
+        let occ = occlusion(field, rays, seed);
+        let (shadowed, _) = ssbump(field, &occ);
+        SsBumpMaps {
+            width: field.width as u32,
+            height: field.height as u32,
+            texels: shadowed
+                .iter()
+                .zip(&occ.ao)
+                .map(|(d, &ao)| [d[0] as f32, d[1] as f32, d[2] as f32, ao as f32])
+                .collect(),
+        }
+    }
+
+    /// The unoccluded maps of a tangent-space normal map (8-bit, decoded as the shader
+    /// decodes it, x and y times `normal_scale`): D of each texel's normal, AO 1 —
+    /// Listing 2's texture when nothing shadows, what makes it equal to Listing 1.
+    pub fn unoccluded(normal_map: &crate::scene::Texture8, normal_scale: f32) -> SsBumpMaps {
+        let decode = |c: u8| f64::from(c) / 255.0 * 2.0 - 1.0;
+        SsBumpMaps {
+            width: normal_map.width,
+            height: normal_map.height,
+            texels: normal_map
+                .texels
+                .iter()
+                .map(|t| {
+                    let s = f64::from(normal_scale);
+                    let n = DVec3::new(decode(t[0]) * s, decode(t[1]) * s, decode(t[2]));
+                    let d = d_encoding(n);
+                    [d[0] as f32, d[1] as f32, d[2] as f32, 1.0]
+                })
+                .collect(),
+        }
+    }
 }
 
 #[cfg(test)]

@@ -241,7 +241,8 @@ impl EnvMap {
 pub const ANGULAR_PREFIX: &str = "angular:";
 
 /// `--env` argument → map: [`BUILTIN_SKY`] ("sky") is the procedural sky
-/// ([`sky::sky`], [`BUILTIN_SKY_WIDTH`] × half, default [`sky::SkyParams`]);
+/// ([`sky::sky`], [`BUILTIN_SKY_WIDTH`] × half, default [`sky::SkyParams`]); `sky:DEG` the
+/// same with the sun DEG° high ([`sky::SkyParams::with_sun_elevation`]);
 /// `angular:PATH` a 1:1 image read as an angular probe; anything else a path loaded by
 /// [`equirect::load`] (1:1 images detected by content).
 ///
@@ -250,6 +251,15 @@ pub const ANGULAR_PREFIX: &str = "angular:";
 pub fn resolve(name_or_path: &str) -> Result<EnvMap, EnvError> {
     if name_or_path == BUILTIN_SKY {
         Ok(sky::sky(BUILTIN_SKY_WIDTH, &sky::SkyParams::default()))
+    } else if let Some(degrees) = name_or_path.strip_prefix("sky:") {
+        let elevation: f64 = degrees.parse().ok().filter(|e: &f64| (1.0..=90.0).contains(e)).ok_or_else(|| EnvError::Format {
+            path: PathBuf::from(name_or_path),
+            detail: "sky:DEG takes a sun elevation in degrees, 1 to 90".into(),
+        })?;
+        Ok(sky::sky(
+            BUILTIN_SKY_WIDTH,
+            &sky::SkyParams::with_sun_elevation(elevation),
+        ))
     } else if let Some(path) = name_or_path.strip_prefix(ANGULAR_PREFIX) {
         equirect::load_as(Path::new(path), equirect::SquareLayout::Angular)
     } else {

@@ -57,10 +57,21 @@ pub struct SkyParams {
     pub horizon_blend: f64,
 }
 
+/// Sun elevation of the default sky, degrees.
+pub const DEFAULT_SUN_ELEVATION_DEG: f64 = 35.0;
+
 impl Default for SkyParams {
     fn default() -> Self {
-        // Elevation 35°, azimuth: 40° from +Z towards −X (front-left).
-        let elevation = 35f64.to_radians();
+        SkyParams::with_sun_elevation(DEFAULT_SUN_ELEVATION_DEG)
+    }
+}
+
+impl SkyParams {
+    /// The default sky with the sun `degrees` above the horizon (`--env sky:DEG`; the
+    /// grazing "low sun" of issue 17 is `sky:15`), at the default azimuth: 40° from +Z
+    /// towards −X (front-left).
+    pub fn with_sun_elevation(degrees: f64) -> Self {
+        let elevation = degrees.to_radians();
         let azimuth = 40f64.to_radians();
         let sun_dir = DVec3::new(
             -elevation.cos() * azimuth.sin(),

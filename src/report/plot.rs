@@ -97,7 +97,8 @@ pub fn write_pca_error_plot(
                 | Technique::Sh2
                 | Technique::Vq { .. }
                 | Technique::Cpca { .. }
-                | Technique::PcaVertex { .. } => None,
+                | Technique::PcaVertex { .. }
+                | Technique::Rnm { .. } => None,
             })
             .collect()
     };

@@ -313,6 +313,7 @@ impl Loader {
                 None => solid_texture(FLAT_NORMAL),
             },
             normal_scale: textures.normal.map_or(1.0, |(_, s)| s),
+            height: None,
         };
         let bounds = mesh.bounds();
         let camera = camera_node

@@ -56,7 +56,7 @@ const GROUND_HALF: f32 = 15.0;
 const FENCE_X: f32 = -6.5;
 
 // Linear RGB tints (≤ 0.9), multiplied into the brick albedo.
-const TINT_WALL: Vec3 = Vec3::new(0.85, 0.74, 0.62);
+pub(super) const TINT_WALL: Vec3 = Vec3::new(0.85, 0.74, 0.62);
 const TINT_ROOF: Vec3 = Vec3::new(0.32, 0.3, 0.29);
 const TINT_GROUND: Vec3 = Vec3::new(0.36, 0.42, 0.34);
 const TINT_PILLAR: Vec3 = Vec3::new(0.88, 0.88, 0.85);
@@ -119,6 +119,7 @@ pub fn build(lightmap_res: u32) -> Result<Scene, SceneError> {
             albedo: brick_albedo(),
             normal: brick_normal(),
             normal_scale: 1.0,
+            height: Some(brick_height_field()),
         },
         camera: camera(),
     })
@@ -127,14 +128,14 @@ pub fn build(lightmap_res: u32) -> Result<Scene, SceneError> {
 /// A planar rectangle: corner `origin`, unit edge directions `t` (tangent, +u) and `b`
 /// (image up), extents `size` in metres along them; normal n = t × b.
 #[derive(Clone, Copy, Debug)]
-struct Quad {
-    origin: Vec3,
-    t: Vec3,
-    b: Vec3,
-    size: Vec2,
-    tint: Vec3,
+pub(super) struct Quad {
+    pub(super) origin: Vec3,
+    pub(super) t: Vec3,
+    pub(super) b: Vec3,
+    pub(super) size: Vec2,
+    pub(super) tint: Vec3,
     /// Charted at half the texel density (the ground is large and smooth in visibility).
-    half_density: bool,
+    pub(super) half_density: bool,
 }
 
 impl Quad {
@@ -423,7 +424,7 @@ fn quads() -> Vec<Quad> {
 
 /// The quads as charts for the shared packer ([`lightmap_uv::pack_charts`]): the ground at
 /// half density.
-fn pack_charts(quads: &[Quad], res: u32) -> Option<Vec<Chart>> {
+pub(super) fn pack_charts(quads: &[Quad], res: u32) -> Option<Vec<Chart>> {
     let charts: Vec<ChartSize> = quads
         .iter()
         .map(|q| ChartSize {
@@ -435,7 +436,7 @@ fn pack_charts(quads: &[Quad], res: u32) -> Option<Vec<Chart>> {
 }
 
 /// Triangulates the quads: 4 vertices and 2 counter-clockwise triangles each.
-fn mesh(quads: &[Quad], charts: &[Chart], res: u32) -> Mesh {
+pub(super) fn mesh(quads: &[Quad], charts: &[Chart], res: u32) -> Mesh {
     let mut m = Mesh::default();
     let inv_res = 1.0 / res as f32;
     for (q, c) in quads.iter().zip(charts) {
@@ -518,7 +519,7 @@ fn srgb8(linear: f32) -> u8 {
 }
 
 /// Brick albedo: per-brick colour variation from an integer hash, light mortar.
-fn brick_albedo() -> Texture8 {
+pub(super) fn brick_albedo() -> Texture8 {
     let n = TEXTURE_SIZE;
     let mut texels = Vec::with_capacity((n * n) as usize);
     for y in 0..n {
@@ -560,7 +561,7 @@ pub fn brick_height_field() -> crate::bake::ssbump::HeightField {
 /// Tangent-space normal map of the brick height field: central differences with
 /// wrap-around, n ∝ (−∂h/∂x, +∂h/∂y_img, 1) (y_img grows downward, green = image up),
 /// stored as (n·0.5 + 0.5)·255.
-fn brick_normal() -> Texture8 {
+pub(super) fn brick_normal() -> Texture8 {
     let n = TEXTURE_SIZE;
     let height: Vec<f32> = (0..n * n).map(|i| brick_at(i % n, i / n).0).collect();
     let h = |x: u32, y: u32| height[((y % n) * n + x % n) as usize];

@@ -6,8 +6,10 @@
 //! The vertex layout here is the one the GPU reads (`glsl/scene/mesh.vert`), so it is
 //! `#[repr(C)]` + `Pod`.
 
+pub mod displace;
 pub mod gltf;
 pub mod house;
+pub mod patio;
 pub mod lightmap_uv;
 pub mod subdivide;
 pub mod tangent;
@@ -80,6 +82,11 @@ pub struct Material {
     pub normal: Texture8,
     /// glTF `normalTexture.scale`: scales the map's x and y before renormalizing.
     pub normal_scale: f32,
+    /// Height field of the surface the normal map describes, tiled like it (heights in
+    /// texels of its own grid): what `ssbump`/`rnmao` shadow with and what
+    /// [`displace`] builds the micro-geometry from (issue 17). The house's bricks have
+    /// one; a glTF scene takes one from `--height-map`.
+    pub height: Option<crate::bake::ssbump::HeightField>,
 }
 
 /// A pinhole camera (right-handed, looking down −Z in view space).
@@ -184,11 +191,51 @@ pub struct Scene {
 /// Errors from building or loading a scene.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    #[error("unknown scene '{0}': use 'house' or a path to a .gltf/.glb file")]
+    #[error("unknown scene '{0}': use 'house', 'patio' or a path to a .gltf/.glb file")]
     Unknown(String),
     /// A glTF file that cannot be read or used; `message` says what is wrong.
     #[error("{path}: {message}")]
     Gltf { path: String, message: String },
     #[error("lightmap resolution {res} is out of range {min}..={max}")]
     LightmapRes { res: u32, min: u32, max: u32 },
+    /// A `--height-map` that cannot be used.
+    #[error("{path}: {message}")]
+    HeightMap { path: String, message: String },
+}
+
+/// Largest height map accepted (texels), as for material textures.
+pub const MAX_HEIGHT_MAP_TEXELS: usize = 16384 * 16384;
+
+/// Reads a height map (PNG, EXR…: its luminance, 8/16-bit images as [0, 1]) as heights
+/// in texels: `scale` × value (`--height-map FILE --height-scale S`; issue 17). The map tiles
+/// by the material UVs like the normal map, and should describe the same surface.
+///
+/// # Errors
+/// [`SceneError::HeightMap`] for an unreadable file, an empty or huge image, non-finite
+/// texels, or a scale that is not positive and finite.
+pub fn load_height_map(
+    path: &std::path::Path,
+    scale: f64,
+) -> Result<crate::bake::ssbump::HeightField, SceneError> {
+    let err = |message: String| SceneError::HeightMap {
+        path: path.display().to_string(),
+        message,
+    };
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(err(format!(
+            "height scale {scale} must be positive and finite"
+        )));
+    }
+    let image = image::open(path)
+        .map_err(|e| err(format!("cannot read the height map: {e}")))?
+        .to_luma32f();
+    let (width, height) = (image.width() as usize, image.height() as usize);
+    if width * height == 0 || width * height > MAX_HEIGHT_MAP_TEXELS {
+        return Err(err(format!("{width}×{height} is not a usable height map")));
+    }
+    let h: Vec<f64> = image.pixels().map(|p| f64::from(p.0[0]) * scale).collect();
+    if h.iter().any(|v| !v.is_finite()) {
+        return Err(err("the height map has non-finite texels".into()));
+    }
+    Ok(crate::bake::ssbump::HeightField { width, height, h })
 }

@@ -9,8 +9,11 @@
 //!   (`shvis study compression`).
 //! - [`seams`]: issue 16 — the screen-space discontinuity at cluster boundaries of the
 //!   clustered techniques, with and without the seam mitigation (`shvis study seams`).
+//! - [`rnm`]: issue 17 — radiosity normal mapping and SSBump against the displaced-geometry
+//!   reference under a low sun and an overcast probe (`shvis study rnm`).
 
 pub mod compression;
 pub mod params;
 pub mod params_gpu;
+pub mod rnm;
 pub mod seams;

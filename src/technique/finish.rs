@@ -24,6 +24,10 @@ pub enum SlotKind {
     /// Normal-indexed tables (`super::tables`): each sphere (dx9: two hemisphere squares
     /// side by side; dx10: one cube of a cube array) is one dependent fetch per pixel.
     NormalTable,
+    /// A material-space texture of the technique (`ssbump`'s SSBump / AO), sampled with the
+    /// material sampler: one fetch per pixel; like albedo and normal map its bytes are
+    /// the material's, not the lightmap's or the lighting's.
+    Material,
 }
 
 /// The images bound at one binding.
@@ -69,7 +73,7 @@ impl SlotLayout {
         self.images
             .iter()
             .map(|d| match self.kind {
-                SlotKind::PerTexel => d.layers,
+                SlotKind::PerTexel | SlotKind::Material => d.layers,
                 SlotKind::NormalTable => match d.view_type {
                     vk::ImageViewType::CUBE | vk::ImageViewType::CUBE_ARRAY => d.layers / 6,
                     // dx9 strips: each sphere is two res × res hemisphere squares.
@@ -114,18 +118,25 @@ pub fn stats(
 /// for double-buffered dynamic lighting, `super::lighting`): checks the path rules, uploads
 /// each copy's uniform block and tables, compiles the fragment shader
 /// ([`super::fragment_shader`]) once and builds one pipeline per copy over the per-texel
-/// images (binding TEXTURE0) and that copy's tables (the bindings after it).
+/// images (binding TEXTURE0), the technique's material-space texture if it has one (the
+/// next binding) and that copy's tables (the bindings after those).
+#[allow(clippy::too_many_arguments)]
 pub fn finish(
     ctx: &Arc<Context>,
     scene: &SceneGpu,
     technique: Technique,
     path: HwPath,
     per_texel: Vec<Image>,
+    material: Option<Image>,
     lighting: &LightingData,
     sets: usize,
 ) -> Result<TechniqueGpu, TechniqueError> {
     let label = format!("{technique}.{path}");
     let per_texel = TextureSlot::per_texel(per_texel);
+    let material = material.map(|image| TextureSlot {
+        kind: SlotKind::Material,
+        images: vec![image],
+    });
     let fragment = compile_fragment(technique, path)?;
     check_uniform_size(ctx, lighting.params.len(), &label)?;
     let sampler = scene.lightmap_sampler();
@@ -137,7 +148,10 @@ pub fn finish(
             Some(tables) => tables.upload(ctx, &suffix)?,
             None => Vec::new(),
         };
-        let slots: Vec<&TextureSlot> = std::iter::once(&per_texel).chain(&table_slots).collect();
+        let slots: Vec<&TextureSlot> = std::iter::once(&per_texel)
+            .chain(&material)
+            .chain(&table_slots)
+            .collect();
         let images: Vec<&Image> = slots.iter().flat_map(|s| &s.images).collect();
         check_path_rules(&label, path, &images)?;
         let layouts: Vec<SlotLayout> = slots.iter().map(|s| s.layout()).collect();
@@ -146,9 +160,16 @@ pub fn finish(
             &layouts,
             super::per_texel_lookups(technique),
         );
+        if super::skips_normal_map(technique) {
+            stats.lookups_per_pixel -= 1;
+        }
         let params = params_buffer(ctx, &lighting.params, &label, &suffix)?;
         let mut resources = base_resources(scene, &params);
         for (binding, slot) in (layout::BINDING_TECHNIQUE_TEXTURE0..).zip(&slots) {
+            let sampler = match slot.kind {
+                SlotKind::Material => scene.material_sampler(),
+                SlotKind::PerTexel | SlotKind::NormalTable => sampler,
+            };
             let resource = match slot.images.as_slice() {
                 [one] => gpu::Resource::Texture(one, sampler),
                 many => gpu::Resource::TextureArray(many.iter().map(|i| (i, sampler)).collect()),
@@ -164,14 +185,9 @@ pub fn finish(
             tables: table_slots.into_iter().flat_map(|s| s.images).collect(),
         });
     }
-    Ok(TechniqueGpu::new(
-        ctx,
-        technique,
-        path,
-        stats,
-        per_texel.images,
-        built,
-    ))
+    let mut images = per_texel.images;
+    images.extend(material.into_iter().flat_map(|s| s.images));
+    Ok(TechniqueGpu::new(ctx, technique, path, stats, images, built))
 }
 
 /// `technique`'s fragment shader ([`super::fragment_shader`]) compiled for `path`.

@@ -22,6 +22,7 @@ pub mod finish;
 pub mod lighting;
 pub mod pca;
 pub mod preconv;
+pub mod rnm;
 pub mod sh2;
 pub mod shlmap;
 pub mod spec;
@@ -33,7 +34,9 @@ pub mod vertex;
 use std::sync::Arc;
 
 pub use lighting::{LightingData, LightingRecipe};
-pub use spec::{BakeNeeds, ClusterNeed, HwPath, ParseError, ReferenceModel, SeamMode, Technique};
+pub use spec::{
+    BakeNeeds, ClusterNeed, HwPath, ParseError, ReferenceModel, RnmVariant, SeamMode, Technique,
+};
 
 use lighting::LightingSet;
 
@@ -63,8 +66,11 @@ pub struct Inputs<'a> {
     pub clusters: &'a [ClusteredModel],
     /// Visibility baked at mesh vertices (`pcaMv`), found by M and edge length.
     pub vertex_pca: &'a [VertexPca],
-    /// Order-3 SH of incident radiance with inter-reflection per texel (`shlmap`).
+    /// Order-3 SH of incident radiance with inter-reflection per texel (`shlmap`), and the
+    /// three `rnm` lightmaps baked with it.
     pub sh_lightmap: Option<&'a ShLightmap>,
+    /// The material's SSBump and AO (`ssbump`, `rnmao`), from its height field.
+    pub ssbump: Option<&'a crate::bake::ssbump::SsBumpMaps>,
     /// L×H table texels per hemisphere / face side.
     pub table_res: u32,
     /// Clamped-cosine order of the L×H product.
@@ -104,6 +110,7 @@ pub fn fragment_shader(technique: Technique) -> ShaderVariant {
         Technique::Vq { k, seams } => cluster::fragment_shader(k, 0, seams),
         Technique::Cpca { k, m, seams, .. } => cluster::fragment_shader(k, m, seams),
         Technique::PcaVertex { m, .. } => vertex::fragment_shader(m),
+        Technique::Rnm { variant } => rnm::fragment_shader(variant),
     }
 }
 
@@ -118,8 +125,20 @@ pub fn per_texel_lookups(technique: Technique) -> Option<u32> {
         | Technique::Shlmap
         | Technique::Preconv
         | Technique::Sh2
-        | Technique::PcaVertex { .. } => None,
+        | Technique::PcaVertex { .. }
+        | Technique::Rnm { .. } => None,
     }
+}
+
+/// Whether a family's shader leaves the normal map unread (`ssbump`: its texel replaces
+/// it), so the cost table does not count that fetch.
+pub fn skips_normal_map(technique: Technique) -> bool {
+    matches!(
+        technique,
+        Technique::Rnm {
+            variant: RnmVariant::SelfShadowed
+        }
+    )
 }
 
 /// An input error unless `coeffs` has at least `need` SH coefficients (`what`: "lighting",
@@ -325,6 +344,7 @@ fn prepare(
             cluster::prepare(need, inputs, &label)?
         }
         Technique::PcaVertex { m, .. } => vertex::prepare(m, inputs, &label)?,
+        Technique::Rnm { .. } => rnm::prepare(inputs, &label)?,
     };
     let recipe = LightingRecipe {
         technique,
@@ -350,7 +370,15 @@ fn build_sets(
         return Ok((gpu, recipe));
     }
     let per_texel = texels.upload(ctx, path)?;
-    let gpu = finish::finish(ctx, scene, technique, path, per_texel, &data, sets)?;
+    let material = match technique {
+        Technique::Rnm { variant } => {
+            rnm::material_texture(ctx, variant, inputs, &format!("{technique}.{path}"))?
+        }
+        _ => None,
+    };
+    let gpu = finish::finish(
+        ctx, scene, technique, path, per_texel, material, &data, sets,
+    )?;
     Ok((gpu, recipe))
 }
 

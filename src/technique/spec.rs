@@ -46,6 +46,44 @@ pub enum Technique {
     /// vertices of the mesh (subdivided so no edge exceeds E cm; none: as authored), in a
     /// vertex stream, interpolated and shaded as `pcaMw`.
     PcaVertex { m: u32, max_edge_cm: Option<u32> },
+    /// Radiosity normal mapping (Green, Valve; issue 17): three lightmaps of irradiance
+    /// around the HL2 tangent-space basis, blended per pixel — `rnm` (Listing 1, weights from
+    /// the normal map), `rnmao` (× scalar AO of the height field), `ssbump` (Listing 2,
+    /// the self-shadowed bump map's texels are the weights).
+    Rnm { variant: RnmVariant },
+}
+
+/// Which per-pixel weights blend the three `rnm` lightmaps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum RnmVariant {
+    /// `rnm`: saturate(N·B_i)², normalized (Listing 1).
+    NormalMap,
+    /// `rnmao`: Listing 1 times the height field's scalar ambient occlusion.
+    NormalMapAo,
+    /// `ssbump`: D_i · directional occlusion_i read from the SSBump texture (Listing 2).
+    SelfShadowed,
+}
+
+impl RnmVariant {
+    pub const ALL: [RnmVariant; 3] = [
+        RnmVariant::NormalMap,
+        RnmVariant::NormalMapAo,
+        RnmVariant::SelfShadowed,
+    ];
+
+    /// The value of the shader macro `SHVIS_RNM_VARIANT`.
+    pub fn shader_value(self) -> u32 {
+        match self {
+            RnmVariant::NormalMap => 0,
+            RnmVariant::NormalMapAo => 1,
+            RnmVariant::SelfShadowed => 2,
+        }
+    }
+
+    /// Whether it reads the height field's SSBump / AO texture.
+    pub fn needs_height(self) -> bool {
+        self != RnmVariant::NormalMap
+    }
 }
 
 /// How a clustered technique crosses cluster boundaries in the lightmap.
@@ -116,6 +154,8 @@ pub struct BakeNeeds {
     pub ao: bool,
     /// A VQ / CPCA model of the order-6 visibility.
     pub clusters: Option<ClusterNeed>,
+    /// The material's SSBump and AO textures, from its height field.
+    pub ssbump: bool,
 }
 
 /// Which ground truth a technique's error is measured against.
@@ -214,6 +254,15 @@ impl Technique {
             m: 12,
             max_edge_cm: Some(25),
         },
+        Technique::Rnm {
+            variant: RnmVariant::NormalMap,
+        },
+        Technique::Rnm {
+            variant: RnmVariant::NormalMapAo,
+        },
+        Technique::Rnm {
+            variant: RnmVariant::SelfShadowed,
+        },
     ];
 
     /// The CLI name: `unc6`, `pca12`, `pca12w`, `shlmap`, `preconv`, `sh2`.
@@ -241,6 +290,12 @@ impl Technique {
                 Some(cm) => format!("pca{m}v{cm}"),
                 None => format!("pca{m}v"),
             },
+            Technique::Rnm { variant } => match variant {
+                RnmVariant::NormalMap => "rnm",
+                RnmVariant::NormalMapAo => "rnmao",
+                RnmVariant::SelfShadowed => "ssbump",
+            }
+            .into(),
         }
     }
 
@@ -269,7 +324,8 @@ impl Technique {
             | Technique::Shlmap
             | Technique::Preconv
             | Technique::Sh2
-            | Technique::PcaVertex { .. } => None,
+            | Technique::PcaVertex { .. }
+            | Technique::Rnm { .. } => None,
         }
     }
 
@@ -287,7 +343,10 @@ impl Technique {
             Technique::Shlmap => Some(PAPER_SHLMAP_MS),
             Technique::Preconv => Some(PAPER_PRECONV_MS),
             Technique::Sh2 => Some(PAPER_SH2_MS),
-            Technique::Vq { .. } | Technique::Cpca { .. } | Technique::PcaVertex { .. } => None,
+            Technique::Vq { .. }
+            | Technique::Cpca { .. }
+            | Technique::PcaVertex { .. }
+            | Technique::Rnm { .. } => None,
         }
     }
 
@@ -330,13 +389,18 @@ impl Technique {
                 pca_vectors: Some(m),
                 ..BakeNeeds::default()
             },
+            Technique::Rnm { variant } => BakeNeeds {
+                sh_lightmap: true,
+                ssbump: variant.needs_height(),
+                ..BakeNeeds::default()
+            },
         }
     }
 
     /// The ground truth its error is measured against.
     pub fn reference(self) -> ReferenceModel {
         match self {
-            Technique::Shlmap => ReferenceModel::InterReflected,
+            Technique::Shlmap | Technique::Rnm { .. } => ReferenceModel::InterReflected,
             Technique::Unc { .. }
             | Technique::Pca { .. }
             | Technique::Preconv
@@ -351,7 +415,7 @@ impl Technique {
     /// not a new bake.
     pub fn dynamic_lighting(self) -> bool {
         match self {
-            Technique::Shlmap => false,
+            Technique::Shlmap | Technique::Rnm { .. } => false,
             Technique::Unc { .. }
             | Technique::Pca { .. }
             | Technique::Preconv
@@ -400,6 +464,9 @@ impl Technique {
                         .map(move |max_edge_cm| Technique::PcaVertex { m, max_edge_cm })
                 })
                 .collect(),
+            Technique::Rnm { .. } => RnmVariant::ALL
+                .map(|variant| Technique::Rnm { variant })
+                .to_vec(),
             Technique::Shlmap | Technique::Preconv | Technique::Sh2 => vec![self],
         }
     }
@@ -640,7 +707,8 @@ mod tests {
         assert!(Technique::Preconv.needs().ao);
         for &t in Technique::ALL {
             let bounced = t.reference() == ReferenceModel::InterReflected;
-            assert_eq!(bounced, t == Technique::Shlmap, "{t}");
+            let lightmapped = matches!(t, Technique::Shlmap | Technique::Rnm { .. });
+            assert_eq!(bounced, lightmapped, "{t}");
         }
     }
 }

@@ -1,0 +1,191 @@
+//! Radiosity normal mapping and self-shadowed bump maps (Green, "Efficient self-shadowed
+//! radiosity normal mapping", Valve; issue 17): `rnm`, `rnmao`, `ssbump`.
+//!
+//! Per lightmap texel three RGB irradiances E_i around the HL2 basis directions B_i in the
+//! texel's tangent frame ([`crate::bake::shlmap`], eq. (3) there: the clamped-cosine lobe
+//! about B_i, with the SH lightmap's visibility and inter-reflection). Per pixel
+//! (`glsl/technique/rnm.frag`), with weights w:
+//!
+//! ```text
+//! rnm:     w_i = saturate(N·B_i)² / Σ_j saturate(N·B_j)²         (Listing 1, eq. (3))
+//! rnmao:   w_i = Listing 1's · AO                                  (scalar AO of the height field)
+//! ssbump:  w_i = SSBump_i = D_i · occlusion_i                      (Listing 2)
+//! radiance = albedo/π · Σ_i w_i E_i
+//! ```
+//!
+//! N is the normal map's tangent-space normal. `ssbump` does not read the normal map at
+//! all: its texel replaces it. The SSBump / AO texture (RGB SSBump, A AO; RGBA16F with a box
+//! MIP chain, 8 bytes per height texel) lives in material space, sampled like the normal
+//! map; like albedo and normal map it counts in textures and lookups, not in the lightmap
+//! bytes. Per lightmap texel: the three lightmaps as three RGBA16F groups (the alpha
+//! unused: dx9's three lightmap textures, dx10's 3-layer array), 24 bytes, range-scaled into
+//! f16 as `shlmap`'s values are.
+
+use std::sync::Arc;
+
+use ash::vk;
+use half::f16;
+
+use super::lighting::{LightingData, Recipe};
+use super::spec::RnmVariant;
+use super::tables::{f16_range_scale, max_abs};
+use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
+use super::{Inputs, ShaderVariant, TechniqueError};
+use crate::bake::ssbump::SsBumpMaps;
+use crate::gpu::{Context, Image, ImageDesc};
+
+/// Lightmaps per texel (one RGBA group each).
+pub const RNM_LIGHTMAPS: usize = 3;
+
+/// Uniforms of glsl/technique/rnm.frag, block `RnmParams` (std140).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct RnmParams {
+    /// x: factor undoing the f16 range scaling.
+    pub unscale: [f32; 4],
+}
+
+/// The fragment shader of a variant.
+pub fn fragment_shader(variant: RnmVariant) -> ShaderVariant {
+    ShaderVariant {
+        path: "technique/rnm.frag",
+        defines: vec![("RNM_VARIANT", variant.shader_value())],
+    }
+}
+
+/// The three lightmaps, range-scaled into f16, and a recipe that always gives the block
+/// undoing that scale (the lighting is baked in).
+pub(crate) fn prepare(
+    inputs: &Inputs<'_>,
+    label: &str,
+) -> Result<(TexelGroups, Recipe), TechniqueError> {
+    let input_error = |detail: &str| TechniqueError::Input {
+        label: label.into(),
+        detail: detail.into(),
+    };
+    let map = inputs
+        .sh_lightmap
+        .ok_or_else(|| input_error("needs the SH lightmap bake (its rnm lightmaps)"))?;
+    let texels = (map.res * map.res) as usize;
+    if map.basis_irradiance.len() != texels {
+        return Err(input_error("the SH lightmap bake has no rnm lightmaps"));
+    }
+    let max = max_abs(
+        map.basis_irradiance
+            .iter()
+            .flat_map(|b| b.iter().flat_map(|v| v.to_array())),
+    );
+    if !max.is_finite() {
+        return Err(input_error(
+            "the rnm lightmaps are not finite (non-finite lighting?)",
+        ));
+    }
+    let scale = f16_range_scale(max);
+    // Value 4i + c of a texel is colour c of lightmap i (c = 3: padding).
+    let groups = pack_groups(texels, RNM_LIGHTMAPS * VALUES_PER_TEXEL, |t, value| {
+        let (i, c) = (value / VALUES_PER_TEXEL, value % VALUES_PER_TEXEL);
+        match c {
+            3 => f16::ZERO,
+            _ => f16::from_f32(map.basis_irradiance[t][i][c] * scale),
+        }
+    });
+    let texels = TexelGroups::new(
+        vk::Format::R16G16B16A16_SFLOAT,
+        map.res,
+        &groups,
+        format!("{label}.lightmaps"),
+    );
+    let params = RnmParams {
+        unscale: [1.0 / scale, 0.0, 0.0, 0.0],
+    };
+    Ok((
+        texels,
+        Recipe::Baked(LightingData::params(bytemuck::bytes_of(&params).to_vec())),
+    ))
+}
+
+/// The material-space SSBump / AO texture `rnmao` and `ssbump` bind (module doc), or `None`
+/// for `rnm`.
+///
+/// # Errors
+/// An input error when the variant needs the maps and the scene has none (no height map).
+pub(crate) fn material_texture(
+    ctx: &Arc<Context>,
+    variant: RnmVariant,
+    inputs: &Inputs<'_>,
+    label: &str,
+) -> Result<Option<Image>, TechniqueError> {
+    if !variant.needs_height() {
+        return Ok(None);
+    }
+    let maps = inputs.ssbump.ok_or_else(|| TechniqueError::Input {
+        label: label.into(),
+        detail: "needs the material's height map (the built-in scenes have one; a glTF scene takes --height-map FILE --height-scale S)".into(),
+    })?;
+    if maps.texels.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(TechniqueError::Input {
+            label: label.into(),
+            detail: "the SSBump texture is not finite".into(),
+        });
+    }
+    Ok(Some(upload_maps(ctx, maps, &format!("{label}.ssbump_ao"))?))
+}
+
+/// RGBA16F image of `maps` with its box-filtered MIP chain.
+fn upload_maps(ctx: &Arc<Context>, maps: &SsBumpMaps, name: &str) -> Result<Image, TechniqueError> {
+    let levels = mip_chain(maps);
+    let bytes: Vec<Vec<u16>> = levels
+        .iter()
+        .map(|(_, _, texels)| {
+            texels
+                .iter()
+                .flat_map(|t| t.map(|v| f16::from_f32(v).to_bits()))
+                .collect()
+        })
+        .collect();
+    let level_bytes: Vec<Vec<&[u8]>> = bytes
+        .iter()
+        .map(|b| vec![bytemuck::cast_slice::<u16, u8>(b)])
+        .collect();
+    let desc = ImageDesc::texture_2d(vk::Format::R16G16B16A16_SFLOAT, maps.width, maps.height)
+        .mip_levels(levels.len() as u32);
+    Ok(Image::with_data(ctx, &desc, &level_bytes, name)?)
+}
+
+/// Level 0 = the maps; each next level halves each side (at least 1) with a 2×2 box.
+fn mip_chain(maps: &SsBumpMaps) -> Vec<(u32, u32, Vec<[f32; 4]>)> {
+    let mut levels = vec![(maps.width, maps.height, maps.texels.clone())];
+    while let Some((w, h, prev)) = levels.last().filter(|(w, h, _)| *w > 1 || *h > 1) {
+        let (pw, ph) = (*w as usize, *h as usize);
+        let (nw, nh) = ((pw / 2).max(1), (ph / 2).max(1));
+        let mut next = vec![[0.0f32; 4]; nw * nh];
+        for (y, row) in next.chunks_mut(nw).enumerate() {
+            for (x, out) in row.iter_mut().enumerate() {
+                let taps = [(0, 0), (1, 0), (0, 1), (1, 1)]
+                    .map(|(dx, dy)| prev[(2 * y + dy).min(ph - 1) * pw + (2 * x + dx).min(pw - 1)]);
+                *out = std::array::from_fn(|c| 0.25 * taps.iter().map(|t| t[c]).sum::<f32>());
+            }
+        }
+        levels.push((nw as u32, nh as u32, next));
+    }
+    levels
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mip_chain_halves_to_one_texel_and_keeps_the_mean() {
+        let maps = SsBumpMaps {
+            width: 8,
+            height: 4,
+            texels: (0..32).map(|i| [i as f32, 1.0, 0.0, 0.5]).collect(),
+        };
+        let levels = mip_chain(&maps);
+        let sizes: Vec<(u32, u32)> = levels.iter().map(|(w, h, _)| (*w, *h)).collect();
+        assert_eq!(sizes, vec![(8, 4), (4, 2), (2, 1), (1, 1)]);
+        let last = levels.last().unwrap().2[0];
+        assert!((last[0] - 15.5).abs() < 1e-5 && last[1] == 1.0 && last[3] == 0.5, "{last:?}");
+    }
+}
