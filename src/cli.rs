@@ -105,7 +105,11 @@ struct StudyRnmArgs {
     #[arg(long, default_value = "patio")]
     scene: String,
     /// Environments, comma-separated (`sky:15`: the grazing low sun; the overcast probe).
-    #[arg(long, value_delimiter = ',', default_value = "sky:15,../shared/assets/env/potsdamer_platz_1k.exr")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "sky:15,../shared/assets/env/potsdamer_platz_1k.exr"
+    )]
     envs: Vec<String>,
     #[arg(long, default_value_t = 256)]
     vis_res: u32,

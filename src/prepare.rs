@@ -11,8 +11,8 @@ use crate::bake::cache::{default_cache_dir, load_or_bake_visibility, load_or_fit
 use crate::bake::cluster::{self, ClusteredModel};
 use crate::bake::pca::{PcaModel, fit};
 use crate::bake::raster::{LightmapTexels, rasterize};
-use crate::bake::ssbump::{self, SsBumpMaps};
 use crate::bake::shlmap::{ShLightmap, ShLightmapSettings, bake_sh_lightmap};
+use crate::bake::ssbump::{self, SsBumpMaps};
 use crate::bake::trace::Tracer;
 use crate::bake::vertex_pca::{VertexPca, bake_vertex_pca};
 use crate::bake::visibility::{VisibilityMap, VisibilitySettings, bake_visibility};

@@ -149,8 +149,7 @@ pub fn rasterize(mesh: &Mesh, res: u32) -> LightmapTexels {
                 let (w0, w1, w2) = (w0 as f32, w1 as f32, w2 as f32);
                 let vn = |k: usize| Vec3::from(v[k].normal);
                 let vt = |k: usize| Vec4::from(v[k].tangent);
-                out.shading_normal[i] =
-                    (vn(0) * w0 + vn(1) * w1 + vn(2) * w2).normalize_or(normal);
+                out.shading_normal[i] = (vn(0) * w0 + vn(1) * w1 + vn(2) * w2).normalize_or(normal);
                 let tangent = vt(0) * w0 + vt(1) * w1 + vt(2) * w2;
                 out.tangent[i] = tangent.truncate().extend(v[0].tangent[3].signum());
             }

@@ -39,11 +39,22 @@
 //! E_i(x) = Σ_{r: n_g·ω_r > 0} w · L_in(x, ω_r) · max(0, ω_r · B_i(x)),   i < 3           (3)
 //! ```
 //!
-//! The lobe is the clamped cosine about B_i, cut by the geometric horizon like (1): it is
-//! what Valve's radiosity tool stores (each bump lightmap is the irradiance a surface facing
-//! B_i would receive), and it makes the shader exact where the normal is a basis vector
-//! (D = e_i). L_in is (1)'s, so the three maps carry the same visibility and
-//! inter-reflection as the SH lightmap and the two compare like for like.
+//! The lobe is the clamped cosine about B_i, cut by the geometric horizon like (1): what
+//! Valve's radiosity tool gathers (each bump lightmap is the irradiance a surface facing B_i
+//! would receive). Three such lobes do not add up to the cosine about the normal — under a
+//! uniform sky each gathers π(1 + 1/√3)/2 ≈ 0.79π, not π — so, as Valve's tools do when they
+//! store the maps (`ColorSpace::LinearToBumpedLightmap` rescales the three to the flat
+//! lightmap), each texel's three values are scaled per channel by
+//!
+//! ```text
+//! k = E_flat / (⅓ Σ_i E_i),   E_flat = Σ_r w · L_in(x, ω_r) · max(0, ω_r · n_s)          (4)
+//! ```
+//!
+//! with the normalization matched to Listing 1 (Σ D_i = 1, D = ⅓ for the unperturbed
+//! normal): the unperturbed normal then shades exactly with the irradiance about n_s, and
+//! the lobes keep their ratios — the direction of the light. L_in is (1)'s, so the maps
+//! carry the same visibility and inter-reflection as the SH lightmap and the two compare
+//! like for like.
 //!
 //! Texels are independent within a pass and sum their rays in a fixed order, so a bake is
 //! bit-identical for any thread count. Results are dilated [`DILATION_PASSES`] texels
@@ -95,8 +106,9 @@ pub struct ShLightmap {
     /// last bounce read at its hits — what [`radiance_at_points`] reads to gather the same
     /// light at other points. Empty for a direct-only bake.
     pub bounce_source: Vec<Vec3>,
-    /// Eq. (3): per texel the RGB irradiance around the three world-space HL2 basis
-    /// directions (dilated like `coeffs`): the `rnm` lightmaps.
+    /// Eqs. (3)–(4): per texel the RGB irradiance around the three world-space HL2 basis
+    /// directions, rescaled to the flat irradiance (dilated like `coeffs`): the `rnm`
+    /// lightmaps.
     pub basis_irradiance: Vec<[Vec3; 3]>,
     /// Rays and time of the bake, all bounces.
     pub stats: BakeStats,
@@ -126,13 +138,27 @@ pub fn irradiance_at(coeffs: &[[f32; 3]], n: Vec3) -> Vec3 {
     Vec3::new(e[0] as f32, e[1] as f32, e[2] as f32)
 }
 
-/// The HL2 basis directions at texel `i` in world space (module doc, eq. (3)).
-pub fn world_basis(texels: &LightmapTexels, i: usize) -> [DVec3; 3] {
+/// The lobe axes of texel `i` in world space: the three HL2 basis directions of eq. (3),
+/// then the shading normal n_s of eq. (4).
+pub fn world_basis(texels: &LightmapTexels, i: usize) -> [DVec3; RNM_LOBES] {
     let n = texels.shading_normal[i].normalize_or(texels.normal[i]);
     let t = crate::scene::tangent::orthonormalize(n, texels.tangent[i]);
     let b = n.cross(t.truncate()) * t.w;
     let (n, t, b) = (n.as_dvec3(), t.truncate().as_dvec3(), b.as_dvec3());
-    super::ssbump::hl2_basis().map(|v| (t * v.x + b * v.y + n * v.z).normalize())
+    let [b0, b1, b2] =
+        super::ssbump::hl2_basis().map(|v| (t * v.x + b * v.y + n * v.z).normalize());
+    [b0, b1, b2, n]
+}
+
+/// Lobes gathered per texel: three basis directions and the flat normal (eqs. (3)–(4)).
+pub const RNM_LOBES: usize = 4;
+
+/// Eq. (4): the three basis irradiances scaled per channel so that their mean is the flat
+/// irradiance `lobes[3]` (zero where the three gathered nothing).
+fn normalized_to_flat(lobes: &[Vec3; RNM_LOBES]) -> [Vec3; 3] {
+    let mean = (lobes[0] + lobes[1] + lobes[2]) / 3.0;
+    let k = Vec3::select(mean.cmpgt(Vec3::ZERO), lobes[3] / mean, Vec3::ZERO);
+    [lobes[0] * k, lobes[1] * k, lobes[2] * k]
 }
 
 /// Bakes the SH lightmap of `scene` under the environment whose radiance SH (RGB, any
@@ -169,7 +195,7 @@ pub fn bake_sh_lightmap(
             );
             let lobes = world_basis(texels, i);
             let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
-            let mut rnm = [DVec3::ZERO; 3];
+            let mut rnm = [DVec3::ZERO; RNM_LOBES];
             let mut rays = 0u64;
             for (r, &d) in dirs.dirs().iter().enumerate() {
                 if !above_horizon(n, d) {
@@ -198,8 +224,7 @@ pub fn bake_sh_lightmap(
         let mut irradiance = vec![Vec3::ZERO; res * res];
         for (k, &i) in covered.iter().enumerate() {
             let i = i as usize;
-            irradiance[i] =
-                irradiance_at(&current[k].0.as_rgb(), texels.normal[i]).max(Vec3::ZERO);
+            irradiance[i] = irradiance_at(&current[k].0.as_rgb(), texels.normal[i]).max(Vec3::ZERO);
         }
         dilate(
             &mut irradiance,
@@ -222,7 +247,7 @@ pub fn bake_sh_lightmap(
                 let origin = tracer.offset_origin(texels.position[i], n);
                 let lobes = world_basis(texels, i);
                 let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
-                let mut rnm = [DVec3::ZERO; 3];
+                let mut rnm = [DVec3::ZERO; RNM_LOBES];
                 let mut rays = 0u64;
                 for (r, &d) in dirs.dirs().iter().enumerate() {
                     if !above_horizon(n, d) {
@@ -267,7 +292,7 @@ pub fn bake_sh_lightmap(
         coeffs: planes.iter().flat_map(|p| p.as_rgb()).collect(),
         covered: texels.covered.clone(),
         bounce_source,
-        basis_irradiance: rnm.into_iter().map(|b| b.0).collect(),
+        basis_irradiance: rnm.iter().map(|b| normalized_to_flat(&b.0)).collect(),
         stats: BakeStats {
             rays_traced: rays_done.into_inner(),
             seconds: start.elapsed().as_secs_f64(),
@@ -371,8 +396,13 @@ fn accumulate(
     }
 }
 
-/// Eq. (3)'s sums: `radiance` (RGB) arriving along `d` into each lobe max(0, d·B_i).
-fn accumulate_lobes(sum: &mut [DVec3; 3], lobes: &[DVec3; 3], d: Vec3, radiance: [f64; 3]) {
+/// Eqs. (3)–(4)'s sums: `radiance` (RGB) arriving along `d` into each lobe max(0, d·axis).
+fn accumulate_lobes(
+    sum: &mut [DVec3; RNM_LOBES],
+    lobes: &[DVec3; RNM_LOBES],
+    d: Vec3,
+    radiance: [f64; 3],
+) {
     let d = d.as_dvec3();
     for (s, b) in sum.iter_mut().zip(lobes) {
         *s += DVec3::from(radiance) * d.dot(*b).max(0.0);
@@ -413,12 +443,12 @@ impl Sh9Rgb {
     }
 }
 
-/// Eq. (3)'s three RGB irradiances of a texel, as one value [`dilate`] can average.
+/// Eqs. (3)–(4)'s RGB lobe irradiances of a texel, as one value [`dilate`] can average.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct BasisIrradiance([Vec3; 3]);
+struct BasisIrradiance([Vec3; RNM_LOBES]);
 
 impl BasisIrradiance {
-    fn from_sums(sum: &[DVec3; 3], weight: f64) -> Self {
+    fn from_sums(sum: &[DVec3; RNM_LOBES], weight: f64) -> Self {
         BasisIrradiance(sum.map(|s| (s * weight).as_vec3()))
     }
 }

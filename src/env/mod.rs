@@ -252,10 +252,14 @@ pub fn resolve(name_or_path: &str) -> Result<EnvMap, EnvError> {
     if name_or_path == BUILTIN_SKY {
         Ok(sky::sky(BUILTIN_SKY_WIDTH, &sky::SkyParams::default()))
     } else if let Some(degrees) = name_or_path.strip_prefix("sky:") {
-        let elevation: f64 = degrees.parse().ok().filter(|e: &f64| (1.0..=90.0).contains(e)).ok_or_else(|| EnvError::Format {
-            path: PathBuf::from(name_or_path),
-            detail: "sky:DEG takes a sun elevation in degrees, 1 to 90".into(),
-        })?;
+        let elevation: f64 = degrees
+            .parse()
+            .ok()
+            .filter(|e: &f64| (1.0..=90.0).contains(e))
+            .ok_or_else(|| EnvError::Format {
+                path: PathBuf::from(name_or_path),
+                detail: "sky:DEG takes a sun elevation in degrees, 1 to 90".into(),
+            })?;
         Ok(sky::sky(
             BUILTIN_SKY_WIDTH,
             &sky::SkyParams::with_sun_elevation(elevation),
@@ -291,6 +295,24 @@ mod tests {
         // +Z sits on the seam: u = 0 or 1.
         let u = EnvMap::dir_to_uv(DVec3::Z).x;
         assert!(u.abs() < ROUND_TRIP || (u - 1.0).abs() < ROUND_TRIP, "{u}");
+    }
+
+    #[test]
+    fn sky_takes_a_sun_elevation() {
+        let low = resolve("sky:15").expect("sky:15");
+        let brightest = low
+            .texels
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1[1].total_cmp(&b.1[1]))
+            .map(|(i, _)| i)
+            .unwrap();
+        let row = brightest / low.width as usize;
+        let elevation = 90.0 - (row as f64 + 0.5) / low.height as f64 * 180.0;
+        assert!((elevation - 15.0).abs() < 1.0, "{elevation}");
+        for bad in ["sky:", "sky:0", "sky:91", "sky:x", "sky:NaN"] {
+            assert!(resolve(bad).is_err(), "{bad}");
+        }
     }
 
     #[test]

@@ -91,7 +91,10 @@ pub fn displace(scene: &Scene) -> Result<Scene, DisplaceError> {
             triangles: estimate,
         });
     }
-    let mut mesh = super::subdivide::subdivide(&scene.mesh, (scale * std::f64::consts::SQRT_2 * 1.0001) as f32);
+    let mut mesh = super::subdivide::subdivide(
+        &scene.mesh,
+        (scale * std::f64::consts::SQRT_2 * 1.0001) as f32,
+    );
     if mesh.triangle_count() > MAX_DISPLACED_TRIANGLES {
         return Err(DisplaceError::TooLarge {
             scene: scene.name.clone(),
@@ -158,7 +161,10 @@ mod tests {
             assert!(off > -1e-5 && off < top as f32 + 1e-5, "{p}");
             raised += usize::from(off > 0.5 * top as f32);
         }
-        assert!(raised > displaced.mesh.vertices.len() / 2, "most texels are brick faces");
+        assert!(
+            raised > displaced.mesh.vertices.len() / 2,
+            "most texels are brick faces"
+        );
         match displace(&crate::scene::house::build(512).unwrap()) {
             Err(DisplaceError::TooLarge { .. }) => {}
             other => panic!("the house displaced: {:?}", other.map(|s| s.name)),

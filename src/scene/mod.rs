@@ -9,8 +9,8 @@
 pub mod displace;
 pub mod gltf;
 pub mod house;
-pub mod patio;
 pub mod lightmap_uv;
+pub mod patio;
 pub mod subdivide;
 pub mod tangent;
 

@@ -113,7 +113,10 @@ mod tests {
                 .project_to_pixel(p, 640, 400)
                 .expect("in front of the camera");
             // Every corner projects into (or just beside) the frame.
-            assert!((-80.0..720.0).contains(&x) && (-80.0..480.0).contains(&y), "{p} → {x},{y}");
+            assert!(
+                (-80.0..720.0).contains(&x) && (-80.0..480.0).contains(&y),
+                "{p} → {x},{y}"
+            );
         }
     }
 }

@@ -148,7 +148,9 @@ pub fn run_env(
             let frame = built.render(&scene_gpu, 1, 1)?;
             let (light_model, pick) = match technique.reference() {
                 ReferenceModel::Direct => ("direct", direct_frame as fn(&ReferenceImage) -> &Frame),
-                ReferenceModel::InterReflected => ("bounced", bounced_frame as fn(&ReferenceImage) -> &Frame),
+                ReferenceModel::InterReflected => {
+                    ("bounced", bounced_frame as fn(&ReferenceImage) -> &Frame)
+                }
             };
             let error = |reference: &ReferenceImage| {
                 image_error(&frame, pick(reference))
@@ -173,8 +175,8 @@ pub fn run_env(
     }
     let mut figure_frames: Vec<&Frame> = panels.iter().flatten().collect();
     figure_frames.push(bounced_frame(&displaced));
-    let figure = (figure_frames.len() == FIGURE_TECHNIQUES.len() + 1)
-        .then(|| side_by_side(&figure_frames));
+    let figure =
+        (figure_frames.len() == FIGURE_TECHNIQUES.len() + 1).then(|| side_by_side(&figure_frames));
     Ok(EnvResult {
         env: env.to_string(),
         rows,
@@ -223,7 +225,9 @@ pub fn env_stem(env: &str) -> String {
     let stem = Path::new(env)
         .file_stem()
         .map_or(env.to_string(), |s| s.to_string_lossy().into_owned());
-    stem.chars().filter(|c| c.is_ascii_alphanumeric() || *c == '_').collect()
+    stem.chars()
+        .filter(|c| c.is_ascii_alphanumeric() || *c == '_')
+        .collect()
 }
 
 /// Writes `rnm.md`, `rnm.json` and the Fig. 1 composites into `dir`; returns the paths.
@@ -266,7 +270,8 @@ pub fn write_report(
             crate::report::image::write_frame(&path, fig, exposure_ev)?;
             md.push_str(&format!(
                 "\n![rnm · rnmao · ssbump · displaced reference]({})\n",
-                path.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+                path.file_name()
+                    .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
             ));
             written.push(path);
         }

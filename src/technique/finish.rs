@@ -187,7 +187,9 @@ pub fn finish(
     }
     let mut images = per_texel.images;
     images.extend(material.into_iter().flat_map(|s| s.images));
-    Ok(TechniqueGpu::new(ctx, technique, path, stats, images, built))
+    Ok(TechniqueGpu::new(
+        ctx, technique, path, stats, images, built,
+    ))
 }
 
 /// `technique`'s fragment shader ([`super::fragment_shader`]) compiled for `path`.

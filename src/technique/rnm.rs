@@ -186,6 +186,9 @@ mod tests {
         let sizes: Vec<(u32, u32)> = levels.iter().map(|(w, h, _)| (*w, *h)).collect();
         assert_eq!(sizes, vec![(8, 4), (4, 2), (2, 1), (1, 1)]);
         let last = levels.last().unwrap().2[0];
-        assert!((last[0] - 15.5).abs() < 1e-5 && last[1] == 1.0 && last[3] == 0.5, "{last:?}");
+        assert!(
+            (last[0] - 15.5).abs() < 1e-5 && last[1] == 1.0 && last[3] == 0.5,
+            "{last:?}"
+        );
     }
 }
