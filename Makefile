@@ -15,8 +15,14 @@ build: deps
 test: deps
 	cargo test --locked -- --test-threads=$(TEST_THREADS)
 
+# The overcast probe of the rnm study, when the shared assets are present.
+OVERCAST ?= ../shared/assets/env/potsdamer_platz_1k.exr
+RNM_ENVS = sky:15$(if $(wildcard $(OVERCAST)),$(comma)$(OVERCAST))
+comma := ,
+
 bench: build
 	target/release/shvis bench --out $(BENCH_OUT)
+	target/release/shvis study rnm --envs $(RNM_ENVS) --out $(BENCH_OUT)/rnm
 
 clean:
 	cargo clean
