@@ -234,3 +234,44 @@ fn ssbump_bad_height_map_and_scale() {
     );
     assert_one_error_line(&out, &["--scale"]);
 }
+
+#[test]
+fn height_maps_displacement_and_sun_elevation() {
+    let dir = scratch("height");
+    let out_png = dir.join("x.png");
+    let out_png = out_png.to_str().unwrap();
+    let mut args = render_args("sky", out_png);
+    args[2] = "ssbump";
+    args.extend(["--height-map", "/no/such/height.png", "--height-scale", "4"]);
+    let out = shvis(&args, &[]);
+    assert_one_error_line(&out, &["/no/such/height.png", "cannot read the height map"]);
+    // A scale without a map is a usage error; a map with a zero scale is refused.
+    let mut args = render_args("sky", out_png);
+    args.extend(["--height-scale", "4"]);
+    let out = shvis(&args, &[]);
+    assert!(!out.status.success());
+    let mut args = render_args("sky", out_png);
+    args.extend(["--height-map", "/no/such/height.png", "--height-scale", "0"]);
+    assert_one_error_line(&shvis(&args, &[]), &["height scale 0"]);
+    // The house is far too large to displace at one vertex per height texel.
+    let out = shvis(
+        &[
+            "reference",
+            "--scene",
+            "house",
+            "--displaced",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--out",
+            out_png,
+        ],
+        &[],
+    );
+    assert_one_error_line(&out, &["house", "triangles", "patio"]);
+    for env in ["sky:0", "sky:high"] {
+        let out = shvis(&render_args(env, out_png), &[]);
+        assert_one_error_line(&out, &[env, "sun elevation"]);
+    }
+}

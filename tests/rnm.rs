@@ -9,7 +9,7 @@ mod common;
 use glam::{DVec3, Vec3};
 use shvis::bake::raster::rasterize;
 use shvis::bake::shlmap::{ShLightmap, ShLightmapSettings, bake_sh_lightmap};
-use shvis::bake::ssbump::SsBumpMaps;
+use shvis::bake::ssbump::{SsBumpMaps, SsBumpStorage};
 use shvis::bake::trace::Tracer;
 use shvis::env::EnvMap;
 use shvis::render::{FrameSettings, SceneGpu};
@@ -133,7 +133,12 @@ fn listing_2_with_the_unoccluded_d_encoding_equals_listing_1_per_pixel() {
     for tilt in [[170u8, 110, 230, 255], [90, 160, 235, 255]] {
         let mut scene = prepared.scene.clone();
         scene.material.normal = texture(tilt);
-        let maps = SsBumpMaps::unoccluded(&scene.material.normal, scene.material.normal_scale);
+        let maps = SsBumpMaps {
+            // f16 storage: the comparison is of the shader's arithmetic, not of the
+            // techniques' 8-bit texture.
+            storage: SsBumpStorage::Float16,
+            ..SsBumpMaps::unoccluded(&scene.material.normal, scene.material.normal_scale)
+        };
         let inputs = technique::Inputs {
             ssbump: Some(&maps),
             ..prepared.inputs()

@@ -227,6 +227,18 @@ pub struct SsBumpMaps {
     pub width: u32,
     pub height: u32,
     pub texels: Vec<[f32; 4]>,
+    /// How the GPU stores the texels.
+    pub storage: SsBumpStorage,
+}
+
+/// Texel format of the SSBump / AO texture on the GPU.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SsBumpStorage {
+    /// RGBA8 UNORM, 4 bytes per texel: what Valve ships (and the normal map's format), the
+    /// techniques' default.
+    Unorm8,
+    /// RGBA16F, 8 bytes per texel: to check the shader against Listing 1 at f16 precision.
+    Float16,
 }
 
 impl SsBumpMaps {
@@ -242,6 +254,7 @@ impl SsBumpMaps {
                 .zip(&occ.ao)
                 .map(|(d, &ao)| [d[0] as f32, d[1] as f32, d[2] as f32, ao as f32])
                 .collect(),
+            storage: SsBumpStorage::Unorm8,
         }
     }
 
@@ -263,6 +276,7 @@ impl SsBumpMaps {
                     [d[0] as f32, d[1] as f32, d[2] as f32, 1.0]
                 })
                 .collect(),
+            storage: SsBumpStorage::Unorm8,
         }
     }
 }

@@ -239,3 +239,32 @@ pub fn load_height_map(
     }
     Ok(crate::bake::ssbump::HeightField { width, height, h })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn height_maps_read_as_luminance_times_scale_and_bad_ones_are_refused() {
+        let dir = std::env::temp_dir().join(format!("shvis-height-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("ramp.png");
+        // A 16-bit ramp 0, ⅓, ⅔, 1 along x.
+        let data: Vec<u16> = (0..8).map(|i| (i % 4) * 21845).collect();
+        image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(4, 2, data)
+            .unwrap()
+            .save(&path)
+            .unwrap();
+        let field = load_height_map(&path, 6.0).unwrap();
+        assert_eq!((field.width, field.height), (4, 2));
+        for (i, h) in field.h.iter().enumerate() {
+            let want = 2.0 * (i % 4) as f64;
+            assert!((h - want).abs() < 1e-4, "texel {i}: {h}, want {want}");
+        }
+        for scale in [0.0, -1.0, f64::NAN] {
+            assert!(load_height_map(&path, scale).is_err(), "scale {scale}");
+        }
+        let e = load_height_map(&dir.join("missing.png"), 1.0).unwrap_err();
+        assert!(e.to_string().contains("missing.png"), "{e}");
+    }
+}

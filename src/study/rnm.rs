@@ -166,10 +166,10 @@ pub fn run_env(
                 vs_flat: error(&flat)?,
             });
             let name = technique.name();
-            if let Some(k) = FIGURE_TECHNIQUES.iter().position(|&t| t == name) {
-                if panels[k].is_none() || path == HwPath::Dx10 {
-                    panels[k] = Some(frame);
-                }
+            if let Some(k) = FIGURE_TECHNIQUES.iter().position(|&t| t == name)
+                && (panels[k].is_none() || path == HwPath::Dx10)
+            {
+                panels[k] = Some(frame);
             }
         }
     }

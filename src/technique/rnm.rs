@@ -14,9 +14,10 @@
 //! ```
 //!
 //! N is the normal map's tangent-space normal. `ssbump` does not read the normal map at
-//! all: its texel replaces it. The SSBump / AO texture (RGB SSBump, A AO; RGBA16F with a box
-//! MIP chain, 8 bytes per height texel) lives in material space, sampled like the normal
-//! map; like albedo and normal map it counts in textures and lookups, not in the lightmap
+//! all: its texel replaces it. The SSBump / AO texture (RGB SSBump, A AO, with a box MIP
+//! chain; RGBA8 UNORM as Valve ships it and as the normal map is stored, 4 bytes per height
+//! texel — RGBA16F only to test the shader at f16 precision) lives in material space,
+//! sampled like the normal map; like albedo and normal map it counts in textures and lookups, not in the lightmap
 //! bytes. Per lightmap texel: the three lightmaps as three RGBA16F groups (the alpha
 //! unused: dx9's three lightmap textures, dx10's 3-layer array), 24 bytes, range-scaled into
 //! f16 as `shlmap`'s values are.
@@ -31,7 +32,7 @@ use super::spec::RnmVariant;
 use super::tables::{f16_range_scale, max_abs};
 use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
 use super::{Inputs, ShaderVariant, TechniqueError};
-use crate::bake::ssbump::SsBumpMaps;
+use crate::bake::ssbump::{SsBumpMaps, SsBumpStorage};
 use crate::gpu::{Context, Image, ImageDesc};
 
 /// Lightmaps per texel (one RGBA group each).
@@ -131,24 +132,39 @@ pub(crate) fn material_texture(
     Ok(Some(upload_maps(ctx, maps, &format!("{label}.ssbump_ao"))?))
 }
 
-/// RGBA16F image of `maps` with its box-filtered MIP chain.
+/// The image of `maps` in its storage format with its box-filtered MIP chain.
 fn upload_maps(ctx: &Arc<Context>, maps: &SsBumpMaps, name: &str) -> Result<Image, TechniqueError> {
     let levels = mip_chain(maps);
-    let bytes: Vec<Vec<u16>> = levels
-        .iter()
-        .map(|(_, _, texels)| {
-            texels
+    let (format, bytes): (vk::Format, Vec<Vec<u8>>) = match maps.storage {
+        SsBumpStorage::Unorm8 => (
+            vk::Format::R8G8B8A8_UNORM,
+            levels
                 .iter()
-                .flat_map(|t| t.map(|v| f16::from_f32(v).to_bits()))
-                .collect()
-        })
-        .collect();
-    let level_bytes: Vec<Vec<&[u8]>> = bytes
-        .iter()
-        .map(|b| vec![bytemuck::cast_slice::<u16, u8>(b)])
-        .collect();
-    let desc = ImageDesc::texture_2d(vk::Format::R16G16B16A16_SFLOAT, maps.width, maps.height)
-        .mip_levels(levels.len() as u32);
+                .map(|(_, _, texels)| {
+                    texels
+                        .iter()
+                        .flat_map(|t| t.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
+                        .collect()
+                })
+                .collect(),
+        ),
+        SsBumpStorage::Float16 => (
+            vk::Format::R16G16B16A16_SFLOAT,
+            levels
+                .iter()
+                .map(|(_, _, texels)| {
+                    texels
+                        .iter()
+                        .flat_map(|t| t.map(|v| f16::from_f32(v).to_bits()))
+                        .flat_map(u16::to_le_bytes)
+                        .collect()
+                })
+                .collect(),
+        ),
+    };
+    let level_bytes: Vec<Vec<&[u8]>> = bytes.iter().map(|b| vec![b.as_slice()]).collect();
+    let desc =
+        ImageDesc::texture_2d(format, maps.width, maps.height).mip_levels(levels.len() as u32);
     Ok(Image::with_data(ctx, &desc, &level_bytes, name)?)
 }
 
@@ -181,6 +197,7 @@ mod tests {
             width: 8,
             height: 4,
             texels: (0..32).map(|i| [i as f32, 1.0, 0.0, 0.5]).collect(),
+            storage: SsBumpStorage::Float16,
         };
         let levels = mip_chain(&maps);
         let sizes: Vec<(u32, u32)> = levels.iter().map(|(w, h, _)| (*w, *h)).collect();
