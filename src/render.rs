@@ -315,7 +315,8 @@ fn upload_texture8(
     Image::with_data(ctx, &desc, &level_bytes, name)
 }
 
-/// Level 0 = `tex`; each next level halves each side (at least 1) with a 2×2 box filter.
+/// Level 0 = `tex`; each next level halves each side (at least 1) with a 2×2 box filter
+/// ([`box_mip_levels`]) in linear light (`srgb`: the colour channels are sRGB-encoded).
 pub fn mip_chain(tex: &Texture8, srgb: bool) -> Vec<Texture8> {
     let to_linear = |c: u8| {
         let c = c as f32 / 255.0;
@@ -337,35 +338,68 @@ pub fn mip_chain(tex: &Texture8, srgb: bool) -> Vec<Texture8> {
         };
         (c * 255.0).round().clamp(0.0, 255.0) as u8
     };
-    let mut levels = vec![tex.clone()];
-    while let Some(prev) = levels.last().filter(|l| l.width > 1 || l.height > 1) {
-        let (w, h) = ((prev.width / 2).max(1), (prev.height / 2).max(1));
-        let mut texels = Vec::with_capacity((w * h) as usize);
+    let linear = tex
+        .texels
+        .iter()
+        .map(|t| {
+            [
+                to_linear(t[0]),
+                to_linear(t[1]),
+                to_linear(t[2]),
+                f32::from(t[3]) / 255.0,
+            ]
+        })
+        .collect();
+    let levels = box_mip_levels(tex.width, tex.height, linear);
+    std::iter::once(tex.clone())
+        .chain(levels.into_iter().skip(1).map(|(width, height, texels)| {
+            Texture8 {
+                width,
+                height,
+                texels: texels
+                    .iter()
+                    .map(|t| {
+                        [
+                            from_linear(t[0]),
+                            from_linear(t[1]),
+                            from_linear(t[2]),
+                            (t[3] * 255.0).round().clamp(0.0, 255.0) as u8,
+                        ]
+                    })
+                    .collect(),
+            }
+        }))
+        .collect()
+}
+
+/// MIP levels (width, height, texels) of `width` × `height` RGBA texels (row-major): level
+/// 0 = `texels`, each next halves each side (at least 1) with a 2×2 box filter, clamped at
+/// odd edges. The material textures' chains ([`mip_chain`]) and the SSBump's.
+pub fn box_mip_levels(
+    width: u32,
+    height: u32,
+    texels: Vec<[f32; 4]>,
+) -> Vec<(u32, u32, Vec<[f32; 4]>)> {
+    let mut levels = vec![(width, height, texels)];
+    while let Some((pw, ph, prev)) = levels.last().filter(|(w, h, _)| *w > 1 || *h > 1) {
+        let (pw, ph) = (*pw, *ph);
+        let (w, h) = ((pw / 2).max(1), (ph / 2).max(1));
+        let mut next = Vec::with_capacity((w * h) as usize);
         for y in 0..h {
             for x in 0..w {
                 let mut sum = [0.0f32; 4];
                 for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                    let sx = (2 * x + dx).min(prev.width - 1);
-                    let sy = (2 * y + dy).min(prev.height - 1);
-                    let t = prev.texels[(sy * prev.width + sx) as usize];
-                    for c in 0..3 {
-                        sum[c] += to_linear(t[c]);
+                    let sx = (2 * x + dx).min(pw - 1);
+                    let sy = (2 * y + dy).min(ph - 1);
+                    let t = prev[(sy * pw + sx) as usize];
+                    for c in 0..4 {
+                        sum[c] += t[c];
                     }
-                    sum[3] += t[3] as f32 / 255.0;
                 }
-                texels.push([
-                    from_linear(sum[0] / 4.0),
-                    from_linear(sum[1] / 4.0),
-                    from_linear(sum[2] / 4.0),
-                    (sum[3] / 4.0 * 255.0).round() as u8,
-                ]);
+                next.push(sum.map(|v| v / 4.0));
             }
         }
-        levels.push(Texture8 {
-            width: w,
-            height: h,
-            texels,
-        });
+        levels.push((w, h, next));
     }
     levels
 }
@@ -417,6 +451,18 @@ mod tests {
         // 1×1: the whole texture's mean.
         let mean_r = (0..8).map(|x| x * 30).sum::<u32>() as f32 / 8.0;
         assert!((levels[3].texels[0][0] as f32 - mean_r).abs() <= 1.0);
+    }
+
+    #[test]
+    fn box_mip_levels_halve_to_one_texel_and_keep_the_mean() {
+        let levels = box_mip_levels(8, 4, (0..32).map(|i| [i as f32, 1.0, 0.0, 0.5]).collect());
+        let sizes: Vec<(u32, u32)> = levels.iter().map(|(w, h, _)| (*w, *h)).collect();
+        assert_eq!(sizes, vec![(8, 4), (4, 2), (2, 1), (1, 1)]);
+        let last = levels.last().unwrap().2[0];
+        assert!(
+            (last[0] - 15.5).abs() < 1e-5 && last[1] == 1.0 && last[3] == 0.5,
+            "{last:?}"
+        );
     }
 
     #[test]

@@ -59,16 +59,13 @@ vec3 shading_normal() {
     vec3 n = normalize(in_normal_world);
     vec3 t = in_tangent_world.xyz - n * dot(n, in_tangent_world.xyz);
     float t_len = length(t);
-    if (t_len < 1e-6 || frame.normal_scale == 0.0) {
+    if (t_len < 1e-6) {
         return n;
     }
     t /= t_len;
     vec3 b = cross(n, t) * in_tangent_world.w;
-    vec3 m = SAMPLE_MATERIAL(normal_tex, in_uv_material).xyz * 2.0 - 1.0;
-    m.xy *= frame.normal_scale;
-    vec3 w = t * m.x + b * m.y + n * m.z;
-    float w_len = length(w);
-    return w_len > 1e-6 ? w / w_len : n;
+    vec3 m = tangent_space_normal();
+    return normalize(t * m.x + b * m.y + n * m.z);
 }
 #endif
 

@@ -134,7 +134,7 @@ pub(crate) fn material_texture(
 
 /// The image of `maps` in its storage format with its box-filtered MIP chain.
 fn upload_maps(ctx: &Arc<Context>, maps: &SsBumpMaps, name: &str) -> Result<Image, TechniqueError> {
-    let levels = mip_chain(maps);
+    let levels = crate::render::box_mip_levels(maps.width, maps.height, maps.texels.clone());
     let (format, bytes): (vk::Format, Vec<Vec<u8>>) = match maps.storage {
         SsBumpStorage::Unorm8 => (
             vk::Format::R8G8B8A8_UNORM,
@@ -166,46 +166,4 @@ fn upload_maps(ctx: &Arc<Context>, maps: &SsBumpMaps, name: &str) -> Result<Imag
     let desc =
         ImageDesc::texture_2d(format, maps.width, maps.height).mip_levels(levels.len() as u32);
     Ok(Image::with_data(ctx, &desc, &level_bytes, name)?)
-}
-
-/// Level 0 = the maps; each next level halves each side (at least 1) with a 2×2 box.
-fn mip_chain(maps: &SsBumpMaps) -> Vec<(u32, u32, Vec<[f32; 4]>)> {
-    let mut levels = vec![(maps.width, maps.height, maps.texels.clone())];
-    while let Some((w, h, prev)) = levels.last().filter(|(w, h, _)| *w > 1 || *h > 1) {
-        let (pw, ph) = (*w as usize, *h as usize);
-        let (nw, nh) = ((pw / 2).max(1), (ph / 2).max(1));
-        let mut next = vec![[0.0f32; 4]; nw * nh];
-        for (y, row) in next.chunks_mut(nw).enumerate() {
-            for (x, out) in row.iter_mut().enumerate() {
-                let taps = [(0, 0), (1, 0), (0, 1), (1, 1)]
-                    .map(|(dx, dy)| prev[(2 * y + dy).min(ph - 1) * pw + (2 * x + dx).min(pw - 1)]);
-                *out = std::array::from_fn(|c| 0.25 * taps.iter().map(|t| t[c]).sum::<f32>());
-            }
-        }
-        levels.push((nw as u32, nh as u32, next));
-    }
-    levels
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn mip_chain_halves_to_one_texel_and_keeps_the_mean() {
-        let maps = SsBumpMaps {
-            width: 8,
-            height: 4,
-            texels: (0..32).map(|i| [i as f32, 1.0, 0.0, 0.5]).collect(),
-            storage: SsBumpStorage::Float16,
-        };
-        let levels = mip_chain(&maps);
-        let sizes: Vec<(u32, u32)> = levels.iter().map(|(w, h, _)| (*w, *h)).collect();
-        assert_eq!(sizes, vec![(8, 4), (4, 2), (2, 1), (1, 1)]);
-        let last = levels.last().unwrap().2[0];
-        assert!(
-            (last[0] - 15.5).abs() < 1e-5 && last[1] == 1.0 && last[3] == 0.5,
-            "{last:?}"
-        );
-    }
 }
