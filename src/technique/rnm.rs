@@ -27,7 +27,7 @@ use std::sync::Arc;
 use ash::vk;
 use half::f16;
 
-use super::lighting::{LightingData, Recipe};
+use super::lighting::Recipe;
 use super::spec::RnmVariant;
 use super::tables::{f16_range_scale, max_abs};
 use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
@@ -37,14 +37,6 @@ use crate::gpu::{Context, Image, ImageDesc};
 
 /// Lightmaps per texel (one RGBA group each).
 pub const RNM_LIGHTMAPS: usize = 3;
-
-/// Uniforms of glsl/technique/rnm.frag, block `RnmParams` (std140).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct RnmParams {
-    /// x: factor undoing the f16 range scaling.
-    pub unscale: [f32; 4],
-}
 
 /// The fragment shader of a variant.
 pub fn fragment_shader(variant: RnmVariant) -> ShaderVariant {
@@ -90,18 +82,11 @@ pub(crate) fn prepare(
             _ => f16::from_f32(map.basis_irradiance[t][i][c] * scale),
         }
     });
-    let texels = TexelGroups::new(
-        vk::Format::R16G16B16A16_SFLOAT,
-        map.res,
+    Ok(super::shlmap::baked_lightmap(
         &groups,
+        map.res,
         format!("{label}.lightmaps"),
-    );
-    let params = RnmParams {
-        unscale: [1.0 / scale, 0.0, 0.0, 0.0],
-    };
-    Ok((
-        texels,
-        Recipe::Baked(LightingData::params(bytemuck::bytes_of(&params).to_vec())),
+        scale,
     ))
 }
 

@@ -25,7 +25,8 @@ use crate::bake::shlmap::{SH_LIGHTMAP_COEFFS, ShLightmap};
 /// RGBA groups per texel: ⌈27 / 4⌉.
 pub const SHLMAP_GROUPS: usize = (3 * SH_LIGHTMAP_COEFFS).div_ceil(VALUES_PER_TEXEL);
 
-/// Uniforms of glsl/technique/shlmap.frag, block `ShLightmapParams` (std140).
+/// Uniforms of glsl/technique/shlmap.frag, block `ShLightmapParams` (std140), and of
+/// glsl/technique/rnm.frag's `RnmParams` (the same layout).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ShLightmapParams {
@@ -69,17 +70,28 @@ pub(crate) fn prepare(
     let groups = pack_groups(texels, 3 * SH_LIGHTMAP_COEFFS, |t, value| {
         f16::from_f32(map.texel(t)[value / 3][value % 3] * scale)
     });
-    let texels = TexelGroups::new(
-        vk::Format::R16G16B16A16_SFLOAT,
-        map.res,
+    Ok(baked_lightmap(
         &groups,
+        map.res,
         format!("{label}.radiance_sh"),
-    );
+        scale,
+    ))
+}
+
+/// Lightmap groups stored in f16 after multiplying by `scale`, and the recipe of their
+/// baked-in lighting: the [`ShLightmapParams`] block undoing the scale (`shlmap`, `rnm`).
+pub(crate) fn baked_lightmap(
+    groups: &[Vec<f16>],
+    res: u32,
+    name: String,
+    scale: f32,
+) -> (TexelGroups, Recipe) {
+    let texels = TexelGroups::new(vk::Format::R16G16B16A16_SFLOAT, res, groups, name);
     let params = ShLightmapParams {
         unscale: [1.0 / scale, 0.0, 0.0, 0.0],
     };
-    Ok((
+    (
         texels,
         Recipe::Baked(LightingData::params(bytemuck::bytes_of(&params).to_vec())),
-    ))
+    )
 }
