@@ -13,17 +13,9 @@ use shvis::bake::ssbump::{SsBumpMaps, SsBumpStorage};
 use shvis::bake::trace::Tracer;
 use shvis::env::EnvMap;
 use shvis::render::{FrameSettings, SceneGpu};
-use shvis::scene::{Camera, Material, Mesh, Scene, Texture8, Vertex, lightmap_uv};
+use shvis::scene::{Camera, Material, Mesh, Scene, Vertex, lightmap_uv};
 use shvis::sh::Order;
 use shvis::technique::{self, HwPath, RnmVariant, Technique};
-
-fn texture(texel: [u8; 4]) -> Texture8 {
-    Texture8 {
-        width: 1,
-        height: 1,
-        texels: vec![texel],
-    }
-}
 
 /// A 4 m square floor facing +Y, tangent +X (so B₀ leans to +X, B₁ to −Z, B₂ to +Z).
 fn plane() -> Scene {
@@ -48,8 +40,8 @@ fn plane() -> Scene {
         name: "plane".into(),
         mesh,
         material: Material {
-            albedo: texture([255; 4]),
-            normal: texture([128, 128, 255, 255]),
+            albedo: common::solid_texture([255; 4]),
+            normal: common::solid_texture([128, 128, 255, 255]),
             normal_scale: 0.0,
             height: None,
         },
@@ -132,7 +124,7 @@ fn listing_2_with_the_unoccluded_d_encoding_equals_listing_1_per_pixel() {
     // colour convention of the CPU encoding and the shader.
     for tilt in [[170u8, 110, 230, 255], [90, 160, 235, 255]] {
         let mut scene = prepared.scene.clone();
-        scene.material.normal = texture(tilt);
+        scene.material.normal = common::solid_texture(tilt);
         let maps = SsBumpMaps {
             // f16 storage: the comparison is of the shader's arithmetic, not of the
             // techniques' 8-bit texture.

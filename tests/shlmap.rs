@@ -11,7 +11,7 @@ use shvis::bake::shlmap::{ShLightmap, ShLightmapSettings, bake_sh_lightmap};
 use shvis::bake::trace::Tracer;
 use shvis::env::EnvMap;
 use shvis::report::metrics::image_error;
-use shvis::scene::{Camera, Material, Mesh, Scene, Texture8, Vertex, lightmap_uv};
+use shvis::scene::{Camera, Material, Mesh, Scene, Vertex, lightmap_uv};
 use shvis::sh::Order;
 use shvis::technique::{HwPath, Technique};
 
@@ -79,11 +79,7 @@ fn wall_scene(res: u32) -> Scene {
         w,
     );
     lightmap_uv::generate(&mut mesh, res).expect("charts fit");
-    let texture = |texel| Texture8 {
-        width: 1,
-        height: 1,
-        texels: vec![texel],
-    };
+    let texture = common::solid_texture;
     Scene {
         name: "wall".into(),
         mesh,

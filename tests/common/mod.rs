@@ -8,7 +8,7 @@ use glam::Vec3;
 use shvis::gpu::{Context, ContextDesc};
 use shvis::prepare::{PrepareSettings, Prepared, prepare};
 use shvis::render::{Frame, FrameSettings, SceneGpu};
-use shvis::scene::{Mesh, Vertex};
+use shvis::scene::{Mesh, Texture8, Vertex};
 use shvis::technique::{self, HwPath, Technique};
 
 /// Lightmap resolution of test bakes: small, yet a texel is ~10 cm on the house.
@@ -136,3 +136,12 @@ pub fn quad(m: &mut Mesh, p: [Vec3; 4], uv: [[f32; 2]; 4]) {
 pub const FULL_UV: [[f32; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
 /// Lightmap corners of a quad that is not baked (zero UV area).
 pub const NO_UV: [[f32; 2]; 4] = [[0.0; 2]; 4];
+
+/// A 1×1 RGBA8 texture: a constant albedo or normal map.
+pub fn solid_texture(texel: [u8; 4]) -> Texture8 {
+    Texture8 {
+        width: 1,
+        height: 1,
+        texels: vec![texel],
+    }
+}
