@@ -132,6 +132,14 @@ pub struct Hit {
     pub v: f32,
 }
 
+/// `dir` with −0.0 components made +0.0 (x + 0.0 = +0.0 for x = ±0.0). obvhs picks a
+/// node's near slab by `dir < 0` but scales by `safe_inverse(dir)`, which keeps the sign
+/// of a zero: for a −0.0 component the two disagree and the ray misses every node it
+/// meets flat on (a ray straight down, −n of an up-facing normal, onto a floor).
+fn canonical_direction(dir: Vec3) -> Vec3A {
+    Vec3A::from(dir) + Vec3A::ZERO
+}
+
 impl Tracer {
     /// Builds the BVH over the mesh's triangles (see the module doc for what is skipped).
     pub fn new(mesh: &Mesh) -> Tracer {
@@ -230,7 +238,12 @@ impl Tracer {
         let Some(bvh) = &self.bvh else {
             return false;
         };
-        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), self.t_min(), t_max);
+        let ray = Ray::new(
+            Vec3A::from(origin),
+            canonical_direction(dir),
+            self.t_min(),
+            t_max,
+        );
         !bvh.ray_traverse_miss(ray, |ray, id| self.triangles[id].intersect(ray))
     }
 
@@ -240,7 +253,7 @@ impl Tracer {
         let bvh = self.bvh.as_ref()?;
         let ray = Ray::new(
             Vec3A::from(origin),
-            Vec3A::from(dir),
+            canonical_direction(dir),
             self.t_min(),
             f32::INFINITY,
         );
@@ -290,7 +303,7 @@ impl Tracer {
             return 0;
         }
         let t_min = self.t_min();
-        let d = Vec3A::from(dir);
+        let d = canonical_direction(dir);
         // As Ray::new computes it.
         let inv = Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
         let (rdx, rdy, rdz) = (d.x < 0.0, d.y < 0.0, d.z < 0.0);
@@ -430,6 +443,37 @@ mod tests {
             }
         }
         m
+    }
+
+    #[test]
+    fn closest_hit_finds_an_axis_aligned_floor_straight_below() {
+        let floor = mesh(&[
+            [
+                Vec3::new(-1.0, -1.0, 0.0),
+                Vec3::new(1.0, -1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+            ],
+            [
+                Vec3::new(-1.0, -1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(-1.0, 1.0, 0.0),
+            ],
+        ]);
+        let tracer = Tracer::new(&floor);
+        for origin in [
+            Vec3::new(-0.5, 0.0, 0.05),
+            Vec3::new(0.5, 0.3, 0.05),
+            Vec3::new(0.2, -0.7, -0.3),
+        ] {
+            let dir = if origin.z > 0.0 { -Vec3::Z } else { Vec3::Z };
+            let hit = tracer.closest_hit(origin, dir).expect("the floor is hit");
+            assert!((hit.t - origin.z.abs()).abs() < 1e-6, "{hit:?}");
+        }
+        assert!(
+            tracer
+                .closest_hit(Vec3::new(1.5, 0.0, 0.05), -Vec3::Z)
+                .is_none()
+        );
     }
 
     #[test]

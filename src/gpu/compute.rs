@@ -97,31 +97,12 @@ impl ComputePipeline {
         }
         let device = self.ctx.device();
         self.ctx.one_shot(&self.name, |cmd| {
+            self.record(cmd, groups, push_constants);
             let to_host = vk::MemoryBarrier::default()
                 .src_access_mask(vk::AccessFlags::SHADER_WRITE)
                 .dst_access_mask(vk::AccessFlags::HOST_READ);
-            // SAFETY: recording; the pipeline, layout and set are owned by `self` and alive
-            // until the waited submission completes.
+            // SAFETY: recording into the command buffer one_shot waits for.
             unsafe {
-                device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
-                device.cmd_bind_descriptor_sets(
-                    cmd,
-                    vk::PipelineBindPoint::COMPUTE,
-                    self.layout,
-                    0,
-                    &[self.descriptors.set],
-                    &[],
-                );
-                if !push_constants.is_empty() {
-                    device.cmd_push_constants(
-                        cmd,
-                        self.layout,
-                        vk::ShaderStageFlags::COMPUTE,
-                        0,
-                        push_constants,
-                    );
-                }
-                device.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
                 device.cmd_pipeline_barrier(
                     cmd,
                     vk::PipelineStageFlags::COMPUTE_SHADER,
@@ -133,6 +114,35 @@ impl ComputePipeline {
                 );
             }
         })
+    }
+
+    /// Records one dispatch into `cmd` (no barrier): for callers that chain several
+    /// passes in one command buffer. `push_constants` must match the declared size.
+    pub(crate) fn record(&self, cmd: vk::CommandBuffer, groups: [u32; 3], push_constants: &[u8]) {
+        let device = self.ctx.device();
+        // SAFETY: `cmd` is recording; the pipeline, layout and set are owned by `self`,
+        // which the caller keeps alive until the submission completes.
+        unsafe {
+            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
+            device.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &[self.descriptors.set],
+                &[],
+            );
+            if !push_constants.is_empty() {
+                device.cmd_push_constants(
+                    cmd,
+                    self.layout,
+                    vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    push_constants,
+                );
+            }
+            device.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
+        }
     }
 }
 

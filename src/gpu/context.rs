@@ -45,6 +45,7 @@ pub struct Context {
     limits: vk::PhysicalDeviceLimits,
     timestamp_valid_bits: u32,
     image_cube_array: bool,
+    multi_draw_indirect: bool,
     messages: std::sync::Arc<MessageCounts>,
 }
 
@@ -170,13 +171,18 @@ impl Context {
         let queue_info = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
             .queue_priorities(&priorities)];
+        let multi_draw_indirect =
+            features.multi_draw_indirect != 0 && features.draw_indirect_first_instance != 0;
         // Cube arrays (dx10 tables) and dynamically uniform indexing of sampler arrays (the
         // dx9 techniques' texture lists) where the device has them; techniques check.
         let enabled_features = vk::PhysicalDeviceFeatures::default()
             .image_cube_array(features.image_cube_array != 0)
             .shader_sampled_image_array_dynamic_indexing(
                 features.shader_sampled_image_array_dynamic_indexing != 0,
-            );
+            )
+            // Normal-map generation draws one indirect command per low triangle.
+            .multi_draw_indirect(multi_draw_indirect)
+            .draw_indirect_first_instance(multi_draw_indirect);
         // VK_KHR_maintenance4 relaxes vertex-output/fragment-input matching, so a pass may
         // read a subset of the shared mesh.vert outputs (the reference's G-buffer passes).
         // SAFETY: a plain query on this instance's physical device.
@@ -278,6 +284,7 @@ impl Context {
             limits: props.limits,
             timestamp_valid_bits: families[queue_family as usize].timestamp_valid_bits,
             image_cube_array: features.image_cube_array != 0,
+            multi_draw_indirect,
             messages,
         };
         ctx.set_name(pool, "shvis.command_pool");
@@ -314,6 +321,11 @@ impl Context {
     pub fn timestamp_valid_bits(&self) -> u32 {
         self.timestamp_valid_bits
     }
+    /// Whether `multiDrawIndirect` and `drawIndirectFirstInstance` are enabled.
+    pub fn supports_multi_draw_indirect(&self) -> bool {
+        self.multi_draw_indirect
+    }
+
     pub fn supports_cube_arrays(&self) -> bool {
         self.image_cube_array
     }

@@ -15,6 +15,7 @@ mod debug;
 mod descriptors;
 pub mod image;
 pub mod layout;
+pub mod normal_bake;
 pub mod pass;
 pub mod shader;
 pub mod target;

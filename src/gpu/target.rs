@@ -184,6 +184,10 @@ impl RenderTarget {
     pub(crate) fn framebuffer(&self) -> vk::Framebuffer {
         self.framebuffer
     }
+    /// The colour image (TRANSFER_SRC_OPTIMAL after each render pass).
+    pub(crate) fn color_image(&self) -> vk::Image {
+        self.color.raw()
+    }
 
     /// Copies the colour image (left in TRANSFER_SRC_OPTIMAL by the render pass) to the
     /// host: linear RGBA f32, row-major, row 0 at the top. Call after at least one frame.

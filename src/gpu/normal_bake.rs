@@ -1,0 +1,695 @@
+//! The Vulkan half of GPU normal-map generation (`crate::normalmap::gpu` prepares the
+//! data; Gumbau et al. §3). One command buffer, three timed phases:
+//!
+//! 1. **mask** — the low mesh drawn in texture space into the RGBA32F target, each texel
+//!    recording its owning triangle (`glsl/normalmap/mask.*`); copied to a storage buffer.
+//!    This is the paper's stencil generalised to all low triangles at once.
+//! 2. **project** — the high mesh drawn once per low triangle T (`project.vert`,
+//!    `normal.frag`): either one `vkCmdDrawIndexedIndirect` holding a command per T, or one
+//!    `vkCmdDrawIndexed` per T under a scissor around T's texels. The depth buffer is
+//!    cleared once: the mask gives every texel to one T, so depths of different Ts never
+//!    meet. Copied to the first half of the expansion buffer.
+//! 3. **expand** — `passes` border-expansion dispatches (`expand.comp`), ping-pong between
+//!    the buffer's halves; the last half is read back.
+//!
+//! Timestamps bracket the phases where the queue has them.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use super::compute::{ComputePipeline, ComputePipelineDesc};
+use super::descriptors::{DescriptorSet, Resource};
+use super::pass::{device_local_buffer, ticks_to_ms};
+use super::shader::{ShaderStage, compile_glsl};
+use super::target::COLOR_FORMAT_F32;
+use super::{Buffer, Context, GpuError, RenderTarget};
+
+/// One low triangle's render of the high mesh.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ProjectionDraw {
+    /// The low triangle (the draw's `firstInstance`, the view index).
+    pub triangle: u32,
+    pub first_index: u32,
+    pub index_count: u32,
+    /// Texels the triangle may write: [x0, y0, x1, y1), for the scissor of direct draws.
+    pub scissor: [u32; 4],
+}
+
+/// Everything one bake needs, as bytes in the shaders' layouts.
+pub struct ProjectionJob<'a> {
+    pub res: u32,
+    /// Low mesh, de-indexed: per corner `vec2 uv` + `uint triangle` (12 bytes).
+    pub mask_vertices: &'a [u8],
+    pub low_triangles: u32,
+    /// High mesh: per vertex `vec3 position` + `vec3 normal` (24 bytes).
+    pub high_vertices: &'a [u8],
+    pub high_indices: &'a [u32],
+    /// Per low triangle two column-major mat4 (view_from_world, clip_from_view).
+    pub views: &'a [u8],
+    pub draws: &'a [ProjectionDraw],
+    /// One multi-draw indirect call (needs `multiDrawIndirect`); else direct draws.
+    pub indirect: bool,
+    pub max_distance: f32,
+    pub mirror: bool,
+    pub expand_passes: u32,
+}
+
+/// GPU time of each phase, ms.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct PhaseMs {
+    pub mask: f64,
+    pub project: f64,
+    pub expand: f64,
+}
+
+/// What [`run`] returns.
+pub struct ProjectionResult {
+    /// res² RGBA texels, row-major (object normal, coverage in w).
+    pub texels: Vec<[f32; 4]>,
+    /// `None` where the queue has no timestamps.
+    pub gpu_ms: Option<PhaseMs>,
+    /// Uploads, shader compiles and pipeline creation, seconds.
+    pub setup_s: f64,
+    /// Submission to completion of the one command buffer plus readback, seconds.
+    pub execute_s: f64,
+}
+
+const MASK_VERTEX_BYTES: u32 = 12;
+const HIGH_VERTEX_BYTES: u32 = 24;
+const INDIRECT_COMMAND_BYTES: u32 = 20;
+const TIMESTAMPS: u32 = 4;
+
+/// Vulkan objects made for one bake, destroyed in Drop (null handles allowed).
+struct Objects {
+    ctx: Arc<Context>,
+    modules: Vec<vk::ShaderModule>,
+    layouts: Vec<vk::PipelineLayout>,
+    pipelines: Vec<vk::Pipeline>,
+    query_pool: vk::QueryPool,
+    cmd: vk::CommandBuffer,
+}
+
+impl Drop for Objects {
+    fn drop(&mut self) {
+        let device = self.ctx.device();
+        // SAFETY: the one submission was waited for (or never made); null handles are
+        // valid to destroy.
+        unsafe {
+            for &p in &self.pipelines {
+                device.destroy_pipeline(p, None);
+            }
+            for &l in &self.layouts {
+                device.destroy_pipeline_layout(l, None);
+            }
+            for &m in &self.modules {
+                device.destroy_shader_module(m, None);
+            }
+            device.destroy_query_pool(self.query_pool, None);
+        }
+        if self.cmd != vk::CommandBuffer::null() {
+            self.ctx.free_command_buffer(self.cmd);
+        }
+    }
+}
+
+impl Objects {
+    fn module(
+        &mut self,
+        path: &str,
+        stage: ShaderStage,
+        name: &str,
+    ) -> Result<vk::ShaderModule, GpuError> {
+        let code = compile_glsl(path, stage, &[])?;
+        let info = vk::ShaderModuleCreateInfo::default().code(&code);
+        // SAFETY: SPIR-V words from shaderc; the handle is stored for Drop at once.
+        let module = unsafe { self.ctx.device().create_shader_module(&info, None) }
+            .map_err(|e| GpuError::vulkan("vkCreateShaderModule", name, e))?;
+        self.modules.push(module);
+        self.ctx.set_name(module, name);
+        Ok(module)
+    }
+
+    fn layout(
+        &mut self,
+        set_layouts: &[vk::DescriptorSetLayout],
+        push: vk::PushConstantRange,
+        name: &str,
+    ) -> Result<vk::PipelineLayout, GpuError> {
+        let ranges = [push];
+        let info = vk::PipelineLayoutCreateInfo::default()
+            .set_layouts(set_layouts)
+            .push_constant_ranges(&ranges);
+        // SAFETY: the create-info borrows locals alive for the call.
+        let layout = unsafe { self.ctx.device().create_pipeline_layout(&info, None) }
+            .map_err(|e| GpuError::vulkan("vkCreatePipelineLayout", name, e))?;
+        self.layouts.push(layout);
+        self.ctx.set_name(layout, name);
+        Ok(layout)
+    }
+
+    /// A triangle-list pipeline into `target` with depth test LESS + write, no culling,
+    /// no blending, dynamic scissor.
+    #[allow(clippy::too_many_arguments)]
+    fn pipeline(
+        &mut self,
+        target: &RenderTarget,
+        layout: vk::PipelineLayout,
+        vertex: vk::ShaderModule,
+        fragment: vk::ShaderModule,
+        stride: u32,
+        attributes: &[(u32, vk::Format, u32)],
+        name: &str,
+    ) -> Result<vk::Pipeline, GpuError> {
+        let stages = [
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(vertex)
+                .name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::FRAGMENT)
+                .module(fragment)
+                .name(c"main"),
+        ];
+        let bindings = [vk::VertexInputBindingDescription {
+            binding: 0,
+            stride,
+            input_rate: vk::VertexInputRate::VERTEX,
+        }];
+        let attrs: Vec<_> = attributes
+            .iter()
+            .map(
+                |&(location, format, offset)| vk::VertexInputAttributeDescription {
+                    location,
+                    binding: 0,
+                    format,
+                    offset,
+                },
+            )
+            .collect();
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(&bindings)
+            .vertex_attribute_descriptions(&attrs);
+        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewports = [vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: target.width() as f32,
+            height: target.height() as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        }];
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
+            .viewports(&viewports)
+            .scissor_count(1);
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(vk::CullModeFlags::NONE)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(true)
+            .depth_write_enable(true)
+            .depth_compare_op(vk::CompareOp::LESS);
+        let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
+            .color_write_mask(vk::ColorComponentFlags::RGBA)];
+        let blend =
+            vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+        let dynamic_states = [vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(layout)
+            .render_pass(target.render_pass())
+            .subpass(0);
+        // SAFETY: every state struct borrows locals alive for the call; the handle is
+        // stored for Drop at once.
+        let pipeline = unsafe {
+            self.ctx
+                .device()
+                .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+        }
+        .map_err(|(_, e)| GpuError::vulkan("vkCreateGraphicsPipelines", name, e))?[0];
+        self.pipelines.push(pipeline);
+        self.ctx.set_name(pipeline, name);
+        Ok(pipeline)
+    }
+}
+
+/// Runs one bake (module doc).
+///
+/// # Errors
+/// A size beyond the device's limits, indirect draws without `multiDrawIndirect`, or a
+/// failing Vulkan call.
+pub fn run(ctx: &Arc<Context>, job: &ProjectionJob<'_>) -> Result<ProjectionResult, GpuError> {
+    let setup = Instant::now();
+    let name = "normalmap";
+    let invalid = |detail: String| GpuError::Invalid {
+        what: name.into(),
+        detail,
+    };
+    if job.indirect && !ctx.supports_multi_draw_indirect() {
+        return Err(invalid(
+            "this device lacks multiDrawIndirect / drawIndirectFirstInstance: use direct draws"
+                .into(),
+        ));
+    }
+    if job.draws.is_empty() || job.high_indices.is_empty() || job.mask_vertices.is_empty() {
+        return Err(invalid("nothing to draw".into()));
+    }
+    let res = job.res;
+    let texels = res as u64 * res as u64;
+    let texel_bytes = 16u64;
+    let target = RenderTarget::with_format(ctx, res, res, COLOR_FORMAT_F32)?;
+    let mask_vb = device_local_buffer(
+        ctx,
+        job.mask_vertices,
+        vk::BufferUsageFlags::VERTEX_BUFFER,
+        "normalmap.mask.vertices",
+    )?;
+    let high_vb = device_local_buffer(
+        ctx,
+        job.high_vertices,
+        vk::BufferUsageFlags::VERTEX_BUFFER,
+        "normalmap.high.vertices",
+    )?;
+    let high_ib = device_local_buffer(
+        ctx,
+        bytemuck::cast_slice(job.high_indices),
+        vk::BufferUsageFlags::INDEX_BUFFER,
+        "normalmap.high.indices",
+    )?;
+    let views = device_local_buffer(
+        ctx,
+        job.views,
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        "normalmap.views",
+    )?;
+    let indirect = if job.indirect {
+        let commands: Vec<u32> = job
+            .draws
+            .iter()
+            .flat_map(|d| [d.index_count, 1, d.first_index, 0, d.triangle])
+            .collect();
+        Some(device_local_buffer(
+            ctx,
+            bytemuck::cast_slice(&commands),
+            vk::BufferUsageFlags::INDIRECT_BUFFER,
+            "normalmap.draws",
+        )?)
+    } else {
+        None
+    };
+    let mask = Buffer::new(
+        ctx,
+        texels * texel_bytes,
+        vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuOnly,
+        "normalmap.mask",
+    )?;
+    let expand = Buffer::new(
+        ctx,
+        2 * texels * texel_bytes,
+        vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC,
+        MemoryLocation::GpuOnly,
+        "normalmap.expand",
+    )?;
+    let readback = Buffer::new(
+        ctx,
+        texels * texel_bytes,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuToCpu,
+        "normalmap.readback",
+    )?;
+    let projection_set = DescriptorSet::new(
+        ctx,
+        &[
+            (0, Resource::Storage(&views)),
+            (1, Resource::Storage(&mask)),
+        ],
+        vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+        "normalmap.project",
+    )?;
+    let expand_pipeline = ComputePipeline::new(
+        ctx,
+        &ComputePipelineDesc {
+            name: "normalmap.expand",
+            spirv: &compile_glsl("normalmap/expand.comp", ShaderStage::Compute, &[])?,
+            resources: &[(0, Resource::Storage(&expand))],
+            push_constant_bytes: 12,
+        },
+    )?;
+
+    let mut objects = Objects {
+        ctx: ctx.clone(),
+        modules: Vec::new(),
+        layouts: Vec::new(),
+        pipelines: Vec::new(),
+        query_pool: vk::QueryPool::null(),
+        cmd: vk::CommandBuffer::null(),
+    };
+    let mask_vs = objects.module(
+        "normalmap/mask.vert",
+        ShaderStage::Vertex,
+        "normalmap.mask.vert",
+    )?;
+    let mask_fs = objects.module(
+        "normalmap/mask.frag",
+        ShaderStage::Fragment,
+        "normalmap.mask.frag",
+    )?;
+    let project_vs = objects.module(
+        "normalmap/project.vert",
+        ShaderStage::Vertex,
+        "normalmap.project.vert",
+    )?;
+    let project_fs = objects.module(
+        "normalmap/normal.frag",
+        ShaderStage::Fragment,
+        "normalmap.normal.frag",
+    )?;
+    let mask_layout = objects.layout(
+        &[],
+        vk::PushConstantRange {
+            stage_flags: vk::ShaderStageFlags::VERTEX,
+            offset: 0,
+            size: 4,
+        },
+        "normalmap.mask",
+    )?;
+    let project_layout = objects.layout(
+        &[projection_set.layout],
+        vk::PushConstantRange {
+            stage_flags: vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+            offset: 0,
+            size: 12,
+        },
+        "normalmap.project",
+    )?;
+    let mask_pipeline = objects.pipeline(
+        &target,
+        mask_layout,
+        mask_vs,
+        mask_fs,
+        MASK_VERTEX_BYTES,
+        &[
+            (0, vk::Format::R32G32_SFLOAT, 0),
+            (1, vk::Format::R32_UINT, 8),
+        ],
+        "normalmap.mask",
+    )?;
+    let project_pipeline = objects.pipeline(
+        &target,
+        project_layout,
+        project_vs,
+        project_fs,
+        HIGH_VERTEX_BYTES,
+        &[
+            (0, vk::Format::R32G32B32_SFLOAT, 0),
+            (1, vk::Format::R32G32B32_SFLOAT, 12),
+        ],
+        "normalmap.project",
+    )?;
+    let timed = ctx.supports_timestamps();
+    let device = ctx.device();
+    if timed {
+        let info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::TIMESTAMP)
+            .query_count(TIMESTAMPS);
+        // SAFETY: plain create-info; stored for Drop at once.
+        objects.query_pool = unsafe { device.create_query_pool(&info, None) }
+            .map_err(|e| GpuError::vulkan("vkCreateQueryPool", name, e))?;
+        ctx.set_name(objects.query_pool, "normalmap.timestamps");
+    }
+    objects.cmd = ctx.allocate_command_buffer(name)?;
+    let cmd = objects.cmd;
+    let setup_s = setup.elapsed().as_secs_f64();
+
+    let full = vk::Rect2D {
+        offset: vk::Offset2D { x: 0, y: 0 },
+        extent: vk::Extent2D {
+            width: res,
+            height: res,
+        },
+    };
+    let clears = [
+        vk::ClearValue {
+            color: vk::ClearColorValue { float32: [0.0; 4] },
+        },
+        vk::ClearValue {
+            depth_stencil: vk::ClearDepthStencilValue {
+                depth: 1.0,
+                stencil: 0,
+            },
+        },
+    ];
+    let begin_pass = vk::RenderPassBeginInfo::default()
+        .render_pass(target.render_pass())
+        .framebuffer(target.framebuffer())
+        .render_area(full)
+        .clear_values(&clears);
+    let image_to_buffer = |dst: &Buffer, offset: u64| {
+        let region = vk::BufferImageCopy::default()
+            .buffer_offset(offset)
+            .image_subresource(vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            })
+            .image_extent(vk::Extent3D {
+                width: res,
+                height: res,
+                depth: 1,
+            });
+        // SAFETY: recording; the image is in TRANSFER_SRC_OPTIMAL after the render pass
+        // and `dst` holds res² texels from `offset`.
+        unsafe {
+            device.cmd_copy_image_to_buffer(
+                cmd,
+                target.color_image(),
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst.raw(),
+                &[region],
+            );
+        }
+    };
+    let barrier = |src_stage, dst_stage, src_access, dst_access| {
+        let memory = vk::MemoryBarrier::default()
+            .src_access_mask(src_access)
+            .dst_access_mask(dst_access);
+        // SAFETY: recording a global memory barrier.
+        unsafe {
+            device.cmd_pipeline_barrier(
+                cmd,
+                src_stage,
+                dst_stage,
+                vk::DependencyFlags::empty(),
+                &[memory],
+                &[],
+                &[],
+            );
+        }
+    };
+    let timestamp = |stage, query| {
+        if timed {
+            // SAFETY: recording; the pool holds TIMESTAMPS queries, reset below.
+            unsafe { device.cmd_write_timestamp(cmd, stage, objects.query_pool, query) };
+        }
+    };
+    let project_push: Vec<u8> = [job.max_distance.to_bits(), u32::from(job.mirror), res]
+        .iter()
+        .flat_map(|v| v.to_ne_bytes())
+        .collect();
+    // SAFETY (this block): `cmd` is freshly allocated; every object recorded lives until
+    // the waited submission below completes (locals of this function and `objects`).
+    unsafe {
+        device
+            .begin_command_buffer(
+                cmd,
+                &vk::CommandBufferBeginInfo::default()
+                    .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+            )
+            .map_err(|e| GpuError::vulkan("vkBeginCommandBuffer", name, e))?;
+        ctx.begin_label(cmd, "normalmap");
+        if timed {
+            device.cmd_reset_query_pool(cmd, objects.query_pool, 0, TIMESTAMPS);
+        }
+        timestamp(vk::PipelineStageFlags::TOP_OF_PIPE, 0);
+
+        // 1. Mask.
+        ctx.begin_label(cmd, "normalmap.mask");
+        device.cmd_begin_render_pass(cmd, &begin_pass, vk::SubpassContents::INLINE);
+        device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, mask_pipeline);
+        device.cmd_set_scissor(cmd, 0, &[full]);
+        device.cmd_push_constants(
+            cmd,
+            mask_layout,
+            vk::ShaderStageFlags::VERTEX,
+            0,
+            &job.low_triangles.to_ne_bytes(),
+        );
+        device.cmd_bind_vertex_buffers(cmd, 0, &[mask_vb.raw()], &[0]);
+        device.cmd_draw(cmd, 3 * job.low_triangles, 1, 0, 0);
+        device.cmd_end_render_pass(cmd);
+        image_to_buffer(&mask, 0);
+        barrier(
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::FRAGMENT_SHADER,
+            vk::AccessFlags::TRANSFER_WRITE,
+            vk::AccessFlags::SHADER_READ,
+        );
+        ctx.end_label(cmd);
+        timestamp(vk::PipelineStageFlags::BOTTOM_OF_PIPE, 1);
+
+        // 2. One render of the high mesh per low triangle.
+        ctx.begin_label(cmd, "normalmap.project");
+        device.cmd_begin_render_pass(cmd, &begin_pass, vk::SubpassContents::INLINE);
+        device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, project_pipeline);
+        device.cmd_bind_descriptor_sets(
+            cmd,
+            vk::PipelineBindPoint::GRAPHICS,
+            project_layout,
+            0,
+            &[projection_set.set],
+            &[],
+        );
+        device.cmd_push_constants(
+            cmd,
+            project_layout,
+            vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+            0,
+            &project_push,
+        );
+        device.cmd_bind_vertex_buffers(cmd, 0, &[high_vb.raw()], &[0]);
+        device.cmd_bind_index_buffer(cmd, high_ib.raw(), 0, vk::IndexType::UINT32);
+        if let Some(commands) = &indirect {
+            device.cmd_set_scissor(cmd, 0, &[full]);
+            let per_call = ctx.limits().max_draw_indirect_count.max(1) as usize;
+            for (k, chunk) in job.draws.chunks(per_call).enumerate() {
+                device.cmd_draw_indexed_indirect(
+                    cmd,
+                    commands.raw(),
+                    (k * per_call) as u64 * u64::from(INDIRECT_COMMAND_BYTES),
+                    chunk.len() as u32,
+                    INDIRECT_COMMAND_BYTES,
+                );
+            }
+        } else {
+            for d in job.draws {
+                let [x0, y0, x1, y1] = d.scissor.map(|c| c.min(res));
+                let scissor = vk::Rect2D {
+                    offset: vk::Offset2D {
+                        x: x0 as i32,
+                        y: y0 as i32,
+                    },
+                    extent: vk::Extent2D {
+                        width: x1.saturating_sub(x0),
+                        height: y1.saturating_sub(y0),
+                    },
+                };
+                device.cmd_set_scissor(cmd, 0, &[scissor]);
+                device.cmd_draw_indexed(cmd, d.index_count, 1, d.first_index, 0, d.triangle);
+            }
+        }
+        device.cmd_end_render_pass(cmd);
+        image_to_buffer(&expand, 0);
+        barrier(
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::AccessFlags::TRANSFER_WRITE,
+            vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
+        );
+        ctx.end_label(cmd);
+        timestamp(vk::PipelineStageFlags::BOTTOM_OF_PIPE, 2);
+
+        // 3. Border expansion, ping-pong between the halves.
+        ctx.begin_label(cmd, "normalmap.expand");
+        let half = (texels as u32, 0u32);
+        let groups = res.div_ceil(8);
+        let mut src = 0u32;
+        for _ in 0..job.expand_passes {
+            let dst = if src == 0 { half.0 } else { 0 };
+            let push: Vec<u8> = [res, src, dst]
+                .iter()
+                .flat_map(|v| v.to_ne_bytes())
+                .collect();
+            expand_pipeline.record(cmd, [groups, groups, 1], &push);
+            barrier(
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::SHADER_WRITE,
+                vk::AccessFlags::SHADER_READ
+                    | vk::AccessFlags::SHADER_WRITE
+                    | vk::AccessFlags::TRANSFER_READ,
+            );
+            src = dst;
+        }
+        ctx.end_label(cmd);
+        timestamp(vk::PipelineStageFlags::BOTTOM_OF_PIPE, 3);
+        let region = vk::BufferCopy::default()
+            .src_offset(u64::from(src) * texel_bytes)
+            .size(texels * texel_bytes);
+        device.cmd_copy_buffer(cmd, expand.raw(), readback.raw(), &[region]);
+        barrier(
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::HOST,
+            vk::AccessFlags::TRANSFER_WRITE,
+            vk::AccessFlags::HOST_READ,
+        );
+        ctx.end_label(cmd);
+        device
+            .end_command_buffer(cmd)
+            .map_err(|e| GpuError::vulkan("vkEndCommandBuffer", name, e))?;
+    }
+    let execute = Instant::now();
+    ctx.submit_and_wait(cmd, name)?;
+    let gpu_ms = if timed {
+        let mut ticks = [0u64; TIMESTAMPS as usize];
+        // SAFETY: all queries were written by the completed submission.
+        unsafe {
+            device.get_query_pool_results(
+                objects.query_pool,
+                0,
+                &mut ticks,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .map_err(|e| GpuError::vulkan("vkGetQueryPoolResults", name, e))?;
+        let mask = match ctx.timestamp_valid_bits() {
+            64.. => u64::MAX,
+            bits => (1u64 << bits) - 1,
+        };
+        let period = f64::from(ctx.limits().timestamp_period);
+        let ms = |a: usize, b: usize| ticks_to_ms(ticks[a], ticks[b], mask, period);
+        Some(PhaseMs {
+            mask: ms(0, 1),
+            project: ms(1, 2),
+            expand: ms(2, 3),
+        })
+    } else {
+        None
+    };
+    let texels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(readback.read()?);
+    Ok(ProjectionResult {
+        texels,
+        gpu_ms,
+        setup_s,
+        execute_s: execute.elapsed().as_secs_f64(),
+    })
+}
