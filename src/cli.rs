@@ -58,6 +58,73 @@ enum Command {
     /// Self-shadowed bump map from a height map (Green, Valve; issue 17): writes the SSBump
     /// (D · directional occlusion) as 16-bit PNG and EXR, the plain D encoding and scalar AO.
     Ssbump(SsbumpArgs),
+    /// Normal map of a high-polygon mesh for a low one, on the GPU (Gumbau et al.; issue 18):
+    /// tangent- and object-space 16-bit PNG + EXR, optionally the low mesh as glTF.
+    Normalmap(NormalmapArgs),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum BakerArg {
+    /// The paper's method (one render of the high mesh per low triangle).
+    Gpu,
+    /// Ray casting along the low mesh's interpolated normal (the check).
+    Cpu,
+    /// Both: --out from the GPU, `*_cpu` beside it, and their angular difference.
+    Both,
+}
+
+#[derive(Args, Debug)]
+struct NormalmapArgs {
+    /// High mesh: a glTF file, or `sphere:LEVEL` (a unit icosphere of 20·4^LEVEL
+    /// triangles with exact normals).
+    #[arg(long)]
+    high: String,
+    /// Low mesh with unique material UVs in [0, 1]: a glTF file or `sphere:LEVEL`
+    /// (generated UVs). Leave out with --simplify.
+    #[arg(
+        long,
+        required_unless_present = "simplify",
+        conflicts_with = "simplify"
+    )]
+    low: Option<String>,
+    /// Make the low mesh by simplifying the high one to this fraction of its triangles
+    /// (meshoptimizer), with UVs from the chart generator.
+    #[arg(long)]
+    simplify: Option<f32>,
+    /// Map texels per side.
+    #[arg(long, default_value_t = 1024)]
+    res: u32,
+    /// Border-expansion passes (texels filled around each chart).
+    #[arg(long, default_value_t = 2)]
+    expand: u32,
+    /// Search distance from the low surface, metres (default: 5 % of the low mesh's
+    /// bounding-box diagonal).
+    #[arg(long)]
+    distance: Option<f32>,
+    /// Turn vertex mirroring off (the paper's Fig. 4 failure, for comparison).
+    #[arg(long)]
+    no_mirror: bool,
+    /// Draw the whole high mesh per low triangle instead of its prism candidates.
+    #[arg(long)]
+    no_cull: bool,
+    /// One draw call per low triangle (with a scissor) instead of one multi-draw indirect.
+    #[arg(long)]
+    direct_draws: bool,
+    #[arg(long, value_enum, default_value = "gpu")]
+    baker: BakerArg,
+    /// CPU rays along each low triangle's face normal (the GPU's projection direction)
+    /// instead of the interpolated normal.
+    #[arg(long)]
+    cpu_face_rays: bool,
+    /// Output .png or .exr: the tangent-space map; the other format and `*_object` (object
+    /// space) are written beside it.
+    #[arg(long)]
+    out: PathBuf,
+    /// Also write the low mesh as this .gltf (+ .bin), its normal texture the PNG.
+    #[arg(long)]
+    gltf: Option<PathBuf>,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 #[derive(Args, Debug)]
@@ -97,6 +164,52 @@ enum StudyCommand {
     /// Issue 17: rnm, rnmao, ssbump, shlmap and unc6 against the displaced-geometry
     /// reference and the flat normal-mapped one, per environment; the Fig. 1 composite.
     Rnm(StudyRnmArgs),
+    /// Issue 18: GPU normal-map generation timed against triangle counts and resolution
+    /// (the paper's Tables 1 and 2) beside the CPU baker; GPU vs CPU maps of a real model
+    /// simplified; the map rendered through unc6 against the high mesh's reference.
+    Normalmap(StudyNormalmapArgs),
+}
+
+#[derive(Args, Debug)]
+struct StudyNormalmapArgs {
+    /// Runs per timing (medians are reported).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
+    repeats: u32,
+    /// Map side of the triangle-count and strategy tables.
+    #[arg(long, default_value_t = 512)]
+    res: u32,
+    /// The real model (skipped with a note when the file is missing).
+    #[arg(
+        long,
+        default_value = "../shared/assets/models/NormalTangentMirrorTest/NormalTangentMirrorTest.gltf"
+    )]
+    model: PathBuf,
+    /// Fractions of the model's triangles to keep, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "0.05,0.02")]
+    ratios: Vec<f32>,
+    /// Map side for the model.
+    #[arg(long, default_value_t = 1024)]
+    model_res: u32,
+    #[arg(long, default_value = "sky")]
+    env: String,
+    #[arg(long, default_value_t = 256)]
+    vis_res: u32,
+    #[arg(long, default_value_t = 256)]
+    rays: u32,
+    #[arg(long, value_delimiter = ',', default_value = "dx9,dx10")]
+    paths: Vec<HwPath>,
+    #[arg(long, default_value_t = 480, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 360, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Samples per pixel of the reference.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    spp: u32,
+    /// Output directory: normalmap.md, normalmap.json, the model's maps, glTFs and renders.
+    #[arg(long, default_value = "study-out/normalmap")]
+    out: PathBuf,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 #[derive(Args, Debug)]
@@ -524,7 +637,11 @@ pub fn run(cli: Cli) -> Result<()> {
         }
         Command::Study(StudyCommand::Seams(a)) => run_study_seams(a).context("study seams"),
         Command::Study(StudyCommand::Rnm(a)) => run_study_rnm(a).context("study rnm"),
+        Command::Study(StudyCommand::Normalmap(a)) => {
+            run_study_normalmap(a).context("study normalmap")
+        }
         Command::Ssbump(a) => run_ssbump(a).context("ssbump"),
+        Command::Normalmap(a) => run_normalmap(a).context("normalmap"),
     }
 }
 
@@ -574,6 +691,172 @@ fn run_study_compression(a: StudyCompressionArgs) -> Result<()> {
         started,
     );
     check_validation(&ctx, a.gpu.validate)
+}
+
+fn run_normalmap(a: NormalmapArgs) -> Result<()> {
+    use shvis::normalmap::{self, DrawMode, MeshRole, NormalMapSettings, output};
+    let ext = a.out.extension().and_then(|e| e.to_str());
+    if !matches!(ext, Some("png" | "exr")) {
+        bail!("{}: the output must be a .png or .exr", a.out.display());
+    }
+    if let Some(g) = &a.gltf
+        && g.extension().and_then(|e| e.to_str()) != Some("gltf")
+    {
+        bail!("{}: --gltf must name a .gltf file", g.display());
+    }
+    if !(normalmap::MIN_RES..=normalmap::MAX_RES).contains(&a.res) {
+        bail!(
+            "--res {} is outside {}..={}",
+            a.res,
+            normalmap::MIN_RES,
+            normalmap::MAX_RES
+        );
+    }
+    let started = Instant::now();
+    let high = normalmap::load_mesh(&a.high, MeshRole::High)?;
+    let low = match (&a.low, a.simplify) {
+        (Some(low), _) => normalmap::load_mesh(low, MeshRole::Low { res: a.res })?,
+        (None, Some(ratio)) => {
+            let (low, report) = normalmap::simplify::simplify(&high, ratio, a.res)?;
+            println!(
+                "simplified {} → {} triangles (meshoptimizer error {:.2e} of the extent), {} charts",
+                report.from_triangles, report.to_triangles, report.relative_error, report.charts
+            );
+            low
+        }
+        (None, None) => bail!("give --low or --simplify"),
+    };
+    let settings = NormalMapSettings {
+        expand: a.expand,
+        max_distance: a
+            .distance
+            .unwrap_or_else(|| normalmap::default_max_distance(&low)),
+        mirror: !a.no_mirror,
+        cull: !a.no_cull,
+        draws: if a.direct_draws {
+            DrawMode::Direct
+        } else {
+            DrawMode::Indirect
+        },
+        ..NormalMapSettings::new(&low, a.res)
+    };
+    println!(
+        "high {} triangles, low {} triangles, {}² texels, search distance {:.4} m",
+        high.triangle_count(),
+        low.triangle_count(),
+        a.res,
+        settings.max_distance
+    );
+    let frames = normalmap::low_texels(&low, a.res);
+    let stem = a.out.with_extension("");
+    let write_all = |image: &normalmap::NormalImage, suffix: &str| -> Result<()> {
+        let tangent = normalmap::tangent_space(image, &frames);
+        for ext in ["png", "exr"] {
+            let path = |s: &str| PathBuf::from(format!("{}{suffix}{s}.{ext}", stem.display()));
+            output::write_map(&path(""), a.res, &tangent, [0.0, 0.0, 1.0])?;
+            output::write_map(&path("_object"), a.res, &image.texels, [0.0; 3])?;
+        }
+        Ok(())
+    };
+    let gpu_image = if a.baker == BakerArg::Cpu {
+        None
+    } else {
+        let ctx = open_gpu(&a.gpu)?;
+        let (image, t) = normalmap::gpu::bake(&ctx, &high, &low, &settings)?;
+        let gpu_ms = t.gpu_ms.map_or("no timestamps".to_string(), |ms| {
+            format!(
+                "GPU mask {:.2} + project {:.2} + expand {:.2} ms",
+                ms.mask, ms.project, ms.expand
+            )
+        });
+        println!(
+            "gpu ({}): {} renders, {} high triangles drawn, {} texels; {gpu_ms}; prepare {:.3} s, setup {:.3} s, execute {:.3} s, total {:.3} s",
+            ctx.device_name(),
+            t.renders,
+            t.triangles_drawn,
+            image.covered_count(),
+            t.prepare_s,
+            t.setup_s,
+            t.execute_s,
+            t.total_s
+        );
+        write_all(&image, "")?;
+        Some(image)
+    };
+    if a.baker != BakerArg::Gpu {
+        let along = if a.cpu_face_rays {
+            normalmap::cpu::RayDirection::Face
+        } else {
+            normalmap::cpu::RayDirection::Interpolated
+        };
+        let (image, t) = normalmap::cpu::bake(&high, &low, &settings, along)?;
+        println!(
+            "cpu: {} rays, {} texels; BVH {:.3} s, trace {:.3} s, total {:.3} s",
+            t.rays,
+            image.covered_count(),
+            t.bvh_s,
+            t.trace_s,
+            t.total_s
+        );
+        let suffix = if gpu_image.is_some() { "_cpu" } else { "" };
+        write_all(&image, suffix)?;
+        if let Some(gpu_image) = &gpu_image {
+            let interior = gpu_image.interior();
+            match normalmap::compare(gpu_image, &image, &interior) {
+                Some(stats) => println!("gpu vs cpu, interior texels: {stats}"),
+                None => println!("gpu vs cpu: no interior texel generated by both"),
+            }
+            // Angle between the two, 10° = white, where both generated a normal.
+            let diff: Vec<[f32; 4]> = (0..image.texels.len())
+                .map(|i| {
+                    let both = gpu_image.texels[i][3] > 0.0 && image.texels[i][3] > 0.0;
+                    let angle = normalmap::angle_deg(gpu_image.normal(i), image.normal(i));
+                    let v = if both {
+                        (angle / 10.0).min(1.0) as f32 * 2.0 - 1.0
+                    } else {
+                        -1.0
+                    };
+                    [v, v, v, 1.0]
+                })
+                .collect();
+            let path = PathBuf::from(format!("{}_diff.png", stem.display()));
+            output::write_map(&path, a.res, &diff, [0.0; 3])?;
+        }
+    }
+    if let Some(g) = &a.gltf {
+        let png = PathBuf::from(format!("{}.png", stem.display()));
+        let uri = relative_uri(g, &png);
+        output::write_low_gltf(g, &low, Some(&uri))?;
+        println!("wrote {} (normal texture {uri})", g.display());
+    }
+    println!(
+        "wrote {}.{{png,exr}} and {}_object.{{png,exr}} in {:.1} s",
+        stem.display(),
+        stem.display(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// `target` as a URI relative to the directory of `from` (its file name when they share
+/// one; else the absolute path).
+fn relative_uri(from: &Path, target: &Path) -> String {
+    let dir = |p: &Path| {
+        p.parent()
+            .filter(|d| !d.as_os_str().is_empty())
+            .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
+    };
+    let same_dir = dir(from)
+        .canonicalize()
+        .ok()
+        .zip(dir(target).canonicalize().ok());
+    match (same_dir, target.file_name()) {
+        (Some((a, b)), Some(name)) if a == b => name.to_string_lossy().into_owned(),
+        _ => std::path::absolute(target)
+            .unwrap_or_else(|_| target.to_path_buf())
+            .display()
+            .to_string(),
+    }
 }
 
 fn run_ssbump(a: SsbumpArgs) -> Result<()> {
@@ -642,6 +925,72 @@ fn run_ssbump(a: SsbumpArgs) -> Result<()> {
         a.out.display(),
         started.elapsed().as_secs_f64()
     );
+    Ok(())
+}
+
+fn run_study_normalmap(a: StudyNormalmapArgs) -> Result<()> {
+    use shvis::study::normalmap as study;
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    let ctx = open_gpu(&a.gpu)?;
+    let model = a.model.exists().then(|| a.model.clone());
+    if model.is_none() {
+        println!(
+            "note: {} not found: the real-model part is skipped",
+            a.model.display()
+        );
+    }
+    let settings = study::NormalMapStudySettings {
+        repeats: a.repeats,
+        res: a.res,
+        model,
+        ratios: a.ratios.clone(),
+        model_res: a.model_res,
+        env: a.env.clone(),
+        vis_res: a.vis_res,
+        rays: a.rays,
+        width: a.width,
+        height: a.height,
+        spp: a.spp,
+        paths: a.paths.clone(),
+    };
+    println!("timings on {}:", ctx.device_name());
+    let timings = study::timings(&ctx, &settings)?;
+    let mut models = Vec::new();
+    if let Some(model) = &settings.model {
+        for &ratio in &settings.ratios {
+            let row = study::model_row(&ctx, &settings, model, ratio, &a.out)
+                .with_context(|| format!("{} at {ratio}", model.display()))?;
+            let fmt = |s: &Option<shvis::normalmap::AngleStats>| {
+                s.map_or("-".to_string(), |s| s.to_string())
+            };
+            println!(
+                "{} kept {:.0} %: {} → {} triangles; GPU vs CPU (interpolated rays) {}; (face rays) {}",
+                model.display(),
+                ratio * 100.0,
+                row.high_triangles,
+                row.low_triangles,
+                fmt(&row.vs_cpu),
+                fmt(&row.vs_cpu_face)
+            );
+            for (path, mapped, flat) in &row.render {
+                println!(
+                    "  unc6 {path}: relative RMSE vs the high mesh's reference {mapped:.4} with the map, {flat:.4} flat"
+                );
+            }
+            models.push(row);
+        }
+    }
+    let result = study::NormalMapStudy {
+        device: ctx.device_name().to_string(),
+        timings,
+        models,
+    };
+    for p in study::write_report(&result, &a.out)? {
+        println!("wrote {}", p.display());
+    }
+    check_validation(&ctx, a.gpu.validate)?;
+    println!("study normalmap: {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
 }
 

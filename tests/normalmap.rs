@@ -4,6 +4,7 @@
 mod common;
 
 use glam::{Vec2, Vec3};
+use shvis::normalmap::cpu::RayDirection;
 use shvis::normalmap::simplify::{sphere_high, sphere_low};
 use shvis::normalmap::{
     AngleStats, DrawMode, NormalImage, NormalMapSettings, angle_deg, cpu, expand_borders, gpu,
@@ -54,7 +55,7 @@ fn sphere_normals_match_the_analytic_sphere_on_gpu_and_cpu() {
         let settings = NormalMapSettings::new(&low, 256);
         let (image, timing) = gpu::bake(&ctx, &high, &low, &settings).unwrap();
         let gpu_stats = sphere_errors(&image, &low, true);
-        let (cpu_image, _) = cpu::bake(&high, &low, &settings).unwrap();
+        let (cpu_image, _) = cpu::bake(&high, &low, &settings, RayDirection::Interpolated).unwrap();
         let cpu_stats = sphere_errors(&cpu_image, &low, false);
         eprintln!(
             "{} low triangles: GPU {gpu_stats} ({} high triangles drawn); CPU {cpu_stats}",
@@ -194,7 +195,7 @@ fn vertex_mirroring_defeats_self_occlusion() {
         },
     )
     .unwrap();
-    let (rays, _) = cpu::bake(&high, &low, &settings).unwrap();
+    let (rays, _) = cpu::bake(&high, &low, &settings, RayDirection::Interpolated).unwrap();
     assert_eq!(mirrored.covered_count(), 64 * 64);
     // Right: the floor everywhere. Wrong without mirroring: the roof's −z under it.
     let all = |_: usize| true;

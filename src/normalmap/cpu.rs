@@ -21,6 +21,17 @@ use super::{COVERED, NormalImage, NormalMapError, NormalMapSettings, expand_bord
 use crate::bake::trace::Tracer;
 use crate::scene::Mesh;
 
+/// Which direction the rays leave the low surface in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RayDirection {
+    /// The interpolated vertex normal: the software bakers' choice (the check).
+    Interpolated,
+    /// The low triangle's face normal: the GPU method's projection direction, to tell
+    /// differences of direction from differences of method.
+    Face,
+}
+
 /// Wall-clock phases of one CPU bake, seconds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct CpuTiming {
@@ -31,7 +42,8 @@ pub struct CpuTiming {
     pub rays: u64,
 }
 
-/// Bakes `high`'s normals onto `low`'s material UVs by ray casting (module doc), then
+/// Bakes `high`'s normals onto `low`'s material UVs by ray casting `along` the chosen
+/// direction (module doc), then
 /// expands borders by `settings.expand` passes. Mirroring, culling and draw mode do not
 /// apply (rays find the nearest surface both ways by construction).
 ///
@@ -41,6 +53,7 @@ pub fn bake(
     high: &Mesh,
     low: &Mesh,
     settings: &NormalMapSettings,
+    along: RayDirection,
 ) -> Result<(NormalImage, CpuTiming), NormalMapError> {
     super::validate(high, low, settings)?;
     let started = Instant::now();
@@ -63,7 +76,10 @@ pub fn bake(
         .filter(|(i, _)| frames.covered[*i])
         .for_each(|(i, texel)| {
             let p = frames.position[i];
-            let n = frames.shading_normal[i];
+            let n = match along {
+                RayDirection::Interpolated => frames.shading_normal[i],
+                RayDirection::Face => frames.normal[i],
+            };
             let best = [n, -n]
                 .into_iter()
                 .filter_map(|dir| {

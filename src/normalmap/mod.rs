@@ -149,6 +149,53 @@ impl NormalImage {
     }
 }
 
+/// Most subdivision levels of `sphere:LEVEL` (level 9: 5.2 M triangles).
+pub const MAX_SPHERE_LEVEL: u32 = 9;
+
+/// Which side of the pair a mesh is for ([`load_mesh`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshRole {
+    High,
+    /// Prepared for a `res`² map (built-in shapes get generated UVs).
+    Low {
+        res: u32,
+    },
+}
+
+/// A mesh from `sphere:LEVEL` (a unit icosphere, [`simplify::sphere_high`] /
+/// [`simplify::sphere_low`]) or a glTF file (world space, as `--scene` loads it).
+///
+/// # Errors
+/// A bad level, or a file the loader refuses.
+pub fn load_mesh(spec: &str, role: MeshRole) -> Result<Mesh, NormalMapError> {
+    if let Some(level) = spec.strip_prefix("sphere:") {
+        let level: u32 = level
+            .parse()
+            .ok()
+            .filter(|&l| l <= MAX_SPHERE_LEVEL)
+            .ok_or_else(|| {
+                NormalMapError::Invalid(format!(
+                    "'{spec}': the level must be an integer in 0..={MAX_SPHERE_LEVEL}"
+                ))
+            })?;
+        return match role {
+            MeshRole::High => Ok(simplify::sphere_high(level, 1.0)),
+            MeshRole::Low { res } => simplify::sphere_low(level, 1.0, res),
+        };
+    }
+    let lightmap_res = match role {
+        MeshRole::High => 1024,
+        MeshRole::Low { res } => res,
+    }
+    .clamp(
+        crate::scene::lightmap_uv::MIN_LIGHTMAP_RES,
+        crate::scene::lightmap_uv::MAX_LIGHTMAP_RES,
+    );
+    crate::scene::gltf::load(std::path::Path::new(spec), lightmap_res)
+        .map(|scene| scene.mesh)
+        .map_err(|e| NormalMapError::Invalid(e.to_string()))
+}
+
 /// Checks the inputs both bakers share.
 ///
 /// # Errors

@@ -87,7 +87,7 @@ pub fn write_low_gltf(
     let mut bin: Vec<u8> = Vec::new();
     let mut views = Vec::new();
     let mut push = |bytes: &[u8], target: u32| {
-        while bin.len() % 4 != 0 {
+        while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
         views.push(json!({
@@ -100,7 +100,7 @@ pub fn write_low_gltf(
     let attr = |f: &dyn Fn(&crate::scene::Vertex) -> Vec<f32>| -> Vec<u8> {
         mesh.vertices
             .iter()
-            .flat_map(|v| f(v))
+            .flat_map(f)
             .flat_map(f32::to_le_bytes)
             .collect()
     };

@@ -88,9 +88,14 @@ pub fn simplify(
     Ok((low, report))
 }
 
-/// A low mesh from positions and triangles: smooth area-weighted normals, generated
-/// charts as material (and lightmap) UVs for a `res`² map, MikkTSpace tangents,
-/// de-indexed (module doc). Returns the mesh and its chart count.
+/// Corners whose faces meet at more than this angle get separate normals.
+pub const CREASE_ANGLE_DEG: f32 = 60.0;
+
+/// A low mesh from positions and triangles: per corner the area-weighted normal of the
+/// faces around its vertex within [`CREASE_ANGLE_DEG`] of its own face (smooth across
+/// gentle curvature, split at creases such as a board's edges), generated charts as
+/// material (and lightmap) UVs for a `res`² map, MikkTSpace tangents; de-indexed (module
+/// doc). Returns the mesh and its chart count.
 ///
 /// # Errors
 /// Charts that do not fit `res`.
@@ -99,30 +104,36 @@ pub fn prepare_low(
     indices: &[u32],
     res: u32,
 ) -> Result<(Mesh, usize), NormalMapError> {
-    // Compact to the vertices used, with smooth normals.
-    let mut slot = vec![u32::MAX; positions.len()];
+    let triangles = indices.len() / 3;
+    let corner = |t: usize, k: usize| positions[indices[3 * t + k] as usize];
+    let area_normals: Vec<Vec3> = (0..triangles)
+        .map(|t| (corner(t, 1) - corner(t, 0)).cross(corner(t, 2) - corner(t, 0)))
+        .collect();
+    let mut faces_at: Vec<Vec<u32>> = vec![Vec::new(); positions.len()];
+    for t in 0..triangles {
+        for k in 0..3 {
+            faces_at[indices[3 * t + k] as usize].push(t as u32);
+        }
+    }
+    let cos_crease = CREASE_ANGLE_DEG.to_radians().cos();
     let mut mesh = Mesh::default();
-    for &i in indices {
-        if slot[i as usize] == u32::MAX {
-            slot[i as usize] = mesh.vertices.len() as u32;
+    for t in 0..triangles {
+        let own = area_normals[t].normalize_or_zero();
+        for k in 0..3 {
+            let v = indices[3 * t + k] as usize;
+            let normal: Vec3 = faces_at[v]
+                .iter()
+                .map(|&f| area_normals[f as usize])
+                .filter(|n| n.normalize_or_zero().dot(own) >= cos_crease)
+                .sum();
+            mesh.indices.push(mesh.vertices.len() as u32);
             mesh.vertices.push(Vertex {
-                position: positions[i as usize].to_array(),
+                position: positions[v].to_array(),
+                normal: normal.normalize_or(own).to_array(),
                 albedo_tint: [1.0; 3],
                 ..Vertex::default()
             });
         }
-        mesh.indices.push(slot[i as usize]);
-    }
-    let mut normals = vec![Vec3::ZERO; mesh.vertices.len()];
-    for t in 0..mesh.triangle_count() {
-        let p = mesh.triangle_positions(t);
-        let area_normal = (p[1] - p[0]).cross(p[2] - p[0]);
-        for k in 0..3 {
-            normals[mesh.indices[3 * t + k] as usize] += area_normal;
-        }
-    }
-    for (v, n) in mesh.vertices.iter_mut().zip(&normals) {
-        v.normal = n.normalize_or(Vec3::Z).to_array();
     }
     let charts = lightmap_uv::generate(&mut mesh, res)
         .map_err(|e| {

@@ -11,8 +11,12 @@
 //!   clustered techniques, with and without the seam mitigation (`shvis study seams`).
 //! - [`rnm`]: issue 17 — radiosity normal mapping and SSBump against the displaced-geometry
 //!   reference under a low sun and an overcast probe (`shvis study rnm`).
+//! - [`normalmap`]: issue 18 — GPU normal-map generation timed against triangle counts and
+//!   resolution beside the CPU baker, checked on a real model, rendered through `unc6`
+//!   (`shvis study normalmap`).
 
 pub mod compression;
+pub mod normalmap;
 pub mod params;
 pub mod params_gpu;
 pub mod rnm;
