@@ -23,6 +23,7 @@ comma := ,
 bench: build
 	target/release/shvis bench --out $(BENCH_OUT)
 	target/release/shvis study rnm --envs $(RNM_ENVS) --out $(BENCH_OUT)/rnm
+	target/release/shvis study normalmap --out $(BENCH_OUT)/normalmap
 
 clean:
 	cargo clean

@@ -99,7 +99,7 @@ struct NormalmapArgs {
     expand: u32,
     /// Search distance from the low surface, metres (default: 5 % of the low mesh's
     /// bounding-box diagonal).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     distance: Option<f32>,
     /// Turn vertex mirroring off (the paper's Fig. 4 failure, for comparison).
     #[arg(long)]
@@ -748,6 +748,7 @@ fn run_normalmap(a: NormalmapArgs) -> Result<()> {
         settings.max_distance
     );
     let frames = normalmap::low_texels(&low, a.res);
+    let low_texels = frames.covered_count();
     let stem = a.out.with_extension("");
     let write_all = |image: &normalmap::NormalImage, suffix: &str| -> Result<()> {
         let tangent = normalmap::tangent_space(image, &frames);
@@ -770,7 +771,7 @@ fn run_normalmap(a: NormalmapArgs) -> Result<()> {
             )
         });
         println!(
-            "gpu ({}): {} renders, {} high triangles drawn, {} texels; {gpu_ms}; prepare {:.3} s, setup {:.3} s, execute {:.3} s, total {:.3} s",
+            "gpu ({}): {} renders, {} high triangles drawn, {} of the low mesh's {low_texels} texels; {gpu_ms}; prepare {:.3} s, setup {:.3} s, execute {:.3} s, total {:.3} s",
             ctx.device_name(),
             t.renders,
             t.triangles_drawn,
@@ -791,7 +792,7 @@ fn run_normalmap(a: NormalmapArgs) -> Result<()> {
         };
         let (image, t) = normalmap::cpu::bake(&high, &low, &settings, along)?;
         println!(
-            "cpu: {} rays, {} texels; BVH {:.3} s, trace {:.3} s, total {:.3} s",
+            "cpu: {} rays, {} of the low mesh's {low_texels} texels; BVH {:.3} s, trace {:.3} s, total {:.3} s",
             t.rays,
             image.covered_count(),
             t.bvh_s,

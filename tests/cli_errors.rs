@@ -275,3 +275,77 @@ fn height_maps_displacement_and_sun_elevation() {
         assert_one_error_line(&out, &[env, "sun elevation"]);
     }
 }
+
+#[test]
+fn normalmap_bad_meshes_sizes_and_outputs() {
+    let dir = scratch("normalmap");
+    let out = dir.join("n.png");
+    let out = out.to_str().unwrap();
+    let run = |extra: &[&str]| {
+        let mut args = vec!["normalmap", "--res", "64"];
+        args.extend_from_slice(extra);
+        shvis(&args, &[])
+    };
+    assert_one_error_line(
+        &run(&["--high", "sphere:3", "--low", "missing.gltf", "--out", out]),
+        &["missing.gltf"],
+    );
+    assert_one_error_line(
+        &run(&["--high", "sphere:12", "--low", "sphere:1", "--out", out]),
+        &["sphere:12", "0..=9"],
+    );
+    assert_one_error_line(
+        &run(&["--high", "sphere:3", "--low", "sphere:1", "--out", "n.jpg"]),
+        &["n.jpg", ".png or .exr"],
+    );
+    assert_one_error_line(
+        &shvis(
+            &[
+                "normalmap",
+                "--res",
+                "100000",
+                "--high",
+                "sphere:3",
+                "--low",
+                "sphere:1",
+                "--out",
+                out,
+            ],
+            &[],
+        ),
+        &["--res 100000"],
+    );
+    assert_one_error_line(
+        &run(&["--high", "sphere:3", "--simplify", "1.5", "--out", out]),
+        &["--simplify 1.5"],
+    );
+    assert_one_error_line(
+        &run(&[
+            "--high",
+            "sphere:3",
+            "--low",
+            "sphere:1",
+            "--distance",
+            "-1",
+            "--out",
+            out,
+        ]),
+        &["search distance -1"],
+    );
+    // A low mesh far from the high one: nothing within the search distance.
+    assert_one_error_line(
+        &run(&[
+            "--high",
+            "sphere:3",
+            "--low",
+            "sphere:1",
+            "--distance",
+            "1e-6",
+            "--baker",
+            "gpu",
+            "--out",
+            out,
+        ]),
+        &["within"],
+    );
+}

@@ -8,7 +8,7 @@ use shvis::normalmap::cpu::RayDirection;
 use shvis::normalmap::simplify::{sphere_high, sphere_low};
 use shvis::normalmap::{
     AngleStats, DrawMode, NormalImage, NormalMapSettings, angle_deg, cpu, expand_borders, gpu,
-    low_texels,
+    low_texels, output, tangent_space,
 };
 use shvis::scene::{Mesh, Vertex};
 
@@ -293,4 +293,49 @@ fn border_expansion_fills_k_texels_and_keeps_bilinear_lookups_inside_charts() {
         assert_eq!(taps_empty(&expanded), 0, "k = {k}");
     }
     common::assert_validation_clean(&ctx, "normalmap expansion");
+}
+
+#[test]
+fn written_gltf_and_tangent_map_give_back_the_object_normals_in_the_renderer_frame() {
+    let ctx = common::validated_context();
+    // A high sphere whose normals wander off the radial direction: a non-trivial map.
+    let mut high = sphere_high(5, 1.0);
+    for v in &mut high.vertices {
+        let p = Vec3::from(v.position);
+        let wobble = Vec3::new((7.0 * p.y).sin(), (5.0 * p.z).sin(), (6.0 * p.x).sin()) * 0.5;
+        v.normal = (p + wobble).normalize().to_array();
+    }
+    let res = 128;
+    let low = sphere_low(1, 1.0, res).unwrap();
+    let (image, _) = gpu::bake(&ctx, &high, &low, &NormalMapSettings::new(&low, res)).unwrap();
+    let tangent = tangent_space(&image, &low_texels(&low, res));
+    let dir = std::env::temp_dir().join(format!("shvis-normalmap-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    output::write_map(&dir.join("map.png"), res, &tangent, [0.0, 0.0, 1.0]).unwrap();
+    output::write_low_gltf(&dir.join("low.gltf"), &low, Some("map.png")).unwrap();
+    let scene = shvis::scene::gltf::load(&dir.join("low.gltf"), res).unwrap();
+    assert_eq!(scene.mesh.triangle_count(), low.triangle_count());
+    let map = &scene.material.normal;
+    assert_eq!((map.width, map.height), (res, res));
+    // Decode as glsl/include/common.glsl::shading_normal does, per texel centre.
+    let frames = low_texels(&scene.mesh, res);
+    let interior = image.interior();
+    let mut angles = Vec::new();
+    let mut tilted = 0;
+    for i in (0..image.texels.len()).filter(|&i| interior[i]) {
+        let [r, g, b, _] = map.texels[i].map(|c| f32::from(c) / 255.0 * 2.0 - 1.0);
+        let m = Vec3::new(r, g, b).normalize();
+        let n = frames.shading_normal[i].normalize();
+        let t4 = frames.tangent[i];
+        let t = (t4.truncate() - n * n.dot(t4.truncate())).normalize();
+        let bitangent = n.cross(t) * t4.w.signum();
+        let world = (t * m.x + bitangent * m.y + n * m.z).normalize();
+        angles.push(angle_deg(world, image.normal(i)));
+        tilted += usize::from(m.z < 0.95);
+    }
+    let stats = AngleStats::of(angles).unwrap();
+    eprintln!("decoded through the renderer's frame: {stats}; {tilted} texels tilted > 18°");
+    assert!(tilted > stats.count / 10, "the map is not trivial");
+    assert!(stats.p99_deg < 1.0 && stats.max_deg < 2.0, "{stats}");
+    common::assert_validation_clean(&ctx, "normalmap glTF round trip");
 }

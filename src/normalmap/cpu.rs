@@ -98,7 +98,7 @@ pub fn bake(
     let trace_s = traced.elapsed().as_secs_f64();
     expand_borders(&mut image, settings.expand);
     Ok((
-        image,
+        super::require_texels(image, d)?,
         CpuTiming {
             bvh_s,
             trace_s,

@@ -148,11 +148,15 @@ pub fn bake(
             expand_passes: settings.expand,
         },
     )?;
-    Ok((
+    let image = super::require_texels(
         NormalImage {
             res,
             texels: result.texels,
         },
+        d,
+    )?;
+    Ok((
+        image,
         GpuTiming {
             prepare_s,
             setup_s: result.setup_s,

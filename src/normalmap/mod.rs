@@ -258,6 +258,22 @@ pub fn low_texels(low: &Mesh, res: u32) -> LightmapTexels {
     raster::rasterize(&by_material, res)
 }
 
+/// `image` unless no texel found a high surface within `max_distance`.
+///
+/// # Errors
+/// [`NormalMapError::Invalid`] for an empty map (meshes apart, or D too small).
+pub(crate) fn require_texels(
+    image: NormalImage,
+    max_distance: f32,
+) -> Result<NormalImage, NormalMapError> {
+    if image.covered_count() == 0 {
+        return Err(NormalMapError::Invalid(format!(
+            "no texel found a high-mesh surface within {max_distance} of the low mesh: are the meshes in the same place and scale? (--distance)"
+        )));
+    }
+    Ok(image)
+}
+
 /// Border expansion (§3.5), the CPU twin of `glsl/normalmap/expand.comp`: `passes` times,
 /// every empty texel with non-empty 8-neighbours becomes their normalized mean, flagged
 /// [`EXPANDED`]. Each pass reads the previous pass's result.

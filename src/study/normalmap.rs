@@ -442,8 +442,8 @@ pub fn write_report(study: &NormalMapStudy, dir: &Path) -> Result<Vec<PathBuf>, 
              Angles over interior texels (median / 99th percentile). Relative RMSE of `unc6` \
              on the low mesh against the reference of the high mesh, with the generated map \
              and flat (interpolated normals).\n\n\
-             | model | kept | high tris | low tris | res | vs CPU (interpolated rays) | vs CPU (face rays) | GPU s | CPU s | unc6 error: mapped / flat |\n\
-             |---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n",
+             | model | kept | high tris | low tris | res | vs CPU (interpolated rays) | vs CPU (face rays) | GPU s | CPU s | unc6 error: mapped / flat | reference noise |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|\n",
         );
         for m in &study.models {
             let render: Vec<String> = m
@@ -452,7 +452,7 @@ pub fn write_report(study: &NormalMapStudy, dir: &Path) -> Result<Vec<PathBuf>, 
                 .map(|(p, a, b)| format!("{p} {a:.4} / {b:.4}"))
                 .collect();
             md.push_str(&format!(
-                "| {} | {:.0} % | {} | {} | {}² | {} | {} | {:.2} | {:.2} | {} |\n",
+                "| {} | {:.0} % | {} | {} | {}² | {} | {} | {:.2} | {:.2} | {} | {} |\n",
                 Path::new(&m.model)
                     .file_name()
                     .map_or(m.model.clone(), |f| f.to_string_lossy().into_owned()),
@@ -464,7 +464,8 @@ pub fn write_report(study: &NormalMapStudy, dir: &Path) -> Result<Vec<PathBuf>, 
                 stats_cell(&m.vs_cpu_face),
                 m.gpu_s,
                 m.cpu_s,
-                render.join("; ")
+                render.join("; "),
+                m.reference_noise.map_or("-".into(), |n| format!("{n:.4}"))
             ));
         }
     }
