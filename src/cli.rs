@@ -168,6 +168,42 @@ enum StudyCommand {
     /// (the paper's Tables 1 and 2) beside the CPU baker; GPU vs CPU maps of a real model
     /// simplified; the map rendered through unc6 against the high mesh's reference.
     Normalmap(StudyNormalmapArgs),
+    /// Issue 19: the specular term of a low light on the receding bumpy plane under naive
+    /// MIP filtering and normal distribution mapping (partial / per-texel normalisation),
+    /// against its footprint reference; the Fig. 1 composite.
+    Ndf(StudyNdfArgs),
+}
+
+#[derive(Args, Debug)]
+struct StudyNdfArgs {
+    /// Base spread σ of a full-resolution texel's normals (the surface's own roughness).
+    #[arg(long, default_value_t = 0.1)]
+    sigma: f32,
+    /// Direction toward the light (x,y,z; normalized).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "0,0.3,-1",
+        allow_negative_numbers = true
+    )]
+    light_dir: Vec<f32>,
+    #[arg(long, default_value_t = 480, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 270, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Reference sub-pixel samples (⌈√spp⌉² strata, at most 1024).
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    spp: u32,
+    #[arg(long, value_delimiter = ',', default_value = "dx9,dx10")]
+    paths: Vec<HwPath>,
+    /// Timed frames per row.
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    frames: u32,
+    /// Output directory: ndf.md, ndf.json, fig1_ndf.png.
+    #[arg(long, default_value = "study-out/ndf")]
+    out: PathBuf,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 #[derive(Args, Debug)]
@@ -637,6 +673,7 @@ pub fn run(cli: Cli) -> Result<()> {
         }
         Command::Study(StudyCommand::Seams(a)) => run_study_seams(a).context("study seams"),
         Command::Study(StudyCommand::Rnm(a)) => run_study_rnm(a).context("study rnm"),
+        Command::Study(StudyCommand::Ndf(a)) => run_study_ndf(a).context("study ndf"),
         Command::Study(StudyCommand::Normalmap(a)) => {
             run_study_normalmap(a).context("study normalmap")
         }
@@ -926,6 +963,65 @@ fn run_ssbump(a: SsbumpArgs) -> Result<()> {
         a.out.display(),
         started.elapsed().as_secs_f64()
     );
+    Ok(())
+}
+
+fn run_study_ndf(a: StudyNdfArgs) -> Result<()> {
+    use shvis::study::ndf;
+    let [x, y, z] = <[f32; 3]>::try_from(a.light_dir.as_slice())
+        .map_err(|_| anyhow::anyhow!("--light-dir needs three numbers x,y,z"))?;
+    let light_dir = glam::Vec3::new(x, y, z);
+    if !(light_dir.is_finite() && light_dir.length() > 1e-6) {
+        bail!("--light-dir {x},{y},{z} is not a direction");
+    }
+    if !(shvis::ndf::MIN_SIGMA..=shvis::ndf::MAX_SIGMA).contains(&a.sigma) {
+        bail!(
+            "--sigma {} is outside {}..={}",
+            a.sigma,
+            shvis::ndf::MIN_SIGMA,
+            shvis::ndf::MAX_SIGMA
+        );
+    }
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    let ctx = open_gpu(&a.gpu)?;
+    let settings = ndf::NdfStudySettings {
+        sigma: a.sigma,
+        light_dir,
+        width: a.width,
+        height: a.height,
+        spp: a.spp,
+        paths: a.paths.clone(),
+        frames: a.frames,
+    };
+    let (study, composite) = ndf::run(&ctx, &settings)?;
+    println!(
+        "reference: {} strata (a quarter of them: {:.4} from it)",
+        study.strata, study.reference_self_error
+    );
+    println!(
+        "bumpy plane: {} plane pixels, {} minified ≥ {}×; relative RMSE / energy against the footprint reference (minified | whole plane):",
+        study.plane_pixels,
+        study.minified_pixels,
+        ndf::MIN_MINIFICATION
+    );
+    for r in &study.rows {
+        println!(
+            "  spec{:<4} {:<4} {:.4} / {:.3} | {:.4} / {:.3}  {} ms",
+            r.filter.name(),
+            r.path.name(),
+            r.rel_rmse_minified,
+            r.energy_minified,
+            r.rel_rmse_all,
+            r.energy_all,
+            r.ms_median.map_or("-".into(), |m| format!("{m:.2}"))
+        );
+    }
+    for p in ndf::write_report(&study, &composite, &a.out)? {
+        println!("wrote {}", p.display());
+    }
+    check_validation(&ctx, a.gpu.validate)?;
+    println!("study ndf: {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
 }
 

@@ -327,7 +327,7 @@ pub fn render_point_gbuffer(
 
 /// The first `outputs` G-buffer pipelines (position, shading normal, albedo, vertex normal,
 /// lightmap UV); with `level0` the material textures are read at full resolution.
-fn gbuffer_pipelines(
+pub(crate) fn gbuffer_pipelines(
     ctx: &Arc<Context>,
     gpu: &SceneGpu,
     level0: bool,

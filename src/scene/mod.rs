@@ -6,6 +6,7 @@
 //! The vertex layout here is the one the GPU reads (`glsl/scene/mesh.vert`), so it is
 //! `#[repr(C)]` + `Pod`.
 
+pub mod bumpy;
 pub mod displace;
 pub mod gltf;
 pub mod house;
@@ -191,7 +192,7 @@ pub struct Scene {
 /// Errors from building or loading a scene.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    #[error("unknown scene '{0}': use 'house', 'patio' or a path to a .gltf/.glb file")]
+    #[error("unknown scene '{0}': use 'house', 'patio', 'bumpy' or a path to a .gltf/.glb file")]
     Unknown(String),
     /// A glTF file that cannot be read or used; `message` says what is wrong.
     #[error("{path}: {message}")]

@@ -14,8 +14,11 @@
 //! - [`normalmap`]: issue 18 — GPU normal-map generation timed against triangle counts and
 //!   resolution beside the CPU baker, checked on a real model, rendered through `unc6`
 //!   (`shvis study normalmap`).
+//! - [`ndf`]: issue 19 — the specular term under naive MIP and normal-distribution filtering
+//!   on the receding bumpy plane against its footprint reference (`shvis study ndf`).
 
 pub mod compression;
+pub mod ndf;
 pub mod normalmap;
 pub mod params;
 pub mod params_gpu;

@@ -1,0 +1,275 @@
+//! The specular term of a directional light under three normal-map filterings
+//! (`glsl/ndf/specular.frag`), and its footprint reference.
+//!
+//! Radiance L = k_s E · D(h) where both n·l and n·v are positive (n the interpolated
+//! normal; no shadowing or masking, as in the paper), D the normal density of [`super`] at
+//! the half vector h of the light and the view:
+//!
+//! - [`NormalFilter::Mip`]: the usual MIP chain of averaged normals, renormalized, with the
+//!   base lobe D = κ₀ g(|h − n̄|²/σ²)/σ³ — the filtering the paper shows to be wrong;
+//! - [`NormalFilter::Ndf`]: the NDF maps' trilinearly filtered moments, D = κ₀ g(d)/√det S;
+//! - [`NormalFilter::NdfNormalized`]: the same with the per-texel 1/N instead of κ₀.
+//!
+//! The reference ([`render_reference`]) takes the footprint reference's G-buffer passes
+//! (full-resolution normal map at stratified sub-pixel positions, `crate::reference`) and
+//! evaluates the base lobe of each sample's own normal, so it integrates exactly the BRDF
+//! the full-resolution surface has over each pixel.
+
+use std::sync::Arc;
+
+use ash::vk;
+use glam::{DVec3, Vec3};
+
+use super::{NdfMaps, pearson};
+use crate::gpu::{self, Buffer, Context, GpuError, Image, ImageDesc, Resource, layout};
+use crate::reference::ReferenceSettings;
+use crate::render::{Frame, SceneGpu};
+use crate::technique::HwPath;
+
+/// How the specular pass filters the normal map.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum NormalFilter {
+    Mip,
+    Ndf,
+    NdfNormalized,
+}
+
+impl NormalFilter {
+    pub const ALL: [NormalFilter; 3] = [
+        NormalFilter::Mip,
+        NormalFilter::Ndf,
+        NormalFilter::NdfNormalized,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            NormalFilter::Mip => "mip",
+            NormalFilter::Ndf => "ndf",
+            NormalFilter::NdfNormalized => "ndfn",
+        }
+    }
+
+    /// Textures fetched per pixel besides albedo (not read) and normal map.
+    pub fn extra_lookups(self) -> u32 {
+        match self {
+            NormalFilter::Mip => 0,
+            NormalFilter::Ndf | NormalFilter::NdfNormalized => 3,
+        }
+    }
+}
+
+/// The directional light and the material's specular factor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpecularLight {
+    /// Unit direction toward the light.
+    pub direction: Vec3,
+    /// k_s · E, linear RGB.
+    pub radiance: Vec3,
+}
+
+/// Uniform block `SpecularParams` of `glsl/ndf/specular.frag` (std140).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct SpecularParams {
+    light_dir: [f32; 4],
+    light_radiance: [f32; 4],
+    sigma: f32,
+    kappa0: f32,
+    _pad: [f32; 2],
+}
+
+/// The NDF images for `path`: three 2D textures (dx9) or one 3-layer array (dx10), each
+/// with the full MIP chain.
+pub fn upload_maps(
+    ctx: &Arc<Context>,
+    maps: &NdfMaps,
+    path: HwPath,
+) -> Result<Vec<Image>, GpuError> {
+    let format = vk::Format::R32G32B32A32_SFLOAT;
+    if !ctx.supports_linear_filter(format) {
+        return Err(GpuError::Invalid {
+            what: "ndf maps".into(),
+            detail: format!(
+                "{} cannot filter RGBA32F textures linearly",
+                ctx.device_name()
+            ),
+        });
+    }
+    let (w, h) = (maps.levels[0].width, maps.levels[0].height);
+    let levels = maps.levels.len() as u32;
+    let bytes = |k: usize, l: usize| -> &[u8] { bytemuck::cast_slice(&maps.levels[l].textures[k]) };
+    match path {
+        HwPath::Dx9 => (0..3)
+            .map(|k| {
+                let data: Vec<Vec<&[u8]>> =
+                    (0..maps.levels.len()).map(|l| vec![bytes(k, l)]).collect();
+                Image::with_data(
+                    ctx,
+                    &ImageDesc::texture_2d(format, w, h).mip_levels(levels),
+                    &data,
+                    &format!("ndf.moments{k}"),
+                )
+            })
+            .collect(),
+        HwPath::Dx10 => {
+            let data: Vec<Vec<&[u8]>> = (0..maps.levels.len())
+                .map(|l| (0..3).map(|k| bytes(k, l)).collect())
+                .collect();
+            Ok(vec![Image::with_data(
+                ctx,
+                &ImageDesc::texture_2d_array(format, w, h, 3).mip_levels(levels),
+                &data,
+                "ndf.moments",
+            )?])
+        }
+    }
+}
+
+/// Renders the specular image of `scene` (a [`SceneGpu`] with `float32_target`, whose
+/// vertex stage passes the world position) under `filter` on `path`; `images` from
+/// [`upload_maps`] for the same path (unused by [`NormalFilter::Mip`]).
+#[allow(clippy::too_many_arguments)]
+pub fn render_specular(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    maps: &NdfMaps,
+    images: &[Image],
+    light: &SpecularLight,
+    filter: NormalFilter,
+    path: HwPath,
+    frames: u32,
+) -> Result<Frame, GpuError> {
+    let name = format!("spec{}.{path}", filter.name());
+    let params = SpecularParams {
+        light_dir: light.direction.normalize().extend(0.0).to_array(),
+        light_radiance: light.radiance.extend(0.0).to_array(),
+        sigma: maps.sigma,
+        kappa0: maps.kappa0 as f32,
+        _pad: [0.0; 2],
+    };
+    let params = Buffer::with_data(
+        ctx,
+        bytemuck::bytes_of(&params),
+        vk::BufferUsageFlags::UNIFORM_BUFFER,
+        &format!("{name}.params"),
+    )?;
+    let filter_value = match filter {
+        NormalFilter::Mip => 0,
+        NormalFilter::Ndf => 1,
+        NormalFilter::NdfNormalized => 2,
+    };
+    let fragment = gpu::compile_glsl(
+        "ndf/specular.frag",
+        gpu::ShaderStage::Fragment,
+        &[
+            path.shader_define(),
+            ("NDF_FILTER", filter_value),
+            ("GBUFFER", 1),
+        ],
+    )?;
+    let mut resources = scene.common_resources();
+    resources.push((layout::BINDING_TECHNIQUE_PARAMS, Resource::Uniform(&params)));
+    if filter != NormalFilter::Mip {
+        let sampler = scene.material_sampler();
+        resources.push((
+            layout::BINDING_TECHNIQUE_TEXTURE0,
+            match images {
+                [one] => Resource::Texture(one, sampler),
+                many => Resource::TextureArray(many.iter().map(|i| (i, sampler)).collect()),
+            },
+        ));
+    }
+    let pipeline = scene.mesh_pipeline(ctx, &name, &fragment, &resources)?;
+    drop(resources);
+    scene.render_pipeline(&pipeline, 1, frames.max(1))
+}
+
+/// The base lobe at full resolution: κ₀ g(|h − n|²/σ²)/σ³.
+pub fn base_lobe(h: DVec3, n: DVec3, sigma: f64, kappa0: f64) -> f64 {
+    kappa0 * pearson((h - n).length_squared() / (sigma * sigma)) / sigma.powi(3)
+}
+
+/// Most sub-pixel strata per side of the specular reference (32² = 1024 G-buffer sets).
+pub const MAX_REFERENCE_SIDE: u32 = 32;
+
+/// The footprint reference of the specular image (module doc): ⌈√spp⌉² (≤ 32²) jittered
+/// strata of the pixel, one G-buffer set each, the positions shared by all pixels. More
+/// strata than the diffuse reference's 8² because nothing else averages here: a pixel near
+/// the horizon covers hundreds of bumps, and 64 shared positions alias into moiré.
+/// Deterministic for a seed.
+pub fn render_reference(
+    ctx: &Arc<Context>,
+    scene: &mut SceneGpu,
+    camera_position: Vec3,
+    maps: &NdfMaps,
+    light: &SpecularLight,
+    settings: &ReferenceSettings,
+) -> Result<Frame, GpuError> {
+    let pipelines = crate::reference::gbuffer_pipelines(ctx, scene, true, 4)?;
+    let side = ((settings.spp.max(1) as f64).sqrt().ceil() as u32).min(MAX_REFERENCE_SIDE);
+    let (w, h) = (settings.width as usize, settings.height as usize);
+    let mut sum = vec![[0.0f64; 4]; w * h];
+    let count = side * side;
+    let l = light.direction.normalize().as_dvec3();
+    let (sigma, kappa0) = (f64::from(maps.sigma), maps.kappa0);
+    let eye = camera_position.as_dvec3();
+    for j in 0..count {
+        let jitter = |axis: u64| {
+            let hash =
+                crate::bake::directions::splitmix64(settings.seed ^ (u64::from(j) << 1 | axis));
+            crate::bake::directions::unit_f64(hash) as f32
+        };
+        let sx = ((j % side) as f32 + jitter(0)) / side as f32;
+        let sy = ((j / side) as f32 + jitter(1)) / side as f32;
+        scene.set_jitter([0.5 - sx, 0.5 - sy])?;
+        let position = scene.render_pipeline(&pipelines[0], 0, 1)?;
+        let normal = scene.render_pipeline(&pipelines[1], 0, 1)?;
+        let vertex_normal = scene.render_pipeline(&pipelines[3], 0, 1)?;
+        for (i, acc) in sum.iter_mut().enumerate() {
+            let p = position.rgba[i];
+            if p[3] < 0.5 {
+                continue;
+            }
+            let pos = DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
+            let n = Vec3::from_slice(&normal.rgba[i][..3])
+                .as_dvec3()
+                .normalize_or_zero();
+            let ng = Vec3::from_slice(&vertex_normal.rgba[i][..3])
+                .as_dvec3()
+                .normalize_or_zero();
+            let v = (eye - pos).normalize_or_zero();
+            let lit = ng.dot(l) > 0.0 && ng.dot(v) > 0.0;
+            let d = if lit {
+                base_lobe((l + v).normalize_or_zero(), n, sigma, kappa0)
+            } else {
+                0.0
+            };
+            for c in 0..3 {
+                acc[c] += d * f64::from(light.radiance[c]);
+            }
+            acc[3] += 1.0;
+        }
+    }
+    scene.set_jitter([0.0, 0.0])?;
+    let n = f64::from(count);
+    Ok(Frame {
+        width: settings.width,
+        height: settings.height,
+        rgba: sum
+            .iter()
+            .map(|a| {
+                let covered = a[3] / n;
+                let scale = if a[3] > 0.0 { 1.0 / a[3] } else { 0.0 };
+                // Covered where every stratum hit the surface (coverage edges excluded).
+                [
+                    (a[0] * scale) as f32,
+                    (a[1] * scale) as f32,
+                    (a[2] * scale) as f32,
+                    if covered >= 1.0 { 1.0 } else { 0.0 },
+                ]
+            })
+            .collect(),
+        ms: Vec::new(),
+    })
+}
