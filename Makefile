@@ -24,6 +24,7 @@ bench: build
 	target/release/shvis bench --out $(BENCH_OUT)
 	target/release/shvis study rnm --envs $(RNM_ENVS) --out $(BENCH_OUT)/rnm
 	target/release/shvis study normalmap --out $(BENCH_OUT)/normalmap
+	target/release/shvis study ndf --out $(BENCH_OUT)/ndf
 
 clean:
 	cargo clean

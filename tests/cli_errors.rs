@@ -349,3 +349,21 @@ fn normalmap_bad_meshes_sizes_and_outputs() {
         &["within"],
     );
 }
+
+#[test]
+fn study_ndf_bad_sigma_and_light() {
+    let dir = scratch("ndf");
+    let out = dir.to_str().unwrap();
+    assert_one_error_line(
+        &shvis(&["study", "ndf", "--sigma", "0", "--out", out], &[]),
+        &["--sigma 0"],
+    );
+    assert_one_error_line(
+        &shvis(&["study", "ndf", "--light-dir", "0,0,0", "--out", out], &[]),
+        &["--light-dir", "not a direction"],
+    );
+    assert_one_error_line(
+        &shvis(&["study", "ndf", "--light-dir", "1,2", "--out", out], &[]),
+        &["three numbers"],
+    );
+}

@@ -114,7 +114,7 @@ impl Moments {
     pub fn partial_density(&self, h: DVec3) -> f64 {
         let s = self.covariance();
         let det = s.determinant();
-        if !(det > 0.0) {
+        if det.is_nan() || det <= 0.0 {
             return 0.0;
         }
         let r = h - self.mean;
@@ -127,7 +127,7 @@ impl Moments {
 pub fn normalization(m: &Moments) -> Option<f64> {
     let s = m.covariance();
     let det = s.determinant();
-    if !(det > 0.0) {
+    if det.is_nan() || det <= 0.0 {
         return None;
     }
     let inv = s.inverse();
@@ -209,7 +209,8 @@ pub fn build(normal_map: &Texture8, normal_scale: f32, sigma: f32) -> NdfMaps {
         .iter()
         .map(|&t| Moments::of_normal(decode_normal(t, normal_scale).as_dvec3(), s).texels(0.0))
         .collect();
-    let chains: Vec<Vec<(u32, u32, Vec<[f32; 4]>)>> = (0..3)
+    type Chain = Vec<(u32, u32, Vec<[f32; 4]>)>;
+    let chains: Vec<Chain> = (0..3)
         .map(|k| crate::render::box_mip_levels(w, h, level0.iter().map(|t| t[k]).collect()))
         .collect();
     let base = normalization(&Moments::of_normal(DVec3::Z, s)).unwrap_or(1.0);

@@ -245,8 +245,8 @@ pub fn render_reference(
             } else {
                 0.0
             };
-            for c in 0..3 {
-                acc[c] += d * f64::from(light.radiance[c]);
+            for (a, r) in acc.iter_mut().zip(light.radiance.to_array()) {
+                *a += d * f64::from(r);
             }
             acc[3] += 1.0;
         }
