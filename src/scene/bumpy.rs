@@ -30,14 +30,6 @@ const LENGTH: f32 = 60.0;
 /// # Errors
 /// [`SceneError::LightmapRes`] for a resolution outside the house's range.
 pub fn build(lightmap_res: u32) -> Result<Scene, SceneError> {
-    let out_of_range = || SceneError::LightmapRes {
-        res: lightmap_res,
-        min: house::MIN_LIGHTMAP_RES,
-        max: house::MAX_LIGHTMAP_RES,
-    };
-    if !(house::MIN_LIGHTMAP_RES..=house::MAX_LIGHTMAP_RES).contains(&lightmap_res) {
-        return Err(out_of_range());
-    }
     let quads = [Quad {
         origin: Vec3::new(-0.5 * WIDTH, 0.0, 1.0),
         t: Vec3::X,
@@ -46,10 +38,9 @@ pub fn build(lightmap_res: u32) -> Result<Scene, SceneError> {
         tint: Vec3::ONE,
         half_density: false,
     }];
-    let charts = house::pack_charts(&quads, lightmap_res).ok_or_else(out_of_range)?;
     Ok(Scene {
         name: "bumpy".to_string(),
-        mesh: house::mesh(&quads, &charts, lightmap_res),
+        mesh: house::quads_mesh(&quads, lightmap_res)?,
         material: Material {
             albedo: Texture8 {
                 width: 1,

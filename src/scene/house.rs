@@ -436,6 +436,25 @@ pub(super) fn pack_charts(quads: &[Quad], res: u32) -> Option<Vec<Chart>> {
 }
 
 /// Triangulates the quads: 4 vertices and 2 counter-clockwise triangles each.
+/// The mesh of `quads` charted for a `lightmap_res`² lightmap: the built-in scenes made
+/// of quads (`patio`, `bumpy`).
+///
+/// # Errors
+/// [`SceneError::LightmapRes`] when the resolution is outside the house's range or the
+/// charts do not fit.
+pub(super) fn quads_mesh(quads: &[Quad], lightmap_res: u32) -> Result<Mesh, SceneError> {
+    let out_of_range = || SceneError::LightmapRes {
+        res: lightmap_res,
+        min: MIN_LIGHTMAP_RES,
+        max: MAX_LIGHTMAP_RES,
+    };
+    if !(MIN_LIGHTMAP_RES..=MAX_LIGHTMAP_RES).contains(&lightmap_res) {
+        return Err(out_of_range());
+    }
+    let charts = pack_charts(quads, lightmap_res).ok_or_else(out_of_range)?;
+    Ok(mesh(quads, &charts, lightmap_res))
+}
+
 pub(super) fn mesh(quads: &[Quad], charts: &[Chart], res: u32) -> Mesh {
     let mut m = Mesh::default();
     let inv_res = 1.0 / res as f32;

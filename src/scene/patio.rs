@@ -24,14 +24,6 @@ const WALL_HEIGHT: f32 = 0.5;
 /// [`SceneError::LightmapRes`] when the charts do not fit or the resolution is outside
 /// the house's range.
 pub fn build(lightmap_res: u32) -> Result<Scene, SceneError> {
-    let out_of_range = || SceneError::LightmapRes {
-        res: lightmap_res,
-        min: house::MIN_LIGHTMAP_RES,
-        max: house::MAX_LIGHTMAP_RES,
-    };
-    if !(house::MIN_LIGHTMAP_RES..=house::MAX_LIGHTMAP_RES).contains(&lightmap_res) {
-        return Err(out_of_range());
-    }
     let h = 0.5 * SIDE;
     let quad = |origin: Vec3, t: Vec3, b: Vec3, size: Vec2| Quad {
         origin,
@@ -64,10 +56,9 @@ pub fn build(lightmap_res: u32) -> Result<Scene, SceneError> {
             Vec2::new(SIDE, WALL_HEIGHT),
         ),
     ];
-    let charts = house::pack_charts(&quads, lightmap_res).ok_or_else(out_of_range)?;
     Ok(Scene {
         name: "patio".to_string(),
-        mesh: house::mesh(&quads, &charts, lightmap_res),
+        mesh: house::quads_mesh(&quads, lightmap_res)?,
         material: Material {
             albedo: house::brick_albedo(),
             normal: house::brick_normal(),

@@ -24,3 +24,51 @@ pub mod params;
 pub mod params_gpu;
 pub mod rnm;
 pub mod seams;
+
+use std::path::{Path, PathBuf};
+
+use crate::render::Frame;
+use crate::report::ReportError;
+
+/// Frames of one size tiled left to right (the studies' composites).
+pub(crate) fn side_by_side(frames: &[&Frame]) -> Frame {
+    let (w, h) = (frames[0].width, frames[0].height);
+    let total = w * frames.len() as u32;
+    let mut rgba = vec![[0.0f32; 4]; (total * h) as usize];
+    for (k, f) in frames.iter().enumerate() {
+        for y in 0..h {
+            for x in 0..w {
+                rgba[(y * total + k as u32 * w + x) as usize] = f.rgba[(y * w + x) as usize];
+            }
+        }
+    }
+    Frame {
+        width: total,
+        height: h,
+        rgba,
+        ms: Vec::new(),
+    }
+}
+
+/// Writes `text` as `dir/name`; returns the path.
+pub(crate) fn write_text(dir: &Path, name: &str, text: &str) -> Result<PathBuf, ReportError> {
+    let path = dir.join(name);
+    std::fs::write(&path, text).map_err(|e| ReportError::Write {
+        path: path.clone(),
+        detail: e.to_string(),
+    })?;
+    Ok(path)
+}
+
+/// Writes `value` as pretty JSON `dir/name`; returns the path.
+pub(crate) fn write_json(
+    dir: &Path,
+    name: &str,
+    value: &impl serde::Serialize,
+) -> Result<PathBuf, ReportError> {
+    let json = serde_json::to_string_pretty(value).map_err(|e| ReportError::Write {
+        path: dir.join(name),
+        detail: e.to_string(),
+    })?;
+    write_text(dir, name, &json)
+}

@@ -233,7 +233,7 @@ pub fn run(ctx: &Arc<Context>, s: &NdfStudySettings) -> Result<(NdfStudy, Frame)
     }
     let mut figure = vec![&reference];
     figure.extend(panels.iter().flatten());
-    let composite = side_by_side(&figure);
+    let composite = super::side_by_side(&figure);
     Ok((
         NdfStudy {
             device: ctx.device_name().to_string(),
@@ -255,25 +255,6 @@ pub fn run(ctx: &Arc<Context>, s: &NdfStudySettings) -> Result<(NdfStudy, Frame)
         },
         composite,
     ))
-}
-
-fn side_by_side(frames: &[&Frame]) -> Frame {
-    let (w, h) = (frames[0].width, frames[0].height);
-    let total = w * frames.len() as u32;
-    let mut rgba = vec![[0.0f32; 4]; (total * h) as usize];
-    for (k, f) in frames.iter().enumerate() {
-        for y in 0..h {
-            for x in 0..w {
-                rgba[(y * total + k as u32 * w + x) as usize] = f.rgba[(y * w + x) as usize];
-            }
-        }
-    }
-    Frame {
-        width: total,
-        height: h,
-        rgba,
-        ms: Vec::new(),
-    }
 }
 
 /// Writes `ndf.md`, `ndf.json` and `fig1_ndf.png` into `dir`; returns their paths.
@@ -329,17 +310,9 @@ pub fn write_report(
         .max(1e-9);
     let fig = dir.join("fig1_ndf.png");
     crate::report::image::write_frame(&fig, composite, -p99.log2())?;
-    let write = |name: &str, text: &str| -> Result<PathBuf, ReportError> {
-        let path = dir.join(name);
-        std::fs::write(&path, text).map_err(|e| ReportError::Write {
-            path: path.clone(),
-            detail: e.to_string(),
-        })?;
-        Ok(path)
-    };
-    let json = serde_json::to_string_pretty(study).map_err(|e| ReportError::Write {
-        path: dir.join("ndf.json"),
-        detail: e.to_string(),
-    })?;
-    Ok(vec![write("ndf.md", &md)?, write("ndf.json", &json)?, fig])
+    Ok(vec![
+        super::write_text(dir, "ndf.md", &md)?,
+        super::write_json(dir, "ndf.json", study)?,
+        fig,
+    ])
 }

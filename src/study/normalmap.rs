@@ -469,20 +469,8 @@ pub fn write_report(study: &NormalMapStudy, dir: &Path) -> Result<Vec<PathBuf>, 
             ));
         }
     }
-    let write = |name: &str, text: &str| -> Result<PathBuf, ReportError> {
-        let path = dir.join(name);
-        std::fs::write(&path, text).map_err(|e| ReportError::Write {
-            path: path.clone(),
-            detail: e.to_string(),
-        })?;
-        Ok(path)
-    };
-    let json = serde_json::to_string_pretty(study).map_err(|e| ReportError::Write {
-        path: dir.join("normalmap.json"),
-        detail: e.to_string(),
-    })?;
     Ok(vec![
-        write("normalmap.md", &md)?,
-        write("normalmap.json", &json)?,
+        super::write_text(dir, "normalmap.md", &md)?,
+        super::write_json(dir, "normalmap.json", study)?,
     ])
 }

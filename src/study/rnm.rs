@@ -175,8 +175,8 @@ pub fn run_env(
     }
     let mut figure_frames: Vec<&Frame> = panels.iter().flatten().collect();
     figure_frames.push(bounced_frame(&displaced));
-    let figure =
-        (figure_frames.len() == FIGURE_TECHNIQUES.len() + 1).then(|| side_by_side(&figure_frames));
+    let figure = (figure_frames.len() == FIGURE_TECHNIQUES.len() + 1)
+        .then(|| super::side_by_side(&figure_frames));
     Ok(EnvResult {
         env: env.to_string(),
         rows,
@@ -198,26 +198,6 @@ fn bounced_frame(r: &ReferenceImage) -> &Frame {
 
 fn bounced_noise(r: &ReferenceImage) -> f64 {
     r.bounced.as_ref().map_or(r.rel_noise, |b| b.rel_noise)
-}
-
-/// Frames of one size tiled left to right.
-fn side_by_side(frames: &[&Frame]) -> Frame {
-    let (w, h) = (frames[0].width, frames[0].height);
-    let total = w * frames.len() as u32;
-    let mut rgba = vec![[0.0f32; 4]; (total * h) as usize];
-    for (k, f) in frames.iter().enumerate() {
-        for y in 0..h {
-            for x in 0..w {
-                rgba[(y * total + k as u32 * w + x) as usize] = f.rgba[(y * w + x) as usize];
-            }
-        }
-    }
-    Frame {
-        width: total,
-        height: h,
-        rgba,
-        ms: Vec::new(),
-    }
 }
 
 /// A file-name-safe stem of an `--env` name: "sky:15" → "sky15", a path → its file stem.
@@ -276,20 +256,8 @@ pub fn write_report(
             written.push(path);
         }
     }
-    let write = |name: &str, text: &str| -> Result<PathBuf, ReportError> {
-        let path = dir.join(name);
-        std::fs::write(&path, text).map_err(|e| ReportError::Write {
-            path: path.clone(),
-            detail: e.to_string(),
-        })?;
-        Ok(path)
-    };
-    written.push(write("rnm.md", &md)?);
-    let json = serde_json::to_string_pretty(results).map_err(|e| ReportError::Write {
-        path: dir.join("rnm.json"),
-        detail: e.to_string(),
-    })?;
-    written.push(write("rnm.json", &json)?);
+    written.push(super::write_text(dir, "rnm.md", &md)?);
+    written.push(super::write_json(dir, "rnm.json", &results)?);
     Ok(written)
 }
 
