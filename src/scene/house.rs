@@ -102,19 +102,9 @@ pub fn camera() -> Camera {
 /// [`SceneError::LightmapRes`] when `lightmap_res` is outside
 /// [`MIN_LIGHTMAP_RES`]..=[`MAX_LIGHTMAP_RES`].
 pub fn build(lightmap_res: u32) -> Result<Scene, SceneError> {
-    let out_of_range = || SceneError::LightmapRes {
-        res: lightmap_res,
-        min: MIN_LIGHTMAP_RES,
-        max: MAX_LIGHTMAP_RES,
-    };
-    if !(MIN_LIGHTMAP_RES..=MAX_LIGHTMAP_RES).contains(&lightmap_res) {
-        return Err(out_of_range());
-    }
-    let quads = quads();
-    let charts = pack_charts(&quads, lightmap_res).ok_or_else(out_of_range)?;
     Ok(Scene {
         name: "house".to_string(),
-        mesh: mesh(&quads, &charts, lightmap_res),
+        mesh: quads_mesh(&quads(), lightmap_res)?,
         material: Material {
             albedo: brick_albedo(),
             normal: brick_normal(),
@@ -437,7 +427,7 @@ pub(super) fn pack_charts(quads: &[Quad], res: u32) -> Option<Vec<Chart>> {
 
 /// Triangulates the quads: 4 vertices and 2 counter-clockwise triangles each.
 /// The mesh of `quads` charted for a `lightmap_res`² lightmap: the built-in scenes made
-/// of quads (`patio`, `bumpy`).
+/// of quads (the house, `patio`, `bumpy`).
 ///
 /// # Errors
 /// [`SceneError::LightmapRes`] when the resolution is outside the house's range or the
