@@ -169,6 +169,7 @@ fn lighting_update(c: &mut Criterion) {
         vertex_pca: &[],
         sh_lightmap: None,
         ssbump: None,
+        ndf_moments: None,
         table_res: 32,
         h_order: Order::THREE,
     };

@@ -199,6 +199,16 @@ struct StudyNdfArgs {
     /// Timed frames per row.
     #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     frames: u32,
+    /// Scenes of the diffuse part (unc6 / preconv and their NDF variants against the
+    /// footprint reference); empty to skip it.
+    #[arg(long, value_delimiter = ',', default_value = "bumpy,house")]
+    diffuse_scenes: Vec<String>,
+    /// Reference samples per pixel of the diffuse part.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    diffuse_spp: u32,
+    /// Lightmap resolution of the diffuse part's bakes.
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=4096))]
+    vis_res: u32,
     /// Output directory: ndf.md, ndf.json, fig1_ndf.png.
     #[arg(long, default_value = "study-out/ndf")]
     out: PathBuf,
@@ -470,6 +480,11 @@ struct RenderArgs {
     /// Bounces of inter-reflection baked for shlmap.
     #[arg(long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
     bounces: u32,
+    /// How unc* and preconv read the normal map: `mip` (its MIP chain of averaged normals)
+    /// or `ndf` (filtered as a distribution, Olano & North: the techniques' `…ndf`
+    /// variants; the other techniques have none and stay as they are).
+    #[arg(long, value_enum, default_value_t = NormalFilterArg::Mip)]
+    normal_filter: NormalFilterArg,
     /// Ignore the normal map (shade with interpolated normals).
     #[arg(long)]
     flat_normals: bool,
@@ -533,6 +548,11 @@ struct BenchArgs {
     /// Comma-separated hardware paths.
     #[arg(long, default_value = "dx9,dx10")]
     paths: String,
+    /// How unc* and preconv read the normal map: `mip` (its MIP chain of averaged normals)
+    /// or `ndf` (filtered as a distribution, Olano & North: the techniques' `…ndf`
+    /// variants; the other techniques have none and stay as they are).
+    #[arg(long, value_enum, default_value_t = NormalFilterArg::Mip)]
+    normal_filter: NormalFilterArg,
     /// Timed frames per technique × path (after the warm-up).
     #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     frames: u32,
@@ -1017,7 +1037,62 @@ fn run_study_ndf(a: StudyNdfArgs) -> Result<()> {
             r.ms_median.map_or("-".into(), |m| format!("{m:.2}"))
         );
     }
-    for p in ndf::write_report(&study, &composite, &a.out)? {
+    let diffuse_scenes: Vec<String> = a
+        .diffuse_scenes
+        .iter()
+        .filter(|s| !s.is_empty())
+        .cloned()
+        .collect();
+    let diffuse = if diffuse_scenes.is_empty() {
+        None
+    } else {
+        let (scenes, rows) = shvis::study::ndf_diffuse::run(
+            &ctx,
+            &shvis::study::ndf_diffuse::DiffuseSettings {
+                scenes: diffuse_scenes,
+                width: a.width,
+                height: a.height,
+                ref_spp: a.diffuse_spp,
+                vis_res: a.vis_res,
+                paths: a.paths.clone(),
+                cache_dir: None,
+                strata_side: 16,
+                image_dir: Some(a.out.clone()),
+            },
+        )?;
+        for s in &scenes {
+            println!(
+                "  {}: {} covered, {} minified, {} magnified pixels; footprint vs point reference {:.4}",
+                s.scene, s.covered_pixels, s.minified_pixels, s.magnified_pixels, s.footprint_step
+            );
+        }
+        println!(
+            "diffuse: relative RMSE against the footprint reference, unfiltered → ndf (minified ≥ 4× | magnified | all; max change where magnified):"
+        );
+        for r in &rows {
+            println!(
+                "  {:<6} {:<8} {:<4} {:.4} → {:.4} (8² blocks {:.4} → {:.4}) | {:.4} → {:.4} | {:.4} → {:.4}; {:.1e}; own footprint {:.4} → {:.4} (8² blocks {:.4} → {:.4})",
+                r.scene,
+                r.technique.name(),
+                r.path.name(),
+                r.minified[0],
+                r.minified[1],
+                r.reference_blocks[0],
+                r.reference_blocks[1],
+                r.magnified[0],
+                r.magnified[1],
+                r.all[0],
+                r.all[1],
+                r.magnified_max_change,
+                r.own_footprint_minified[0],
+                r.own_footprint_minified[1],
+                r.own_footprint_blocks[0],
+                r.own_footprint_blocks[1]
+            );
+        }
+        Some((scenes, rows))
+    };
+    for p in ndf::write_report(&study, &composite, diffuse.as_ref(), &a.out)? {
         println!("wrote {}", p.display());
     }
     check_validation(&ctx, a.gpu.validate)?;
@@ -1273,8 +1348,41 @@ fn run_bake(a: BakeArgs) -> Result<()> {
     Ok(())
 }
 
-fn run_render(a: RenderArgs) -> Result<()> {
+/// `--normal-filter`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum NormalFilterArg {
+    Mip,
+    Ndf,
+}
+
+/// `techniques` under `--normal-filter`: with `ndf` each unc*/preconv replaced by its NDF
+/// variant (duplicates dropped), a note naming those without one.
+fn with_normal_filter(techniques: Vec<Technique>, filter: NormalFilterArg) -> Vec<Technique> {
+    if filter == NormalFilterArg::Mip {
+        return techniques;
+    }
+    let unfiltered: Vec<String> = techniques
+        .iter()
+        .filter(|t| t.ndf_variant().is_none())
+        .map(|t| t.name())
+        .collect();
+    if !unfiltered.is_empty() {
+        eprintln!(
+            "note: --normal-filter ndf applies to unc* and preconv; {} read the MIP chain",
+            unfiltered.join(", ")
+        );
+    }
+    let mut seen = std::collections::HashSet::new();
+    techniques
+        .into_iter()
+        .map(|t| t.ndf_variant().unwrap_or(t))
+        .filter(|t| seen.insert(*t))
+        .collect()
+}
+
+fn run_render(mut a: RenderArgs) -> Result<()> {
     frame_format(&a.out)?;
+    a.technique = with_normal_filter(vec![a.technique], a.normal_filter)[0];
     // The device first: a missing GPU should not cost a bake.
     let ctx = open_gpu(&a.gpu)?;
     let bounces = a.technique.needs().sh_lightmap.then_some(a.bounces);
@@ -1370,7 +1478,10 @@ where
 
 fn run_bench(a: BenchArgs) -> Result<()> {
     let mut settings = BenchSettings {
-        techniques: parse_list(&a.techniques, Technique::ALL)?,
+        techniques: with_normal_filter(
+            parse_list(&a.techniques, Technique::ALL)?,
+            a.normal_filter,
+        ),
         paths: parse_list(&a.paths, HwPath::ALL)?,
         frames: a.frames,
         warmup: a.warmup,

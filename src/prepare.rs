@@ -103,6 +103,9 @@ pub struct Prepared {
     pub vertex_pca: Vec<VertexPca>,
     /// The material's SSBump and AO for `ssbump` / `rnmao` ([`Prepared::bake_ssbump`]).
     pub ssbump: Option<SsBumpMaps>,
+    /// The moments of the material's normal map for `uncOndf` / `preconvndf`
+    /// ([`Prepared::build_ndf_moments`]).
+    pub ndf_moments: Option<crate::ndf::NdfMaps>,
 }
 
 /// Order of the lighting projection: L×H of order-6 visibility needs lighting of order 8
@@ -189,7 +192,27 @@ impl Prepared {
         self.fit_clusters(techniques)?;
         self.bake_vertex_pca(techniques);
         self.bake_ssbump(techniques);
+        self.build_ndf_moments(techniques);
         Ok(())
+    }
+
+    /// Builds the moment MIP chain of the material's normal map when a technique of
+    /// `techniques` filters with it (`crate::ndf::moment_maps`).
+    pub fn build_ndf_moments(&mut self, techniques: &[Technique]) {
+        if self.ndf_moments.is_some() || !techniques.iter().any(|t| t.needs().ndf_moments) {
+            return;
+        }
+        let t = Instant::now();
+        let material = &self.scene.material;
+        let maps = crate::ndf::moment_maps(&material.normal, material.normal_scale);
+        log::info!(
+            "NDF moments: {}×{} texels, {} levels in {:.2} s",
+            material.normal.width,
+            material.normal.height,
+            maps.levels.len(),
+            t.elapsed().as_secs_f64()
+        );
+        self.ndf_moments = Some(maps);
     }
 
     /// Bakes the material's SSBump and AO from its height field when a technique of
@@ -224,6 +247,7 @@ impl Prepared {
             vertex_pca: &self.vertex_pca,
             sh_lightmap: self.sh_lightmap.as_ref(),
             ssbump: self.ssbump.as_ref(),
+            ndf_moments: self.ndf_moments.as_ref(),
             table_res: self.table_res,
             h_order: self.h_order,
         }
@@ -342,6 +366,7 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
         cache_dir: settings.cache_dir.clone().unwrap_or_else(default_cache_dir),
         vertex_pca: Vec::new(),
         ssbump: None,
+        ndf_moments: None,
     })
 }
 

@@ -228,6 +228,7 @@ pub fn render_reference(
             height: settings.height,
             flat_normals: false,
             float32_target: true,
+            material_level0: false,
         },
     )?;
     let pipelines = gbuffer_pipelines(ctx, &gpu, settings.footprint, 4)?;
@@ -308,6 +309,7 @@ pub fn render_point_gbuffer(
             height,
             flat_normals: false,
             float32_target: true,
+            material_level0: false,
         },
     )?;
     let mut frames = Vec::with_capacity(5);

@@ -22,6 +22,10 @@ pub struct FrameSettings {
     pub flat_normals: bool,
     /// Render into RGBA32F instead of RGBA16F (G-buffer passes of the reference).
     pub float32_target: bool,
+    /// Techniques built for this scene read the material textures at full resolution
+    /// (`SHVIS_MATERIAL_LEVEL0`), for integrating their own shading over a pixel's
+    /// footprint by jittered renders (`study ndf`).
+    pub material_level0: bool,
 }
 
 impl Default for FrameSettings {
@@ -31,6 +35,7 @@ impl Default for FrameSettings {
             height: 800,
             flat_normals: false,
             float32_target: false,
+            material_level0: false,
         }
     }
 }
@@ -48,6 +53,7 @@ pub struct SceneGpu {
     frame_params: layout::FrameParams,
     vertex_spirv: Vec<u32>,
     vertex_layout: VertexLayout,
+    material_level0: bool,
 }
 
 impl SceneGpu {
@@ -159,6 +165,7 @@ impl SceneGpu {
                 &[("GBUFFER", settings.float32_target as u32)],
             )?,
             vertex_layout,
+            material_level0: settings.material_level0,
         })
     }
 
@@ -229,6 +236,12 @@ impl SceneGpu {
                 resources,
             },
         )
+    }
+
+    /// Whether techniques read the material textures at full resolution
+    /// ([`FrameSettings::material_level0`]).
+    pub fn material_level0(&self) -> bool {
+        self.material_level0
     }
 
     /// The layout of the scene's vertex buffer (`scene::Vertex`).

@@ -28,6 +28,7 @@ fn a_constant_normal_map_shades_the_same_under_every_filter() {
             height: 90,
             flat_normals: false,
             float32_target: true,
+            material_level0: false,
         },
     )
     .unwrap();

@@ -284,6 +284,7 @@ fn shlmap_tracks_strong_inter_reflection() {
         vertex_pca: &[],
         sh_lightmap: Some(&map),
         ssbump: None,
+        ndf_moments: None,
         table_res: 16,
         h_order: Order::THREE,
     };

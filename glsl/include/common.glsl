@@ -52,20 +52,31 @@ vec3 tangent_space_normal() {
     return m_len > 1e-6 ? m / m_len : vec3(0.0, 0.0, 1.0);
 }
 
-// World-space shading normal from the tangent-space normal map (glTF convention, DESIGN §1:
-// +Y green = image up; bitangent = w · cross(n, t) points toward decreasing v). A map texel
-// that decodes to a zero-length vector falls back to the interpolated normal.
-vec3 shading_normal() {
+// The normal map's frame in world space (columns: tangent, bitangent, interpolated normal;
+// glTF convention, DESIGN §1: +Y green = image up; bitangent = w · cross(n, t) points toward
+// decreasing v); false where the tangent is degenerate.
+bool tangent_frame(out mat3 frame_world) {
     vec3 n = normalize(in_normal_world);
     vec3 t = in_tangent_world.xyz - n * dot(n, in_tangent_world.xyz);
     float t_len = length(t);
     if (t_len < 1e-6) {
-        return n;
+        frame_world = mat3(1.0);
+        return false;
     }
     t /= t_len;
-    vec3 b = cross(n, t) * in_tangent_world.w;
+    frame_world = mat3(t, cross(n, t) * in_tangent_world.w, n);
+    return true;
+}
+
+// World-space shading normal from the tangent-space normal map. A degenerate tangent
+// falls back to the interpolated normal.
+vec3 shading_normal() {
+    mat3 f;
+    if (!tangent_frame(f)) {
+        return normalize(in_normal_world);
+    }
     vec3 m = tangent_space_normal();
-    return normalize(t * m.x + b * m.y + n * m.z);
+    return normalize(f[0] * m.x + f[1] * m.y + f[2] * m.z);
 }
 #endif
 

@@ -660,7 +660,9 @@ pub fn cpu_rungs(
         }
         // No ladder for the radiosity-normal-mapping family yet: its error is measured
         // against the displaced-geometry reference (`study rnm`), not split into rungs.
-        Technique::Rnm { .. } => {}
+        // The NDF variants' rungs are their base technique's; their own step (the normal
+        // map's filtering) is measured by `shvis study ndf`.
+        Technique::Rnm { .. } | Technique::Ndf { .. } => {}
         Technique::Shlmap => {
             let Some(map) = prepared.sh_lightmap.as_ref() else {
                 return Ok(rungs);

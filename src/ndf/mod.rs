@@ -33,6 +33,7 @@
 //! level ([`normalization`]) and interpolated by the hardware (the paper's "MIP-map of
 //! normalization factors", an approximation between texels).
 
+pub mod diffuse;
 pub mod render;
 
 use glam::{DMat3, DVec3, Vec3};
@@ -203,24 +204,8 @@ pub fn decode_normal(texel: [u8; 4], scale: f32) -> Vec3 {
 /// material textures' chain, [`crate::render::box_mip_levels`]), then 1/N per texel.
 pub fn build(normal_map: &Texture8, normal_scale: f32, sigma: f32) -> NdfMaps {
     let s = f64::from(sigma);
-    let (w, h) = (normal_map.width, normal_map.height);
-    let level0: Vec<[[f32; 4]; 3]> = normal_map
-        .texels
-        .iter()
-        .map(|&t| Moments::of_normal(decode_normal(t, normal_scale).as_dvec3(), s).texels(0.0))
-        .collect();
-    type Chain = Vec<(u32, u32, Vec<[f32; 4]>)>;
-    let chains: Vec<Chain> = (0..3)
-        .map(|k| crate::render::box_mip_levels(w, h, level0.iter().map(|t| t[k]).collect()))
-        .collect();
+    let mut levels = moment_levels(normal_map, normal_scale, s);
     let base = normalization(&Moments::of_normal(DVec3::Z, s)).unwrap_or(1.0);
-    let mut levels: Vec<NdfLevel> = (0..chains[0].len())
-        .map(|l| NdfLevel {
-            width: chains[0][l].0,
-            height: chains[0][l].1,
-            textures: [0, 1, 2].map(|k| chains[k][l].2.clone()),
-        })
-        .collect();
     for (l, level) in levels.iter_mut().enumerate() {
         let inv: Vec<f32> = (0..level.textures[0].len())
             .into_par_iter()
@@ -242,6 +227,38 @@ pub fn build(normal_map: &Texture8, normal_scale: f32, sigma: f32) -> NdfMaps {
         kappa0: 1.0 / base,
         levels,
     }
+}
+
+/// The moments of the normal map's own normals, without a base spread or normalisation
+/// (σ = 0, 1/N = 0): what the diffuse filtering of [`diffuse`] reads, E[nnᵀ] of unit
+/// normals having trace 1.
+pub fn moment_maps(normal_map: &Texture8, normal_scale: f32) -> NdfMaps {
+    NdfMaps {
+        sigma: 0.0,
+        kappa0: 0.0,
+        levels: moment_levels(normal_map, normal_scale, 0.0),
+    }
+}
+
+/// The box MIP chain of the moments of `normal_map`'s texels with base spread `sigma`.
+fn moment_levels(normal_map: &Texture8, normal_scale: f32, sigma: f64) -> Vec<NdfLevel> {
+    let (w, h) = (normal_map.width, normal_map.height);
+    let level0: Vec<[[f32; 4]; 3]> = normal_map
+        .texels
+        .iter()
+        .map(|&t| Moments::of_normal(decode_normal(t, normal_scale).as_dvec3(), sigma).texels(0.0))
+        .collect();
+    type Chain = Vec<(u32, u32, Vec<[f32; 4]>)>;
+    let chains: Vec<Chain> = (0..3)
+        .map(|k| crate::render::box_mip_levels(w, h, level0.iter().map(|t| t[k]).collect()))
+        .collect();
+    (0..chains[0].len())
+        .map(|l| NdfLevel {
+            width: chains[0][l].0,
+            height: chains[0][l].1,
+            textures: [0, 1, 2].map(|k| chains[k][l].2.clone()),
+        })
+        .collect()
 }
 
 #[cfg(test)]

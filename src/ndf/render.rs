@@ -185,9 +185,37 @@ pub fn render_specular(
     scene.render_pipeline(&pipeline, 1, frames.max(1))
 }
 
+/// The normal map's level of detail λ per pixel of `scene` (row-major; `None` where the
+/// surface does not cover the pixel): ≤ 0 where the map is magnified, k where 2^k texels
+/// fall across a pixel (`glsl/ndf/lod.frag`).
+pub fn normal_map_lod(ctx: &Arc<Context>, scene: &SceneGpu) -> Result<Vec<Option<f32>>, GpuError> {
+    let fragment = gpu::compile_glsl("ndf/lod.frag", gpu::ShaderStage::Fragment, &[])?;
+    let resources = scene.common_resources();
+    let pipeline = scene.mesh_pipeline(ctx, "ndf.lod", &fragment, &resources)?;
+    drop(resources);
+    let frame = scene.render_pipeline(&pipeline, 0, 1)?;
+    Ok(frame
+        .rgba
+        .iter()
+        .map(|p| (p[3] > 0.5).then_some(p[0]))
+        .collect())
+}
+
 /// The base lobe at full resolution: κ₀ g(|h − n|²/σ²)/σ³.
 pub fn base_lobe(h: DVec3, n: DVec3, sigma: f64, kappa0: f64) -> f64 {
     kappa0 * pearson((h - n).length_squared() / (sigma * sigma)) / sigma.powi(3)
+}
+
+/// The frame jitter (pixels) that puts pixel centres on stratum `j` of `side`² cells,
+/// jittered within the cell by a hash of (`seed`, `j`): the same positions for every pixel.
+pub fn stratum_jitter(seed: u64, j: u32, side: u32) -> [f32; 2] {
+    let jitter = |axis: u64| {
+        let hash = crate::bake::directions::splitmix64(seed ^ (u64::from(j) << 1 | axis));
+        crate::bake::directions::unit_f64(hash) as f32
+    };
+    let sx = ((j % side) as f32 + jitter(0)) / side as f32;
+    let sy = ((j / side) as f32 + jitter(1)) / side as f32;
+    [0.5 - sx, 0.5 - sy]
 }
 
 /// Most sub-pixel strata per side of the specular reference (32² = 1024 G-buffer sets).
@@ -215,14 +243,7 @@ pub fn render_reference(
     let (sigma, kappa0) = (f64::from(maps.sigma), maps.kappa0);
     let eye = camera_position.as_dvec3();
     for j in 0..count {
-        let jitter = |axis: u64| {
-            let hash =
-                crate::bake::directions::splitmix64(settings.seed ^ (u64::from(j) << 1 | axis));
-            crate::bake::directions::unit_f64(hash) as f32
-        };
-        let sx = ((j % side) as f32 + jitter(0)) / side as f32;
-        let sy = ((j / side) as f32 + jitter(1)) / side as f32;
-        scene.set_jitter([0.5 - sx, 0.5 - sy])?;
+        scene.set_jitter(stratum_jitter(settings.seed, j, side))?;
         let position = scene.render_pipeline(&pipelines[0], 0, 1)?;
         let normal = scene.render_pipeline(&pipelines[1], 0, 1)?;
         let vertex_normal = scene.render_pipeline(&pipelines[3], 0, 1)?;

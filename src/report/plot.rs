@@ -98,7 +98,8 @@ pub fn write_pca_error_plot(
                 | Technique::Vq { .. }
                 | Technique::Cpca { .. }
                 | Technique::PcaVertex { .. }
-                | Technique::Rnm { .. } => None,
+                | Technique::Rnm { .. }
+                | Technique::Ndf { .. } => None,
             })
             .collect()
     };

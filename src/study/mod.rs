@@ -19,6 +19,7 @@
 
 pub mod compression;
 pub mod ndf;
+pub mod ndf_diffuse;
 pub mod normalmap;
 pub mod params;
 pub mod params_gpu;

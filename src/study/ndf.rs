@@ -26,6 +26,7 @@ use crate::report::ReportError;
 use crate::report::metrics::TimingStats;
 use crate::scene::{Scene, bumpy};
 use crate::technique::HwPath;
+use super::ndf_diffuse::{DiffuseRow, DiffuseScene};
 
 /// Pixels counted as minified cover at least this many normal-map texels across.
 pub const MIN_MINIFICATION: f32 = 4.0;
@@ -160,6 +161,7 @@ pub fn run(ctx: &Arc<Context>, s: &NdfStudySettings) -> Result<(NdfStudy, Frame)
             height: s.height,
             flat_normals: false,
             float32_target: true,
+            material_level0: false,
         },
     )?;
     let light = SpecularLight {
@@ -261,6 +263,7 @@ pub fn run(ctx: &Arc<Context>, s: &NdfStudySettings) -> Result<(NdfStudy, Frame)
 pub fn write_report(
     study: &NdfStudy,
     composite: &Frame,
+    diffuse: Option<&(Vec<DiffuseScene>, Vec<DiffuseRow>)>,
     dir: &Path,
 ) -> Result<Vec<PathBuf>, ReportError> {
     let mut md = format!(
@@ -295,6 +298,9 @@ pub fn write_report(
         ));
     }
     md.push_str("\n![reference · mip · ndf · ndfn](fig1_ndf.png)\n");
+    if let Some((scenes, rows)) = diffuse {
+        md.push_str(&super::ndf_diffuse::markdown(scenes, rows));
+    }
     // Expose so the reference's 99th percentile is white.
     let mut values: Vec<f32> = composite
         .rgba
@@ -312,7 +318,14 @@ pub fn write_report(
     crate::report::image::write_frame(&fig, composite, -p99.log2())?;
     Ok(vec![
         super::write_text(dir, "ndf.md", &md)?,
-        super::write_json(dir, "ndf.json", study)?,
+        super::write_json(
+            dir,
+            "ndf.json",
+            &serde_json::json!({
+                "specular": study,
+                "diffuse": diffuse.map(|(scenes, rows)| serde_json::json!({"scenes": scenes, "rows": rows})),
+            }),
+        )?,
         fig,
     ])
 }

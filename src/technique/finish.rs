@@ -24,8 +24,8 @@ pub enum SlotKind {
     /// Normal-indexed tables (`super::tables`): each sphere (dx9: two hemisphere squares
     /// side by side; dx10: one cube of a cube array) is one dependent fetch per pixel.
     NormalTable,
-    /// A material-space texture of the technique (`ssbump`'s SSBump / AO), sampled with the
-    /// material sampler: one fetch per pixel; like albedo and normal map its bytes are
+    /// Material-space textures of the technique (`ssbump`'s SSBump / AO, the NDF moments of
+    /// `uncOndf` / `preconvndf`), sampled with the material sampler: one fetch per layer; like albedo and normal map its bytes are
     /// the material's, not the lightmap's or the lighting's.
     Material,
 }
@@ -118,7 +118,7 @@ pub fn stats(
 /// for double-buffered dynamic lighting, `super::lighting`): checks the path rules, uploads
 /// each copy's uniform block and tables, compiles the fragment shader
 /// ([`super::fragment_shader`]) once and builds one pipeline per copy over the per-texel
-/// images (binding TEXTURE0), the technique's material-space texture if it has one (the
+/// images (binding TEXTURE0), the technique's material-space textures if it has any (the
 /// next binding) and that copy's tables (the bindings after those).
 #[allow(clippy::too_many_arguments)]
 pub fn finish(
@@ -127,17 +127,17 @@ pub fn finish(
     technique: Technique,
     path: HwPath,
     per_texel: Vec<Image>,
-    material: Option<Image>,
+    material: Vec<Image>,
     lighting: &LightingData,
     sets: usize,
 ) -> Result<TechniqueGpu, TechniqueError> {
     let label = format!("{technique}.{path}");
     let per_texel = TextureSlot::per_texel(per_texel);
-    let material = material.map(|image| TextureSlot {
+    let material = (!material.is_empty()).then_some(TextureSlot {
         kind: SlotKind::Material,
-        images: vec![image],
+        images: material,
     });
-    let fragment = compile_fragment(technique, path)?;
+    let fragment = compile_fragment(technique, path, scene)?;
     check_uniform_size(ctx, lighting.params.len(), &label)?;
     let sampler = scene.lightmap_sampler();
     let mut built = Vec::with_capacity(sets);
@@ -163,6 +163,12 @@ pub fn finish(
         if super::skips_normal_map(technique) {
             stats.lookups_per_pixel -= 1;
         }
+        let table_lookups: u32 = layouts
+            .iter()
+            .filter(|l| l.kind == SlotKind::NormalTable)
+            .map(SlotLayout::lookups)
+            .sum();
+        stats.lookups_per_pixel += (super::table_fetches(technique) - 1) * table_lookups;
         let params = params_buffer(ctx, &lighting.params, &label, &suffix)?;
         let mut resources = base_resources(scene, &params);
         for (binding, slot) in (layout::BINDING_TECHNIQUE_TEXTURE0..).zip(&slots) {
@@ -192,13 +198,18 @@ pub fn finish(
     ))
 }
 
-/// `technique`'s fragment shader ([`super::fragment_shader`]) compiled for `path`.
+/// `technique`'s fragment shader ([`super::fragment_shader`]) compiled for `path`, reading
+/// the material textures at full resolution for a `material_level0` scene.
 pub(crate) fn compile_fragment(
     technique: Technique,
     path: HwPath,
+    scene: &SceneGpu,
 ) -> Result<Vec<u32>, TechniqueError> {
     let shader = super::fragment_shader(technique);
-    let mut defines = vec![path.shader_define()];
+    let mut defines = vec![
+        path.shader_define(),
+        ("MATERIAL_LEVEL0", scene.material_level0() as u32),
+    ];
     defines.extend_from_slice(&shader.defines);
     Ok(gpu::compile_glsl(
         shader.path,

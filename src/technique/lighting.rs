@@ -71,6 +71,12 @@ pub(crate) enum Recipe {
     },
     /// Lighting baked into the per-texel data (`shlmap`): the data never changes.
     Baked(LightingData),
+    /// `uncOndf` / `preconvndf`: the base technique's data; for `unc` (`order`) its uniform
+    /// block followed by the L×H table's band-0 constants (`crate::ndf::diffuse`).
+    Ndf {
+        base: Box<Recipe>,
+        order: Option<Order>,
+    },
 }
 
 /// Builds a technique's [`LightingData`] for any SH lighting (module doc).
@@ -106,8 +112,17 @@ impl LightingRecipe {
         radiance_sh: &[[f64; 3]],
         irradiance_sh: &[[f64; 3]],
     ) -> Result<LightingData, TechniqueError> {
+        self.build_recipe(&self.recipe, radiance_sh, irradiance_sh)
+    }
+
+    fn build_recipe(
+        &self,
+        recipe: &Recipe,
+        radiance_sh: &[[f64; 3]],
+        irradiance_sh: &[[f64; 3]],
+    ) -> Result<LightingData, TechniqueError> {
         let label = self.label();
-        match &self.recipe {
+        match recipe {
             Recipe::Unc { order, table } => {
                 super::unc::lighting(*order, self.path, table, self.h_order, radiance_sh, &label)
             }
@@ -134,6 +149,15 @@ impl LightingRecipe {
                 means,
             } => super::cluster::lighting(bases, means, *order, radiance_sh, &label),
             Recipe::Baked(data) => Ok(data.clone()),
+            Recipe::Ndf { base, order } => {
+                let mut data = self.build_recipe(base, radiance_sh, irradiance_sh)?;
+                if let Some(order) = order {
+                    super::require_coefficients(radiance_sh, order.coeff_count(), "lighting", &label)?;
+                    let ambient = crate::ndf::diffuse::ambient_block(radiance_sh, *order);
+                    data.params.extend_from_slice(bytemuck::cast_slice(&ambient));
+                }
+                Ok(data)
+            }
         }
     }
 }

@@ -35,7 +35,8 @@ use std::sync::Arc;
 
 pub use lighting::{LightingData, LightingRecipe};
 pub use spec::{
-    BakeNeeds, ClusterNeed, HwPath, ParseError, ReferenceModel, RnmVariant, SeamMode, Technique,
+    BakeNeeds, ClusterNeed, HwPath, NdfBase, ParseError, ReferenceModel, RnmVariant, SeamMode,
+    Technique,
 };
 
 use lighting::LightingSet;
@@ -71,6 +72,9 @@ pub struct Inputs<'a> {
     pub sh_lightmap: Option<&'a ShLightmap>,
     /// The material's SSBump and AO (`ssbump`, `rnmao`), from its height field.
     pub ssbump: Option<&'a crate::bake::ssbump::SsBumpMaps>,
+    /// The moments of the material's normal map (`uncOndf`, `preconvndf`;
+    /// `crate::ndf::moment_maps`).
+    pub ndf_moments: Option<&'a crate::ndf::NdfMaps>,
     /// L×H table texels per hemisphere / face side.
     pub table_res: u32,
     /// Clamped-cosine order of the L×H product.
@@ -111,6 +115,11 @@ pub fn fragment_shader(technique: Technique) -> ShaderVariant {
         Technique::Cpca { k, m, seams, .. } => cluster::fragment_shader(k, m, seams),
         Technique::PcaVertex { m, .. } => vertex::fragment_shader(m),
         Technique::Rnm { variant } => rnm::fragment_shader(variant),
+        Technique::Ndf { base } => {
+            let mut shader = fragment_shader(base.technique());
+            shader.defines.push(("NDF_DIFFUSE", 1));
+            shader
+        }
     }
 }
 
@@ -126,7 +135,19 @@ pub fn per_texel_lookups(technique: Technique) -> Option<u32> {
         | Technique::Preconv
         | Technique::Sh2
         | Technique::PcaVertex { .. }
-        | Technique::Rnm { .. } => None,
+        | Technique::Rnm { .. }
+        | Technique::Ndf { .. } => None,
+    }
+}
+
+/// How often a family's shader fetches each normal-indexed table: twice for `uncOndf`
+/// (at ±μ, `crate::ndf::diffuse`), once otherwise.
+pub fn table_fetches(technique: Technique) -> u32 {
+    match technique {
+        Technique::Ndf {
+            base: spec::NdfBase::Unc { .. },
+        } => 2,
+        _ => 1,
     }
 }
 
@@ -345,6 +366,18 @@ fn prepare(
         }
         Technique::PcaVertex { m, .. } => vertex::prepare(m, inputs, &label)?,
         Technique::Rnm { .. } => rnm::prepare(inputs, &label)?,
+        Technique::Ndf { base } => {
+            let (texels, recipe) = prepare(base.technique(), path, inputs)?;
+            let order = match base {
+                NdfBase::Unc { order } => Some(order),
+                NdfBase::Preconv => None,
+            };
+            let recipe = lighting::Recipe::Ndf {
+                base: Box::new(recipe.recipe),
+                order,
+            };
+            (texels, recipe)
+        }
     };
     let recipe = LightingRecipe {
         technique,
@@ -370,11 +403,20 @@ fn build_sets(
         return Ok((gpu, recipe));
     }
     let per_texel = texels.upload(ctx, path)?;
+    let label = format!("{technique}.{path}");
     let material = match technique {
-        Technique::Rnm { variant } => {
-            rnm::material_texture(ctx, variant, inputs, &format!("{technique}.{path}"))?
+        Technique::Rnm { variant } => rnm::material_texture(ctx, variant, inputs, &label)?
+            .into_iter()
+            .collect(),
+        Technique::Ndf { base } => {
+            let maps = inputs.ndf_moments.ok_or_else(|| TechniqueError::Input {
+                label: label.clone(),
+                detail: "needs the moments of the material's normal map (prepare builds them)"
+                    .into(),
+            })?;
+            crate::ndf::diffuse::upload(ctx, maps, base, path, &label)?
         }
-        _ => None,
+        _ => Vec::new(),
     };
     let gpu = finish::finish(
         ctx, scene, technique, path, per_texel, material, &data, sets,

@@ -51,6 +51,29 @@ pub enum Technique {
     /// the normal map), `rnmao` (× scalar AO of the height field), `ssbump` (Listing 2,
     /// the self-shadowed bump map's texels are the weights).
     Rnm { variant: RnmVariant },
+    /// `uncOndf`, `preconvndf`: the base technique with its normal map filtered as a
+    /// distribution (Olano & North; issue 19; `crate::ndf::diffuse`): the clamped-cosine
+    /// bands attenuated at lookup time by the zonal coefficients of the pixel's filtered
+    /// normals — isotropic from the mean length for `unc`, exact from all nine moments for
+    /// `preconv`.
+    Ndf { base: NdfBase },
+}
+
+/// The technique an NDF-filtered variant ([`Technique::Ndf`]) extends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum NdfBase {
+    Unc { order: Order },
+    Preconv,
+}
+
+impl NdfBase {
+    /// The unfiltered technique.
+    pub fn technique(self) -> Technique {
+        match self {
+            NdfBase::Unc { order } => Technique::Unc { order },
+            NdfBase::Preconv => Technique::Preconv,
+        }
+    }
 }
 
 /// Which per-pixel weights blend the three `rnm` lightmaps.
@@ -156,6 +179,8 @@ pub struct BakeNeeds {
     pub clusters: Option<ClusterNeed>,
     /// The material's SSBump and AO textures, from its height field.
     pub ssbump: bool,
+    /// The moments of the material's normal map (`crate::ndf::moment_maps`).
+    pub ndf_moments: bool,
 }
 
 /// Which ground truth a technique's error is measured against.
@@ -263,6 +288,12 @@ impl Technique {
         Technique::Rnm {
             variant: RnmVariant::SelfShadowed,
         },
+        Technique::Ndf {
+            base: NdfBase::Unc { order: Order::SIX },
+        },
+        Technique::Ndf {
+            base: NdfBase::Preconv,
+        },
     ];
 
     /// The CLI name: `unc6`, `pca12`, `pca12w`, `shlmap`, `preconv`, `sh2`.
@@ -296,6 +327,29 @@ impl Technique {
                 RnmVariant::SelfShadowed => "ssbump",
             }
             .into(),
+            Technique::Ndf { base } => format!("{}ndf", base.technique().name()),
+        }
+    }
+
+    /// The technique without NDF filtering (itself for every other family).
+    pub fn unfiltered(self) -> Technique {
+        match self {
+            Technique::Ndf { base } => base.technique(),
+            _ => self,
+        }
+    }
+
+    /// The NDF-filtered variant of `unc*` and `preconv` (`--normal-filter ndf`).
+    pub fn ndf_variant(self) -> Option<Technique> {
+        match self {
+            Technique::Unc { order } => Some(Technique::Ndf {
+                base: NdfBase::Unc { order },
+            }),
+            Technique::Preconv => Some(Technique::Ndf {
+                base: NdfBase::Preconv,
+            }),
+            Technique::Ndf { .. } => Some(self),
+            _ => None,
         }
     }
 
@@ -325,7 +379,8 @@ impl Technique {
             | Technique::Preconv
             | Technique::Sh2
             | Technique::PcaVertex { .. }
-            | Technique::Rnm { .. } => None,
+            | Technique::Rnm { .. }
+            | Technique::Ndf { .. } => None,
         }
     }
 
@@ -346,7 +401,8 @@ impl Technique {
             Technique::Vq { .. }
             | Technique::Cpca { .. }
             | Technique::PcaVertex { .. }
-            | Technique::Rnm { .. } => None,
+            | Technique::Rnm { .. }
+            | Technique::Ndf { .. } => None,
         }
     }
 
@@ -394,6 +450,10 @@ impl Technique {
                 ssbump: variant.needs_height(),
                 ..BakeNeeds::default()
             },
+            Technique::Ndf { base } => BakeNeeds {
+                ndf_moments: true,
+                ..base.technique().needs()
+            },
         }
     }
 
@@ -407,7 +467,8 @@ impl Technique {
             | Technique::Sh2
             | Technique::Vq { .. }
             | Technique::Cpca { .. }
-            | Technique::PcaVertex { .. } => ReferenceModel::Direct,
+            | Technique::PcaVertex { .. }
+            | Technique::Ndf { .. } => ReferenceModel::Direct,
         }
     }
 
@@ -422,7 +483,8 @@ impl Technique {
             | Technique::Sh2
             | Technique::Vq { .. }
             | Technique::Cpca { .. }
-            | Technique::PcaVertex { .. } => true,
+            | Technique::PcaVertex { .. }
+            | Technique::Ndf { .. } => true,
         }
     }
 
@@ -468,6 +530,12 @@ impl Technique {
                 .map(|variant| Technique::Rnm { variant })
                 .to_vec(),
             Technique::Shlmap | Technique::Preconv | Technique::Sh2 => vec![self],
+            Technique::Ndf { .. } => UNC_ORDERS
+                .filter_map(|o| Order::new(o).ok())
+                .map(|order| NdfBase::Unc { order })
+                .chain([NdfBase::Preconv])
+                .map(|base| Technique::Ndf { base })
+                .collect(),
         }
     }
 
@@ -519,7 +587,7 @@ impl FromStr for Technique {
             known: format!(
                 "{} (and uncO for O in {}..={}, pcaM/pcaMw for M a multiple of {} up to {}, \
                  vqK[n] for K in {:?}, cpcaK_M[s][n] for K in {:?}, M in {:?}, K·(M+1) ≤ {}, \
-                 pcaMv[E] for E in {:?} cm)",
+                 pcaMv[E] for E in {:?} cm, uncOndf and preconvndf)",
                 join_names(Technique::ALL.iter().map(|t| t.name())),
                 UNC_ORDERS.start(),
                 UNC_ORDERS.end(),
