@@ -1478,10 +1478,7 @@ where
 
 fn run_bench(a: BenchArgs) -> Result<()> {
     let mut settings = BenchSettings {
-        techniques: with_normal_filter(
-            parse_list(&a.techniques, Technique::ALL)?,
-            a.normal_filter,
-        ),
+        techniques: with_normal_filter(parse_list(&a.techniques, Technique::ALL)?, a.normal_filter),
         paths: parse_list(&a.paths, HwPath::ALL)?,
         frames: a.frames,
         warmup: a.warmup,

@@ -204,11 +204,21 @@ impl Prepared {
         }
         let t = Instant::now();
         let material = &self.scene.material;
-        let maps = crate::ndf::moment_maps(&material.normal, material.normal_scale);
+        // The height field the normal map describes, where there is one (and the map is
+        // unscaled): the same normals without the map's 8-bit quantization.
+        let (maps, source) = match &material.height {
+            Some(field) if material.normal_scale == 1.0 => {
+                (crate::ndf::moment_maps_from_height(field), "height field")
+            }
+            _ => (
+                crate::ndf::moment_maps(&material.normal, material.normal_scale),
+                "normal map",
+            ),
+        };
         log::info!(
-            "NDF moments: {}×{} texels, {} levels in {:.2} s",
-            material.normal.width,
-            material.normal.height,
+            "NDF moments from the {source}: {}×{} texels, {} levels in {:.2} s",
+            maps.levels[0].width,
+            maps.levels[0].height,
             maps.levels.len(),
             t.elapsed().as_secs_f64()
         );

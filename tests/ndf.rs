@@ -114,3 +114,109 @@ fn ndf_filtering_halves_the_minified_specular_error_and_keeps_its_energy() {
     }
     common::assert_validation_clean(&ctx, "ndf study");
 }
+
+/// The diffuse NDF variants (`unc6ndf`, `preconvndf`) on both paths: where the normal map
+/// is magnified they give the unfiltered image (the filter's weight is 0); where it is
+/// minified the mean over the plane moves to the technique's own footprint truth — for
+/// preconv all the way (the order-3 expectation is exact), for unc6 most of it (the
+/// isotropic vMF fit).
+#[test]
+fn diffuse_ndf_variants_change_nothing_magnified_and_follow_the_footprint_minified() {
+    use shvis::ndf::render::normal_map_lod;
+    use shvis::prepare::{PrepareSettings, prepare};
+    use shvis::study::ndf_diffuse::own_footprint;
+    use shvis::technique::{self, NdfBase, Technique};
+
+    let ctx = common::validated_context();
+    let mut prepared = prepare(&PrepareSettings {
+        scene: "bumpy".into(),
+        vis_res: 64,
+        ..PrepareSettings::default()
+    })
+    .unwrap();
+    let bases = [
+        NdfBase::Unc {
+            order: shvis::sh::Order::SIX,
+        },
+        NdfBase::Preconv,
+    ];
+    let all: Vec<Technique> = bases
+        .iter()
+        .flat_map(|&b| [b.technique(), Technique::Ndf { base: b }])
+        .collect();
+    prepared.prepare_techniques(&all).unwrap();
+    let receding = prepared.scene.camera;
+    let mut overhead = receding;
+    overhead.position = Vec3::new(0.0, 0.2, -10.0);
+    overhead.target = Vec3::new(0.0, 0.0, -10.0);
+    overhead.up = Vec3::NEG_Z;
+    let settings = |level0| FrameSettings {
+        width: 160,
+        height: 90,
+        material_level0: level0,
+        ..FrameSettings::default()
+    };
+    for (camera, magnified) in [(overhead, true), (receding, false)] {
+        prepared.scene.camera = camera;
+        let gpu = SceneGpu::new(&ctx, &prepared.scene, &settings(false)).unwrap();
+        let mut level0 = SceneGpu::new(&ctx, &prepared.scene, &settings(true)).unwrap();
+        let lod = normal_map_lod(&ctx, &gpu).unwrap();
+        let mask: Vec<bool> = lod
+            .iter()
+            .map(|l| l.is_some_and(|l| if magnified { l <= 0.0 } else { l >= 2.0 }))
+            .collect();
+        let selected = mask.iter().filter(|&&m| m).count();
+        assert!(selected > 1000, "magnified {magnified}: {selected} pixels");
+        let inputs = prepared.inputs();
+        for &base in &bases {
+            for path in [HwPath::Dx9, HwPath::Dx10] {
+                let render = |t| {
+                    technique::build(&ctx, &gpu, t, path, &inputs)
+                        .unwrap()
+                        .render(&gpu, 0, 1)
+                        .unwrap()
+                };
+                let plain = render(base.technique());
+                let filtered = render(Technique::Ndf { base });
+                let label = format!("{}.{path}", base.technique());
+                let mean = |f: &shvis::render::Frame| {
+                    let sum: f64 = (0..mask.len())
+                        .filter(|&i| mask[i])
+                        .map(|i| f64::from(f.rgba[i][1]))
+                        .sum();
+                    sum / selected as f64
+                };
+                if magnified {
+                    let peak = plain.rgba.iter().map(|p| p[1]).fold(0.0f32, f32::max);
+                    let worst = (0..mask.len())
+                        .filter(|&i| mask[i])
+                        .flat_map(|i| (0..3).map(move |c| (i, c)))
+                        .map(|(i, c)| (plain.rgba[i][c] - filtered.rgba[i][c]).abs())
+                        .fold(0.0f32, f32::max);
+                    assert!(peak > 0.0, "{label}: lit");
+                    assert!(
+                        worst <= 1e-5 * peak,
+                        "{label}: magnified change {worst} of {peak}"
+                    );
+                } else {
+                    let tech =
+                        technique::build(&ctx, &level0, base.technique(), path, &inputs).unwrap();
+                    let truth = own_footprint(&mut level0, &tech, 8).unwrap();
+                    let (before, after) = (
+                        (mean(&plain) - mean(&truth)).abs(),
+                        (mean(&filtered) - mean(&truth)).abs(),
+                    );
+                    let bound = match base {
+                        NdfBase::Preconv => 0.2,
+                        NdfBase::Unc { .. } => 0.6,
+                    };
+                    assert!(
+                        before > 0.01 * mean(&truth) && after <= bound * before,
+                        "{label}: |mean − own footprint| {before} unfiltered, {after} with the NDF"
+                    );
+                }
+            }
+        }
+    }
+    common::assert_validation_clean(&ctx, "diffuse NDF variants");
+}

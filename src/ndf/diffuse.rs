@@ -231,7 +231,10 @@ mod tests {
                 DVec3::new(a.sin() * 0.8, (1.7 * a).cos() * 0.5, 0.6 + 0.3 * a.cos()).normalize()
             })
             .collect();
-        let parts: Vec<Moments> = normals.iter().map(|&n| Moments::of_normal(n, 0.0)).collect();
+        let parts: Vec<Moments> = normals
+            .iter()
+            .map(|&n| Moments::of_normal(n, 0.0))
+            .collect();
         let mixture = Moments::mixture(&parts);
         let expected = expected_sh_order3(&mixture);
         for (i, &e) in expected.iter().enumerate() {

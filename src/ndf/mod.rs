@@ -240,13 +240,35 @@ pub fn moment_maps(normal_map: &Texture8, normal_scale: f32) -> NdfMaps {
     }
 }
 
+/// The moments of a height field's own normals (σ = 0, as [`moment_maps`]): the surface a
+/// normal map is derived from, without its 8-bit quantization (the house's bricks;
+/// `crate::bake::ssbump::HeightField::normal`, the same central differences).
+pub fn moment_maps_from_height(field: &crate::bake::ssbump::HeightField) -> NdfMaps {
+    let normals = (0..field.width * field.height)
+        .map(|i| field.normal(i % field.width, i / field.width))
+        .collect();
+    NdfMaps {
+        sigma: 0.0,
+        kappa0: 0.0,
+        levels: levels_of_normals(field.width as u32, field.height as u32, normals, 0.0),
+    }
+}
+
 /// The box MIP chain of the moments of `normal_map`'s texels with base spread `sigma`.
 fn moment_levels(normal_map: &Texture8, normal_scale: f32, sigma: f64) -> Vec<NdfLevel> {
-    let (w, h) = (normal_map.width, normal_map.height);
-    let level0: Vec<[[f32; 4]; 3]> = normal_map
+    let normals = normal_map
         .texels
         .iter()
-        .map(|&t| Moments::of_normal(decode_normal(t, normal_scale).as_dvec3(), sigma).texels(0.0))
+        .map(|&t| decode_normal(t, normal_scale).as_dvec3())
+        .collect();
+    levels_of_normals(normal_map.width, normal_map.height, normals, sigma)
+}
+
+/// The box MIP chain of the moments of unit `normals` (w × h, row-major), spread `sigma`.
+fn levels_of_normals(w: u32, h: u32, normals: Vec<DVec3>, sigma: f64) -> Vec<NdfLevel> {
+    let level0: Vec<[[f32; 4]; 3]> = normals
+        .into_iter()
+        .map(|n| Moments::of_normal(n, sigma).texels(0.0))
         .collect();
     type Chain = Vec<(u32, u32, Vec<[f32; 4]>)>;
     let chains: Vec<Chain> = (0..3)
@@ -378,5 +400,37 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn height_field_moments_match_the_normal_map_derived_from_it() {
+        let field = crate::scene::house::brick_height_field();
+        let from_height = moment_maps_from_height(&field);
+        let scene = crate::scene::house::build(64).unwrap();
+        let from_map = moment_maps(&scene.material.normal, scene.material.normal_scale);
+        assert_eq!(from_height.levels.len(), from_map.levels.len());
+        for (lh, lm) in from_height.levels.iter().zip(&from_map.levels) {
+            for i in 0..lh.textures[0].len() {
+                let (a, b) = (lh.moments(i), lm.moments(i));
+                // 8-bit quantization of the map: ≤ 1/127 per component, plus rounding.
+                assert!(
+                    (a.mean - b.mean).abs().max_element() < 0.012,
+                    "{:?} {:?}",
+                    a.mean,
+                    b.mean
+                );
+                let tr = |m: &Moments| m.second.x_axis.x + m.second.y_axis.y + m.second.z_axis.z;
+                assert!(
+                    (tr(&a) - 1.0).abs() < 1e-5,
+                    "unit normals' E[nnᵀ] has trace 1"
+                );
+            }
+        }
+        let coarse = from_height.levels.last().unwrap().moments(0);
+        assert!(
+            coarse.mean.length() < 0.999,
+            "the bricks' normals spread: r = {}",
+            coarse.mean.length()
+        );
     }
 }

@@ -15,6 +15,7 @@ use std::sync::Arc;
 use glam::{Vec3, Vec4};
 use serde::Serialize;
 
+use super::ndf_diffuse::{DiffuseRow, DiffuseScene};
 use crate::gpu::{Context, GpuError};
 use crate::ndf::render::{
     NormalFilter, SpecularLight, render_reference, render_specular, upload_maps,
@@ -26,7 +27,6 @@ use crate::report::ReportError;
 use crate::report::metrics::TimingStats;
 use crate::scene::{Scene, bumpy};
 use crate::technique::HwPath;
-use super::ndf_diffuse::{DiffuseRow, DiffuseScene};
 
 /// Pixels counted as minified cover at least this many normal-map texels across.
 pub const MIN_MINIFICATION: f32 = 4.0;

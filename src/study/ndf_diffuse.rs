@@ -172,7 +172,7 @@ fn difference_residual(a: &Frame, b: &Frame, c: &Frame, d: &Frame, mask: &[bool]
 /// `tech` on `scene` (built with `material_level0`) averaged over `side`² jittered
 /// sub-pixel positions: the technique's shading integrated over each pixel's footprint with
 /// the full-resolution normal map. Pixels some stratum misses are uncovered.
-fn own_footprint(
+pub fn own_footprint(
     scene: &mut SceneGpu,
     tech: &technique::TechniqueGpu,
     side: u32,
@@ -202,7 +202,12 @@ fn own_footprint(
             .map(|a| {
                 let k = a[3].max(1.0);
                 let covered = if a[3] >= f64::from(count) { 1.0 } else { 0.0 };
-                [(a[0] / k) as f32, (a[1] / k) as f32, (a[2] / k) as f32, covered]
+                [
+                    (a[0] / k) as f32,
+                    (a[1] / k) as f32,
+                    (a[2] / k) as f32,
+                    covered,
+                ]
             })
             .collect(),
         ms: Vec::new(),
@@ -214,7 +219,12 @@ pub fn run(
     ctx: &Arc<Context>,
     s: &DiffuseSettings,
 ) -> Result<(Vec<DiffuseScene>, Vec<DiffuseRow>), DiffuseStudyError> {
-    let bases = [NdfBase::Unc { order: crate::sh::Order::SIX }, NdfBase::Preconv];
+    let bases = [
+        NdfBase::Unc {
+            order: crate::sh::Order::SIX,
+        },
+        NdfBase::Preconv,
+    ];
     let techniques: Vec<Technique> = bases
         .iter()
         .flat_map(|&base| [base.technique(), Technique::Ndf { base }])
@@ -325,8 +335,12 @@ pub fn run(
                 let own = [0, 1].map(|k| rel_rmse(&frames[k], &truth, &own_mask));
                 if let Some(dir) = &s.image_dir {
                     let stem = format!("diffuse_{name}_{}.{path}", base.technique());
-                    for (frame, kind) in [(&frames[0], "mip"), (&frames[1], "ndf"), (&truth, "own")] {
-                        crate::report::image::write_exr(&dir.join(format!("{stem}_{kind}.exr")), frame)?;
+                    for (frame, kind) in [(&frames[0], "mip"), (&frames[1], "ndf"), (&truth, "own")]
+                    {
+                        crate::report::image::write_exr(
+                            &dir.join(format!("{stem}_{kind}.exr")),
+                            frame,
+                        )?;
                     }
                 }
                 let change = frames[0]
@@ -346,7 +360,8 @@ pub fn run(
                     all: pick(&covered),
                     magnified_max_change: f64::from(change / peak),
                     own_footprint_minified: own,
-                    own_footprint_blocks: [0, 1].map(|k| block_rel_rmse(&frames[k], &truth, &own_mask)),
+                    own_footprint_blocks: [0, 1]
+                        .map(|k| block_rel_rmse(&frames[k], &truth, &own_mask)),
                     reference_blocks: [0, 1]
                         .map(|k| block_rel_rmse(&frames[k], &reference.frame, &minified)),
                     minified_change: rel_rmse(&frames[1], &frames[0], &minified)

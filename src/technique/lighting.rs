@@ -152,9 +152,15 @@ impl LightingRecipe {
             Recipe::Ndf { base, order } => {
                 let mut data = self.build_recipe(base, radiance_sh, irradiance_sh)?;
                 if let Some(order) = order {
-                    super::require_coefficients(radiance_sh, order.coeff_count(), "lighting", &label)?;
+                    super::require_coefficients(
+                        radiance_sh,
+                        order.coeff_count(),
+                        "lighting",
+                        &label,
+                    )?;
                     let ambient = crate::ndf::diffuse::ambient_block(radiance_sh, *order);
-                    data.params.extend_from_slice(bytemuck::cast_slice(&ambient));
+                    data.params
+                        .extend_from_slice(bytemuck::cast_slice(&ambient));
                 }
                 Ok(data)
             }
