@@ -1046,6 +1046,7 @@ fn run_study_ndf(a: StudyNdfArgs) -> Result<()> {
     let diffuse = if diffuse_scenes.is_empty() {
         None
     } else {
+        use shvis::study::ndf_diffuse::arrow;
         let (scenes, rows) = shvis::study::ndf_diffuse::run(
             &ctx,
             &shvis::study::ndf_diffuse::DiffuseSettings {
@@ -1071,23 +1072,17 @@ fn run_study_ndf(a: StudyNdfArgs) -> Result<()> {
         );
         for r in &rows {
             println!(
-                "  {:<6} {:<8} {:<4} {:.4} → {:.4} (8² blocks {:.4} → {:.4}) | {:.4} → {:.4} | {:.4} → {:.4}; {:.1e}; own footprint {:.4} → {:.4} (8² blocks {:.4} → {:.4})",
+                "  {:<6} {:<8} {:<4} {} (8² blocks {}) | {} | {}; {:.1e}; own footprint {} (8² blocks {})",
                 r.scene,
                 r.technique.name(),
                 r.path.name(),
-                r.minified[0],
-                r.minified[1],
-                r.reference_blocks[0],
-                r.reference_blocks[1],
-                r.magnified[0],
-                r.magnified[1],
-                r.all[0],
-                r.all[1],
+                arrow(r.minified),
+                arrow(r.reference_blocks),
+                arrow(r.magnified),
+                arrow(r.all),
                 r.magnified_max_change,
-                r.own_footprint_minified[0],
-                r.own_footprint_minified[1],
-                r.own_footprint_blocks[0],
-                r.own_footprint_blocks[1]
+                arrow(r.own_footprint_minified),
+                arrow(r.own_footprint_blocks)
             );
         }
         Some((scenes, rows))

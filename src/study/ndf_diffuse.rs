@@ -65,12 +65,6 @@ pub struct DiffuseRow {
     /// Against the footprint reference over the same blocks (its Monte Carlo noise
     /// averaged down).
     pub reference_blocks: [f64; 2],
-    /// ‖NDF − unfiltered‖ / ‖reference‖ over minified pixels: how much the filter changes.
-    pub minified_change: f64,
-    /// ‖(NDF − unfiltered) − (footprint − point reference)‖ / ‖footprint − point‖ over
-    /// minified pixels: 1 for a filter that changes nothing, 0 for one that moves the
-    /// technique exactly as integrating the footprint moves the reference.
-    pub footprint_step_residual: f64,
     /// Texture fetches per pixel: unfiltered / NDF.
     pub lookups: [u32; 2],
 }
@@ -138,32 +132,6 @@ fn block_rel_rmse(test: &Frame, reference: &Frame, mask: &[bool]) -> f64 {
                 se += (t - r).powi(2);
                 sq += r * r;
             }
-        }
-    }
-    if sq > 0.0 { (se / sq).sqrt() } else { f64::NAN }
-}
-
-/// ‖a‖ / ‖b‖ over `mask`.
-fn rel_norm_ratio(a: &Frame, b: &Frame, mask: &[bool]) -> f64 {
-    let norm = |f: &Frame| -> f64 {
-        (0..mask.len())
-            .filter(|&i| mask[i])
-            .flat_map(|i| f.rgba[i][..3].iter().map(|&v| f64::from(v).powi(2)))
-            .sum::<f64>()
-            .sqrt()
-    };
-    norm(a) / norm(b)
-}
-
-/// ‖(a − b) − (c − d)‖ / ‖c − d‖ over `mask`.
-fn difference_residual(a: &Frame, b: &Frame, c: &Frame, d: &Frame, mask: &[bool]) -> f64 {
-    let (mut se, mut sq) = (0.0, 0.0);
-    for i in (0..mask.len()).filter(|&i| mask[i]) {
-        for ch in 0..3 {
-            let v = |f: &Frame| f64::from(f.rgba[i][ch]);
-            let step = v(c) - v(d);
-            se += (v(a) - v(b) - step).powi(2);
-            sq += step * step;
         }
     }
     if sq > 0.0 { (se / sq).sqrt() } else { f64::NAN }
@@ -364,21 +332,17 @@ pub fn run(
                         .map(|k| block_rel_rmse(&frames[k], &truth, &own_mask)),
                     reference_blocks: [0, 1]
                         .map(|k| block_rel_rmse(&frames[k], &reference.frame, &minified)),
-                    minified_change: rel_rmse(&frames[1], &frames[0], &minified)
-                        * rel_norm_ratio(&frames[0], &reference.frame, &minified),
-                    footprint_step_residual: difference_residual(
-                        &frames[1],
-                        &frames[0],
-                        &reference.frame,
-                        &point.frame,
-                        &minified,
-                    ),
                     lookups,
                 });
             }
         }
     }
     Ok((scenes, rows))
+}
+
+/// "before → after" of an (unfiltered, NDF) pair.
+pub fn arrow(pair: [f64; 2]) -> String {
+    format!("{:.4} → {:.4}", pair[0], pair[1])
 }
 
 /// The markdown section of the diffuse rows.
@@ -405,23 +369,17 @@ pub fn markdown(scenes: &[DiffuseScene], rows: &[DiffuseRow]) -> String {
     );
     for r in rows {
         md.push_str(&format!(
-            "| {} | {} → {}ndf | {} | {:.4} → {:.4} | {:.4} → {:.4} | {:.4} → {:.4} | {:.4} → {:.4} | {:.4} → {:.4} | {:.4} → {:.4} | {:.1e} | {} → {} |\n",
+            "| {} | {} → {}ndf | {} | {} | {} | {} | {} | {} | {} | {:.1e} | {} → {} |\n",
             r.scene,
             r.technique,
             r.technique,
             r.path,
-            r.minified[0],
-            r.minified[1],
-            r.reference_blocks[0],
-            r.reference_blocks[1],
-            r.magnified[0],
-            r.magnified[1],
-            r.all[0],
-            r.all[1],
-            r.own_footprint_minified[0],
-            r.own_footprint_minified[1],
-            r.own_footprint_blocks[0],
-            r.own_footprint_blocks[1],
+            arrow(r.minified),
+            arrow(r.reference_blocks),
+            arrow(r.magnified),
+            arrow(r.all),
+            arrow(r.own_footprint_minified),
+            arrow(r.own_footprint_blocks),
             r.magnified_max_change,
             r.lookups[0],
             r.lookups[1]
