@@ -67,6 +67,21 @@ pub struct ReferenceSettings {
     pub footprint: bool,
 }
 
+impl ReferenceSettings {
+    /// The footprint reference of direct light at `width` × `height`, `spp` samples per
+    /// pixel, seed 0: what the studies measure against.
+    pub fn footprint_direct(width: u32, height: u32, spp: u32) -> Self {
+        ReferenceSettings {
+            width,
+            height,
+            spp,
+            seed: 0,
+            bounces: 0,
+            footprint: true,
+        }
+    }
+}
+
 /// Most sub-pixel strata per side of the footprint reference (8 × 8 = 64 G-buffer sets).
 pub const MAX_STRATA_SIDE: u32 = 8;
 

@@ -168,14 +168,7 @@ pub fn run(ctx: &Arc<Context>, s: &NdfStudySettings) -> Result<(NdfStudy, Frame)
         direction: s.light_dir.normalize(),
         radiance: Vec3::ONE,
     };
-    let reference_settings = ReferenceSettings {
-        width: s.width,
-        height: s.height,
-        spp: s.spp,
-        seed: 0,
-        bounces: 0,
-        footprint: true,
-    };
+    let reference_settings = ReferenceSettings::footprint_direct(s.width, s.height, s.spp);
     let reference = render_reference(
         ctx,
         &mut gpu,

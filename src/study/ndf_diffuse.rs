@@ -206,14 +206,7 @@ pub fn run(
             ..PrepareSettings::default()
         })?;
         prepared.prepare_techniques(&techniques)?;
-        let reference_settings = ReferenceSettings {
-            width: s.width,
-            height: s.height,
-            spp: s.ref_spp,
-            seed: 0,
-            bounces: 0,
-            footprint: true,
-        };
+        let reference_settings = ReferenceSettings::footprint_direct(s.width, s.height, s.ref_spp);
         let reference = render_reference(ctx, &prepared.scene, &prepared.env, &reference_settings)?;
         let point = render_reference(
             ctx,

@@ -324,14 +324,7 @@ pub fn model_row(
         ctx,
         &high_scene,
         &prepared.env,
-        &ReferenceSettings {
-            width: s.width,
-            height: s.height,
-            spp: s.spp,
-            seed: 0,
-            bounces: 0,
-            footprint: true,
-        },
+        &ReferenceSettings::footprint_direct(s.width, s.height, s.spp),
     )?;
     let unc6: Technique = "unc6".parse().expect("a technique name");
     prepared.prepare_techniques(&[unc6])?;
