@@ -168,18 +168,23 @@ enum StudyCommand {
     /// (the paper's Tables 1 and 2) beside the CPU baker; GPU vs CPU maps of a real model
     /// simplified; the map rendered through unc6 against the high mesh's reference.
     Normalmap(StudyNormalmapArgs),
-    /// Issue 19: the specular term of a low light on the receding bumpy plane under naive
-    /// MIP filtering and normal distribution mapping (partial / per-texel normalisation),
-    /// against its footprint reference; the Fig. 1 composite.
+    /// Issue 19: the specular term of a directional light on the receding bumpy plane and
+    /// the wavy sphere under naive MIP filtering and normal distribution mapping (partial /
+    /// per-texel normalisation), against its footprint reference, with a composite per
+    /// scene; the diffuse techniques and their NDF variants.
     Ndf(StudyNdfArgs),
 }
 
 #[derive(Args, Debug)]
 struct StudyNdfArgs {
+    /// Scenes of the specular part: `bumpy` (the receding plane) and `wavy` (the sphere).
+    #[arg(long, value_delimiter = ',', default_value = "bumpy,wavy")]
+    scenes: Vec<shvis::study::ndf::SpecularScene>,
     /// Base spread σ of a full-resolution texel's normals (the surface's own roughness).
     #[arg(long, default_value_t = 0.1)]
     sigma: f32,
-    /// Direction toward the light (x,y,z; normalized).
+    /// Direction toward the light on the plane (x,y,z; normalized); the sphere's is fixed
+    /// (`scene::wavy::light_dir`).
     #[arg(
         long,
         value_delimiter = ',',
@@ -209,7 +214,7 @@ struct StudyNdfArgs {
     /// Lightmap resolution of the diffuse part's bakes.
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=4096))]
     vis_res: u32,
-    /// Output directory: ndf.md, ndf.json, fig1_ndf.png.
+    /// Output directory: ndf.md, ndf.json, fig1_ndf_{scene}.png.
     #[arg(long, default_value = "study-out/ndf")]
     out: PathBuf,
     #[command(flatten)]
@@ -1005,37 +1010,44 @@ fn run_study_ndf(a: StudyNdfArgs) -> Result<()> {
     create_dir(&a.out)?;
     let started = Instant::now();
     let ctx = open_gpu(&a.gpu)?;
-    let settings = ndf::NdfStudySettings {
-        sigma: a.sigma,
-        light_dir,
-        width: a.width,
-        height: a.height,
-        spp: a.spp,
-        paths: a.paths.clone(),
-        frames: a.frames,
-    };
-    let (study, composite) = ndf::run(&ctx, &settings)?;
-    println!(
-        "reference: {} strata (a quarter of them: {:.4} from it)",
-        study.strata, study.reference_self_error
-    );
-    println!(
-        "bumpy plane: {} plane pixels, {} minified ≥ {}×; relative RMSE / energy against the footprint reference (minified | whole plane):",
-        study.plane_pixels,
-        study.minified_pixels,
-        ndf::MIN_MINIFICATION
-    );
-    for r in &study.rows {
+    let mut studies = Vec::new();
+    for &scene in &a.scenes {
+        let settings = ndf::NdfStudySettings {
+            scene,
+            sigma: a.sigma,
+            light_dir: match scene {
+                ndf::SpecularScene::Bumpy => light_dir,
+                ndf::SpecularScene::Wavy => shvis::scene::wavy::light_dir(),
+            },
+            width: a.width,
+            height: a.height,
+            spp: a.spp,
+            paths: a.paths.clone(),
+            frames: a.frames,
+        };
+        let (study, composite) = ndf::run(&ctx, &settings)?;
         println!(
-            "  spec{:<4} {:<4} {:.4} / {:.3} | {:.4} / {:.3}  {} ms",
-            r.filter.name(),
-            r.path.name(),
-            r.rel_rmse_minified,
-            r.energy_minified,
-            r.rel_rmse_all,
-            r.energy_all,
-            r.ms_median.map_or("-".into(), |m| format!("{m:.2}"))
+            "{}: {} surface pixels, {} minified ≥ {}×; reference {} strata (a quarter of them: {:.4} from it); relative RMSE / energy against the footprint reference (minified | whole surface):",
+            scene.name(),
+            study.plane_pixels,
+            study.minified_pixels,
+            ndf::MIN_MINIFICATION,
+            study.strata,
+            study.reference_self_error
         );
+        for r in &study.rows {
+            println!(
+                "  spec{:<4} {:<4} {:.4} / {:.3} | {:.4} / {:.3}  {} ms",
+                r.filter.name(),
+                r.path.name(),
+                r.rel_rmse_minified,
+                r.energy_minified,
+                r.rel_rmse_all,
+                r.energy_all,
+                r.ms_median.map_or("-".into(), |m| format!("{m:.2}"))
+            );
+        }
+        studies.push((study, composite));
     }
     let diffuse_scenes: Vec<String> = a
         .diffuse_scenes
@@ -1087,7 +1099,7 @@ fn run_study_ndf(a: StudyNdfArgs) -> Result<()> {
         }
         Some((scenes, rows))
     };
-    for p in ndf::write_report(&study, &composite, diffuse.as_ref(), &a.out)? {
+    for p in ndf::write_report(&studies, diffuse.as_ref(), &a.out)? {
         println!("wrote {}", p.display());
     }
     check_validation(&ctx, a.gpu.validate)?;

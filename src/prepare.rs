@@ -285,6 +285,7 @@ pub fn resolve_scene(name: &str, vis_res: u32) -> Result<Scene, SceneError> {
         "house" => house::build(vis_res),
         "patio" => patio::build(vis_res),
         "bumpy" => crate::scene::bumpy::build(vis_res),
+        "wavy" => crate::scene::wavy::build(vis_res),
         p if p.ends_with(".gltf") || p.ends_with(".glb") => {
             gltf::load(std::path::Path::new(p), vis_res)
         }

@@ -14,6 +14,7 @@ pub mod lightmap_uv;
 pub mod patio;
 pub mod subdivide;
 pub mod tangent;
+pub mod wavy;
 
 use glam::{Mat4, Vec3, Vec4};
 
@@ -192,7 +193,7 @@ pub struct Scene {
 /// Errors from building or loading a scene.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    #[error("unknown scene '{0}': use 'house', 'patio', 'bumpy' or a path to a .gltf/.glb file")]
+    #[error("unknown scene '{0}': use 'house', 'patio', 'bumpy', 'wavy' or a path to a .gltf/.glb file")]
     Unknown(String),
     /// A glTF file that cannot be read or used; `message` says what is wrong.
     #[error("{path}: {message}")]

@@ -1,13 +1,17 @@
 //! Normal distribution mapping against naive MIP filtering (issue 19, `shvis study ndf`).
 //!
-//! On the built-in receding bumpy plane ([`crate::scene::bumpy`]) under a low directional
-//! light ahead of the camera, the specular term ([`crate::ndf::render`]) is rendered with
-//! the three filterings on each path and compared with its footprint reference: relative
-//! RMSE and the highlight's energy (the sum over the plane's pixels) against the
-//! reference's, over the pixels where the normal map is minified at least
-//! [`MIN_MINIFICATION`]× (texels per pixel along the larger footprint axis, from the camera
-//! and the plane analytically) and over the whole plane. Writes `ndf.md`, `ndf.json` and
-//! the composite `fig1_ndf.png` (reference · mip · ndf · ndfn, the paper's Fig. 1 setting).
+//! On each specular scene — the built-in receding bumpy plane ([`crate::scene::bumpy`],
+//! isotropic bumps, the paper's Fig. 1 setting of a surface receding to the horizon) and
+//! the wavy sphere ([`crate::scene::wavy`], parallel ripples: the highlight must elongate,
+//! the paper's Figs. 1–2) — the specular term of a directional light
+//! ([`crate::ndf::render`]) is rendered with the three filterings on each path and compared
+//! with its footprint reference: relative RMSE and the highlight's energy (the sum over
+//! the surface's pixels) against the reference's, over the pixels where the normal map is
+//! minified at least [`MIN_MINIFICATION`]× and over the whole surface. Minification is the
+//! texels per pixel along the larger footprint axis: analytic on the plane, from the
+//! hardware's level of detail (`ndf::render::normal_map_lod`) on the sphere. Writes
+//! `ndf.md`, `ndf.json` and a composite `fig1_ndf_{scene}.png` per scene (reference · mip ·
+//! ndf · ndfn).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -25,15 +29,55 @@ use crate::reference::ReferenceSettings;
 use crate::render::{Frame, FrameSettings, SceneGpu};
 use crate::report::ReportError;
 use crate::report::metrics::TimingStats;
-use crate::scene::{Scene, bumpy};
+use crate::scene::{Scene, bumpy, wavy};
 use crate::technique::HwPath;
 
 /// Pixels counted as minified cover at least this many normal-map texels across.
 pub const MIN_MINIFICATION: f32 = 4.0;
 
+/// The scenes of the specular part.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SpecularScene {
+    /// The receding bumpy plane.
+    Bumpy,
+    /// The wavy sphere.
+    Wavy,
+}
+
+impl SpecularScene {
+    pub const ALL: [SpecularScene; 2] = [SpecularScene::Bumpy, SpecularScene::Wavy];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            SpecularScene::Bumpy => "bumpy",
+            SpecularScene::Wavy => "wavy",
+        }
+    }
+
+    /// The scene, its lightmap at 256² (the specular term reads no lightmap).
+    pub fn build(self) -> Result<Scene, crate::scene::SceneError> {
+        match self {
+            SpecularScene::Bumpy => bumpy::build(256),
+            SpecularScene::Wavy => wavy::build(256),
+        }
+    }
+}
+
+impl std::str::FromStr for SpecularScene {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        SpecularScene::ALL
+            .into_iter()
+            .find(|v| v.name() == s)
+            .ok_or_else(|| format!("unknown specular scene '{s}': use bumpy or wavy"))
+    }
+}
+
 /// How the study runs.
 #[derive(Clone, Debug)]
 pub struct NdfStudySettings {
+    pub scene: SpecularScene,
     pub sigma: f32,
     pub light_dir: Vec3,
     pub width: u32,
@@ -65,6 +109,7 @@ pub struct NdfRow {
 #[derive(Clone, Debug, Serialize)]
 pub struct NdfStudy {
     pub device: String,
+    pub scene: SpecularScene,
     pub sigma: f32,
     pub light_dir: [f32; 3],
     pub width: u32,
@@ -146,7 +191,7 @@ fn compare(test: &Frame, reference: &Frame, mask: &[bool]) -> (f64, f64) {
 
 /// Runs the study; returns it and the composite (dx10 where rendered, else dx9).
 pub fn run(ctx: &Arc<Context>, s: &NdfStudySettings) -> Result<(NdfStudy, Frame), GpuError> {
-    let scene = bumpy::build(256).map_err(|e| GpuError::Invalid {
+    let scene = s.scene.build().map_err(|e| GpuError::Invalid {
         what: "study ndf".into(),
         detail: e.to_string(),
     })?;
@@ -190,7 +235,13 @@ pub fn run(ctx: &Arc<Context>, s: &NdfStudySettings) -> Result<(NdfStudy, Frame)
             ..reference_settings
         },
     )?;
-    let texels = minification(&scene, s.width, s.height);
+    let texels: Vec<f32> = match s.scene {
+        SpecularScene::Bumpy => minification(&scene, s.width, s.height),
+        SpecularScene::Wavy => crate::ndf::render::normal_map_lod(ctx, &gpu)?
+            .into_iter()
+            .map(|lod| lod.map_or(0.0, f32::exp2))
+            .collect(),
+    };
     let plane: Vec<bool> = reference
         .rgba
         .iter()
@@ -232,6 +283,7 @@ pub fn run(ctx: &Arc<Context>, s: &NdfStudySettings) -> Result<(NdfStudy, Frame)
     Ok((
         NdfStudy {
             device: ctx.device_name().to_string(),
+            scene: s.scene,
             sigma: s.sigma,
             light_dir: light.direction.to_array(),
             width: s.width,
@@ -252,73 +304,79 @@ pub fn run(ctx: &Arc<Context>, s: &NdfStudySettings) -> Result<(NdfStudy, Frame)
     ))
 }
 
-/// Writes `ndf.md`, `ndf.json` and `fig1_ndf.png` into `dir`; returns their paths.
+/// Writes `ndf.md`, `ndf.json` and `fig1_ndf_{scene}.png` per specular study into `dir`;
+/// returns their paths.
 pub fn write_report(
-    study: &NdfStudy,
-    composite: &Frame,
+    studies: &[(NdfStudy, Frame)],
     diffuse: Option<&(Vec<DiffuseScene>, Vec<DiffuseRow>)>,
     dir: &Path,
 ) -> Result<Vec<PathBuf>, ReportError> {
-    let mut md = format!(
-        "# Normal distribution mapping (issue 19)\n\nDevice {}; scene `bumpy` {}×{}, base spread σ = {}, light toward {:?}; \
-         footprint reference over {} sub-pixel strata (a quarter of them differ from it by {:.4}); {} plane pixels, {} minified ≥ {}×. NDF maps: {} levels, built in {:.2} s.\n\n\
-         | filter | path | rel. RMSE (minified) | energy (minified) | rel. RMSE (plane) | energy (plane) | ms median | lookups/px |\n\
-         |---|---|---:|---:|---:|---:|---:|---:|\n",
-        study.device,
-        study.width,
-        study.height,
-        study.sigma,
-        study.light_dir,
-        study.strata,
-        study.reference_self_error,
-        study.plane_pixels,
-        study.minified_pixels,
-        MIN_MINIFICATION,
-        study.ndf_levels,
-        study.ndf_build_s
-    );
-    for r in &study.rows {
+    let mut md = "# Normal distribution mapping (issue 19)\n".to_string();
+    let mut written = Vec::new();
+    for (study, composite) in studies {
+        let scene = study.scene.name();
         md.push_str(&format!(
-            "| spec{} | {} | {:.4} | {:.3} | {:.4} | {:.3} | {} | {} |\n",
-            r.filter.name(),
-            r.path,
-            r.rel_rmse_minified,
-            r.energy_minified,
-            r.rel_rmse_all,
-            r.energy_all,
-            r.ms_median.map_or("-".into(), |m| format!("{m:.2}")),
-            r.lookups
+            "\n## Specular, `{scene}`\n\nDevice {}; {}×{}, base spread σ = {}, light toward {:?}; \
+             footprint reference over {} sub-pixel strata (a quarter of them differ from it by {:.4}); {} surface pixels, {} minified ≥ {}×. NDF maps: {} levels, built in {:.2} s.\n\n\
+             | filter | path | rel. RMSE (minified) | energy (minified) | rel. RMSE (surface) | energy (surface) | ms median | lookups/px |\n\
+             |---|---|---:|---:|---:|---:|---:|---:|\n",
+            study.device,
+            study.width,
+            study.height,
+            study.sigma,
+            study.light_dir,
+            study.strata,
+            study.reference_self_error,
+            study.plane_pixels,
+            study.minified_pixels,
+            MIN_MINIFICATION,
+            study.ndf_levels,
+            study.ndf_build_s
         ));
+        for r in &study.rows {
+            md.push_str(&format!(
+                "| spec{} | {} | {:.4} | {:.3} | {:.4} | {:.3} | {} | {} |\n",
+                r.filter.name(),
+                r.path,
+                r.rel_rmse_minified,
+                r.energy_minified,
+                r.rel_rmse_all,
+                r.energy_all,
+                r.ms_median.map_or("-".into(), |m| format!("{m:.2}")),
+                r.lookups
+            ));
+        }
+        let name = format!("fig1_ndf_{scene}.png");
+        md.push_str(&format!("\n![reference · mip · ndf · ndfn]({name})\n"));
+        // Expose so the reference's 99th percentile is white.
+        let mut values: Vec<f32> = composite
+            .rgba
+            .iter()
+            .map(|p| p[0])
+            .filter(|v| *v > 0.0)
+            .collect();
+        values.sort_by(f32::total_cmp);
+        let p99 = values
+            .get(values.len() * 99 / 100)
+            .copied()
+            .unwrap_or(1.0)
+            .max(1e-9);
+        let fig = dir.join(name);
+        crate::report::image::write_frame(&fig, composite, -p99.log2())?;
+        written.push(fig);
     }
-    md.push_str("\n![reference · mip · ndf · ndfn](fig1_ndf.png)\n");
     if let Some((scenes, rows)) = diffuse {
         md.push_str(&super::ndf_diffuse::markdown(scenes, rows));
     }
-    // Expose so the reference's 99th percentile is white.
-    let mut values: Vec<f32> = composite
-        .rgba
-        .iter()
-        .map(|p| p[0])
-        .filter(|v| *v > 0.0)
-        .collect();
-    values.sort_by(f32::total_cmp);
-    let p99 = values
-        .get(values.len() * 99 / 100)
-        .copied()
-        .unwrap_or(1.0)
-        .max(1e-9);
-    let fig = dir.join("fig1_ndf.png");
-    crate::report::image::write_frame(&fig, composite, -p99.log2())?;
-    Ok(vec![
-        super::write_text(dir, "ndf.md", &md)?,
-        super::write_json(
-            dir,
-            "ndf.json",
-            &serde_json::json!({
-                "specular": study,
-                "diffuse": diffuse.map(|(scenes, rows)| serde_json::json!({"scenes": scenes, "rows": rows})),
-            }),
-        )?,
-        fig,
-    ])
+    let specular: Vec<&NdfStudy> = studies.iter().map(|(s, _)| s).collect();
+    written.push(super::write_text(dir, "ndf.md", &md)?);
+    written.push(super::write_json(
+        dir,
+        "ndf.json",
+        &serde_json::json!({
+            "specular": specular,
+            "diffuse": diffuse.map(|(scenes, rows)| serde_json::json!({"scenes": scenes, "rows": rows})),
+        }),
+    )?);
+    Ok(written)
 }
