@@ -12,6 +12,7 @@ use std::time::Instant;
 
 use crate::attribution::{LadderPixels, cpu_rungs};
 use crate::gpu::{Context, GpuError};
+use crate::ndf::render::{NormalFilter, SpecularLight, SpecularTerm};
 use crate::prepare::Prepared;
 use crate::reference::{ReferenceImage, ReferenceSettings, render_reference};
 use crate::render::{Frame, FrameSettings, SceneGpu};
@@ -48,8 +49,31 @@ pub struct BenchSettings {
     pub footprint_reference: bool,
     /// Seed of the reference's sampling.
     pub seed: u64,
+    /// The specular material term (`--specular`): every technique × path is measured once
+    /// per filtering with the term added, against references with the term's own footprint
+    /// reference (`ndf::render::render_reference`, the same for every filtering) summed in.
+    pub specular: Option<SpecularSettings>,
     /// Output directory (must exist).
     pub out: PathBuf,
+}
+
+/// The specular term of a bench: its light and base spread, and the normal-map filterings
+/// measured side by side.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpecularSettings {
+    pub filters: Vec<NormalFilter>,
+    pub light: SpecularLight,
+    pub sigma: f32,
+}
+
+impl SpecularSettings {
+    fn term(&self, filter: NormalFilter) -> SpecularTerm {
+        SpecularTerm {
+            filter,
+            light: self.light,
+            sigma: self.sigma,
+        }
+    }
 }
 
 impl BenchSettings {
@@ -93,7 +117,13 @@ pub fn run(
         flat_normals: false,
         ..FrameSettings::default()
     };
+    // The ladder's CPU rungs model the diffuse techniques alone (`attribution` leaves
+    // specular rows out).
     let ladder = match reference.as_ref().and_then(|r| r.point.as_ref()) {
+        Some(_) if settings.specular.is_some() => {
+            log::info!("error ladder: left out with --specular (its CPU rungs are diffuse)");
+            None
+        }
         Some(_) => Some(ladder_pixels(ctx, prepared, settings)?),
         None => None,
     };
@@ -101,29 +131,49 @@ pub fn run(
         pixels: ladder,
         written: std::collections::HashSet::new(),
     };
-    let scene = SceneGpu::new(ctx, &prepared.scene, &frame_settings)?;
+    let mut scene = SceneGpu::new(ctx, &prepared.scene, &frame_settings)?;
+    let filters: Vec<Option<NormalFilter>> = match &settings.specular {
+        Some(s) => s.filters.iter().copied().map(Some).collect(),
+        None => vec![None],
+    };
     let mut rows = Vec::new();
-    // The images the figures need, kept until they are drawn.
+    // The images the figures need, kept until they are drawn (the first filtering's).
     let mut figure_frames = std::collections::HashMap::new();
-    for &technique in &settings.techniques {
-        for &path in &settings.paths {
-            let reference = reference.as_ref();
-            let (row, frame) = measure_row(
-                ctx,
-                &scene,
-                prepared,
-                technique,
-                path,
-                reference,
-                &mut ladder,
-                settings,
-            )?;
-            rows.push(row);
-            if FIGURES
-                .iter()
-                .any(|f| f.techniques().any(|t| t == technique))
-            {
-                figure_frames.insert((technique, path), frame);
+    for (k, &filter) in filters.iter().enumerate() {
+        if let (Some(filter), Some(s)) = (filter, &settings.specular) {
+            scene.add_specular(ctx, &prepared.scene, s.term(filter))?;
+        }
+        for &technique in &settings.techniques {
+            for &path in &settings.paths {
+                let reference = reference.as_ref();
+                let measured = measure_row(
+                    ctx,
+                    &scene,
+                    prepared,
+                    technique,
+                    path,
+                    reference,
+                    &mut ladder,
+                    settings,
+                );
+                let (row, frame) = match measured {
+                    // The specular term's moment maps can take a dx9 draw past its textures.
+                    Err(BenchError::Technique(e @ TechniqueError::Dx9Rule { .. }))
+                        if filter.is_some() =>
+                    {
+                        log::warn!("{e} (with the specular term): row left out");
+                        continue;
+                    }
+                    other => other?,
+                };
+                rows.push(row);
+                if k == 0
+                    && FIGURES
+                        .iter()
+                        .any(|f| f.techniques().any(|t| t == technique))
+                {
+                    figure_frames.insert((technique, path), frame);
+                }
             }
         }
     }
@@ -154,6 +204,13 @@ pub fn run(
         width: settings.width,
         height: settings.height,
         vis_res: prepared.visibility.res,
+        specular: settings.specular.as_ref().map(|s| {
+            let (d, e) = (s.light.direction, s.light.radiance);
+            format!(
+                "light toward ({:.3}, {:.3}, {:.3}), k_s·E = ({:.4}, {:.4}, {:.4}), σ = {}",
+                d.x, d.y, d.z, e.x, e.y, e.z, s.sigma
+            )
+        }),
         results: rows,
     };
     table.write(&settings.out)?;
@@ -187,23 +244,27 @@ fn render_references(
         return Ok(None);
     }
     let render = |footprint: bool, name: &str| -> Result<ReferenceImage, BenchError> {
-        let image = render_reference(
-            ctx,
-            &prepared.scene,
-            &prepared.env,
-            &ReferenceSettings {
-                width: settings.width,
-                height: settings.height,
-                spp: settings.ref_spp,
-                seed: settings.seed,
-                bounces: if settings.needs_sh_lightmap() {
-                    settings.bounces
-                } else {
-                    0
-                },
-                footprint,
+        let reference_settings = ReferenceSettings {
+            width: settings.width,
+            height: settings.height,
+            spp: settings.ref_spp,
+            seed: settings.seed,
+            bounces: if settings.needs_sh_lightmap() {
+                settings.bounces
+            } else {
+                0
             },
-        )?;
+            footprint,
+        };
+        let mut image = render_reference(ctx, &prepared.scene, &prepared.env, &reference_settings)?;
+        if let Some(s) = &settings.specular {
+            let term = s.term(NormalFilter::Mip);
+            let specular = specular_reference(ctx, prepared, &term, &reference_settings)?;
+            add_rgb(&mut image.frame, &specular);
+            if let Some(b) = &mut image.bounced {
+                add_rgb(&mut b.frame, &specular);
+            }
+        }
         log::info!(
             "{name}: {} spp ({}×{} sub-pixel strata) in {:.1} s, relative noise {:.4}",
             settings.ref_spp,
@@ -231,6 +292,59 @@ fn render_references(
         None
     };
     Ok(Some(References { main, point }))
+}
+
+/// The footprint (or, without `settings.footprint`, point) reference of the specular term
+/// alone: the same BRDF from the full-resolution normals (`ndf::render::render_reference`).
+fn specular_reference(
+    ctx: &Arc<Context>,
+    prepared: &Prepared,
+    term: &SpecularTerm,
+    settings: &ReferenceSettings,
+) -> Result<Frame, BenchError> {
+    let mut gpu = SceneGpu::new(
+        ctx,
+        &prepared.scene,
+        &FrameSettings {
+            width: settings.width,
+            height: settings.height,
+            float32_target: true,
+            ..FrameSettings::default()
+        },
+    )?;
+    let maps = crate::ndf::build(
+        &prepared.scene.material.normal,
+        prepared.scene.material.normal_scale,
+        term.sigma,
+    );
+    let started = Instant::now();
+    let frame = crate::ndf::render::render_reference(
+        ctx,
+        &mut gpu,
+        prepared.scene.camera.position,
+        &maps,
+        &term.light,
+        settings,
+    )?;
+    log::info!(
+        "specular reference ({}): {:.1} s",
+        if settings.footprint {
+            "footprint"
+        } else {
+            "point"
+        },
+        started.elapsed().as_secs_f64()
+    );
+    Ok(frame)
+}
+
+/// Adds `extra`'s colour to `frame` (same size), alpha kept.
+fn add_rgb(frame: &mut Frame, extra: &Frame) {
+    for (p, e) in frame.rgba.iter_mut().zip(&extra.rgba) {
+        for c in 0..3 {
+            p[c] += e[c];
+        }
+    }
 }
 
 /// The image of `reference` a technique is measured against, and how the row names it.
@@ -297,6 +411,9 @@ fn attribution(
     let Some((r, Some(point))) = references.map(|r| (r, r.point.as_ref())) else {
         return Ok(vec![]);
     };
+    if settings.specular.is_some() {
+        return Ok(vec![]);
+    }
     let (footprint, _) = reference_for(technique, &r.main);
     let (point, kind) = reference_for(technique, point);
     let rel = |a: &Frame, b: &Frame| image_error(a, b).map(|e| e.rel_rmse);
@@ -365,6 +482,11 @@ fn measure_row(
 ) -> Result<(BenchRow, Frame), BenchError> {
     let tech = technique::build(ctx, scene, technique, path, &prepared.inputs())?;
     let frame = tech.render(scene, settings.warmup, settings.frames)?;
+    let specular = scene.specular().map(|s| s.term.filter);
+    let label = match specular {
+        Some(f) => format!("{}.spec{}", tech.label(), f.name()),
+        None => tech.label(),
+    };
     let timing = TimingStats::from_ms(&frame.ms);
     let (reference_frame, reference_kind) = match references {
         Some(r) => {
@@ -378,20 +500,20 @@ fn measure_row(
         && let Some(e) = image_error(&frame, &r.main.frame)
     {
         log::info!(
-            "{}: relative RMSE against the direct-only reference {:.4}",
-            tech.label(),
+            "{label}: relative RMSE against the direct-only reference {:.4}",
             e.rel_rmse
         );
     }
-    write_images(&settings.out, &tech.label(), &frame, settings.exposure)?;
+    write_images(&settings.out, &label, &frame, settings.exposure)?;
     if let Some(r) = reference_frame {
         let diff = difference(&frame, r, DIFFERENCE_SCALE);
-        let name = format!("{}.diff{DIFFERENCE_SCALE}.png", tech.label());
+        let name = format!("{label}.diff{DIFFERENCE_SCALE}.png");
         write_png(&settings.out.join(name), &diff, settings.exposure)?;
     }
     let row = BenchRow {
         technique,
         path,
+        specular,
         ms_median: timing.map(|s| s.ms_median),
         ms_min: timing.map(|s| s.ms_min),
         ms_max: timing.map(|s| s.ms_max),

@@ -434,6 +434,107 @@ struct SceneArgs {
     height_scale: f64,
 }
 
+/// The specular material term of `render` and `bench` (issue 19; `shvis::ndf::render`).
+#[derive(Args, Debug, Clone)]
+struct SpecularArgs {
+    /// Add a specular term (Blinn-style microfacet density at the half vector of the
+    /// environment's sun, or of `--light-dir`) to every technique, its normal map filtered
+    /// as `mip` (averaged normals), `ndf` (normal distribution mapping, partial
+    /// normalisation: the paper's choice) or `ndfn` (the per-texel normalisation map).
+    /// `bench` takes a comma-separated list and measures every row once per filtering.
+    #[arg(long, value_delimiter = ',')]
+    specular: Vec<shvis::ndf::render::NormalFilter>,
+    /// Base spread σ of a full-resolution texel's normals (the surface's roughness).
+    #[arg(long, default_value_t = 0.1)]
+    specular_sigma: f32,
+    /// Specular factor k_s multiplied into the light's irradiance.
+    #[arg(long, default_value_t = 0.04)]
+    specular_ks: f32,
+    /// Direction toward the specular light (x,y,z) instead of the sun's; its irradiance
+    /// stays the sun's.
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    light_dir: Option<Vec<f32>>,
+}
+
+impl SpecularArgs {
+    /// The one filtering `render` takes, and its term for `env`.
+    fn term(&self, env: &shvis::env::EnvMap) -> Result<Option<shvis::ndf::render::SpecularTerm>> {
+        let [filter] = self.specular.as_slice() else {
+            if self.specular.len() > 1 {
+                bail!("--specular: render takes one filtering (mip, ndf or ndfn)");
+            }
+            return Ok(None);
+        };
+        let Some(s) = self.settings(env)? else {
+            return Ok(None);
+        };
+        Ok(Some(shvis::ndf::render::SpecularTerm {
+            filter: *filter,
+            light: s.light,
+            sigma: s.sigma,
+        }))
+    }
+
+    /// The bench's specular settings for `env`, or `None` without `--specular`.
+    fn settings(&self, env: &shvis::env::EnvMap) -> Result<Option<shvis::bench::SpecularSettings>> {
+        if self.specular.is_empty() {
+            return Ok(None);
+        }
+        if !(shvis::ndf::MIN_SIGMA..=shvis::ndf::MAX_SIGMA).contains(&self.specular_sigma) {
+            bail!(
+                "--specular-sigma {} is outside {}..={}",
+                self.specular_sigma,
+                shvis::ndf::MIN_SIGMA,
+                shvis::ndf::MAX_SIGMA
+            );
+        }
+        if !(self.specular_ks.is_finite() && (0.0..=1.0).contains(&self.specular_ks)) {
+            bail!("--specular-ks {} is outside 0..=1", self.specular_ks);
+        }
+        let Some((sun, irradiance)) = env.dominant_light() else {
+            bail!("--specular: the environment is black, it has no light to reflect");
+        };
+        let direction = match &self.light_dir {
+            None => sun.as_vec3(),
+            Some(v) => {
+                let d = <[f32; 3]>::try_from(v.as_slice())
+                    .map(glam::Vec3::from)
+                    .map_err(|_| anyhow::anyhow!("--light-dir needs three numbers x,y,z"))?;
+                if !(d.is_finite() && d.length() > 1e-6) {
+                    bail!("--light-dir {},{},{} is not a direction", d.x, d.y, d.z);
+                }
+                d.normalize()
+            }
+        };
+        let radiance = glam::DVec3::from(irradiance).as_vec3() * self.specular_ks;
+        if !radiance.is_finite() {
+            bail!("--specular: the environment's sun has a non-finite irradiance {radiance}");
+        }
+        let names: Vec<&str> = self.specular.iter().map(|f| f.name()).collect();
+        eprintln!(
+            "specular ({}): light toward {:.3},{:.3},{:.3}, k_s·E = {:.4},{:.4},{:.4}, σ = {}",
+            names.join(", "),
+            direction.x,
+            direction.y,
+            direction.z,
+            radiance.x,
+            radiance.y,
+            radiance.z,
+            self.specular_sigma
+        );
+        let mut filters = self.specular.clone();
+        filters.dedup();
+        Ok(Some(shvis::bench::SpecularSettings {
+            filters,
+            light: shvis::ndf::render::SpecularLight {
+                direction,
+                radiance,
+            },
+            sigma: self.specular_sigma,
+        }))
+    }
+}
+
 #[derive(Args, Debug, Clone)]
 struct GpuArgs {
     /// Pick the first Vulkan device whose name contains this.
@@ -490,6 +591,8 @@ struct RenderArgs {
     /// variants; the other techniques have none and stay as they are).
     #[arg(long, value_enum, default_value_t = NormalFilterArg::Mip)]
     normal_filter: NormalFilterArg,
+    #[command(flatten)]
+    specular: SpecularArgs,
     /// Ignore the normal map (shade with interpolated normals).
     #[arg(long)]
     flat_normals: bool,
@@ -558,6 +661,8 @@ struct BenchArgs {
     /// variants; the other techniques have none and stay as they are).
     #[arg(long, value_enum, default_value_t = NormalFilterArg::Mip)]
     normal_filter: NormalFilterArg,
+    #[command(flatten)]
+    specular: SpecularArgs,
     /// Timed frames per technique × path (after the warm-up).
     #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     frames: u32,
@@ -1401,7 +1506,10 @@ fn run_render(mut a: RenderArgs) -> Result<()> {
         flat_normals: a.flat_normals,
         ..FrameSettings::default()
     };
-    let scene_gpu = SceneGpu::new(&ctx, &prepared.scene, &settings)?;
+    let mut scene_gpu = SceneGpu::new(&ctx, &prepared.scene, &settings)?;
+    if let Some(term) = a.specular.term(&prepared.env)? {
+        scene_gpu.add_specular(&ctx, &prepared.scene, term)?;
+    }
     let tech = technique::build(&ctx, &scene_gpu, a.technique, a.path, &prepared.inputs())?;
     let frame = tech.render(&scene_gpu, 0, 1)?;
     write_frame(&a.out, &frame, a.exposure)?;
@@ -1496,6 +1604,7 @@ fn run_bench(a: BenchArgs) -> Result<()> {
         bounces: a.bounces,
         footprint_reference: !a.point_reference,
         seed: a.scene.seed,
+        specular: None,
         out: a.out.clone(),
     };
     create_dir(&a.out)?;
@@ -1503,6 +1612,7 @@ fn run_bench(a: BenchArgs) -> Result<()> {
     let bounces = settings.needs_sh_lightmap().then_some(a.bounces);
     let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, bounces)?)?;
     prepared.prepare_techniques(&settings.techniques)?;
+    settings.specular = a.specular.settings(&prepared.env)?;
     if a.techniques == "all" && prepared.ssbump.is_none() {
         // The whole table on a scene without a height map: the rows that need one are left
         // out (named explicitly they fail with the reason).

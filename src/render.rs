@@ -54,6 +54,7 @@ pub struct SceneGpu {
     vertex_spirv: Vec<u32>,
     vertex_layout: VertexLayout,
     material_level0: bool,
+    specular: Option<crate::ndf::render::SceneSpecular>,
 }
 
 impl SceneGpu {
@@ -166,7 +167,32 @@ impl SceneGpu {
             )?,
             vertex_layout,
             material_level0: settings.material_level0,
+            specular: None,
         })
+    }
+
+    /// Adds the specular material term `term` to every technique built for this scene
+    /// afterwards (`--specular`; `crate::ndf::render`): its NDF maps from `scene`'s normal
+    /// map, and a vertex stage that passes the world position on.
+    pub fn add_specular(
+        &mut self,
+        ctx: &Arc<Context>,
+        scene: &Scene,
+        term: crate::ndf::render::SpecularTerm,
+    ) -> Result<(), GpuError> {
+        self.specular = Some(crate::ndf::render::SceneSpecular::new(
+            ctx,
+            &scene.material,
+            term,
+        )?);
+        self.vertex_spirv =
+            compile_glsl("scene/mesh.vert", ShaderStage::Vertex, &[("GBUFFER", 1)])?;
+        Ok(())
+    }
+
+    /// The specular material term techniques add, if any ([`Self::add_specular`]).
+    pub fn specular(&self) -> Option<&crate::ndf::render::SceneSpecular> {
+        self.specular.as_ref()
     }
 
     /// The bindings every technique shares: frame block, albedo, normal map.

@@ -82,6 +82,7 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
             bounces: shvis::bake::shlmap::DEFAULT_BOUNCES,
             footprint_reference: true,
             seed: 5,
+            specular: None,
             out: out_dir.clone(),
         },
     )

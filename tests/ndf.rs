@@ -233,3 +233,164 @@ fn diffuse_ndf_variants_change_nothing_magnified_and_follow_the_footprint_minifi
     }
     common::assert_validation_clean(&ctx, "diffuse NDF variants");
 }
+
+/// `--specular` as a material term of the cost-table techniques: a technique built on a
+/// scene with the term renders its own image plus exactly the standalone specular pass of
+/// the same filtering (to the f16 target's rounding), on both paths — for a per-texel
+/// technique (preconv), a table technique (unc6 on dx10; on dx9 its 14 textures plus the
+/// three moment maps break the 16-texture rule, which must be refused) and the per-vertex
+/// one (pca12v, its own vertex stage).
+#[test]
+fn the_specular_term_adds_the_standalone_pass_to_every_technique() {
+    use shvis::ndf::render::SpecularTerm;
+    use shvis::prepare::{PrepareSettings, prepare};
+    use shvis::technique::{self, Technique, TechniqueError};
+
+    let ctx = common::validated_context();
+    let mut prepared = prepare(&PrepareSettings {
+        scene: "bumpy".into(),
+        vis_res: 64,
+        ..PrepareSettings::default()
+    })
+    .unwrap();
+    let techniques: Vec<Technique> = ["preconv", "unc6", "pca12v"]
+        .iter()
+        .map(|t| t.parse().unwrap())
+        .collect();
+    prepared.prepare_techniques(&techniques).unwrap();
+    let light = SpecularLight {
+        direction: Vec3::new(0.0, 0.3, -1.0).normalize(),
+        radiance: Vec3::splat(0.5),
+    };
+    let settings = FrameSettings {
+        width: 160,
+        height: 90,
+        ..FrameSettings::default()
+    };
+    let plain = SceneGpu::new(&ctx, &prepared.scene, &settings).unwrap();
+    let standalone = SceneGpu::new(
+        &ctx,
+        &prepared.scene,
+        &FrameSettings {
+            float32_target: true,
+            ..settings
+        },
+    )
+    .unwrap();
+    let maps = shvis::ndf::build(&prepared.scene.material.normal, 1.0, 0.1);
+    let inputs = prepared.inputs();
+    for filter in NormalFilter::ALL {
+        let mut with_term = SceneGpu::new(&ctx, &prepared.scene, &settings).unwrap();
+        let term = SpecularTerm {
+            filter,
+            light,
+            sigma: 0.1,
+        };
+        with_term.add_specular(&ctx, &prepared.scene, term).unwrap();
+        for path in [HwPath::Dx9, HwPath::Dx10] {
+            let images = upload_maps(&ctx, &maps, path).unwrap();
+            let specular =
+                render_specular(&ctx, &standalone, &maps, &images, &light, filter, path, 1)
+                    .unwrap();
+            let peak = specular.rgba.iter().map(|p| p[0]).fold(0.0f32, f32::max);
+            assert!(peak > 0.1, "{filter:?}: the highlight is in view ({peak})");
+            for &t in &techniques {
+                let built = technique::build(&ctx, &with_term, t, path, &inputs);
+                if t.name() == "unc6" && path == HwPath::Dx9 && filter != NormalFilter::Mip {
+                    assert!(
+                        matches!(built, Err(TechniqueError::Dx9Rule { .. })),
+                        "unc6.dx9 with the moment maps must break the texture rule"
+                    );
+                    continue;
+                }
+                let built = built.unwrap();
+                let extra = filter.extra_lookups();
+                let base = technique::build(&ctx, &plain, t, path, &inputs).unwrap();
+                assert_eq!(
+                    built.stats.lookups_per_pixel,
+                    base.stats.lookups_per_pixel + extra,
+                    "{t}.{path}"
+                );
+                let sum = built.render(&with_term, 0, 1).unwrap();
+                let diffuse = base.render(&plain, 0, 1).unwrap();
+                let mut worst = 0.0f32;
+                for i in 0..sum.rgba.len() {
+                    for c in 0..3 {
+                        let expected = diffuse.rgba[i][c] + specular.rgba[i][c];
+                        let err = (sum.rgba[i][c] - expected).abs() / expected.abs().max(1.0);
+                        worst = worst.max(err);
+                    }
+                }
+                // f16 targets: 2⁻¹⁰ relative per image, two images rounded.
+                assert!(worst <= 4e-3, "{t}.{path} {filter:?}: {worst}");
+            }
+        }
+    }
+    common::assert_validation_clean(&ctx, "specular term in the techniques");
+}
+
+/// The bench with `--specular mip,ndf,ndfn` on the receding plane: one row per technique ×
+/// path × filtering, and the NDF rows' error against the reference with the specular
+/// footprint reference summed in well under the naive MIP rows'.
+#[test]
+fn the_bench_measures_the_specular_filterings_side_by_side() {
+    use shvis::bench::{BenchSettings, SpecularSettings, run};
+    use shvis::prepare::{PrepareSettings, prepare};
+    use shvis::technique::Technique;
+
+    let ctx = common::validated_context();
+    let mut prepared = prepare(&PrepareSettings {
+        scene: "bumpy".into(),
+        vis_res: 64,
+        ..PrepareSettings::default()
+    })
+    .unwrap();
+    let preconv: Technique = "preconv".parse().unwrap();
+    prepared.prepare_techniques(&[preconv]).unwrap();
+    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("ndf-specular-bench");
+    let _ = std::fs::remove_dir_all(&out);
+    std::fs::create_dir_all(&out).unwrap();
+    let table = run(
+        &ctx,
+        &prepared,
+        &BenchSettings {
+            techniques: vec![preconv],
+            paths: vec![HwPath::Dx9, HwPath::Dx10],
+            frames: 1,
+            warmup: 0,
+            width: 320,
+            height: 180,
+            exposure: 0.0,
+            ref_spp: 16,
+            bounces: 0,
+            footprint_reference: true,
+            seed: 3,
+            specular: Some(SpecularSettings {
+                filters: NormalFilter::ALL.to_vec(),
+                light: SpecularLight {
+                    direction: Vec3::new(0.0, 0.3, -1.0).normalize(),
+                    radiance: Vec3::splat(0.5),
+                },
+                sigma: 0.1,
+            }),
+            out: out.clone(),
+        },
+    )
+    .unwrap();
+    assert_eq!(table.results.len(), 6);
+    for path in [HwPath::Dx9, HwPath::Dx10] {
+        let error = |f| {
+            table
+                .results
+                .iter()
+                .find(|r| r.path == path && r.specular == Some(f))
+                .and_then(|r| r.rel_rmse)
+                .unwrap()
+        };
+        let (mip, ndf) = (error(NormalFilter::Mip), error(NormalFilter::Ndf));
+        eprintln!("{path}: preconv+specmip {mip:.4}, +specndf {ndf:.4}");
+        assert!(ndf < 0.6 * mip, "{path}: {ndf} vs {mip}");
+    }
+    assert!(out.join("preconv.dx10.specndf.exr").exists());
+    common::assert_validation_clean(&ctx, "bench with the specular term");
+}

@@ -1,12 +1,19 @@
-// The ending every diffuse technique shares: radiance = albedo/π · irradiance, written to
+// The ending every diffuse technique shares: radiance = albedo/π · irradiance, plus the
+// specular material term when the scene has one (`--specular`, specular.glsl), written to
 // the colour target (alpha 1 marks covered pixels for the readback).
 #ifndef SHVIS_DIFFUSE_OUT_GLSL
 #define SHVIS_DIFFUSE_OUT_GLSL
 
+#include "specular.glsl"
+
 layout(location = 0) out vec4 out_radiance;
 
 void write_diffuse(vec3 irradiance) {
-    out_radiance = vec4(material_albedo() / PI * irradiance, 1.0);
+    vec3 radiance = material_albedo() / PI * irradiance;
+#if defined(SHVIS_SPECULAR) && SHVIS_SPECULAR > 0
+    radiance += specular_radiance();
+#endif
+    out_radiance = vec4(radiance, 1.0);
 }
 
 #endif

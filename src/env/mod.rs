@@ -128,6 +128,12 @@ pub enum EnvError {
     },
 }
 
+/// Half-angle of the cone around the brightest texel that [`EnvMap::dominant_light`]
+/// gathers, degrees.
+pub const DOMINANT_LIGHT_CONE_DEG: f64 = 5.0;
+/// Fraction of the brightest luminance a texel needs to count as part of that light.
+pub const DOMINANT_LIGHT_FRACTION: f32 = 0.01;
+
 /// An equirectangular radiance map (DESIGN §1; layout in the module doc).
 #[derive(Clone, Debug, PartialEq)]
 pub struct EnvMap {
@@ -227,6 +233,42 @@ impl EnvMap {
         })
     }
 
+    /// The map's dominant light as a directional one (`--specular`: "the sun of the
+    /// environment"): around the brightest texel (by luminance), the texels within
+    /// [`DOMINANT_LIGHT_CONE_DEG`] of it that reach [`DOMINANT_LIGHT_FRACTION`] of its
+    /// luminance; their irradiance Σ L dω (RGB, at normal incidence) and the direction of
+    /// their luminance-weighted centroid. The built-in sky's sun is that; for a captured
+    /// probe it is its brightest small region. `None` for a black map.
+    pub fn dominant_light(&self) -> Option<(DVec3, [f64; 3])> {
+        let luminance = |t: [f32; 3]| 0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2];
+        let (brightest, peak) = self
+            .texels
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| (i, luminance(t)))
+            .max_by(|a, b| a.1.total_cmp(&b.1))?;
+        if !(peak > 0.0) {
+            return None;
+        }
+        let w = self.width as usize;
+        let centre = self.texel_center_dir((brightest % w) as u32, (brightest / w) as u32);
+        let cos_cone = DOMINANT_LIGHT_CONE_DEG.to_radians().cos();
+        let (mut irradiance, mut weighted) = ([0.0f64; 3], DVec3::ZERO);
+        for (i, &t) in self.texels.iter().enumerate() {
+            let (x, y) = ((i % w) as u32, (i / w) as u32);
+            let d = self.texel_center_dir(x, y);
+            if luminance(t) < DOMINANT_LIGHT_FRACTION * peak || d.dot(centre) < cos_cone {
+                continue;
+            }
+            let d_omega = self.texel_solid_angle(y);
+            for (e, c) in irradiance.iter_mut().zip(t) {
+                *e += f64::from(c) * d_omega;
+            }
+            weighted += d * f64::from(luminance(t)) * d_omega;
+        }
+        Some((weighted.try_normalize().unwrap_or(centre), irradiance))
+    }
+
     /// Writes the map as an RGB f32 OpenEXR file (fixtures, debugging).
     ///
     /// # Errors
@@ -295,6 +337,26 @@ mod tests {
         // +Z sits on the seam: u = 0 or 1.
         let u = EnvMap::dir_to_uv(DVec3::Z).x;
         assert!(u.abs() < ROUND_TRIP || (u - 1.0).abs() < ROUND_TRIP, "{u}");
+    }
+
+    #[test]
+    fn the_dominant_light_of_the_sky_is_its_sun() {
+        let params = sky::SkyParams::with_sun_elevation(30.0);
+        let map = sky::sky(512, &params);
+        let (dir, e) = map.dominant_light().unwrap();
+        assert!(
+            dir.angle_between(params.sun_dir).to_degrees() < 0.5,
+            "{dir}"
+        );
+        // All of the sun's irradiance, little of the sky's around it.
+        let sun = params.sun_radiance * params.sun_solid_angle();
+        let lum = 0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2];
+        assert!((lum / sun - 1.0).abs() < 0.05, "{lum} vs {sun}");
+        assert!(
+            EnvMap::from_fn(8, 4, |_| [0.0; 3])
+                .dominant_light()
+                .is_none()
+        );
     }
 
     #[test]

@@ -14,6 +14,12 @@ pub const BINDING_TECHNIQUE_PARAMS: u32 = 3;
 /// The technique's first texture; further ones follow consecutively.
 pub const BINDING_TECHNIQUE_TEXTURE0: u32 = 4;
 
+/// The scene's specular material term (`--specular`, glsl/include/specular.glsl): its
+/// uniform block and, for the NDF filterings, the moment maps. Above every technique's own
+/// bindings (`technique::finish` checks).
+pub const BINDING_SPECULAR_PARAMS: u32 = 16;
+pub const BINDING_SPECULAR_MOMENTS: u32 = 17;
+
 /// Textures every technique binds besides its own (albedo, normal map).
 pub const MATERIAL_TEXTURES: u32 = 2;
 
@@ -25,6 +31,8 @@ pub const SHADER_MACROS: &[(&str, u32)] = &[
     ("BINDING_NORMAL_MAP", BINDING_NORMAL_MAP),
     ("BINDING_TECHNIQUE_PARAMS", BINDING_TECHNIQUE_PARAMS),
     ("BINDING_TECHNIQUE_TEXTURE0", BINDING_TECHNIQUE_TEXTURE0),
+    ("BINDING_SPECULAR_PARAMS", BINDING_SPECULAR_PARAMS),
+    ("BINDING_SPECULAR_MOMENTS", BINDING_SPECULAR_MOMENTS),
 ];
 
 /// Uniform block `FrameParams` of glsl/include/common.glsl (std140).

@@ -57,6 +57,25 @@ impl NormalFilter {
             NormalFilter::Ndf | NormalFilter::NdfNormalized => 3,
         }
     }
+
+    /// `SHVIS_SPECULAR` of glsl/include/specular.glsl.
+    pub fn shader_value(self) -> u32 {
+        match self {
+            NormalFilter::Mip => 1,
+            NormalFilter::Ndf => 2,
+            NormalFilter::NdfNormalized => 3,
+        }
+    }
+}
+
+impl std::str::FromStr for NormalFilter {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        NormalFilter::ALL
+            .into_iter()
+            .find(|f| f.name() == s)
+            .ok_or_else(|| format!("unknown specular filtering '{s}': use mip, ndf or ndfn"))
+    }
 }
 
 /// The directional light and the material's specular factor.
@@ -68,7 +87,16 @@ pub struct SpecularLight {
     pub radiance: Vec3,
 }
 
-/// Uniform block `SpecularParams` of `glsl/ndf/specular.frag` (std140).
+/// The specular material term a scene adds to every technique's radiance (`--specular`):
+/// the light, the filtering of the normal map and the surface's base spread σ.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpecularTerm {
+    pub filter: NormalFilter,
+    pub light: SpecularLight,
+    pub sigma: f32,
+}
+
+/// Uniform block `SpecularParams` of `glsl/include/specular.glsl` (std140).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct SpecularParams {
@@ -77,6 +105,105 @@ struct SpecularParams {
     sigma: f32,
     kappa0: f32,
     _pad: [f32; 2],
+}
+const _: () = assert!(std::mem::offset_of!(SpecularParams, sigma) == 32);
+
+impl SpecularParams {
+    fn new(light: &SpecularLight, maps: &NdfMaps) -> Self {
+        SpecularParams {
+            light_dir: light.direction.normalize().extend(0.0).to_array(),
+            light_radiance: light.radiance.extend(0.0).to_array(),
+            sigma: maps.sigma,
+            kappa0: maps.kappa0 as f32,
+            _pad: [0.0; 2],
+        }
+    }
+
+    fn upload(&self, ctx: &Arc<Context>, name: &str) -> Result<Buffer, GpuError> {
+        Buffer::with_data(
+            ctx,
+            bytemuck::bytes_of(self),
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            name,
+        )
+    }
+}
+
+/// The bindings of the specular term: its block and, for the NDF filterings, `images`
+/// (from [`upload_maps`] for the draw's path) with the material sampler.
+fn specular_resources<'a>(
+    scene: &'a SceneGpu,
+    params: &'a Buffer,
+    filter: NormalFilter,
+    images: &'a [Image],
+) -> Vec<(u32, Resource<'a>)> {
+    let mut resources = vec![(layout::BINDING_SPECULAR_PARAMS, Resource::Uniform(params))];
+    if filter != NormalFilter::Mip {
+        let sampler = scene.material_sampler();
+        resources.push((
+            layout::BINDING_SPECULAR_MOMENTS,
+            match images {
+                [one] => Resource::Texture(one, sampler),
+                many => Resource::TextureArray(many.iter().map(|i| (i, sampler)).collect()),
+            },
+        ));
+    }
+    resources
+}
+
+/// A scene's specular material term on the GPU (`SceneGpu::add_specular`): the NDF maps
+/// of its normal map, their images for both paths (NDF filterings only) and the block.
+pub struct SceneSpecular {
+    pub term: SpecularTerm,
+    pub maps: NdfMaps,
+    params: Buffer,
+    /// (dx9, dx10) images of the maps; empty for [`NormalFilter::Mip`].
+    images: [Vec<Image>; 2],
+}
+
+impl SceneSpecular {
+    pub fn new(
+        ctx: &Arc<Context>,
+        material: &crate::scene::Material,
+        term: SpecularTerm,
+    ) -> Result<Self, GpuError> {
+        let maps = super::build(&material.normal, material.normal_scale, term.sigma);
+        let params = SpecularParams::new(&term.light, &maps).upload(ctx, "scene.specular")?;
+        let images = match term.filter {
+            NormalFilter::Mip => [Vec::new(), Vec::new()],
+            _ => [
+                upload_maps(ctx, &maps, HwPath::Dx9)?,
+                upload_maps(ctx, &maps, HwPath::Dx10)?,
+            ],
+        };
+        Ok(SceneSpecular {
+            term,
+            maps,
+            params,
+            images,
+        })
+    }
+
+    /// The shader macros of the term: `SHVIS_SPECULAR`, and the world position passed on.
+    pub fn defines(&self) -> [(&'static str, u32); 2] {
+        [
+            ("SPECULAR", self.term.filter.shader_value()),
+            ("GBUFFER", 1),
+        ]
+    }
+
+    /// The images bound on `path`.
+    pub fn images(&self, path: HwPath) -> &[Image] {
+        match path {
+            HwPath::Dx9 => &self.images[0],
+            HwPath::Dx10 => &self.images[1],
+        }
+    }
+
+    /// The bindings of a technique's draw on `path`.
+    pub fn resources<'a>(&'a self, scene: &'a SceneGpu, path: HwPath) -> Vec<(u32, Resource<'a>)> {
+        specular_resources(scene, &self.params, self.term.filter, self.images(path))
+    }
 }
 
 /// The NDF images for `path`: three 2D textures (dx9) or one 3-layer array (dx10), each
@@ -141,45 +268,18 @@ pub fn render_specular(
     frames: u32,
 ) -> Result<Frame, GpuError> {
     let name = format!("spec{}.{path}", filter.name());
-    let params = SpecularParams {
-        light_dir: light.direction.normalize().extend(0.0).to_array(),
-        light_radiance: light.radiance.extend(0.0).to_array(),
-        sigma: maps.sigma,
-        kappa0: maps.kappa0 as f32,
-        _pad: [0.0; 2],
-    };
-    let params = Buffer::with_data(
-        ctx,
-        bytemuck::bytes_of(&params),
-        vk::BufferUsageFlags::UNIFORM_BUFFER,
-        &format!("{name}.params"),
-    )?;
-    let filter_value = match filter {
-        NormalFilter::Mip => 0,
-        NormalFilter::Ndf => 1,
-        NormalFilter::NdfNormalized => 2,
-    };
+    let params = SpecularParams::new(light, maps).upload(ctx, &format!("{name}.params"))?;
     let fragment = gpu::compile_glsl(
         "ndf/specular.frag",
         gpu::ShaderStage::Fragment,
         &[
             path.shader_define(),
-            ("NDF_FILTER", filter_value),
+            ("SPECULAR", filter.shader_value()),
             ("GBUFFER", 1),
         ],
     )?;
     let mut resources = scene.common_resources();
-    resources.push((layout::BINDING_TECHNIQUE_PARAMS, Resource::Uniform(&params)));
-    if filter != NormalFilter::Mip {
-        let sampler = scene.material_sampler();
-        resources.push((
-            layout::BINDING_TECHNIQUE_TEXTURE0,
-            match images {
-                [one] => Resource::Texture(one, sampler),
-                many => Resource::TextureArray(many.iter().map(|i| (i, sampler)).collect()),
-            },
-        ));
-    }
+    resources.extend(specular_resources(scene, &params, filter, images));
     let pipeline = scene.mesh_pipeline(ctx, &name, &fragment, &resources)?;
     drop(resources);
     scene.render_pipeline(&pipeline, 1, frames.max(1))
@@ -225,7 +325,8 @@ pub const MAX_REFERENCE_SIDE: u32 = 32;
 /// strata of the pixel, one G-buffer set each, the positions shared by all pixels. More
 /// strata than the diffuse reference's 8² because nothing else averages here: a pixel near
 /// the horizon covers hundreds of bumps, and 64 shared positions alias into moiré.
-/// Deterministic for a seed.
+/// Deterministic for a seed. Without `settings.footprint`, one sample at each pixel centre
+/// (the point reference).
 pub fn render_reference(
     ctx: &Arc<Context>,
     scene: &mut SceneGpu,
@@ -235,7 +336,11 @@ pub fn render_reference(
     settings: &ReferenceSettings,
 ) -> Result<Frame, GpuError> {
     let pipelines = crate::reference::gbuffer_pipelines(ctx, scene, true, 4)?;
-    let side = ((settings.spp.max(1) as f64).sqrt().ceil() as u32).min(MAX_REFERENCE_SIDE);
+    let side = if settings.footprint {
+        ((settings.spp.max(1) as f64).sqrt().ceil() as u32).min(MAX_REFERENCE_SIDE)
+    } else {
+        1
+    };
     let (w, h) = (settings.width as usize, settings.height as usize);
     let mut sum = vec![[0.0f64; 4]; w * h];
     let count = side * side;
@@ -243,7 +348,11 @@ pub fn render_reference(
     let (sigma, kappa0) = (f64::from(maps.sigma), maps.kappa0);
     let eye = camera_position.as_dvec3();
     for j in 0..count {
-        scene.set_jitter(stratum_jitter(settings.seed, j, side))?;
+        scene.set_jitter(if settings.footprint {
+            stratum_jitter(settings.seed, j, side)
+        } else {
+            [0.0, 0.0]
+        })?;
         let position = scene.render_pipeline(&pipelines[0], 0, 1)?;
         let normal = scene.render_pipeline(&pipelines[1], 0, 1)?;
         let vertex_normal = scene.render_pipeline(&pipelines[3], 0, 1)?;

@@ -85,7 +85,7 @@ pub fn write_pca_error_plot(
     use plotters::prelude::*;
     let series = |weights_only: bool| -> Vec<(f64, f64)> {
         rows.iter()
-            .filter(|r| r.path == path)
+            .filter(|r| r.path == path && r.specular.is_none())
             .filter_map(|r| match r.technique {
                 Technique::Pca { m, weights_only: w } if w == weights_only => {
                     Some((f64::from(m), r.rel_rmse?))
@@ -307,9 +307,9 @@ pub fn write_error_plot(
             let starred = r.reference != RowReference::Direct;
             Some(SpeedErrorPoint {
                 label: if starred {
-                    format!("{}*", r.technique)
+                    format!("{}*", r.name())
                 } else {
-                    r.technique.name()
+                    r.name()
                 },
                 path: r.path.to_string(),
                 ms: axis.of(r)?,

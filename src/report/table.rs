@@ -118,6 +118,8 @@ pub struct AttributionStep {
 pub struct BenchRow {
     pub technique: Technique,
     pub path: HwPath,
+    /// The specular term's normal-map filtering, for a row with one (`--specular`).
+    pub specular: Option<crate::ndf::render::NormalFilter>,
     pub ms_median: Option<f64>,
     pub ms_min: Option<f64>,
     pub ms_max: Option<f64>,
@@ -142,17 +144,28 @@ pub struct BenchRow {
 
 /// Fills `ratio_to_preconv` of every row from the `preconv` row of its path.
 pub fn fill_ratios_to_preconv(rows: &mut [BenchRow]) {
-    let preconv: Vec<(HwPath, f64)> = rows
+    let preconv: Vec<(HwPath, _, f64)> = rows
         .iter()
         .filter(|r| r.technique == Technique::Preconv)
-        .filter_map(|r| Some((r.path, r.ms_median?)))
+        .filter_map(|r| Some((r.path, r.specular, r.ms_median?)))
         .collect();
     for row in rows.iter_mut() {
         row.ratio_to_preconv = preconv
             .iter()
-            .find(|(p, _)| *p == row.path)
-            .and_then(|(_, base)| Some(row.ms_median? / base))
+            .find(|(p, s, _)| *p == row.path && *s == row.specular)
+            .and_then(|(_, _, base)| Some(row.ms_median? / base))
             .filter(|r| r.is_finite());
+    }
+}
+
+impl BenchRow {
+    /// The row's name in tables and plots: the technique's, `+spec{filter}` with the
+    /// specular term.
+    pub fn name(&self) -> String {
+        match self.specular {
+            Some(f) => format!("{}+spec{}", self.technique, f.name()),
+            None => self.technique.name(),
+        }
     }
 }
 
@@ -171,6 +184,9 @@ pub struct BenchTable {
     pub reference_bounces: u32,
     /// That reference's relative noise.
     pub reference_bounced_rel_noise: Option<f64>,
+    /// The specular material term of the rows that have one (`--specular`): its light and
+    /// base spread.
+    pub specular: Option<String>,
     pub results: Vec<BenchRow>,
 }
 
@@ -190,6 +206,11 @@ impl BenchTable {
             self.reference_spp,
             opt(self.reference_rel_noise, 4)
         );
+        if let Some(term) = &self.specular {
+            s += &format!(
+                "; rows `+spec{{filter}}` add the specular term ({term}) with its normal map filtered as named, against references with its footprint reference added"
+            );
+        }
         if self.reference_bounces > 0 {
             s += &format!(
                 "; shlmap against the reference with {} bounces (relative noise {})",
@@ -209,7 +230,7 @@ impl BenchTable {
             };
             s += &format!(
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-                r.technique,
+                r.name(),
                 r.path,
                 opt(r.ms_median, 3),
                 opt(r.ms_min, 3),
@@ -260,7 +281,7 @@ impl BenchTable {
                 .collect();
             s += &format!(
                 "| {} | {} | {} | {} | {:.4} |\n",
-                r.technique,
+                r.name(),
                 r.path,
                 rungs.join(" · "),
                 opt(r.rel_rmse, 4),
@@ -293,6 +314,7 @@ mod tests {
         BenchRow {
             technique,
             path: HwPath::Dx10,
+            specular: None,
             ms_median: Some(ms),
             ms_min: Some(ms),
             ms_max: Some(ms),
@@ -347,6 +369,7 @@ mod tests {
             reference_rel_noise: Some(0.1),
             reference_bounces: 0,
             reference_bounced_rel_noise: None,
+            specular: None,
             results: vec![
                 row(Technique::Preconv, 1.0, steps),
                 row(Technique::Sh2, 1.0, vec![]),

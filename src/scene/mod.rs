@@ -193,7 +193,9 @@ pub struct Scene {
 /// Errors from building or loading a scene.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    #[error("unknown scene '{0}': use 'house', 'patio', 'bumpy', 'wavy' or a path to a .gltf/.glb file")]
+    #[error(
+        "unknown scene '{0}': use 'house', 'patio', 'bumpy', 'wavy' or a path to a .gltf/.glb file"
+    )]
     Unknown(String),
     /// A glTF file that cannot be read or used; `message` says what is wrong.
     #[error("{path}: {message}")]

@@ -74,7 +74,11 @@ fn sphere_mesh() -> Mesh {
         for i in 0..=SEGMENTS_AROUND {
             let u = i as f32 / SEGMENTS_AROUND as f32;
             let phi = TAU * u;
-            let normal = Vec3::new(theta.sin() * phi.sin(), theta.cos(), theta.sin() * phi.cos());
+            let normal = Vec3::new(
+                theta.sin() * phi.sin(),
+                theta.cos(),
+                theta.sin() * phi.cos(),
+            );
             // ∂P/∂φ / sin θ: defined at the poles too.
             let tangent = Vec3::new(phi.cos(), 0.0, -phi.sin());
             mesh.vertices.push(Vertex {
@@ -155,7 +159,10 @@ mod tests {
         for t in 0..mesh.triangle_count() {
             let [a, b, c] = mesh.triangle_positions(t);
             let centre = (a + b + c) / 3.0;
-            assert!((b - a).cross(c - a).dot(centre) > 0.0, "triangle {t} faces inward");
+            assert!(
+                (b - a).cross(c - a).dot(centre) > 0.0,
+                "triangle {t} faces inward"
+            );
         }
         for v in &mesh.vertices {
             let (n, t) = (Vec3::from(v.normal), Vec3::from_slice(&v.tangent[..3]));

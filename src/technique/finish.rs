@@ -5,7 +5,10 @@
 //! Bindings (glsl/include/common.glsl and `gpu::layout`): the scene's frame block, albedo
 //! and normal map; the technique's uniform block at `BINDING_TECHNIQUE_PARAMS`; slot i at
 //! `BINDING_TECHNIQUE_TEXTURE0 + i`, one image as a texture, several as a texture array
-//! (dx9's `sampler2D t[N]`).
+//! (dx9's `sampler2D t[N]`). A scene with a specular material term (`--specular`,
+//! `crate::ndf::render::SceneSpecular`) adds its block and moment maps at
+//! `BINDING_SPECULAR_*`, counted in the path rules and the lookup columns like the
+//! technique's own.
 
 use std::sync::Arc;
 
@@ -152,7 +155,8 @@ pub fn finish(
             .chain(&material)
             .chain(&table_slots)
             .collect();
-        let images: Vec<&Image> = slots.iter().flat_map(|s| &s.images).collect();
+        let mut images: Vec<&Image> = slots.iter().flat_map(|s| &s.images).collect();
+        images.extend(scene.specular().into_iter().flat_map(|s| s.images(path)));
         check_path_rules(&label, path, &images)?;
         let layouts: Vec<SlotLayout> = slots.iter().map(|s| s.layout()).collect();
         stats = self::stats(
@@ -169,8 +173,14 @@ pub fn finish(
             .map(SlotLayout::lookups)
             .sum();
         stats.lookups_per_pixel += (super::table_fetches(technique) - 1) * table_lookups;
+        add_specular_stats(scene, path, &mut stats);
         let params = params_buffer(ctx, &lighting.params, &label, &suffix)?;
-        let mut resources = base_resources(scene, &params);
+        let mut resources = base_resources(scene, &params, path);
+        assert!(
+            layout::BINDING_TECHNIQUE_TEXTURE0 + (slots.len() as u32)
+                <= layout::BINDING_SPECULAR_PARAMS,
+            "{label}: technique bindings reach the specular term's"
+        );
         for (binding, slot) in (layout::BINDING_TECHNIQUE_TEXTURE0..).zip(&slots) {
             let sampler = match slot.kind {
                 SlotKind::Material => scene.material_sampler(),
@@ -198,8 +208,19 @@ pub fn finish(
     ))
 }
 
+/// What the scene's specular term (if any) adds to a technique's columns on `path`: its
+/// moment maps as textures bound and fetched per pixel (the mip filtering re-reads the
+/// normal map, which the technique fetches already).
+pub(crate) fn add_specular_stats(scene: &SceneGpu, path: HwPath, stats: &mut TechniqueStats) {
+    if let Some(specular) = scene.specular() {
+        stats.textures_bound += specular.images(path).len() as u32;
+        stats.lookups_per_pixel += specular.term.filter.extra_lookups();
+    }
+}
+
 /// `technique`'s fragment shader ([`super::fragment_shader`]) compiled for `path`, reading
-/// the material textures at full resolution for a `material_level0` scene.
+/// the material textures at full resolution for a `material_level0` scene and adding the
+/// scene's specular term when it has one.
 pub(crate) fn compile_fragment(
     technique: Technique,
     path: HwPath,
@@ -211,6 +232,9 @@ pub(crate) fn compile_fragment(
         ("MATERIAL_LEVEL0", scene.material_level0() as u32),
     ];
     defines.extend_from_slice(&shader.defines);
+    if let Some(specular) = scene.specular() {
+        defines.extend(specular.defines());
+    }
     Ok(gpu::compile_glsl(
         shader.path,
         gpu::ShaderStage::Fragment,
@@ -233,13 +257,17 @@ pub(crate) fn params_buffer(
     )?)
 }
 
-/// The scene's common bindings and the technique's uniform block: what every technique
-/// binds before its own textures.
+/// The scene's common bindings, its specular term's on `path` and the technique's uniform
+/// block: what every technique binds besides its own textures.
 pub(crate) fn base_resources<'a>(
     scene: &'a SceneGpu,
     params: &'a gpu::Buffer,
+    path: HwPath,
 ) -> Vec<(u32, gpu::Resource<'a>)> {
     let mut resources = scene.common_resources();
+    if let Some(specular) = scene.specular() {
+        resources.extend(specular.resources(scene, path));
+    }
     resources.push((
         layout::BINDING_TECHNIQUE_PARAMS,
         gpu::Resource::Uniform(params),

@@ -150,14 +150,17 @@ pub(crate) fn finish(
     let vertex = gpu::compile_glsl(
         "scene/mesh.vert",
         gpu::ShaderStage::Vertex,
-        &[("GBUFFER", 0), ("VERTEX_WEIGHT_GROUPS", groups)],
+        &[
+            ("GBUFFER", scene.specular().is_some() as u32),
+            ("VERTEX_WEIGHT_GROUPS", groups),
+        ],
     )?;
     let fragment = super::finish::compile_fragment(technique, path, scene)?;
     let mut built = Vec::with_capacity(sets);
     for set in 0..sets.max(1) {
         let suffix = super::finish::set_suffix(set);
         let params = super::finish::params_buffer(ctx, &lighting.params, &label, &suffix)?;
-        let resources = super::finish::base_resources(scene, &params);
+        let resources = super::finish::base_resources(scene, &params, path);
         let pipeline = MeshPipeline::new(
             ctx,
             scene.target(),
@@ -176,12 +179,13 @@ pub(crate) fn finish(
             tables: Vec::new(),
         });
     }
-    let stats = TechniqueStats {
+    let mut stats = TechniqueStats {
         texel_bytes: (bake.mesh.vertices.len() * 4 * groups as usize) as u64,
         table_bytes: lighting.params.len() as u64,
         textures_bound: layout::MATERIAL_TEXTURES,
         lookups_per_pixel: layout::MATERIAL_TEXTURES,
     };
+    super::finish::add_specular_stats(scene, path, &mut stats);
     let mut gpu = TechniqueGpu::new(ctx, technique, path, stats, Vec::new(), built);
     gpu.mesh = Some(mesh);
     Ok(gpu)
