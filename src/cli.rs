@@ -208,6 +208,10 @@ struct StudyNdfArgs {
     /// footprint reference); empty to skip it.
     #[arg(long, value_delimiter = ',', default_value = "bumpy,house")]
     diffuse_scenes: Vec<String>,
+    /// Environments of the diffuse part, comma-separated (`sky`, `sky:DEG` or .exr/.hdr
+    /// maps): each scene is measured under each.
+    #[arg(long, value_delimiter = ',', default_value = "sky")]
+    diffuse_envs: Vec<String>,
     /// Reference samples per pixel of the diffuse part.
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     diffuse_spp: u32,
@@ -1164,24 +1168,35 @@ fn run_study_ndf(a: StudyNdfArgs) -> Result<()> {
         None
     } else {
         use shvis::study::ndf_diffuse::arrow;
-        let (scenes, rows) = shvis::study::ndf_diffuse::run(
-            &ctx,
-            &shvis::study::ndf_diffuse::DiffuseSettings {
-                scenes: diffuse_scenes,
-                width: a.width,
-                height: a.height,
-                ref_spp: a.diffuse_spp,
-                vis_res: a.vis_res,
-                paths: a.paths.clone(),
-                cache_dir: None,
-                strata_side: 16,
-                image_dir: Some(a.out.clone()),
-            },
-        )?;
+        let (mut scenes, mut rows) = (Vec::new(), Vec::new());
+        for env in &a.diffuse_envs {
+            let (s, r) = shvis::study::ndf_diffuse::run(
+                &ctx,
+                &shvis::study::ndf_diffuse::DiffuseSettings {
+                    scenes: diffuse_scenes.clone(),
+                    env: env.clone(),
+                    width: a.width,
+                    height: a.height,
+                    ref_spp: a.diffuse_spp,
+                    vis_res: a.vis_res,
+                    paths: a.paths.clone(),
+                    cache_dir: None,
+                    strata_side: 16,
+                    image_dir: Some(a.out.clone()),
+                },
+            )?;
+            scenes.extend(s);
+            rows.extend(r);
+        }
         for s in &scenes {
             println!(
-                "  {}: {} covered, {} minified, {} magnified pixels; footprint vs point reference {:.4}",
-                s.scene, s.covered_pixels, s.minified_pixels, s.magnified_pixels, s.footprint_step
+                "  {} ({}): {} covered, {} minified, {} magnified pixels; footprint vs point reference {:.4}",
+                s.scene,
+                s.env,
+                s.covered_pixels,
+                s.minified_pixels,
+                s.magnified_pixels,
+                s.footprint_step
             );
         }
         println!(
@@ -1189,8 +1204,9 @@ fn run_study_ndf(a: StudyNdfArgs) -> Result<()> {
         );
         for r in &rows {
             println!(
-                "  {:<6} {:<8} {:<4} {} (8² blocks {}) | {} | {}; {:.1e}; own footprint {} (8² blocks {})",
+                "  {:<6} {:<10} {:<8} {:<4} {} (8² blocks {}) | {} | {}; {:.1e}; own footprint {} (8² blocks {})",
                 r.scene,
+                r.env,
                 r.technique.name(),
                 r.path.name(),
                 arrow(r.minified),

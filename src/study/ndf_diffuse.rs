@@ -29,6 +29,8 @@ pub const MINIFIED_LOD: f32 = 2.0;
 #[derive(Clone, Debug)]
 pub struct DiffuseSettings {
     pub scenes: Vec<String>,
+    /// The environment (`env::resolve`: `sky`, `sky:DEG` or a file).
+    pub env: String,
     pub width: u32,
     pub height: u32,
     pub ref_spp: u32,
@@ -38,7 +40,8 @@ pub struct DiffuseSettings {
     /// Sub-pixel strata per side of the techniques' own footprint truth.
     pub strata_side: u32,
     /// Where the images go (`diffuse_{scene}_{technique}.{path}_{mip,ndf,own}.exr`, the
-    /// reference as `diffuse_{scene}_reference.exr`); `None` writes none.
+    /// reference as `diffuse_{scene}_reference.exr`; `{scene}_{env}` for an environment
+    /// other than `sky`); `None` writes none.
     pub image_dir: Option<std::path::PathBuf>,
 }
 
@@ -46,6 +49,8 @@ pub struct DiffuseSettings {
 #[derive(Clone, Debug, Serialize)]
 pub struct DiffuseRow {
     pub scene: String,
+    /// The environment's short name ([`env_label`]).
+    pub env: String,
     pub technique: Technique,
     pub path: HwPath,
     /// Relative RMSE against the footprint reference: unfiltered / NDF, minified pixels.
@@ -73,6 +78,7 @@ pub struct DiffuseRow {
 #[derive(Clone, Debug, Serialize)]
 pub struct DiffuseScene {
     pub scene: String,
+    pub env: String,
     pub minified_pixels: usize,
     pub magnified_pixels: usize,
     pub covered_pixels: usize,
@@ -93,6 +99,16 @@ pub enum DiffuseStudyError {
     Gpu(#[from] crate::gpu::GpuError),
     #[error(transparent)]
     Report(#[from] crate::report::ReportError),
+}
+
+/// An environment's short name: `sky`/`sky:DEG` as given, a file by its stem.
+pub fn env_label(env: &str) -> String {
+    if env.starts_with("sky") {
+        return env.to_string();
+    }
+    std::path::Path::new(env.trim_start_matches("angular:"))
+        .file_stem()
+        .map_or_else(|| env.to_string(), |s| s.to_string_lossy().into_owned())
 }
 
 /// Relative RMSE of `test` against `reference` over `mask`.
@@ -198,9 +214,17 @@ pub fn run(
         .flat_map(|&base| [base.technique(), Technique::Ndf { base }])
         .collect();
     let (mut scenes, mut rows) = (Vec::new(), Vec::new());
+    let env = env_label(&s.env);
     for name in &s.scenes {
+        // Image names: the scene's, with the environment's for any but the default sky.
+        let tag = if env == "sky" {
+            name.clone()
+        } else {
+            format!("{name}_{env}")
+        };
         let mut prepared = prepare(&PrepareSettings {
             scene: name.clone(),
+            env: s.env.clone(),
             vis_res: s.vis_res,
             cache_dir: s.cache_dir.clone(),
             ..PrepareSettings::default()
@@ -252,13 +276,14 @@ pub fn run(
         let magnified = mask(|l| l <= 0.0);
         if let Some(dir) = &s.image_dir {
             crate::report::image::write_exr(
-                &dir.join(format!("diffuse_{name}_reference.exr")),
+                &dir.join(format!("diffuse_{tag}_reference.exr")),
                 &reference.frame,
             )?;
         }
         let count = |m: &[bool]| m.iter().filter(|&&b| b).count();
         scenes.push(DiffuseScene {
             scene: name.clone(),
+            env: env.clone(),
             minified_pixels: count(&minified),
             magnified_pixels: count(&magnified),
             covered_pixels: count(&covered),
@@ -295,7 +320,7 @@ pub fn run(
                     .collect();
                 let own = [0, 1].map(|k| rel_rmse(&frames[k], &truth, &own_mask));
                 if let Some(dir) = &s.image_dir {
-                    let stem = format!("diffuse_{name}_{}.{path}", base.technique());
+                    let stem = format!("diffuse_{tag}_{}.{path}", base.technique());
                     for (frame, kind) in [(&frames[0], "mip"), (&frames[1], "ndf"), (&truth, "own")]
                     {
                         crate::report::image::write_exr(
@@ -314,6 +339,7 @@ pub fn run(
                     .fold(0.0f32, f32::max);
                 rows.push(DiffuseRow {
                     scene: name.clone(),
+                    env: env.clone(),
                     technique: base.technique(),
                     path,
                     minified: pick(&minified),
@@ -335,6 +361,10 @@ pub fn run(
 
 /// "before → after" of an (unfiltered, NDF) pair.
 pub fn arrow(pair: [f64; 2]) -> String {
+    if pair.iter().all(|v| v.is_nan()) {
+        // No pixel of that kind in the view.
+        return "—".to_string();
+    }
     format!("{:.4} → {:.4}", pair[0], pair[1])
 }
 
@@ -352,18 +382,19 @@ pub fn markdown(scenes: &[DiffuseScene], rows: &[DiffuseRow]) -> String {
     );
     for s in scenes {
         md.push_str(&format!(
-            "- `{}`: {} covered pixels, {} minified, {} magnified; reference noise {:.4}\n",
-            s.scene, s.covered_pixels, s.minified_pixels, s.magnified_pixels, s.reference_rel_noise
+            "- `{}` under `{}`: {} covered pixels, {} minified, {} magnified; reference noise {:.4}\n",
+            s.scene, s.env, s.covered_pixels, s.minified_pixels, s.magnified_pixels, s.reference_rel_noise
         ));
     }
     md.push_str(
-        "\n| scene | technique | path | minified | minified, 8² blocks | magnified | all | own footprint, minified | own footprint, 8² blocks | max change (magnified) | lookups/px |\n\
-         |---|---|---|---|---|---|---|---|---|---:|---|\n",
+        "\n| scene | env | technique | path | minified | minified, 8² blocks | magnified | all | own footprint, minified | own footprint, 8² blocks | max change (magnified) | lookups/px |\n\
+         |---|---|---|---|---|---|---|---|---|---|---:|---|\n",
     );
     for r in rows {
         md.push_str(&format!(
-            "| {} | {} → {}ndf | {} | {} | {} | {} | {} | {} | {} | {:.1e} | {} → {} |\n",
+            "| {} | {} | {} → {}ndf | {} | {} | {} | {} | {} | {} | {} | {:.1e} | {} → {} |\n",
             r.scene,
+            r.env,
             r.technique,
             r.technique,
             r.path,
