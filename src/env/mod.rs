@@ -247,7 +247,7 @@ impl EnvMap {
             .enumerate()
             .map(|(i, &t)| (i, luminance(t)))
             .max_by(|a, b| a.1.total_cmp(&b.1))?;
-        if !(peak > 0.0) {
+        if peak.is_nan() || peak <= 0.0 {
             return None;
         }
         let w = self.width as usize;

@@ -326,7 +326,7 @@ pub const MAX_REFERENCE_SIDE: u32 = 32;
 /// strata than the diffuse reference's 8² because nothing else averages here: a pixel near
 /// the horizon covers hundreds of bumps, and 64 shared positions alias into moiré.
 /// Deterministic for a seed. Without `settings.footprint`, one sample at each pixel centre
-/// (the point reference).
+/// through the MIP chains (the point reference).
 pub fn render_reference(
     ctx: &Arc<Context>,
     scene: &mut SceneGpu,
@@ -335,7 +335,8 @@ pub fn render_reference(
     light: &SpecularLight,
     settings: &ReferenceSettings,
 ) -> Result<Frame, GpuError> {
-    let pipelines = crate::reference::gbuffer_pipelines(ctx, scene, true, 4)?;
+    // The point reference reads the MIP chains at the pixel centre, as the diffuse one does.
+    let pipelines = crate::reference::gbuffer_pipelines(ctx, scene, settings.footprint, 4)?;
     let side = if settings.footprint {
         ((settings.spp.max(1) as f64).sqrt().ceil() as u32).min(MAX_REFERENCE_SIDE)
     } else {
