@@ -26,44 +26,52 @@ layout(location = 6) in vec4 in_vertex_weights[GROUPS];
 #endif
 #include "diffuse_out.glsl"
 
-void main() {
-    vec4 e[9];
-    for (int i = 0; i < 9; ++i) {
-        e[i] = params.coeffs[9 * BASIS_COUNT + i];
-    }
-    for (int g = 0; g < GROUPS; ++g) {
+// Every uniform read has a constant index: the groups and coefficients are unrolled here,
+// not left to the driver (with loop-derived indices lavapipe gathers the block per pixel,
+// issue 20: pca24w 215 ms against pca24's 62 ms at 1280×800), and the sums are RGB only.
+#define COEFF(k, i) params.coeffs[9 * (k) + (i)].rgb
+#define ACC_I(w, g, i) e[i] += w.x * COEFF(4 * (g), i) + w.y * COEFF(4 * (g) + 1, i) \
+    + w.z * COEFF(4 * (g) + 2, i) + w.w * COEFF(4 * (g) + 3, i);
+#define ACC_GROUP(g) { \
+    vec4 w = GROUP_WEIGHTS(g); \
+    ACC_I(w, g, 0) ACC_I(w, g, 1) ACC_I(w, g, 2) ACC_I(w, g, 3) ACC_I(w, g, 4) \
+    ACC_I(w, g, 5) ACC_I(w, g, 6) ACC_I(w, g, 7) ACC_I(w, g, 8) \
+}
 #if defined(SHVIS_VERTEX_WEIGHTS) && SHVIS_VERTEX_WEIGHTS
-        vec4 w = in_vertex_weights[g];
-#elif SHVIS_PATH_DX9
-        // Constant indices for the sampler array: unrolled by the compiler per g below.
-        vec4 w = vec4(0.0);
-        if (g == 0) w = SAMPLE_PER_TEXEL(0);
+#define GROUP_WEIGHTS(g) in_vertex_weights[g]
+#else
+#define GROUP_WEIGHTS(g) SAMPLE_PER_TEXEL(g)
+#endif
+
+void main() {
+    vec3 e[9] = vec3[9](COEFF(BASIS_COUNT, 0), COEFF(BASIS_COUNT, 1), COEFF(BASIS_COUNT, 2),
+                        COEFF(BASIS_COUNT, 3), COEFF(BASIS_COUNT, 4), COEFF(BASIS_COUNT, 5),
+                        COEFF(BASIS_COUNT, 6), COEFF(BASIS_COUNT, 7), COEFF(BASIS_COUNT, 8));
+    ACC_GROUP(0)
 #if GROUPS > 1
-        if (g == 1) w = SAMPLE_PER_TEXEL(1);
+    ACC_GROUP(1)
 #endif
 #if GROUPS > 2
-        if (g == 2) w = SAMPLE_PER_TEXEL(2);
+    ACC_GROUP(2)
 #endif
 #if GROUPS > 3
-        if (g == 3) w = SAMPLE_PER_TEXEL(3);
+    ACC_GROUP(3)
 #endif
 #if GROUPS > 4
-        if (g == 4) w = SAMPLE_PER_TEXEL(4);
+    ACC_GROUP(4)
 #endif
 #if GROUPS > 5
-        if (g == 5) w = SAMPLE_PER_TEXEL(5);
+    ACC_GROUP(5)
 #endif
 #if GROUPS > 6
 #error "at most 6 groups (24 basis vectors)"
 #endif
-#else
-        vec4 w = SAMPLE_PER_TEXEL(g);
-#endif
-        for (int i = 0; i < 9; ++i) {
-            e[i] += w.x * params.coeffs[9 * (4 * g) + i] + w.y * params.coeffs[9 * (4 * g + 1) + i]
-                  + w.z * params.coeffs[9 * (4 * g + 2) + i] + w.w * params.coeffs[9 * (4 * g + 3) + i];
-        }
+    float y[9];
+    sh_eval_order3(shading_normal(), y);
+    vec3 irradiance = vec3(0.0);
+    for (int i = 0; i < 9; ++i) {
+        irradiance += e[i] * y[i];
     }
-    vec3 irradiance = max(sh_eval_rgb_order3(e, shading_normal()), vec3(0.0));
+    irradiance = max(irradiance, vec3(0.0));
     write_diffuse(irradiance);
 }
