@@ -55,6 +55,9 @@ pub struct BenchSettings {
     pub specular: Option<SpecularSettings>,
     /// Output directory (must exist).
     pub out: PathBuf,
+    /// Run the device probe first (`crate::probe`, at the bench's size) and give every row
+    /// the model's time (`model_ms`, `x_model`); `probe.md`/`probe.json` beside the table.
+    pub probe: bool,
 }
 
 /// The specular term of a bench: its light and base spread, and the normal-map filterings
@@ -110,6 +113,26 @@ pub fn run(
         });
     }
     let started = Instant::now();
+    let cost_model = if settings.probe {
+        let probe = crate::probe::run(
+            ctx,
+            &crate::probe::ProbeSettings {
+                width: settings.width,
+                height: settings.height,
+                warmup: settings.warmup.min(5),
+                frames: settings.frames.clamp(5, 30),
+            },
+        )?;
+        log::info!(
+            "probe: {:.1} s, model within {:.1} % of its microbenchmarks",
+            probe.seconds,
+            100.0 * probe.worst_relative_error()
+        );
+        probe.write(&settings.out)?;
+        Some(probe)
+    } else {
+        None
+    };
     let reference = render_references(ctx, prepared, settings)?;
     let frame_settings = FrameSettings {
         width: settings.width,
@@ -194,6 +217,17 @@ pub fn run(
     }
     drop(figure_frames);
     fill_ratios_to_preconv(&mut rows);
+    if let Some(probe) = &cost_model {
+        for row in &mut rows {
+            // Shaded share in the probe's unit: its screen's invocations, where counted.
+            if let (Some(screen), Some(fragments)) = (probe.screen_fragments, row.fragments) {
+                row.coverage = fragments as f64 / screen.max(1) as f64;
+            }
+            let predicted = probe.model.predict(&row.cost, row.coverage);
+            row.model_ms = Some(predicted);
+            row.x_model = row.ms_median.map(|ms| ms / predicted);
+        }
+    }
     let bounced = reference.as_ref().and_then(|r| r.main.bounced.as_ref());
     let table = BenchTable {
         reference_spp: settings.ref_spp,
@@ -204,6 +238,7 @@ pub fn run(
         width: settings.width,
         height: settings.height,
         vis_res: prepared.visibility.res,
+        cost_model: cost_model.map(|p| p.model),
         specular: settings.specular.as_ref().map(|s| {
             let (d, e) = (s.light.direction, s.light.radiance);
             format!(
@@ -510,10 +545,19 @@ fn measure_row(
         let name = format!("{label}.diff{DIFFERENCE_SCALE}.png");
         write_png(&settings.out.join(name), &diff, settings.exposure)?;
     }
+    // The share of the screen covered; the fragment invocations where the device counts
+    // them (overdraw included) replace it for the model (`run`).
+    let fragments = tech.count_fragments(scene)?;
+    let covered = frame.rgba.iter().filter(|p| p[3] > 0.5).count();
     let row = BenchRow {
         technique,
         path,
         specular,
+        cost: tech.stats.cost,
+        coverage: covered as f64 / frame.rgba.len().max(1) as f64,
+        fragments,
+        model_ms: None,
+        x_model: None,
         ms_median: timing.map(|s| s.ms_median),
         ms_min: timing.map(|s| s.ms_min),
         ms_max: timing.map(|s| s.ms_max),

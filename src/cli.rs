@@ -45,6 +45,10 @@ enum Command {
     Reference(ReferenceArgs),
     /// Time every technique × path and write table.md, table.json and images.
     Bench(BenchArgs),
+    /// Issue 20: microbenchmarks of the current device (lookups by kind, float ops,
+    /// varyings, uniform reads, depth test) and the cost model fitted to them → probe.md,
+    /// probe.json (`shvis bench` runs it first).
+    Probe(ProbeArgs),
     /// Dynamic lighting (§3.3): turn the environment about +Y over a run of frames, rebuild
     /// each technique's lighting data every K frames, and report rebuild and GPU times and
     /// the errors at sampled frames (static and lag).
@@ -647,6 +651,25 @@ struct ReferenceArgs {
 }
 
 #[derive(Args, Debug)]
+struct ProbeArgs {
+    #[command(flatten)]
+    gpu: GpuArgs,
+    #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Timed frames per microbenchmark (the median is used).
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    frames: u32,
+    /// Untimed frames before them.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=10_000))]
+    warmup: u32,
+    /// Output directory (probe.md, probe.json).
+    #[arg(long, default_value = "probe-out")]
+    out: PathBuf,
+}
+
+#[derive(Args, Debug)]
 struct BenchArgs {
     #[command(flatten)]
     scene: SceneArgs,
@@ -691,6 +714,9 @@ struct BenchArgs {
     /// against (the other techniques model direct light and meet the direct reference).
     #[arg(long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
     bounces: u32,
+    /// Leave out the device probe and the rows' model columns.
+    #[arg(long)]
+    no_probe: bool,
     /// Output directory.
     #[arg(long, default_value = "bench-out")]
     out: PathBuf,
@@ -799,6 +825,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(a) => run_render(a).context("render"),
         Command::Reference(a) => run_reference(a).context("reference"),
         Command::Bench(a) => run_bench(a).context("bench"),
+        Command::Probe(a) => run_probe(a).context("probe"),
         Command::Relight(a) => run_relight(a).context("relight"),
         Command::Sh(c) => run_sh(c).context("sh"),
         Command::Study(StudyCommand::Params(a)) => run_study_params(a).context("study params"),
@@ -1607,6 +1634,26 @@ where
         .collect()
 }
 
+fn run_probe(a: ProbeArgs) -> Result<()> {
+    create_dir(&a.out)?;
+    let ctx = open_gpu(&a.gpu)?;
+    let probe = shvis::probe::run(
+        &ctx,
+        &shvis::probe::ProbeSettings {
+            width: a.width,
+            height: a.height,
+            warmup: a.warmup,
+            frames: a.frames,
+        },
+    )?;
+    println!("{}", probe.to_markdown());
+    for p in probe.write(&a.out)? {
+        println!("wrote {}", p.display());
+    }
+    check_validation(&ctx, a.gpu.validate)?;
+    Ok(())
+}
+
 fn run_bench(a: BenchArgs) -> Result<()> {
     let mut settings = BenchSettings {
         techniques: with_normal_filter(parse_list(&a.techniques, Technique::ALL)?, a.normal_filter),
@@ -1622,6 +1669,7 @@ fn run_bench(a: BenchArgs) -> Result<()> {
         seed: a.scene.seed,
         specular: None,
         out: a.out.clone(),
+        probe: !a.no_probe,
     };
     create_dir(&a.out)?;
     let started = Instant::now();

@@ -17,6 +17,7 @@ pub mod gpu;
 pub mod ndf;
 pub mod normalmap;
 pub mod prepare;
+pub mod probe;
 pub mod reference;
 pub mod relight;
 pub mod render;

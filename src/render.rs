@@ -251,6 +251,18 @@ impl SceneGpu {
         fragment_spirv: &[u32],
         resources: &[(u32, Resource<'_>)],
     ) -> Result<MeshPipeline, GpuError> {
+        self.mesh_pipeline_with_depth(ctx, name, fragment_spirv, resources, true)
+    }
+
+    /// [`Self::mesh_pipeline`] with the depth test on or off (the device probe).
+    pub fn mesh_pipeline_with_depth(
+        &self,
+        ctx: &Arc<Context>,
+        name: &str,
+        fragment_spirv: &[u32],
+        resources: &[(u32, Resource<'_>)],
+        depth_test: bool,
+    ) -> Result<MeshPipeline, GpuError> {
         MeshPipeline::new(
             ctx,
             &self.target,
@@ -260,6 +272,7 @@ impl SceneGpu {
                 fragment_spirv,
                 vertex_layout: &self.vertex_layout,
                 resources,
+                depth_test,
             },
         )
     }
@@ -273,6 +286,16 @@ impl SceneGpu {
     /// The layout of the scene's vertex buffer (`scene::Vertex`).
     pub fn vertex_layout(&self) -> &VertexLayout {
         &self.vertex_layout
+    }
+
+    /// Fragment-shader invocations of one frame of `pipeline` over `mesh` (the scene's when
+    /// `None`), where the device counts them (`MeshPipeline::count_fragments`).
+    pub fn count_fragments(
+        &self,
+        pipeline: &MeshPipeline,
+        mesh: Option<&MeshBuffers>,
+    ) -> Result<Option<u64>, GpuError> {
+        pipeline.count_fragments(&self.target, mesh.unwrap_or(&self.mesh))
     }
 
     /// Renders `mesh` (a technique's own, over the same surface) with `pipeline`.

@@ -84,6 +84,7 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
             seed: 5,
             specular: None,
             out: out_dir.clone(),
+            probe: false,
         },
     )
     .expect("bench runs");

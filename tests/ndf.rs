@@ -374,6 +374,7 @@ fn the_bench_measures_the_specular_filterings_side_by_side() {
                 sigma: 0.1,
             }),
             out: out.clone(),
+            probe: false,
         },
     )
     .unwrap();

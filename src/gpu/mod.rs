@@ -18,6 +18,7 @@ pub mod layout;
 pub mod normal_bake;
 pub mod pass;
 pub mod shader;
+pub mod spirv_counts;
 pub mod target;
 pub mod upload;
 

@@ -120,6 +120,17 @@ pub struct BenchRow {
     pub path: HwPath,
     /// The specular term's normal-map filtering, for a row with one (`--specular`).
     pub specular: Option<crate::ndf::render::NormalFilter>,
+    /// Per-pixel operation counts by kind (`crate::probe`), and the share of the screen
+    /// shaded: with the probe and invocation counts, the row's fragment invocations ÷ the
+    /// probe screen's (overdraw included); else the covered pixels' share.
+    pub cost: crate::probe::CostCounts,
+    pub coverage: f64,
+    /// Fragment-shader invocations of one frame, where the device counts them.
+    pub fragments: Option<u64>,
+    /// The device cost model's frame time for the row (`shvis bench` runs the probe first),
+    /// and the measured median over it.
+    pub model_ms: Option<f64>,
+    pub x_model: Option<f64>,
     pub ms_median: Option<f64>,
     pub ms_min: Option<f64>,
     pub ms_max: Option<f64>,
@@ -187,6 +198,8 @@ pub struct BenchTable {
     /// The specular material term of the rows that have one (`--specular`): its light and
     /// base spread.
     pub specular: Option<String>,
+    /// The device cost model the rows' `model_ms` come from (`probe.md`).
+    pub cost_model: Option<crate::probe::CostModel>,
     pub results: Vec<BenchRow>,
 }
 
@@ -219,8 +232,8 @@ impl BenchTable {
             );
         }
         s += "\n\n";
-        s += "| technique | path | ms median | ms min | ms max | frames | ×preconv | paper ×preconv | rel. RMSE | PSNR dB | texel bytes | table bytes | textures | lookups/px |\n";
-        s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+        s += "| technique | path | ms median | ms min | ms max | frames | ×preconv | paper ×preconv | model ms | ×model | rel. RMSE | PSNR dB | texel bytes | table bytes | textures | lookups/px |\n";
+        s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
         for r in &self.results {
             let rmse = match (r.rel_rmse, r.reference) {
                 (Some(e), RowReference::Bounced(_)) => format!("{e:.4} ({})", r.reference),
@@ -229,7 +242,7 @@ impl BenchTable {
                 }
             };
             s += &format!(
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
                 r.name(),
                 r.path,
                 opt(r.ms_median, 3),
@@ -238,6 +251,8 @@ impl BenchTable {
                 r.frames,
                 opt(r.ratio_to_preconv, 2),
                 opt(r.paper_ratio_to_preconv, 2),
+                opt(r.model_ms, 3),
+                opt(r.x_model, 2),
                 rmse,
                 opt(r.psnr, 2),
                 r.texel_bytes,
@@ -315,6 +330,11 @@ mod tests {
             technique,
             path: HwPath::Dx10,
             specular: None,
+            cost: crate::probe::CostCounts::default(),
+            coverage: 1.0,
+            fragments: None,
+            model_ms: None,
+            x_model: None,
             ms_median: Some(ms),
             ms_min: Some(ms),
             ms_max: Some(ms),
@@ -370,6 +390,7 @@ mod tests {
             reference_bounces: 0,
             reference_bounced_rel_noise: None,
             specular: None,
+            cost_model: None,
             results: vec![
                 row(Technique::Preconv, 1.0, steps),
                 row(Technique::Sh2, 1.0, vec![]),

@@ -114,6 +114,7 @@ pub fn stats(
         textures_bound: layout::MATERIAL_TEXTURES
             + slots.iter().map(|s| s.images.len() as u32).sum::<u32>(),
         lookups_per_pixel: layout::MATERIAL_TEXTURES + slots.iter().map(slot_lookups).sum::<u32>(),
+        cost: crate::probe::CostCounts::default(),
     }
 }
 
@@ -174,6 +175,7 @@ pub fn finish(
             .sum();
         stats.lookups_per_pixel += (super::table_fetches(technique) - 1) * table_lookups;
         add_specular_stats(scene, path, &mut stats);
+        stats.cost = cost_counts(technique, path, scene, &layouts, &fragment);
         let params = params_buffer(ctx, &lighting.params, &label, &suffix)?;
         let mut resources = base_resources(scene, &params, path);
         assert!(
@@ -206,6 +208,42 @@ pub fn finish(
     Ok(TechniqueGpu::new(
         ctx, technique, path, stats, images, built,
     ))
+}
+
+/// The cost model's counts of `technique` on `path` (`crate::probe`): its lookups by kind
+/// from the slots — material textures trilinear, per-texel data bilinear 2D (dx9) or 2D
+/// array (dx10), normal-indexed tables dependent 2D (dx9) or cube array (dx10), the
+/// specular term's moment maps trilinear — and the float ops, uniform and varying reads of
+/// its compiled fragment shader (`gpu::spirv_counts`).
+fn cost_counts(
+    technique: Technique,
+    path: HwPath,
+    scene: &SceneGpu,
+    layouts: &[SlotLayout],
+    fragment: &[u32],
+) -> crate::probe::CostCounts {
+    use crate::probe::Kind;
+    let material = layout::MATERIAL_TEXTURES - u32::from(super::skips_normal_map(technique));
+    let mut lookups = vec![(Kind::Trilinear2d, material)];
+    for slot in layouts {
+        let n = match (slot.kind, super::per_texel_lookups(technique)) {
+            (SlotKind::PerTexel, Some(n)) => n,
+            (SlotKind::NormalTable, _) => slot.lookups() * super::table_fetches(technique),
+            _ => slot.lookups(),
+        };
+        let kind = match (slot.kind, path) {
+            (SlotKind::Material, _) => Kind::Trilinear2d,
+            (SlotKind::PerTexel, HwPath::Dx9) => Kind::Bilinear2d,
+            (SlotKind::PerTexel, HwPath::Dx10) => Kind::Array2d,
+            (SlotKind::NormalTable, HwPath::Dx9) => Kind::Dependent2d,
+            (SlotKind::NormalTable, HwPath::Dx10) => Kind::CubeArray,
+        };
+        lookups.push((kind, n));
+    }
+    if let Some(specular) = scene.specular() {
+        lookups.push((Kind::Trilinear2d, specular.term.filter.extra_lookups()));
+    }
+    crate::probe::CostCounts::new(&lookups, &gpu::spirv_counts::count(fragment))
 }
 
 /// What the scene's specular term (if any) adds to a technique's columns on `path`: its

@@ -93,6 +93,9 @@ pub struct TechniqueStats {
     pub textures_bound: u32,
     /// Texture fetches per pixel, albedo and normal map included.
     pub lookups_per_pixel: u32,
+    /// Per-pixel operation counts by kind for the device cost model (`crate::probe`): the
+    /// lookups from the bound images, the rest from the fragment shader's SPIR-V.
+    pub cost: crate::probe::CostCounts,
 }
 
 /// A fragment shader under `glsl/` and the `SHVIS_*` defines of one technique's variant
@@ -246,6 +249,11 @@ impl TechniqueGpu {
             Some(mesh) => scene.render_pipeline_on(pipeline, mesh, warmup, frames),
             None => scene.render_pipeline(pipeline, warmup, frames),
         }
+    }
+
+    /// Fragment-shader invocations of one frame (`SceneGpu::count_fragments`).
+    pub fn count_fragments(&self, scene: &SceneGpu) -> Result<Option<u64>, GpuError> {
+        scene.count_fragments(&self.sets[self.front].pipeline, self.mesh.as_ref())
     }
 
     /// Copies of the lighting data (2 when built with [`build_dynamic`]).

@@ -170,6 +170,7 @@ pub(crate) fn finish(
                 fragment_spirv: &fragment,
                 vertex_layout: &vertex_layout,
                 resources: &resources,
+                depth_test: true,
             },
         )?;
         drop(resources);
@@ -184,6 +185,18 @@ pub(crate) fn finish(
         table_bytes: lighting.params.len() as u64,
         textures_bound: layout::MATERIAL_TEXTURES,
         lookups_per_pixel: layout::MATERIAL_TEXTURES,
+        cost: crate::probe::CostCounts::new(
+            &[
+                (crate::probe::Kind::Trilinear2d, layout::MATERIAL_TEXTURES),
+                (
+                    crate::probe::Kind::Trilinear2d,
+                    scene
+                        .specular()
+                        .map_or(0, |s| s.term.filter.extra_lookups()),
+                ),
+            ],
+            &gpu::spirv_counts::count(&fragment),
+        ),
     };
     super::finish::add_specular_stats(scene, path, &mut stats);
     let mut gpu = TechniqueGpu::new(ctx, technique, path, stats, Vec::new(), built);

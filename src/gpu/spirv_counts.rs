@@ -1,0 +1,286 @@
+//! What a compiled fragment shader does per invocation, read off its SPIR-V (issue 20): the
+//! cost model's operation counts are derived from the shader itself, not typed beside it.
+//!
+//! One pass over the instruction stream (SPIR-V 1.x §2.3: each instruction is a word with
+//! its length in the high half and its opcode in the low half) records the types, the
+//! pointers' storage classes and, per value instruction, what it costs:
+//! - **float ops**: arithmetic on floats, counted in scalar operations of the result's
+//!   width (a `vec4` add or fused multiply-add is 4, a dot of two `vec3`s 3, a 3×3 matrix
+//!   times a vector 9, a normalize 3 per component); comparisons, conversions and selects
+//!   are not counted;
+//! - **uniform reads**: loads from `Uniform` / `StorageBuffer` / `PushConstant` memory, in
+//!   16-byte units (one `vec4` is 1, a `float` is 1);
+//! - **varying reads**: float components loaded from `Input` variables (interpolants);
+//! - **samples**: image sample / fetch / gather instructions;
+//! - **loops**: loops left in the code (`OpLoopMerge`): where there are any, the other counts
+//!   are of the code as written, not as executed.
+//!
+//! The counts are static: with every loop unrolled (shaderc's performance recipe unrolls
+//! loops marked `[[unroll]]`; most shaders here are unrolled by macros) they are what each
+//! invocation executes, except inside branches, which are counted as if both sides ran.
+
+use std::collections::HashMap;
+
+/// Per-invocation operation counts of a shader ([`count`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct OpCounts {
+    pub float_ops: u32,
+    pub uniform_reads: u32,
+    pub varying_reads: u32,
+    pub samples: u32,
+    pub loops: u32,
+}
+
+// Opcodes (SPIR-V unified specification, §3.52).
+const OP_EXT_INST: u32 = 12;
+const OP_TYPE_FLOAT: u32 = 22;
+const OP_TYPE_VECTOR: u32 = 23;
+const OP_TYPE_MATRIX: u32 = 24;
+const OP_TYPE_ARRAY: u32 = 28;
+const OP_TYPE_STRUCT: u32 = 30;
+const OP_TYPE_POINTER: u32 = 32;
+const OP_VARIABLE: u32 = 59;
+const OP_LOAD: u32 = 61;
+const OP_ACCESS_CHAIN: u32 = 65;
+const OP_IN_BOUNDS_ACCESS_CHAIN: u32 = 66;
+const OP_LOOP_MERGE: u32 = 246;
+/// OpImageSampleImplicitLod … OpImageSparseDrefGather and OpImageFetch/Gather.
+const SAMPLE_OPS: [u32; 10] = [87, 88, 89, 90, 91, 92, 93, 94, 95, 96];
+/// OpFNegate, OpFAdd, OpFSub, OpFMul, OpFDiv, OpFRem, OpFMod.
+const FLOAT_ELEMENTWISE_OPS: [u32; 7] = [127, 129, 131, 133, 136, 140, 141];
+const OP_VECTOR_TIMES_SCALAR: u32 = 142;
+const OP_MATRIX_TIMES_SCALAR: u32 = 143;
+const OP_VECTOR_TIMES_MATRIX: u32 = 144;
+const OP_MATRIX_TIMES_VECTOR: u32 = 145;
+const OP_MATRIX_TIMES_MATRIX: u32 = 146;
+const OP_OUTER_PRODUCT: u32 = 147;
+const OP_DOT: u32 = 148;
+
+// Storage classes (§3.7).
+const STORAGE_INPUT: u32 = 1;
+const STORAGE_UNIFORM: u32 = 2;
+const STORAGE_PUSH_CONSTANT: u32 = 9;
+const STORAGE_STORAGE_BUFFER: u32 = 12;
+
+// GLSL.std.450 instructions that cost more than one operation per component.
+const GLSL_NORMALIZE: u32 = 69;
+const GLSL_LENGTH: u32 = 66;
+const GLSL_DISTANCE: u32 = 67;
+const GLSL_CROSS: u32 = 68;
+const GLSL_DETERMINANT: u32 = 33;
+const GLSL_MATRIX_INVERSE: u32 = 34;
+
+/// A type's shape: float components (0 for non-float scalars) and bytes-ish size in
+/// 16-byte units for memory reads.
+#[derive(Clone, Copy, Debug, Default)]
+struct Shape {
+    floats: u32,
+    columns: u32,
+    rows: u32,
+    units16: u32,
+}
+
+/// Counts the operations of one invocation of `spirv` (module doc). Malformed input ends
+/// the walk where it stops making sense; the counts so far are returned.
+pub fn count(spirv: &[u32]) -> OpCounts {
+    let mut counts = OpCounts::default();
+    let mut shapes: HashMap<u32, Shape> = HashMap::new();
+    // Pointer type id → (storage class, pointee type id).
+    let mut pointer_types: HashMap<u32, (u32, u32)> = HashMap::new();
+    // Value id → its type id (variables, access chains, values).
+    let mut value_types: HashMap<u32, u32> = HashMap::new();
+    let mut i = 5; // after the header
+    while i < spirv.len() {
+        let word = spirv[i];
+        let (len, op) = ((word >> 16) as usize, word & 0xffff);
+        if len == 0 || i + len > spirv.len() {
+            break;
+        }
+        let w = &spirv[i + 1..i + len];
+        let shape_of =
+            |shapes: &HashMap<u32, Shape>, t: u32| shapes.get(&t).copied().unwrap_or_default();
+        match op {
+            OP_TYPE_FLOAT if !w.is_empty() => {
+                shapes.insert(
+                    w[0],
+                    Shape {
+                        floats: 1,
+                        columns: 1,
+                        rows: 1,
+                        units16: 1,
+                    },
+                );
+            }
+            OP_TYPE_VECTOR if w.len() >= 3 => {
+                let c = shape_of(&shapes, w[1]);
+                shapes.insert(
+                    w[0],
+                    Shape {
+                        floats: c.floats * w[2],
+                        columns: 1,
+                        rows: w[2],
+                        units16: 1,
+                    },
+                );
+            }
+            OP_TYPE_MATRIX if w.len() >= 3 => {
+                let c = shape_of(&shapes, w[1]);
+                shapes.insert(
+                    w[0],
+                    Shape {
+                        floats: c.floats * w[2],
+                        columns: w[2],
+                        rows: c.rows,
+                        units16: w[2],
+                    },
+                );
+            }
+            OP_TYPE_ARRAY | OP_TYPE_STRUCT => {
+                // Arrays: the length is a constant id, unknown here; loads of whole arrays
+                // and structs are rare in fragment shaders (access chains pick elements).
+                if let Some(&id) = w.first() {
+                    shapes.insert(id, Shape::default());
+                }
+            }
+            OP_TYPE_POINTER if w.len() >= 3 => {
+                pointer_types.insert(w[0], (w[1], w[2]));
+            }
+            OP_VARIABLE | OP_ACCESS_CHAIN | OP_IN_BOUNDS_ACCESS_CHAIN if w.len() >= 2 => {
+                value_types.insert(w[1], w[0]);
+            }
+            OP_LOAD if w.len() >= 3 => {
+                value_types.insert(w[1], w[0]);
+                let storage = value_types
+                    .get(&w[2])
+                    .and_then(|t| pointer_types.get(t))
+                    .map(|&(s, _)| s);
+                let loaded = shape_of(&shapes, w[0]);
+                match storage {
+                    Some(STORAGE_UNIFORM | STORAGE_STORAGE_BUFFER | STORAGE_PUSH_CONSTANT) => {
+                        counts.uniform_reads += loaded.units16.max(1);
+                    }
+                    Some(STORAGE_INPUT) => counts.varying_reads += loaded.floats,
+                    _ => {}
+                }
+            }
+            OP_LOOP_MERGE => counts.loops += 1,
+            op if SAMPLE_OPS.contains(&op) => counts.samples += 1,
+            op if FLOAT_ELEMENTWISE_OPS.contains(&op)
+                || op == OP_VECTOR_TIMES_SCALAR
+                || op == OP_MATRIX_TIMES_SCALAR =>
+            {
+                if let Some(&t) = w.first() {
+                    counts.float_ops += shape_of(&shapes, t).floats;
+                }
+            }
+            OP_DOT if w.len() >= 3 => {
+                let operand = value_types.get(&w[2]).map(|&t| shape_of(&shapes, t));
+                counts.float_ops += operand.map_or(4, |s| s.floats);
+                value_types.insert(w[1], w[0]);
+            }
+            OP_MATRIX_TIMES_VECTOR
+            | OP_VECTOR_TIMES_MATRIX
+            | OP_MATRIX_TIMES_MATRIX
+            | OP_OUTER_PRODUCT
+                if w.len() >= 2 =>
+            {
+                // One multiply-add per product term: result components × the inner size.
+                let result = shape_of(&shapes, w[0]);
+                let inner = match op {
+                    OP_OUTER_PRODUCT => 1,
+                    _ => w
+                        .get(2)
+                        .and_then(|a| value_types.get(a))
+                        .map_or(result.rows, |&t| {
+                            let s = shape_of(&shapes, t);
+                            if op == OP_MATRIX_TIMES_VECTOR {
+                                s.columns
+                            } else {
+                                s.rows
+                            }
+                        }),
+                };
+                counts.float_ops += result.floats * inner.max(1);
+            }
+            OP_EXT_INST if w.len() >= 4 => {
+                let result = shape_of(&shapes, w[0]);
+                let operand = w
+                    .get(4)
+                    .and_then(|a| value_types.get(a))
+                    .map_or(result, |&t| shape_of(&shapes, t));
+                counts.float_ops += match w[3] {
+                    GLSL_NORMALIZE => 3 * operand.floats,
+                    GLSL_LENGTH | GLSL_DISTANCE => 2 * operand.floats,
+                    GLSL_CROSS => 6,
+                    GLSL_DETERMINANT => 3 * operand.floats,
+                    GLSL_MATRIX_INVERSE => 6 * operand.floats,
+                    _ => result.floats,
+                };
+            }
+            _ => {}
+        }
+        // Every value instruction: remember its result type (word 1 = type, word 2 = id).
+        if has_result_type(op) && w.len() >= 2 {
+            value_types.entry(w[1]).or_insert(w[0]);
+        }
+        i += len;
+    }
+    counts
+}
+
+/// Whether instructions of `op` start with (result type, result id): all but the
+/// module-level, type, decoration and control-flow instructions.
+fn has_result_type(op: u32) -> bool {
+    !matches!(op, 0..=11 | 13..=17 | 19..=39 | 56 | 62 | 71..=77 | 246..=255)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::{ShaderStage, shader::compile_source};
+
+    fn counts_of(body: &str) -> OpCounts {
+        let text = format!(
+            "#version 450\n\
+             #extension GL_EXT_control_flow_attributes : require\n\
+             layout(location = 0) in vec4 a;\n\
+             layout(location = 1) in vec2 uv;\n\
+             layout(std140, set = 0, binding = 0) uniform P {{ vec4 c[8]; }} p;\n\
+             layout(set = 0, binding = 1) uniform sampler2D t;\n\
+             layout(location = 0) out vec4 o;\n\
+             void main() {{ {body} }}\n"
+        );
+        let spirv = compile_source("test.frag", &text, ShaderStage::Fragment, &[]).unwrap();
+        count(&spirv)
+    }
+
+    #[test]
+    fn a_shader_counts_its_float_ops_uniform_and_varying_reads_and_samples() {
+        // 4 multiplies + 4 adds on vec4s, a dot of vec4s (4), one uniform vec4, six varying
+        // floats (a and uv), two samples.
+        let c = counts_of(
+            "vec4 x = a * p.c[3] + texture(t, uv) + texture(t, uv * 0.5);\n\
+             o = x * dot(x, a);",
+        );
+        assert_eq!(c.uniform_reads, 1, "{c:?}");
+        assert_eq!(c.varying_reads, 6, "{c:?}");
+        assert_eq!(c.samples, 2, "{c:?}");
+        assert_eq!(c.loops, 0);
+        // The optimizer fuses a*c + sample into one vec4 Fma (4), then one add (4), the dot
+        // (4), x * scalar (4), uv * 0.5 (2): a fused multiply-add counts once.
+        assert_eq!(c.float_ops, 18, "{c:?}");
+    }
+
+    #[test]
+    fn unrolled_loops_count_every_iteration_and_kept_loops_are_flagged() {
+        let unrolled = counts_of(
+            "vec4 s = vec4(0.0);\n[[unroll]] for (int i = 0; i < 8; ++i) { s += p.c[i]; }\no = s;",
+        );
+        assert_eq!(unrolled.loops, 0, "{unrolled:?}");
+        assert_eq!(unrolled.uniform_reads, 8, "{unrolled:?}");
+        let kept = counts_of(
+            "vec4 s = vec4(0.0);\n[[dont_unroll]] for (int i = 0; i < 8; ++i) { s += p.c[i]; }\no = s;",
+        );
+        assert_eq!(kept.loops, 1, "{kept:?}");
+    }
+}

@@ -1,0 +1,796 @@
+//! The device probe and the cost model (issue 20; `shvis probe`, run first by `shvis bench`).
+//!
+//! **Probe.** On the current Vulkan device, at the bench's target format and resolution, a
+//! screen-filling quad is drawn with generated fragment shaders that each do N operations
+//! of one kind (straight-line code, no loops): bilinear 2D lookups (RGBA16F, the lightmap
+//! sampler, a texture each, as dx9 binds them), trilinear lookups (RGBA8 with MIP chains, the
+//! material sampler, ≈ 2.7 texels per pixel), 2D-array lookups, cube-array lookups (32²
+//! faces, as the tables), dependent lookups (each one's coordinates from the previous one's
+//! result, into textures the size of a dx9 table strip), scalar fused
+//! multiply-adds (four independent vec4 chains), interpolated varyings read, and uniform
+//! vec4 reads; plus the empty shader over the full screen, over half of it (fixed vs
+//! per-pixel cost) and with the depth test off. Each point is the median of `frames` timed
+//! frames (`gpu::pass`).
+//!
+//! **Model.** t = fixed + f · (p + Σ_k n_k c_k), f the covered fraction of the screen, p the
+//! per-screen cost of the empty shader with the depth test (the depth test's own part, p −
+//! p_off, is reported), n_k a shader's count of kind k per pixel and c_k the cost of one per
+//! pixel over the whole screen. The lookup counts of a probe point are what it was generated
+//! with; its float ops, uniform and varying reads are read off its SPIR-V
+//! (`gpu::spirv_counts`), exactly as a technique's are, so probe and techniques are counted
+//! alike. p and the c_k are fitted jointly by least squares over the full-screen points
+//! (nalgebra's SVD); fixed = 2·t(half) − t(full) from the two empty-shader points.
+//!
+//! **Limits.** Overdraw (fragments later hidden by the depth test) is not modelled: f counts
+//! covered pixels once. Counts are static (branches count both sides). Caches: every probe
+//! lookup of a kind reads the same few textures at neighbouring coordinates, as the
+//! techniques' texel and table fetches do, but a technique's real access pattern over a
+//! scene (table lookups scattered by the normal map) may hit worse.
+
+use std::sync::Arc;
+
+use ash::vk;
+use glam::{Vec2, Vec3};
+use serde::Serialize;
+
+use crate::gpu::spirv_counts::{self, OpCounts};
+use crate::gpu::{
+    Buffer, Context, GpuError, Image, ImageDesc, MeshBuffers, Resource, Sampler, SamplerKind,
+    ShaderStage, layout,
+};
+use crate::render::{FrameSettings, SceneGpu};
+use crate::report::metrics::TimingStats;
+use crate::scene::{Camera, Material, Mesh, Scene, Texture8, Vertex};
+
+/// The operation kinds the model prices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Kind {
+    /// Bilinear 2D lookup, no MIP chain (dx9's per-texel data).
+    Bilinear2d,
+    /// Trilinear lookup through a MIP chain (material textures).
+    Trilinear2d,
+    /// Bilinear 2D-array lookup (dx10's per-texel data).
+    Array2d,
+    /// Cube-array lookup (dx10's normal-indexed tables).
+    CubeArray,
+    /// 2D lookup at coordinates computed from a previous lookup (dx9's tables).
+    Dependent2d,
+    /// Scalar float operation (a fused multiply-add counts once).
+    FloatOp,
+    /// Interpolated float read from the vertex stage.
+    Varying,
+    /// vec4 read from a uniform block.
+    UniformRead,
+}
+
+impl Kind {
+    pub const ALL: [Kind; 8] = [
+        Kind::Bilinear2d,
+        Kind::Trilinear2d,
+        Kind::Array2d,
+        Kind::CubeArray,
+        Kind::Dependent2d,
+        Kind::FloatOp,
+        Kind::Varying,
+        Kind::UniformRead,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Bilinear2d => "bilinear 2D lookup",
+            Kind::Trilinear2d => "trilinear lookup",
+            Kind::Array2d => "2D-array lookup",
+            Kind::CubeArray => "cube-array lookup",
+            Kind::Dependent2d => "dependent 2D lookup",
+            Kind::FloatOp => "float op",
+            Kind::Varying => "varying float",
+            Kind::UniformRead => "uniform vec4 read",
+        }
+    }
+
+    fn index(self) -> usize {
+        Kind::ALL.iter().position(|&k| k == self).unwrap_or(0)
+    }
+
+    /// The counts a probe point of this kind is generated with.
+    fn probe_counts(self) -> [u32; 4] {
+        match self {
+            Kind::FloatOp => [64, 128, 256, 512],
+            Kind::Varying => [2, 5, 9, 14],
+            Kind::UniformRead => [16, 32, 64, 128],
+            _ => [4, 8, 12, 16],
+        }
+    }
+}
+
+/// Per-pixel counts of a shader, by [`Kind`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct CostCounts(pub [f64; 8]);
+
+impl CostCounts {
+    /// The counts of a shader with `lookups` (kind, count) and the SPIR-V counts `ops`.
+    pub fn new(lookups: &[(Kind, u32)], ops: &OpCounts) -> Self {
+        let mut c = [0.0; 8];
+        for &(kind, n) in lookups {
+            c[kind.index()] += f64::from(n);
+        }
+        c[Kind::FloatOp.index()] += f64::from(ops.float_ops);
+        c[Kind::Varying.index()] += f64::from(ops.varying_reads);
+        c[Kind::UniformRead.index()] += f64::from(ops.uniform_reads);
+        CostCounts(c)
+    }
+
+    pub fn get(&self, kind: Kind) -> f64 {
+        self.0[kind.index()]
+    }
+}
+
+/// The fitted model (module doc).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CostModel {
+    /// Per frame, whatever is drawn (clear, submission, timestamps), ms.
+    pub fixed_ms: f64,
+    /// The empty shader with the depth test over the whole screen, ms.
+    pub pixel_ms: f64,
+    /// Of which the depth test, ms (empty shader, depth on − off).
+    pub depth_test_ms: f64,
+    /// ms per unit of each kind per pixel over the whole screen, in [`Kind::ALL`] order.
+    pub per_unit_ms: [f64; 8],
+}
+
+impl CostModel {
+    /// Predicted frame time of a shader with `counts` covering `coverage` of the screen.
+    pub fn predict(&self, counts: &CostCounts, coverage: f64) -> f64 {
+        let per_pixel: f64 = counts
+            .0
+            .iter()
+            .zip(&self.per_unit_ms)
+            .map(|(n, c)| n * c)
+            .sum();
+        self.fixed_ms + coverage * (self.pixel_ms + per_pixel)
+    }
+
+    pub fn cost(&self, kind: Kind) -> f64 {
+        self.per_unit_ms[kind.index()]
+    }
+}
+
+/// One microbenchmark.
+#[derive(Clone, Debug, Serialize)]
+pub struct ProbePoint {
+    /// `None` for the empty shader.
+    pub kind: Option<Kind>,
+    /// Operations of `kind` generated.
+    pub count: u32,
+    pub coverage: f64,
+    pub depth_test: bool,
+    /// What the shader's SPIR-V counts (all kinds).
+    pub counts: CostCounts,
+    pub ms_median: f64,
+    /// The fitted model's prediction.
+    pub model_ms: f64,
+}
+
+/// The probe's result.
+#[derive(Clone, Debug, Serialize)]
+pub struct Probe {
+    pub device: String,
+    pub width: u32,
+    pub height: u32,
+    pub frames: u32,
+    /// Fragment-shader invocations the device counts for the screen-filling quad (where it
+    /// counts them): the unit of a technique's shaded share ([`CostModel::predict`]'s
+    /// coverage = its invocations ÷ these), whatever the device's counting convention.
+    pub screen_fragments: Option<u64>,
+    pub model: CostModel,
+    pub points: Vec<ProbePoint>,
+    pub seconds: f64,
+}
+
+impl Probe {
+    /// Largest |model − measured| / measured over the points.
+    pub fn worst_relative_error(&self) -> f64 {
+        self.points
+            .iter()
+            .map(|p| (p.model_ms - p.ms_median).abs() / p.ms_median)
+            .fold(0.0, f64::max)
+    }
+
+    /// Writes `probe.md` and `probe.json` into `dir`; returns their paths.
+    pub fn write(
+        &self,
+        dir: &std::path::Path,
+    ) -> Result<Vec<std::path::PathBuf>, crate::report::ReportError> {
+        Ok(vec![
+            crate::study::write_text(dir, "probe.md", &self.to_markdown())?,
+            crate::study::write_json(dir, "probe.json", self)?,
+        ])
+    }
+
+    /// The probe as markdown: the model's costs and every point against its prediction.
+    pub fn to_markdown(&self) -> String {
+        let m = &self.model;
+        let mut s = format!(
+            "device: {} · {}×{} ({} fragment invocations counted for the screen) · {} timed frames per point · {:.1} s\n\n\
+             fixed {:.3} ms per frame; empty shader {:.3} ms per screen, of which the depth test {:.3} ms\n\n\
+             | kind | ms per unit per screen | ns per unit per pixel |\n|---|---:|---:|\n",
+            self.device,
+            self.width,
+            self.height,
+            self.screen_fragments
+                .map_or("no".to_string(), |n| n.to_string()),
+            self.frames,
+            self.seconds,
+            m.fixed_ms,
+            m.pixel_ms,
+            m.depth_test_ms
+        );
+        let pixels = f64::from(self.width) * f64::from(self.height);
+        for kind in Kind::ALL {
+            s += &format!(
+                "| {} | {:.4} | {:.3} |\n",
+                kind.name(),
+                m.cost(kind),
+                m.cost(kind) * 1e6 / pixels
+            );
+        }
+        s += "\n| point | count | coverage | depth | ms median | model ms | model / measured |\n|---|---:|---:|---|---:|---:|---:|\n";
+        for p in &self.points {
+            s += &format!(
+                "| {} | {} | {:.2} | {} | {:.3} | {:.3} | {:.3} |\n",
+                p.kind.map_or("empty shader", Kind::name),
+                p.count,
+                p.coverage,
+                if p.depth_test { "on" } else { "off" },
+                p.ms_median,
+                p.model_ms,
+                p.model_ms / p.ms_median
+            );
+        }
+        s += &format!(
+            "\nlargest model error over the points: {:.1} %\n",
+            100.0 * self.worst_relative_error()
+        );
+        s
+    }
+}
+
+/// How the probe runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProbeSettings {
+    pub width: u32,
+    pub height: u32,
+    pub warmup: u32,
+    pub frames: u32,
+}
+
+/// Textures per lookup kind (as dx9 binds separate textures; arrays get as many layers):
+/// every lookup of a probe point reads its own texture, as every per-texel group and table
+/// of a technique is its own (repeated reads of one texture hit its cache and cost less).
+const TEXTURES: u32 = 16;
+/// Side of the probe's textures.
+const TEXTURE_SIDE: u32 = 512;
+/// Uniform vec4s in the probe's block.
+const UNIFORM_VEC4S: u32 = 256;
+
+/// The probe's scene: a quad filling the screen from a camera at the origin, lightmap UVs
+/// over [0, 1]² across it, material UVs at ≈ 2.7 texels of a 512² map per pixel.
+fn probe_scene(width: u32, height: u32, left_half: bool) -> Scene {
+    let aspect = width as f32 / height as f32;
+    let (x0, x1) = (-1.2 * aspect, if left_half { 0.0 } else { 1.2 * aspect });
+    let material_scale = 2.7 * width as f32 / TEXTURE_SIDE as f32;
+    let vertex = |x: f32, y: f32| {
+        let lightmap = Vec2::new((x / aspect + 1.0) * 0.5, (1.0 - y) * 0.5);
+        Vertex {
+            position: [x, y, -1.0],
+            normal: [0.0, 0.0, 1.0],
+            tangent: [1.0, 0.0, 0.0, 1.0],
+            uv_material: (lightmap * material_scale).to_array(),
+            uv_lightmap: lightmap.to_array(),
+            albedo_tint: [1.0; 3],
+        }
+    };
+    let mut mesh = Mesh::default();
+    for (x, y) in [(x0, -1.2), (x1, -1.2), (x1, 1.2), (x0, 1.2)] {
+        mesh.vertices.push(vertex(x, y));
+    }
+    mesh.indices = vec![0, 1, 2, 0, 2, 3];
+    let one = |t: [u8; 4]| Texture8 {
+        width: 1,
+        height: 1,
+        texels: vec![t],
+    };
+    Scene {
+        name: "probe".into(),
+        mesh,
+        material: Material {
+            albedo: one([255; 4]),
+            normal: one([128, 128, 255, 255]),
+            normal_scale: 1.0,
+            height: None,
+        },
+        camera: Camera {
+            position: Vec3::ZERO,
+            target: Vec3::NEG_Z,
+            up: Vec3::Y,
+            fov_y: 90f32.to_radians(),
+            z_near: 0.1,
+            z_far: 10.0,
+        },
+    }
+}
+
+/// The GLSL of a probe point: `count` operations of `kind` (`None`: the empty shader).
+fn probe_source(kind: Option<Kind>, count: u32) -> String {
+    let t0 = "SHVIS_BINDING_TECHNIQUE_TEXTURE0";
+    let mut decl = String::new();
+    let mut body = String::new();
+    let step = format!("{:.8}", 1.0 / TEXTURE_SIDE as f64);
+    match kind {
+        None => {}
+        Some(Kind::Bilinear2d) => {
+            decl = format!(
+                "layout(set = 0, binding = {t0}) uniform sampler2D probe_tex[{TEXTURES}];\n"
+            );
+            for k in 0..count {
+                body += &format!(
+                    "    acc += texture(probe_tex[{}], in_uv_lightmap + vec2({} * {step}, 0.0));\n",
+                    k % TEXTURES,
+                    k / TEXTURES
+                );
+            }
+        }
+        Some(Kind::Trilinear2d) => {
+            decl = format!(
+                "layout(set = 0, binding = {t0}) uniform sampler2D probe_tex[{TEXTURES}];\n"
+            );
+            for k in 0..count {
+                body += &format!(
+                    "    acc += texture(probe_tex[{}], in_uv_material + vec2({} * {step}, 0.0));\n",
+                    k % TEXTURES,
+                    k / TEXTURES
+                );
+            }
+        }
+        Some(Kind::Array2d) => {
+            decl = format!("layout(set = 0, binding = {t0}) uniform sampler2DArray probe_tex;\n");
+            for k in 0..count {
+                body += &format!(
+                    "    acc += texture(probe_tex, vec3(in_uv_lightmap + vec2({} * {step}, 0.0), {}.0));\n",
+                    k / TEXTURES,
+                    k % TEXTURES
+                );
+            }
+        }
+        Some(Kind::CubeArray) => {
+            decl = format!("layout(set = 0, binding = {t0}) uniform samplerCubeArray probe_tex;\n");
+            body += "    vec3 d = vec3(in_uv_lightmap * 2.0 - 1.0, 1.0);\n";
+            for k in 0..count {
+                body += &format!(
+                    "    acc += texture(probe_tex, vec4(d + vec3({} * {step}), {}.0));\n",
+                    k / TEXTURES,
+                    k % TEXTURES
+                );
+            }
+        }
+        Some(Kind::Dependent2d) => {
+            decl = format!(
+                "layout(set = 0, binding = {t0}) uniform sampler2D probe_tex[{TEXTURES}];\n"
+            );
+            body += "    vec2 c = in_uv_lightmap;\n";
+            for k in 0..count {
+                body += &format!(
+                    "    {{ vec4 s = texture(probe_tex[{}], c); c += (s.xy - 0.5) * {step}; acc += s; }}\n",
+                    k % TEXTURES
+                );
+            }
+        }
+        Some(Kind::FloatOp) => {
+            // Four independent vec4 chains of fma(v, m, b): 16 float ops per round.
+            decl = format!(
+                "layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform Probe {{ vec4 v[{UNIFORM_VEC4S}]; }} probe;\n"
+            );
+            body += "    vec4 m = probe.v[0], b = probe.v[1];\n";
+            body += "    vec4 c0 = vec4(in_uv_lightmap, 0.0, 1.0), c1 = c0.yxzw, c2 = c0.xxyy, c3 = c0.yyxx;\n";
+            for _ in 0..count.div_ceil(16) {
+                body += "    c0 = fma(c0, m, b); c1 = fma(c1, m, b); c2 = fma(c2, m, b); c3 = fma(c3, m, b);\n";
+            }
+            body += "    acc = c0 + c1 + c2 + c3;\n";
+        }
+        Some(Kind::Varying) => {
+            let floats = [
+                "in_normal_world.x",
+                "in_normal_world.y",
+                "in_normal_world.z",
+                "in_tangent_world.x",
+                "in_tangent_world.y",
+                "in_tangent_world.z",
+                "in_tangent_world.w",
+                "in_uv_material.x",
+                "in_uv_material.y",
+                "in_uv_lightmap.x",
+                "in_uv_lightmap.y",
+                "in_albedo_tint.x",
+                "in_albedo_tint.y",
+                "in_albedo_tint.z",
+            ];
+            for f in floats.iter().take(count as usize) {
+                body += &format!("    acc.x += {f};\n");
+            }
+        }
+        Some(Kind::UniformRead) => {
+            decl = format!(
+                "layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform Probe {{ vec4 v[{UNIFORM_VEC4S}]; }} probe;\n"
+            );
+            for k in 0..count.min(UNIFORM_VEC4S) {
+                body += &format!("    acc += probe.v[{k}];\n");
+            }
+        }
+    }
+    format!(
+        "#version 450\n#extension GL_GOOGLE_include_directive : require\n#define SHVIS_FRAGMENT 1\n\
+         #include \"common.glsl\"\n{decl}layout(location = 0) out vec4 out_color;\n\
+         void main() {{\n    vec4 acc = vec4(0.0);\n{body}    out_color = vec4(acc.rgb * 1e-3 + 0.5, 1.0);\n}}\n"
+    )
+}
+
+/// The probe's textures and uniform block.
+struct ProbeResources {
+    bilinear: Vec<Image>,
+    /// For the dependent lookups: the size of a dx9 table strip (9 spheres of 2 × 32²).
+    tables: Vec<Image>,
+    trilinear: Vec<Image>,
+    array: Image,
+    cube_array: Image,
+    uniforms: Buffer,
+}
+
+fn probe_resources(ctx: &Arc<Context>) -> Result<ProbeResources, GpuError> {
+    let side = TEXTURE_SIDE;
+    // A smooth pseudo-random pattern (RGBA16F halves, RGBA8 bytes).
+    let value = |i: u32, x: u32, y: u32| -> f32 {
+        let h = crate::bake::directions::splitmix64(
+            u64::from(i) << 40 | u64::from(y) << 20 | u64::from(x),
+        );
+        crate::bake::directions::unit_f64(h) as f32
+    };
+    let halves = |i: u32, s: u32| -> Vec<u8> {
+        (0..s * s * 4)
+            .flat_map(|j| half::f16::from_f32(value(i, j % (s * 4), j / (s * 4))).to_le_bytes())
+            .collect()
+    };
+    let f16 = vk::Format::R16G16B16A16_SFLOAT;
+    let bilinear = (0..TEXTURES)
+        .map(|i| {
+            let data = halves(i, side);
+            Image::with_data(
+                ctx,
+                &ImageDesc::texture_2d(f16, side, side),
+                &[vec![data.as_slice()]],
+                &format!("probe.bilinear{i}"),
+            )
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let (table_w, table_h) = (9 * 2 * 32, 32);
+    let tables = (0..TEXTURES)
+        .map(|i| {
+            let data: Vec<u8> = (0..table_w * table_h * 4)
+                .flat_map(|j| {
+                    half::f16::from_f32(value(i, j % (table_w * 4), j / (table_w * 4)))
+                        .to_le_bytes()
+                })
+                .collect();
+            Image::with_data(
+                ctx,
+                &ImageDesc::texture_2d(f16, table_w, table_h),
+                &[vec![data.as_slice()]],
+                &format!("probe.table{i}"),
+            )
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let trilinear = (0..TEXTURES)
+        .map(|i| {
+            let texels: Vec<[f32; 4]> = (0..side * side)
+                .map(|j| std::array::from_fn(|c| value(i, (j % side) * 4 + c as u32, j / side)))
+                .collect();
+            let levels = crate::render::box_mip_levels(side, side, texels);
+            let bytes: Vec<Vec<u8>> = levels
+                .iter()
+                .map(|(_, _, t)| {
+                    t.iter()
+                        .flat_map(|p| p.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
+                        .collect()
+                })
+                .collect();
+            let data: Vec<Vec<&[u8]>> = bytes.iter().map(|b| vec![b.as_slice()]).collect();
+            Image::with_data(
+                ctx,
+                &ImageDesc::texture_2d(vk::Format::R8G8B8A8_UNORM, side, side)
+                    .mip_levels(levels.len() as u32),
+                &data,
+                &format!("probe.trilinear{i}"),
+            )
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let layers: Vec<Vec<u8>> = (0..TEXTURES).map(|i| halves(i, side)).collect();
+    let array = Image::with_data(
+        ctx,
+        &ImageDesc::texture_2d_array(f16, side, side, TEXTURES),
+        &[layers.iter().map(Vec::as_slice).collect()],
+        "probe.array",
+    )?;
+    let cube_side = 32;
+    let faces: Vec<Vec<u8>> = (0..6 * TEXTURES).map(|i| halves(i, cube_side)).collect();
+    let cube_array = Image::with_data(
+        ctx,
+        &ImageDesc::texture_cube_array(f16, cube_side, TEXTURES),
+        &[faces.iter().map(Vec::as_slice).collect()],
+        "probe.cube_array",
+    )?;
+    let block: Vec<f32> = (0..UNIFORM_VEC4S * 4)
+        .map(|i| if i < 4 { 0.999 } else { 1e-3 * (i % 7) as f32 })
+        .collect();
+    let uniforms = Buffer::with_data(
+        ctx,
+        bytemuck::cast_slice(&block),
+        vk::BufferUsageFlags::UNIFORM_BUFFER,
+        "probe.uniforms",
+    )?;
+    Ok(ProbeResources {
+        bilinear,
+        tables,
+        trilinear,
+        array,
+        cube_array,
+        uniforms,
+    })
+}
+
+/// Runs the probe (module doc).
+///
+/// # Errors
+/// Vulkan or shader failures, and a fit that is not finite (a device whose timings are
+/// all zero).
+pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
+    let started = std::time::Instant::now();
+    let scene = probe_scene(s.width, s.height, false);
+    let gpu = SceneGpu::new(
+        ctx,
+        &scene,
+        &FrameSettings {
+            width: s.width,
+            height: s.height,
+            ..FrameSettings::default()
+        },
+    )?;
+    let half = probe_scene(s.width, s.height, true);
+    let half_mesh = MeshBuffers::new(
+        ctx,
+        bytemuck::cast_slice(&half.mesh.vertices),
+        &half.mesh.indices,
+        "probe.half_mesh",
+    )?;
+    let res = probe_resources(ctx)?;
+    let linear = Sampler::new(ctx, SamplerKind::LinearClamp, "probe.linear")?;
+    let material = gpu.material_sampler();
+    let mut points = Vec::new();
+    let mut screen_fragments = None;
+    let mut measure = |kind: Option<Kind>,
+                       count: u32,
+                       depth_test: bool,
+                       half_screen: bool|
+     -> Result<(), GpuError> {
+        let name = format!(
+            "probe.{}{count}",
+            kind.map_or("empty".to_string(), |k| format!("{k:?}").to_lowercase())
+        );
+        let spirv = crate::gpu::shader::compile_source(
+            &format!("{name}.frag"),
+            &probe_source(kind, count),
+            ShaderStage::Fragment,
+            &[],
+        )?;
+        let ops = spirv_counts::count(&spirv);
+        let mut resources = gpu.common_resources();
+        resources.push((
+            layout::BINDING_TECHNIQUE_PARAMS,
+            Resource::Uniform(&res.uniforms),
+        ));
+        let t0 = layout::BINDING_TECHNIQUE_TEXTURE0;
+        match kind {
+            Some(Kind::Bilinear2d) => resources.push((
+                t0,
+                Resource::TextureArray(res.bilinear.iter().map(|i| (i, &linear)).collect()),
+            )),
+            Some(Kind::Dependent2d) => resources.push((
+                t0,
+                Resource::TextureArray(res.tables.iter().map(|i| (i, &linear)).collect()),
+            )),
+            Some(Kind::Trilinear2d) => resources.push((
+                t0,
+                Resource::TextureArray(res.trilinear.iter().map(|i| (i, material)).collect()),
+            )),
+            Some(Kind::Array2d) => resources.push((t0, Resource::Texture(&res.array, &linear))),
+            Some(Kind::CubeArray) => {
+                resources.push((t0, Resource::Texture(&res.cube_array, &linear)));
+            }
+            _ => {}
+        }
+        let pipeline = gpu.mesh_pipeline_with_depth(ctx, &name, &spirv, &resources, depth_test)?;
+        drop(resources);
+        if kind.is_none() && depth_test && !half_screen {
+            screen_fragments = gpu.count_fragments(&pipeline, None)?;
+        }
+        let frame = if half_screen {
+            gpu.render_pipeline_on(&pipeline, &half_mesh, s.warmup, s.frames)?
+        } else {
+            gpu.render_pipeline(&pipeline, s.warmup, s.frames)?
+        };
+        let ms = TimingStats::from_ms(&frame.ms).map_or(f64::NAN, |t| t.ms_median);
+        let lookups: Vec<(Kind, u32)> = match kind {
+            Some(
+                k @ (Kind::Bilinear2d
+                | Kind::Trilinear2d
+                | Kind::Array2d
+                | Kind::CubeArray
+                | Kind::Dependent2d),
+            ) => {
+                vec![(k, count)]
+            }
+            _ => vec![],
+        };
+        points.push(ProbePoint {
+            kind,
+            count,
+            coverage: if half_screen { 0.5 } else { 1.0 },
+            depth_test,
+            counts: CostCounts::new(&lookups, &ops),
+            ms_median: ms,
+            model_ms: f64::NAN,
+        });
+        Ok(())
+    };
+    measure(None, 0, true, false)?;
+    measure(None, 0, true, true)?;
+    measure(None, 0, false, false)?;
+    for kind in Kind::ALL {
+        for count in kind.probe_counts() {
+            measure(Some(kind), count, true, false)?;
+        }
+    }
+    let model = fit(&points).ok_or_else(|| GpuError::Invalid {
+        what: "probe".into(),
+        detail: format!("{}: the timings do not fit a cost model", ctx.device_name()),
+    })?;
+    for p in &mut points {
+        let depth_off = if p.depth_test {
+            0.0
+        } else {
+            model.depth_test_ms
+        };
+        p.model_ms = model.predict(&p.counts, p.coverage) - p.coverage * depth_off;
+    }
+    Ok(Probe {
+        device: ctx.device_name().to_string(),
+        width: s.width,
+        height: s.height,
+        frames: s.frames,
+        screen_fragments,
+        model,
+        points,
+        seconds: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// Least-squares fit of the model (module doc) to the points.
+fn fit(points: &[ProbePoint]) -> Option<CostModel> {
+    let full: Vec<&ProbePoint> = points
+        .iter()
+        .filter(|p| p.coverage == 1.0 && p.depth_test)
+        .collect();
+    // Unknowns: B = fixed + p, then c_k. Rows weighted by 1/t so relative errors count.
+    let n = 1 + Kind::ALL.len();
+    let a = nalgebra::DMatrix::from_fn(full.len(), n, |r, c| {
+        let w = 1.0 / full[r].ms_median;
+        if c == 0 {
+            w
+        } else {
+            full[r].counts.0[c - 1] * w
+        }
+    });
+    let b = nalgebra::DVector::from_element(full.len(), 1.0);
+    let x = a.svd(true, true).solve(&b, 1e-12).ok()?;
+    let empty = |depth: bool, coverage: f64| {
+        points
+            .iter()
+            .find(|p| p.kind.is_none() && p.depth_test == depth && p.coverage == coverage)
+            .map(|p| p.ms_median)
+    };
+    let (full_ms, half_ms, off_ms) = (empty(true, 1.0)?, empty(true, 0.5)?, empty(false, 1.0)?);
+    let fixed_ms = (2.0 * half_ms - full_ms).max(0.0);
+    let model = CostModel {
+        fixed_ms,
+        pixel_ms: x[0] - fixed_ms,
+        depth_test_ms: full_ms - off_ms,
+        per_unit_ms: std::array::from_fn(|k| x[k + 1]),
+    };
+    let finite = model.per_unit_ms.iter().all(|c| c.is_finite()) && model.pixel_ms.is_finite();
+    finite.then_some(model)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn probe_shaders_compile_and_count_what_they_were_generated_with() {
+        for kind in Kind::ALL {
+            for count in kind.probe_counts() {
+                let spirv = crate::gpu::shader::compile_source(
+                    "probe.frag",
+                    &probe_source(Some(kind), count),
+                    ShaderStage::Fragment,
+                    &[],
+                )
+                .unwrap();
+                let ops = spirv_counts::count(&spirv);
+                assert_eq!(ops.loops, 0, "{kind:?} {count}");
+                match kind {
+                    Kind::UniformRead => assert!(ops.uniform_reads >= count, "{ops:?}"),
+                    Kind::Varying => assert_eq!(ops.varying_reads, count, "{ops:?}"),
+                    Kind::FloatOp => assert!(ops.float_ops >= count, "{ops:?}"),
+                    _ => assert_eq!(ops.samples, count, "{kind:?}: {ops:?}"),
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_fit_recovers_a_linear_device() {
+        // Synthetic timings from known costs: the fit must give them back.
+        let truth = CostModel {
+            fixed_ms: 0.4,
+            pixel_ms: 1.2,
+            depth_test_ms: 0.3,
+            per_unit_ms: [2.0, 3.0, 2.5, 4.0, 2.2, 0.01, 0.05, 0.5],
+        };
+        let mut points = Vec::new();
+        let mut push = |kind: Option<Kind>, counts: CostCounts, coverage: f64, depth: bool| {
+            let ms = truth.predict(&counts, coverage)
+                - if depth {
+                    0.0
+                } else {
+                    coverage * truth.depth_test_ms
+                };
+            points.push(ProbePoint {
+                kind,
+                count: 0,
+                coverage,
+                depth_test: depth,
+                counts,
+                ms_median: ms,
+                model_ms: 0.0,
+            });
+        };
+        push(None, CostCounts::default(), 1.0, true);
+        push(None, CostCounts::default(), 0.5, true);
+        push(None, CostCounts::default(), 1.0, false);
+        for kind in Kind::ALL {
+            for n in kind.probe_counts() {
+                let mut c = CostCounts::default();
+                c.0[kind.index()] = f64::from(n);
+                c.0[Kind::Varying.index()] += 2.0;
+                c.0[Kind::FloatOp.index()] += 7.0;
+                push(Some(kind), c, 1.0, true);
+            }
+        }
+        let model = fit(&points).unwrap();
+        assert!((model.fixed_ms - truth.fixed_ms).abs() < 1e-9, "{model:?}");
+        assert!((model.pixel_ms - truth.pixel_ms).abs() < 1e-6, "{model:?}");
+        assert!((model.depth_test_ms - truth.depth_test_ms).abs() < 1e-9);
+        for (m, t) in model.per_unit_ms.iter().zip(truth.per_unit_ms) {
+            assert!((m - t).abs() < 1e-6 * t.max(1.0), "{m} vs {t}");
+        }
+    }
+}

@@ -1,0 +1,105 @@
+//! The device probe and cost model (issue 20) on lavapipe with validation on: every
+//! microbenchmark runs and is counted as generated, the fit is printed, and every
+//! technique's counts come from its own shader. No timing is asserted (timings go in
+//! `shvis probe` and the bench); what can fail here is structure.
+
+mod common;
+
+use shvis::probe::{Kind, ProbeSettings, run};
+use shvis::render::FrameSettings;
+use shvis::technique::{self, HwPath, Technique};
+
+#[test]
+fn the_probe_runs_every_microbenchmark_and_fits_a_model_to_them() {
+    let ctx = common::validated_context();
+    let probe = run(
+        &ctx,
+        &ProbeSettings {
+            width: 320,
+            height: 200,
+            warmup: 1,
+            frames: 5,
+        },
+    )
+    .expect("probe runs");
+    eprintln!("{}", probe.to_markdown());
+    // 3 empty-shader points and 4 counts of each kind.
+    assert_eq!(probe.points.len(), 3 + 4 * Kind::ALL.len());
+    for p in &probe.points {
+        assert!(p.ms_median.is_finite() && p.ms_median > 0.0, "{p:?}");
+        assert!(p.model_ms.is_finite(), "{p:?}");
+        if let Some(kind) = p.kind {
+            // The point is counted as what it was generated with.
+            assert!(p.counts.get(kind) >= f64::from(p.count), "{p:?}");
+        }
+    }
+    let m = &probe.model;
+    assert!(m.per_unit_ms.iter().all(|c| c.is_finite()), "{m:?}");
+    assert!(m.fixed_ms.is_finite() && m.pixel_ms.is_finite() && m.depth_test_ms.is_finite());
+    if ctx.supports_pipeline_statistics() {
+        // The screen-filling quad shades every pixel (a device may count a few more).
+        let fragments = probe.screen_fragments.expect("counted") as f64;
+        assert!(
+            (1.0..1.1).contains(&(fragments / (320.0 * 200.0))),
+            "{fragments}"
+        );
+    }
+    common::assert_validation_clean(&ctx, "probe");
+}
+
+#[test]
+fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
+    let ctx = common::validated_context();
+    let prepared = common::house();
+    let settings = FrameSettings {
+        width: 160,
+        height: 100,
+        ..FrameSettings::default()
+    };
+    let scene = shvis::render::SceneGpu::new(&ctx, &prepared.scene, &settings).unwrap();
+    let inputs = prepared.inputs();
+    for &t in Technique::ALL {
+        for &path in HwPath::ALL {
+            let tech = technique::build(&ctx, &scene, t, path, &inputs).unwrap();
+            let c = tech.stats.cost;
+            let lookups: f64 = [
+                Kind::Bilinear2d,
+                Kind::Trilinear2d,
+                Kind::Array2d,
+                Kind::CubeArray,
+                Kind::Dependent2d,
+            ]
+            .iter()
+            .map(|&k| c.get(k))
+            .sum();
+            // The cost model's lookups are the cost table's.
+            assert_eq!(
+                lookups,
+                f64::from(tech.stats.lookups_per_pixel),
+                "{t}.{path}: {c:?}"
+            );
+            // dx9 binds no arrays or cubes; dx10's per-texel data is an array.
+            if path == HwPath::Dx9 {
+                assert_eq!(
+                    c.get(Kind::Array2d) + c.get(Kind::CubeArray),
+                    0.0,
+                    "{t}.{path}"
+                );
+            } else {
+                assert_eq!(
+                    c.get(Kind::Bilinear2d) + c.get(Kind::Dependent2d),
+                    0.0,
+                    "{t}.{path}"
+                );
+            }
+            assert!(
+                c.get(Kind::FloatOp) > 0.0 && c.get(Kind::Varying) > 0.0,
+                "{t}.{path}"
+            );
+            if let Some(n) = tech.count_fragments(&scene).unwrap() {
+                assert!(n > 1000, "{t}.{path}: {n} fragments");
+            }
+        }
+    }
+    common::assert_validation_clean(&ctx, "technique cost counts");
+}
