@@ -22,11 +22,13 @@ NDF_ENVS = sky$(if $(wildcard $(OVERCAST)),$(comma)$(OVERCAST))
 comma := ,
 
 bench: build
-	target/release/shvis bench --out $(BENCH_OUT)
-	target/release/shvis study rnm --envs $(RNM_ENVS) --out $(BENCH_OUT)/rnm
-	target/release/shvis study normalmap --out $(BENCH_OUT)/normalmap
-	target/release/shvis study ndf --diffuse-envs $(NDF_ENVS) --out $(BENCH_OUT)/ndf
-	target/release/shvis bench --scene bumpy --techniques unc6,preconv,unc6ndf,preconvndf --specular mip,ndf,ndfn --light-dir 0,0.3,-1 --vis-res 256 --rays 256 --width 640 --height 360 --out $(BENCH_OUT)/specular
+	start=$$(date +%s); \
+	target/release/shvis bench --out $(BENCH_OUT) && \
+	target/release/shvis study rnm --envs $(RNM_ENVS) --out $(BENCH_OUT)/rnm && \
+	target/release/shvis study normalmap --out $(BENCH_OUT)/normalmap && \
+	target/release/shvis study ndf --diffuse-envs $(NDF_ENVS) --out $(BENCH_OUT)/ndf && \
+	target/release/shvis bench --scene bumpy --techniques unc6,preconv,unc6ndf,preconvndf --specular mip,ndf,ndfn --light-dir 0,0.3,-1 --vis-res 256 --rays 256 --width 640 --height 360 --out $(BENCH_OUT)/specular && \
+	echo "make bench: $$(( $$(date +%s) - start )) s after the build"
 
 clean:
 	cargo clean

@@ -218,11 +218,12 @@ pub fn run(
     drop(figure_frames);
     fill_ratios_to_preconv(&mut rows);
     if let Some(probe) = &cost_model {
+        // Fragments shaded per screen pixel, overdraw included: the same for every row.
+        let shaded = scene.shaded_fragments(ctx)? as f64
+            / (f64::from(settings.width) * f64::from(settings.height));
+        log::info!("cost model: {shaded:.3} fragments shaded per screen pixel");
         for row in &mut rows {
-            // Shaded share in the probe's unit: its screen's invocations, where counted.
-            if let (Some(screen), Some(fragments)) = (probe.screen_fragments, row.fragments) {
-                row.coverage = fragments as f64 / screen.max(1) as f64;
-            }
+            row.coverage = shaded;
             let predicted = probe.model.predict(&row.cost, row.coverage);
             row.model_ms = Some(predicted);
             row.x_model = row.ms_median.map(|ms| ms / predicted);
@@ -247,6 +248,7 @@ pub fn run(
             )
         }),
         results: rows,
+        seconds: started.elapsed().as_secs_f64(),
     };
     table.write(&settings.out)?;
     write_plots(&table, &settings.paths, &settings.out);

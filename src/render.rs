@@ -273,8 +273,34 @@ impl SceneGpu {
                 vertex_layout: &self.vertex_layout,
                 resources,
                 depth_test,
+                additive: false,
             },
         )
+    }
+
+    /// Fragments shaded in one frame of the scene mesh with the depth test, counted exactly
+    /// (each fragment adds 1 to its pixel; hidden fragments drawn before their occluder
+    /// count, as they are shaded): the overdraw every technique of the scene pays, since
+    /// they all draw the same surfaces in the same order (`crate::probe`'s coverage).
+    pub fn shaded_fragments(&self, ctx: &Arc<Context>) -> Result<u64, GpuError> {
+        let fragment = compile_glsl("probe/count.frag", ShaderStage::Fragment, &[])?;
+        let resources = self.common_resources();
+        let pipeline = MeshPipeline::new(
+            ctx,
+            &self.target,
+            &crate::gpu::MeshPipelineDesc {
+                name: "scene.count_fragments",
+                vertex_spirv: &self.vertex_spirv,
+                fragment_spirv: &fragment,
+                vertex_layout: &self.vertex_layout,
+                resources: &resources,
+                depth_test: true,
+                additive: true,
+            },
+        )?;
+        drop(resources);
+        let frame = self.render_pipeline(&pipeline, 0, 1)?;
+        Ok(frame.rgba.iter().map(|p| p[0].round() as u64).sum())
     }
 
     /// Whether techniques read the material textures at full resolution

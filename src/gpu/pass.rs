@@ -34,6 +34,9 @@ pub struct MeshPipelineDesc<'a> {
     /// Depth test and write (every technique); off only for the device probe's
     /// measurement of what the depth test costs (`crate::probe`).
     pub depth_test: bool,
+    /// Additive blending of the colour output (one + one): with a shader writing 1, each
+    /// pixel counts the fragments shaded there (`SceneGpu::shaded_fragments`).
+    pub additive: bool,
 }
 
 /// Vertex and index buffers in device-local memory.
@@ -246,7 +249,14 @@ impl MeshPipeline {
             .depth_write_enable(desc.depth_test)
             .depth_compare_op(vk::CompareOp::LESS);
         let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
-            .color_write_mask(vk::ColorComponentFlags::RGBA)];
+            .color_write_mask(vk::ColorComponentFlags::RGBA)
+            .blend_enable(desc.additive)
+            .src_color_blend_factor(vk::BlendFactor::ONE)
+            .dst_color_blend_factor(vk::BlendFactor::ONE)
+            .color_blend_op(vk::BlendOp::ADD)
+            .src_alpha_blend_factor(vk::BlendFactor::ONE)
+            .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+            .alpha_blend_op(vk::BlendOp::ADD)];
         let blend =
             vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
         let info = vk::GraphicsPipelineCreateInfo::default()

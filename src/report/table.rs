@@ -121,11 +121,12 @@ pub struct BenchRow {
     /// The specular term's normal-map filtering, for a row with one (`--specular`).
     pub specular: Option<crate::ndf::render::NormalFilter>,
     /// Per-pixel operation counts by kind (`crate::probe`), and the share of the screen
-    /// shaded: with the probe and invocation counts, the row's fragment invocations ÷ the
-    /// probe screen's (overdraw included); else the covered pixels' share.
+    /// shaded: with the probe, the fragments shaded per screen pixel (overdraw included,
+    /// `SceneGpu::shaded_fragments`); else the covered pixels' share.
     pub cost: crate::probe::CostCounts,
     pub coverage: f64,
-    /// Fragment-shader invocations of one frame, where the device counts them.
+    /// Fragment-shader invocations of one frame, where the device counts them (helper and
+    /// partial-quad lanes included, so more than the fragments shaded).
     pub fragments: Option<u64>,
     /// The device cost model's frame time for the row (`shvis bench` runs the probe first),
     /// and the measured median over it.
@@ -200,6 +201,9 @@ pub struct BenchTable {
     pub specular: Option<String>,
     /// The device cost model the rows' `model_ms` come from (`probe.md`).
     pub cost_model: Option<crate::probe::CostModel>,
+    /// Wall time of the bench itself (probe, references, rows, files; the bake before it
+    /// is not counted), s.
+    pub seconds: f64,
     pub results: Vec<BenchRow>,
 }
 
@@ -219,6 +223,7 @@ impl BenchTable {
             self.reference_spp,
             opt(self.reference_rel_noise, 4)
         );
+        s += &format!("; bench wall time {:.1} s", self.seconds);
         if let Some(term) = &self.specular {
             s += &format!(
                 "; rows `+spec{{filter}}` add the specular term ({term}) with its normal map filtered as named, against references with its footprint reference added"
@@ -391,6 +396,7 @@ mod tests {
             reference_bounced_rel_noise: None,
             specular: None,
             cost_model: None,
+            seconds: 0.0,
             results: vec![
                 row(Technique::Preconv, 1.0, steps),
                 row(Technique::Sh2, 1.0, vec![]),

@@ -171,6 +171,7 @@ pub(crate) fn finish(
                 vertex_layout: &vertex_layout,
                 resources: &resources,
                 depth_test: true,
+                additive: false,
             },
         )?;
         drop(resources);
