@@ -224,7 +224,7 @@ pub fn run(
         log::info!("cost model: {shaded:.3} fragments shaded per screen pixel");
         for row in &mut rows {
             row.coverage = shaded;
-            let predicted = probe.model.predict(&row.cost, row.coverage);
+            let predicted = probe.model.predict(&row.cost, row.coverage, row.triangles);
             row.model_ms = Some(predicted);
             row.x_model = row.ms_median.map(|ms| ms / predicted);
         }
@@ -547,9 +547,7 @@ fn measure_row(
         let name = format!("{label}.diff{DIFFERENCE_SCALE}.png");
         write_png(&settings.out.join(name), &diff, settings.exposure)?;
     }
-    // The share of the screen covered; the fragment invocations where the device counts
-    // them (overdraw included) replace it for the model (`run`).
-    let fragments = tech.count_fragments(scene)?;
+    // The share of the screen covered; the model uses the scene's shaded fragments (`run`).
     let covered = frame.rgba.iter().filter(|p| p[3] > 0.5).count();
     let row = BenchRow {
         technique,
@@ -557,7 +555,7 @@ fn measure_row(
         specular,
         cost: tech.stats.cost,
         coverage: covered as f64 / frame.rgba.len().max(1) as f64,
-        fragments,
+        triangles: tech.triangle_count(scene),
         model_ms: None,
         x_model: None,
         ms_median: timing.map(|s| s.ms_median),

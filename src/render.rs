@@ -303,6 +303,11 @@ impl SceneGpu {
         Ok(frame.rgba.iter().map(|p| p[0].round() as u64).sum())
     }
 
+    /// Triangles of the scene mesh.
+    pub fn triangle_count(&self) -> u32 {
+        self.mesh.triangle_count()
+    }
+
     /// Whether techniques read the material textures at full resolution
     /// ([`FrameSettings::material_level0`]).
     pub fn material_level0(&self) -> bool {
@@ -312,16 +317,6 @@ impl SceneGpu {
     /// The layout of the scene's vertex buffer (`scene::Vertex`).
     pub fn vertex_layout(&self) -> &VertexLayout {
         &self.vertex_layout
-    }
-
-    /// Fragment-shader invocations of one frame of `pipeline` over `mesh` (the scene's when
-    /// `None`), where the device counts them (`MeshPipeline::count_fragments`).
-    pub fn count_fragments(
-        &self,
-        pipeline: &MeshPipeline,
-        mesh: Option<&MeshBuffers>,
-    ) -> Result<Option<u64>, GpuError> {
-        pipeline.count_fragments(&self.target, mesh.unwrap_or(&self.mesh))
     }
 
     /// Renders `mesh` (a technique's own, over the same surface) with `pipeline`.

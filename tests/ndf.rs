@@ -10,6 +10,16 @@ use shvis::scene::{Texture8, bumpy};
 use shvis::study::ndf::{NdfStudySettings, SpecularScene, run};
 use shvis::technique::HwPath;
 
+/// The receding bumpy plane prepared at a small lightmap (the diffuse and `--specular` tests).
+fn bumpy_prepared() -> shvis::prepare::Prepared {
+    shvis::prepare::prepare(&shvis::prepare::PrepareSettings {
+        scene: "bumpy".into(),
+        vis_res: 64,
+        ..shvis::prepare::PrepareSettings::default()
+    })
+    .unwrap()
+}
+
 #[test]
 fn a_constant_normal_map_shades_the_same_under_every_filter() {
     let ctx = common::validated_context();
@@ -136,17 +146,11 @@ fn ndf_filtering_halves_the_minified_specular_error_and_keeps_its_energy() {
 #[test]
 fn diffuse_ndf_variants_change_nothing_magnified_and_follow_the_footprint_minified() {
     use shvis::ndf::render::normal_map_lod;
-    use shvis::prepare::{PrepareSettings, prepare};
     use shvis::study::ndf_diffuse::own_footprint;
     use shvis::technique::{self, NdfBase, Technique};
 
     let ctx = common::validated_context();
-    let mut prepared = prepare(&PrepareSettings {
-        scene: "bumpy".into(),
-        vis_res: 64,
-        ..PrepareSettings::default()
-    })
-    .unwrap();
+    let mut prepared = bumpy_prepared();
     let bases = [
         NdfBase::Unc {
             order: shvis::sh::Order::SIX,
@@ -243,16 +247,10 @@ fn diffuse_ndf_variants_change_nothing_magnified_and_follow_the_footprint_minifi
 #[test]
 fn the_specular_term_adds_the_standalone_pass_to_every_technique() {
     use shvis::ndf::render::SpecularTerm;
-    use shvis::prepare::{PrepareSettings, prepare};
     use shvis::technique::{self, Technique, TechniqueError};
 
     let ctx = common::validated_context();
-    let mut prepared = prepare(&PrepareSettings {
-        scene: "bumpy".into(),
-        vis_res: 64,
-        ..PrepareSettings::default()
-    })
-    .unwrap();
+    let mut prepared = bumpy_prepared();
     let techniques: Vec<Technique> = ["preconv", "unc6", "pca12v"]
         .iter()
         .map(|t| t.parse().unwrap())
@@ -335,16 +333,10 @@ fn the_specular_term_adds_the_standalone_pass_to_every_technique() {
 #[test]
 fn the_bench_measures_the_specular_filterings_side_by_side() {
     use shvis::bench::{BenchSettings, SpecularSettings, run};
-    use shvis::prepare::{PrepareSettings, prepare};
     use shvis::technique::Technique;
 
     let ctx = common::validated_context();
-    let mut prepared = prepare(&PrepareSettings {
-        scene: "bumpy".into(),
-        vis_res: 64,
-        ..PrepareSettings::default()
-    })
-    .unwrap();
+    let mut prepared = bumpy_prepared();
     let preconv: Technique = "preconv".parse().unwrap();
     prepared.prepare_techniques(&[preconv]).unwrap();
     let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("ndf-specular-bench");

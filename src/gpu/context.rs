@@ -46,7 +46,6 @@ pub struct Context {
     timestamp_valid_bits: u32,
     image_cube_array: bool,
     multi_draw_indirect: bool,
-    pipeline_statistics: bool,
     messages: std::sync::Arc<MessageCounts>,
 }
 
@@ -183,9 +182,7 @@ impl Context {
             )
             // Normal-map generation draws one indirect command per low triangle.
             .multi_draw_indirect(multi_draw_indirect)
-            .draw_indirect_first_instance(multi_draw_indirect)
-            // The cost model counts fragment-shader invocations (`crate::probe`).
-            .pipeline_statistics_query(features.pipeline_statistics_query != 0);
+            .draw_indirect_first_instance(multi_draw_indirect);
         // VK_KHR_maintenance4 relaxes vertex-output/fragment-input matching, so a pass may
         // read a subset of the shared mesh.vert outputs (the reference's G-buffer passes).
         // SAFETY: a plain query on this instance's physical device.
@@ -288,7 +285,6 @@ impl Context {
             timestamp_valid_bits: families[queue_family as usize].timestamp_valid_bits,
             image_cube_array: features.image_cube_array != 0,
             multi_draw_indirect,
-            pipeline_statistics: features.pipeline_statistics_query != 0,
             messages,
         };
         ctx.set_name(pool, "shvis.command_pool");
@@ -324,10 +320,6 @@ impl Context {
     }
     pub fn timestamp_valid_bits(&self) -> u32 {
         self.timestamp_valid_bits
-    }
-    /// Whether `pipelineStatisticsQuery` is enabled (fragment-shader invocation counts).
-    pub fn supports_pipeline_statistics(&self) -> bool {
-        self.pipeline_statistics
     }
     /// Whether `multiDrawIndirect` and `drawIndirectFirstInstance` are enabled.
     pub fn supports_multi_draw_indirect(&self) -> bool {

@@ -47,6 +47,11 @@ pub struct MeshBuffers {
 }
 
 impl MeshBuffers {
+    /// Triangles drawn (indices ÷ 3).
+    pub fn triangle_count(&self) -> u32 {
+        self.index_count / 3
+    }
+
     pub fn new(
         ctx: &Arc<Context>,
         vertex_bytes: &[u8],
@@ -321,112 +326,6 @@ impl MeshPipeline {
         // SAFETY: every submission was waited for.
         unsafe { device.destroy_query_pool(pool, None) };
         result
-    }
-
-    /// Fragment-shader invocations of one frame of `mesh` (a pipeline statistics query), or
-    /// `None` where the device has no such queries: the fragments actually shaded, hidden
-    /// ones that passed the depth test when drawn included.
-    pub fn count_fragments(
-        &self,
-        target: &RenderTarget,
-        mesh: &MeshBuffers,
-    ) -> Result<Option<u64>, GpuError> {
-        let ctx = &self.ctx;
-        if !ctx.supports_pipeline_statistics() {
-            return Ok(None);
-        }
-        let device = ctx.device();
-        let name = format!("{}.fragments", self.name);
-        let info = vk::QueryPoolCreateInfo::default()
-            .query_type(vk::QueryType::PIPELINE_STATISTICS)
-            .query_count(1)
-            .pipeline_statistics(vk::QueryPipelineStatisticFlags::FRAGMENT_SHADER_INVOCATIONS);
-        // SAFETY: plain create-info; destroyed below after the waited submission.
-        let pool = unsafe { device.create_query_pool(&info, None) }
-            .map_err(|e| GpuError::vulkan("vkCreateQueryPool", &name, e))?;
-        ctx.set_name(pool, &name);
-        let result = ctx.allocate_command_buffer(&name).and_then(|cmd| {
-            let counted = self.record_counted(target, mesh, cmd, pool, &name);
-            ctx.free_command_buffer(cmd);
-            counted
-        });
-        // SAFETY: the submission was waited for (or never made).
-        unsafe { device.destroy_query_pool(pool, None) };
-        result.map(Some)
-    }
-
-    fn record_counted(
-        &self,
-        target: &RenderTarget,
-        mesh: &MeshBuffers,
-        cmd: vk::CommandBuffer,
-        pool: vk::QueryPool,
-        name: &str,
-    ) -> Result<u64, GpuError> {
-        let device = self.ctx.device();
-        let clears = [
-            vk::ClearValue {
-                color: vk::ClearColorValue {
-                    float32: [0.0, 0.0, 0.0, 0.0],
-                },
-            },
-            vk::ClearValue {
-                depth_stencil: vk::ClearDepthStencilValue {
-                    depth: 1.0,
-                    stencil: 0,
-                },
-            },
-        ];
-        let begin_pass = vk::RenderPassBeginInfo::default()
-            .render_pass(target.render_pass())
-            .framebuffer(target.framebuffer())
-            .render_area(vk::Rect2D {
-                offset: vk::Offset2D { x: 0, y: 0 },
-                extent: vk::Extent2D {
-                    width: target.width(),
-                    height: target.height(),
-                },
-            })
-            .clear_values(&clears);
-        // SAFETY: as in `record_and_run`; the submission is waited for before returning.
-        unsafe {
-            device
-                .begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())
-                .map_err(|e| GpuError::vulkan("vkBeginCommandBuffer", name, e))?;
-            device.cmd_reset_query_pool(cmd, pool, 0, 1);
-            device.cmd_begin_render_pass(cmd, &begin_pass, vk::SubpassContents::INLINE);
-            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
-            device.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::GRAPHICS,
-                self.pipeline_layout,
-                0,
-                &[self.descriptors.set],
-                &[],
-            );
-            device.cmd_bind_vertex_buffers(cmd, 0, &[mesh.vertex.raw()], &[0]);
-            device.cmd_bind_index_buffer(cmd, mesh.index.raw(), 0, vk::IndexType::UINT32);
-            device.cmd_begin_query(cmd, pool, 0, vk::QueryControlFlags::empty());
-            device.cmd_draw_indexed(cmd, mesh.index_count, 1, 0, 0, 0);
-            device.cmd_end_query(cmd, pool, 0);
-            device.cmd_end_render_pass(cmd);
-            device
-                .end_command_buffer(cmd)
-                .map_err(|e| GpuError::vulkan("vkEndCommandBuffer", name, e))?;
-        }
-        self.ctx.submit_and_wait(cmd, name)?;
-        let mut count = [0u64; 1];
-        // SAFETY: the query was written by the completed submission.
-        unsafe {
-            device.get_query_pool_results(
-                pool,
-                0,
-                &mut count,
-                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-            )
-        }
-        .map_err(|e| GpuError::vulkan("vkGetQueryPoolResults", name, e))?;
-        Ok(count[0])
     }
 
     fn record_and_run(

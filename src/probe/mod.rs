@@ -9,23 +9,27 @@
 //! result, into textures the size of a dx9 table strip), scalar fused
 //! multiply-adds (four independent vec4 chains), interpolated varyings read, and uniform
 //! vec4 reads; plus the empty shader over the full screen, over half of it (fixed vs
-//! per-pixel cost) and with the depth test off. Each point is the median of `frames` timed
+//! per-pixel cost), with the depth test off, and over the screen split into 2·32², 2·64²
+//! and 2·128² triangles (the per-triangle cost). Each point is the median of `frames` timed
 //! frames (`gpu::pass`).
 //!
-//! **Model.** t = fixed + f · (p + Σ_k n_k c_k), f the covered fraction of the screen, p the
+//! **Model.** t = fixed + T·c_T + f · (p + Σ_k n_k c_k), T the triangles drawn and c_T the
+//! cost of one (setup, rasterization, vertex shading), f the fragments shaded per screen pixel
+//! (`SceneGpu::shaded_fragments`: counted exactly by additive blending, so overdraw — hidden
+//! surfaces drawn before their occluders — is included; 1 for the probe's quad), p the
 //! per-screen cost of the empty shader with the depth test (the depth test's own part, p −
 //! p_off, is reported), n_k a shader's count of kind k per pixel and c_k the cost of one per
 //! pixel over the whole screen. The lookup counts of a probe point are what it was generated
 //! with; its float ops, uniform and varying reads are read off its SPIR-V
 //! (`gpu::spirv_counts`), exactly as a technique's are, so probe and techniques are counted
 //! alike. p and the c_k are fitted jointly by least squares over the full-screen points
-//! (nalgebra's SVD); fixed = 2·t(half) − t(full) from the two empty-shader points.
+//! (nalgebra's SVD); fixed = 2·t(half) − t(full) − 2·c_T from the two empty-shader points.
 //!
-//! **Limits.** Overdraw (fragments later hidden by the depth test) is not modelled: f counts
-//! covered pixels once. Counts are static (branches count both sides). Caches: every probe
-//! lookup of a kind reads the same few textures at neighbouring coordinates, as the
-//! techniques' texel and table fetches do, but a technique's real access pattern over a
-//! scene (table lookups scattered by the normal map) may hit worse.
+//! **Limits.** The per-triangle cost is the probe's: small screen-filling triangles with
+//! the shared vertex shader (pcaMv's passes more weights on). Counts are static: branches count both sides, and loops left in a shader (the
+//! clustered techniques') count once. Caches: every probe lookup reads its own texture at
+//! neighbouring coordinates, as the techniques' texel and table fetches do, but a scene's
+//! access pattern (table lookups scattered by the normal map) may hit worse.
 
 use std::sync::Arc;
 
@@ -135,20 +139,25 @@ pub struct CostModel {
     pub pixel_ms: f64,
     /// Of which the depth test, ms (empty shader, depth on − off).
     pub depth_test_ms: f64,
+    /// Per triangle drawn (setup, rasterization, vertex shading), ms.
+    pub per_triangle_ms: f64,
     /// ms per unit of each kind per pixel over the whole screen, in [`Kind::ALL`] order.
     pub per_unit_ms: [f64; 8],
 }
 
 impl CostModel {
-    /// Predicted frame time of a shader with `counts` covering `coverage` of the screen.
-    pub fn predict(&self, counts: &CostCounts, coverage: f64) -> f64 {
+    /// Predicted frame time of a shader with `counts` shading `coverage` fragments per
+    /// screen pixel over a mesh of `triangles`.
+    pub fn predict(&self, counts: &CostCounts, coverage: f64, triangles: u32) -> f64 {
         let per_pixel: f64 = counts
             .0
             .iter()
             .zip(&self.per_unit_ms)
             .map(|(n, c)| n * c)
             .sum();
-        self.fixed_ms + coverage * (self.pixel_ms + per_pixel)
+        self.fixed_ms
+            + f64::from(triangles) * self.per_triangle_ms
+            + coverage * (self.pixel_ms + per_pixel)
     }
 
     pub fn cost(&self, kind: Kind) -> f64 {
@@ -164,6 +173,8 @@ pub struct ProbePoint {
     /// Operations of `kind` generated.
     pub count: u32,
     pub coverage: f64,
+    /// Triangles drawn (2, or a grid's for the per-triangle cost).
+    pub triangles: u32,
     pub depth_test: bool,
     /// What the shader's SPIR-V counts (all kinds).
     pub counts: CostCounts,
@@ -179,10 +190,9 @@ pub struct Probe {
     pub width: u32,
     pub height: u32,
     pub frames: u32,
-    /// Fragment-shader invocations the device counts for the screen-filling quad (where it
-    /// counts them): the unit of a technique's shaded share ([`CostModel::predict`]'s
-    /// coverage = its invocations ÷ these), whatever the device's counting convention.
-    pub screen_fragments: Option<u64>,
+    /// Fragments the screen-filling quad shades (`SceneGpu::shaded_fragments`): one per
+    /// pixel, the unit of [`CostModel::predict`]'s coverage.
+    pub screen_fragments: u64,
     pub model: CostModel,
     pub points: Vec<ProbePoint>,
     pub seconds: f64,
@@ -212,17 +222,17 @@ impl Probe {
     pub fn to_markdown(&self) -> String {
         let m = &self.model;
         let mut s = format!(
-            "device: {} · {}×{} ({} fragment invocations counted for the screen) · {} timed frames per point · {:.1} s\n\n\
-             fixed {:.3} ms per frame; empty shader {:.3} ms per screen, of which the depth test {:.3} ms\n\n\
+            "device: {} · {}×{} ({} fragments shaded by the screen quad) · {} timed frames per point · {:.1} s\n\n\
+             fixed {:.3} ms per frame; {:.3} µs per triangle; empty shader {:.3} ms per screen, of which the depth test {:.3} ms\n\n\
              | kind | ms per unit per screen | ns per unit per pixel |\n|---|---:|---:|\n",
             self.device,
             self.width,
             self.height,
-            self.screen_fragments
-                .map_or("no".to_string(), |n| n.to_string()),
+            self.screen_fragments,
             self.frames,
             self.seconds,
             m.fixed_ms,
+            1e3 * m.per_triangle_ms,
             m.pixel_ms,
             m.depth_test_ms
         );
@@ -235,13 +245,14 @@ impl Probe {
                 m.cost(kind) * 1e6 / pixels
             );
         }
-        s += "\n| point | count | coverage | depth | ms median | model ms | model / measured |\n|---|---:|---:|---|---:|---:|---:|\n";
+        s += "\n| point | count | coverage | triangles | depth | ms median | model ms | model / measured |\n|---|---:|---:|---:|---|---:|---:|---:|\n";
         for p in &self.points {
             s += &format!(
-                "| {} | {} | {:.2} | {} | {:.3} | {:.3} | {:.3} |\n",
+                "| {} | {} | {:.2} | {} | {} | {:.3} | {:.3} | {:.3} |\n",
                 p.kind.map_or("empty shader", Kind::name),
                 p.count,
                 p.coverage,
+                p.triangles,
                 if p.depth_test { "on" } else { "off" },
                 p.ms_median,
                 p.model_ms,
@@ -271,12 +282,15 @@ pub struct ProbeSettings {
 const TEXTURES: u32 = 16;
 /// Side of the probe's textures.
 const TEXTURE_SIDE: u32 = 512;
+/// Grid sides of the per-triangle points (2·side² triangles over the screen).
+const TRIANGLE_GRIDS: [u32; 3] = [32, 64, 128];
 /// Uniform vec4s in the probe's block.
 const UNIFORM_VEC4S: u32 = 256;
 
-/// The probe's scene: a quad filling the screen from a camera at the origin, lightmap UVs
-/// over [0, 1]² across it, material UVs at ≈ 2.7 texels of a 512² map per pixel.
-fn probe_scene(width: u32, height: u32, left_half: bool) -> Scene {
+/// The probe's scene: a quad filling the screen (or its left half) from a camera at the
+/// origin, split into `grid`² quads, lightmap UVs over [0, 1]² across it, material UVs at
+/// ≈ 2.7 texels of a 512² map per pixel.
+fn probe_scene(width: u32, height: u32, left_half: bool, grid: u32) -> Scene {
     let aspect = width as f32 / height as f32;
     let (x0, x1) = (-1.2 * aspect, if left_half { 0.0 } else { 1.2 * aspect });
     let material_scale = 2.7 * width as f32 / TEXTURE_SIDE as f32;
@@ -291,11 +305,22 @@ fn probe_scene(width: u32, height: u32, left_half: bool) -> Scene {
             albedo_tint: [1.0; 3],
         }
     };
+    // grid × grid quads, two triangles each (the per-triangle cost's points).
     let mut mesh = Mesh::default();
-    for (x, y) in [(x0, -1.2), (x1, -1.2), (x1, 1.2), (x0, 1.2)] {
-        mesh.vertices.push(vertex(x, y));
+    for j in 0..=grid {
+        for i in 0..=grid {
+            let (fx, fy) = (i as f32 / grid as f32, j as f32 / grid as f32);
+            mesh.vertices
+                .push(vertex(x0 + (x1 - x0) * fx, -1.2 + 2.4 * fy));
+        }
     }
-    mesh.indices = vec![0, 1, 2, 0, 2, 3];
+    for j in 0..grid {
+        for i in 0..grid {
+            let a = j * (grid + 1) + i;
+            let (b, c, d) = (a + 1, a + grid + 2, a + grid + 1);
+            mesh.indices.extend([a, b, c, a, c, d]);
+        }
+    }
     let one = |t: [u8; 4]| Texture8 {
         width: 1,
         height: 1,
@@ -554,7 +579,7 @@ fn probe_resources(ctx: &Arc<Context>) -> Result<ProbeResources, GpuError> {
 /// all zero).
 pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
     let started = std::time::Instant::now();
-    let scene = probe_scene(s.width, s.height, false);
+    let scene = probe_scene(s.width, s.height, false, 1);
     let gpu = SceneGpu::new(
         ctx,
         &scene,
@@ -564,23 +589,31 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
             ..FrameSettings::default()
         },
     )?;
-    let half = probe_scene(s.width, s.height, true);
-    let half_mesh = MeshBuffers::new(
-        ctx,
-        bytemuck::cast_slice(&half.mesh.vertices),
-        &half.mesh.indices,
-        "probe.half_mesh",
-    )?;
+    let upload = |left_half: bool, grid: u32| -> Result<MeshBuffers, GpuError> {
+        let m = probe_scene(s.width, s.height, left_half, grid).mesh;
+        MeshBuffers::new(
+            ctx,
+            bytemuck::cast_slice(&m.vertices),
+            &m.indices,
+            &format!("probe.mesh{}{grid}", if left_half { ".half" } else { "" }),
+        )
+    };
+    let half_mesh = upload(true, 1)?;
+    let grids = TRIANGLE_GRIDS
+        .iter()
+        .map(|&g| upload(false, g))
+        .collect::<Result<Vec<_>, _>>()?;
     let res = probe_resources(ctx)?;
     let linear = Sampler::new(ctx, SamplerKind::LinearClamp, "probe.linear")?;
     let material = gpu.material_sampler();
     let mut points = Vec::new();
-    let mut screen_fragments = None;
+    let screen_fragments = gpu.shaded_fragments(ctx)?;
     let mut measure = |kind: Option<Kind>,
                        count: u32,
                        depth_test: bool,
-                       half_screen: bool|
+                       mesh: Option<&MeshBuffers>|
      -> Result<(), GpuError> {
+        let half_screen = mesh.is_some_and(|m| std::ptr::eq(m, &half_mesh));
         let name = format!(
             "probe.{}{count}",
             kind.map_or("empty".to_string(), |k| format!("{k:?}").to_lowercase())
@@ -619,13 +652,9 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
         }
         let pipeline = gpu.mesh_pipeline_with_depth(ctx, &name, &spirv, &resources, depth_test)?;
         drop(resources);
-        if kind.is_none() && depth_test && !half_screen {
-            screen_fragments = gpu.count_fragments(&pipeline, None)?;
-        }
-        let frame = if half_screen {
-            gpu.render_pipeline_on(&pipeline, &half_mesh, s.warmup, s.frames)?
-        } else {
-            gpu.render_pipeline(&pipeline, s.warmup, s.frames)?
+        let frame = match mesh {
+            Some(m) => gpu.render_pipeline_on(&pipeline, m, s.warmup, s.frames)?,
+            None => gpu.render_pipeline(&pipeline, s.warmup, s.frames)?,
         };
         let ms = TimingStats::from_ms(&frame.ms).map_or(f64::NAN, |t| t.ms_median);
         let lookups: Vec<(Kind, u32)> = match kind {
@@ -644,6 +673,7 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
             kind,
             count,
             coverage: if half_screen { 0.5 } else { 1.0 },
+            triangles: mesh.map_or(2, MeshBuffers::triangle_count),
             depth_test,
             counts: CostCounts::new(&lookups, &ops),
             ms_median: ms,
@@ -651,12 +681,15 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
         });
         Ok(())
     };
-    measure(None, 0, true, false)?;
-    measure(None, 0, true, true)?;
-    measure(None, 0, false, false)?;
+    measure(None, 0, true, None)?;
+    measure(None, 0, true, Some(&half_mesh))?;
+    measure(None, 0, false, None)?;
+    for grid in &grids {
+        measure(None, 0, true, Some(grid))?;
+    }
     for kind in Kind::ALL {
         for count in kind.probe_counts() {
-            measure(Some(kind), count, true, false)?;
+            measure(Some(kind), count, true, None)?;
         }
     }
     let model = fit(&points).ok_or_else(|| GpuError::Invalid {
@@ -669,7 +702,7 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
         } else {
             model.depth_test_ms
         };
-        p.model_ms = model.predict(&p.counts, p.coverage) - p.coverage * depth_off;
+        p.model_ms = model.predict(&p.counts, p.coverage, p.triangles) - p.coverage * depth_off;
     }
     Ok(Probe {
         device: ctx.device_name().to_string(),
@@ -689,14 +722,15 @@ fn fit(points: &[ProbePoint]) -> Option<CostModel> {
         .iter()
         .filter(|p| p.coverage == 1.0 && p.depth_test)
         .collect();
-    // Unknowns: B = fixed + p, then c_k. Rows weighted by 1/t so relative errors count.
-    let n = 1 + Kind::ALL.len();
+    // Unknowns: B = fixed + p, the per-triangle cost, then c_k. Rows weighted by 1/t so
+    // relative errors count.
+    let n = 2 + Kind::ALL.len();
     let a = nalgebra::DMatrix::from_fn(full.len(), n, |r, c| {
         let w = 1.0 / full[r].ms_median;
-        if c == 0 {
-            w
-        } else {
-            full[r].counts.0[c - 1] * w
+        match c {
+            0 => w,
+            1 => f64::from(full[r].triangles) * w,
+            _ => full[r].counts.0[c - 2] * w,
         }
     });
     let b = nalgebra::DVector::from_element(full.len(), 1.0);
@@ -704,18 +738,27 @@ fn fit(points: &[ProbePoint]) -> Option<CostModel> {
     let empty = |depth: bool, coverage: f64| {
         points
             .iter()
-            .find(|p| p.kind.is_none() && p.depth_test == depth && p.coverage == coverage)
+            .find(|p| {
+                p.kind.is_none()
+                    && p.triangles == 2
+                    && p.depth_test == depth
+                    && p.coverage == coverage
+            })
             .map(|p| p.ms_median)
     };
     let (full_ms, half_ms, off_ms) = (empty(true, 1.0)?, empty(true, 0.5)?, empty(false, 1.0)?);
-    let fixed_ms = (2.0 * half_ms - full_ms).max(0.0);
+    // Both empty points draw 2 triangles: 2·t(half) − t(full) = fixed + 2·c_T.
+    let fixed_ms = (2.0 * half_ms - full_ms - 2.0 * x[1]).max(0.0);
     let model = CostModel {
         fixed_ms,
         pixel_ms: x[0] - fixed_ms,
         depth_test_ms: full_ms - off_ms,
-        per_unit_ms: std::array::from_fn(|k| x[k + 1]),
+        per_triangle_ms: x[1],
+        per_unit_ms: std::array::from_fn(|k| x[k + 2]),
     };
-    let finite = model.per_unit_ms.iter().all(|c| c.is_finite()) && model.pixel_ms.is_finite();
+    let finite = model.per_unit_ms.iter().all(|c| c.is_finite())
+        && model.pixel_ms.is_finite()
+        && model.per_triangle_ms.is_finite();
     finite.then_some(model)
 }
 
@@ -753,42 +796,52 @@ mod tests {
             fixed_ms: 0.4,
             pixel_ms: 1.2,
             depth_test_ms: 0.3,
+            per_triangle_ms: 2e-4,
             per_unit_ms: [2.0, 3.0, 2.5, 4.0, 2.2, 0.01, 0.05, 0.5],
         };
         let mut points = Vec::new();
-        let mut push = |kind: Option<Kind>, counts: CostCounts, coverage: f64, depth: bool| {
-            let ms = truth.predict(&counts, coverage)
-                - if depth {
-                    0.0
-                } else {
-                    coverage * truth.depth_test_ms
-                };
-            points.push(ProbePoint {
-                kind,
-                count: 0,
-                coverage,
-                depth_test: depth,
-                counts,
-                ms_median: ms,
-                model_ms: 0.0,
-            });
-        };
-        push(None, CostCounts::default(), 1.0, true);
-        push(None, CostCounts::default(), 0.5, true);
-        push(None, CostCounts::default(), 1.0, false);
+        let mut push =
+            |kind: Option<Kind>, counts: CostCounts, coverage: f64, depth: bool, triangles: u32| {
+                let ms = truth.predict(&counts, coverage, triangles)
+                    - if depth {
+                        0.0
+                    } else {
+                        coverage * truth.depth_test_ms
+                    };
+                points.push(ProbePoint {
+                    kind,
+                    count: 0,
+                    coverage,
+                    triangles,
+                    depth_test: depth,
+                    counts,
+                    ms_median: ms,
+                    model_ms: 0.0,
+                });
+            };
+        push(None, CostCounts::default(), 1.0, true, 2);
+        push(None, CostCounts::default(), 0.5, true, 2);
+        push(None, CostCounts::default(), 1.0, false, 2);
+        for g in TRIANGLE_GRIDS {
+            push(None, CostCounts::default(), 1.0, true, 2 * g * g);
+        }
         for kind in Kind::ALL {
             for n in kind.probe_counts() {
                 let mut c = CostCounts::default();
                 c.0[kind.index()] = f64::from(n);
                 c.0[Kind::Varying.index()] += 2.0;
                 c.0[Kind::FloatOp.index()] += 7.0;
-                push(Some(kind), c, 1.0, true);
+                push(Some(kind), c, 1.0, true, 2);
             }
         }
         let model = fit(&points).unwrap();
         assert!((model.fixed_ms - truth.fixed_ms).abs() < 1e-9, "{model:?}");
         assert!((model.pixel_ms - truth.pixel_ms).abs() < 1e-6, "{model:?}");
         assert!((model.depth_test_ms - truth.depth_test_ms).abs() < 1e-9);
+        assert!(
+            (model.per_triangle_ms - truth.per_triangle_ms).abs() < 1e-9,
+            "{model:?}"
+        );
         for (m, t) in model.per_unit_ms.iter().zip(truth.per_unit_ms) {
             assert!((m - t).abs() < 1e-6 * t.max(1.0), "{m} vs {t}");
         }

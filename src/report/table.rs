@@ -125,9 +125,8 @@ pub struct BenchRow {
     /// `SceneGpu::shaded_fragments`); else the covered pixels' share.
     pub cost: crate::probe::CostCounts,
     pub coverage: f64,
-    /// Fragment-shader invocations of one frame, where the device counts them (helper and
-    /// partial-quad lanes included, so more than the fragments shaded).
-    pub fragments: Option<u64>,
+    /// Triangles one frame draws.
+    pub triangles: u32,
     /// The device cost model's frame time for the row (`shvis bench` runs the probe first),
     /// and the measured median over it.
     pub model_ms: Option<f64>,
@@ -337,7 +336,7 @@ mod tests {
             specular: None,
             cost: crate::probe::CostCounts::default(),
             coverage: 1.0,
-            fragments: None,
+            triangles: 2,
             model_ms: None,
             x_model: None,
             ms_median: Some(ms),

@@ -251,9 +251,11 @@ impl TechniqueGpu {
         }
     }
 
-    /// Fragment-shader invocations of one frame (`SceneGpu::count_fragments`).
-    pub fn count_fragments(&self, scene: &SceneGpu) -> Result<Option<u64>, GpuError> {
-        scene.count_fragments(&self.sets[self.front].pipeline, self.mesh.as_ref())
+    /// Triangles one frame draws: the technique's own mesh's, else the scene's.
+    pub fn triangle_count(&self, scene: &SceneGpu) -> u32 {
+        self.mesh
+            .as_ref()
+            .map_or_else(|| scene.triangle_count(), gpu::MeshBuffers::triangle_count)
     }
 
     /// Copies of the lighting data (2 when built with [`build_dynamic`]).
