@@ -354,25 +354,18 @@ fn probe_source(kind: Option<Kind>, count: u32) -> String {
     let step = format!("{:.8}", 1.0 / TEXTURE_SIDE as f64);
     match kind {
         None => {}
-        Some(Kind::Bilinear2d) => {
+        Some(k @ (Kind::Bilinear2d | Kind::Trilinear2d)) => {
+            let uv = if k == Kind::Bilinear2d {
+                "in_uv_lightmap"
+            } else {
+                "in_uv_material"
+            };
             decl = format!(
                 "layout(set = 0, binding = {t0}) uniform sampler2D probe_tex[{TEXTURES}];\n"
             );
             for k in 0..count {
                 body += &format!(
-                    "    acc += texture(probe_tex[{}], in_uv_lightmap + vec2({} * {step}, 0.0));\n",
-                    k % TEXTURES,
-                    k / TEXTURES
-                );
-            }
-        }
-        Some(Kind::Trilinear2d) => {
-            decl = format!(
-                "layout(set = 0, binding = {t0}) uniform sampler2D probe_tex[{TEXTURES}];\n"
-            );
-            for k in 0..count {
-                body += &format!(
-                    "    acc += texture(probe_tex[{}], in_uv_material + vec2({} * {step}, 0.0));\n",
+                    "    acc += texture(probe_tex[{}], {uv} + vec2({} * {step}, 0.0));\n",
                     k % TEXTURES,
                     k / TEXTURES
                 );
