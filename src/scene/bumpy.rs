@@ -68,8 +68,7 @@ pub fn egg_crate_normal_map() -> Texture8 {
             // Image rows grow downward; the map's +y is image up.
             let dhdy_up = -ak * (k * x).sin() * (k * y).cos();
             let normal = Vec3::new(-dhdx, -dhdy_up, 1.0).normalize();
-            let e = |c: f32| ((c * 0.5 + 0.5) * 255.0).round() as u8;
-            [e(normal.x), e(normal.y), e(normal.z), 255]
+            Texture8::encode_normal(normal)
         })
         .collect();
     Texture8 {

@@ -580,8 +580,7 @@ pub(super) fn brick_normal() -> Texture8 {
             let dhdx = 0.5 * (h(x + 1, y) - h(x + n - 1, y));
             let dhdy = 0.5 * (h(x, y + 1) - h(x, y + n - 1));
             let nrm = Vec3::new(-dhdx, dhdy, 1.0).normalize();
-            let enc = |c: f32| ((c * 0.5 + 0.5) * 255.0 + 0.5) as u8;
-            texels.push([enc(nrm.x), enc(nrm.y), enc(nrm.z), 255]);
+            texels.push(Texture8::encode_normal(nrm));
         }
     }
     Texture8 {

@@ -75,6 +75,15 @@ pub struct Texture8 {
     pub texels: Vec<[u8; 4]>,
 }
 
+impl Texture8 {
+    /// A unit tangent-space normal as an RGBA8 normal-map texel (glTF convention: c ↦
+    /// (c + 1)/2 rounded to the nearest 8-bit code; `ndf::decode_normal` inverts it).
+    pub fn encode_normal(n: Vec3) -> [u8; 4] {
+        let e = |c: f32| ((c * 0.5 + 0.5) * 255.0).round() as u8;
+        [e(n.x), e(n.y), e(n.z), 255]
+    }
+}
+
 /// The surface material shared by the whole mesh (per-vertex `albedo_tint` varies it).
 #[derive(Clone, Debug)]
 pub struct Material {

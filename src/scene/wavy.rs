@@ -118,8 +118,7 @@ pub fn ripple_normal_map() -> Texture8 {
             let x = (i % n) as f32 + 0.5;
             let dhdx = MAX_SLOPE * (k * x).cos();
             let normal = Vec3::new(-dhdx, 0.0, 1.0).normalize();
-            let e = |c: f32| ((c * 0.5 + 0.5) * 255.0).round() as u8;
-            [e(normal.x), e(normal.y), e(normal.z), 255]
+            Texture8::encode_normal(normal)
         })
         .collect();
     Texture8 {
