@@ -39,6 +39,7 @@ const OP_TYPE_MATRIX: u32 = 24;
 const OP_TYPE_ARRAY: u32 = 28;
 const OP_TYPE_STRUCT: u32 = 30;
 const OP_TYPE_POINTER: u32 = 32;
+const OP_CONSTANT: u32 = 43;
 const OP_VARIABLE: u32 = 59;
 const OP_LOAD: u32 = 61;
 const OP_ACCESS_CHAIN: u32 = 65;
@@ -89,6 +90,8 @@ pub fn count(spirv: &[u32]) -> OpCounts {
     let mut pointer_types: HashMap<u32, (u32, u32)> = HashMap::new();
     // Value id → its type id (variables, access chains, values).
     let mut value_types: HashMap<u32, u32> = HashMap::new();
+    // 32-bit constant id → its value (array lengths).
+    let mut constants: HashMap<u32, u32> = HashMap::new();
     let mut i = 5; // after the header
     while i < spirv.len() {
         let word = spirv[i];
@@ -135,12 +138,39 @@ pub fn count(spirv: &[u32]) -> OpCounts {
                     },
                 );
             }
-            OP_TYPE_ARRAY | OP_TYPE_STRUCT => {
-                // Arrays: the length is a constant id, unknown here; loads of whole arrays
-                // and structs are rare in fragment shaders (access chains pick elements).
-                if let Some(&id) = w.first() {
-                    shapes.insert(id, Shape::default());
-                }
+            OP_CONSTANT if w.len() >= 3 => {
+                constants.insert(w[1], w[2]);
+            }
+            // A whole array or struct loaded at once (the optimizer loads a uniform array
+            // with one OpLoad and extracts from it): its size is the sum of its parts.
+            OP_TYPE_ARRAY if w.len() >= 3 => {
+                let (e, n) = (
+                    shape_of(&shapes, w[1]),
+                    constants.get(&w[2]).copied().unwrap_or(1),
+                );
+                shapes.insert(
+                    w[0],
+                    Shape {
+                        floats: e.floats * n,
+                        columns: 1,
+                        rows: 1,
+                        units16: e.units16.max(1) * n,
+                    },
+                );
+            }
+            OP_TYPE_STRUCT if !w.is_empty() => {
+                let members = w[1..].iter().map(|&m| shape_of(&shapes, m));
+                let (floats, units16) =
+                    members.fold((0, 0), |(f, u), m| (f + m.floats, u + m.units16.max(1)));
+                shapes.insert(
+                    w[0],
+                    Shape {
+                        floats,
+                        columns: 1,
+                        rows: 1,
+                        units16,
+                    },
+                );
             }
             OP_TYPE_POINTER if w.len() >= 3 => {
                 pointer_types.insert(w[0], (w[1], w[2]));
@@ -269,6 +299,15 @@ mod tests {
         // The optimizer fuses a*c + sample into one vec4 Fma (4), then one add (4), the dot
         // (4), x * scalar (4), uv * 0.5 (2): a fused multiply-add counts once.
         assert_eq!(c.float_ops, 18, "{c:?}");
+    }
+
+    #[test]
+    fn a_uniform_array_read_whole_counts_every_element() {
+        // Passing the block's array to a function copies all eight vec4s.
+        let c = counts_of(
+            "vec4 s = vec4(0.0);\nvec4 cs[8] = p.c;\n[[unroll]] for (int i = 0; i < 8; ++i) { s += cs[i]; }\no = s;",
+        );
+        assert_eq!(c.uniform_reads, 8, "{c:?}");
     }
 
     #[test]
