@@ -321,17 +321,12 @@ fn probe_scene(width: u32, height: u32, left_half: bool, grid: u32) -> Scene {
             mesh.indices.extend([a, b, c, a, c, d]);
         }
     }
-    let one = |t: [u8; 4]| Texture8 {
-        width: 1,
-        height: 1,
-        texels: vec![t],
-    };
     Scene {
         name: "probe".into(),
         mesh,
         material: Material {
-            albedo: one([255; 4]),
-            normal: one([128, 128, 255, 255]),
+            albedo: Texture8::solid([255; 4]),
+            normal: Texture8::solid([128, 128, 255, 255]),
             normal_scale: 1.0,
             height: None,
         },

@@ -42,11 +42,7 @@ pub fn build(lightmap_res: u32) -> Result<Scene, SceneError> {
         name: "bumpy".to_string(),
         mesh: house::quads_mesh(&quads, lightmap_res)?,
         material: Material {
-            albedo: Texture8 {
-                width: 1,
-                height: 1,
-                texels: vec![[255; 4]],
-            },
+            albedo: Texture8::solid([255; 4]),
             normal: egg_crate_normal_map(),
             normal_scale: 1.0,
             height: None,

@@ -47,7 +47,7 @@ use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::{Mode, Semantic};
 
-use super::lightmap_uv::{self, MAX_LIGHTMAP_RES, MIN_LIGHTMAP_RES};
+use super::lightmap_uv;
 use super::{Camera, Material, Mesh, Scene, SceneError, Texture8, Vertex, framing_camera, tangent};
 
 /// Triangles with |e₁ × e₂| ≤ this × |e₁|·|e₂| (sine of the corner angle) are degenerate.
@@ -92,7 +92,7 @@ pub struct LoadReport {
 ///
 /// # Errors
 /// [`SceneError::LightmapRes`] for a resolution outside
-/// [`MIN_LIGHTMAP_RES`]..=[`MAX_LIGHTMAP_RES`]; [`SceneError::Gltf`] for anything wrong with
+/// [`lightmap_uv::MIN_LIGHTMAP_RES`]..=[`lightmap_uv::MAX_LIGHTMAP_RES`]; [`SceneError::Gltf`] for anything wrong with
 /// the file (module doc).
 pub fn load(path: &Path, lightmap_res: u32) -> Result<Scene, SceneError> {
     load_with_report(path, lightmap_res).map(|(scene, _)| scene)
@@ -104,7 +104,7 @@ pub fn load(path: &Path, lightmap_res: u32) -> Result<Scene, SceneError> {
 /// As [`load`].
 pub fn load_with_report(path: &Path, lightmap_res: u32) -> Result<(Scene, LoadReport), SceneError> {
     let file = path.display().to_string();
-    check_res(lightmap_res)?;
+    lightmap_uv::check_res(lightmap_res)?;
     let bytes = std::fs::read(path).map_err(|e| gltf_error(&file, format!("cannot read: {e}")))?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let name = path
@@ -124,25 +124,13 @@ pub fn load_with_report(path: &Path, lightmap_res: u32) -> Result<(Scene, LoadRe
 /// # Errors
 /// As [`load`]; external file references are errors.
 pub fn load_from_slice(bytes: &[u8], lightmap_res: u32) -> Result<Scene, SceneError> {
-    check_res(lightmap_res)?;
+    lightmap_uv::check_res(lightmap_res)?;
     Loader {
         file: "<memory>".to_string(),
         base: None,
     }
     .load("gltf", bytes, lightmap_res)
     .map(|(scene, _)| scene)
-}
-
-fn check_res(res: u32) -> Result<(), SceneError> {
-    if (MIN_LIGHTMAP_RES..=MAX_LIGHTMAP_RES).contains(&res) {
-        Ok(())
-    } else {
-        Err(SceneError::LightmapRes {
-            res,
-            min: MIN_LIGHTMAP_RES,
-            max: MAX_LIGHTMAP_RES,
-        })
-    }
 }
 
 fn gltf_error(file: &str, message: impl Into<String>) -> SceneError {
@@ -306,11 +294,11 @@ impl Loader {
         let material = Material {
             albedo: match textures.albedo {
                 Some(i) => self.texture(&document, i, &buffers)?,
-                None => solid_texture([255; 4]),
+                None => Texture8::solid([255; 4]),
             },
             normal: match textures.normal {
                 Some((i, _)) => self.texture(&document, i, &buffers)?,
-                None => solid_texture(FLAT_NORMAL),
+                None => Texture8::solid(FLAT_NORMAL),
             },
             normal_scale: textures.normal.map_or(1.0, |(_, s)| s),
             height: None,
@@ -701,15 +689,6 @@ fn semantic_name(semantic: &Semantic) -> String {
         Semantic::Tangents => "TANGENT".into(),
         Semantic::TexCoords(n) => format!("TEXCOORD_{n}"),
         other => format!("{other:?}"),
-    }
-}
-
-/// A 1×1 texture.
-fn solid_texture(texel: [u8; 4]) -> Texture8 {
-    Texture8 {
-        width: 1,
-        height: 1,
-        texels: vec![texel],
     }
 }
 

@@ -53,6 +53,20 @@ const BISECTION_STEPS: u32 = 40;
 /// Upper clamp of a chart side, texels (keeps u32 sums far from overflow).
 const MAX_CHART_TEXELS: f64 = 1e9;
 
+/// [`SceneError::LightmapRes`] unless `res` is within [`MIN_LIGHTMAP_RES`]..=[`MAX_LIGHTMAP_RES`]
+/// (scenes with generated lightmap UVs: glTF without TEXCOORD_1, the wavy sphere).
+pub fn check_res(res: u32) -> Result<(), super::SceneError> {
+    if (MIN_LIGHTMAP_RES..=MAX_LIGHTMAP_RES).contains(&res) {
+        Ok(())
+    } else {
+        Err(super::SceneError::LightmapRes {
+            res,
+            min: MIN_LIGHTMAP_RES,
+            max: MAX_LIGHTMAP_RES,
+        })
+    }
+}
+
 /// One chart to pack: a rectangle in metres and its density relative to the others.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChartSize {

@@ -76,6 +76,15 @@ pub struct Texture8 {
 }
 
 impl Texture8 {
+    /// A 1×1 texture of `texel` (white albedo, flat normal map).
+    pub fn solid(texel: [u8; 4]) -> Self {
+        Texture8 {
+            width: 1,
+            height: 1,
+            texels: vec![texel],
+        }
+    }
+
     /// A unit tangent-space normal as an RGBA8 normal-map texel (glTF convention: c ↦
     /// (c + 1)/2 rounded to the nearest 8-bit code; `ndf::decode_normal` inverts it).
     pub fn encode_normal(n: Vec3) -> [u8; 4] {

@@ -37,25 +37,19 @@ const SEGMENTS_DOWN: u32 = 48;
 /// [`SceneError::LightmapRes`] for a resolution outside the generated charts' range or too
 /// small for them.
 pub fn build(lightmap_res: u32) -> Result<Scene, SceneError> {
-    let out_of_range = || SceneError::LightmapRes {
+    lightmap_uv::check_res(lightmap_res)?;
+    let mut mesh = sphere_mesh();
+    // Too many charts for the resolution: the same error, naming the resolution.
+    lightmap_uv::generate(&mut mesh, lightmap_res).map_err(|_| SceneError::LightmapRes {
         res: lightmap_res,
         min: lightmap_uv::MIN_LIGHTMAP_RES,
         max: lightmap_uv::MAX_LIGHTMAP_RES,
-    };
-    if !(lightmap_uv::MIN_LIGHTMAP_RES..=lightmap_uv::MAX_LIGHTMAP_RES).contains(&lightmap_res) {
-        return Err(out_of_range());
-    }
-    let mut mesh = sphere_mesh();
-    lightmap_uv::generate(&mut mesh, lightmap_res).map_err(|_| out_of_range())?;
+    })?;
     Ok(Scene {
         name: "wavy".to_string(),
         mesh,
         material: Material {
-            albedo: Texture8 {
-                width: 1,
-                height: 1,
-                texels: vec![[255; 4]],
-            },
+            albedo: Texture8::solid([255; 4]),
             normal: ripple_normal_map(),
             normal_scale: 1.0,
             height: None,

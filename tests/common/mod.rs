@@ -139,9 +139,5 @@ pub const NO_UV: [[f32; 2]; 4] = [[0.0; 2]; 4];
 
 /// A 1×1 RGBA8 texture: a constant albedo or normal map.
 pub fn solid_texture(texel: [u8; 4]) -> Texture8 {
-    Texture8 {
-        width: 1,
-        height: 1,
-        texels: vec![texel],
-    }
+    Texture8::solid(texel)
 }
