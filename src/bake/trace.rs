@@ -21,12 +21,13 @@
 //! walk of the CWBVH with a mask of the rays still alive per stack entry. Each node is
 //! decoded once for the packet: the child planes picked by the direction's signs, u8 →
 //! f32, times extent·(1/d) — everything but the origin term is shared because the
-//! direction is. Each live ray then costs the origin term (p − o)·(1/d) and two 4-wide
-//! slab tests (8 children), and its 8-bit child hit mask is scattered into per-child ray
-//! masks, so a node costs in proportion to the rays that reach it (a sparse packet is no
-//! slower per ray than single rays). In a leaf, the ray-independent part of
-//! Möller–Trumbore (edges, normal, 1/(n·d)) is computed once per triangle. A ray found
-//! occluded leaves every mask.
+//! direction is. The rays are stored by coordinate in blocks of four (SoA), so each block
+//! with a live ray costs the origin term (p − o)·(1/d) once and one 4-ray slab test per
+//! occupied child, whose 4-bit movemask is the child's ray mask for that block (no
+//! per-hit scatter); a node costs in proportion to the blocks that reach it. In a leaf,
+//! the ray-independent part of Möller–Trumbore (edges and normal, precomputed per
+//! triangle at build; 1/(n·d) per triangle and direction) is shared and the rest runs
+//! four rays per vector. A ray found occluded leaves every mask.
 //!
 //! Bit-identity: every per-ray operation is the very IEEE operation, in the very order
 //! and with the same min/max operand order (NaN handling), that obvhs's single-ray
@@ -58,10 +59,18 @@ pub const PACKET_RAYS: usize = 64;
 /// repeated so that coherent node tests equal single-ray ones bit for bit.
 const NODE_T_MIN: f32 = 0.0001;
 
-/// Origins of one coherent query and the traversal stack, reused across queries.
+/// Lanes of one SIMD ray block of a packet.
+const LANES: usize = 4;
+/// SIMD ray blocks of a full packet.
+const BLOCKS: usize = PACKET_RAYS / LANES;
+
+/// Origins of one coherent query, stored by coordinate in blocks of [`LANES`] rays (ray
+/// i = lane i % 4 of block i / 4), and the traversal stack, reused across queries.
 #[derive(Clone, Debug)]
 pub struct RayPacket {
-    origins: [Vec3A; PACKET_RAYS],
+    x: [Vec4; BLOCKS],
+    y: [Vec4; BLOCKS],
+    z: [Vec4; BLOCKS],
     len: usize,
     stack: Vec<(u32, u64)>,
 }
@@ -78,12 +87,17 @@ impl RayPacket {
             origins.len()
         );
         let mut packet = RayPacket {
-            origins: [Vec3A::ZERO; PACKET_RAYS],
+            x: [Vec4::ZERO; BLOCKS],
+            y: [Vec4::ZERO; BLOCKS],
+            z: [Vec4::ZERO; BLOCKS],
             len: origins.len(),
             stack: Vec::with_capacity(256),
         };
-        for (slot, o) in packet.origins.iter_mut().zip(origins) {
-            *slot = Vec3A::from(*o);
+        for (i, o) in origins.iter().enumerate() {
+            let (b, lane) = (i / LANES, i % LANES);
+            packet.x[b][lane] = o.x;
+            packet.y[b][lane] = o.y;
+            packet.z[b][lane] = o.z;
         }
         packet
     }
@@ -108,6 +122,19 @@ impl RayPacket {
     }
 }
 
+/// Calls `f(block, lanes)` for every block of [`LANES`] rays with a ray in `mask`,
+/// `lanes` = that block's bits of `mask`.
+#[inline(always)]
+fn for_each_block(mask: u64, mut f: impl FnMut(usize, u32)) {
+    let mut todo = mask;
+    while todo != 0 {
+        let b = todo.trailing_zeros() as usize / LANES;
+        let lanes = ((todo >> (LANES * b)) & 0xf) as u32;
+        todo &= !(0xf << (LANES * b));
+        f(b, lanes);
+    }
+}
+
 /// Any-hit ray queries against a static mesh.
 pub struct Tracer {
     /// `None` for a mesh without a usable triangle: nothing occludes.
@@ -116,7 +143,32 @@ pub struct Tracer {
     triangles: Vec<Triangle>,
     /// Mesh triangle index of each BVH primitive.
     mesh_triangles: Vec<u32>,
+    /// The ray-independent part of Möller–Trumbore per BVH primitive, for coherent queries.
+    edges: Vec<TriangleEdges>,
     ray_epsilon: f32,
+}
+
+/// v0 and the edges and normal of a triangle as obvhs's `Triangle::intersect` computes
+/// them (e1 = v0 − v1, e2 = v2 − v0, n = e1 × e2): the same operations, so the same bits.
+#[derive(Clone, Copy, Debug)]
+struct TriangleEdges {
+    v0: Vec3A,
+    e1: Vec3A,
+    e2: Vec3A,
+    n: Vec3A,
+}
+
+impl TriangleEdges {
+    fn of(tri: &Triangle) -> Self {
+        let e1 = tri.v0 - tri.v1;
+        let e2 = tri.v2 - tri.v0;
+        TriangleEdges {
+            v0: tri.v0,
+            e1,
+            e2,
+            n: e1.cross(e2),
+        }
+    }
 }
 
 /// The nearest surface along a ray ([`Tracer::closest_hit`]).
@@ -184,12 +236,13 @@ impl Tracer {
                 bvh: None,
                 triangles: input,
                 mesh_triangles: input_triangles,
+                edges: Vec::new(),
                 ray_epsilon,
             };
         }
         let mut build_time = Duration::ZERO;
         let bvh = build_cwbvh_from_tris(&input, BvhBuildParams::medium_build(), &mut build_time);
-        let triangles = bvh
+        let triangles: Vec<Triangle> = bvh
             .primitive_indices
             .iter()
             .map(|&i| input[i as usize])
@@ -206,6 +259,7 @@ impl Tracer {
         );
         Tracer {
             bvh: Some(bvh),
+            edges: triangles.iter().map(TriangleEdges::of).collect(),
             triangles,
             mesh_triangles,
             ray_epsilon,
@@ -310,7 +364,11 @@ impl Tracer {
         // Child-slot priority of obvhs's traversal order: slot ^ octant (near first).
         let oct = (if rdx { 0 } else { 4 }) | (if rdy { 0 } else { 2 }) | (if rdz { 0 } else { 1 });
         let node_t_min = Vec4::splat(NODE_T_MIN);
+        let ray_t_min = Vec4::splat(t_min);
         let ray_t_max = Vec4::splat(t_max);
+        let (inv_x, inv_y, inv_z) = (Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z));
+        let (dx, dy, dz) = (Vec4::splat(d.x), Vec4::splat(d.y), Vec4::splat(d.z));
+        let one = Vec4::ONE;
         let mut occluded = 0u64;
         let mut stack = std::mem::take(&mut packet.stack);
         stack.clear();
@@ -321,57 +379,52 @@ impl Tracer {
                 continue;
             }
             let node = &bvh.nodes[node_index as usize];
-            // Shared part of CwBvhNode::intersect_ray_simd for this direction: the child
-            // planes picked by the direction's signs, times extent·(1/d), 4 children per
-            // SIMD vector as obvhs groups them.
+            // Shared part of CwBvhNode::intersect_ray_simd for this direction: each
+            // occupied child's planes picked by the direction's signs, u8 → f32, times
+            // extent·(1/d), splat over a block of rays.
             let adj = node.compute_extent() * inv;
-            let planes = |lo: &[u8; 8], hi: &[u8; 8], neg: bool, scale: f32, half: usize| {
-                let (near, far) = if neg { (hi, lo) } else { (lo, hi) };
-                let q = |v: &[u8; 8]| {
-                    Vec4::new(
-                        f32::from(v[4 * half]),
-                        f32::from(v[4 * half + 1]),
-                        f32::from(v[4 * half + 2]),
-                        f32::from(v[4 * half + 3]),
-                    ) * Vec4::splat(scale)
-                };
-                (q(near), q(far))
-            };
-            let mut slabs = [[Vec4::ZERO; 6]; 2];
-            for (half, slab) in slabs.iter_mut().enumerate() {
-                let (x0, x1) = planes(&node.child_min_x, &node.child_max_x, rdx, adj.x, half);
-                let (y0, y1) = planes(&node.child_min_y, &node.child_max_y, rdy, adj.y, half);
-                let (z0, z1) = planes(&node.child_min_z, &node.child_max_z, rdz, adj.z, half);
-                *slab = [x0, x1, y0, y1, z0, z1];
-            }
             let occupied = u64::from_le_bytes(node.child_meta);
+            let pick = |lo: &[u8; 8], hi: &[u8; 8], neg: bool, scale: f32, c: usize| {
+                let (near, far) = if neg { (hi[c], lo[c]) } else { (lo[c], hi[c]) };
+                (
+                    Vec4::splat(f32::from(near) * scale),
+                    Vec4::splat(f32::from(far) * scale),
+                )
+            };
+            let mut slabs = [[Vec4::ZERO; 6]; 8];
+            let mut children = [0usize; 8];
+            let mut child_count = 0;
+            for c in 0..8 {
+                if (occupied >> (8 * c)) & 0xff == 0 {
+                    continue; // empty slot
+                }
+                let (x0, x1) = pick(&node.child_min_x, &node.child_max_x, rdx, adj.x, c);
+                let (y0, y1) = pick(&node.child_min_y, &node.child_max_y, rdy, adj.y, c);
+                let (z0, z1) = pick(&node.child_min_z, &node.child_max_z, rdz, adj.z, c);
+                slabs[child_count] = [x0, x1, y0, y1, z0, z1];
+                children[child_count] = c;
+                child_count += 1;
+            }
             let mut child_masks = [0u64; 8];
-            let p = Vec3A::from(node.p);
-            let mut todo = mask;
-            while todo != 0 {
-                let r = todo.trailing_zeros() as usize;
-                todo &= todo - 1;
-                // Per-ray part: (p − origin)·(1/d), then obvhs's slab test with its
-                // operand order of _mm_max_ps/_mm_min_ps (NaN handling).
-                let o = (p - packet.origins[r]) * inv;
-                let (ox, oy, oz) = (Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z));
-                let mut hits = 0u32;
-                for (half, [x0, x1, y0, y1, z0, z1]) in slabs.iter().enumerate() {
+            let (px, py, pz) = (
+                Vec4::splat(node.p.x),
+                Vec4::splat(node.p.y),
+                Vec4::splat(node.p.z),
+            );
+            for_each_block(mask, |b, lanes| {
+                // Per-ray part, four rays per vector: (p − origin)·(1/d), then obvhs's
+                // slab test with its operand order of _mm_max_ps/_mm_min_ps (NaN
+                // handling).
+                let ox = (px - packet.x[b]) * inv_x;
+                let oy = (py - packet.y[b]) * inv_y;
+                let oz = (pz - packet.z[b]) * inv_z;
+                for (k, [x0, x1, y0, y1, z0, z1]) in slabs[..child_count].iter().enumerate() {
                     let tmin = (*x0 + ox).max((*y0 + oy).max(*z0 + oz)).max(node_t_min);
                     let tmax = (*x1 + ox).min((*y1 + oy).min(*z1 + oz)).min(ray_t_max);
-                    hits |= tmin.cmple(tmax).bitmask() << (4 * half);
+                    let hits = tmin.cmple(tmax).bitmask() & lanes;
+                    child_masks[children[k]] |= u64::from(hits) << (LANES * b);
                 }
-                while hits != 0 {
-                    let c = hits.trailing_zeros() as usize;
-                    hits &= hits - 1;
-                    child_masks[c] |= 1 << r;
-                }
-            }
-            for (c, m) in child_masks.iter_mut().enumerate() {
-                if (occupied >> (8 * c)) & 0xff == 0 {
-                    *m = 0; // empty slot
-                }
-            }
+            });
             // Leaves first (any hit removes rays from everything below), then internal
             // children pushed far to near so the nearest is walked next.
             for (c, &m) in child_masks.iter().enumerate() {
@@ -380,34 +433,42 @@ impl Tracer {
                 }
                 let (first, count) = node.child_primitives(c);
                 for prim in first..first + count {
-                    let tri = &self.triangles[prim as usize];
                     // Triangle::intersect (Möller–Trumbore), its ray-independent part
-                    // hoisted: the same operations, so the same bits.
-                    let e1 = tri.v0 - tri.v1;
-                    let e2 = tri.v2 - tri.v0;
-                    let n = e1.cross(e2);
+                    // precomputed, the rest four rays per vector: the same operations in
+                    // the same order as glam's Vec3A cross and dot, so the same bits.
+                    let tri = &self.edges[prim as usize];
+                    let (e1, e2, n) = (tri.e1, tri.e2, tri.n);
                     let inv_det = 1.0 / n.dot(d);
                     if inv_det == 0.0 {
                         continue; // obvhs's `valid` needs inv_det ≠ 0
                     }
-                    let mut todo = m & !occluded;
-                    while todo != 0 {
-                        let r = todo.trailing_zeros() as usize;
-                        todo &= todo - 1;
-                        let c = tri.v0 - packet.origins[r];
-                        let q = d.cross(c);
-                        let u = q.dot(e2) * inv_det;
-                        let v = q.dot(e1) * inv_det;
-                        let w = 1.0 - u - v;
-                        if (u.to_bits() | v.to_bits() | w.to_bits()) & 0x8000_0000 == 0 {
-                            let t = n.dot(c) * inv_det;
-                            // intersect() returns t within [t_min, t_max] (else ∞) and
-                            // the any-hit traversal counts it when t < t_max.
-                            if t >= t_min && t < t_max {
-                                occluded |= 1 << r;
-                            }
-                        }
-                    }
+                    let s = Vec4::splat;
+                    let (v0x, v0y, v0z) = (s(tri.v0.x), s(tri.v0.y), s(tri.v0.z));
+                    let (e1x, e1y, e1z) = (s(e1.x), s(e1.y), s(e1.z));
+                    let (e2x, e2y, e2z) = (s(e2.x), s(e2.y), s(e2.z));
+                    let (nx, ny, nz) = (s(n.x), s(n.y), s(n.z));
+                    let inv_det = s(inv_det);
+                    for_each_block(m & !occluded, |b, lanes| {
+                        let cx = v0x - packet.x[b];
+                        let cy = v0y - packet.y[b];
+                        let cz = v0z - packet.z[b];
+                        // q = d × c
+                        let qx = dy * cz - dz * cy;
+                        let qy = dz * cx - dx * cz;
+                        let qz = dx * cy - dy * cx;
+                        let u = (qx * e2x + qy * e2y + qz * e2z) * inv_det;
+                        let v = (qx * e1x + qy * e1y + qz * e1z) * inv_det;
+                        let w = one - u - v;
+                        let outside = u.is_negative_bitmask()
+                            | v.is_negative_bitmask()
+                            | w.is_negative_bitmask();
+                        let t = (nx * cx + ny * cy + nz * cz) * inv_det;
+                        // intersect() returns t within [t_min, t_max] (else ∞) and the
+                        // any-hit traversal counts it when t < t_max.
+                        let in_range = t.cmpge(ray_t_min).bitmask() & t.cmplt(ray_t_max).bitmask();
+                        let hit = lanes & !outside & in_range;
+                        occluded |= u64::from(hit) << (LANES * b);
+                    });
                 }
             }
             if occluded == active {

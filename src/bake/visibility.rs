@@ -189,7 +189,7 @@ fn coherent_order(texels: &SurfacePoints<'_>, covered: Vec<u32>) -> Vec<u32> {
         ((axis as u64 + sign) << 32) | morton
     };
     let mut order = covered;
-    order.sort_by_key(|&i| (key(i), i));
+    order.sort_by_cached_key(|&i| (key(i), i));
     order
 }
 

@@ -33,7 +33,7 @@
 //! only within one chart. Tests: `generated_charts_have_disjoint_texels` here and
 //! `tests/scene_gltf.rs`.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 
 use glam::{DVec2, DVec3};
 
@@ -208,7 +208,7 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
         .unzip();
 
     // Weld corners by exact position, then map each undirected edge to its triangles.
-    let mut weld: HashMap<[u32; 3], u32> = HashMap::new();
+    let mut weld: FxHashMap<[u32; 3], u32> = FxHashMap::default();
     let welded: Vec<u32> = mesh
         .vertices
         .iter()
@@ -217,18 +217,23 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
             *weld.entry(v.position.map(f32::to_bits)).or_insert(next)
         })
         .collect();
-    let mut edges: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+    // (edge key, triangle) sorted: an edge's triangles are one run, in triangle order.
+    let edge_key = |a: u32, b: u32| (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
+    let mut edge_triangles: Vec<(u64, u32)> = Vec::with_capacity(3 * tri_count);
     for t in 0..tri_count {
         for k in 0..3 {
             let (a, b) = (welded[corner(t, k)], welded[corner(t, (k + 1) % 3)]);
             if a != b {
-                edges
-                    .entry((a.min(b), a.max(b)))
-                    .or_default()
-                    .push(t as u32);
+                edge_triangles.push((edge_key(a, b), t as u32));
             }
         }
     }
+    edge_triangles.sort_unstable();
+    let edge_neighbours = |key: u64| {
+        let first = edge_triangles.partition_point(|e| e.0 < key);
+        let count = edge_triangles[first..].partition_point(|e| e.0 == key);
+        &edge_triangles[first..first + count]
+    };
 
     // Flood fill from the largest unassigned triangle.
     let cos_max = CHART_MAX_ANGLE_DEG.to_radians().cos();
@@ -250,10 +255,10 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
             next += 1;
             for k in 0..3 {
                 let (a, b) = (welded[corner(t, k)], welded[corner(t, (k + 1) % 3)]);
-                let Some(neighbours) = edges.get(&(a.min(b), a.max(b))) else {
+                if a == b {
                     continue;
-                };
-                for &o in neighbours {
+                }
+                for &(_, o) in edge_neighbours(edge_key(a, b)) {
                     let o = o as usize;
                     if chart_of[o] == u32::MAX && normals[o].dot(n_seed) >= cos_max {
                         chart_of[o] = id;
@@ -266,10 +271,12 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
     }
 
     // Project each chart; record its 2D corner coordinates and bounding rectangle.
-    let mut local: HashMap<(u32, u32), DVec2> = HashMap::new();
+    // Each triangle corner's chart-local 2D position (a vertex projects alike in every
+    // triangle of its chart).
+    let mut local = vec![DVec2::ZERO; 3 * tri_count];
     let mut sizes = Vec::with_capacity(charts.len());
     let mut mins = Vec::with_capacity(charts.len());
-    for (id, members) in charts.iter().enumerate() {
+    for members in &charts {
         let mean = members
             .iter()
             .map(|&t| normals[t] * areas[t])
@@ -302,7 +309,7 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
             for k in 0..3 {
                 let p = rot.rotate(project(corner(t, k)));
                 (lo, hi) = (lo.min(p), hi.max(p));
-                local.insert((corner(t, k) as u32, id as u32), p);
+                local[3 * t + k] = p;
             }
         }
         sizes.push(ChartSize {
@@ -318,7 +325,7 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
 
     // Split vertices per chart and write the lightmap UVs.
     let inv_res = 1.0 / f64::from(res);
-    let mut remap: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut remap: FxHashMap<(u32, u32), u32> = FxHashMap::default();
     let mut vertices: Vec<Vertex> = Vec::with_capacity(mesh.vertices.len());
     let mut indices = Vec::with_capacity(mesh.indices.len());
     for (t, &id) in chart_of.iter().enumerate() {
@@ -331,7 +338,7 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
         for k in 0..3 {
             let old = corner(t, k) as u32;
             let index = *remap.entry((old, id)).or_insert_with(|| {
-                let p = local.get(&(old, id)).copied().unwrap_or_default() - mins[id as usize];
+                let p = local[3 * t + k] - mins[id as usize];
                 let mut uv = (offset + p * d) * inv_res;
                 if !uv.is_finite() {
                     // Only for absurd input (zero density): the chart's rectangle centre.
@@ -357,6 +364,8 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
 
 #[cfg(test)]
 mod tests {
+    use std::collections::HashMap;
+
     use super::*;
     use glam::Vec3;
 
