@@ -561,9 +561,37 @@ struct BakeArgs {
     /// the AO layer written is the visibility bake's, as the techniques use.
     #[arg(long)]
     separate_ao: bool,
+    /// Who bakes the visibility: `cpu` (ray tracing, cached) or `gpu` (the PRT course's
+    /// GPU simulator: a depth map per direction, not cached).
+    #[arg(long, value_enum, default_value_t = VisibilityBakerArg::Cpu)]
+    baker: VisibilityBakerArg,
+    /// `--baker gpu`: depth-map texels per side.
+    #[arg(long, default_value_t = shvis::bake::gpu_visibility::GpuVisibilitySettings::default().depth_res)]
+    depth_res: u32,
+    /// `--baker gpu`: constant depth bias, depth-map texels.
+    #[arg(long, default_value_t = shvis::bake::gpu_visibility::GpuVisibilitySettings::default().bias_texels)]
+    depth_bias: f32,
+    /// `--baker gpu`: depth bias per unit tan of the ray's angle to the normal, texels.
+    #[arg(long, default_value_t = shvis::bake::gpu_visibility::GpuVisibilitySettings::default().slope_bias_texels)]
+    slope_bias: f32,
+    /// `--baker gpu`: also run the CPU bake (and one with the next seed, for the
+    /// quadrature noise) and print how far the GPU's coefficients are from it.
+    #[arg(long)]
+    compare_cpu: bool,
+    #[command(flatten)]
+    gpu: GpuArgs,
     /// Output directory (ao.exr).
     #[arg(long)]
     out: PathBuf,
+}
+
+/// `shvis bake --baker`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum VisibilityBakerArg {
+    /// Ray tracing (cached).
+    Cpu,
+    /// The PRT course's GPU simulator (not cached).
+    Gpu,
 }
 
 #[derive(Args, Debug)]
@@ -1488,9 +1516,15 @@ fn run_bake(a: BakeArgs) -> Result<()> {
             ao.stats
         );
     }
-    let visibility = shvis::prepare::bake_scene_visibility(&scene, vis_res, rays, &settings)?;
+    let visibility = match a.baker {
+        VisibilityBakerArg::Cpu => {
+            shvis::prepare::bake_scene_visibility(&scene, vis_res, rays, &settings)?
+        }
+        VisibilityBakerArg::Gpu => bake_on_gpu(&a, &scene, vis_res, rays, &settings)?,
+    };
     println!(
-        "visibility and AO bake: order {} × {rays} rays, {} triangles: {}",
+        "visibility and AO bake ({:?}): order {} × {rays} rays, {} triangles: {}",
+        a.baker,
         visibility.order,
         scene.mesh.triangle_count(),
         visibility.stats
@@ -1501,6 +1535,84 @@ fn run_bake(a: BakeArgs) -> Result<()> {
         a.out.display()
     );
     Ok(())
+}
+
+/// `shvis bake --baker gpu`: the GPU simulator, and with `--compare-cpu` its distance
+/// from the CPU bake against the quadrature noise.
+fn bake_on_gpu(
+    a: &BakeArgs,
+    scene: &shvis::scene::Scene,
+    vis_res: u32,
+    rays: u32,
+    settings: &PrepareSettings,
+) -> Result<bake::visibility::VisibilityMap> {
+    use shvis::bake::gpu_visibility::{self, GpuVisibilitySettings};
+    use shvis::bake::visibility::{VisibilitySettings, bake_visibility};
+    let ctx = open_gpu(&a.gpu)?;
+    let texels = bake::raster::rasterize(&scene.mesh, vis_res);
+    let vis_settings = VisibilitySettings {
+        order: settings.order,
+        rays,
+        seed: settings.seed,
+        progress: true,
+    };
+    let gpu_settings = GpuVisibilitySettings {
+        depth_res: a.depth_res,
+        bias_texels: a.depth_bias,
+        slope_bias_texels: a.slope_bias,
+    };
+    let baked = gpu_visibility::bake_visibility_gpu(
+        &ctx,
+        &scene.mesh,
+        &texels,
+        &vis_settings,
+        &gpu_settings,
+    )?;
+    let gpu_ms = baked.gpu_ms.map_or("no timestamps".into(), |(d, p)| {
+        format!("GPU {d:.1} ms directions + {p:.1} ms projection")
+    });
+    println!(
+        "gpu simulator on {}: {}² depth maps, bias {} + {}·tanθ texels: {:.2} s ({:.2} s set-up; {gpu_ms})",
+        ctx.device_name(),
+        a.depth_res,
+        a.depth_bias,
+        a.slope_bias,
+        baked.map.stats.seconds,
+        baked.setup_s
+    );
+    if a.compare_cpu {
+        let tracer = bake::trace::Tracer::new(&scene.mesh);
+        let cpu = bake_visibility(&tracer, &texels, &vis_settings);
+        let other_seed = bake_visibility(
+            &tracer,
+            &texels,
+            &VisibilitySettings {
+                seed: vis_settings.seed + 1,
+                ..vis_settings
+            },
+        );
+        let noise = gpu_visibility::quadrature_noise(&cpu, &other_seed);
+        let (mut leaks, mut acne) = (0, 0);
+        for i in 0..cpu.ao.len() {
+            if cpu.covered[i] {
+                let d = baked.map.ao[i] - cpu.ao[i];
+                leaks += usize::from(d > 0.02);
+                acne += usize::from(d < -0.02);
+            }
+        }
+        println!("gpu AO above the cpu's by > 0.02 (leaks): {leaks} texels; below (acne): {acne}");
+        let d = gpu_visibility::compare(&cpu, &baked.map, noise);
+        println!(
+            "gpu vs cpu: {:.3} % of {} texels differ by more than the quadrature noise {noise:.4} (L2 of the coefficients; RMS difference {:.4}); cpu bake {:.2} s, gpu {:.2} s ({:.2}×)",
+            100.0 * d.fraction_above,
+            d.texels,
+            d.rms,
+            cpu.stats.seconds,
+            baked.map.stats.seconds,
+            baked.map.stats.seconds / cpu.stats.seconds
+        );
+    }
+    Ok(baked.map)
 }
 
 /// `--normal-filter`.

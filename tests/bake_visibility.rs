@@ -756,3 +756,74 @@ fn throughput_report() {
     report("house", &house.mesh, 512, 1024);
     report("grid", &bake_scenes::displaced_grid(320), 128, 1024);
 }
+
+// ---------------------------------------------------------------- GPU simulator
+
+mod gpu_simulator {
+    use super::*;
+    use shvis::bake::gpu_visibility::{
+        GpuVisibilitySettings, bake_visibility_gpu, compare, quadrature_noise,
+    };
+
+    fn gpu_bake(
+        mesh: &Mesh,
+        texels: &LightmapTexels,
+        s: &VisibilitySettings,
+        depth_res: u32,
+    ) -> VisibilityMap {
+        let ctx = common::validated_context();
+        let gpu = GpuVisibilitySettings {
+            depth_res,
+            ..GpuVisibilitySettings::default()
+        };
+        let baked = bake_visibility_gpu(&ctx, mesh, texels, s, &gpu).expect("the simulator runs");
+        common::assert_validation_clean(&ctx, "gpu visibility bake");
+        baked.map
+    }
+
+    #[test]
+    fn equals_the_cpu_bake_where_every_ray_escapes() {
+        let mut m = Mesh::default();
+        floor_rect(&mut m, -10.0, 10.0, -10.0, 10.0, FULL_UV);
+        let s = settings(256, 3);
+        let (texels, cpu) = bake(&m, 16, &s);
+        let gpu = gpu_bake(&m, &texels, &s, 256);
+        assert!(gpu.ao.iter().all(|&a| a == 1.0), "an open plane has AO 1");
+        assert_eq!(gpu.stats.rays_traced, cpu.stats.rays_traced);
+        // Same escaping rays: only the f32 (GPU) against f64 (CPU) sum of ≤ 256 terms.
+        let worst = cpu
+            .coeffs
+            .iter()
+            .zip(&gpu.coeffs)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        assert!(worst < 1e-5, "largest coefficient difference {worst:.2e}");
+    }
+
+    #[test]
+    fn follows_the_cpu_bake_on_the_inner_corner_and_the_house() {
+        let s = settings(128, 0);
+        let other = settings(128, 1);
+        let corner = inner_corner();
+        let house = house::build(64).expect("the built-in house").mesh;
+        for (name, mesh, res, bound) in [
+            ("inner corner", &corner, 16, 0.10),
+            ("house", &house, 64, 0.10),
+        ] {
+            let (texels, cpu) = bake(mesh, res, &s);
+            let (_, cpu_other) = bake(mesh, res, &other);
+            let noise = quadrature_noise(&cpu, &cpu_other);
+            let gpu = gpu_bake(mesh, &texels, &s, 1024);
+            let d = compare(&cpu, &gpu, noise);
+            eprintln!(
+                "{name}: {:.2} % of {} texels beyond the quadrature noise {noise:.4}, RMS {:.4}",
+                100.0 * d.fraction_above,
+                d.texels,
+                d.rms
+            );
+            assert!(d.texels > 0);
+            assert!(d.rms < noise, "{name}: RMS {} ≥ noise {noise}", d.rms);
+            assert!(d.fraction_above <= bound, "{name}: {d:?}");
+        }
+    }
+}

@@ -7,6 +7,7 @@
 //! - [`directions`]: the shared stratified ray directions of the visibility bake and the
 //!   SH projection of a texel's visible set.
 //! - [`visibility`]: SH visibility per texel (Iwanicki–Sloan §3.1), the `unc*`/`pca*` data.
+//! - [`gpu_visibility`]: the same bake by depth maps on the GPU (PRT course's simulator).
 //! - [`surface`]: attributes of ray hit points (oriented normal, albedo, lightmap texel).
 //! - [`shlmap`]: order-3 SH of incident radiance with inter-reflection, the `shlmap` data.
 //! - [`cache`]: versioned, checksummed bake cache files, and EXR dumps for inspection.
@@ -18,6 +19,7 @@ pub mod ao;
 pub mod cache;
 pub mod cluster;
 pub mod directions;
+pub mod gpu_visibility;
 pub mod lxh;
 pub mod pca;
 pub mod raster;

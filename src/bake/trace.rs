@@ -192,21 +192,43 @@ fn canonical_direction(dir: Vec3) -> Vec3A {
     Vec3A::from(dir) + Vec3A::ZERO
 }
 
+/// The mesh's triangles that can occlude (module doc): indices in range, finite corners,
+/// non-zero area; with their mesh triangle index.
+pub fn usable_triangles(mesh: &Mesh) -> Vec<(u32, [Vec3; 3])> {
+    (0..mesh.triangle_count())
+        .filter(|&t| {
+            mesh.indices[3 * t..3 * t + 3]
+                .iter()
+                .all(|&i| (i as usize) < mesh.vertices.len())
+        })
+        .map(|t| (t as u32, mesh.triangle_positions(t)))
+        .filter(|(_, p)| {
+            let finite = p.iter().all(|v| v.is_finite());
+            finite && (p[1] - p[0]).cross(p[2] - p[0]).length_squared() > 0.0
+        })
+        .collect()
+}
+
+/// [`Tracer::ray_epsilon`] of a scene with these triangle corners (0 for none).
+pub fn ray_epsilon_of(corners: impl Iterator<Item = Vec3>) -> f32 {
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    let mut any = false;
+    for v in corners {
+        (lo, hi) = (lo.min(v), hi.max(v));
+        any = true;
+    }
+    if !any {
+        return 0.0;
+    }
+    let extent = (hi - lo).length();
+    let largest = lo.abs().max(hi.abs()).max_element();
+    (EPSILON_PER_EXTENT * extent).max(64.0 * f32::EPSILON * largest)
+}
+
 impl Tracer {
     /// Builds the BVH over the mesh's triangles (see the module doc for what is skipped).
     pub fn new(mesh: &Mesh) -> Tracer {
-        let input: Vec<(u32, [Vec3; 3])> = (0..mesh.triangle_count())
-            .filter(|&t| {
-                mesh.indices[3 * t..3 * t + 3]
-                    .iter()
-                    .all(|&i| (i as usize) < mesh.vertices.len())
-            })
-            .map(|t| (t as u32, mesh.triangle_positions(t)))
-            .filter(|(_, p)| {
-                let finite = p.iter().all(|v| v.is_finite());
-                finite && (p[1] - p[0]).cross(p[2] - p[0]).length_squared() > 0.0
-            })
-            .collect();
+        let input = usable_triangles(mesh);
         let (input_triangles, input): (Vec<u32>, Vec<Triangle>) = input
             .into_iter()
             .map(|(t, p)| {
@@ -218,19 +240,11 @@ impl Tracer {
                 (t, tri)
             })
             .unzip();
-        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        for t in &input {
-            for v in [t.v0, t.v1, t.v2] {
-                (lo, hi) = (lo.min(v.into()), hi.max(v.into()));
-            }
-        }
-        let ray_epsilon = if input.is_empty() {
-            0.0
-        } else {
-            let extent = (hi - lo).length();
-            let largest = lo.abs().max(hi.abs()).max_element();
-            (EPSILON_PER_EXTENT * extent).max(64.0 * f32::EPSILON * largest)
-        };
+        let ray_epsilon = ray_epsilon_of(
+            input
+                .iter()
+                .flat_map(|t| [t.v0, t.v1, t.v2].map(Vec3::from)),
+        );
         if input.is_empty() {
             return Tracer {
                 bvh: None,

@@ -400,7 +400,7 @@ pub fn bake_points(
 
 /// [`dilate`] of texel-major vectors of `n2` coefficients, four coefficients per plane,
 /// planes in parallel (each plane's result is independent of the others).
-fn dilate_coeffs(coeffs: &mut [f32], n2: usize, covered: &[bool], res: u32) {
+pub(crate) fn dilate_coeffs(coeffs: &mut [f32], n2: usize, covered: &[bool], res: u32) {
     let texel_count = covered.len();
     let planes: Vec<Vec<Lanes4>> = (0..n2.div_ceil(4))
         .into_par_iter()

@@ -17,10 +17,12 @@ pub mod image;
 pub mod layout;
 pub mod normal_bake;
 pub mod pass;
+mod pass_objects;
 pub mod shader;
 pub mod spirv_counts;
 pub mod target;
 pub mod upload;
+pub mod visibility_sim;
 
 pub use buffer::Buffer;
 pub use compute::{ComputePipeline, ComputePipelineDesc};

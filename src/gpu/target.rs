@@ -13,6 +13,8 @@ pub const COLOR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 /// The colour format of G-buffer passes (positions need f32).
 pub const COLOR_FORMAT_F32: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+/// The one-channel f32 colour format of the visibility simulator's sky-distance maps.
+pub const DEPTH_MAP_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
 
 /// Colour and depth images at one size, with the render pass that clears them.
 pub struct RenderTarget {
@@ -33,14 +35,15 @@ impl RenderTarget {
         Self::with_format(ctx, width, height, COLOR_FORMAT)
     }
 
-    /// A target with colour format [`COLOR_FORMAT`] or [`COLOR_FORMAT_F32`].
+    /// A target with colour format [`COLOR_FORMAT`], [`COLOR_FORMAT_F32`] or
+    /// [`DEPTH_MAP_FORMAT`] ([`Self::read_rgba`] needs one of the first two).
     pub fn with_format(
         ctx: &Arc<Context>,
         width: u32,
         height: u32,
         format: vk::Format,
     ) -> Result<Self, GpuError> {
-        if format != COLOR_FORMAT && format != COLOR_FORMAT_F32 {
+        if ![COLOR_FORMAT, COLOR_FORMAT_F32, DEPTH_MAP_FORMAT].contains(&format) {
             return Err(GpuError::Invalid {
                 what: "render target".into(),
                 detail: format!("colour format {format:?} is not supported"),

@@ -1,0 +1,13 @@
+#version 450
+// The scene seen from the sky along one direction (orthographic): depth = sky distance
+// over the box's sky range, so the depth test keeps the surface nearest the sky.
+#include "sim_view.glsl"
+
+layout(location = 0) in vec3 in_position;
+layout(location = 0) out float out_sky;
+
+void main() {
+    vec3 view = sim_view(in_position);
+    gl_Position = vec4(view.xy, view.z / push.window.z, 1.0);
+    out_sky = view.z;
+}

@@ -1,0 +1,447 @@
+//! The Vulkan half of the GPU visibility simulator (PRT course, "GPU simulator";
+//! `crate::bake::gpu_visibility` prepares the data and states the math). Per direction d
+//! of the bake's set, in command buffers of [`DIRECTIONS_PER_SUBMIT`] directions:
+//!
+//! 1. **depth** — the scene drawn orthographically along d into an R32F target holding the
+//!    sky distance of the nearest surface (`glsl/bake/depth.*`), copied to a buffer;
+//! 2. **mark** — one invocation per point sets bit d of its visibility mask when nothing
+//!    in the map lies nearer the sky than the point by more than the bias
+//!    (`glsl/bake/mark.comp`).
+//!
+//! Then **project** (`glsl/bake/project.comp`) sums w·y_i(d) over each point's visible
+//! directions into its coefficients and forms its AO. Timestamps bracket the direction
+//! passes and the projection where the queue has them.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use super::compute::{ComputePipeline, ComputePipelineDesc};
+use super::descriptors::Resource;
+use super::pass::{device_local_buffer, ticks_to_ms};
+use super::pass_objects::PassObjects;
+use super::shader::{ShaderStage, compile_glsl};
+use super::target::DEPTH_MAP_FORMAT;
+use super::{Buffer, Context, GpuError, RenderTarget};
+
+/// Directions recorded into one command buffer (one progress step).
+pub const DIRECTIONS_PER_SUBMIT: usize = 16;
+const TIMESTAMPS: u32 = 2;
+/// Cleared sky distance: no surface.
+const EMPTY_SKY: f32 = 1e30;
+
+/// The view of one direction, as `glsl/include/sim_view.glsl`'s push constants lay it out.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct DirectionView {
+    /// xyz: the image's x axis; w: the window's centre along it.
+    pub axis_u: [f32; 4],
+    /// xyz: the image's y axis; w: the window's centre along it.
+    pub axis_v: [f32; 4],
+    /// xyz: d; w: the sky plane along d.
+    pub axis_d: [f32; 4],
+    /// xyz: the scene box's centre; w: constant bias, metres.
+    pub centre: [f32; 4],
+    /// x, y: the window's half extents; z: the sky range; w: bias per unit tan θ, metres.
+    pub window: [f32; 4],
+    pub res: u32,
+    pub direction: u32,
+    pub point_count: u32,
+    pub mask_words: u32,
+}
+
+/// Everything one simulation needs.
+pub struct SimulationJob<'a> {
+    /// Depth-map texels per side.
+    pub res: u32,
+    /// Scene vertices, xyz f32 each.
+    pub positions: &'a [[f32; 3]],
+    pub indices: &'a [u32],
+    /// Per point: ray origin then unit normal (w unused).
+    pub points: &'a [[f32; 4]],
+    /// One view per direction of the set, in order (`direction` = index).
+    pub views: &'a [DirectionView],
+    /// The directions again, xyz, for the AO.
+    pub directions: &'a [[f32; 4]],
+    /// w·y_i(d_r), direction-major, `coeff_count` per direction.
+    pub weighted_basis: &'a [f32],
+    pub coeff_count: u32,
+    /// Called after each submission with the directions done so far.
+    pub progress: &'a (dyn Fn(usize) + Sync),
+}
+
+/// What [`run`] returns.
+pub struct SimulationResult {
+    /// `coeff_count` per point.
+    pub coeffs: Vec<f32>,
+    pub ao: Vec<f32>,
+    /// Visibility bits per point, `mask_words` u32 each (bit r = direction r escapes).
+    pub masks: Vec<u32>,
+    /// GPU ms of the direction passes and of the projection (`None` without timestamps).
+    pub gpu_ms: Option<(f64, f64)>,
+    /// Uploads, shader compiles, pipelines, seconds.
+    pub setup_s: f64,
+    /// Submissions to readback, seconds.
+    pub execute_s: f64,
+}
+
+fn storage_buffer(ctx: &Arc<Context>, bytes: u64, name: &str) -> Result<Buffer, GpuError> {
+    Buffer::new(
+        ctx,
+        bytes.max(4),
+        vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC,
+        MemoryLocation::GpuOnly,
+        name,
+    )
+}
+
+/// Runs one simulation (module doc).
+///
+/// # Errors
+/// A depth map beyond the device's framebuffer limit, empty input, or a failing Vulkan
+/// call.
+pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResult, GpuError> {
+    let setup = Instant::now();
+    let name = "bake.gpu-visibility";
+    if job.indices.is_empty() || job.points.is_empty() || job.views.is_empty() {
+        return Err(GpuError::Invalid {
+            what: name.into(),
+            detail: "nothing to simulate (no triangles, points or directions)".into(),
+        });
+    }
+    let res = job.res;
+    let point_count = job.points.len() as u64;
+    let mask_words = job.views.len().div_ceil(32) as u64;
+    let coeff_count = u64::from(job.coeff_count);
+    let target = RenderTarget::with_format(ctx, res, res, DEPTH_MAP_FORMAT)?;
+    let vertices = device_local_buffer(
+        ctx,
+        bytemuck::cast_slice(job.positions),
+        vk::BufferUsageFlags::VERTEX_BUFFER,
+        "bake.gpu-visibility.vertices",
+    )?;
+    let indices = device_local_buffer(
+        ctx,
+        bytemuck::cast_slice(job.indices),
+        vk::BufferUsageFlags::INDEX_BUFFER,
+        "bake.gpu-visibility.indices",
+    )?;
+    let points = device_local_buffer(
+        ctx,
+        bytemuck::cast_slice(job.points),
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        "bake.gpu-visibility.points",
+    )?;
+    let basis = device_local_buffer(
+        ctx,
+        bytemuck::cast_slice(job.weighted_basis),
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        "bake.gpu-visibility.weighted-basis",
+    )?;
+    let directions = device_local_buffer(
+        ctx,
+        bytemuck::cast_slice(job.directions),
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        "bake.gpu-visibility.directions",
+    )?;
+    let depth = storage_buffer(
+        ctx,
+        u64::from(res) * u64::from(res) * 4,
+        "bake.gpu-visibility.depth",
+    )?;
+    let masks = storage_buffer(
+        ctx,
+        point_count * mask_words * 4,
+        "bake.gpu-visibility.masks",
+    )?;
+    let coeffs = storage_buffer(
+        ctx,
+        point_count * coeff_count * 4,
+        "bake.gpu-visibility.coeffs",
+    )?;
+    let ao = storage_buffer(ctx, point_count * 4, "bake.gpu-visibility.ao")?;
+    let out_bytes = point_count * (mask_words + coeff_count + 1) * 4;
+    let readback = Buffer::new(
+        ctx,
+        out_bytes,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuToCpu,
+        "bake.gpu-visibility.readback",
+    )?;
+    let mark = ComputePipeline::new(
+        ctx,
+        &ComputePipelineDesc {
+            name: "bake.gpu-visibility.mark",
+            spirv: &compile_glsl("bake/mark.comp", ShaderStage::Compute, &[])?,
+            resources: &[
+                (0, Resource::Storage(&depth)),
+                (1, Resource::Storage(&points)),
+                (2, Resource::Storage(&masks)),
+            ],
+            push_constant_bytes: size_of::<DirectionView>() as u32,
+        },
+    )?;
+    let project = ComputePipeline::new(
+        ctx,
+        &ComputePipelineDesc {
+            name: "bake.gpu-visibility.project",
+            spirv: &compile_glsl("bake/project.comp", ShaderStage::Compute, &[])?,
+            resources: &[
+                (0, Resource::Storage(&points)),
+                (1, Resource::Storage(&masks)),
+                (2, Resource::Storage(&basis)),
+                (3, Resource::Storage(&directions)),
+                (4, Resource::Storage(&coeffs)),
+                (5, Resource::Storage(&ao)),
+            ],
+            push_constant_bytes: 16,
+        },
+    )?;
+    let mut objects = PassObjects::new(ctx);
+    let vs = objects.module(
+        "bake/depth.vert",
+        ShaderStage::Vertex,
+        "bake.gpu-visibility.depth.vert",
+    )?;
+    let fs = objects.module(
+        "bake/depth.frag",
+        ShaderStage::Fragment,
+        "bake.gpu-visibility.depth.frag",
+    )?;
+    let layout = objects.layout(
+        &[],
+        vk::PushConstantRange {
+            stage_flags: vk::ShaderStageFlags::VERTEX,
+            offset: 0,
+            size: size_of::<DirectionView>() as u32,
+        },
+        "bake.gpu-visibility.depth",
+    )?;
+    let pipeline = objects.pipeline(
+        &target,
+        layout,
+        vs,
+        fs,
+        12,
+        &[(0, vk::Format::R32G32B32_SFLOAT, 0)],
+        "bake.gpu-visibility.depth",
+    )?;
+    let timed = ctx.supports_timestamps();
+    let device = ctx.device();
+    if timed {
+        let info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::TIMESTAMP)
+            .query_count(2 * TIMESTAMPS);
+        // SAFETY: plain create-info; stored for Drop at once.
+        objects.query_pool = unsafe { device.create_query_pool(&info, None) }
+            .map_err(|e| GpuError::vulkan("vkCreateQueryPool", name, e))?;
+        ctx.set_name(objects.query_pool, "bake.gpu-visibility.timestamps");
+    }
+    let setup_s = setup.elapsed().as_secs_f64();
+    let execute = Instant::now();
+
+    let full = vk::Rect2D {
+        offset: vk::Offset2D { x: 0, y: 0 },
+        extent: vk::Extent2D {
+            width: res,
+            height: res,
+        },
+    };
+    let clears = [
+        vk::ClearValue {
+            color: vk::ClearColorValue {
+                float32: [EMPTY_SKY, 0.0, 0.0, 0.0],
+            },
+        },
+        vk::ClearValue {
+            depth_stencil: vk::ClearDepthStencilValue {
+                depth: 1.0,
+                stencil: 0,
+            },
+        },
+    ];
+    let begin_pass = vk::RenderPassBeginInfo::default()
+        .render_pass(target.render_pass())
+        .framebuffer(target.framebuffer())
+        .render_area(full)
+        .clear_values(&clears);
+    let barrier = |cmd, src_stage, dst_stage, src_access, dst_access| {
+        let memory = vk::MemoryBarrier::default()
+            .src_access_mask(src_access)
+            .dst_access_mask(dst_access);
+        // SAFETY: recording a global memory barrier into `cmd`.
+        unsafe {
+            device.cmd_pipeline_barrier(
+                cmd,
+                src_stage,
+                dst_stage,
+                vk::DependencyFlags::empty(),
+                &[memory],
+                &[],
+                &[],
+            );
+        }
+    };
+    let timestamp = |cmd, stage, query| {
+        if timed {
+            // SAFETY: recording; the pool holds 2·TIMESTAMPS queries, reset before use.
+            unsafe { device.cmd_write_timestamp(cmd, stage, objects.query_pool, query) };
+        }
+    };
+    let groups = point_count.div_ceil(64) as u32;
+    let chunks: Vec<&[DirectionView]> = job.views.chunks(DIRECTIONS_PER_SUBMIT).collect();
+    let last = chunks.len() - 1;
+    let mut done = 0;
+    for (k, chunk) in chunks.iter().enumerate() {
+        ctx.one_shot(name, |cmd| {
+            // SAFETY (this block): `cmd` is recording; every object recorded lives until
+            // one_shot's waited submission completes (locals of this function).
+            unsafe {
+                if k == 0 {
+                    if timed {
+                        device.cmd_reset_query_pool(cmd, objects.query_pool, 0, 2 * TIMESTAMPS);
+                    }
+                    device.cmd_fill_buffer(cmd, masks.raw(), 0, vk::WHOLE_SIZE, 0);
+                    barrier(
+                        cmd,
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::PipelineStageFlags::COMPUTE_SHADER,
+                        vk::AccessFlags::TRANSFER_WRITE,
+                        vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
+                    );
+                    timestamp(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, 0);
+                }
+                for view in chunk.iter() {
+                    let push = bytemuck::bytes_of(view);
+                    ctx.begin_label(cmd, "bake.gpu-visibility.depth");
+                    device.cmd_begin_render_pass(cmd, &begin_pass, vk::SubpassContents::INLINE);
+                    device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+                    device.cmd_set_scissor(cmd, 0, &[full]);
+                    device.cmd_push_constants(cmd, layout, vk::ShaderStageFlags::VERTEX, 0, push);
+                    device.cmd_bind_vertex_buffers(cmd, 0, &[vertices.raw()], &[0]);
+                    device.cmd_bind_index_buffer(cmd, indices.raw(), 0, vk::IndexType::UINT32);
+                    device.cmd_draw_indexed(cmd, job.indices.len() as u32, 1, 0, 0, 0);
+                    device.cmd_end_render_pass(cmd);
+                    let region = vk::BufferImageCopy::default()
+                        .image_subresource(vk::ImageSubresourceLayers {
+                            aspect_mask: vk::ImageAspectFlags::COLOR,
+                            mip_level: 0,
+                            base_array_layer: 0,
+                            layer_count: 1,
+                        })
+                        .image_extent(vk::Extent3D {
+                            width: res,
+                            height: res,
+                            depth: 1,
+                        });
+                    device.cmd_copy_image_to_buffer(
+                        cmd,
+                        target.color_image(),
+                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                        depth.raw(),
+                        &[region],
+                    );
+                    ctx.end_label(cmd);
+                    barrier(
+                        cmd,
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::PipelineStageFlags::COMPUTE_SHADER,
+                        vk::AccessFlags::TRANSFER_WRITE,
+                        vk::AccessFlags::SHADER_READ,
+                    );
+                    mark.record(cmd, [groups, 1, 1], push);
+                    // The next copy overwrites the map the mark pass read; the next mark
+                    // reads the masks this one wrote.
+                    barrier(
+                        cmd,
+                        vk::PipelineStageFlags::COMPUTE_SHADER,
+                        vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::COMPUTE_SHADER,
+                        vk::AccessFlags::SHADER_WRITE,
+                        vk::AccessFlags::TRANSFER_WRITE
+                            | vk::AccessFlags::SHADER_READ
+                            | vk::AccessFlags::SHADER_WRITE,
+                    );
+                }
+                if k == last {
+                    timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, 1);
+                    let push: Vec<u8> = [
+                        point_count as u32,
+                        job.coeff_count,
+                        mask_words as u32,
+                        job.views.len() as u32,
+                    ]
+                    .iter()
+                    .flat_map(|v| v.to_ne_bytes())
+                    .collect();
+                    project.record(cmd, [groups, 1, 1], &push);
+                    barrier(
+                        cmd,
+                        vk::PipelineStageFlags::COMPUTE_SHADER,
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::AccessFlags::SHADER_WRITE,
+                        vk::AccessFlags::TRANSFER_READ,
+                    );
+                    timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, 2);
+                    let mut offset = 0;
+                    for (src, bytes) in [
+                        (&masks, point_count * mask_words * 4),
+                        (&coeffs, point_count * coeff_count * 4),
+                        (&ao, point_count * 4),
+                    ] {
+                        if bytes > 0 {
+                            let copy = vk::BufferCopy::default().dst_offset(offset).size(bytes);
+                            device.cmd_copy_buffer(cmd, src.raw(), readback.raw(), &[copy]);
+                        }
+                        offset += bytes;
+                    }
+                    barrier(
+                        cmd,
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::PipelineStageFlags::HOST,
+                        vk::AccessFlags::TRANSFER_WRITE,
+                        vk::AccessFlags::HOST_READ,
+                    );
+                }
+            }
+        })?;
+        done += chunk.len();
+        (job.progress)(done);
+    }
+    let gpu_ms = if timed {
+        let mut ticks = [0u64; 3];
+        // SAFETY: the three queries were written by the completed submissions.
+        unsafe {
+            device.get_query_pool_results(
+                objects.query_pool,
+                0,
+                &mut ticks,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .map_err(|e| GpuError::vulkan("vkGetQueryPoolResults", name, e))?;
+        let mask = match ctx.timestamp_valid_bits() {
+            64.. => u64::MAX,
+            bits => (1u64 << bits) - 1,
+        };
+        let period = f64::from(ctx.limits().timestamp_period);
+        let ms = |a: usize, b: usize| ticks_to_ms(ticks[a], ticks[b], mask, period);
+        Some((ms(0, 1), ms(1, 2)))
+    } else {
+        None
+    };
+    let words: &[u32] = bytemuck::cast_slice(readback.read()?);
+    let (m, rest) = words.split_at((point_count * mask_words) as usize);
+    let (c, a) = rest.split_at((point_count * coeff_count) as usize);
+    Ok(SimulationResult {
+        masks: m.to_vec(),
+        coeffs: bytemuck::cast_slice(c).to_vec(),
+        ao: bytemuck::cast_slice(a).to_vec(),
+        gpu_ms,
+        setup_s,
+        execute_s: execute.elapsed().as_secs_f64(),
+    })
+}
