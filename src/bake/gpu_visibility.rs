@@ -154,7 +154,7 @@ pub fn bake_visibility_gpu(
     let mut basis = vec![0.0f64; n2];
     let mut weighted_basis = Vec::with_capacity(dirs.len() * n2);
     for d in dirs.dirs() {
-        eval_basis(settings.order, d.as_dvec3(), &mut basis);
+        eval_basis(settings.order, d.as_dvec3().normalize(), &mut basis);
         weighted_basis.extend(basis.iter().map(|&y| (weight * y) as f32));
     }
     let views: Vec<DirectionView> = dirs
