@@ -21,13 +21,13 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use glam::{DVec2, Vec3};
-use indicatif::{ProgressBar, ProgressStyle};
+
 use rayon::prelude::*;
 
-use super::BakeStats;
 use super::directions::{splitmix64, unit_f64};
 use super::raster::{LightmapTexels, dilate};
 use super::trace::Tracer;
+use super::{BakeStats, progress_bar};
 
 /// Gutter texels filled around charts after the bake.
 pub const DILATION_PASSES: u32 = 2;
@@ -134,18 +134,7 @@ pub fn ao_at(
 pub fn bake_ao(tracer: &Tracer, texels: &LightmapTexels, settings: &AoSettings) -> AoMap {
     let res = texels.res as usize;
     let start = Instant::now();
-    let progress = if settings.progress {
-        let bar = ProgressBar::new(res as u64);
-        let style = ProgressStyle::with_template(
-            "AO {elapsed_precise} [{bar:40.cyan/blue}] {percent:>3}% {msg}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> ");
-        bar.set_style(style);
-        bar
-    } else {
-        ProgressBar::hidden()
-    };
+    let progress = progress_bar(settings.progress, res, "AO");
     let rays_done = AtomicU64::new(0);
     let mut values = vec![1.0f32; res * res];
     values

@@ -31,13 +31,12 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
-use indicatif::{ProgressBar, ProgressStyle};
 
-use super::BakeStats;
 use super::directions::{DirectionSet, above_horizon};
 use super::raster::{LightmapTexels, dilate};
 use super::trace::{ray_epsilon_of, usable_triangles};
 use super::visibility::{DILATION_PASSES, VisibilityMap, VisibilitySettings, dilate_coeffs};
+use super::{BakeStats, progress_bar};
 use crate::gpu::visibility_sim::{self, DirectionView, SimulationJob};
 use crate::gpu::{Context, GpuError};
 use crate::scene::Mesh;
@@ -190,18 +189,7 @@ pub fn bake_visibility_gpu(
         .map(|d| d.extend(0.0).to_array())
         .collect();
 
-    let bar = if settings.progress {
-        let bar = ProgressBar::new(dirs.len() as u64);
-        let style = ProgressStyle::with_template(
-            "gpu visibility {elapsed_precise} [{bar:40.cyan/blue}] {pos}/{len} directions",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> ");
-        bar.set_style(style);
-        bar
-    } else {
-        ProgressBar::hidden()
-    };
+    let bar = progress_bar(settings.progress, dirs.len(), "gpu visibility (directions)");
     let progress = |done: usize| bar.set_position(done as u64);
     let result = visibility_sim::run(
         ctx,

@@ -30,6 +30,22 @@ pub mod trace;
 pub mod vertex_pca;
 pub mod visibility;
 
+/// A bake's progress bar on stderr, `label` first, with the elapsed time, the share done
+/// and a message slot (rays/s); hidden unless `show`.
+pub fn progress_bar(show: bool, len: usize, label: &str) -> indicatif::ProgressBar {
+    if !show {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len as u64);
+    let style = indicatif::ProgressStyle::with_template(&format!(
+        "{label} {{elapsed_precise}} [{{bar:40.cyan/blue}}] {{percent:>3}}% {{msg}}"
+    ))
+    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+    .progress_chars("=> ");
+    bar.set_style(style);
+    bar
+}
+
 /// Work and time of one bake, shared by every bake that traces rays.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct BakeStats {

@@ -65,15 +65,15 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
-use indicatif::{ProgressBar, ProgressStyle};
+
 use rayon::prelude::*;
 
-use super::BakeStats;
 use super::directions::{DirectionSet, above_horizon};
 use super::raster::{LightmapTexels, dilate, texel_index_of};
 use super::surface::SurfaceReader;
 use super::trace::Tracer;
 use super::visibility::DILATION_PASSES;
+use super::{BakeStats, progress_bar};
 use crate::scene::Scene;
 use crate::sh::{Order, basis::eval_basis, zonal};
 
@@ -183,7 +183,7 @@ pub fn bake_sh_lightmap(
     let rays_done = AtomicU64::new(0);
 
     // Bounce 0: direct light through the visible directions (any-hit rays).
-    let bar = progress_bar(settings.progress, covered.len(), "direct");
+    let bar = progress_bar(settings.progress, covered.len(), "SH lightmap direct");
     let direct: Vec<(Sh9Rgb, BasisIrradiance)> = covered
         .par_iter()
         .with_min_len(64)
@@ -235,7 +235,7 @@ pub fn bake_sh_lightmap(
         let bar = progress_bar(
             settings.progress,
             covered.len(),
-            &format!("bounce {bounce}"),
+            &format!("SH lightmap bounce {bounce}"),
         );
         current = covered
             .par_iter()
@@ -407,20 +407,6 @@ fn accumulate_lobes(
     for (s, b) in sum.iter_mut().zip(lobes) {
         *s += DVec3::from(radiance) * d.dot(*b).max(0.0);
     }
-}
-
-fn progress_bar(show: bool, len: usize, what: &str) -> ProgressBar {
-    if !show {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::new(len as u64);
-    let style = ProgressStyle::with_template(&format!(
-        "SH lightmap {what} {{elapsed_precise}} [{{bar:40.cyan/blue}}] {{percent:>3}}%"
-    ))
-    .unwrap_or_else(|_| ProgressStyle::default_bar())
-    .progress_chars("=> ");
-    bar.set_style(style);
-    bar
 }
 
 /// 9 RGB coefficients as one value that [`dilate`] can average.

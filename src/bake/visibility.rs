@@ -44,13 +44,13 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use glam::Vec3;
-use indicatif::{ProgressBar, ProgressStyle};
+
 use rayon::prelude::*;
 
-use super::BakeStats;
 use super::directions::{DirectionSet, ShProjector, above_horizon};
 use super::raster::{LightmapTexels, dilate};
 use super::trace::{PACKET_RAYS, RayPacket, Tracer};
+use super::{BakeStats, progress_bar};
 use crate::sh::Order;
 
 /// Gutter texels filled around charts after the bake (as the AO bake does).
@@ -278,18 +278,7 @@ pub fn bake_visibility(
     let projector = ShProjector::new(&dirs, settings.order);
     let order = texel_order(texels);
     let points = SurfacePoints::of(texels);
-    let progress = if settings.progress {
-        let bar = ProgressBar::new(order.len() as u64);
-        let style = ProgressStyle::with_template(
-            "visibility {elapsed_precise} [{bar:40.cyan/blue}] {percent:>3}% {msg}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> ");
-        bar.set_style(style);
-        bar
-    } else {
-        ProgressBar::hidden()
-    };
+    let progress = progress_bar(settings.progress, order.len(), "visibility");
     let rays_done = AtomicU64::new(0);
     let groups: Vec<&[u32]> = order.chunks(PACKET_RAYS).collect();
     let results: Vec<GroupResult> = groups

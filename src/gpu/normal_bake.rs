@@ -22,7 +22,7 @@ use gpu_allocator::MemoryLocation;
 
 use super::compute::{ComputePipeline, ComputePipelineDesc};
 use super::descriptors::{DescriptorSet, Resource};
-use super::pass::{device_local_buffer, ticks_to_ms};
+use super::pass::device_local_buffer;
 use super::pass_objects::PassObjects;
 use super::shader::{ShaderStage, compile_glsl};
 use super::target::COLOR_FORMAT_F32;
@@ -252,17 +252,8 @@ pub fn run(ctx: &Arc<Context>, job: &ProjectionJob<'_>) -> Result<ProjectionResu
         ],
         "normalmap.project",
     )?;
-    let timed = ctx.supports_timestamps();
+    let timed = objects.timestamps(TIMESTAMPS, "normalmap.timestamps")?;
     let device = ctx.device();
-    if timed {
-        let info = vk::QueryPoolCreateInfo::default()
-            .query_type(vk::QueryType::TIMESTAMP)
-            .query_count(TIMESTAMPS);
-        // SAFETY: plain create-info; stored for Drop at once.
-        objects.query_pool = unsafe { device.create_query_pool(&info, None) }
-            .map_err(|e| GpuError::vulkan("vkCreateQueryPool", name, e))?;
-        ctx.set_name(objects.query_pool, "normalmap.timestamps");
-    }
     objects.cmd = ctx.allocate_command_buffer(name)?;
     let cmd = objects.cmd;
     let setup_s = setup.elapsed().as_secs_f64();
@@ -290,55 +281,14 @@ pub fn run(ctx: &Arc<Context>, job: &ProjectionJob<'_>) -> Result<ProjectionResu
         .framebuffer(target.framebuffer())
         .render_area(full)
         .clear_values(&clears);
-    let image_to_buffer = |dst: &Buffer, offset: u64| {
-        let region = vk::BufferImageCopy::default()
-            .buffer_offset(offset)
-            .image_subresource(vk::ImageSubresourceLayers {
-                aspect_mask: vk::ImageAspectFlags::COLOR,
-                mip_level: 0,
-                base_array_layer: 0,
-                layer_count: 1,
-            })
-            .image_extent(vk::Extent3D {
-                width: res,
-                height: res,
-                depth: 1,
-            });
-        // SAFETY: recording; the image is in TRANSFER_SRC_OPTIMAL after the render pass
-        // and `dst` holds res² texels from `offset`.
-        unsafe {
-            device.cmd_copy_image_to_buffer(
-                cmd,
-                target.color_image(),
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                dst.raw(),
-                &[region],
-            );
-        }
-    };
+    // The render passes leave the image in TRANSFER_SRC_OPTIMAL; each `dst` holds res²
+    // texels from `offset`.
+    let image_to_buffer =
+        |dst: &Buffer, offset: u64| target.record_copy_to_buffer(cmd, dst, offset);
     let barrier = |src_stage, dst_stage, src_access, dst_access| {
-        let memory = vk::MemoryBarrier::default()
-            .src_access_mask(src_access)
-            .dst_access_mask(dst_access);
-        // SAFETY: recording a global memory barrier.
-        unsafe {
-            device.cmd_pipeline_barrier(
-                cmd,
-                src_stage,
-                dst_stage,
-                vk::DependencyFlags::empty(),
-                &[memory],
-                &[],
-                &[],
-            );
-        }
+        objects.barrier(cmd, (src_stage, dst_stage), (src_access, dst_access))
     };
-    let timestamp = |stage, query| {
-        if timed {
-            // SAFETY: recording; the pool holds TIMESTAMPS queries, reset below.
-            unsafe { device.cmd_write_timestamp(cmd, stage, objects.query_pool, query) };
-        }
-    };
+    let timestamp = |stage, query| objects.timestamp(cmd, stage, query);
     let project_push: Vec<u8> = [job.max_distance.to_bits(), u32::from(job.mirror), res]
         .iter()
         .flat_map(|v| v.to_ne_bytes())
@@ -486,32 +436,13 @@ pub fn run(ctx: &Arc<Context>, job: &ProjectionJob<'_>) -> Result<ProjectionResu
     }
     let execute = Instant::now();
     ctx.submit_and_wait(cmd, name)?;
-    let gpu_ms = if timed {
-        let mut ticks = [0u64; TIMESTAMPS as usize];
-        // SAFETY: all queries were written by the completed submission.
-        unsafe {
-            device.get_query_pool_results(
-                objects.query_pool,
-                0,
-                &mut ticks,
-                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-            )
-        }
-        .map_err(|e| GpuError::vulkan("vkGetQueryPoolResults", name, e))?;
-        let mask = match ctx.timestamp_valid_bits() {
-            64.. => u64::MAX,
-            bits => (1u64 << bits) - 1,
-        };
-        let period = f64::from(ctx.limits().timestamp_period);
-        let ms = |a: usize, b: usize| ticks_to_ms(ticks[a], ticks[b], mask, period);
-        Some(PhaseMs {
-            mask: ms(0, 1),
-            project: ms(1, 2),
-            expand: ms(2, 3),
-        })
-    } else {
-        None
-    };
+    let gpu_ms = objects
+        .timestamp_ms(TIMESTAMPS as usize - 1, name)?
+        .map(|ms| PhaseMs {
+            mask: ms[0],
+            project: ms[1],
+            expand: ms[2],
+        });
     let texels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(readback.read()?);
     Ok(ProjectionResult {
         texels,

@@ -6,10 +6,94 @@ use std::sync::Arc;
 
 use ash::vk;
 
+use super::pass::ticks_to_ms;
 use super::shader::{ShaderStage, compile_glsl};
 use super::{Context, GpuError, RenderTarget};
 
 impl PassObjects {
+    /// Creates the pool of `count` timestamp queries when the queue has timestamps;
+    /// returns whether it did.
+    pub fn timestamps(&mut self, count: u32, name: &str) -> Result<bool, GpuError> {
+        if !self.ctx.supports_timestamps() {
+            return Ok(false);
+        }
+        let info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::TIMESTAMP)
+            .query_count(count);
+        // SAFETY: plain create-info; stored for Drop at once.
+        self.query_pool = unsafe { self.ctx.device().create_query_pool(&info, None) }
+            .map_err(|e| GpuError::vulkan("vkCreateQueryPool", name, e))?;
+        self.ctx.set_name(self.query_pool, name);
+        Ok(true)
+    }
+
+    /// Records timestamp `query` after `stage` into `cmd`, when there is a pool.
+    pub fn timestamp(&self, cmd: vk::CommandBuffer, stage: vk::PipelineStageFlags, query: u32) {
+        if self.query_pool != vk::QueryPool::null() {
+            // SAFETY: recording; the caller resets the pool before writing a query and
+            // keeps `query` below the pool's count.
+            unsafe {
+                self.ctx
+                    .device()
+                    .cmd_write_timestamp(cmd, stage, self.query_pool, query)
+            };
+        }
+    }
+
+    /// The ms between consecutive timestamps 0..=`intervals` once the submissions that
+    /// wrote them completed; `None` without a pool.
+    pub fn timestamp_ms(&self, intervals: usize, what: &str) -> Result<Option<Vec<f64>>, GpuError> {
+        if self.query_pool == vk::QueryPool::null() {
+            return Ok(None);
+        }
+        let mut ticks = vec![0u64; intervals + 1];
+        // SAFETY: all queries were written by completed submissions.
+        unsafe {
+            self.ctx.device().get_query_pool_results(
+                self.query_pool,
+                0,
+                &mut ticks,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .map_err(|e| GpuError::vulkan("vkGetQueryPoolResults", what, e))?;
+        let mask = match self.ctx.timestamp_valid_bits() {
+            64.. => u64::MAX,
+            bits => (1u64 << bits) - 1,
+        };
+        let period = f64::from(self.ctx.limits().timestamp_period);
+        Ok(Some(
+            ticks
+                .windows(2)
+                .map(|t| ticks_to_ms(t[0], t[1], mask, period))
+                .collect(),
+        ))
+    }
+
+    /// Records a global memory barrier into `cmd`.
+    pub fn barrier(
+        &self,
+        cmd: vk::CommandBuffer,
+        stages: (vk::PipelineStageFlags, vk::PipelineStageFlags),
+        access: (vk::AccessFlags, vk::AccessFlags),
+    ) {
+        let memory = vk::MemoryBarrier::default()
+            .src_access_mask(access.0)
+            .dst_access_mask(access.1);
+        // SAFETY: recording a global memory barrier.
+        unsafe {
+            self.ctx.device().cmd_pipeline_barrier(
+                cmd,
+                stages.0,
+                stages.1,
+                vk::DependencyFlags::empty(),
+                &[memory],
+                &[],
+                &[],
+            );
+        }
+    }
+
     /// No objects yet.
     pub fn new(ctx: &Arc<Context>) -> Self {
         PassObjects {

@@ -187,9 +187,35 @@ impl RenderTarget {
     pub(crate) fn framebuffer(&self) -> vk::Framebuffer {
         self.framebuffer
     }
-    /// The colour image (TRANSFER_SRC_OPTIMAL after each render pass).
-    pub(crate) fn color_image(&self) -> vk::Image {
-        self.color.raw()
+
+    /// Records a copy of the whole colour image (TRANSFER_SRC_OPTIMAL after a render pass)
+    /// into `dst` from byte `offset`, row-major, row 0 at the top. The caller makes sure
+    /// the render pass came first and `dst` holds width × height texels from `offset`.
+    pub(crate) fn record_copy_to_buffer(&self, cmd: vk::CommandBuffer, dst: &Buffer, offset: u64) {
+        let region = vk::BufferImageCopy::default()
+            .buffer_offset(offset)
+            .image_subresource(vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            })
+            .image_extent(vk::Extent3D {
+                width: self.width,
+                height: self.height,
+                depth: 1,
+            });
+        // SAFETY: `cmd` is recording; the image is owned by `self` and, per the contract
+        // above, in TRANSFER_SRC_OPTIMAL with `dst` large enough.
+        unsafe {
+            self.ctx.device().cmd_copy_image_to_buffer(
+                cmd,
+                self.color.raw(),
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst.raw(),
+                &[region],
+            );
+        }
     }
 
     /// Copies the colour image (left in TRANSFER_SRC_OPTIMAL by the render pass) to the
@@ -208,18 +234,6 @@ impl RenderTarget {
             MemoryLocation::GpuToCpu,
             "target.readback",
         )?;
-        let region = vk::BufferImageCopy::default()
-            .image_subresource(vk::ImageSubresourceLayers {
-                aspect_mask: vk::ImageAspectFlags::COLOR,
-                mip_level: 0,
-                base_array_layer: 0,
-                layer_count: 1,
-            })
-            .image_extent(vk::Extent3D {
-                width: self.width,
-                height: self.height,
-                depth: 1,
-            });
         let device = self.ctx.device();
         self.ctx.one_shot("readback target.color", |cmd| {
             let to_host = vk::BufferMemoryBarrier::default()
@@ -229,16 +243,9 @@ impl RenderTarget {
                 .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
                 .buffer(buffer.raw())
                 .size(vk::WHOLE_SIZE);
-            // SAFETY: recording; the image is in TRANSFER_SRC_OPTIMAL after the render
-            // pass, the buffer is large enough, and one_shot waits for completion.
+            self.record_copy_to_buffer(cmd, &buffer, 0);
+            // SAFETY: recording a barrier; one_shot waits for completion.
             unsafe {
-                device.cmd_copy_image_to_buffer(
-                    cmd,
-                    self.color.raw(),
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    buffer.raw(),
-                    &[region],
-                );
                 device.cmd_pipeline_barrier(
                     cmd,
                     vk::PipelineStageFlags::TRANSFER,

@@ -20,7 +20,7 @@ use gpu_allocator::MemoryLocation;
 
 use super::compute::{ComputePipeline, ComputePipelineDesc};
 use super::descriptors::Resource;
-use super::pass::{device_local_buffer, ticks_to_ms};
+use super::pass::device_local_buffer;
 use super::pass_objects::PassObjects;
 use super::shader::{ShaderStage, compile_glsl};
 use super::target::DEPTH_MAP_FORMAT;
@@ -28,7 +28,8 @@ use super::{Buffer, Context, GpuError, RenderTarget};
 
 /// Directions recorded into one command buffer (one progress step).
 pub const DIRECTIONS_PER_SUBMIT: usize = 16;
-const TIMESTAMPS: u32 = 2;
+/// Before the direction passes, after them, after the projection.
+const TIMESTAMPS: u32 = 3;
 /// Cleared sky distance: no surface.
 const EMPTY_SKY: f32 = 1e30;
 
@@ -230,17 +231,8 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
         &[(0, vk::Format::R32G32B32_SFLOAT, 0)],
         "bake.gpu-visibility.depth",
     )?;
-    let timed = ctx.supports_timestamps();
+    let timed = objects.timestamps(TIMESTAMPS, "bake.gpu-visibility.timestamps")?;
     let device = ctx.device();
-    if timed {
-        let info = vk::QueryPoolCreateInfo::default()
-            .query_type(vk::QueryType::TIMESTAMP)
-            .query_count(2 * TIMESTAMPS);
-        // SAFETY: plain create-info; stored for Drop at once.
-        objects.query_pool = unsafe { device.create_query_pool(&info, None) }
-            .map_err(|e| GpuError::vulkan("vkCreateQueryPool", name, e))?;
-        ctx.set_name(objects.query_pool, "bake.gpu-visibility.timestamps");
-    }
     let setup_s = setup.elapsed().as_secs_f64();
     let execute = Instant::now();
 
@@ -270,28 +262,9 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
         .render_area(full)
         .clear_values(&clears);
     let barrier = |cmd, src_stage, dst_stage, src_access, dst_access| {
-        let memory = vk::MemoryBarrier::default()
-            .src_access_mask(src_access)
-            .dst_access_mask(dst_access);
-        // SAFETY: recording a global memory barrier into `cmd`.
-        unsafe {
-            device.cmd_pipeline_barrier(
-                cmd,
-                src_stage,
-                dst_stage,
-                vk::DependencyFlags::empty(),
-                &[memory],
-                &[],
-                &[],
-            );
-        }
+        objects.barrier(cmd, (src_stage, dst_stage), (src_access, dst_access))
     };
-    let timestamp = |cmd, stage, query| {
-        if timed {
-            // SAFETY: recording; the pool holds 2·TIMESTAMPS queries, reset before use.
-            unsafe { device.cmd_write_timestamp(cmd, stage, objects.query_pool, query) };
-        }
-    };
+    let timestamp = |cmd, stage, query| objects.timestamp(cmd, stage, query);
     let groups = point_count.div_ceil(64) as u32;
     let chunks: Vec<&[DirectionView]> = job.views.chunks(DIRECTIONS_PER_SUBMIT).collect();
     let last = chunks.len() - 1;
@@ -303,7 +276,7 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
             unsafe {
                 if k == 0 {
                     if timed {
-                        device.cmd_reset_query_pool(cmd, objects.query_pool, 0, 2 * TIMESTAMPS);
+                        device.cmd_reset_query_pool(cmd, objects.query_pool, 0, TIMESTAMPS);
                     }
                     device.cmd_fill_buffer(cmd, masks.raw(), 0, vk::WHOLE_SIZE, 0);
                     barrier(
@@ -326,25 +299,7 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
                     device.cmd_bind_index_buffer(cmd, indices.raw(), 0, vk::IndexType::UINT32);
                     device.cmd_draw_indexed(cmd, job.indices.len() as u32, 1, 0, 0, 0);
                     device.cmd_end_render_pass(cmd);
-                    let region = vk::BufferImageCopy::default()
-                        .image_subresource(vk::ImageSubresourceLayers {
-                            aspect_mask: vk::ImageAspectFlags::COLOR,
-                            mip_level: 0,
-                            base_array_layer: 0,
-                            layer_count: 1,
-                        })
-                        .image_extent(vk::Extent3D {
-                            width: res,
-                            height: res,
-                            depth: 1,
-                        });
-                    device.cmd_copy_image_to_buffer(
-                        cmd,
-                        target.color_image(),
-                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                        depth.raw(),
-                        &[region],
-                    );
+                    target.record_copy_to_buffer(cmd, &depth, 0);
                     ctx.end_label(cmd);
                     barrier(
                         cmd,
@@ -411,28 +366,9 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
         done += chunk.len();
         (job.progress)(done);
     }
-    let gpu_ms = if timed {
-        let mut ticks = [0u64; 3];
-        // SAFETY: the three queries were written by the completed submissions.
-        unsafe {
-            device.get_query_pool_results(
-                objects.query_pool,
-                0,
-                &mut ticks,
-                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-            )
-        }
-        .map_err(|e| GpuError::vulkan("vkGetQueryPoolResults", name, e))?;
-        let mask = match ctx.timestamp_valid_bits() {
-            64.. => u64::MAX,
-            bits => (1u64 << bits) - 1,
-        };
-        let period = f64::from(ctx.limits().timestamp_period);
-        let ms = |a: usize, b: usize| ticks_to_ms(ticks[a], ticks[b], mask, period);
-        Some((ms(0, 1), ms(1, 2)))
-    } else {
-        None
-    };
+    let gpu_ms = objects
+        .timestamp_ms(TIMESTAMPS as usize - 1, name)?
+        .map(|ms| (ms[0], ms[1]));
     let words: &[u32] = bytemuck::cast_slice(readback.read()?);
     let (m, rest) = words.split_at((point_count * mask_words) as usize);
     let (c, a) = rest.split_at((point_count * coeff_count) as usize);
