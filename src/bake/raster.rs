@@ -165,7 +165,7 @@ pub fn rasterize(mesh: &Mesh, res: u32) -> LightmapTexels {
 
 /// Gutter dilation: `passes` times, every texel not yet filled that has filled
 /// 8-neighbours becomes their average. Filled = `covered` at first, then also texels filled
-/// by earlier passes. Each pass reads a copy of the previous one, so the result does not
+/// by earlier passes. Each pass reads the previous one's values, so the result does not
 /// depend on the visiting order.
 ///
 /// # Panics
@@ -174,38 +174,107 @@ pub fn dilate<T>(values: &mut [T], covered: &[bool], res: u32, passes: u32)
 where
     T: Copy + Add<Output = T> + Mul<f32, Output = T>,
 {
-    let n = res as usize;
-    assert_eq!(values.len(), n * n, "dilate: values are not res²");
-    assert_eq!(covered.len(), n * n, "dilate: coverage is not res²");
-    let mut filled = covered.to_vec();
-    for _ in 0..passes {
-        let (src, was) = (values.to_vec(), filled.clone());
-        let mut changed = false;
-        for y in 0..n {
-            for x in 0..n {
-                let i = y * n + x;
-                if was[i] {
-                    continue;
-                }
-                let (mut sum, mut count) = (None::<T>, 0u32);
-                for ny in y.saturating_sub(1)..(y + 2).min(n) {
-                    for nx in x.saturating_sub(1)..(x + 2).min(n) {
-                        let j = ny * n + nx;
-                        if j != i && was[j] {
-                            sum = Some(sum.map_or(src[j], |s| s + src[j]));
-                            count += 1;
+    DilationPlan::new(covered, res, passes).apply(values);
+}
+
+/// Which texels [`dilate`] fills, pass by pass, and from which neighbours: it depends on
+/// the coverage only, so one plan serves every value array of a lightmap (and vectors of
+/// values per texel, [`DilationPlan::apply_vectors`]). Within a pass the targets were not
+/// filled before it and the sources were, so a pass can be applied in place.
+#[derive(Clone, Debug, Default)]
+pub struct DilationPlan {
+    /// Filled texels in pass order.
+    targets: Vec<u32>,
+    /// The 8-neighbours each target averages (row-major order), `starts`-delimited.
+    sources: Vec<u32>,
+    starts: Vec<u32>,
+}
+
+impl DilationPlan {
+    /// The plan of `passes` dilation passes of a res² lightmap with this coverage.
+    ///
+    /// # Panics
+    /// When `covered` does not hold res² entries (a bug in the caller).
+    pub fn new(covered: &[bool], res: u32, passes: u32) -> DilationPlan {
+        let n = res as usize;
+        assert_eq!(covered.len(), n * n, "dilate: coverage is not res²");
+        let mut plan = DilationPlan {
+            starts: vec![0],
+            ..DilationPlan::default()
+        };
+        let mut filled = covered.to_vec();
+        for _ in 0..passes {
+            let pass_start = plan.targets.len();
+            for y in 0..n {
+                for x in 0..n {
+                    let i = y * n + x;
+                    if filled[i] {
+                        continue;
+                    }
+                    let before = plan.sources.len();
+                    for ny in y.saturating_sub(1)..(y + 2).min(n) {
+                        for nx in x.saturating_sub(1)..(x + 2).min(n) {
+                            let j = ny * n + nx;
+                            // `filled` is updated after the pass: these were filled before it.
+                            if j != i && filled[j] {
+                                plan.sources.push(j as u32);
+                            }
                         }
                     }
-                }
-                if let Some(s) = sum {
-                    values[i] = s * (1.0 / count as f32);
-                    filled[i] = true;
-                    changed = true;
+                    if plan.sources.len() > before {
+                        plan.targets.push(i as u32);
+                        plan.starts.push(plan.sources.len() as u32);
+                    }
                 }
             }
+            if plan.targets.len() == pass_start {
+                break;
+            }
+            for &t in &plan.targets[pass_start..] {
+                filled[t as usize] = true;
+            }
         }
-        if !changed {
-            break;
+        plan
+    }
+
+    /// Each target with its sources, in pass order.
+    fn entries(&self) -> impl Iterator<Item = (usize, &[u32])> {
+        self.targets.iter().enumerate().map(|(k, &t)| {
+            let range = self.starts[k] as usize..self.starts[k + 1] as usize;
+            (t as usize, &self.sources[range])
+        })
+    }
+
+    /// Dilates one value per texel.
+    pub fn apply<T>(&self, values: &mut [T])
+    where
+        T: Copy + Add<Output = T> + Mul<f32, Output = T>,
+    {
+        for (target, sources) in self.entries() {
+            let sum = sources[1..]
+                .iter()
+                .fold(values[sources[0] as usize], |s, &j| s + values[j as usize]);
+            values[target] = sum * (1.0 / sources.len() as f32);
+        }
+    }
+
+    /// Dilates texel-major vectors of `n` values per texel, component by component as
+    /// [`Self::apply`] would each (the same sums in the same order).
+    pub fn apply_vectors(&self, values: &mut [f32], n: usize) {
+        let mut sum = vec![0.0f32; n];
+        for (target, sources) in self.entries() {
+            let first = sources[0] as usize;
+            sum.copy_from_slice(&values[first * n..(first + 1) * n]);
+            for &j in &sources[1..] {
+                let j = j as usize;
+                for (s, v) in sum.iter_mut().zip(&values[j * n..(j + 1) * n]) {
+                    *s += *v;
+                }
+            }
+            let scale = 1.0 / sources.len() as f32;
+            for (v, s) in values[target * n..(target + 1) * n].iter_mut().zip(&sum) {
+                *v = *s * scale;
+            }
         }
     }
 }
@@ -307,5 +376,33 @@ mod tests {
         dilate(&mut values, &covered, res, 2);
         assert!(values[8 + 1] > 0.0, "second pass reaches the next ring");
         assert_eq!(values[3 * 8 + 3], 1.0, "covered texels never change");
+    }
+
+    #[test]
+    fn dilation_of_vectors_equals_dilating_each_component() {
+        let res: usize = 12;
+        // A ragged coverage: a diagonal band and a lone texel.
+        let covered: Vec<bool> = (0..res * res)
+            .map(|i| (i % res).abs_diff(i / res) <= 1 || i == 5 * res + 10)
+            .collect();
+        let n = 5;
+        let mut vectors: Vec<f32> = (0..res * res * n)
+            .map(|i| (i as f32 * 0.37).sin())
+            .collect();
+        let mut planes: Vec<Vec<f32>> = (0..n)
+            .map(|k| (0..res * res).map(|t| vectors[t * n + k]).collect())
+            .collect();
+        let plan = DilationPlan::new(&covered, res as u32, 3);
+        plan.apply_vectors(&mut vectors, n);
+        for (k, plane) in planes.iter_mut().enumerate() {
+            dilate(plane, &covered, res as u32, 3);
+            for t in 0..res * res {
+                assert_eq!(
+                    vectors[t * n + k].to_bits(),
+                    plane[t].to_bits(),
+                    "texel {t}, component {k}"
+                );
+            }
+        }
     }
 }

@@ -69,7 +69,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::directions::{DirectionSet, above_horizon};
-use super::raster::{LightmapTexels, dilate, texel_index_of};
+use super::raster::{DilationPlan, LightmapTexels, texel_index_of};
 use super::surface::SurfaceReader;
 use super::trace::Tracer;
 use super::visibility::DILATION_PASSES;
@@ -218,6 +218,7 @@ pub fn bake_sh_lightmap(
     bar.finish_and_clear();
     let mut current = direct.clone();
     let mut bounce_source = Vec::new();
+    let dilation = DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES);
 
     for bounce in 1..=settings.bounces {
         // Irradiance of the previous bounce at every texel, dilated into the gutters.
@@ -226,12 +227,7 @@ pub fn bake_sh_lightmap(
             let i = i as usize;
             irradiance[i] = irradiance_at(&current[k].0.as_rgb(), texels.normal[i]).max(Vec3::ZERO);
         }
-        dilate(
-            &mut irradiance,
-            &texels.covered,
-            texels.res,
-            DILATION_PASSES,
-        );
+        dilation.apply(&mut irradiance);
         let bar = progress_bar(
             settings.progress,
             covered.len(),
@@ -284,8 +280,8 @@ pub fn bake_sh_lightmap(
         planes[i as usize] = current[k].0;
         rnm[i as usize] = current[k].1;
     }
-    dilate(&mut planes, &texels.covered, texels.res, DILATION_PASSES);
-    dilate(&mut rnm, &texels.covered, texels.res, DILATION_PASSES);
+    dilation.apply(&mut planes);
+    dilation.apply(&mut rnm);
     let map = ShLightmap {
         res: texels.res,
         bounces: settings.bounces,

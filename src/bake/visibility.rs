@@ -37,9 +37,8 @@
 //! a fixed order, so a bake is bit-identical whatever the thread count.
 //!
 //! Finally the coefficients and AO are dilated [`DILATION_PASSES`] texels into the chart
-//! gutters ([`dilate`]); gutter texels further out keep 0 coefficients and AO 1.
+//! gutters (one [`DilationPlan`] for both); gutter texels further out keep 0 coefficients and AO 1.
 
-use std::ops::{Add, Mul};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
@@ -48,7 +47,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::directions::{DirectionSet, ShProjector, above_horizon};
-use super::raster::{LightmapTexels, dilate};
+use super::raster::{DilationPlan, LightmapTexels};
 use super::trace::{PACKET_RAYS, RayPacket, Tracer};
 use super::{BakeStats, progress_bar};
 use crate::sh::Order;
@@ -108,24 +107,6 @@ impl VisibilityMap {
     pub fn texel(&self, index: usize) -> &[f32] {
         let n2 = self.order.coeff_count();
         &self.coeffs[index * n2..(index + 1) * n2]
-    }
-}
-
-/// Four f32 lanes, so [`dilate`] can fill coefficient vectors four at a time.
-#[derive(Clone, Copy, Debug, Default)]
-struct Lanes4([f32; 4]);
-
-impl Add for Lanes4 {
-    type Output = Lanes4;
-    fn add(self, o: Lanes4) -> Lanes4 {
-        Lanes4([0, 1, 2, 3].map(|k| self.0[k] + o.0[k]))
-    }
-}
-
-impl Mul<f32> for Lanes4 {
-    type Output = Lanes4;
-    fn mul(self, s: f32) -> Lanes4 {
-        Lanes4(self.0.map(|v| v * s))
     }
 }
 
@@ -277,6 +258,7 @@ pub fn bake_visibility(
     let dirs = DirectionSet::new(settings.rays, settings.seed);
     let projector = ShProjector::new(&dirs, settings.order);
     let order = texel_order(texels);
+    let ordered = start.elapsed().as_secs_f64();
     let points = SurfacePoints::of(texels);
     let progress = progress_bar(settings.progress, order.len(), "visibility");
     let rays_done = AtomicU64::new(0);
@@ -295,6 +277,7 @@ pub fn bake_visibility(
         })
         .collect();
     progress.finish_and_clear();
+    let traced = start.elapsed().as_secs_f64();
 
     let mut coeffs = vec![0.0f32; res * res * n2];
     let mut ao = vec![1.0f32; res * res];
@@ -306,8 +289,9 @@ pub fn bake_visibility(
         }
     }
     drop(results);
-    dilate_coeffs(&mut coeffs, n2, &texels.covered, texels.res);
-    dilate(&mut ao, &texels.covered, texels.res, DILATION_PASSES);
+    let plan = DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES);
+    plan.apply_vectors(&mut coeffs, n2);
+    plan.apply(&mut ao);
     let map = VisibilityMap {
         res: texels.res,
         order: settings.order,
@@ -319,6 +303,11 @@ pub fn bake_visibility(
             seconds: start.elapsed().as_secs_f64(),
         },
     };
+    log::debug!(
+        "visibility bake phases: set-up and order {ordered:.3} s, trace {:.3} s, scatter and dilate {:.3} s",
+        traced - ordered,
+        map.stats.seconds - traced
+    );
     log::info!(
         "visibility bake: {} texels × {} directions (order {}): {} traced",
         order.len(),
@@ -387,50 +376,10 @@ pub fn bake_points(
     out
 }
 
-/// [`dilate`] of texel-major vectors of `n2` coefficients, four coefficients per plane,
-/// planes in parallel (each plane's result is independent of the others).
-pub(crate) fn dilate_coeffs(coeffs: &mut [f32], n2: usize, covered: &[bool], res: u32) {
-    let texel_count = covered.len();
-    let planes: Vec<Vec<Lanes4>> = (0..n2.div_ceil(4))
-        .into_par_iter()
-        .map(|p| {
-            let mut plane: Vec<Lanes4> = (0..texel_count)
-                .map(|t| {
-                    let mut lanes = [0.0f32; 4];
-                    for (k, lane) in lanes.iter_mut().enumerate() {
-                        if 4 * p + k < n2 {
-                            *lane = coeffs[t * n2 + 4 * p + k];
-                        }
-                    }
-                    Lanes4(lanes)
-                })
-                .collect();
-            dilate(&mut plane, covered, res, DILATION_PASSES);
-            plane
-        })
-        .collect();
-    for (p, plane) in planes.iter().enumerate() {
-        for (t, lanes) in plane.iter().enumerate() {
-            for k in 0..4 {
-                if 4 * p + k < n2 {
-                    coeffs[t * n2 + 4 * p + k] = lanes.0[k];
-                }
-            }
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::scene::{Mesh, Vertex};
-
-    #[test]
-    fn lanes_dilate_like_scalars() {
-        let a = Lanes4([1.0, 2.0, 3.0, 4.0]);
-        let b = (a + a) * 0.5;
-        assert_eq!(b.0, a.0);
-    }
 
     #[test]
     fn texel_order_visits_every_covered_texel_once() {

@@ -21,13 +21,20 @@
 //! walk of the CWBVH with a mask of the rays still alive per stack entry. Each node is
 //! decoded once for the packet: the child planes picked by the direction's signs, u8 →
 //! f32, times extent·(1/d) — everything but the origin term is shared because the
-//! direction is. The rays are stored by coordinate in blocks of four (SoA), so each block
-//! with a live ray costs the origin term (p − o)·(1/d) once and one 4-ray slab test per
-//! occupied child, whose 4-bit movemask is the child's ray mask for that block (no
-//! per-hit scatter); a node costs in proportion to the blocks that reach it. In a leaf,
-//! the ray-independent part of Möller–Trumbore (edges and normal, precomputed per
-//! triangle at build; 1/(n·d) per triangle and direction) is shared and the rest runs
-//! four rays per vector. A ray found occluded leaves every mask.
+//! direction is. The rays are stored by coordinate (SoA) and walked in blocks of W lanes
+//! (W = 8 with AVX2, else 4: [`lanes`]), so each block with a live ray costs the origin
+//! term (p − o)·(1/d) once and one W-ray slab test per occupied child, whose movemask is
+//! the child's ray mask for that block (no per-hit scatter); a node costs in proportion
+//! to the blocks that reach it. In a leaf, the ray-independent part of Möller–Trumbore
+//! (edges and normal, precomputed per triangle at build; 1/(n·d) per triangle and
+//! direction) is shared and the rest runs W rays per vector. A ray found occluded leaves
+//! every mask. The children a packet enters are prefetched before any is read: on big
+//! scenes the walk waits on cache misses (node and triangle loads) more than it computes.
+//!
+//! Tried and not kept: a packet-level test of each child box and triangle against the
+//! box of the packet's origins (all rays enter / none does, exact by monotonicity of the
+//! f32 slab operations): on the house 58 % of child tests and 96 % of triangle tests were
+//! undecided at 64 texels per packet, and the walk got slower.
 //!
 //! Bit-identity: every per-ray operation is the very IEEE operation, in the very order
 //! and with the same min/max operand order (NaN handling), that obvhs's single-ray
@@ -50,6 +57,9 @@ use obvhs::{
 
 use crate::scene::Mesh;
 
+mod lanes;
+use lanes::{RayLanes, Width};
+
 /// Normal offset of ray origins relative to the scene's bounding-box diagonal.
 pub const EPSILON_PER_EXTENT: f32 = 1e-4;
 
@@ -59,18 +69,14 @@ pub const PACKET_RAYS: usize = 64;
 /// repeated so that coherent node tests equal single-ray ones bit for bit.
 const NODE_T_MIN: f32 = 0.0001;
 
-/// Lanes of one SIMD ray block of a packet.
-const LANES: usize = 4;
-/// SIMD ray blocks of a full packet.
-const BLOCKS: usize = PACKET_RAYS / LANES;
-
-/// Origins of one coherent query, stored by coordinate in blocks of [`LANES`] rays (ray
-/// i = lane i % 4 of block i / 4), and the traversal stack, reused across queries.
+/// Origins of one coherent query, stored by coordinate (ray i = entry i of each axis,
+/// loaded [`RayLanes::WIDTH`] rays at a time), and the traversal stack, reused across
+/// queries.
 #[derive(Clone, Debug)]
 pub struct RayPacket {
-    x: [Vec4; BLOCKS],
-    y: [Vec4; BLOCKS],
-    z: [Vec4; BLOCKS],
+    x: [f32; PACKET_RAYS],
+    y: [f32; PACKET_RAYS],
+    z: [f32; PACKET_RAYS],
     len: usize,
     stack: Vec<(u32, u64)>,
 }
@@ -87,17 +93,14 @@ impl RayPacket {
             origins.len()
         );
         let mut packet = RayPacket {
-            x: [Vec4::ZERO; BLOCKS],
-            y: [Vec4::ZERO; BLOCKS],
-            z: [Vec4::ZERO; BLOCKS],
+            x: [0.0; PACKET_RAYS],
+            y: [0.0; PACKET_RAYS],
+            z: [0.0; PACKET_RAYS],
             len: origins.len(),
             stack: Vec::with_capacity(256),
         };
         for (i, o) in origins.iter().enumerate() {
-            let (b, lane) = (i / LANES, i % LANES);
-            packet.x[b][lane] = o.x;
-            packet.y[b][lane] = o.y;
-            packet.z[b][lane] = o.z;
+            (packet.x[i], packet.y[i], packet.z[i]) = (o.x, o.y, o.z);
         }
         packet
     }
@@ -122,16 +125,17 @@ impl RayPacket {
     }
 }
 
-/// Calls `f(block, lanes)` for every block of [`LANES`] rays with a ray in `mask`,
-/// `lanes` = that block's bits of `mask`.
+/// Calls `f(first_ray, lanes)` for every block of `width` (< 64) consecutive rays with a
+/// ray in `mask`, `lanes` = that block's bits of `mask`.
 #[inline(always)]
-fn for_each_block(mask: u64, mut f: impl FnMut(usize, u32)) {
+fn for_each_block(width: usize, mask: u64, mut f: impl FnMut(usize, u32)) {
+    let (block_bits, w) = ((1u64 << width) - 1, width);
     let mut todo = mask;
     while todo != 0 {
-        let b = todo.trailing_zeros() as usize / LANES;
-        let lanes = ((todo >> (LANES * b)) & 0xf) as u32;
-        todo &= !(0xf << (LANES * b));
-        f(b, lanes);
+        let first = todo.trailing_zeros() as usize / w * w;
+        let lanes = ((todo >> first) & block_bits) as u32;
+        todo &= !(block_bits << first);
+        f(first, lanes);
     }
 }
 
@@ -146,6 +150,8 @@ pub struct Tracer {
     /// The ray-independent part of Möller–Trumbore per BVH primitive, for coherent queries.
     edges: Vec<TriangleEdges>,
     ray_epsilon: f32,
+    /// Lanes of the coherent walk on this CPU.
+    width: Width,
 }
 
 /// v0 and the edges and normal of a triangle as obvhs's `Triangle::intersect` computes
@@ -252,6 +258,7 @@ impl Tracer {
                 mesh_triangles: input_triangles,
                 edges: Vec::new(),
                 ray_epsilon,
+                width: Width::detect(),
             };
         }
         let mut build_time = Duration::ZERO;
@@ -277,6 +284,7 @@ impl Tracer {
             triangles,
             mesh_triangles,
             ray_epsilon,
+            width: Width::detect(),
         }
     }
 
@@ -370,19 +378,66 @@ impl Tracer {
         if active == 0 || bvh.nodes.is_empty() {
             return 0;
         }
-        let t_min = self.t_min();
-        let d = canonical_direction(dir);
+        let query = CoherentQuery {
+            bvh,
+            edges: &self.edges,
+            t_min: self.t_min(),
+            t_max,
+            dir: canonical_direction(dir),
+        };
+        match self.width {
+            Width::Sse4 => query.walk::<Vec4>(packet, active),
+            // SAFETY: `Width::detect` found the feature on this CPU.
+            #[cfg(target_arch = "x86_64")]
+            #[allow(unsafe_code)]
+            Width::Avx2x8 => unsafe { query.walk_avx2(packet, active) },
+            #[cfg(target_arch = "x86_64")]
+            #[allow(unsafe_code)]
+            Width::Avx512x16 => unsafe { query.walk_avx512(packet, active) },
+        }
+    }
+}
+
+/// One [`Tracer::occluded_coherent`] query: what the walk shares across its rays.
+struct CoherentQuery<'a> {
+    bvh: &'a CwBvh,
+    edges: &'a [TriangleEdges],
+    t_min: f32,
+    t_max: f32,
+    /// Unit direction, −0.0 components made +0.0.
+    dir: Vec3A,
+}
+
+impl CoherentQuery<'_> {
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn walk_avx2(&self, packet: &mut RayPacket, active: u64) -> u64 {
+        self.walk::<lanes::Avx2>(packet, active)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn walk_avx512(&self, packet: &mut RayPacket, active: u64) -> u64 {
+        self.walk::<lanes::Avx512>(packet, active)
+    }
+
+    /// The walk (module doc), `L::WIDTH` rays per vector operation.
+    #[inline(always)]
+    fn walk<L: RayLanes>(&self, packet: &mut RayPacket, active: u64) -> u64 {
+        let (bvh, t_min, t_max, d) = (self.bvh, self.t_min, self.t_max, self.dir);
         // As Ray::new computes it.
         let inv = Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
         let (rdx, rdy, rdz) = (d.x < 0.0, d.y < 0.0, d.z < 0.0);
         // Child-slot priority of obvhs's traversal order: slot ^ octant (near first).
         let oct = (if rdx { 0 } else { 4 }) | (if rdy { 0 } else { 2 }) | (if rdz { 0 } else { 1 });
-        let node_t_min = Vec4::splat(NODE_T_MIN);
-        let ray_t_min = Vec4::splat(t_min);
-        let ray_t_max = Vec4::splat(t_max);
-        let (inv_x, inv_y, inv_z) = (Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z));
-        let (dx, dy, dz) = (Vec4::splat(d.x), Vec4::splat(d.y), Vec4::splat(d.z));
-        let one = Vec4::ONE;
+        let s = L::splat;
+        let node_t_min = s(NODE_T_MIN);
+        let ray_t_min = s(t_min);
+        let ray_t_max = s(t_max);
+        let (inv_x, inv_y, inv_z) = (s(inv.x), s(inv.y), s(inv.z));
+        let (dx, dy, dz) = (s(d.x), s(d.y), s(d.z));
+        let one = s(1.0);
+        let block = |axis: &[f32; PACKET_RAYS], first: usize| L::load(&axis[first..]);
         let mut occluded = 0u64;
         let mut stack = std::mem::take(&mut packet.stack);
         stack.clear();
@@ -400,12 +455,9 @@ impl Tracer {
             let occupied = u64::from_le_bytes(node.child_meta);
             let pick = |lo: &[u8; 8], hi: &[u8; 8], neg: bool, scale: f32, c: usize| {
                 let (near, far) = if neg { (hi[c], lo[c]) } else { (lo[c], hi[c]) };
-                (
-                    Vec4::splat(f32::from(near) * scale),
-                    Vec4::splat(f32::from(far) * scale),
-                )
+                (s(f32::from(near) * scale), s(f32::from(far) * scale))
             };
-            let mut slabs = [[Vec4::ZERO; 6]; 8];
+            let mut slabs = [[s(0.0); 6]; 8];
             let mut children = [0usize; 8];
             let mut child_count = 0;
             for c in 0..8 {
@@ -420,68 +472,77 @@ impl Tracer {
                 child_count += 1;
             }
             let mut child_masks = [0u64; 8];
-            let (px, py, pz) = (
-                Vec4::splat(node.p.x),
-                Vec4::splat(node.p.y),
-                Vec4::splat(node.p.z),
-            );
-            for_each_block(mask, |b, lanes| {
-                // Per-ray part, four rays per vector: (p − origin)·(1/d), then obvhs's
-                // slab test with its operand order of _mm_max_ps/_mm_min_ps (NaN
+            let (px, py, pz) = (s(node.p.x), s(node.p.y), s(node.p.z));
+            for_each_block(L::WIDTH, mask, |first, lanes| {
+                // Per-ray part, a vector of rays at a time: (p − origin)·(1/d), then
+                // obvhs's slab test with its operand order of _mm_max_ps/_mm_min_ps (NaN
                 // handling).
-                let ox = (px - packet.x[b]) * inv_x;
-                let oy = (py - packet.y[b]) * inv_y;
-                let oz = (pz - packet.z[b]) * inv_z;
+                let ox = px.sub(block(&packet.x, first)).mul(inv_x);
+                let oy = py.sub(block(&packet.y, first)).mul(inv_y);
+                let oz = pz.sub(block(&packet.z, first)).mul(inv_z);
                 for (k, [x0, x1, y0, y1, z0, z1]) in slabs[..child_count].iter().enumerate() {
-                    let tmin = (*x0 + ox).max((*y0 + oy).max(*z0 + oz)).max(node_t_min);
-                    let tmax = (*x1 + ox).min((*y1 + oy).min(*z1 + oz)).min(ray_t_max);
-                    let hits = tmin.cmple(tmax).bitmask() & lanes;
-                    child_masks[children[k]] |= u64::from(hits) << (LANES * b);
+                    let tmin = x0.add(ox).max(y0.add(oy).max(z0.add(oz))).max(node_t_min);
+                    let tmax = x1.add(ox).min(y1.add(oy).min(z1.add(oz))).min(ray_t_max);
+                    let hits = tmin.le(tmax) & lanes;
+                    child_masks[children[k]] |= u64::from(hits) << first;
                 }
             });
+            // The children's memory requested before any is read (the walk is bound by
+            // cache misses on big scenes).
+            for (c, &m) in child_masks.iter().enumerate() {
+                if m == 0 {
+                    continue;
+                }
+                if node.is_leaf(c) {
+                    let (first_prim, count) = node.child_primitives(c);
+                    for prim in first_prim..first_prim + count {
+                        lanes::prefetch(&self.edges[prim as usize]);
+                    }
+                } else {
+                    lanes::prefetch(&bvh.nodes[node.child_node_index(c) as usize]);
+                }
+            }
             // Leaves first (any hit removes rays from everything below), then internal
             // children pushed far to near so the nearest is walked next.
             for (c, &m) in child_masks.iter().enumerate() {
                 if m == 0 || !node.is_leaf(c) {
                     continue;
                 }
-                let (first, count) = node.child_primitives(c);
-                for prim in first..first + count {
+                let (first_prim, count) = node.child_primitives(c);
+                for prim in first_prim..first_prim + count {
                     // Triangle::intersect (Möller–Trumbore), its ray-independent part
-                    // precomputed, the rest four rays per vector: the same operations in
-                    // the same order as glam's Vec3A cross and dot, so the same bits.
+                    // precomputed, the rest a vector of rays at a time: the same
+                    // operations in the same order as glam's Vec3A cross and dot, so the
+                    // same bits.
                     let tri = &self.edges[prim as usize];
                     let (e1, e2, n) = (tri.e1, tri.e2, tri.n);
                     let inv_det = 1.0 / n.dot(d);
                     if inv_det == 0.0 {
                         continue; // obvhs's `valid` needs inv_det ≠ 0
                     }
-                    let s = Vec4::splat;
                     let (v0x, v0y, v0z) = (s(tri.v0.x), s(tri.v0.y), s(tri.v0.z));
                     let (e1x, e1y, e1z) = (s(e1.x), s(e1.y), s(e1.z));
                     let (e2x, e2y, e2z) = (s(e2.x), s(e2.y), s(e2.z));
                     let (nx, ny, nz) = (s(n.x), s(n.y), s(n.z));
                     let inv_det = s(inv_det);
-                    for_each_block(m & !occluded, |b, lanes| {
-                        let cx = v0x - packet.x[b];
-                        let cy = v0y - packet.y[b];
-                        let cz = v0z - packet.z[b];
+                    for_each_block(L::WIDTH, m & !occluded, |first, lanes| {
+                        let cx = v0x.sub(block(&packet.x, first));
+                        let cy = v0y.sub(block(&packet.y, first));
+                        let cz = v0z.sub(block(&packet.z, first));
                         // q = d × c
-                        let qx = dy * cz - dz * cy;
-                        let qy = dz * cx - dx * cz;
-                        let qz = dx * cy - dy * cx;
-                        let u = (qx * e2x + qy * e2y + qz * e2z) * inv_det;
-                        let v = (qx * e1x + qy * e1y + qz * e1z) * inv_det;
-                        let w = one - u - v;
-                        let outside = u.is_negative_bitmask()
-                            | v.is_negative_bitmask()
-                            | w.is_negative_bitmask();
-                        let t = (nx * cx + ny * cy + nz * cz) * inv_det;
+                        let qx = dy.mul(cz).sub(dz.mul(cy));
+                        let qy = dz.mul(cx).sub(dx.mul(cz));
+                        let qz = dx.mul(cy).sub(dy.mul(cx));
+                        let u = qx.mul(e2x).add(qy.mul(e2y)).add(qz.mul(e2z)).mul(inv_det);
+                        let v = qx.mul(e1x).add(qy.mul(e1y)).add(qz.mul(e1z)).mul(inv_det);
+                        let w = one.sub(u).sub(v);
+                        let outside = u.negative() | v.negative() | w.negative();
+                        let t = nx.mul(cx).add(ny.mul(cy)).add(nz.mul(cz)).mul(inv_det);
                         // intersect() returns t within [t_min, t_max] (else ∞) and the
                         // any-hit traversal counts it when t < t_max.
-                        let in_range = t.cmpge(ray_t_min).bitmask() & t.cmplt(ray_t_max).bitmask();
+                        let in_range = t.ge(ray_t_min) & t.lt(ray_t_max);
                         let hit = lanes & !outside & in_range;
-                        occluded |= u64::from(hit) << (LANES * b);
+                        occluded |= u64::from(hit) << first;
                     });
                 }
             }
@@ -592,12 +653,14 @@ mod tests {
                 [0, 1, 2].map(|_| c + Vec3::new(next(), next(), next()) * 0.3)
             })
             .collect();
-        let tracer = Tracer::new(&mesh(&tris));
+        let mut tracer = Tracer::new(&mesh(&tris));
         let origins: Vec<Vec3> = (0..61)
             .map(|i| Vec3::new((i % 8) as f32 * 0.1, (i / 8) as f32 * 0.1, 0.05))
             .collect();
         let mut packet = RayPacket::new(&origins);
-        for k in 0..200 {
+        let widths = Width::available();
+        for k in 0..200 * widths.len() {
+            tracer.width = widths[k / 200];
             let dir = Vec3::new(next(), next(), next()).normalize_or(Vec3::X);
             let dir = if k % 17 == 0 { Vec3::Y } else { dir }; // axis-aligned: 1/0 slabs
             let active = if k % 3 == 0 {
@@ -609,7 +672,8 @@ mod tests {
             let got = tracer.occluded_coherent(&mut packet, dir, t_max, active);
             for (i, &o) in origins.iter().enumerate() {
                 let want = active >> i & 1 == 1 && tracer.occluded(o, dir, t_max);
-                assert_eq!(got >> i & 1 == 1, want, "direction {k}, ray {i}");
+                let width = tracer.width;
+                assert_eq!(got >> i & 1 == 1, want, "direction {k}, ray {i}, {width:?}");
             }
             assert_eq!(got >> origins.len(), 0);
         }
