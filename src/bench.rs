@@ -24,7 +24,8 @@ use crate::report::image::{write_exr, write_exr_half, write_png};
 use crate::report::metrics::{TimingStats, image_error};
 use crate::report::plot::{CostAxis, write_error_plot, write_pca_error_plot};
 use crate::report::table::{
-    AttributionKind, AttributionStep, BenchRow, BenchTable, RowReference, fill_ratios_to_preconv,
+    AttributionKind, AttributionStep, BenchPhases, BenchRow, BenchTable, RowReference,
+    fill_ratios_to_preconv,
 };
 use crate::technique::{self, HwPath, ReferenceModel, Technique, TechniqueError};
 
@@ -113,6 +114,8 @@ pub fn run(
         });
     }
     let started = Instant::now();
+    let mut phases = BenchPhases::default();
+    let mut lap = Lap::start();
     let cost_model = if settings.probe {
         let probe = crate::probe::run(
             ctx,
@@ -133,7 +136,9 @@ pub fn run(
     } else {
         None
     };
+    lap.split(&mut phases.probe);
     let reference = render_references(ctx, prepared, settings)?;
+    lap.split(&mut phases.references);
     let frame_settings = FrameSettings {
         width: settings.width,
         height: settings.height,
@@ -154,6 +159,7 @@ pub fn run(
         pixels: ladder,
         written: std::collections::HashSet::new(),
     };
+    lap.split(&mut phases.ladder_setup);
     let mut scene = SceneGpu::new(ctx, &prepared.scene, &frame_settings)?;
     let filters: Vec<Option<NormalFilter>> = match &settings.specular {
         Some(s) => s.filters.iter().copied().map(Some).collect(),
@@ -178,6 +184,7 @@ pub fn run(
                     reference,
                     &mut ladder,
                     settings,
+                    &mut phases,
                 );
                 let (row, frame) = match measured {
                     // The specular term's moment maps can take a dx9 draw past its textures.
@@ -200,6 +207,7 @@ pub fn run(
             }
         }
     }
+    lap = Lap::start();
     for &path in &settings.paths {
         let written = write_figures(
             &settings.out,
@@ -248,14 +256,19 @@ pub fn run(
             )
         }),
         results: rows,
-        seconds: started.elapsed().as_secs_f64(),
+        seconds: 0.0,
+        phases,
     };
-    table.write(&settings.out)?;
+    let mut table = table;
     write_plots(&table, &settings.paths, &settings.out);
+    lap.split(&mut table.phases.figures);
+    table.seconds = started.elapsed().as_secs_f64();
+    table.write(&settings.out)?;
     log::info!(
-        "bench: {} rows in {:.1} s",
+        "bench: {} rows in {:.1} s ({})",
         table.results.len(),
-        started.elapsed().as_secs_f64()
+        table.seconds,
+        table.phases.summary()
     );
     Ok(table)
 }
@@ -505,6 +518,20 @@ fn attribution(
     Ok(steps)
 }
 
+/// A stopwatch that adds the time since its last split to a phase of [`BenchPhases`].
+struct Lap(Instant);
+
+impl Lap {
+    fn start() -> Lap {
+        Lap(Instant::now())
+    }
+
+    fn split(&mut self, phase: &mut f64) {
+        *phase += self.0.elapsed().as_secs_f64();
+        self.0 = Instant::now();
+    }
+}
+
 /// Builds, times, writes and measures one technique × path; returns its row and image.
 #[allow(clippy::too_many_arguments)]
 fn measure_row(
@@ -516,9 +543,13 @@ fn measure_row(
     references: Option<&References>,
     ladder: &mut Ladder,
     settings: &BenchSettings,
+    phases: &mut BenchPhases,
 ) -> Result<(BenchRow, Frame), BenchError> {
+    let mut lap = Lap::start();
     let tech = technique::build(ctx, scene, technique, path, &prepared.inputs())?;
+    lap.split(&mut phases.build);
     let frame = tech.render(scene, settings.warmup, settings.frames)?;
+    lap.split(&mut phases.render);
     let specular = scene.specular().map(|s| s.term.filter);
     let label = match specular {
         Some(f) => format!("{}.spec{}", tech.label(), f.name()),
@@ -549,6 +580,11 @@ fn measure_row(
     }
     // The share of the screen covered; the model uses the scene's shaded fragments (`run`).
     let covered = frame.rgba.iter().filter(|p| p[3] > 0.5).count();
+    lap.split(&mut phases.row_images);
+    let attribution = attribution(
+        prepared, technique, path, &frame, references, ladder, settings,
+    )?;
+    lap.split(&mut phases.ladder);
     let row = BenchRow {
         technique,
         path,
@@ -572,9 +608,7 @@ fn measure_row(
         paper_ms: technique.paper_ms(),
         paper_ratio_to_preconv: technique.paper_ratio_to_preconv(),
         reference: reference_kind,
-        attribution: attribution(
-            prepared, technique, path, &frame, references, ladder, settings,
-        )?,
+        attribution,
     };
     Ok((row, frame))
 }

@@ -5,7 +5,8 @@
 // Value j of a texel is lane j%4 of group j/4: weights 0 … M−1, then the index as UNORM8.
 //
 // Cluster boundaries (SHVIS_SEAM_BLEND): 1 fetches the 4 bilinear taps unfiltered, decodes
-// each in its own cluster and blends the reconstructions bilinearly (the mitigation); 0
+// each in its own cluster and blends the reconstructions bilinearly (the mitigation) —
+// where all four share a cluster that is one decode of the blended weights; 0
 // filters the weights bilinearly across the boundary and decodes them in the nearest
 // texel's cluster (the known artifact).
 #version 450
@@ -100,15 +101,31 @@ void main() {
     vec2 st = in_uv_lightmap * vec2(res) - 0.5;
     vec2 base = floor(st);
     vec2 f = st - base;
+    vec4 v[4][GROUPS];
+    float w[4];
+    int c[4];
     for (int tap = 0; tap < 4; ++tap) {
         ivec2 offset = ivec2(tap & 1, tap >> 1);
         ivec2 ij = clamp(ivec2(base) + offset, ivec2(0), res - 1);
         vec2 w2 = mix(1.0 - f, f, vec2(offset));
-        vec4 v[GROUPS];
         for (int g = 0; g < GROUPS; ++g) {
-            v[g] = fetch_group(g, ij);
+            v[tap][g] = fetch_group(g, ij);
         }
-        add_cluster(e, w2.x * w2.y, v, cluster_index(v[M / 4]));
+        w[tap] = w2.x * w2.y;
+        c[tap] = cluster_index(v[tap][M / 4]);
+    }
+    if (c[0] == c[1] && c[0] == c[2] && c[0] == c[3]) {
+        // Inside a cluster the decode is linear: blend the weights, decode once (the
+        // same sum, a quarter of the cluster block's reads).
+        vec4 blended[GROUPS];
+        for (int g = 0; g < GROUPS; ++g) {
+            blended[g] = w[0] * v[0][g] + w[1] * v[1][g] + w[2] * v[2][g] + w[3] * v[3][g];
+        }
+        add_cluster(e, 1.0, blended, c[0]);
+    } else {
+        for (int tap = 0; tap < 4; ++tap) {
+            add_cluster(e, w[tap], v[tap], c[tap]);
+        }
     }
 #else
     ivec2 nearest = clamp(ivec2(floor(in_uv_lightmap * vec2(res))), ivec2(0), res - 1);

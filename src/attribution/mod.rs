@@ -38,7 +38,8 @@
 
 pub mod exact_light;
 
-use std::sync::Arc;
+use std::collections::VecDeque;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
@@ -80,8 +81,15 @@ pub struct LadderPixels {
     /// `shlmap`'s incident-radiance SH at each pixel, gathered on first use.
     sh_radiance: std::sync::OnceLock<Vec<[[f64; 3]; 9]>>,
     exact: ExactLightTable,
+    /// Rung images by stem, kept between rows ([`LadderPixels::rung`]).
+    rung_cache: Mutex<VecDeque<(String, Frame)>>,
     pub seconds: f64,
 }
+
+/// Rung images [`LadderPixels`] keeps: the rows of one technique (dx9 and dx10; `pcaM`
+/// and `pcaMw`) come one after another, and 24 images (16 MB each at 1280×800) cover the
+/// largest family's shared rungs.
+const RUNG_CACHE_IMAGES: usize = 24;
 
 impl LadderPixels {
     /// Renders the point G-buffer, traces the visibility at each covered pixel and
@@ -133,6 +141,7 @@ impl LadderPixels {
             vis,
             sh_radiance: std::sync::OnceLock::new(),
             exact,
+            rung_cache: Mutex::new(VecDeque::new()),
             seconds: start.elapsed().as_secs_f64(),
         })
     }
@@ -158,6 +167,28 @@ impl LadderPixels {
             *o = f64::from(c);
         }
         v
+    }
+
+    /// The rung image named `stem`, made by `make` unless a recent row made it already:
+    /// equal stems are equal images ([`Rung`]), so the rungs that do not depend on the
+    /// path (or on the weights-only variant) are computed once per technique.
+    fn rung(&self, stem: &str, make: &dyn Fn() -> Frame) -> Frame {
+        let cached = |cache: &VecDeque<(String, Frame)>| {
+            cache
+                .iter()
+                .find(|(s, _)| s == stem)
+                .map(|(_, f)| f.clone())
+        };
+        if let Some(frame) = cached(&self.rung_cache.lock().expect("rung cache")) {
+            return frame;
+        }
+        let frame = make();
+        let mut cache = self.rung_cache.lock().expect("rung cache");
+        if cache.len() == RUNG_CACHE_IMAGES {
+            cache.pop_front();
+        }
+        cache.push_back((stem.to_string(), frame.clone()));
+        frame
     }
 
     /// The image of irradiance `irradiance(k)` at covered pixel k (module doc's radiance).
@@ -331,23 +362,24 @@ fn compression_rungs(
     };
     let lighting = exact_cosine(radiance, order.get() + 2, order);
     let lxh = LxhMatrices::new(radiance, order, prepared.h_order);
-    let rungs = vec![
-        (
-            compression.0,
-            compression.1,
-            px.image(|k| dot_rgb(&compressed(k), &exact(k), n2)),
-        ),
-        (
+    let (compression_kind, compression_stem) = compression;
+    let rung = |kind, stem: String, make: &dyn Fn() -> Frame| (kind, px.rung(&stem, make), stem);
+    let rungs = [
+        rung(compression_kind, compression_stem, &|| {
+            px.image(|k| dot_rgb(&compressed(k), &exact(k), n2))
+        }),
+        rung(
             AttributionKind::LightingOrder,
             format!("{base}.lighting_order"),
-            px.image(|k| shade(&lighting, px.normal[k], &compressed(k))),
+            &|| px.image(|k| shade(&lighting, px.normal[k], &compressed(k))),
         ),
-        (
+        rung(
             AttributionKind::CosineOrder,
             format!("{base}.cosine_order"),
-            px.image(|k| shade(&lxh, px.normal[k], &compressed(k))),
+            &|| px.image(|k| shade(&lxh, px.normal[k], &compressed(k))),
         ),
     ];
+    let rungs = rungs.into_iter().map(|(k, f, stem)| (k, stem, f)).collect();
     (rungs, lxh)
 }
 
@@ -362,7 +394,8 @@ pub fn cpu_rungs(
     let radiance = &prepared.radiance_sh;
     let label = format!("{technique}.{path}");
     let mut rungs = Vec::new();
-    let mut push = |step: AttributionKind, stem: String, frame: Frame| {
+    let mut push = |step: AttributionKind, stem: String, make: &dyn Fn() -> Frame| {
+        let frame = px.rung(&stem, make);
         rungs.push(Rung { step, stem, frame });
     };
     let exact = |k: usize| {
@@ -379,25 +412,28 @@ pub fn cpu_rungs(
     };
     let visibility_rung = |order: Order| {
         let n2 = order.coeff_count();
-        let frame = px.image(|k| dot_rgb(&px.visibility(k, n2), &exact(k), n2));
-        (format!("visibility_order{order}"), frame)
+        let stem = format!("visibility_order{order}");
+        let frame = px.rung(&stem, &|| {
+            px.image(|k| dot_rgb(&px.visibility(k, n2), &exact(k), n2))
+        });
+        (stem, frame)
     };
     match technique {
         Technique::Unc { order } => {
             let n2 = order.coeff_count();
             let (stem, frame) = visibility_rung(order);
-            push(AttributionKind::VisibilityOrder, stem, frame);
+            push(AttributionKind::VisibilityOrder, stem, &|| frame.clone());
             let lighting = exact_cosine(radiance, order.get() + 2, order);
             push(
                 AttributionKind::LightingOrder,
                 format!("{technique}.lighting_order"),
-                px.image(|k| shade(&lighting, px.normal[k], &px.visibility(k, n2))),
+                &|| px.image(|k| shade(&lighting, px.normal[k], &px.visibility(k, n2))),
             );
             let lxh = LxhMatrices::new(radiance, order, prepared.h_order);
             push(
                 AttributionKind::CosineOrder,
                 format!("{technique}.cosine_order"),
-                px.image(|k| shade(&lxh, px.normal[k], &px.visibility(k, n2))),
+                &|| px.image(|k| shade(&lxh, px.normal[k], &px.visibility(k, n2))),
             );
             let map = table_map(path, prepared.table_res, &label)?;
             let table = build_table(&lxh, map);
@@ -408,12 +444,12 @@ pub fn cpu_rungs(
             push(
                 AttributionKind::NormalTable,
                 format!("{label}.normal_table"),
-                px.image(|k| table_dot(&px.visibility(k, n2), k)),
+                &|| px.image(|k| table_dot(&px.visibility(k, n2), k)),
             );
             push(
                 AttributionKind::LightmapTexels,
                 format!("{label}.lightmap"),
-                px.image(|k| table_dot(&lightmap_v(k, n2), k)),
+                &|| px.image(|k| table_dot(&lightmap_v(k, n2), k)),
             );
         }
         Technique::Pca { m, weights_only } => {
@@ -428,7 +464,7 @@ pub fn cpu_rungs(
             }
             let m = (m as usize).min(model.basis.len());
             let (stem, frame) = visibility_rung(order);
-            push(AttributionKind::VisibilityOrder, stem, frame);
+            push(AttributionKind::VisibilityOrder, stem, &|| frame.clone());
             // V_e + Σ_k (V_k·(V − V_e)) V_k over the first m (orthonormal) vectors.
             let compressed = |k: usize| {
                 let v = px.visibility(k, n2);
@@ -454,7 +490,9 @@ pub fn cpu_rungs(
                 &base,
                 &compressed,
             );
-            shared.into_iter().for_each(|(k, stem, f)| push(k, stem, f));
+            shared
+                .into_iter()
+                .for_each(|(k, stem, f)| push(k, stem, &|| f.clone()));
             let q = quantized_prefix(model, m);
             // The stored weights, bilinear: UNORM8 reads as q / 255.
             let unorm = f64::from((1u32 << q.bits) - 1);
@@ -468,22 +506,24 @@ pub fn cpu_rungs(
                 push(
                     AttributionKind::LightmapTexels,
                     format!("{technique}.lightmap"),
-                    px.image(|k| {
-                        let u = lightmap_u(k);
-                        let mut y = [0.0; 9];
-                        eval_basis(Order::THREE, px.normal[k], &mut y);
-                        let mut e = [0.0; 3];
-                        for (i, yi) in y.iter().enumerate() {
-                            for c in 0..3 {
-                                let mut coeff = f64::from(block[9 * q.m + i][c]);
-                                for (b, ub) in u[..q.m].iter().enumerate() {
-                                    coeff += ub * f64::from(block[9 * b + i][c]);
+                    &|| {
+                        px.image(|k| {
+                            let u = lightmap_u(k);
+                            let mut y = [0.0; 9];
+                            eval_basis(Order::THREE, px.normal[k], &mut y);
+                            let mut e = [0.0; 3];
+                            for (i, yi) in y.iter().enumerate() {
+                                for c in 0..3 {
+                                    let mut coeff = f64::from(block[9 * q.m + i][c]);
+                                    for (b, ub) in u[..q.m].iter().enumerate() {
+                                        coeff += ub * f64::from(block[9 * b + i][c]);
+                                    }
+                                    e[c] += coeff * yi;
                                 }
-                                e[c] += coeff * yi;
                             }
-                        }
-                        e
-                    }),
+                            e
+                        })
+                    },
                 );
             } else {
                 // Basis tables T_k = Σ_j V_kj (L×H)_j and the mean's, as pca.rs builds them.
@@ -527,12 +567,12 @@ pub fn cpu_rungs(
                 push(
                     AttributionKind::NormalTable,
                     format!("{label}.normal_table"),
-                    px.image(|k| tables_dot(&continuous_u(k), k)),
+                    &|| px.image(|k| tables_dot(&continuous_u(k), k)),
                 );
                 push(
                     AttributionKind::LightmapTexels,
                     format!("{label}.lightmap"),
-                    px.image(|k| tables_dot(&lightmap_u(k), k)),
+                    &|| px.image(|k| tables_dot(&lightmap_u(k), k)),
                 );
             }
         }
@@ -542,7 +582,7 @@ pub fn cpu_rungs(
             let order = model.order;
             let n2 = order.coeff_count();
             let (stem, frame) = visibility_rung(order);
-            push(AttributionKind::VisibilityOrder, stem, frame);
+            push(AttributionKind::VisibilityOrder, stem, &|| frame.clone());
             let compressed = |k: usize| {
                 let mut out = [0.0; 36];
                 out[..n2].copy_from_slice(&model.compress(&px.visibility(k, n2)[..n2]));
@@ -560,7 +600,9 @@ pub fn cpu_rungs(
                 &base,
                 &compressed,
             );
-            shared.into_iter().for_each(|(k, stem, f)| push(k, stem, f));
+            shared
+                .into_iter()
+                .for_each(|(k, stem, f)| push(k, stem, &|| f.clone()));
             // The stored lightmap as the shader reads it (glsl/technique/cluster.frag).
             let q = model.quantize();
             let blended = matches!(
@@ -599,7 +641,7 @@ pub fn cpu_rungs(
             push(
                 AttributionKind::LightmapTexels,
                 format!("{label}.lightmap"),
-                px.image(|k| shade(&lxh, px.normal[k], &stored(k))),
+                &|| px.image(|k| shade(&lxh, px.normal[k], &stored(k))),
             );
         }
         // The CPU ladder walks lightmap texels; per-vertex weights have none.
@@ -611,7 +653,7 @@ pub fn cpu_rungs(
                 AttributionKind::AmbientOcclusion,
                 "preconv.ambient_occlusion".into(),
                 // ∫ L H_n = G_0 / y_00.
-                px.image(|k| exact(k)[0].map(|g| ao(k) * g / y00)),
+                &|| px.image(|k| exact(k)[0].map(|g| ao(k) * g / y00)),
             );
             let e3 = |k: usize| {
                 crate::sh::zonal::eval_rgb(&prepared.irradiance_sh, Order::THREE, px.normal[k])
@@ -620,42 +662,44 @@ pub fn cpu_rungs(
             push(
                 AttributionKind::IrradianceOrder,
                 "preconv.irradiance_order".into(),
-                px.image(|k| e3(k).map(|e| ao(k) * e)),
+                &|| px.image(|k| e3(k).map(|e| ao(k) * e)),
             );
             let ao_map = &prepared.ao;
             push(
                 AttributionKind::LightmapTexels,
                 "preconv.lightmap".into(),
-                px.image(|k| {
-                    let a = lightmap_bilinear(ao_map.res, px.uv[k], 1, |t, _| {
-                        f16_round(ao_map.values[t])
-                    })[0];
-                    e3(k).map(|e| a * e)
-                }),
+                &|| {
+                    px.image(|k| {
+                        let a = lightmap_bilinear(ao_map.res, px.uv[k], 1, |t, _| {
+                            f16_round(ao_map.values[t])
+                        })[0];
+                        e3(k).map(|e| a * e)
+                    })
+                },
             );
         }
         Technique::Sh2 => {
             let order = Order::TWO;
             let n2 = order.coeff_count();
             let (stem, frame) = visibility_rung(order);
-            push(AttributionKind::VisibilityOrder, stem, frame);
+            push(AttributionKind::VisibilityOrder, stem, &|| frame.clone());
             let lighting = exact_cosine(radiance, 3, order);
             push(
                 AttributionKind::LightingOrder,
                 "sh2.lighting_order".into(),
-                px.image(|k| shade(&lighting, px.normal[k], &px.visibility(k, n2))),
+                &|| px.image(|k| shade(&lighting, px.normal[k], &px.visibility(k, n2))),
             );
             let product =
                 LxhMatrices::with_lighting_order(radiance, Order::THREE, order, Order::THREE);
             push(
                 AttributionKind::ProductOrder,
                 "sh2.product_order".into(),
-                px.image(|k| shade(&product, px.normal[k], &px.visibility(k, n2))),
+                &|| px.image(|k| shade(&product, px.normal[k], &px.visibility(k, n2))),
             );
             push(
                 AttributionKind::LightmapTexels,
                 "sh2.lightmap".into(),
-                px.image(|k| shade(&product, px.normal[k], &lightmap_v(k, n2))),
+                &|| px.image(|k| shade(&product, px.normal[k], &lightmap_v(k, n2))),
             );
         }
         // No ladder for the radiosity-normal-mapping family yet: its error is measured
@@ -707,7 +751,7 @@ pub fn cpu_rungs(
             push(
                 AttributionKind::RadianceOrder,
                 "shlmap.radiance_order".into(),
-                px.image(|k| convolve(&gathered[k], px.normal[k])),
+                &|| px.image(|k| convolve(&gathered[k], px.normal[k])),
             );
             // As the technique stores it (finite: the bench built it first).
             let scale = crate::technique::shlmap::stored_scale(map).unwrap_or(1.0);
@@ -715,15 +759,17 @@ pub fn cpu_rungs(
             push(
                 AttributionKind::LightmapTexels,
                 "shlmap.lightmap".into(),
-                px.image(|k| {
-                    let v = lightmap_bilinear(map.res, px.uv[k], 27, |t, j| {
-                        f16_round(map.texel(t)[j / 3][j % 3] * scale)
-                    });
-                    let c: Vec<[f64; 3]> = (0..9)
-                        .map(|i| std::array::from_fn(|ch| v[3 * i + ch] * unscale))
-                        .collect();
-                    convolve(&c, px.normal[k])
-                }),
+                &|| {
+                    px.image(|k| {
+                        let v = lightmap_bilinear(map.res, px.uv[k], 27, |t, j| {
+                            f16_round(map.texel(t)[j / 3][j % 3] * scale)
+                        });
+                        let c: Vec<[f64; 3]> = (0..9)
+                            .map(|i| std::array::from_fn(|ch| v[3 * i + ch] * unscale))
+                            .collect();
+                        convolve(&c, px.normal[k])
+                    })
+                },
             );
         }
     }

@@ -203,7 +203,47 @@ pub struct BenchTable {
     /// Wall time of the bench itself (probe, references, rows, files; the bake before it
     /// is not counted), s.
     pub seconds: f64,
+    /// Where `seconds` went.
+    pub phases: BenchPhases,
     pub results: Vec<BenchRow>,
+}
+
+/// The bench's wall time by phase, seconds (issue 20 Build 5: what a `make bench` spends).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct BenchPhases {
+    /// `shvis probe`'s microbenchmarks.
+    pub probe: f64,
+    /// The footprint and point references (and their inter-reflected twins).
+    pub references: f64,
+    /// The error ladder's per-pixel G-buffer, visibility and exact-lighting table.
+    pub ladder_setup: f64,
+    /// Building every row's technique (CPU data, uploads, pipelines).
+    pub build: f64,
+    /// Warm-up and timed frames of every row, and the image read back.
+    pub render: f64,
+    /// Every row's error, its PNG/EXR and difference image.
+    pub row_images: f64,
+    /// Every row's error-ladder rungs (CPU) and their images and sheet.
+    pub ladder: f64,
+    /// Figures, the fragment count of the cost model, the table and the plots.
+    pub figures: f64,
+}
+
+impl BenchPhases {
+    /// One line: each phase and its seconds.
+    pub fn summary(&self) -> String {
+        format!(
+            "probe {:.1} s, references {:.1} s, ladder set-up {:.1} s, technique builds {:.1} s, frames {:.1} s, row images {:.1} s, ladder rungs {:.1} s, figures and plots {:.1} s",
+            self.probe,
+            self.references,
+            self.ladder_setup,
+            self.build,
+            self.render,
+            self.row_images,
+            self.ladder,
+            self.figures
+        )
+    }
 }
 
 fn opt(v: Option<f64>, digits: usize) -> String {
@@ -222,7 +262,11 @@ impl BenchTable {
             self.reference_spp,
             opt(self.reference_rel_noise, 4)
         );
-        s += &format!("; bench wall time {:.1} s", self.seconds);
+        s += &format!(
+            "; bench wall time {:.1} s ({})",
+            self.seconds,
+            self.phases.summary()
+        );
         if let Some(term) = &self.specular {
             s += &format!(
                 "; rows `+spec{{filter}}` add the specular term ({term}) with its normal map filtered as named, against references with its footprint reference added"
@@ -396,6 +440,7 @@ mod tests {
             specular: None,
             cost_model: None,
             seconds: 0.0,
+            phases: BenchPhases::default(),
             results: vec![
                 row(Technique::Preconv, 1.0, steps),
                 row(Technique::Sh2, 1.0, vec![]),

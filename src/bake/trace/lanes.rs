@@ -139,6 +139,42 @@ mod x86 {
 
     use super::RayLanes;
 
+    /// The arithmetic methods of [`RayLanes`] for a register wrapper `$lanes` of `$width`
+    /// lanes, from its intrinsics (the same shape for AVX2 and AVX-512F).
+    macro_rules! arithmetic {
+        ($lanes:ident, $width:literal, $load:ident, $set1:ident, $add:ident, $sub:ident, $mul:ident, $max:ident, $min:ident) => {
+            #[inline(always)]
+            fn load(src: &[f32]) -> Self {
+                assert!(src.len() >= $width);
+                $lanes(unsafe { $load(src.as_ptr()) })
+            }
+            #[inline(always)]
+            fn splat(v: f32) -> Self {
+                $lanes(unsafe { $set1(v) })
+            }
+            #[inline(always)]
+            fn add(self, o: Self) -> Self {
+                $lanes(unsafe { $add(self.0, o.0) })
+            }
+            #[inline(always)]
+            fn sub(self, o: Self) -> Self {
+                $lanes(unsafe { $sub(self.0, o.0) })
+            }
+            #[inline(always)]
+            fn mul(self, o: Self) -> Self {
+                $lanes(unsafe { $mul(self.0, o.0) })
+            }
+            #[inline(always)]
+            fn max(self, o: Self) -> Self {
+                $lanes(unsafe { $max(self.0, o.0) })
+            }
+            #[inline(always)]
+            fn min(self, o: Self) -> Self {
+                $lanes(unsafe { $min(self.0, o.0) })
+            }
+        };
+    }
+
     /// Eight lanes in an AVX register; only used inside `#[target_feature(enable = "avx2")]`.
     #[derive(Clone, Copy)]
     pub(in super::super) struct Avx2(__m256);
@@ -147,35 +183,17 @@ mod x86 {
     // with the feature enabled, which the caller checked at run time (`Width::detect`).
     impl RayLanes for Avx2 {
         const WIDTH: usize = 8;
-        #[inline(always)]
-        fn load(src: &[f32]) -> Self {
-            assert!(src.len() >= 8);
-            Avx2(unsafe { _mm256_loadu_ps(src.as_ptr()) })
-        }
-        #[inline(always)]
-        fn splat(v: f32) -> Self {
-            Avx2(unsafe { _mm256_set1_ps(v) })
-        }
-        #[inline(always)]
-        fn add(self, o: Self) -> Self {
-            Avx2(unsafe { _mm256_add_ps(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn sub(self, o: Self) -> Self {
-            Avx2(unsafe { _mm256_sub_ps(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn mul(self, o: Self) -> Self {
-            Avx2(unsafe { _mm256_mul_ps(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn max(self, o: Self) -> Self {
-            Avx2(unsafe { _mm256_max_ps(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn min(self, o: Self) -> Self {
-            Avx2(unsafe { _mm256_min_ps(self.0, o.0) })
-        }
+        arithmetic!(
+            Avx2,
+            8,
+            _mm256_loadu_ps,
+            _mm256_set1_ps,
+            _mm256_add_ps,
+            _mm256_sub_ps,
+            _mm256_mul_ps,
+            _mm256_max_ps,
+            _mm256_min_ps
+        );
         #[inline(always)]
         fn le(self, o: Self) -> u32 {
             unsafe { _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.0)) as u32 }
@@ -201,35 +219,17 @@ mod x86 {
 
     impl RayLanes for Avx512 {
         const WIDTH: usize = 16;
-        #[inline(always)]
-        fn load(src: &[f32]) -> Self {
-            assert!(src.len() >= 16);
-            Avx512(unsafe { _mm512_loadu_ps(src.as_ptr()) })
-        }
-        #[inline(always)]
-        fn splat(v: f32) -> Self {
-            Avx512(unsafe { _mm512_set1_ps(v) })
-        }
-        #[inline(always)]
-        fn add(self, o: Self) -> Self {
-            Avx512(unsafe { _mm512_add_ps(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn sub(self, o: Self) -> Self {
-            Avx512(unsafe { _mm512_sub_ps(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn mul(self, o: Self) -> Self {
-            Avx512(unsafe { _mm512_mul_ps(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn max(self, o: Self) -> Self {
-            Avx512(unsafe { _mm512_max_ps(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn min(self, o: Self) -> Self {
-            Avx512(unsafe { _mm512_min_ps(self.0, o.0) })
-        }
+        arithmetic!(
+            Avx512,
+            16,
+            _mm512_loadu_ps,
+            _mm512_set1_ps,
+            _mm512_add_ps,
+            _mm512_sub_ps,
+            _mm512_mul_ps,
+            _mm512_max_ps,
+            _mm512_min_ps
+        );
         #[inline(always)]
         fn le(self, o: Self) -> u32 {
             u32::from(unsafe { _mm512_cmp_ps_mask::<_CMP_LE_OQ>(self.0, o.0) })
