@@ -177,6 +177,36 @@ impl TriangleEdges {
     }
 }
 
+/// A copy of `items` in memory the kernel is asked to back with 2 MiB pages (Linux's
+/// `MADV_HUGEPAGE`, before the copy touches it; elsewhere a plain copy). Walks read the
+/// nodes and triangles at random: on big scenes (tens of MB) 4 KiB pages add a TLB miss to
+/// most of the cache misses the walk waits on.
+fn in_huge_pages<T: Copy>(items: &[T]) -> Vec<T> {
+    let mut copy = Vec::with_capacity(items.len());
+    #[cfg(target_os = "linux")]
+    advise_huge_pages(copy.as_ptr() as usize, copy.capacity() * size_of::<T>());
+    copy.extend_from_slice(items);
+    copy
+}
+
+/// Asks for 2 MiB pages over the whole 2 MiB pages inside `len` bytes from `start`.
+#[cfg(target_os = "linux")]
+#[allow(unsafe_code)]
+fn advise_huge_pages(start: usize, len: usize) {
+    const HUGE_PAGE: usize = 2 << 20;
+    let (begin, end) = (
+        start.next_multiple_of(HUGE_PAGE),
+        (start + len) / HUGE_PAGE * HUGE_PAGE,
+    );
+    if end > begin {
+        // SAFETY: advice over pages of this allocation; it changes no memory contents, and
+        // a refusal (EINVAL where THP is off) leaves ordinary pages.
+        unsafe {
+            libc::madvise(begin as *mut libc::c_void, end - begin, libc::MADV_HUGEPAGE);
+        }
+    }
+}
+
 /// The nearest surface along a ray ([`Tracer::closest_hit`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
@@ -278,10 +308,13 @@ impl Tracer {
             input.len(),
             build_time.as_secs_f64()
         );
+        let mut bvh = bvh;
+        bvh.nodes = in_huge_pages(&bvh.nodes);
+        let edges: Vec<TriangleEdges> = triangles.iter().map(TriangleEdges::of).collect();
         Tracer {
             bvh: Some(bvh),
-            edges: triangles.iter().map(TriangleEdges::of).collect(),
-            triangles,
+            edges: in_huge_pages(&edges),
+            triangles: in_huge_pages(&triangles),
             mesh_triangles,
             ray_epsilon,
             width: Width::detect(),
