@@ -184,6 +184,7 @@ pub fn run(
                     reference,
                     &mut ladder,
                     settings,
+                    &mut lap,
                     &mut phases,
                 );
                 let (row, frame) = match measured {
@@ -207,7 +208,6 @@ pub fn run(
             }
         }
     }
-    lap = Lap::start();
     for &path in &settings.paths {
         let written = write_figures(
             &settings.out,
@@ -238,7 +238,7 @@ pub fn run(
         }
     }
     let bounced = reference.as_ref().and_then(|r| r.main.bounced.as_ref());
-    let table = BenchTable {
+    let mut table = BenchTable {
         reference_spp: settings.ref_spp,
         reference_rel_noise: reference.as_ref().map(|r| r.main.rel_noise),
         reference_bounces: bounced.map_or(0, |b| b.bounces),
@@ -259,7 +259,6 @@ pub fn run(
         seconds: 0.0,
         phases,
     };
-    let mut table = table;
     write_plots(&table, &settings.paths, &settings.out);
     lap.split(&mut table.phases.figures);
     table.seconds = started.elapsed().as_secs_f64();
@@ -518,7 +517,9 @@ fn attribution(
     Ok(steps)
 }
 
-/// A stopwatch that adds the time since its last split to a phase of [`BenchPhases`].
+/// A stopwatch that adds the time since its last split to a phase of [`BenchPhases`]; one
+/// runs through the whole bench, so the phases add up to its wall time (the scene upload
+/// and the time between rows count as builds).
 struct Lap(Instant);
 
 impl Lap {
@@ -543,9 +544,9 @@ fn measure_row(
     references: Option<&References>,
     ladder: &mut Ladder,
     settings: &BenchSettings,
+    lap: &mut Lap,
     phases: &mut BenchPhases,
 ) -> Result<(BenchRow, Frame), BenchError> {
-    let mut lap = Lap::start();
     let tech = technique::build(ctx, scene, technique, path, &prepared.inputs())?;
     lap.split(&mut phases.build);
     let frame = tech.render(scene, settings.warmup, settings.frames)?;

@@ -393,10 +393,14 @@ pub fn cpu_rungs(
 ) -> Result<Vec<Rung>, TechniqueError> {
     let radiance = &prepared.radiance_sh;
     let label = format!("{technique}.{path}");
-    let mut rungs = Vec::new();
-    let mut push = |step: AttributionKind, stem: String, make: &dyn Fn() -> Frame| {
-        let frame = px.rung(&stem, make);
-        rungs.push(Rung { step, stem, frame });
+    // Rungs are made through the cache (`LadderPixels::rung`): by `push`, or already by
+    // `visibility_rung` and `compression_rungs`, whose frames `push_made` takes as they are.
+    let rungs = std::cell::RefCell::new(Vec::new());
+    let push_made = |step: AttributionKind, stem: String, frame: Frame| {
+        rungs.borrow_mut().push(Rung { step, stem, frame });
+    };
+    let push = |step: AttributionKind, stem: String, make: &dyn Fn() -> Frame| {
+        push_made(step, stem.clone(), px.rung(&stem, make));
     };
     let exact = |k: usize| {
         let mut g = [[0.0; 3]; 36];
@@ -422,7 +426,7 @@ pub fn cpu_rungs(
         Technique::Unc { order } => {
             let n2 = order.coeff_count();
             let (stem, frame) = visibility_rung(order);
-            push(AttributionKind::VisibilityOrder, stem, &|| frame.clone());
+            push_made(AttributionKind::VisibilityOrder, stem, frame);
             let lighting = exact_cosine(radiance, order.get() + 2, order);
             push(
                 AttributionKind::LightingOrder,
@@ -460,11 +464,11 @@ pub fn cpu_rungs(
                 log::warn!(
                     "{label}: the error ladder handles PCA of visibility up to order 6, the bake has order {order}; no CPU rungs"
                 );
-                return Ok(rungs);
+                return Ok(rungs.into_inner());
             }
             let m = (m as usize).min(model.basis.len());
             let (stem, frame) = visibility_rung(order);
-            push(AttributionKind::VisibilityOrder, stem, &|| frame.clone());
+            push_made(AttributionKind::VisibilityOrder, stem, frame);
             // V_e + Σ_k (V_k·(V − V_e)) V_k over the first m (orthonormal) vectors.
             let compressed = |k: usize| {
                 let v = px.visibility(k, n2);
@@ -492,7 +496,7 @@ pub fn cpu_rungs(
             );
             shared
                 .into_iter()
-                .for_each(|(k, stem, f)| push(k, stem, &|| f.clone()));
+                .for_each(|(k, stem, f)| push_made(k, stem, f));
             let q = quantized_prefix(model, m);
             // The stored weights, bilinear: UNORM8 reads as q / 255.
             let unorm = f64::from((1u32 << q.bits) - 1);
@@ -582,7 +586,7 @@ pub fn cpu_rungs(
             let order = model.order;
             let n2 = order.coeff_count();
             let (stem, frame) = visibility_rung(order);
-            push(AttributionKind::VisibilityOrder, stem, &|| frame.clone());
+            push_made(AttributionKind::VisibilityOrder, stem, frame);
             let compressed = |k: usize| {
                 let mut out = [0.0; 36];
                 out[..n2].copy_from_slice(&model.compress(&px.visibility(k, n2)[..n2]));
@@ -602,7 +606,7 @@ pub fn cpu_rungs(
             );
             shared
                 .into_iter()
-                .for_each(|(k, stem, f)| push(k, stem, &|| f.clone()));
+                .for_each(|(k, stem, f)| push_made(k, stem, f));
             // The stored lightmap as the shader reads it (glsl/technique/cluster.frag).
             let q = model.quantize();
             let blended = matches!(
@@ -682,7 +686,7 @@ pub fn cpu_rungs(
             let order = Order::TWO;
             let n2 = order.coeff_count();
             let (stem, frame) = visibility_rung(order);
-            push(AttributionKind::VisibilityOrder, stem, &|| frame.clone());
+            push_made(AttributionKind::VisibilityOrder, stem, frame);
             let lighting = exact_cosine(radiance, 3, order);
             push(
                 AttributionKind::LightingOrder,
@@ -709,7 +713,7 @@ pub fn cpu_rungs(
         Technique::Rnm { .. } | Technique::Ndf { .. } => {}
         Technique::Shlmap => {
             let Some(map) = prepared.sh_lightmap.as_ref() else {
-                return Ok(rungs);
+                return Ok(rungs.into_inner());
             };
             let settings = ShLightmapSettings {
                 rays: prepared.visibility_settings.rays,
@@ -773,7 +777,7 @@ pub fn cpu_rungs(
             );
         }
     }
-    Ok(rungs)
+    Ok(rungs.into_inner())
 }
 
 #[cfg(test)]

@@ -33,9 +33,9 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::directions::{DirectionSet, above_horizon};
-use super::raster::{DilationPlan, LightmapTexels};
+use super::raster::LightmapTexels;
 use super::trace::{ray_epsilon_of, usable_triangles};
-use super::visibility::{DILATION_PASSES, VisibilityMap, VisibilitySettings};
+use super::visibility::{VisibilityMap, VisibilitySettings, dilate_visibility};
 use super::{BakeStats, progress_bar};
 use crate::gpu::visibility_sim::{self, DirectionView, SimulationJob};
 use crate::gpu::{Context, GpuError};
@@ -218,9 +218,7 @@ pub fn bake_visibility_gpu(
         let n = texels.normal[i];
         rays_traced += dirs.dirs().iter().filter(|&&d| above_horizon(n, d)).count() as u64;
     }
-    let plan = DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES);
-    plan.apply_vectors(&mut coeffs, n2);
-    plan.apply(&mut ao);
+    dilate_visibility(&mut coeffs, n2, &mut ao, texels);
     let map = VisibilityMap {
         res: texels.res,
         order: settings.order,

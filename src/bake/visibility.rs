@@ -289,9 +289,7 @@ pub fn bake_visibility(
         }
     }
     drop(results);
-    let plan = DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES);
-    plan.apply_vectors(&mut coeffs, n2);
-    plan.apply(&mut ao);
+    dilate_visibility(&mut coeffs, n2, &mut ao, texels);
     let map = VisibilityMap {
         res: texels.res,
         order: settings.order,
@@ -374,6 +372,19 @@ pub fn bake_points(
         out.rays_traced += result.rays;
     }
     out
+}
+
+/// Dilates a visibility bake's coefficient vectors (`n2` per texel) and AO into the chart
+/// gutters with one [`DilationPlan`] (the CPU bake and the GPU simulator).
+pub(crate) fn dilate_visibility(
+    coeffs: &mut [f32],
+    n2: usize,
+    ao: &mut [f32],
+    texels: &LightmapTexels,
+) {
+    let plan = DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES);
+    plan.apply_vectors(coeffs, n2);
+    plan.apply(ao);
 }
 
 #[cfg(test)]

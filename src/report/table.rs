@@ -217,7 +217,7 @@ pub struct BenchPhases {
     pub references: f64,
     /// The error ladder's per-pixel G-buffer, visibility and exact-lighting table.
     pub ladder_setup: f64,
-    /// Building every row's technique (CPU data, uploads, pipelines).
+    /// Building every row's technique (CPU data, uploads, pipelines), the scene's upload.
     pub build: f64,
     /// Warm-up and timed frames of every row, and the image read back.
     pub render: f64,
@@ -225,7 +225,8 @@ pub struct BenchPhases {
     pub row_images: f64,
     /// Every row's error-ladder rungs (CPU) and their images and sheet.
     pub ladder: f64,
-    /// Figures, the fragment count of the cost model, the table and the plots.
+    /// Figures, the fragment count of the cost model and the plots (the table is written
+    /// after, with these figures in it).
     pub figures: f64,
 }
 
