@@ -884,8 +884,8 @@ fn run_study_compression(a: StudyCompressionArgs) -> Result<()> {
         Some(&prepared.cache_dir),
     )?;
     let markdown = compression::to_markdown(&rows, prepared.visibility.res, a.scene.table_res);
-    std::fs::write(a.out.join("compression.md"), &markdown).context("compression.md")?;
-    std::fs::write(
+    shvis::files::write(a.out.join("compression.md"), &markdown).context("compression.md")?;
+    shvis::files::write(
         a.out.join("compression.json"),
         serde_json::to_string_pretty(&rows)? + "\n",
     )
@@ -904,8 +904,8 @@ fn run_study_compression(a: StudyCompressionArgs) -> Result<()> {
     let screen =
         compression::screen_errors(&ctx, &prepared, &a.techniques, &a.paths, a.width, a.height)?;
     let screen_md = compression::screen_markdown(&screen, &a.env, a.width, a.height);
-    std::fs::write(a.out.join("screen.md"), &screen_md).context("screen.md")?;
-    std::fs::write(
+    shvis::files::write(a.out.join("screen.md"), &screen_md).context("screen.md")?;
+    shvis::files::write(
         a.out.join("screen.json"),
         serde_json::to_string_pretty(&screen)? + "\n",
     )
@@ -1117,6 +1117,7 @@ fn run_ssbump(a: SsbumpArgs) -> Result<()> {
         |suffix: &str, ext: &str| PathBuf::from(format!("{}{suffix}.{ext}", stem.display()));
     for (texels, suffix) in [(&shadowed, ""), (&plain, "_d"), (&ao, "_ao")] {
         let png = with_suffix(suffix, "png");
+        let mut encoded = Vec::new();
         let data: Vec<u16> = texels
             .iter()
             .flat_map(|t| t.map(|v| (v.clamp(0.0, 1.0) * 65535.0).round() as u16))
@@ -1127,7 +1128,9 @@ fn run_ssbump(a: SsbumpArgs) -> Result<()> {
             data,
         )
         .expect("3 channels per texel")
-        .save(&png)
+        .write_to(&mut std::io::Cursor::new(&mut encoded), image::ImageFormat::Png)
+        .map_err(anyhow::Error::from)
+        .and_then(|()| Ok(shvis::files::write(&png, &encoded)?))
         .with_context(|| format!("{}: cannot write", png.display()))?;
         let frame = shvis::render::Frame {
             width: width as u32,
@@ -1412,8 +1415,8 @@ fn run_study_seams(a: StudySeamsArgs) -> Result<()> {
         }
     }
     let markdown = seams::to_markdown(&rows, a.width, a.height);
-    std::fs::write(a.out.join("seams.md"), &markdown).context("seams.md")?;
-    std::fs::write(
+    shvis::files::write(a.out.join("seams.md"), &markdown).context("seams.md")?;
+    shvis::files::write(
         a.out.join("seams.json"),
         serde_json::to_string_pretty(&rows)? + "\n",
     )
@@ -1529,7 +1532,15 @@ fn run_bake(a: BakeArgs) -> Result<()> {
         scene.mesh.triangle_count(),
         visibility.stats
     );
-    shvis::bake::cache::write_exr_layers(&a.out, &visibility)?;
+    let manifest_settings = serde_json::json!({
+        "scene": a.scene.scene,
+        "vis_res": vis_res,
+        "rays": rays,
+        "order": a.scene.order,
+        "seed": a.scene.seed,
+        "baker": format!("{:?}", a.baker).to_lowercase(),
+    });
+    shvis::bake::cache::write_exr_layers(&a.out, &visibility, manifest_settings)?;
     println!(
         "wrote {}/ (visibility coefficient and ao EXR layers)",
         a.out.display()

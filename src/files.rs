@@ -1,9 +1,29 @@
-//! How shvis writes data files so that equal data gives equal bytes.
+//! How shvis reads and writes files: bounded reads, atomic writes, stale temporaries,
+//! early write checks and the manifest that marks a bake's output directory complete
+//! (issue 21).
+//!
+//! - **Reads** of inputs go through [`read_bounded`]: only regular files (a link to
+//!   `/dev/zero` or a FIFO would be read forever), at most a stated number of bytes.
+//! - **Writes** go through [`write_atomic`]: the bytes go to `.NAME.tmp-PID-N` in the same
+//!   directory, are fsynced and renamed over `NAME` (then a best-effort fsync of the
+//!   directory), so a killed or failed run leaves the old file or none, never a truncated
+//!   one, and a full disk is an error rather than a short file. [`remove_stale_temps`]
+//!   deletes the temporaries of runs that were killed (their process is gone).
+//! - [`check_writable_dir`] creates a directory and a probe file in it before any work, so
+//!   an unwritable `--out` or cache is reported before a bake, not after.
+//! - A [`Manifest`] (`manifest.json`, written last) lists a directory's files with their
+//!   sizes and [`hash64`](crate::bake::cache::hash64): a directory without one, or whose
+//!   files do not match it, is incomplete ([`Manifest::verify`]).
 //!
 //! OpenEXR: the `exr` crate's default encoding writes tiles in whatever order its worker
 //! threads finish (`LineOrder::Unspecified`), so two runs with identical pixels give
 //! different files. [`EXR_ENCODING`] keeps its compression and tiling but asks for
 //! increasing line order, which the writer sorts into, whatever the thread count.
+
+use std::fs::{self, File};
+use std::io::{self, Read, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use exr::prelude::{Encoding, LineOrder};
 
@@ -12,3 +32,472 @@ pub const EXR_ENCODING: Encoding = Encoding {
     line_order: LineOrder::Increasing,
     ..Encoding::FAST_LOSSLESS
 };
+
+/// Test hook, not a user setting: when a file whose name equals this variable's value is
+/// being written by [`write_atomic`], the process kills itself with SIGKILL after writing
+/// half of the bytes (the kill-9 test of `tests/bad_input.rs`).
+pub const KILL_WHILE_WRITING_ENV: &str = "SHVIS_TEST_KILL_WHILE_WRITING";
+
+/// Name of a bake output directory's manifest.
+pub const MANIFEST_NAME: &str = "manifest.json";
+
+/// Errors of this module: one line naming the file.
+#[derive(Debug, thiserror::Error)]
+pub enum FileError {
+    /// Opening, reading or writing failed.
+    #[error("{}: cannot {action}: {source}", .path.display())]
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// What was being done ("read", "write", "create the directory").
+        action: &'static str,
+        /// The I/O error.
+        source: io::Error,
+    },
+    /// Not a regular file (a device, FIFO, socket or directory).
+    #[error("{}: not a regular file ({kind}); give a file", .path.display())]
+    NotRegular {
+        /// The path.
+        path: PathBuf,
+        /// What it is.
+        kind: &'static str,
+    },
+    /// Larger than the reader accepts.
+    #[error("{}: {bytes} bytes is more than the {limit} bytes accepted for {what}", .path.display())]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its size.
+        bytes: u64,
+        /// The limit.
+        limit: u64,
+        /// What kind of file it was read as.
+        what: &'static str,
+    },
+}
+
+/// The bytes of the regular file at `path` (links followed), if it holds at most `limit`
+/// bytes; `what` names the kind of input in the error.
+///
+/// # Errors
+/// [`FileError::NotRegular`] for devices, FIFOs, sockets and directories,
+/// [`FileError::TooLarge`], [`FileError::Io`].
+pub fn read_bounded(path: &Path, limit: u64, what: &'static str) -> Result<Vec<u8>, FileError> {
+    let io_err = |source| FileError::Io {
+        path: path.to_path_buf(),
+        action: "read",
+        source,
+    };
+    let meta = fs::metadata(path).map_err(io_err)?;
+    check_regular(path, &meta)?;
+    if meta.len() > limit {
+        return Err(FileError::TooLarge {
+            path: path.to_path_buf(),
+            bytes: meta.len(),
+            limit,
+            what,
+        });
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    // `take` guards against a file that grows while it is read.
+    File::open(path)
+        .and_then(|f| f.take(limit + 1).read_to_end(&mut bytes))
+        .map_err(io_err)?;
+    if bytes.len() as u64 > limit {
+        return Err(FileError::TooLarge {
+            path: path.to_path_buf(),
+            bytes: bytes.len() as u64,
+            limit,
+            what,
+        });
+    }
+    Ok(bytes)
+}
+
+fn check_regular(path: &Path, meta: &fs::Metadata) -> Result<(), FileError> {
+    if meta.is_file() {
+        return Ok(());
+    }
+    let kind = if meta.is_dir() {
+        "a directory"
+    } else {
+        special_kind(meta)
+    };
+    Err(FileError::NotRegular {
+        path: path.to_path_buf(),
+        kind,
+    })
+}
+
+#[cfg(unix)]
+fn special_kind(meta: &fs::Metadata) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    let t = meta.file_type();
+    if t.is_char_device() || t.is_block_device() {
+        "a device"
+    } else if t.is_fifo() {
+        "a FIFO"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "not a file"
+    }
+}
+
+#[cfg(not(unix))]
+fn special_kind(_: &fs::Metadata) -> &'static str {
+    "not a file"
+}
+
+/// Writes `bytes` to `path` atomically (module doc): temporary file in the same directory,
+/// fsync, rename, best-effort fsync of the directory. The directory must exist.
+///
+/// # Errors
+/// [`FileError::Io`] naming `path` when any step fails (the temporary file is removed).
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".to_string());
+    let tmp = dir.join(format!(
+        ".{name}.tmp-{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let result = (|| {
+        let mut file = fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)?;
+        match std::env::var_os(KILL_WHILE_WRITING_ENV) {
+            Some(v) if v.to_string_lossy() == name => {
+                file.write_all(&bytes[..bytes.len() / 2])?;
+                file.sync_all()?;
+                kill_self();
+            }
+            _ => {}
+        }
+        file.write_all(bytes)?;
+        file.sync_all()?;
+        fs::rename(&tmp, path)
+    })();
+    if let Err(source) = result {
+        let _ = fs::remove_file(&tmp); // best effort: the error below is what matters
+        return Err(FileError::Io {
+            path: path.to_path_buf(),
+            action: "write",
+            source,
+        });
+    }
+    if let Ok(d) = File::open(dir) {
+        let _ = d.sync_all(); // not supported everywhere; the rename is already done
+    }
+    Ok(())
+}
+
+/// [`write_atomic`] with the plain I/O error (for callers that name the file themselves):
+/// the drop-in replacement of `std::fs::write` in shvis.
+///
+/// # Errors
+/// The I/O error of the step that failed.
+pub fn write(path: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> io::Result<()> {
+    write_atomic(path.as_ref(), bytes.as_ref()).map_err(|e| match e {
+        FileError::Io { source, .. } => source,
+        e => io::Error::other(e.to_string()),
+    })
+}
+
+/// SIGKILL to this process ([`KILL_WHILE_WRITING_ENV`]): no destructors, no flushing.
+fn kill_self() -> ! {
+    let _ = std::process::Command::new("kill")
+        .args(["-9", &std::process::id().to_string()])
+        .status();
+    std::process::abort();
+}
+
+/// Removes temporaries `.NAME.tmp-PID-N` in `dir` left by processes that no longer run
+/// (on systems without `/proc`, those older than a day); returns how many were removed.
+/// Best effort: unreadable directories and entries are skipped.
+pub fn remove_stale_temps(dir: &Path) -> usize {
+    let Ok(entries) = fs::read_dir(dir) else {
+        return 0;
+    };
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let Some(pid) = temp_owner(&name) else {
+            continue;
+        };
+        if pid == std::process::id() || process_alive(pid, &entry) {
+            continue;
+        }
+        if fs::remove_file(entry.path()).is_ok() {
+            log::info!("removed {} (left by a killed run)", entry.path().display());
+            removed += 1;
+        }
+    }
+    removed
+}
+
+/// The PID in a temporary's name `.NAME.tmp-PID-N`, `None` for other names.
+fn temp_owner(name: &str) -> Option<u32> {
+    if !name.starts_with('.') {
+        return None;
+    }
+    let (_, tail) = name.rsplit_once(".tmp-")?;
+    let (pid, n) = tail.split_once('-')?;
+    n.parse::<u64>().ok()?;
+    pid.parse().ok()
+}
+
+fn process_alive(pid: u32, entry: &fs::DirEntry) -> bool {
+    if Path::new("/proc/self").exists() {
+        return Path::new(&format!("/proc/{pid}")).exists();
+    }
+    let day = std::time::Duration::from_secs(24 * 3600);
+    entry
+        .metadata()
+        .and_then(|m| m.modified())
+        .ok()
+        .and_then(|t| t.elapsed().ok())
+        .is_none_or(|age| age < day)
+}
+
+/// Creates `dir` (and its parents) and checks that a file can be created in it; `what`
+/// names the option in the error (`--out`, `the bake cache`).
+///
+/// # Errors
+/// One line naming `dir`, `what` and the cause.
+pub fn check_writable_dir(dir: &Path, what: &str) -> Result<(), FileError> {
+    let io_err = |action, source| FileError::Io {
+        path: dir.to_path_buf(),
+        action,
+        source,
+    };
+    if let Ok(meta) = fs::metadata(dir)
+        && !meta.is_dir()
+    {
+        return Err(io_err(
+            "use it as a directory",
+            io::Error::other(format!("{what} exists and is not a directory")),
+        ));
+    }
+    fs::create_dir_all(dir).map_err(|e| io_err("create the directory", e))?;
+    let probe = dir.join(format!(".shvis-write-check-{}", std::process::id()));
+    File::create(&probe)
+        .and_then(|mut f| f.write_all(b"shvis"))
+        .map_err(|e| io_err("write into the directory", e))?;
+    let _ = fs::remove_file(&probe);
+    Ok(())
+}
+
+/// [`check_writable_dir`] for the directory an output file goes into.
+///
+/// # Errors
+/// As [`check_writable_dir`].
+pub fn check_writable_file(path: &Path, what: &str) -> Result<(), FileError> {
+    if let Ok(meta) = fs::metadata(path)
+        && meta.is_dir()
+    {
+        return Err(FileError::Io {
+            path: path.to_path_buf(),
+            action: "write",
+            source: io::Error::other(format!("{what} is a directory")),
+        });
+    }
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => check_writable_dir(d, what),
+        _ => check_writable_dir(Path::new("."), what),
+    }
+}
+
+/// One file of a [`Manifest`].
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct ManifestEntry {
+    /// File name in the directory.
+    pub name: String,
+    /// Size in bytes.
+    pub bytes: u64,
+    /// `hash64` of the content, 16 hex digits.
+    pub hash: String,
+}
+
+/// What a complete output directory holds: the settings that made it and its files.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Manifest {
+    /// The shvis version that wrote it.
+    pub shvis: String,
+    /// The settings, as the writer describes them.
+    pub settings: serde_json::Value,
+    /// The files, in writing order.
+    pub files: Vec<ManifestEntry>,
+}
+
+impl Manifest {
+    /// A manifest of `settings` and the given files' `(name, content)`.
+    pub fn new<'a>(
+        settings: serde_json::Value,
+        files: impl IntoIterator<Item = (String, &'a [u8])>,
+    ) -> Manifest {
+        Manifest {
+            shvis: env!("CARGO_PKG_VERSION").to_string(),
+            settings,
+            files: files
+                .into_iter()
+                .map(|(name, bytes)| ManifestEntry {
+                    name,
+                    bytes: bytes.len() as u64,
+                    hash: format!("{:016x}", crate::bake::cache::hash64(bytes)),
+                })
+                .collect(),
+        }
+    }
+
+    /// Writes it as `dir/manifest.json` (atomically; write it after the files).
+    ///
+    /// # Errors
+    /// As [`write_atomic`].
+    pub fn write(&self, dir: &Path) -> Result<(), FileError> {
+        let text = serde_json::to_string_pretty(self).expect("a manifest serializes");
+        write_atomic(&dir.join(MANIFEST_NAME), (text + "\n").as_bytes())
+    }
+
+    /// Removes `dir/manifest.json` if there is one: called before a directory's files are
+    /// rewritten, so that an interrupted rewrite is not taken for complete.
+    ///
+    /// # Errors
+    /// [`FileError::Io`] when it exists and cannot be removed.
+    pub fn invalidate(dir: &Path) -> Result<(), FileError> {
+        let path = dir.join(MANIFEST_NAME);
+        match fs::remove_file(&path) {
+            Err(e) if e.kind() != io::ErrorKind::NotFound => Err(FileError::Io {
+                path,
+                action: "remove",
+                source: e,
+            }),
+            _ => Ok(()),
+        }
+    }
+
+    /// The manifest of `dir` when it is there and every file it lists has its size and
+    /// hash; `Err` says, in one line, why the directory is incomplete.
+    pub fn verify(dir: &Path) -> Result<Manifest, String> {
+        let path = dir.join(MANIFEST_NAME);
+        let bytes = read_bounded(&path, 1 << 20, "a manifest").map_err(|e| match e {
+            FileError::Io { source, .. } if source.kind() == io::ErrorKind::NotFound => format!(
+                "{}: no {MANIFEST_NAME}: the directory is incomplete (an interrupted run?)",
+                dir.display()
+            ),
+            e => e.to_string(),
+        })?;
+        let manifest: Manifest = serde_json::from_slice(&bytes)
+            .map_err(|e| format!("{}: unreadable ({e})", path.display()))?;
+        for f in &manifest.files {
+            let file = dir.join(&f.name);
+            let content = read_bounded(&file, f.bytes, "a listed file").map_err(|e| {
+                format!("{}: does not match {MANIFEST_NAME} ({e})", file.display())
+            })?;
+            let hash = format!("{:016x}", crate::bake::cache::hash64(&content));
+            if content.len() as u64 != f.bytes || hash != f.hash {
+                return Err(format!(
+                    "{}: does not match {MANIFEST_NAME} ({} bytes, hash {hash}; listed {} bytes, hash {})",
+                    file.display(),
+                    content.len(),
+                    f.bytes,
+                    f.hash
+                ));
+            }
+        }
+        Ok(manifest)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("shvis-files-{}-{name}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn temp_names_parse_back_to_their_pid() {
+        assert_eq!(temp_owner(".visibility-ab.bin.tmp-1234-7"), Some(1234));
+        assert_eq!(temp_owner(".x.png.tmp-1-0"), Some(1));
+        assert_eq!(temp_owner("x.png.tmp-1-0"), None);
+        assert_eq!(temp_owner(".x.tmp-a-0"), None);
+        assert_eq!(temp_owner(".x.png"), None);
+    }
+
+    #[test]
+    fn atomic_write_replaces_and_leaves_no_temporary() {
+        let dir = scratch("atomic");
+        let path = dir.join("a.txt");
+        write_atomic(&path, b"one").unwrap();
+        write_atomic(&path, b"two!").unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"two!");
+        let names: Vec<_> = fs::read_dir(&dir).unwrap().flatten().collect();
+        assert_eq!(names.len(), 1, "{names:?}");
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn stale_temps_of_dead_processes_are_removed_live_ones_kept() {
+        let dir = scratch("stale");
+        // PID 0x7fff_fff0 is above any Linux pid_max.
+        let dead = dir.join(".a.bin.tmp-2147483632-0");
+        let live = dir.join(format!(".b.bin.tmp-{}-0", std::process::id()));
+        let other = dir.join("c.bin");
+        for p in [&dead, &live, &other] {
+            fs::write(p, b"x").unwrap();
+        }
+        assert_eq!(remove_stale_temps(&dir), 1);
+        assert!(!dead.exists() && live.exists() && other.exists());
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn bounded_read_refuses_devices_and_oversized_files() {
+        let dir = scratch("bounded");
+        let f = dir.join("f");
+        fs::write(&f, [0u8; 100]).unwrap();
+        assert_eq!(read_bounded(&f, 100, "x").unwrap().len(), 100);
+        let e = read_bounded(&f, 99, "an environment map").unwrap_err();
+        assert!(e.to_string().contains("more than the 99 bytes"), "{e}");
+        let e = read_bounded(Path::new("/dev/zero"), 1 << 30, "x").unwrap_err();
+        assert!(e.to_string().contains("not a regular file (a device)"), "{e}");
+        let e = read_bounded(&dir, 1 << 30, "x").unwrap_err();
+        assert!(e.to_string().contains("a directory"), "{e}");
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn manifest_detects_a_changed_or_missing_file() {
+        let dir = scratch("manifest");
+        assert!(Manifest::verify(&dir).unwrap_err().contains("incomplete"));
+        let (a, b) = (b"alpha".as_slice(), b"beta".as_slice());
+        write_atomic(&dir.join("a"), a).unwrap();
+        write_atomic(&dir.join("b"), b).unwrap();
+        let m = Manifest::new(
+            serde_json::json!({"res": 16}),
+            [("a".to_string(), a), ("b".to_string(), b)],
+        );
+        m.write(&dir).unwrap();
+        assert_eq!(Manifest::verify(&dir).unwrap(), m);
+        fs::write(dir.join("b"), b"bets").unwrap();
+        assert!(Manifest::verify(&dir).unwrap_err().contains("does not match"));
+        fs::remove_file(dir.join("b")).unwrap();
+        assert!(Manifest::verify(&dir).unwrap_err().contains("does not match"));
+        Manifest::invalidate(&dir).unwrap();
+        assert!(Manifest::verify(&dir).unwrap_err().contains("incomplete"));
+        let _ = fs::remove_dir_all(&dir);
+    }
+}

@@ -26,7 +26,6 @@
 //! Writes `relight.md`, `relight.json`, the sampled frames and their references (PNG), and
 //! one animated PNG per technique × path of the whole run.
 
-use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -364,7 +363,7 @@ pub fn run(
     };
     let write = |name: &str, text: String| -> Result<(), ReportError> {
         let path = settings.out.join(name);
-        std::fs::write(&path, text).map_err(|e| ReportError::Write {
+        crate::files::write(&path, text).map_err(|e| ReportError::Write {
             path,
             detail: e.to_string(),
         })
@@ -562,11 +561,8 @@ fn write_apng(path: &Path, width: u32, height: u32, frames: &[Vec<u8>]) -> Resul
         path: path.to_path_buf(),
         detail: e.to_string(),
     };
-    let file = std::fs::File::create(path).map_err(|e| ReportError::Write {
-        path: path.to_path_buf(),
-        detail: e.to_string(),
-    })?;
-    let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
+    let mut bytes = Vec::new();
+    let mut encoder = png::Encoder::new(&mut bytes, width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
     encoder.set_animated(frames.len() as u32, 0).map_err(err)?;
@@ -575,7 +571,8 @@ fn write_apng(path: &Path, width: u32, height: u32, frames: &[Vec<u8>]) -> Resul
     for frame in frames {
         writer.write_image_data(frame).map_err(err)?;
     }
-    writer.finish().map_err(err)
+    writer.finish().map_err(err)?;
+    crate::report::image::write_file(path, &bytes)
 }
 
 #[cfg(test)]

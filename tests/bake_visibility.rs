@@ -672,7 +672,7 @@ fn different_settings_or_scene_change_the_key() {
 fn exr_layers_are_written() {
     let dir = temp_dir("exr");
     let (_, map) = bake(&small_plane(), 16, &settings(64, 1));
-    write_exr_layers(&dir, &map).expect("EXR written");
+    write_exr_layers(&dir, &map, serde_json::json!({"test": true})).expect("EXR written");
     for k in 0..9 {
         assert!(
             dir.join(format!("visibility_{k}.exr")).is_file(),

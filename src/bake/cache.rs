@@ -34,10 +34,8 @@
 //! of the state for a given input, so any change confined to one word (a flipped byte)
 //! always changes the hash. It is a checksum and a cache key, not a cryptographic hash.
 
-use std::fs::{self, File};
-use std::io::Write;
+use std::fs;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use rayon::prelude::*;
 
@@ -45,6 +43,7 @@ use super::BakeError;
 use super::cluster::{self, ClusteredModel, Clustering};
 use super::directions::splitmix64;
 use super::visibility::{VisibilityMap, VisibilitySettings};
+use crate::files;
 use crate::scene::{Mesh, Vertex};
 use crate::sh::Order;
 
@@ -55,6 +54,8 @@ pub const CACHE_FORMAT_VERSION: u32 = 2;
 pub const CACHE_MAGIC: [u8; 8] = *b"SHVISBC\0";
 /// Header bytes before the payload.
 pub const HEADER_BYTES: usize = 40;
+/// Largest cache file read (a 8192² order-8 bake is 17 GB; anything larger is not ours).
+pub const MAX_CACHE_FILE_BYTES: u64 = 64 << 30;
 /// Environment variable naming the cache directory.
 pub const CACHE_DIR_ENV: &str = "SHVIS_CACHE_DIR";
 /// Kind tag of SH visibility caches.
@@ -182,7 +183,10 @@ fn load_or_build<T>(
     build: impl FnOnce() -> Result<T, BakeError>,
     encode: impl FnOnce(&T) -> Vec<u8>,
 ) -> Result<T, BakeError> {
-    match fs::read(path) {
+    if let Some(dir) = path.parent() {
+        files::remove_stale_temps(dir);
+    }
+    match files::read_bounded(path, MAX_CACHE_FILE_BYTES, "a bake cache file") {
         Ok(bytes) => match decode(&bytes) {
             Ok(value) => {
                 log::info!("{what}: using cache {}", path.display());
@@ -190,13 +194,13 @@ fn load_or_build<T>(
             }
             Err(e) => log::warn!("bake cache {}: {e}; rebuilding", path.display()),
         },
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+        Err(files::FileError::Io { source, .. })
+            if source.kind() == std::io::ErrorKind::NotFound =>
+        {
             log::debug!("bake cache {}: not there yet", path.display());
         }
-        Err(e) => log::warn!(
-            "bake cache {}: cannot read ({e}); rebuilding",
-            path.display()
-        ),
+        // The error names the file and the cause already.
+        Err(e) => log::warn!("bake cache {e}; rebuilding"),
     }
     let value = build()?;
     write_atomically(path, &encode(&value))?;
@@ -339,6 +343,14 @@ pub fn decode_clusters(
         return Err("a cluster index is out of range".into());
     }
     let weights = r.f32s(texels * m)?;
+    let finite = clusters
+        .iter()
+        .flat_map(|c| c.mean.iter().chain(c.basis.iter().flatten()))
+        .all(|x| x.is_finite())
+        && weights.iter().all(|w| w.is_finite());
+    if !finite {
+        return Err("a mean, basis vector or weight is not finite".into());
+    }
     if !r.bytes.is_empty() {
         return Err(format!(
             "{} unexpected bytes after the payload",
@@ -503,13 +515,28 @@ pub fn decode_visibility(
     let seconds = f64::from_bits(r.u64()?);
     let texels = (res as usize) * (res as usize);
     let coeffs = r.f32s(texels * order.coeff_count())?;
-    let covered: Vec<bool> = r.take(texels)?.iter().map(|&b| b != 0).collect();
+    let flags = r.take(texels)?;
+    if let Some(i) = flags.iter().position(|&b| b > 1) {
+        return Err(format!("coverage flag {} at texel {i} is not 0 or 1", flags[i]));
+    }
+    let covered: Vec<bool> = flags.iter().map(|&b| b != 0).collect();
     let ao = r.f32s(texels)?;
     if !r.bytes.is_empty() {
         return Err(format!(
             "{} unexpected bytes after the payload",
             r.bytes.len()
         ));
+    }
+    // Values a bake can produce: the projection of a visibility function (|c| ≤ √(4π)·‖y‖,
+    // far below 1e3) and AO in [0, 1].
+    if let Some(i) = coeffs.iter().position(|c| !c.is_finite() || c.abs() > 1e3) {
+        return Err(format!(
+            "coefficient {i} is {}, not what a bake produces",
+            coeffs[i]
+        ));
+    }
+    if let Some(i) = ao.iter().position(|a| !(0.0..=1.0).contains(a)) {
+        return Err(format!("AO of texel {i} is {}, outside [0, 1]", ao[i]));
     }
     Ok(VisibilityMap {
         res,
@@ -524,37 +551,15 @@ pub fn decode_visibility(
     })
 }
 
-/// Writes `bytes` to `path` atomically: temporary file in the same directory, fsync,
-/// rename, best-effort fsync of the directory.
+/// Writes a cache file atomically ([`files::write_atomic`]), creating the directory.
 fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), BakeError> {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let io = |action, source| BakeError::Io {
-        path: path.to_path_buf(),
-        action,
-        source,
-    };
     let dir = path.parent().unwrap_or(Path::new("."));
-    fs::create_dir_all(dir).map_err(|e| io("create the cache directory", e))?;
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("cache");
-    let tmp = dir.join(format!(
-        ".{name}.tmp-{}-{}",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let result = (|| {
-        let mut file = File::create(&tmp)?;
-        file.write_all(bytes)?;
-        file.sync_all()?;
-        fs::rename(&tmp, path)
-    })();
-    if let Err(e) = result {
-        let _ = fs::remove_file(&tmp); // best effort: the error below is what matters
-        return Err(io("write cache file", e));
-    }
-    if let Ok(d) = File::open(dir) {
-        let _ = d.sync_all(); // not supported everywhere; the rename is already done
-    }
-    Ok(())
+    fs::create_dir_all(dir).map_err(|source| BakeError::Io {
+        path: dir.to_path_buf(),
+        action: "create the cache directory",
+        source,
+    })?;
+    files::write_atomic(path, bytes).map_err(BakeError::File)
 }
 
 /// Writes `map` into `dir` as f32 OpenEXR images for inspection: `visibility_{k}.exr`
@@ -562,10 +567,18 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), BakeError> {
 /// (zero past order²), `ao.exr` the AO in channel Y. Image row y is lightmap row y
 /// (v = 0 at the top, DESIGN §1).
 ///
+/// Every file is written atomically, and `manifest.json` (`settings`, each file's size and
+/// hash; [`files::Manifest`]) last: an earlier manifest is removed first, so a directory
+/// whose run was interrupted has none and [`files::Manifest::verify`] rejects it.
+///
 /// # Errors
-/// [`BakeError::Io`] when `dir` cannot be created, [`BakeError::Exr`] when a file
-/// cannot be written.
-pub fn write_exr_layers(dir: &Path, map: &VisibilityMap) -> Result<(), BakeError> {
+/// [`BakeError::Io`] when `dir` cannot be created, [`BakeError::Exr`] when an image
+/// cannot be encoded, [`BakeError::File`] when a file cannot be written.
+pub fn write_exr_layers(
+    dir: &Path,
+    map: &VisibilityMap,
+    settings: serde_json::Value,
+) -> Result<(), BakeError> {
     use crate::files::EXR_ENCODING;
     use exr::prelude::{Image, SpecificChannels, WritableImage};
     fs::create_dir_all(dir).map_err(|source| BakeError::Io {
@@ -573,16 +586,18 @@ pub fn write_exr_layers(dir: &Path, map: &VisibilityMap) -> Result<(), BakeError
         action: "create the output directory",
         source,
     })?;
+    files::remove_stale_temps(dir);
+    files::Manifest::invalidate(dir)?;
     let res = map.res as usize;
     let n2 = map.order.coeff_count();
-    let exr_err = |path: &Path, e: exr::error::Error| BakeError::Exr {
-        path: path.to_path_buf(),
+    let exr_err = |name: &str, e: exr::error::Error| BakeError::Exr {
+        path: dir.join(name),
         detail: e.to_string(),
     };
-    // One file per job on rayon's pool (each written single-threaded): exr's own
+    // One file per job on rayon's pool (each encoded single-threaded): exr's own
     // per-file parallelism starts threads for every file and leaves most of them idle.
-    let write_layer = |k: usize| -> Result<(), BakeError> {
-        let path = dir.join(format!("visibility_{k}.exr"));
+    let encode_layer = |k: usize| -> Result<(String, Vec<u8>), BakeError> {
+        let name = format!("visibility_{k}.exr");
         let c = |x: usize, y: usize, j: usize| {
             let i = 4 * k + j;
             if i < n2 {
@@ -595,34 +610,47 @@ pub fn write_exr_layers(dir: &Path, map: &VisibilityMap) -> Result<(), BakeError
             let (x, y) = (p.0, p.1);
             (c(x, y, 0), c(x, y, 1), c(x, y, 2), c(x, y, 3))
         });
+        let mut bytes = std::io::Cursor::new(Vec::new());
         Image::from_encoded_channels((res, res), EXR_ENCODING, channels)
             .write()
             .non_parallel()
-            .to_file(&path)
-            .map_err(|e| exr_err(&path, e))
+            .to_buffered(&mut bytes)
+            .map_err(|e| exr_err(&name, e))?;
+        Ok((name, bytes.into_inner()))
     };
-    let write_ao = || -> Result<(), BakeError> {
-        let path = dir.join("ao.exr");
+    let encode_ao = || -> Result<(String, Vec<u8>), BakeError> {
+        let name = "ao.exr".to_string();
         let channels = SpecificChannels::build()
             .with_channel("Y")
             .with_pixel_fn(|p: exr::math::Vec2<usize>| (map.ao[p.1 * res + p.0],));
+        let mut bytes = std::io::Cursor::new(Vec::new());
         Image::from_encoded_channels((res, res), EXR_ENCODING, channels)
             .write()
             .non_parallel()
-            .to_file(&path)
-            .map_err(|e| exr_err(&path, e))
+            .to_buffered(&mut bytes)
+            .map_err(|e| exr_err(&name, e))?;
+        Ok((name, bytes.into_inner()))
     };
     let layers = n2.div_ceil(4);
-    (0..=layers)
+    let encoded: Vec<(String, Vec<u8>)> = (0..=layers)
         .into_par_iter()
         .map(|k| {
             if k < layers {
-                write_layer(k)
+                encode_layer(k)
             } else {
-                write_ao()
+                encode_ao()
             }
         })
-        .collect()
+        .collect::<Result<_, _>>()?;
+    for (name, bytes) in &encoded {
+        files::write_atomic(&dir.join(name), bytes)?;
+    }
+    files::Manifest::new(
+        settings,
+        encoded.iter().map(|(n, b)| (n.clone(), b.as_slice())),
+    )
+    .write(dir)?;
+    Ok(())
 }
 
 #[cfg(test)]
@@ -653,7 +681,7 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap();
-            pool.install(|| write_exr_layers(&dir, &map)).unwrap();
+            pool.install(|| write_exr_layers(&dir, &map, serde_json::json!({}))).unwrap();
             let mut entries: Vec<(String, Vec<u8>)> = fs::read_dir(&dir)
                 .unwrap()
                 .map(|e| {

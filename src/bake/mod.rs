@@ -111,6 +111,8 @@ pub enum BakeError {
         path: std::path::PathBuf,
         detail: String,
     },
+    #[error(transparent)]
+    File(#[from] crate::files::FileError),
 }
 
 /// Checks a rays-per-texel count against [`MIN_RAYS`]..=[`MAX_RAYS`].

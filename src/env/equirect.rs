@@ -203,13 +203,16 @@ pub(super) fn save_exr(map: &EnvMap, path: &Path) -> Result<(), EnvError> {
         let t = map.texels[p.1 * w + p.0];
         (t[0], t[1], t[2])
     });
+    let write_err = |detail: String| EnvError::Write {
+        path: path.to_owned(),
+        detail,
+    };
+    let mut bytes = Cursor::new(Vec::new());
     Image::from_encoded_channels((w, h), crate::files::EXR_ENCODING, channels)
         .write()
-        .to_file(path)
-        .map_err(|e| EnvError::Write {
-            path: path.to_owned(),
-            detail: e.to_string(),
-        })
+        .to_buffered(&mut bytes)
+        .map_err(|e| write_err(e.to_string()))?;
+    crate::files::write(path, bytes.into_inner()).map_err(|e| write_err(e.to_string()))
 }
 
 #[cfg(test)]

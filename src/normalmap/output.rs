@@ -43,6 +43,7 @@ pub fn write_map(
     };
     match path.extension().and_then(|e| e.to_str()) {
         Some("png") => {
+            let mut encoded = Vec::new();
             let data: Vec<u16> = texels
                 .iter()
                 .flat_map(|t| {
@@ -51,8 +52,9 @@ pub fn write_map(
                 .collect();
             image::ImageBuffer::<image::Rgb<u16>, Vec<u16>>::from_raw(res, res, data)
                 .ok_or_else(|| io_error(path, "texel count is not res²"))?
-                .save(path)
-                .map_err(|e| io_error(path, e))
+                .write_to(&mut std::io::Cursor::new(&mut encoded), image::ImageFormat::Png)
+                .map_err(|e| io_error(path, e))?;
+            crate::files::write(path, &encoded).map_err(|e| io_error(path, e))
         }
         Some("exr") => {
             let frame = Frame {
@@ -155,7 +157,7 @@ pub fn write_low_gltf(
         document["textures"] = json!([{ "source": 0 }]);
     }
     document["materials"] = json!([material]);
-    std::fs::write(&bin_path, &bin).map_err(|e| io_error(&bin_path, e))?;
+    crate::files::write(&bin_path, &bin).map_err(|e| io_error(&bin_path, e))?;
     let text = serde_json::to_string_pretty(&document).map_err(|e| io_error(path, e))?;
-    std::fs::write(path, text).map_err(|e| io_error(path, e))
+    crate::files::write(path, text).map_err(|e| io_error(path, e))
 }

@@ -65,34 +65,65 @@ fn write_rgba_exr<T: exr::prelude::IntoSample>(
         let t = frame.rgba[p.1 * w + p.0];
         (convert(t[0]), convert(t[1]), convert(t[2]), convert(t[3]))
     });
+    let mut bytes = std::io::Cursor::new(Vec::new());
     Image::from_encoded_channels(
         (w, frame.height as usize),
         crate::files::EXR_ENCODING,
         channels,
     )
     .write()
-    .to_file(path)
+    .to_buffered(&mut bytes)
     .map_err(|e| ReportError::Write {
         path: path.to_path_buf(),
         detail: e.to_string(),
+    })?;
+    write_file(path, &bytes.into_inner())
+}
+
+/// `bytes` to `path` atomically (`files::write_atomic`), the error naming `path`.
+pub(crate) fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
+    crate::files::write_atomic(path, bytes).map_err(|e| ReportError::Write {
+        path: path.to_path_buf(),
+        detail: match e {
+            crate::files::FileError::Io { source, .. } => source.to_string(),
+            e => e.to_string(),
+        },
     })
+}
+
+/// PNG bytes of an 8-bit image of `channels` (3: RGB, 4: RGBA, 1: grey).
+pub(crate) fn encode_png(
+    bytes: &[u8],
+    width: u32,
+    height: u32,
+    color: image::ExtendedColorType,
+) -> Result<Vec<u8>, image::ImageError> {
+    use image::ImageEncoder;
+    let mut out = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut out).write_image(bytes, width, height, color)?;
+    Ok(out)
 }
 
 /// 8-bit sRGB PNG of `frame · 2^exposure_ev`.
 pub fn write_png(path: &Path, frame: &Frame, exposure_ev: f32) -> Result<(), ReportError> {
+    if !exposure_ev.is_finite() {
+        return Err(ReportError::Write {
+            path: path.to_path_buf(),
+            detail: format!("exposure {exposure_ev} EV is not a finite number"),
+        });
+    }
     let bytes = to_srgb8(frame, exposure_ev);
-    image::save_buffer_with_format(
-        path,
+    let png = encode_png(
         &bytes,
         frame.width,
         frame.height,
         image::ExtendedColorType::Rgb8,
-        image::ImageFormat::Png,
     )
     .map_err(|e| ReportError::Write {
         path: path.to_path_buf(),
         detail: e.to_string(),
-    })
+    })?;
+    write_file(path, &png)
 }
 
 /// sRGB-encoded RGB8 of `frame · 2^exposure_ev`; NaN becomes 0.

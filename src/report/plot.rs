@@ -63,15 +63,22 @@ where
     use plotters::prelude::{BitMapBackend, IntoDrawingArea};
     let mut rgb = vec![0u8; (size.0 * size.1 * 3) as usize];
     draw(BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area())?;
-    image::save_buffer_with_format(
-        path,
-        &rgb,
-        size.0,
-        size.1,
-        image::ExtendedColorType::Rgb8,
-        image::ImageFormat::Png,
-    )
-    .map_err(|e| e.to_string())
+    let png = super::image::encode_png(&rgb, size.0, size.1, image::ExtendedColorType::Rgb8)
+        .map_err(|e| e.to_string())?;
+    crate::files::write(path, png).map_err(|e| e.to_string())
+}
+
+/// Draws an SVG into memory and writes it atomically (`files::write`).
+pub fn write_svg_plot<F>(path: &Path, size: (u32, u32), draw: F) -> Result<(), String>
+where
+    F: for<'a> FnOnce(
+        plotters::prelude::DrawingArea<plotters::prelude::SVGBackend<'a>, plotters::coord::Shift>,
+    ) -> Result<(), String>,
+{
+    use plotters::prelude::{IntoDrawingArea, SVGBackend};
+    let mut svg = String::new();
+    draw(SVGBackend::with_string(&mut svg, size).into_drawing_area())?;
+    crate::files::write(path, svg).map_err(|e| e.to_string())
 }
 
 /// Writes `pca_error_{path}.svg` and `.png`: relative RMSE against M for `pcaN` and
@@ -82,7 +89,6 @@ pub fn write_pca_error_plot(
     path: HwPath,
     dir: &Path,
 ) -> Result<Vec<PathBuf>, ReportError> {
-    use plotters::prelude::*;
     let series = |weights_only: bool| -> Vec<(f64, f64)> {
         rows.iter()
             .filter(|r| r.path == path && r.specular.is_none())
@@ -134,8 +140,7 @@ pub fn write_pca_error_plot(
         lo,
         hi,
     };
-    draw_pca(SVGBackend::new(&svg, (900, 520)).into_drawing_area(), &data)
-        .map_err(|e| err(&svg, e))?;
+    write_svg_plot(&svg, (900, 520), |root| draw_pca(root, &data)).map_err(|e| err(&svg, e))?;
     let png = dir.join(format!("pca_error_{path}.png"));
     write_png_plot(&png, (900, 520), |root| draw_pca(root, &data)).map_err(|e| err(&png, e))?;
     Ok(vec![svg, png])
@@ -367,10 +372,8 @@ pub fn write_error_plot(
         paths: &paths,
         axis,
     };
-    use plotters::prelude::{IntoDrawingArea, SVGBackend};
     let size = (1100, 700);
-    draw_speed_error(SVGBackend::new(&svg, size).into_drawing_area(), &data)
-        .map_err(|e| err(&svg, e))?;
+    write_svg_plot(&svg, size, |root| draw_speed_error(root, &data)).map_err(|e| err(&svg, e))?;
     let png = dir.join(format!("{}.png", axis.stem()));
     write_png_plot(&png, size, |root| draw_speed_error(root, &data)).map_err(|e| err(&png, e))?;
     Ok(vec![svg, png])

@@ -362,10 +362,10 @@ impl BenchTable {
             detail: e.to_string(),
         };
         let md = dir.join("table.md");
-        std::fs::write(&md, self.to_markdown()).map_err(|e| err(&md, &e))?;
+        crate::files::write(&md, self.to_markdown()).map_err(|e| err(&md, &e))?;
         let json_path = dir.join("table.json");
         let json = serde_json::to_string_pretty(self).map_err(|e| err(&json_path, &e))?;
-        std::fs::write(&json_path, json + "\n").map_err(|e| err(&json_path, &e))?;
+        crate::files::write(&json_path, json + "\n").map_err(|e| err(&json_path, &e))?;
         Ok(())
     }
 }

@@ -54,7 +54,7 @@ pub(crate) fn side_by_side(frames: &[&Frame]) -> Frame {
 /// Writes `text` as `dir/name`; returns the path.
 pub(crate) fn write_text(dir: &Path, name: &str, text: &str) -> Result<PathBuf, ReportError> {
     let path = dir.join(name);
-    std::fs::write(&path, text).map_err(|e| ReportError::Write {
+    crate::files::write(&path, text).map_err(|e| ReportError::Write {
         path: path.clone(),
         detail: e.to_string(),
     })?;

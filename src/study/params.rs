@@ -533,19 +533,18 @@ where
 /// [`StudyError::Plot`] when plotters fails or no font is available for the labels
 /// (`$SHVIS_FONT`, else DejaVu/Liberation/Noto Sans or Arial at their usual paths).
 pub fn write_plots(points: &[StudyPoint], dir: &Path) -> Result<Vec<PathBuf>, StudyError> {
-    use plotters::prelude::{IntoDrawingArea, SVGBackend};
     const SIZE: (u32, u32) = (1200, 520);
     let svg = dir.join("params_mse.svg");
     crate::report::plot::register_plot_font().map_err(|message| StudyError::Plot {
         path: svg.clone(),
         message,
     })?;
-    draw_figure(SVGBackend::new(&svg, SIZE).into_drawing_area(), points).map_err(|message| {
-        StudyError::Plot {
+    crate::report::plot::write_svg_plot(&svg, SIZE, |root| draw_figure(root, points)).map_err(
+        |message| StudyError::Plot {
             path: svg.clone(),
             message,
-        }
-    })?;
+        },
+    )?;
     let png = dir.join("params_mse.png");
     crate::report::plot::write_png_plot(&png, SIZE, |root| draw_figure(root, points)).map_err(
         |message| StudyError::Plot {
@@ -572,15 +571,15 @@ pub fn write_report(points: &[StudyPoint], dir: &Path) -> Result<Vec<PathBuf>, S
     let csv = dir.join("params.csv");
     let mut buf = Vec::new();
     write_csv(points, &mut buf).map_err(io(&csv))?;
-    std::fs::write(&csv, buf).map_err(io(&csv))?;
+    crate::files::write(&csv, buf).map_err(io(&csv))?;
     let json = dir.join("params.json");
     let text = serde_json::to_string_pretty(points).map_err(|e| StudyError::Io {
         path: json.clone(),
         source: e.into(),
     })?;
-    std::fs::write(&json, text).map_err(io(&json))?;
+    crate::files::write(&json, text).map_err(io(&json))?;
     let md = dir.join("params.md");
-    std::fs::write(&md, summary_markdown(points)).map_err(io(&md))?;
+    crate::files::write(&md, summary_markdown(points)).map_err(io(&md))?;
     let mut written = vec![csv, json, md];
     written.extend(write_plots(points, dir)?);
     Ok(written)

@@ -265,11 +265,11 @@ pub fn run_and_write(
         move |source| StudyError::Io { path, source }
     };
     let csv_path = dir.join("gpu.csv");
-    std::fs::write(&csv_path, gpu_csv(&points)).map_err(io(&csv_path))?;
+    crate::files::write(&csv_path, gpu_csv(&points)).map_err(io(&csv_path))?;
     let md_path = dir.join("params.md");
     let mut md = std::fs::read_to_string(&md_path).unwrap_or_default();
     md += &gpu_summary_markdown(&points, ctx.device_name(), dirs.len());
-    std::fs::write(&md_path, md).map_err(io(&md_path))?;
+    crate::files::write(&md_path, md).map_err(io(&md_path))?;
     Ok(csv_path)
 }
 
