@@ -610,7 +610,14 @@ fn measure_row(
         paper_ratio_to_preconv: technique.paper_ratio_to_preconv(),
         reference: reference_kind,
         attribution,
+        clipped_pixels: frame.clipped_pixels(),
     };
+    if row.clipped_pixels > 0 {
+        log::warn!(
+            "{label}: {} pixels clipped at the f16 target's 65504 (or not finite); the row is marked",
+            row.clipped_pixels
+        );
+    }
     Ok((row, frame))
 }
 

@@ -23,6 +23,27 @@ const DEFAULT_EXPOSURE_EV: f32 = -1.0;
 /// Most bounces of inter-reflection accepted (each adds a pass over the lightmap).
 const MAX_BOUNCES: u32 = 16;
 
+/// A finite f32 (clap value parser): NaN and ±inf are refused where they are typed, not
+/// turned into a black image later (issue 21).
+fn finite_f32(text: &str) -> Result<f32, String> {
+    let v: f32 = text.trim().parse().map_err(|e| format!("{e}"))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("{text} is not a finite number"))
+    }
+}
+
+/// A finite f64 (clap value parser), as [`finite_f32`].
+fn finite_f64(text: &str) -> Result<f64, String> {
+    let v: f64 = text.trim().parse().map_err(|e| format!("{e}"))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("{text} is not a finite number"))
+    }
+}
+
 #[derive(Parser, Debug)]
 #[command(
     name = "shvis",
@@ -93,7 +114,7 @@ struct NormalmapArgs {
     low: Option<String>,
     /// Make the low mesh by simplifying the high one to this fraction of its triangles
     /// (meshoptimizer), with UVs from the chart generator.
-    #[arg(long)]
+    #[arg(long, value_parser = finite_f32)]
     simplify: Option<f32>,
     /// Map texels per side.
     #[arg(long, default_value_t = 1024)]
@@ -103,7 +124,7 @@ struct NormalmapArgs {
     expand: u32,
     /// Search distance from the low surface, metres (default: 5 % of the low mesh's
     /// bounding-box diagonal).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true, value_parser = finite_f32)]
     distance: Option<f32>,
     /// Turn vertex mirroring off (the paper's Fig. 4 failure, for comparison).
     #[arg(long)]
@@ -138,14 +159,14 @@ struct SsbumpArgs {
     #[arg(long)]
     height: PathBuf,
     /// Height of a white texel, in texels (with `house`: a factor on its heights).
-    #[arg(long)]
+    #[arg(long, value_parser = finite_f64)]
     scale: f64,
     /// Rays per texel.
     #[arg(long, default_value_t = 300, value_parser = clap::value_parser!(u32).range(1..=65536))]
     rays: u32,
     /// Bilateral pre-filter: spatial σ in texels (0: off); the range σ is 5 % of the height
     /// range.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = finite_f64)]
     bilateral: f64,
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -185,7 +206,7 @@ struct StudyNdfArgs {
     #[arg(long, value_delimiter = ',', default_value = "bumpy,wavy")]
     scenes: Vec<shvis::study::ndf::SpecularScene>,
     /// Base spread σ of a full-resolution texel's normals (the surface's own roughness).
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = 0.1, value_parser = finite_f32)]
     sigma: f32,
     /// Direction toward the light on the plane (x,y,z; normalized); the sphere's is fixed
     /// (`scene::wavy::light_dir`).
@@ -193,7 +214,8 @@ struct StudyNdfArgs {
         long,
         value_delimiter = ',',
         default_value = "0,0.3,-1",
-        allow_negative_numbers = true
+        allow_hyphen_values = true,
+        value_parser = finite_f32
     )]
     light_dir: Vec<f32>,
     #[arg(long, default_value_t = 480, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
@@ -244,7 +266,7 @@ struct StudyNormalmapArgs {
     )]
     model: PathBuf,
     /// Fractions of the model's triangles to keep, comma-separated.
-    #[arg(long, value_delimiter = ',', default_value = "0.05,0.02")]
+    #[arg(long, value_delimiter = ',', default_value = "0.05,0.02", value_parser = finite_f32)]
     ratios: Vec<f32>,
     /// Map side for the model.
     #[arg(long, default_value_t = 1024)]
@@ -301,7 +323,7 @@ struct StudyRnmArgs {
     /// Samples per pixel of each reference.
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     spp: u32,
-    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
     exposure: f32,
     /// Output directory: rnm.md, rnm.json, fig1_<env>.png.
     #[arg(long, default_value = "study-out")]
@@ -424,21 +446,22 @@ struct SceneArgs {
     /// Seed of the bake's sample patterns.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// SH order of the visibility bake (bands l < order).
-    #[arg(long, default_value_t = 6)]
+    /// SH order of the visibility bake (bands l < order); at most 28, as the L×H product
+    /// needs lighting of order + 2 ≤ 30.
+    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=shvis::prepare::MAX_VISIBILITY_ORDER as i64))]
     order: u32,
     /// L×H table texels per hemisphere (dx9) or cube face (dx10) side.
-    #[arg(long, default_value_t = 32)]
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(shvis::prepare::TABLE_RES_MIN as i64..=shvis::prepare::TABLE_RES_MAX as i64))]
     table_res: u32,
     /// SH order of the clamped cosine in the L×H product (the paper uses 3).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=shvis::sh::MAX_ORDER as i64))]
     h_order: u32,
     /// Height map of the scene's material (PNG/EXR luminance), tiled by its UVs like the
     /// normal map: what `ssbump` and `rnmao` shadow with (replaces the built-in bricks').
     #[arg(long)]
     height_map: Option<PathBuf>,
     /// Height of a white `--height-map` texel, in texels of the map.
-    #[arg(long, default_value_t = 1.0, requires = "height_map")]
+    #[arg(long, default_value_t = 1.0, requires = "height_map", value_parser = finite_f64)]
     height_scale: f64,
 }
 
@@ -453,14 +476,14 @@ struct SpecularArgs {
     #[arg(long, value_delimiter = ',')]
     specular: Vec<shvis::ndf::render::NormalFilter>,
     /// Base spread σ of a full-resolution texel's normals (the surface's roughness).
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = 0.1, value_parser = finite_f32)]
     specular_sigma: f32,
     /// Specular factor k_s multiplied into the light's irradiance.
-    #[arg(long, default_value_t = 0.04)]
+    #[arg(long, default_value_t = 0.04, value_parser = finite_f32)]
     specular_ks: f32,
     /// Direction toward the specular light (x,y,z) instead of the sun's; its irradiance
     /// stays the sun's.
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_parser = finite_f32)]
     light_dir: Option<Vec<f32>>,
 }
 
@@ -569,10 +592,10 @@ struct BakeArgs {
     #[arg(long, default_value_t = shvis::bake::gpu_visibility::GpuVisibilitySettings::default().depth_res)]
     depth_res: u32,
     /// `--baker gpu`: constant depth bias, depth-map texels.
-    #[arg(long, default_value_t = shvis::bake::gpu_visibility::GpuVisibilitySettings::default().bias_texels)]
+    #[arg(long, default_value_t = shvis::bake::gpu_visibility::GpuVisibilitySettings::default().bias_texels, value_parser = finite_f32)]
     depth_bias: f32,
     /// `--baker gpu`: depth bias per unit tan of the ray's angle to the normal, texels.
-    #[arg(long, default_value_t = shvis::bake::gpu_visibility::GpuVisibilitySettings::default().slope_bias_texels)]
+    #[arg(long, default_value_t = shvis::bake::gpu_visibility::GpuVisibilitySettings::default().slope_bias_texels, value_parser = finite_f32)]
     slope_bias: f32,
     /// `--baker gpu`: also run the CPU bake (and one with the next seed, for the
     /// quadrature noise) and print how far the GPU's coefficients are from it.
@@ -617,7 +640,7 @@ struct RenderArgs {
     height: u32,
     /// Exposure in EV applied before sRGB encoding (PNG only). The default −1 keeps the
     /// built-in sky's sunlit ground out of clipping.
-    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
     exposure: f32,
     /// Bounces of inter-reflection baked for shlmap.
     #[arg(long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
@@ -656,7 +679,7 @@ struct ReferenceArgs {
     /// Lightmap resolution the scene is built for (only the built-in house's UVs use it).
     #[arg(long, default_value_t = 512)]
     vis_res: u32,
-    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
     exposure: f32,
     /// Reflections of light to include (0: direct light only, the model of every technique
     /// but shlmap; shlmap bakes 2 by default).
@@ -722,17 +745,18 @@ struct BenchArgs {
     #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     frames: u32,
     /// Untimed warm-up frames per technique × path.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(0..=10_000))]
     warmup: u32,
     #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
     width: u32,
     #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
     height: u32,
     /// Exposure in EV of the PNG images.
-    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
     exposure: f32,
-    /// Samples per pixel of the reference the errors are measured against (0: no errors).
-    #[arg(long, default_value_t = 64)]
+    /// Samples per pixel of the reference the errors are measured against (0: no errors);
+    /// at most `reference --spp`'s limit.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(0..=1_000_000))]
     ref_spp: u32,
     /// Measure against the point-sampled reference (the techniques' own pixel sampling)
     /// instead of the footprint reference.
@@ -776,7 +800,7 @@ struct RelightArgs {
     #[arg(long)]
     blocking_upload: bool,
     /// Full turns of the environment over the run.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = finite_f64)]
     turns: f64,
     /// Cross-fade from --env to this environment over the run (time of day).
     #[arg(long)]
@@ -788,7 +812,7 @@ struct RelightArgs {
     width: u32,
     #[arg(long, default_value_t = 200, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
     height: u32,
-    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
     exposure: f32,
     /// Samples per pixel of each sampled frame's reference.
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=65_536))]
@@ -1472,7 +1496,7 @@ fn prepare_settings(
     env: &str,
     sh_lightmap_bounces: Option<u32>,
 ) -> Result<PrepareSettings> {
-    Ok(PrepareSettings {
+    let settings = PrepareSettings {
         scene: scene.scene.clone(),
         env: env.to_string(),
         vis_res: scene.vis_res,
@@ -1488,7 +1512,10 @@ fn prepare_settings(
             .height_map
             .clone()
             .map(|path| (path, scene.height_scale)),
-    })
+    };
+    // Every range and the bake's memory, before a device is opened or a file read.
+    shvis::prepare::check_settings(&settings)?;
+    Ok(settings)
 }
 
 fn open_gpu(gpu: &GpuArgs) -> Result<Arc<Context>> {
@@ -1500,17 +1527,21 @@ fn open_gpu(gpu: &GpuArgs) -> Result<Arc<Context>> {
     Ok(ctx)
 }
 
+/// Creates the `--out` directory and checks it takes files, before any work.
 fn create_dir(dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("{}: cannot create directory", dir.display()))
+    Ok(shvis::files::check_writable_dir(dir, "--out")?)
 }
 
 fn run_bake(a: BakeArgs) -> Result<()> {
+    let settings = prepare_settings(&a.scene, "sky", None)?;
     let vis_res = bake::validate_res(a.scene.vis_res)?;
     let rays = bake::validate_rays(a.scene.rays)?;
-    let settings = prepare_settings(&a.scene, "sky", None)?;
-    let scene = resolve_scene(&a.scene.scene, vis_res)?;
     create_dir(&a.out)?;
+    let cache_dir = shvis::bake::cache::default_cache_dir();
+    if a.baker == VisibilityBakerArg::Cpu {
+        shvis::files::check_writable_dir(&cache_dir, "the bake cache (SHVIS_CACHE_DIR)")?;
+    }
+    let scene = resolve_scene(&a.scene.scene, vis_res)?;
     if a.separate_ao {
         let ao = bake_scene_ao(&scene, vis_res, rays, a.scene.seed, true)?;
         println!(
@@ -1660,11 +1691,13 @@ fn with_normal_filter(techniques: Vec<Technique>, filter: NormalFilterArg) -> Ve
 
 fn run_render(mut a: RenderArgs) -> Result<()> {
     frame_format(&a.out)?;
+    shvis::files::check_writable_file(&a.out, "--out")?;
     a.technique = with_normal_filter(vec![a.technique], a.normal_filter)[0];
-    // The device first: a missing GPU should not cost a bake.
-    let ctx = open_gpu(&a.gpu)?;
     let bounces = a.technique.needs().sh_lightmap.then_some(a.bounces);
-    let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, bounces)?)?;
+    let settings = prepare_settings(&a.scene, &a.env, bounces)?;
+    // The device next: a missing GPU should not cost a bake.
+    let ctx = open_gpu(&a.gpu)?;
+    let mut prepared = prepare(&settings)?;
     prepared.prepare_techniques(&[a.technique])?;
     let settings = FrameSettings {
         width: a.width,
@@ -1678,6 +1711,13 @@ fn run_render(mut a: RenderArgs) -> Result<()> {
     }
     let tech = technique::build(&ctx, &scene_gpu, a.technique, a.path, &prepared.inputs())?;
     let frame = tech.render(&scene_gpu, 0, 1)?;
+    let clipped = frame.clipped_pixels();
+    if clipped > 0 {
+        log::warn!(
+            "{}: {clipped} pixels clipped at the f16 target's 65504 (or not finite): the environment is too bright for this target; scale it down",
+            tech.label()
+        );
+    }
     write_frame(&a.out, &frame, a.exposure)?;
     check_validation(&ctx, a.gpu.validate)?;
     println!("wrote {} ({})", a.out.display(), tech.label());
@@ -1686,6 +1726,16 @@ fn run_render(mut a: RenderArgs) -> Result<()> {
 
 fn run_reference(a: ReferenceArgs) -> Result<()> {
     frame_format(&a.out)?;
+    shvis::files::check_writable_file(&a.out, "--out")?;
+    let min = shvis::prepare::min_vis_res(&a.scene);
+    if !(min..=bake::MAX_RES).contains(&a.vis_res) {
+        bail!(
+            "--vis-res {} is out of range {min}..={} for scene '{}'",
+            a.vis_res,
+            bake::MAX_RES,
+            a.scene
+        );
+    }
     let ctx = open_gpu(&a.gpu)?;
     let vis_res = bake::validate_res(a.vis_res)?;
     let env = shvis::env::resolve(&a.env)?;
@@ -1795,6 +1845,10 @@ fn run_bench(a: BenchArgs) -> Result<()> {
         probe: !a.no_probe,
     };
     create_dir(&a.out)?;
+    // A table from an earlier run must not sit beside this run's images if it stops early.
+    for stale in ["table.md", "table.json"] {
+        let _ = std::fs::remove_file(a.out.join(stale));
+    }
     let started = Instant::now();
     let bounces = settings.needs_sh_lightmap().then_some(a.bounces);
     let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, bounces)?)?;

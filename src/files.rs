@@ -45,14 +45,14 @@ pub const MANIFEST_NAME: &str = "manifest.json";
 #[derive(Debug, thiserror::Error)]
 pub enum FileError {
     /// Opening, reading or writing failed.
-    #[error("{}: cannot {action}: {source}", .path.display())]
+    #[error("{}: cannot {action}: {cause}", .path.display())]
     Io {
         /// The file or directory.
         path: PathBuf,
         /// What was being done ("read", "write", "create the directory").
         action: &'static str,
-        /// The I/O error.
-        source: io::Error,
+        /// The I/O error (in the message, so not also a `source()` that `{:#}` repeats).
+        cause: io::Error,
     },
     /// Not a regular file (a device, FIFO, socket or directory).
     #[error("{}: not a regular file ({kind}); give a file", .path.display())]
@@ -86,7 +86,7 @@ pub fn read_bounded(path: &Path, limit: u64, what: &'static str) -> Result<Vec<u
     let io_err = |source| FileError::Io {
         path: path.to_path_buf(),
         action: "read",
-        source,
+        cause: source,
     };
     let meta = fs::metadata(path).map_err(io_err)?;
     check_regular(path, &meta)?;
@@ -191,7 +191,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
         return Err(FileError::Io {
             path: path.to_path_buf(),
             action: "write",
-            source,
+            cause: source,
         });
     }
     if let Ok(d) = File::open(dir) {
@@ -207,7 +207,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
 /// The I/O error of the step that failed.
 pub fn write(path: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> io::Result<()> {
     write_atomic(path.as_ref(), bytes.as_ref()).map_err(|e| match e {
-        FileError::Io { source, .. } => source,
+        FileError::Io { cause, .. } => cause,
         e => io::Error::other(e.to_string()),
     })
 }
@@ -277,7 +277,7 @@ pub fn check_writable_dir(dir: &Path, what: &str) -> Result<(), FileError> {
     let io_err = |action, source| FileError::Io {
         path: dir.to_path_buf(),
         action,
-        source,
+        cause: source,
     };
     if let Ok(meta) = fs::metadata(dir)
         && !meta.is_dir()
@@ -307,7 +307,7 @@ pub fn check_writable_file(path: &Path, what: &str) -> Result<(), FileError> {
         return Err(FileError::Io {
             path: path.to_path_buf(),
             action: "write",
-            source: io::Error::other(format!("{what} is a directory")),
+            cause: io::Error::other(format!("{what} is a directory")),
         });
     }
     match path.parent() {
@@ -378,7 +378,7 @@ impl Manifest {
             Err(e) if e.kind() != io::ErrorKind::NotFound => Err(FileError::Io {
                 path,
                 action: "remove",
-                source: e,
+                cause: e,
             }),
             _ => Ok(()),
         }
@@ -389,7 +389,7 @@ impl Manifest {
     pub fn verify(dir: &Path) -> Result<Manifest, String> {
         let path = dir.join(MANIFEST_NAME);
         let bytes = read_bounded(&path, 1 << 20, "a manifest").map_err(|e| match e {
-            FileError::Io { source, .. } if source.kind() == io::ErrorKind::NotFound => format!(
+            FileError::Io { cause, .. } if cause.kind() == io::ErrorKind::NotFound => format!(
                 "{}: no {MANIFEST_NAME}: the directory is incomplete (an interrupted run?)",
                 dir.display()
             ),

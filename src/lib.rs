@@ -14,6 +14,7 @@ pub mod env;
 pub mod files;
 #[allow(unsafe_code)]
 pub mod gpu;
+pub mod limits;
 pub mod ndf;
 pub mod normalmap;
 pub mod prepare;

@@ -115,8 +115,75 @@ pub const LIGHTING_ORDER: u32 = 8;
 /// The largest PCA basis of the cost table (`pca24`).
 pub const PCA_MAX_BASIS: usize = 24;
 
+/// Smallest `--table-res`.
+pub const TABLE_RES_MIN: u32 = 4;
+/// Largest `--table-res`.
+pub const TABLE_RES_MAX: u32 = 256;
 /// Valid `--table-res` values (DESIGN §2: 16–32 per hemisphere is adequate; more for study).
-pub const TABLE_RES_RANGE: std::ops::RangeInclusive<u32> = 4..=256;
+pub const TABLE_RES_RANGE: std::ops::RangeInclusive<u32> = TABLE_RES_MIN..=TABLE_RES_MAX;
+/// Highest visibility order: the L×H product needs lighting of order + 2 ≤ `sh::MAX_ORDER`.
+pub const MAX_VISIBILITY_ORDER: u32 = crate::sh::MAX_ORDER - 2;
+
+/// The smallest lightmap resolution scene `name` can be baked at (the built-in house's
+/// charts and gutters need more texels than generated UVs).
+pub fn min_vis_res(name: &str) -> u32 {
+    match name {
+        "house" => house::MIN_LIGHTMAP_RES,
+        _ => bake::MIN_RES,
+    }
+}
+
+/// Bytes a visibility bake of `res`² texels at `order` plans to hold at once: the
+/// coefficients as baked (f32), their cache encoding and the prepared copy, plus per-texel
+/// geometry, AO and flags (~64 bytes).
+pub fn bake_memory_bytes(res: u32, order: u32) -> u64 {
+    let texels = u64::from(res) * u64::from(res);
+    texels.saturating_mul(12 * u64::from(order) * u64::from(order) + 64)
+}
+
+/// The checks of [`prepare`] that need no file, run by the command line before it opens a
+/// device or bakes: the lightmap resolution against the scene's range (one message for
+/// every scene), rays, order, table resolution, the bake's memory, and a warning when
+/// there are fewer rays per texel than SH coefficients to project.
+///
+/// # Errors
+/// One line naming the option and its range, or the memory it needs.
+pub fn check_settings(settings: &PrepareSettings) -> Result<(), PrepareError> {
+    let min = min_vis_res(&settings.scene);
+    if !(min..=bake::MAX_RES).contains(&settings.vis_res) {
+        return Err(PrepareError::VisRes {
+            res: settings.vis_res,
+            min,
+            max: bake::MAX_RES,
+            scene: settings.scene.clone(),
+        });
+    }
+    bake::validate_rays(settings.rays)?;
+    if settings.order.get() > MAX_VISIBILITY_ORDER {
+        return Err(PrepareError::Order(settings.order.get()));
+    }
+    if !TABLE_RES_RANGE.contains(&settings.table_res) {
+        return Err(PrepareError::TableRes(settings.table_res));
+    }
+    crate::limits::check_memory(
+        format_args!(
+            "--vis-res {} × --order {}: the visibility bake",
+            settings.vis_res,
+            settings.order.get()
+        ),
+        bake_memory_bytes(settings.vis_res, settings.order.get()),
+        "lower --vis-res or --order",
+    )?;
+    let n2 = settings.order.coeff_count();
+    if (settings.rays as usize) < n2 {
+        log::warn!(
+            "--rays {} is fewer than the {n2} SH coefficients of --order {} each texel projects: the visibility of unc*/pca*/cluster techniques will be badly wrong (use at least {n2})",
+            settings.rays,
+            settings.order.get()
+        );
+    }
+    Ok(())
+}
 
 impl Prepared {
     /// Fits the VQ / CPCA models `techniques` need that are not fitted yet (k-means with
@@ -275,8 +342,25 @@ pub enum PrepareError {
     Bake(#[from] BakeError),
     #[error("--table-res {0} is out of range 4..=256")]
     TableRes(u32),
-    #[error("visibility order {0} needs lighting of order {0}+2 > 30")]
+    #[error("--order {0} is out of range 1..=28 (the L×H product needs lighting of order + 2 ≤ 30)")]
     Order(u32),
+    #[error("--vis-res {res} is out of range {min}..={max} for scene '{scene}'")]
+    VisRes {
+        res: u32,
+        min: u32,
+        max: u32,
+        scene: String,
+    },
+    #[error(transparent)]
+    Limit(#[from] crate::limits::LimitError),
+    #[error(transparent)]
+    File(#[from] crate::files::FileError),
+}
+
+/// Whether `name` is a glTF path (`.gltf`/`.glb`, any case).
+pub fn is_gltf_path(name: &str) -> bool {
+    let lower = name.to_ascii_lowercase();
+    lower.ends_with(".gltf") || lower.ends_with(".glb")
 }
 
 /// The built-in scene by name, or a scene file.
@@ -286,7 +370,7 @@ pub fn resolve_scene(name: &str, vis_res: u32) -> Result<Scene, SceneError> {
         "patio" => patio::build(vis_res),
         "bumpy" => crate::scene::bumpy::build(vis_res),
         "wavy" => crate::scene::wavy::build(vis_res),
-        p if p.ends_with(".gltf") || p.ends_with(".glb") => {
+        p if is_gltf_path(p) => {
             gltf::load(std::path::Path::new(p), vis_res)
         }
         other => Err(SceneError::Unknown(other.to_string())),
@@ -295,6 +379,9 @@ pub fn resolve_scene(name: &str, vis_res: u32) -> Result<Scene, SceneError> {
 
 /// Validates inputs (cheap checks first), then bakes and prepares the lighting.
 pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
+    check_settings(settings)?;
+    let cache_dir = settings.cache_dir.clone().unwrap_or_else(default_cache_dir);
+    crate::files::check_writable_dir(&cache_dir, "the bake cache (SHVIS_CACHE_DIR)")?;
     let vis_res = bake::validate_res(settings.vis_res)?;
     let rays = bake::validate_rays(settings.rays)?;
     let env = env::resolve(&settings.env)?;

@@ -364,6 +364,16 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// Covered pixels (alpha > ½) with a channel that is not finite or at least the f16
+    /// target's largest value 65504 (issue 21: an f16 target saturates to Inf there). The
+    /// same check for every technique: `render` warns, `bench` marks the row.
+    pub fn clipped_pixels(&self) -> u64 {
+        self.rgba
+            .iter()
+            .filter(|p| p[3] > 0.5 && p[..3].iter().any(|c| !c.is_finite() || *c >= 65504.0))
+            .count() as u64
+    }
+
     /// Linear RGB at pixel (x, y).
     pub fn rgb(&self, x: u32, y: u32) -> [f32; 3] {
         let t = self.rgba[(y * self.width + x) as usize];

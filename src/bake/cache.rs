@@ -194,7 +194,7 @@ fn load_or_build<T>(
             }
             Err(e) => log::warn!("bake cache {}: {e}; rebuilding", path.display()),
         },
-        Err(files::FileError::Io { source, .. })
+        Err(files::FileError::Io { cause: source, .. })
             if source.kind() == std::io::ErrorKind::NotFound =>
         {
             log::debug!("bake cache {}: not there yet", path.display());

@@ -31,6 +31,10 @@ use crate::scene::Mesh;
 /// of the triangle's UV height) still count, which closes cracks on shared edges.
 pub const EDGE_EPS: f64 = 1e-6;
 
+/// Barycentric margin inside a second triangle for a texel centre to count as a chart
+/// overlap (far above [`EDGE_EPS`], so centres on shared edges never count).
+const OVERLAP_MARGIN: f64 = 1e-4;
+
 /// Texels of a lightmap covered by a mesh, with what the bake needs at each.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightmapTexels {
@@ -96,6 +100,7 @@ pub fn rasterize(mesh: &Mesh, res: u32) -> LightmapTexels {
         tangent: vec![Vec4::ZERO; n],
     };
     let mut degenerate = 0usize;
+    let mut overlapping = 0usize;
     for t in 0..mesh.triangle_count() {
         let idx = &mesh.indices[3 * t..3 * t + 3];
         let Some(v) = idx
@@ -133,14 +138,17 @@ pub fn rasterize(mesh: &Mesh, res: u32) -> LightmapTexels {
         for y in first(lo.y)..last(hi.y) {
             for x in first(lo.x)..last(hi.x) {
                 let i = y as usize * res as usize + x as usize;
-                if out.covered[i] {
-                    continue; // first writer wins
-                }
                 let c = DVec2::new(f64::from(x) + 0.5, f64::from(y) + 0.5);
                 let w0 = cross2(q[2] - q[1], c - q[1]) / area_uv;
                 let w1 = cross2(q[0] - q[2], c - q[2]) / area_uv;
                 let w2 = 1.0 - w0 - w1;
                 if w0 < -EDGE_EPS || w1 < -EDGE_EPS || w2 < -EDGE_EPS {
+                    continue;
+                }
+                if out.covered[i] {
+                    // First writer wins; a centre well inside a second triangle (not on a
+                    // shared edge) means the charts overlap.
+                    overlapping += usize::from(w0.min(w1).min(w2) > OVERLAP_MARGIN);
                     continue;
                 }
                 out.covered[i] = true;
@@ -158,6 +166,13 @@ pub fn rasterize(mesh: &Mesh, res: u32) -> LightmapTexels {
     if degenerate > 0 {
         log::warn!(
             "lightmap raster: skipped {degenerate} degenerate triangles (zero area in 3D or in lightmap UV)"
+        );
+    }
+    if overlapping > 0 {
+        let covered = out.covered.iter().filter(|&&c| c).count();
+        log::warn!(
+            "lightmap UVs overlap: {overlapping} of {covered} covered texels ({:.2} %) lie inside more than one triangle; each gets the first triangle's bake, so the others are lit wrongly (give non-overlapping TEXCOORD_1 charts, or remove them to have shvis generate some)",
+            100.0 * overlapping as f64 / covered.max(1) as f64
         );
     }
     out

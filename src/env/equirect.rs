@@ -50,17 +50,29 @@ pub fn load(path: &Path) -> Result<EnvMap, EnvError> {
 
 /// [`load`], with the reading of a 1:1 image given.
 pub fn load_as(path: &Path, square: SquareLayout) -> Result<EnvMap, EnvError> {
-    let bytes = std::fs::read(path).map_err(|source| EnvError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
+    let bytes = crate::files::read_bounded(path, MAX_ENV_FILE_BYTES, "an environment map")
+        .map_err(|e| match e {
+            crate::files::FileError::Io { cause: source, .. } => EnvError::Io {
+                path: path.to_owned(),
+                source,
+            },
+            e => EnvError::Format {
+                path: path.to_owned(),
+                detail: e.to_string().replacen(&format!("{}: ", path.display()), "", 1),
+            },
+        })?;
     let format_err = |detail: String| EnvError::Format {
         path: path.to_owned(),
         detail,
     };
     let map = if bytes.starts_with(&EXR_MAGIC) {
+        check_exr_header(&bytes, path)?;
         decode_exr(&bytes).map_err(|e| format_err(format!("invalid OpenEXR file: {e}")))?
     } else if RADIANCE_MAGICS.iter().any(|m| bytes.starts_with(m)) {
+        let meta = image::codecs::hdr::HdrDecoder::new(Cursor::new(&bytes))
+            .map_err(|e| format_err(format!("invalid Radiance HDR file: {e}")))?
+            .metadata();
+        check_env_size(path, u64::from(meta.width), u64::from(meta.height))?;
         decode_hdr(&bytes).map_err(|e| format_err(format!("invalid Radiance HDR file: {e}")))?
     } else {
         let ext = path
@@ -74,6 +86,49 @@ pub fn load_as(path: &Path, square: SquareLayout) -> Result<EnvMap, EnvError> {
         )));
     };
     validate(map, path, square)
+}
+
+/// Widest environment map accepted (texels; 16384 × 8192 is 1.5 GiB of f32 RGB).
+pub const MAX_ENV_WIDTH: u64 = 16384;
+/// Largest environment file read.
+pub const MAX_ENV_FILE_BYTES: u64 = 4 << 30;
+
+/// Every layer's size from the EXR header, checked before any texel is allocated.
+fn check_exr_header(bytes: &[u8], path: &Path) -> Result<(), EnvError> {
+    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(|e| {
+        EnvError::Format {
+            path: path.to_owned(),
+            detail: format!("invalid OpenEXR file: {e}"),
+        }
+    })?;
+    for header in &meta.headers {
+        let size = header.layer_size;
+        check_env_size(path, size.width() as u64, size.height() as u64)?;
+    }
+    Ok(())
+}
+
+/// A `width × height` map against [`MAX_ENV_WIDTH`] and the memory available (the decoded
+/// texels, the validated copy and the SH projection's working set: ~3 × 12 bytes a texel).
+fn check_env_size(path: &Path, width: u64, height: u64) -> Result<(), EnvError> {
+    let side = width.max(height);
+    let limit_err = |e: crate::limits::LimitError| EnvError::Format {
+        path: path.to_owned(),
+        detail: e.to_string(),
+    };
+    crate::limits::check_at_most(
+        format_args!("the header's {width}×{height} texels: a side"),
+        side,
+        MAX_ENV_WIDTH,
+        "the widest map accepted",
+    )
+    .map_err(limit_err)?;
+    crate::limits::check_memory(
+        format_args!("decoding its {width}×{height} texels"),
+        crate::limits::image_bytes(width, height, 36),
+        "",
+    )
+    .map_err(limit_err)
 }
 
 fn decode_exr(bytes: &[u8]) -> Result<EnvMap, exr::error::Error> {
@@ -161,7 +216,8 @@ fn validate(mut map: EnvMap, path: &Path, square: SquareLayout) -> Result<EnvMap
             path.display()
         );
     }
-    if width == height {
+    check_range(&map, path)?;
+    let map = if width == height {
         let probe = AngularProbe {
             size: width,
             texels: map.texels,
@@ -179,9 +235,70 @@ fn validate(mut map: EnvMap, path: &Path, square: SquareLayout) -> Result<EnvMap
             path.display(),
             2 * width
         );
-        return Ok(probe.to_equirect(2 * width));
-    }
+        probe.to_equirect(2 * width)
+    } else {
+        map
+    };
+    warn_if_frames_clip(&map, path);
     Ok(map)
+}
+
+/// Largest radiance accepted in a loaded map. Far above any captured sky (a physical sun
+/// is ~1e9 in W·sr⁻¹·m⁻²), and low enough that the f32 sums over the largest map
+/// (1.3e8 texels × SH basis values ≤ 1e2) stay below 1e23, finite with a wide margin,
+/// for every technique and the reference alike.
+pub const MAX_ENV_RADIANCE: f32 = 1e12;
+
+/// Largest value of an f16 render target (`half::f16::MAX`).
+pub const F16_TARGET_MAX: f64 = 65504.0;
+
+/// Refuses texels above [`MAX_ENV_RADIANCE`], naming the first and the largest value.
+fn check_range(map: &EnvMap, path: &Path) -> Result<(), EnvError> {
+    let mut first = None;
+    let mut count = 0usize;
+    let mut largest = 0.0f32;
+    for (i, t) in map.texels.iter().enumerate() {
+        let m = t[0].max(t[1]).max(t[2]);
+        if m > MAX_ENV_RADIANCE {
+            count += 1;
+            first.get_or_insert(i);
+            largest = largest.max(m);
+        }
+    }
+    match first {
+        None => Ok(()),
+        Some(i) => Err(EnvError::Format {
+            path: path.to_owned(),
+            detail: format!(
+                "{count} texels exceed the radiance limit {MAX_ENV_RADIANCE:e} (largest {largest:e}, first at x={}, y={}); scale the map down",
+                i % map.width as usize,
+                i / map.width as usize
+            ),
+        }),
+    }
+}
+
+/// Warns when a white surface facing the brightest hemisphere could exceed an f16 frame
+/// target: the bound is ∫ L dω / π over the whole sphere (irradiance over π, albedo 1).
+/// The frames themselves are checked after rendering (`render::Frame::clipped`).
+fn warn_if_frames_clip(map: &EnvMap, path: &Path) {
+    let mut integral = 0.0f64;
+    for y in 0..map.height {
+        let omega = map.texel_solid_angle(y);
+        let row = &map.texels[(y * map.width) as usize..((y + 1) * map.width) as usize];
+        let max_row: f64 = row
+            .iter()
+            .map(|t| f64::from(t[0].max(t[1]).max(t[2])))
+            .sum();
+        integral += omega * max_row;
+    }
+    let bound = integral / std::f64::consts::PI;
+    if bound > F16_TARGET_MAX {
+        log::warn!(
+            "{}: lit surfaces may reach radiance {bound:.3e}, above the f16 frame targets' {F16_TARGET_MAX}; such pixels are reported as clipped",
+            path.display()
+        );
+    }
 }
 
 /// Writes `map` as an RGB f32 OpenEXR file ([`EnvMap::save_exr`]).

@@ -85,7 +85,7 @@ pub(crate) fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
     crate::files::write_atomic(path, bytes).map_err(|e| ReportError::Write {
         path: path.to_path_buf(),
         detail: match e {
-            crate::files::FileError::Io { source, .. } => source.to_string(),
+            crate::files::FileError::Io { cause: source, .. } => source.to_string(),
             e => e.to_string(),
         },
     })

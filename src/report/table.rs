@@ -151,6 +151,9 @@ pub struct BenchRow {
     pub reference: RowReference,
     /// Where `rel_rmse` comes from, rung by rung (empty without a footprint reference).
     pub attribution: Vec<AttributionStep>,
+    /// Covered pixels whose value the f16 target could not hold (`Frame::clipped_pixels`);
+    /// a row with any is marked in `table.md`.
+    pub clipped_pixels: u64,
 }
 
 /// Fills `ratio_to_preconv` of every row from the `preconv` row of its path.
@@ -290,9 +293,13 @@ impl BenchTable {
                     opt(e, 4)
                 }
             };
+            let name = match r.clipped_pixels {
+                0 => r.name(),
+                n => format!("{} (⚠ {n} px clipped)", r.name()),
+            };
             s += &format!(
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-                r.name(),
+                name,
                 r.path,
                 opt(r.ms_median, 3),
                 opt(r.ms_min, 3),
@@ -399,6 +406,7 @@ mod tests {
             paper_ratio_to_preconv: technique.paper_ratio_to_preconv(),
             reference: RowReference::Direct,
             attribution,
+            clipped_pixels: 0,
         }
     }
 

@@ -28,6 +28,15 @@
 //!   −Z, up +Y, `yfov`, `znear`, `zfar` or [`DEFAULT_Z_FAR_SCALE`] × the scene size);
 //!   else [`super::framing_camera`].
 //!
+//! URI policy (issue 21): buffers and images come from the `.glb` BIN chunk, base64 `data:`
+//! URIs, or relative paths (percent-decoded) that stay inside the glTF file's folder. An
+//! absolute path, a `file:` URI, any other scheme (`http:` …) or a relative path that climbs
+//! out of the folder (`../`) is refused with one error naming the URI: a scene file must not
+//! make shvis open files elsewhere on the machine (`file:///etc/passwd`). Referenced files
+//! must be regular files of at most [`MAX_REFERENCED_FILE_BYTES`]. Textures are checked
+//! from their header (at most 16384 texels a side, and the memory available) before they
+//! are decoded.
+//!
 //! Robustness (a file never panics the loader; `tests/scene_gltf.rs` and `fuzz/`): the
 //! `gltf` crate parses and validates the JSON (index references, enums); this module reads
 //! buffers, images and accessors itself with checked arithmetic, because the crate's own
@@ -304,10 +313,20 @@ impl Loader {
             height: None,
         };
         let bounds = mesh.bounds();
-        let camera = camera_node
-            .and_then(|(cam, world)| file_camera(&document, cam, world, bounds))
-            .inspect(|_| report.camera_from_file = true)
-            .unwrap_or_else(|| framing_camera(bounds));
+        let camera = match camera_node.map(|(cam, world)| (cam, file_camera(&document, cam, world, bounds))) {
+            Some((_, Ok(camera))) => {
+                report.camera_from_file = true;
+                camera
+            }
+            Some((index, Err(why))) => {
+                log::warn!(
+                    "{}: camera {index} is unusable ({why}); rendering from a camera that frames the scene instead",
+                    self.file
+                );
+                framing_camera(bounds)
+            }
+            None => framing_camera(bounds),
+        };
         Ok((
             Scene {
                 name: name.to_string(),
@@ -365,17 +384,17 @@ impl Loader {
                 short(uri)
             ));
         };
-        let path = if let Some(rest) = uri.strip_prefix("file://").or(uri.strip_prefix("file:")) {
-            PathBuf::from(percent_decode(rest).ok_or("bad percent-encoding in URI")?)
-        } else if uri.contains(':') {
-            return Err(format!("unsupported URI scheme in '{}'", short(uri)));
-        } else {
-            base.join(percent_decode(uri).ok_or("bad percent-encoding in URI")?)
-        };
-        std::fs::read(&path).map_err(|e| match e.kind() {
-            std::io::ErrorKind::NotFound => format!("'{}' not found", path.display()),
-            _ => format!("cannot read '{}': {e}", path.display()),
-        })
+        let relative = check_relative_uri(uri)?;
+        let path = base.join(relative);
+        crate::files::read_bounded(&path, MAX_REFERENCED_FILE_BYTES, "a glTF buffer or image")
+            .map_err(|e| match e {
+                crate::files::FileError::Io { cause: source, .. }
+                    if source.kind() == std::io::ErrorKind::NotFound =>
+                {
+                    format!("'{}' not found", path.display())
+                }
+                e => e.to_string(),
+            })
     }
 
     /// Mesh instances (depth-first, in child order) and the first perspective camera node.
@@ -660,15 +679,8 @@ impl Loader {
                     .to_vec()
             }
         };
-        let decoded = image::load_from_memory(&bytes)
-            .map_err(|e| err(format!("cannot decode: {e}")))?
-            .to_rgba8();
+        let decoded = decode_texture(&bytes).map_err(err)?;
         let (width, height) = decoded.dimensions();
-        if width == 0 || height == 0 || width.max(height) > MAX_TEXTURE_SIDE {
-            return Err(err(format!(
-                "{width}×{height} is outside 1..={MAX_TEXTURE_SIDE} texels per side"
-            )));
-        }
         Ok(Texture8 {
             width,
             height,
@@ -681,6 +693,36 @@ impl Loader {
     }
 }
 
+/// Decodes a texture to RGBA8 after checking its header's size against
+/// [`MAX_TEXTURE_SIDE`] and the memory available; the decoder's own allocation limit is set
+/// to what that size needs (its default 512 MiB would refuse a 16384² texture).
+fn decode_texture(bytes: &[u8]) -> Result<image::RgbaImage, String> {
+    let reader = || {
+        image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| format!("cannot read: {e}"))
+    };
+    let (width, height) = reader()?
+        .into_dimensions()
+        .map_err(|e| format!("cannot decode: {e}"))?;
+    if width == 0 || height == 0 || width.max(height) > MAX_TEXTURE_SIDE {
+        return Err(format!(
+            "{width}×{height} is outside 1..={MAX_TEXTURE_SIDE} texels per side"
+        ));
+    }
+    // The decoded image (up to 16 bytes a texel for 32-bit float formats) and its RGBA8 copy.
+    let need = crate::limits::image_bytes(u64::from(width), u64::from(height), 20);
+    crate::limits::check_memory(format_args!("decoding its {width}×{height} texels"), need, "")
+        .map_err(|e| e.to_string())?;
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(need);
+    let mut r = reader()?;
+    r.limits(limits);
+    Ok(r.decode()
+        .map_err(|e| format!("cannot decode: {e}"))?
+        .to_rgba8())
+}
+
 /// The attribute's glTF spelling (`POSITION`, `TEXCOORD_1`, …) for messages.
 fn semantic_name(semantic: &Semantic) -> String {
     match semantic {
@@ -690,6 +732,50 @@ fn semantic_name(semantic: &Semantic) -> String {
         Semantic::TexCoords(n) => format!("TEXCOORD_{n}"),
         other => format!("{other:?}"),
     }
+}
+
+/// Largest buffer or image file a glTF may reference.
+pub const MAX_REFERENCED_FILE_BYTES: u64 = 4 << 30;
+
+/// The relative path a non-data URI names, when the URI policy (module doc) allows it.
+fn check_relative_uri(uri: &str) -> Result<PathBuf, String> {
+    let refuse = |why: &str| {
+        Err(format!(
+            "URI '{}' is refused: {why}; glTF files may only reference files beside them (relative paths inside their folder) or data: URIs",
+            short(uri)
+        ))
+    };
+    if uri.starts_with("file:") {
+        return refuse("file: URIs can name any file on the machine");
+    }
+    // A scheme is letters, digits, '+', '-', '.' before the first ':' (RFC 3986); a
+    // Windows drive letter ("C:") lands here too and is absolute.
+    if let Some((scheme, _)) = uri.split_once(':')
+        && !scheme.is_empty()
+        && scheme
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '+' | '-' | '.'))
+    {
+        return refuse("only relative paths and data: URIs are read (no network, no other schemes)");
+    }
+    let decoded = percent_decode(uri).ok_or("bad percent-encoding in URI")?;
+    let path = Path::new(&decoded);
+    if path.is_absolute() || decoded.starts_with('/') || decoded.starts_with('\\') {
+        return refuse("absolute paths can name any file on the machine");
+    }
+    let mut depth = 0i32;
+    for part in path.components() {
+        match part {
+            std::path::Component::ParentDir => depth -= 1,
+            std::path::Component::Normal(_) => depth += 1,
+            std::path::Component::CurDir => {}
+            _ => return refuse("absolute paths can name any file on the machine"),
+        }
+        if depth < 0 {
+            return refuse("the path leaves the glTF file's folder");
+        }
+    }
+    Ok(path.to_path_buf())
 }
 
 /// `uri` shortened for messages (data URIs can be megabytes).
@@ -755,35 +841,44 @@ fn local_matrix(node: &gltf::Node) -> Mat4 {
     }
 }
 
-/// The camera of node matrix `world` (perspective checked by the caller), or `None` when
-/// its transform or projection is unusable.
+/// The camera of node matrix `world` (perspective checked by the caller), or what makes its
+/// transform or projection unusable.
 fn file_camera(
     document: &gltf::Document,
     index: usize,
     world: Mat4,
     bounds: (Vec3, Vec3),
-) -> Option<Camera> {
+) -> Result<Camera, String> {
     let p = document
         .as_json()
         .cameras
-        .get(index)?
-        .perspective
-        .as_ref()?;
+        .get(index)
+        .and_then(|c| c.perspective.as_ref())
+        .ok_or("not a perspective camera")?;
     let position = world.transform_point3(Vec3::ZERO);
-    let forward = world.transform_vector3(Vec3::NEG_Z).try_normalize()?;
-    let up = world.transform_vector3(Vec3::Y).try_normalize()?;
+    let forward = world
+        .transform_vector3(Vec3::NEG_Z)
+        .try_normalize()
+        .ok_or("its node's transform collapses the view direction")?;
+    let up = world
+        .transform_vector3(Vec3::Y)
+        .try_normalize()
+        .ok_or("its node's transform collapses the up direction")?;
     let size = (bounds.1 - bounds.0).length().max(f32::MIN_POSITIVE);
     let z_far = p
         .zfar
         .filter(|&f| f.is_finite() && f > p.znear)
         .unwrap_or(DEFAULT_Z_FAR_SCALE * size);
-    let valid = position.is_finite()
-        && forward.cross(up).length() > DEGENERATE_SINE
-        && p.yfov > 0.0
-        && p.yfov < std::f32::consts::PI
-        && p.znear > 0.0
-        && z_far > p.znear;
-    valid.then(|| Camera {
+    if !position.is_finite() || forward.cross(up).length() <= DEGENERATE_SINE {
+        return Err("its node's transform is degenerate".into());
+    }
+    if !(p.yfov > 0.0 && p.yfov < std::f32::consts::PI) {
+        return Err(format!("yfov {} is outside (0, π)", p.yfov));
+    }
+    if !(p.znear > 0.0 && z_far > p.znear) {
+        return Err(format!("znear {} must be > 0 and below zfar", p.znear));
+    }
+    Ok(Camera {
         position,
         target: position + forward,
         up,
