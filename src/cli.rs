@@ -441,7 +441,7 @@ struct SceneArgs {
     #[arg(long, default_value_t = 512)]
     vis_res: u32,
     /// Rays per lightmap texel.
-    #[arg(long, default_value_t = 1024)]
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(shvis::bake::MIN_RAYS as i64..=shvis::bake::MAX_RAYS as i64))]
     rays: u32,
     /// Seed of the bake's sample patterns.
     #[arg(long, default_value_t = 0)]
@@ -1152,7 +1152,10 @@ fn run_ssbump(a: SsbumpArgs) -> Result<()> {
             data,
         )
         .expect("3 channels per texel")
-        .write_to(&mut std::io::Cursor::new(&mut encoded), image::ImageFormat::Png)
+        .write_to(
+            &mut std::io::Cursor::new(&mut encoded),
+            image::ImageFormat::Png,
+        )
         .map_err(anyhow::Error::from)
         .and_then(|()| Ok(shvis::files::write(&png, &encoded)?))
         .with_context(|| format!("{}: cannot write", png.display()))?;

@@ -62,6 +62,16 @@ pub enum FileError {
         /// What it is.
         kind: &'static str,
     },
+    /// A directory shvis must write into cannot be used.
+    #[error("{}: {what} is not writable: {cause}", .path.display())]
+    Unwritable {
+        /// The directory (or the file in the way).
+        path: PathBuf,
+        /// The option or role (`--out`, `the bake cache (SHVIS_CACHE_DIR)`).
+        what: String,
+        /// Why.
+        cause: io::Error,
+    },
     /// Larger than the reader accepts.
     #[error("{}: {bytes} bytes is more than the {limit} bytes accepted for {what}", .path.display())]
     TooLarge {
@@ -213,10 +223,13 @@ pub fn write(path: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> io::Result<()> 
 }
 
 /// SIGKILL to this process ([`KILL_WHILE_WRITING_ENV`]): no destructors, no flushing.
+#[allow(unsafe_code)]
 fn kill_self() -> ! {
-    let _ = std::process::Command::new("kill")
-        .args(["-9", &std::process::id().to_string()])
-        .status();
+    #[cfg(target_os = "linux")]
+    // SAFETY: kill(2) on our own PID with a valid signal number has no memory effects.
+    unsafe {
+        libc::kill(libc::getpid(), libc::SIGKILL);
+    }
     std::process::abort();
 }
 
@@ -274,24 +287,23 @@ fn process_alive(pid: u32, entry: &fs::DirEntry) -> bool {
 /// # Errors
 /// One line naming `dir`, `what` and the cause.
 pub fn check_writable_dir(dir: &Path, what: &str) -> Result<(), FileError> {
-    let io_err = |action, source| FileError::Io {
+    let unwritable = |cause| FileError::Unwritable {
         path: dir.to_path_buf(),
-        action,
-        cause: source,
+        what: what.to_string(),
+        cause,
     };
     if let Ok(meta) = fs::metadata(dir)
         && !meta.is_dir()
     {
-        return Err(io_err(
-            "use it as a directory",
-            io::Error::other(format!("{what} exists and is not a directory")),
-        ));
+        return Err(unwritable(io::Error::other(
+            "it exists and is not a directory",
+        )));
     }
-    fs::create_dir_all(dir).map_err(|e| io_err("create the directory", e))?;
+    fs::create_dir_all(dir).map_err(unwritable)?;
     let probe = dir.join(format!(".shvis-write-check-{}", std::process::id()));
     File::create(&probe)
         .and_then(|mut f| f.write_all(b"shvis"))
-        .map_err(|e| io_err("write into the directory", e))?;
+        .map_err(unwritable)?;
     let _ = fs::remove_file(&probe);
     Ok(())
 }
@@ -304,10 +316,10 @@ pub fn check_writable_file(path: &Path, what: &str) -> Result<(), FileError> {
     if let Ok(meta) = fs::metadata(path)
         && meta.is_dir()
     {
-        return Err(FileError::Io {
+        return Err(FileError::Unwritable {
             path: path.to_path_buf(),
-            action: "write",
-            cause: io::Error::other(format!("{what} is a directory")),
+            what: what.to_string(),
+            cause: io::Error::other("it is a directory"),
         });
     }
     match path.parent() {
@@ -399,9 +411,8 @@ impl Manifest {
             .map_err(|e| format!("{}: unreadable ({e})", path.display()))?;
         for f in &manifest.files {
             let file = dir.join(&f.name);
-            let content = read_bounded(&file, f.bytes, "a listed file").map_err(|e| {
-                format!("{}: does not match {MANIFEST_NAME} ({e})", file.display())
-            })?;
+            let content = read_bounded(&file, f.bytes, "a listed file")
+                .map_err(|e| format!("{}: does not match {MANIFEST_NAME} ({e})", file.display()))?;
             let hash = format!("{:016x}", crate::bake::cache::hash64(&content));
             if content.len() as u64 != f.bytes || hash != f.hash {
                 return Err(format!(
@@ -473,7 +484,10 @@ mod tests {
         let e = read_bounded(&f, 99, "an environment map").unwrap_err();
         assert!(e.to_string().contains("more than the 99 bytes"), "{e}");
         let e = read_bounded(Path::new("/dev/zero"), 1 << 30, "x").unwrap_err();
-        assert!(e.to_string().contains("not a regular file (a device)"), "{e}");
+        assert!(
+            e.to_string().contains("not a regular file (a device)"),
+            "{e}"
+        );
         let e = read_bounded(&dir, 1 << 30, "x").unwrap_err();
         assert!(e.to_string().contains("a directory"), "{e}");
         let _ = fs::remove_dir_all(&dir);
@@ -493,9 +507,17 @@ mod tests {
         m.write(&dir).unwrap();
         assert_eq!(Manifest::verify(&dir).unwrap(), m);
         fs::write(dir.join("b"), b"bets").unwrap();
-        assert!(Manifest::verify(&dir).unwrap_err().contains("does not match"));
+        assert!(
+            Manifest::verify(&dir)
+                .unwrap_err()
+                .contains("does not match")
+        );
         fs::remove_file(dir.join("b")).unwrap();
-        assert!(Manifest::verify(&dir).unwrap_err().contains("does not match"));
+        assert!(
+            Manifest::verify(&dir)
+                .unwrap_err()
+                .contains("does not match")
+        );
         Manifest::invalidate(&dir).unwrap();
         assert!(Manifest::verify(&dir).unwrap_err().contains("incomplete"));
         let _ = fs::remove_dir_all(&dir);

@@ -140,9 +140,7 @@ pub fn check_at_most(
 
 /// Bytes of a `width × height` image of `bytes_per_texel`, saturating.
 pub fn image_bytes(width: u64, height: u64, bytes_per_texel: u64) -> u64 {
-    width
-        .saturating_mul(height)
-        .saturating_mul(bytes_per_texel)
+    width.saturating_mul(height).saturating_mul(bytes_per_texel)
 }
 
 #[cfg(test)]
@@ -172,7 +170,10 @@ mod tests {
         let e = check_memory("--vis-res 8192 × --order 30", 1 << 62, "lower --vis-res")
             .unwrap_err()
             .to_string();
-        assert!(e.starts_with("--vis-res 8192 × --order 30 needs 4294967296.0 GiB"), "{e}");
+        assert!(
+            e.starts_with("--vis-res 8192 × --order 30 needs 4294967296.0 GiB"),
+            "{e}"
+        );
         assert!(e.ends_with("; lower --vis-res"), "{e}");
     }
 }

@@ -35,6 +35,10 @@ fn main() -> ExitCode {
                 let _ = e.print();
                 return ExitCode::SUCCESS;
             }
+            if let Some(line) = negative_value_line(&e) {
+                eprintln!("{line}");
+                return ExitCode::from(2);
+            }
             // clap adds usage hints on further lines; the first line says what is wrong.
             let text = e.to_string();
             let first = text
@@ -52,4 +56,27 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// clap reads `--rays -5` or `--exposure -inf` (on options that take no negative values)
+/// as an unknown flag `-5` / `-i`, a message that does not name the option; this names it.
+fn negative_value_line(e: &clap::Error) -> Option<String> {
+    use clap::error::{ContextKind, ContextValue, ErrorKind};
+    if e.kind() != ErrorKind::UnknownArgument {
+        return None;
+    }
+    let Some(ContextValue::String(token)) = e.get(ContextKind::InvalidArg) else {
+        return None;
+    };
+    let args: Vec<String> = std::env::args().collect();
+    let i = args
+        .iter()
+        .position(|a| a.starts_with(token.as_str()) && a.starts_with('-'))?;
+    let value = &args[i];
+    let looks_numeric = value[1..].starts_with(|c: char| c.is_ascii_digit() || c == '.')
+        || ["inf", "nan", "infinity"].contains(&value[1..].to_ascii_lowercase().as_str());
+    let flag = args.get(i.checked_sub(1)?)?;
+    (looks_numeric && flag.starts_with("--")).then(|| {
+        format!("error: invalid value '{value}' for '{flag}': it must not be negative or infinite")
+    })
 }

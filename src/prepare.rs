@@ -342,7 +342,9 @@ pub enum PrepareError {
     Bake(#[from] BakeError),
     #[error("--table-res {0} is out of range 4..=256")]
     TableRes(u32),
-    #[error("--order {0} is out of range 1..=28 (the L×H product needs lighting of order + 2 ≤ 30)")]
+    #[error(
+        "--order {0} is out of range 1..=28 (the L×H product needs lighting of order + 2 ≤ 30)"
+    )]
     Order(u32),
     #[error("--vis-res {res} is out of range {min}..={max} for scene '{scene}'")]
     VisRes {
@@ -370,9 +372,7 @@ pub fn resolve_scene(name: &str, vis_res: u32) -> Result<Scene, SceneError> {
         "patio" => patio::build(vis_res),
         "bumpy" => crate::scene::bumpy::build(vis_res),
         "wavy" => crate::scene::wavy::build(vis_res),
-        p if is_gltf_path(p) => {
-            gltf::load(std::path::Path::new(p), vis_res)
-        }
+        p if is_gltf_path(p) => gltf::load(std::path::Path::new(p), vis_res),
         other => Err(SceneError::Unknown(other.to_string())),
     }
 }

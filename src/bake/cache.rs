@@ -517,7 +517,10 @@ pub fn decode_visibility(
     let coeffs = r.f32s(texels * order.coeff_count())?;
     let flags = r.take(texels)?;
     if let Some(i) = flags.iter().position(|&b| b > 1) {
-        return Err(format!("coverage flag {} at texel {i} is not 0 or 1", flags[i]));
+        return Err(format!(
+            "coverage flag {} at texel {i} is not 0 or 1",
+            flags[i]
+        ));
     }
     let covered: Vec<bool> = flags.iter().map(|&b| b != 0).collect();
     let ao = r.f32s(texels)?;
@@ -681,7 +684,8 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap();
-            pool.install(|| write_exr_layers(&dir, &map, serde_json::json!({}))).unwrap();
+            pool.install(|| write_exr_layers(&dir, &map, serde_json::json!({})))
+                .unwrap();
             let mut entries: Vec<(String, Vec<u8>)> = fs::read_dir(&dir)
                 .unwrap()
                 .map(|e| {

@@ -58,7 +58,9 @@ pub fn load_as(path: &Path, square: SquareLayout) -> Result<EnvMap, EnvError> {
             },
             e => EnvError::Format {
                 path: path.to_owned(),
-                detail: e.to_string().replacen(&format!("{}: ", path.display()), "", 1),
+                detail: e
+                    .to_string()
+                    .replacen(&format!("{}: ", path.display()), "", 1),
             },
         })?;
     let format_err = |detail: String| EnvError::Format {

@@ -52,7 +52,10 @@ pub fn write_map(
                 .collect();
             image::ImageBuffer::<image::Rgb<u16>, Vec<u16>>::from_raw(res, res, data)
                 .ok_or_else(|| io_error(path, "texel count is not res²"))?
-                .write_to(&mut std::io::Cursor::new(&mut encoded), image::ImageFormat::Png)
+                .write_to(
+                    &mut std::io::Cursor::new(&mut encoded),
+                    image::ImageFormat::Png,
+                )
                 .map_err(|e| io_error(path, e))?;
             crate::files::write(path, &encoded).map_err(|e| io_error(path, e))
         }

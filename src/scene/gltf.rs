@@ -114,7 +114,14 @@ pub fn load(path: &Path, lightmap_res: u32) -> Result<Scene, SceneError> {
 pub fn load_with_report(path: &Path, lightmap_res: u32) -> Result<(Scene, LoadReport), SceneError> {
     let file = path.display().to_string();
     lightmap_uv::check_res(lightmap_res)?;
-    let bytes = std::fs::read(path).map_err(|e| gltf_error(&file, format!("cannot read: {e}")))?;
+    let bytes = crate::files::read_bounded(path, MAX_REFERENCED_FILE_BYTES, "a glTF file")
+        .map_err(|e| {
+            let detail = match e {
+                crate::files::FileError::Io { cause, .. } => format!("cannot read: {cause}"),
+                e => e.to_string().replacen(&format!("{file}: "), "", 1),
+            };
+            gltf_error(&file, detail)
+        })?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let name = path
         .file_stem()
@@ -313,7 +320,9 @@ impl Loader {
             height: None,
         };
         let bounds = mesh.bounds();
-        let camera = match camera_node.map(|(cam, world)| (cam, file_camera(&document, cam, world, bounds))) {
+        let camera = match camera_node
+            .map(|(cam, world)| (cam, file_camera(&document, cam, world, bounds)))
+        {
             Some((_, Ok(camera))) => {
                 report.camera_from_file = true;
                 camera
@@ -712,8 +721,12 @@ fn decode_texture(bytes: &[u8]) -> Result<image::RgbaImage, String> {
     }
     // The decoded image (up to 16 bytes a texel for 32-bit float formats) and its RGBA8 copy.
     let need = crate::limits::image_bytes(u64::from(width), u64::from(height), 20);
-    crate::limits::check_memory(format_args!("decoding its {width}×{height} texels"), need, "")
-        .map_err(|e| e.to_string())?;
+    crate::limits::check_memory(
+        format_args!("decoding its {width}×{height} texels"),
+        need,
+        "",
+    )
+    .map_err(|e| e.to_string())?;
     let mut limits = image::Limits::default();
     limits.max_alloc = Some(need);
     let mut r = reader()?;
@@ -756,7 +769,9 @@ fn check_relative_uri(uri: &str) -> Result<PathBuf, String> {
             .chars()
             .all(|c| c.is_ascii_alphanumeric() || matches!(c, '+' | '-' | '.'))
     {
-        return refuse("only relative paths and data: URIs are read (no network, no other schemes)");
+        return refuse(
+            "only relative paths and data: URIs are read (no network, no other schemes)",
+        );
     }
     let decoded = percent_decode(uri).ok_or("bad percent-encoding in URI")?;
     let path = Path::new(&decoded);

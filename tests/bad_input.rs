@@ -1,0 +1,2260 @@
+//! Issue 21: bad input, limits and interruptions, as a hostile user meets them — through the
+//! `shvis` binary, one process per case. Every case states what must happen:
+//!
+//! - [`Expect::Error`]: the exit code (2: the argument parser, 1: everything else), stderr's
+//!   first line starts with `error` and names the input (the needles), and no output is
+//!   left (the output path is absent, or an empty directory; no temporaries beside it);
+//! - [`Expect::Warn`]: exit 0, a warning line with the needles, the output written;
+//! - [`Expect::Ok`]: exit 0, the output written (hard cases that must simply work).
+//!
+//! Always: the process exits by itself within [`CASE_TIMEOUT`] (no hang), with an exit
+//! code (no abort or signal), and nothing on stderr reads like a panic or a failed
+//! allocation. Files are generated here; nothing large is checked in. The kill-9 test
+//! (`killed_bakes_rerun_to_identical_outputs`) interrupts a bake at its five writes.
+
+use std::collections::BTreeMap;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use serde_json::{Value, json};
+use shvis::env::EnvMap;
+
+/// Longest a case may run before it counts as a hang.
+const CASE_TIMEOUT: Duration = Duration::from_secs(180);
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Kind {
+    /// Options out of range, not numbers, not finite; loop counts without bound.
+    Arguments,
+    /// Sizes that would allocate more than the budget (headers, vis-res × order², memory).
+    Budget,
+    /// Values that overflow what a path can represent, silently wrong results.
+    Values,
+    /// Environment files: missing, special, truncated, malformed.
+    EnvFiles,
+    /// Scene files: malformed glTF, URIs outside the asset, bad textures.
+    SceneFiles,
+    /// Output and cache locations: unwritable, wrong kind, full.
+    Outputs,
+    /// Bake caches: damaged, foreign, special files, stale temporaries.
+    Cache,
+    /// DESIGN §6 hard cases at the command line.
+    HardCases,
+}
+
+#[derive(Clone, Debug)]
+enum Expect {
+    Error { code: i32, needles: Vec<String> },
+    Warn { needles: Vec<String> },
+    Ok,
+}
+
+struct Case {
+    kind: Kind,
+    name: String,
+    args: Vec<String>,
+    env: Vec<(String, String)>,
+    /// A shell prefix (`ulimit …;`) the command runs under, if any.
+    shell: Option<String>,
+    /// The output the command would write.
+    out: Option<PathBuf>,
+    expect: Expect,
+    /// A further check after the run (stdout, stderr) → problem.
+    check: Option<Box<dyn Fn(&str, &str) -> Result<(), String>>>,
+}
+
+fn strings(v: &[&str]) -> Vec<String> {
+    v.iter().map(|s| s.to_string()).collect()
+}
+
+fn error(code: i32, needles: &[&str]) -> Expect {
+    Expect::Error {
+        code,
+        needles: strings(needles),
+    }
+}
+
+fn warn(needles: &[&str]) -> Expect {
+    Expect::Warn {
+        needles: strings(needles),
+    }
+}
+
+struct Suite {
+    dir: PathBuf,
+    cases: Vec<Case>,
+}
+
+impl Suite {
+    fn new(name: &str) -> Suite {
+        let dir = std::env::temp_dir().join(format!("shvis-bad-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Suite {
+            dir,
+            cases: Vec::new(),
+        }
+    }
+
+    fn path(&self, name: &str) -> PathBuf {
+        self.dir.join(name)
+    }
+
+    /// A fresh cache directory for case `name` (cases do not share caches unless they ask).
+    fn cache(&self, name: &str) -> String {
+        self.path(&format!("cache-{name}")).display().to_string()
+    }
+
+    fn add(&mut self, kind: Kind, name: &str, args: &[&str], out: Option<PathBuf>, expect: Expect) {
+        let cache = self.cache(name);
+        self.cases.push(Case {
+            kind,
+            name: name.to_string(),
+            args: strings(args),
+            env: vec![("SHVIS_CACHE_DIR".into(), cache)],
+            shell: None,
+            out,
+            expect,
+            check: None,
+        });
+    }
+
+    fn last(&mut self) -> &mut Case {
+        self.cases.last_mut().unwrap()
+    }
+
+    /// Runs every case; returns the number per kind. Panics listing every failure.
+    fn run(self) -> BTreeMap<Kind, usize> {
+        let mut failures = Vec::new();
+        let mut counts = BTreeMap::new();
+        for case in &self.cases {
+            *counts.entry(case.kind).or_insert(0) += 1;
+            if let Err(e) = run_case(case) {
+                failures.push(format!("[{:?}] {}: {e}", case.kind, case.name));
+            }
+        }
+        assert!(
+            failures.is_empty(),
+            "{} of {} cases failed:\n{}",
+            failures.len(),
+            self.cases.len(),
+            failures.join("\n")
+        );
+        let _ = std::fs::remove_dir_all(&self.dir);
+        println!("cases per kind: {counts:?}");
+        counts
+    }
+}
+
+/// Runs the binary with `args` (under `shell` when given), killing it after the timeout.
+fn spawn(case: &Case) -> Result<(Option<i32>, String, String), String> {
+    let bin = env!("CARGO_BIN_EXE_shvis");
+    let rust_log = match case.expect {
+        Expect::Error { .. } => "off",
+        _ => "warn",
+    };
+    let mut cmd = match &case.shell {
+        Some(prefix) => {
+            let quoted: Vec<String> = case.args.iter().map(|a| format!("'{a}'")).collect();
+            let mut c = Command::new("sh");
+            c.arg("-c")
+                .arg(format!("{prefix} exec '{bin}' {}", quoted.join(" ")));
+            c
+        }
+        None => {
+            let mut c = Command::new(bin);
+            c.args(&case.args);
+            c
+        }
+    };
+    cmd.env("RUST_LOG", rust_log)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    for (k, v) in &case.env {
+        cmd.env(k, v);
+    }
+    let mut child = cmd.spawn().map_err(|e| format!("cannot start: {e}"))?;
+    let (mut out_pipe, mut err_pipe) = (child.stdout.take().unwrap(), child.stderr.take().unwrap());
+    let out_thread = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = out_pipe.read_to_string(&mut s);
+        s
+    });
+    let err_thread = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = err_pipe.read_to_string(&mut s);
+        s
+    });
+    let started = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().map_err(|e| e.to_string())? {
+            break status;
+        }
+        if started.elapsed() > CASE_TIMEOUT {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(format!("hang: still running after {CASE_TIMEOUT:?}"));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let stdout = out_thread.join().unwrap_or_default();
+    let stderr = err_thread.join().unwrap_or_default();
+    Ok((status.code(), stdout, stderr))
+}
+
+/// No output at `out`: absent, or an empty directory; no temporaries beside it.
+fn no_output(out: &Path) -> Result<(), String> {
+    if out.is_dir() {
+        let left: Vec<_> = std::fs::read_dir(out)
+            .map_err(|e| e.to_string())?
+            .flatten()
+            .map(|e| e.file_name())
+            .collect();
+        if !left.is_empty() {
+            return Err(format!("output directory holds {left:?}"));
+        }
+    } else if out.exists() {
+        return Err(format!("{} was written", out.display()));
+    }
+    if let Some(parent) = out.parent()
+        && let Ok(entries) = std::fs::read_dir(parent)
+    {
+        let name = out.file_name().unwrap_or_default().to_string_lossy();
+        for e in entries.flatten() {
+            let n = e.file_name().to_string_lossy().into_owned();
+            if n.starts_with(&format!(".{name}.tmp-")) {
+                return Err(format!("temporary {n} left"));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn run_case(case: &Case) -> Result<(), String> {
+    let (code, stdout, stderr) = spawn(case)?;
+    for bad in [
+        "panicked",
+        "internal error",
+        "memory allocation of",
+        "RUST_BACKTRACE",
+    ] {
+        if stderr.contains(bad) {
+            return Err(format!("'{bad}' on stderr: {stderr}"));
+        }
+    }
+    let Some(code) = code else {
+        return Err(format!("killed by a signal (abort?); stderr: {stderr}"));
+    };
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    match &case.expect {
+        Expect::Error {
+            code: want,
+            needles,
+        } => {
+            if code != *want {
+                return Err(format!("exit {code}, expected {want}; stderr: {stderr}"));
+            }
+            let first = lines.first().copied().unwrap_or("");
+            if !first.starts_with("error") {
+                return Err(format!("first stderr line is not an error: {stderr}"));
+            }
+            for n in needles {
+                if !first.contains(n.as_str()) {
+                    return Err(format!("'{n}' missing from: {first}"));
+                }
+            }
+            if let Some(out) = &case.out {
+                no_output(out)?;
+            }
+        }
+        Expect::Warn { needles } => {
+            if code != 0 {
+                return Err(format!("exit {code}; stderr: {stderr}"));
+            }
+            let found = lines
+                .iter()
+                .any(|l| l.contains("WARN") && needles.iter().all(|n| l.contains(n.as_str())));
+            if !found {
+                return Err(format!("no warning with {needles:?}: {stderr}"));
+            }
+            if let Some(out) = &case.out
+                && !out.exists()
+            {
+                return Err(format!("{} not written", out.display()));
+            }
+        }
+        Expect::Ok => {
+            if code != 0 {
+                return Err(format!("exit {code}; stderr: {stderr}"));
+            }
+            if let Some(out) = &case.out
+                && !out.exists()
+            {
+                return Err(format!("{} not written", out.display()));
+            }
+        }
+    }
+    if let Some(check) = &case.check {
+        check(&stdout, &stderr)?;
+    }
+    Ok(())
+}
+
+// ---- Generated input files --------------------------------------------------------------
+
+fn write(path: &Path, bytes: &[u8]) {
+    if let Err(e) = std::fs::write(path, bytes) {
+        panic!("{}: {e}", path.display());
+    }
+}
+
+/// A `w × h` f32 RGB EXR with texels `f(x, y)`.
+fn exr(path: &Path, w: u32, h: u32, f: impl Fn(u32, u32) -> [f32; 3]) -> PathBuf {
+    let map = EnvMap {
+        width: w,
+        height: h,
+        texels: (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .map(|(x, y)| f(x, y))
+            .collect(),
+    };
+    map.save_exr(path).unwrap();
+    path.to_path_buf()
+}
+
+/// An EXR whose header claims `w × h` (a valid 8 × 4 file with its windows patched).
+fn exr_claiming(path: &Path, w: i32, h: i32) -> PathBuf {
+    let tmp = path.with_extension("small.exr");
+    exr(&tmp, 8, 4, |_, _| [1.0; 3]);
+    let mut bytes = std::fs::read(&tmp).unwrap();
+    for name in [&b"dataWindow\0box2i\0"[..], &b"displayWindow\0box2i\0"[..]] {
+        let at = bytes
+            .windows(name.len())
+            .position(|w| w == name)
+            .expect("window attribute")
+            + name.len()
+            + 4;
+        bytes[at + 8..at + 12].copy_from_slice(&(w - 1).to_le_bytes());
+        bytes[at + 12..at + 16].copy_from_slice(&(h - 1).to_le_bytes());
+    }
+    write(path, &bytes);
+    path.to_path_buf()
+}
+
+/// A Radiance `.hdr` of flat (not run-length) RGBE pixels.
+fn hdr(path: &Path, w: u32, h: u32, rgbe: [u8; 4]) -> PathBuf {
+    let mut bytes = format!("#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {h} +X {w}\n").into_bytes();
+    for _ in 0..w * h {
+        bytes.extend_from_slice(&rgbe);
+    }
+    write(path, &bytes);
+    path.to_path_buf()
+}
+
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = !0u32;
+    for &b in bytes {
+        c ^= u32::from(b);
+        for _ in 0..8 {
+            c = if c & 1 != 0 {
+                0xedb8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}
+
+/// PNG bytes whose header claims `w × h` RGBA8, with a token IDAT (never decoded).
+fn png_claiming(w: u32, h: u32) -> Vec<u8> {
+    let mut out = b"\x89PNG\r\n\x1a\n".to_vec();
+    let mut chunk = |kind: &[u8], data: &[u8]| {
+        out.extend_from_slice(&(data.len() as u32).to_be_bytes());
+        let mut body = kind.to_vec();
+        body.extend_from_slice(data);
+        out.extend_from_slice(&body);
+        out.extend_from_slice(&crc32(&body).to_be_bytes());
+    };
+    let mut ihdr = w.to_be_bytes().to_vec();
+    ihdr.extend_from_slice(&h.to_be_bytes());
+    ihdr.extend_from_slice(&[8, 6, 0, 0, 0]);
+    chunk(b"IHDR", &ihdr);
+    chunk(b"IDAT", &[0x78, 0x9c, 0x03, 0x00]);
+    chunk(b"IEND", &[]);
+    out
+}
+
+fn png(w: u32, h: u32) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    image::RgbaImage::from_pixel(w, h, image::Rgba([128, 128, 255, 255]))
+        .write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Png,
+        )
+        .unwrap();
+    bytes
+}
+
+/// A glTF scene: a ground quad and a box-like fold (two quads), positions, normals,
+/// TEXCOORD_0 (and TEXCOORD_1 when `uv1` is given), written as `.gltf` + `.bin`; `edit`
+/// changes the JSON before it is written.
+struct SceneFile {
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl SceneFile {
+    fn push(&mut self, bytes: &[u8], accessor: Value) -> usize {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        self.views
+            .push(json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()}));
+        self.bin.extend_from_slice(bytes);
+        let mut a = accessor;
+        a["bufferView"] = json!(self.views.len() - 1);
+        self.accessors.push(a);
+        self.accessors.len() - 1
+    }
+
+    fn floats(&mut self, data: &[f32], ty: &str, dims: usize) -> usize {
+        let bytes: Vec<u8> = data.iter().flat_map(|f| f.to_le_bytes()).collect();
+        let mut a = json!({"componentType": 5126, "count": data.len() / dims, "type": ty});
+        if ty == "VEC3" && data.iter().all(|v| v.is_finite()) {
+            let lo: Vec<f32> = (0..3)
+                .map(|k| {
+                    data.iter()
+                        .skip(k)
+                        .step_by(3)
+                        .copied()
+                        .fold(f32::MAX, f32::min)
+                })
+                .collect();
+            let hi: Vec<f32> = (0..3)
+                .map(|k| {
+                    data.iter()
+                        .skip(k)
+                        .step_by(3)
+                        .copied()
+                        .fold(f32::MIN, f32::max)
+                })
+                .collect();
+            a["min"] = json!(lo);
+            a["max"] = json!(hi);
+        }
+        if ty == "VEC3" && !data.iter().all(|v| v.is_finite()) {
+            a["min"] = json!([0, 0, 0]);
+            a["max"] = json!([1, 1, 1]);
+        }
+        self.push(&bytes, a)
+    }
+
+    fn indices(&mut self, data: &[u32]) -> usize {
+        let bytes: Vec<u8> = data.iter().flat_map(|i| i.to_le_bytes()).collect();
+        self.push(
+            &bytes,
+            json!({"componentType": 5125, "count": data.len(), "type": "SCALAR"}),
+        )
+    }
+}
+
+/// Ground (4 m, y = 0) and a 1 m wall standing on it: 4 triangles.
+fn scene_json(uv1: Option<&[f32]>, positions: Option<&[f32]>) -> (Value, Vec<u8>) {
+    let mut s = SceneFile {
+        bin: Vec::new(),
+        views: Vec::new(),
+        accessors: Vec::new(),
+    };
+    let p: Vec<f32> = positions.map(<[f32]>::to_vec).unwrap_or_else(|| {
+        vec![
+            -2., 0., -2., 2., 0., -2., 2., 0., 2., -2., 0., 2., // ground
+            -1., 0., 0., 1., 0., 0., 1., 1., 0., -1., 1., 0., // wall facing +Z
+        ]
+    });
+    let n = [
+        0., 1., 0., 0., 1., 0., 0., 1., 0., 0., 1., 0., 0., 0., 1., 0., 0., 1., 0., 0., 1., 0., 0.,
+        1.,
+    ];
+    let uv = [
+        0., 0., 1., 0., 1., 1., 0., 1., 0., 0., 1., 0., 1., 1., 0., 1.,
+    ];
+    let mut attributes = json!({
+        "POSITION": s.floats(&p, "VEC3", 3),
+        "NORMAL": s.floats(&n, "VEC3", 3),
+        "TEXCOORD_0": s.floats(&uv, "VEC2", 2),
+    });
+    if let Some(uv1) = uv1 {
+        attributes["TEXCOORD_1"] = json!(s.floats(uv1, "VEC2", 2));
+    }
+    let indices = s.indices(&[0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7]);
+    let json = json!({
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": attributes, "indices": indices}]}],
+        "buffers": [{"byteLength": s.bin.len(), "uri": "BIN"}],
+        "bufferViews": s.views,
+        "accessors": s.accessors,
+    });
+    (json, s.bin)
+}
+
+/// Writes `name.gltf` (+ `name.bin` unless the edit changed the buffer URI) into `dir`.
+fn gltf(dir: &Path, name: &str, edit: impl FnOnce(&mut Value)) -> PathBuf {
+    gltf_with(dir, name, None, None, edit)
+}
+
+fn gltf_with(
+    dir: &Path,
+    name: &str,
+    uv1: Option<&[f32]>,
+    positions: Option<&[f32]>,
+    edit: impl FnOnce(&mut Value),
+) -> PathBuf {
+    let (mut json, bin) = scene_json(uv1, positions);
+    let bin_name = format!("{name}.bin");
+    json["buffers"][0]["uri"] = json!(bin_name);
+    write(&dir.join(&bin_name), &bin);
+    edit(&mut json);
+    let path = dir.join(format!("{name}.gltf"));
+    write(&path, json.to_string().as_bytes());
+    path
+}
+
+/// Adds a base-colour texture whose image is `uri`.
+fn with_texture(json: &mut Value, uri: &str) {
+    json["images"] = json!([{"uri": uri}]);
+    json["textures"] = json!([{"source": 0}]);
+    json["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    json["meshes"][0]["primitives"][0]["material"] = json!(0);
+}
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+// ---- The cases --------------------------------------------------------------------------
+
+/// Options of every command: each bound, non-numbers, non-finite floats. All refused by
+/// the parser (exit 2) or the first check (exit 1) before any work.
+fn argument_cases(suite: &mut Suite) {
+    let out = s(&suite.path("arg-out"));
+    let png = s(&suite.path("arg.png"));
+    let exr_out = s(&suite.path("arg.exr"));
+    // (command line, exit code, needles)
+    let mut table: Vec<(Vec<&str>, i32, Vec<&str>)> = Vec::new();
+    for (flag, values) in [
+        ("--rays", &["0", "65537", "-5", "many", "1e3"][..]),
+        ("--order", &["0", "29", "31", "-1", "6.5"][..]),
+        ("--table-res", &["3", "257"][..]),
+        ("--h-order", &["0", "31"][..]),
+        ("--seed", &["-1", "x"][..]),
+        ("--height-scale", &["nan", "inf"][..]),
+    ] {
+        for v in values {
+            table.push((vec!["bake", flag, v, "--out", &out], 2, vec![flag]));
+        }
+    }
+    for v in ["0", "15", "63", "8193", "4294967295"] {
+        let code = if v == "4294967295" || v.parse::<u64>().is_ok() {
+            1
+        } else {
+            2
+        };
+        table.push((
+            vec!["bake", "--vis-res", v, "--out", &out],
+            code,
+            vec!["--vis-res", "64..=8192", "house"],
+        ));
+    }
+    table.push((
+        vec!["bake", "--vis-res", "abc", "--out", &out],
+        2,
+        vec!["--vis-res"],
+    ));
+    let render = |extra: &[&'static str]| -> Vec<&'static str> {
+        let mut v = vec!["render", "--technique", "preconv"];
+        v.extend_from_slice(extra);
+        v
+    };
+    for (flag, values) in [
+        ("--width", &["0", "16385", "-1"][..]),
+        ("--height", &["0", "99999"][..]),
+        ("--exposure", &["nan", "inf", "-inf", "1e39", "bright"][..]),
+        ("--bounces", &["17"][..]),
+        ("--specular-sigma", &["nan"][..]),
+        ("--specular-ks", &["-inf"][..]),
+        ("--light-dir", &["nan,0,1", "0,inf,1"][..]),
+    ] {
+        for v in values {
+            let mut args = render(&[]);
+            args.extend([flag, v, "--out", &png]);
+            table.push((args, 2, vec![flag]));
+        }
+    }
+    table.push((
+        vec!["render", "--technique", "unc99", "--out", &png],
+        2,
+        vec!["unc99"],
+    ));
+    table.push((
+        vec![
+            "render",
+            "--technique",
+            "preconv",
+            "--path",
+            "dx11",
+            "--out",
+            &png,
+        ],
+        2,
+        vec!["dx11"],
+    ));
+    for (flag, v) in [
+        ("--spp", "0"),
+        ("--spp", "1000001"),
+        ("--width", "0"),
+        ("--bounces", "17"),
+        ("--exposure", "nan"),
+    ] {
+        table.push((vec!["reference", flag, v, "--out", &exr_out], 2, vec![flag]));
+    }
+    table.push((
+        vec!["reference", "--vis-res", "3", "--out", &exr_out],
+        1,
+        vec!["--vis-res 3", "64..=8192"],
+    ));
+    for (flag, v) in [
+        ("--frames", "0"),
+        ("--frames", "100001"),
+        ("--warmup", "10001"),
+        ("--warmup", "4000000000"),
+        ("--ref-spp", "2000000"),
+        ("--ref-spp", "-1"),
+        ("--width", "0"),
+        ("--exposure", "-inf"),
+    ] {
+        table.push((vec!["bench", flag, v, "--out", &out], 2, vec![flag]));
+    }
+    table.push((
+        vec!["bench", "--techniques", "unc3,nope", "--out", &out],
+        1,
+        vec!["nope"],
+    ));
+    table.push((
+        vec!["bench", "--paths", "dx11", "--out", &out],
+        1,
+        vec!["dx11"],
+    ));
+    for (flag, v) in [
+        ("--frames", "0"),
+        ("--every", "0"),
+        ("--samples", "65"),
+        ("--turns", "nan"),
+        ("--ref-spp", "0"),
+    ] {
+        table.push((vec!["relight", flag, v, "--out", &out], 2, vec![flag]));
+    }
+    for (flag, v) in [("--frames", "0"), ("--warmup", "10001"), ("--width", "0")] {
+        table.push((vec!["probe", flag, v, "--out", &out], 2, vec![flag]));
+    }
+    table.push((vec!["sh", "eval", "--order", "0"], 1, vec!["order"]));
+    table.push((vec!["sh", "eval", "--order", "31"], 1, vec!["order"]));
+    table.push((vec!["sh", "project", "--order", "31"], 1, vec!["order"]));
+    table.push((
+        vec!["sh", "irradiance", "--normal", "0,0,0"],
+        1,
+        vec!["normal"],
+    ));
+    table.push((
+        vec!["sh", "irradiance", "--normal", "nan,0,1"],
+        1,
+        vec!["normal"],
+    ));
+    for (i, (args, code, needles)) in table.into_iter().enumerate() {
+        let name = format!("args-{i}-{}", args.join(" "));
+        let out_path = args
+            .iter()
+            .position(|a| *a == "--out")
+            .map(|k| PathBuf::from(args[k + 1]));
+        suite.add(
+            Kind::Arguments,
+            &name,
+            &args,
+            out_path,
+            error(code, &needles),
+        );
+    }
+}
+
+/// Sizes checked against the budget before anything is allocated.
+fn budget_cases(suite: &mut Suite) {
+    let d = suite.dir.clone();
+    let out = suite.path("budget-out");
+    let huge_exr = exr_claiming(&d.join("huge.exr"), 200_000, 100_000);
+    let big_exr = exr_claiming(&d.join("big.exr"), 16384, 8192);
+    let huge_hdr = hdr(&d.join("huge_header.hdr"), 8, 4, [128, 128, 128, 129]);
+    {
+        let text = std::fs::read(&huge_hdr).unwrap();
+        let patched = String::from_utf8_lossy(&text).replace("-Y 4 +X 8", "-Y 100000 +X 200000");
+        write(&huge_hdr, patched.as_bytes());
+    }
+    let big_hdr = d.join("big_header.hdr");
+    write(
+        &big_hdr,
+        b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8192 +X 16384\n\x02\x02\x40\x00",
+    );
+    let project = |env: &Path| {
+        vec![
+            "sh".to_string(),
+            "project".into(),
+            "--order".into(),
+            "2".into(),
+            "--env".into(),
+            s(env),
+        ]
+    };
+    let cases: Vec<(&str, Vec<String>, Option<&str>, Vec<&str>)> = vec![
+        (
+            "exr header 200000×100000",
+            project(&huge_exr),
+            None,
+            vec!["huge.exr", "200000", "16384"],
+        ),
+        (
+            "exr header 16384×8192 over a 64 MiB budget",
+            project(&big_exr),
+            Some("64M"),
+            vec!["big.exr", "needs", "available"],
+        ),
+        (
+            "hdr header 200000×100000",
+            project(&huge_hdr),
+            None,
+            vec!["huge_header.hdr", "200000", "16384"],
+        ),
+        (
+            "hdr header 16384×8192 over a 64 MiB budget",
+            project(&big_hdr),
+            Some("64M"),
+            vec!["big_header.hdr", "needs"],
+        ),
+        (
+            "render with the huge exr",
+            strings(&[
+                "render",
+                "--technique",
+                "preconv",
+                "--vis-res",
+                "64",
+                "--rays",
+                "4",
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "--env",
+                &s(&huge_exr),
+                "--out",
+                &s(&d.join("huge.png")),
+            ]),
+            None,
+            vec!["huge.exr", "200000"],
+        ),
+    ];
+    for (name, args, limit, needles) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        suite.add(Kind::Budget, name, &args, None, error(1, &needles));
+        if let Some(l) = limit {
+            suite
+                .last()
+                .env
+                .push(("SHVIS_MEMORY_LIMIT".into(), l.into()));
+        }
+    }
+    for (name, vis_res, order, limit) in [
+        ("vis-res 8192 × order 28", "8192", "28", None),
+        ("vis-res 8192 × order 6", "8192", "6", Some("16G")),
+        ("vis-res 2048 × order 6 over 1 GiB", "2048", "6", Some("1G")),
+        ("vis-res 64 × order 6 over 1 MiB", "64", "6", Some("1M")),
+        ("vis-res 512 × order 20 over 1 GiB", "512", "20", Some("1G")),
+    ] {
+        suite.add(
+            Kind::Budget,
+            name,
+            &[
+                "bake",
+                "--vis-res",
+                vis_res,
+                "--order",
+                order,
+                "--out",
+                &s(&out),
+            ],
+            Some(out.clone()),
+            error(
+                1,
+                &[
+                    &format!("--vis-res {vis_res} × --order {order}"),
+                    "needs",
+                    "lower --vis-res or --order",
+                ],
+            ),
+        );
+        if let Some(l) = limit {
+            suite
+                .last()
+                .env
+                .push(("SHVIS_MEMORY_LIMIT".into(), l.into()));
+        }
+    }
+    // Textures: sized from their header before decoding.
+    let tex = |name: &str, bytes: &[u8]| -> PathBuf {
+        write(&d.join(format!("{name}.png")), bytes);
+        gltf(&d, name, |j| with_texture(j, &format!("{name}.png")))
+    };
+    let huge_tex = tex("tex_huge", &png_claiming(100_000, 100_000));
+    let wide_tex = tex("tex_wide", &png_claiming(16385, 1));
+    let big_tex = tex("tex_big", &png_claiming(16384, 16384));
+    let bake = |scene: &Path, out: &Path| {
+        strings(&[
+            "bake",
+            "--scene",
+            &s(scene),
+            "--vis-res",
+            "16",
+            "--rays",
+            "4",
+            "--order",
+            "2",
+            "--out",
+            &s(out),
+        ])
+    };
+    for (name, scene, limit, needles) in [
+        (
+            "texture header 100000²",
+            &huge_tex,
+            None,
+            vec!["tex_huge.gltf", "100000", "16384"],
+        ),
+        (
+            "texture header 16385×1",
+            &wide_tex,
+            None,
+            vec!["tex_wide.gltf", "16385"],
+        ),
+        (
+            "texture header 16384² over 256 MiB",
+            &big_tex,
+            Some("256M"),
+            vec!["tex_big.gltf", "needs"],
+        ),
+    ] {
+        let o = d.join(format!(
+            "out-{}",
+            scene.file_stem().unwrap().to_string_lossy()
+        ));
+        let args = bake(scene, &o);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        suite.add(Kind::Budget, name, &args, None, error(1, &needles));
+        if let Some(l) = limit {
+            suite
+                .last()
+                .env
+                .push(("SHVIS_MEMORY_LIMIT".into(), l.into()));
+        }
+    }
+    // The documented maximum side loads (a 16384 × 4 texture).
+    write(&d.join("tex_max.png"), &png(16384, 4));
+    let max_tex = gltf(&d, "tex_max", |j| with_texture(j, "tex_max.png"));
+    let o = d.join("out-tex-max");
+    let args = bake(&max_tex, &o);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    suite.add(
+        Kind::Budget,
+        "texture 16384 wide loads",
+        &args,
+        Some(o),
+        Expect::Ok,
+    );
+}
+
+/// Values beyond what a path represents: refused or flagged, the same for every technique.
+fn value_cases(suite: &mut Suite) {
+    let d = suite.dir.clone();
+    let env_1e30 = exr(&d.join("v1e30.exr"), 16, 8, |x, y| {
+        if (x, y) == (3, 2) {
+            [1e30; 3]
+        } else {
+            [1.0; 3]
+        }
+    });
+    let env_rgbe255 = hdr(&d.join("rgbe255.hdr"), 8, 4, [200, 200, 200, 255]);
+    let env_bright = exr(&d.join("bright.exr"), 64, 32, |_, _| [1e9; 3]);
+    let env_negative = exr(&d.join("negative.exr"), 16, 8, |x, _| {
+        if x == 0 { [-0.5; 3] } else { [1.0; 3] }
+    });
+    for (name, env, needles) in [
+        (
+            "texel 1e30",
+            &env_1e30,
+            vec!["v1e30.exr", "radiance limit", "x=3, y=2"],
+        ),
+        (
+            "rgbe exponent 255",
+            &env_rgbe255,
+            vec!["rgbe255.hdr", "radiance limit"],
+        ),
+    ] {
+        suite.add(
+            Kind::Values,
+            &format!("sh project: {name}"),
+            &["sh", "project", "--order", "2", "--env", &s(env)],
+            None,
+            error(1, &needles),
+        );
+        for technique in ["preconv", "unc3", "sh2", "shlmap"] {
+            let out = d.join(format!(
+                "v-{technique}-{}.png",
+                env.file_stem().unwrap().to_string_lossy()
+            ));
+            suite.add(
+                Kind::Values,
+                &format!("render {technique}: {name}"),
+                &[
+                    "render",
+                    "--technique",
+                    technique,
+                    "--vis-res",
+                    "64",
+                    "--rays",
+                    "16",
+                    "--order",
+                    "3",
+                    "--width",
+                    "8",
+                    "--height",
+                    "8",
+                    "--env",
+                    &s(env),
+                    "--out",
+                    &s(&out),
+                ],
+                Some(out.clone()),
+                error(1, &needles),
+            );
+        }
+    }
+    suite.add(
+        Kind::Values,
+        "negative texels clamped with a warning",
+        &["sh", "project", "--order", "2", "--env", &s(&env_negative)],
+        None,
+        warn(&["negative.exr", "negative radiance", "clamped"]),
+    );
+    for technique in ["preconv", "unc3"] {
+        let out = d.join(format!("bright-{technique}.exr"));
+        suite.add(
+            Kind::Values,
+            &format!("f16 target clips under a 1e9 sky: {technique}"),
+            &[
+                "render",
+                "--technique",
+                technique,
+                "--vis-res",
+                "64",
+                "--rays",
+                "16",
+                "--order",
+                "3",
+                "--width",
+                "16",
+                "--height",
+                "16",
+                "--env",
+                &s(&env_bright),
+                "--out",
+                &s(&out),
+            ],
+            Some(out),
+            warn(&["pixels clipped", "65504"]),
+        );
+    }
+    let bench_out = d.join("bench-bright");
+    suite.add(
+        Kind::Values,
+        "bench marks the clipped row",
+        &[
+            "bench",
+            "--techniques",
+            "preconv",
+            "--paths",
+            "dx9",
+            "--frames",
+            "1",
+            "--warmup",
+            "0",
+            "--ref-spp",
+            "0",
+            "--no-probe",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--vis-res",
+            "64",
+            "--rays",
+            "16",
+            "--order",
+            "3",
+            "--env",
+            &s(&env_bright),
+            "--out",
+            &s(&bench_out),
+        ],
+        Some(bench_out.join("table.json")),
+        warn(&["pixels clipped"]),
+    );
+    let table = bench_out.join("table.json");
+    let md = bench_out.join("table.md");
+    suite.last().check = Some(Box::new(move |_, _| {
+        let json: Value =
+            serde_json::from_slice(&std::fs::read(&table).map_err(|e| e.to_string())?)
+                .map_err(|e| e.to_string())?;
+        let clipped = json["results"][0]["clipped_pixels"].as_u64().unwrap_or(0);
+        let text = std::fs::read_to_string(&md).map_err(|e| e.to_string())?;
+        if clipped == 0 || !text.contains("px clipped") {
+            return Err(format!(
+                "row not marked: clipped_pixels {clipped}; table.md: {text}"
+            ));
+        }
+        Ok(())
+    }));
+    let out = d.join("rays1");
+    suite.add(
+        Kind::Values,
+        "fewer rays than coefficients",
+        &[
+            "bake",
+            "--vis-res",
+            "64",
+            "--rays",
+            "1",
+            "--order",
+            "6",
+            "--out",
+            &s(&out),
+        ],
+        Some(out),
+        warn(&["--rays 1", "36 SH coefficients"]),
+    );
+    for (name, camera) in [
+        (
+            "camera yfov 0",
+            json!({"type": "perspective", "perspective": {"yfov": 0.0, "znear": 0.1}}),
+        ),
+        (
+            "camera znear 0",
+            json!({"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.0}}),
+        ),
+        (
+            "camera yfov 4",
+            json!({"type": "perspective", "perspective": {"yfov": 4.0, "znear": 0.1}}),
+        ),
+    ] {
+        let file = name.replace(' ', "_");
+        let scene = gltf(&d, &file, |j| {
+            j["cameras"] = json!([camera]);
+            j["nodes"] = json!([{"mesh": 0}, {"camera": 0, "translation": [0, 1, 5]}]);
+            j["scenes"] = json!([{"nodes": [0, 1]}]);
+        });
+        let out = d.join(format!("{file}.png"));
+        suite.add(
+            Kind::Values,
+            name,
+            &[
+                "render",
+                "--technique",
+                "preconv",
+                "--scene",
+                &s(&scene),
+                "--vis-res",
+                "32",
+                "--rays",
+                "4",
+                "--order",
+                "2",
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "--out",
+                &s(&out),
+            ],
+            Some(out),
+            warn(&[
+                &format!("{file}.gltf"),
+                "camera 0 is unusable",
+                "frames the scene",
+            ]),
+        );
+    }
+    // Both quads mapped onto the same lightmap square.
+    let same = [0.1f32, 0.1, 0.9, 0.1, 0.9, 0.9, 0.1, 0.9];
+    let uv1: Vec<f32> = same.iter().chain(same.iter()).copied().collect();
+    let overlap = gltf_with(&d, "overlap", Some(&uv1), None, |_| {});
+    let out = d.join("overlap-out");
+    suite.add(
+        Kind::Values,
+        "overlapping TEXCOORD_1 charts",
+        &[
+            "bake",
+            "--scene",
+            &s(&overlap),
+            "--vis-res",
+            "32",
+            "--rays",
+            "4",
+            "--order",
+            "2",
+            "--out",
+            &s(&out),
+        ],
+        Some(out),
+        warn(&["lightmap UVs overlap", "TEXCOORD_1"]),
+    );
+    let out = d.join("exposure.png");
+    suite.add(
+        Kind::Values,
+        "exposure 1e39 overflows f32",
+        &[
+            "render",
+            "--technique",
+            "preconv",
+            "--exposure",
+            "1e39",
+            "--out",
+            &s(&out),
+        ],
+        Some(out),
+        error(2, &["--exposure"]),
+    );
+}
+
+/// Environment files (through `sh project`: no device needed).
+fn env_file_cases(suite: &mut Suite) {
+    let d = suite.dir.clone();
+    let good = exr(&d.join("good.exr"), 16, 8, |_, _| [1.0; 3]);
+    let bytes = std::fs::read(&good).unwrap();
+    let truncated = d.join("truncated.exr");
+    write(&truncated, &bytes[..bytes.len() / 2]);
+    let header_only = d.join("header_only.exr");
+    write(&header_only, &bytes[..40]);
+    let text = d.join("text.exr");
+    write(&text, b"these are not texels\n");
+    let empty = d.join("empty.exr");
+    write(&empty, b"");
+    let zero = d.join("zero.exr");
+    let _ = std::os::unix::fs::symlink("/dev/zero", &zero);
+    let fifo = d.join("fifo.exr");
+    let _ = Command::new("mkfifo").arg(&fifo).status();
+    let dir = d.join("a_directory.exr");
+    std::fs::create_dir_all(&dir).unwrap();
+    let wide = exr(&d.join("three_to_one.exr"), 24, 8, |_, _| [1.0; 3]);
+    let tall = exr(&d.join("tall.exr"), 8, 16, |_, _| [1.0; 3]);
+    let nan = exr(&d.join("nan.exr"), 16, 8, |x, y| {
+        if (x, y) == (5, 1) {
+            [f32::NAN, 0.0, 0.0]
+        } else {
+            [1.0; 3]
+        }
+    });
+    let inf = exr(&d.join("inf.exr"), 16, 8, |x, _| {
+        if x == 2 {
+            [0.0, f32::INFINITY, 0.0]
+        } else {
+            [1.0; 3]
+        }
+    });
+    let neg_inf = exr(&d.join("neg_inf.exr"), 16, 8, |x, _| {
+        if x == 2 {
+            [0.0, 0.0, f32::NEG_INFINITY]
+        } else {
+            [1.0; 3]
+        }
+    });
+    let square = exr(&d.join("square.exr"), 16, 16, |_, _| [1.0; 3]);
+    let hdr_garbage = d.join("garbage.hdr");
+    write(
+        &hdr_garbage,
+        b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 4 +X 8\n\x01",
+    );
+    let hdr_no_size = d.join("no_size.hdr");
+    write(&hdr_no_size, b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n");
+    let png_env = d.join("photo.exr");
+    write(&png_env, &png(8, 4));
+    let exr_named_hdr = d.join("misnamed.hdr");
+    std::fs::copy(&good, &exr_named_hdr).unwrap();
+    let mut flipped = bytes.clone();
+    let n = flipped.len();
+    for i in (n / 2..n).step_by(7) {
+        flipped[i] ^= 0x5a;
+    }
+    let corrupt = d.join("corrupt_tiles.exr");
+    write(&corrupt, &flipped);
+    let cases: Vec<(&str, String, Expect)> = vec![
+        (
+            "missing",
+            s(&d.join("absent.exr")),
+            error(1, &["absent.exr", "cannot read"]),
+        ),
+        ("truncated", s(&truncated), error(1, &["truncated.exr"])),
+        (
+            "header only",
+            s(&header_only),
+            error(1, &["header_only.exr"]),
+        ),
+        (
+            "text",
+            s(&text),
+            error(1, &["text.exr", "not an OpenEXR or Radiance HDR file"]),
+        ),
+        (
+            "empty",
+            s(&empty),
+            error(1, &["empty.exr", "not an OpenEXR"]),
+        ),
+        (
+            "link to /dev/zero",
+            s(&zero),
+            error(1, &["zero.exr", "not a regular file"]),
+        ),
+        (
+            "FIFO",
+            s(&fifo),
+            error(1, &["fifo.exr", "not a regular file (a FIFO)"]),
+        ),
+        (
+            "directory",
+            s(&dir),
+            error(1, &["a_directory.exr", "directory"]),
+        ),
+        ("3:1", s(&wide), error(1, &["three_to_one.exr", "24×8"])),
+        ("1:2", s(&tall), error(1, &["tall.exr", "8×16"])),
+        (
+            "NaN texel",
+            s(&nan),
+            error(1, &["nan.exr", "NaN or infinite", "x=5, y=1"]),
+        ),
+        (
+            "Inf texel",
+            s(&inf),
+            error(1, &["inf.exr", "NaN or infinite"]),
+        ),
+        (
+            "-Inf texel",
+            s(&neg_inf),
+            error(1, &["neg_inf.exr", "NaN or infinite"]),
+        ),
+        (
+            "square without a disk",
+            s(&square),
+            error(1, &["square.exr", "angular"]),
+        ),
+        (
+            "hdr garbage",
+            s(&hdr_garbage),
+            error(1, &["garbage.hdr", "Radiance"]),
+        ),
+        (
+            "hdr without size",
+            s(&hdr_no_size),
+            error(1, &["no_size.hdr", "Radiance"]),
+        ),
+        (
+            "png named exr",
+            s(&png_env),
+            error(1, &["photo.exr", "89 50 4e 47"]),
+        ),
+        (
+            "corrupt tiles",
+            s(&corrupt),
+            error(1, &["corrupt_tiles.exr"]),
+        ),
+        (
+            "angular: missing",
+            format!("angular:{}", s(&d.join("nope.exr"))),
+            error(1, &["nope.exr"]),
+        ),
+        ("exr named .hdr loads", s(&exr_named_hdr), Expect::Ok),
+    ];
+    for (name, env, expect) in cases {
+        suite.add(
+            Kind::EnvFiles,
+            name,
+            &["sh", "project", "--order", "2", "--env", &env],
+            None,
+            expect,
+        );
+    }
+    let out = d.join("env-render.png");
+    suite.add(
+        Kind::EnvFiles,
+        "render with a FIFO env fails before the bake",
+        &[
+            "render",
+            "--technique",
+            "preconv",
+            "--env",
+            &s(&fifo),
+            "--out",
+            &s(&out),
+        ],
+        Some(out),
+        error(1, &["fifo.exr", "not a regular file"]),
+    );
+}
+
+/// glTF files: structure, URIs and textures (through `bake`: no device needed).
+fn scene_file_cases(suite: &mut Suite) {
+    let d = suite.dir.join("scenes");
+    std::fs::create_dir_all(&d).unwrap();
+    let outside = suite.dir.join("outside.bin");
+    write(&outside, &[0u8; 256]);
+    let malformed = d.join("malformed.gltf");
+    write(
+        &malformed,
+        b"{ \"asset\": {\"version\": \"2.0\"}, \"meshes\": [ ",
+    );
+    let glb_bad = d.join("bad_magic.glb");
+    write(
+        &glb_bad,
+        b"glTX\x02\0\0\0\x20\0\0\0garbage-garbage-garbage!",
+    );
+    let glb_short = d.join("short.glb");
+    write(&glb_short, b"glTF\x02\0\0\0\x04\0\0\0");
+    let not_json = d.join("binary.gltf");
+    write(&not_json, &[0xff, 0xfe, 0x00, 0x01, 0x02]);
+    let nan_positions: Vec<f32> = {
+        let mut p = vec![
+            -2., 0., -2., 2., 0., -2., 2., 0., 2., -2., 0., 2., -1., 0., 0., 1., 0., 0., 1., 1.,
+            0., -1., 1., 0.,
+        ];
+        p[4] = f32::NAN;
+        p
+    };
+    let degenerate: Vec<f32> = vec![0.0; 24];
+    let mut cases: Vec<(&str, PathBuf, Vec<&str>)> = vec![
+        (
+            "malformed json",
+            malformed,
+            vec!["malformed.gltf", "invalid glTF"],
+        ),
+        ("bad glb magic", glb_bad, vec!["bad_magic.glb"]),
+        ("short glb", glb_short, vec!["short.glb"]),
+        ("binary .gltf", not_json, vec!["binary.gltf"]),
+        ("missing file", d.join("absent.gltf"), vec!["absent.gltf"]),
+        (
+            "missing file, capital extension",
+            d.join("absent.GLB"),
+            vec!["absent.GLB", "cannot read"],
+        ),
+        (
+            "absolute buffer path",
+            gltf(&d, "abs_buffer", |j| {
+                j["buffers"][0]["uri"] = json!(s(&outside))
+            }),
+            vec!["abs_buffer.gltf", "refused", "absolute"],
+        ),
+        (
+            "file: URI to /etc/passwd",
+            gltf(&d, "passwd", |j| {
+                j["buffers"][0]["uri"] = json!("file:///etc/passwd")
+            }),
+            vec!["passwd.gltf", "refused", "file:"],
+        ),
+        (
+            "http URI",
+            gltf(&d, "remote", |j| {
+                j["buffers"][0]["uri"] = json!("http://example.com/x.bin")
+            }),
+            vec!["remote.gltf", "refused", "no network"],
+        ),
+        (
+            "../ escape",
+            gltf(&d, "escape", |j| {
+                j["buffers"][0]["uri"] = json!("../outside.bin")
+            }),
+            vec!["escape.gltf", "refused", "leaves the glTF file's folder"],
+        ),
+        (
+            "percent-encoded ../ escape",
+            gltf(&d, "escape_pct", |j| {
+                j["buffers"][0]["uri"] = json!("sub/%2E%2E/%2E%2E/outside.bin")
+            }),
+            vec!["escape_pct.gltf", "leaves the glTF file's folder"],
+        ),
+        (
+            "image file: URI",
+            gltf(&d, "image_passwd", |j| {
+                with_texture(j, "file:///etc/passwd")
+            }),
+            vec!["image_passwd.gltf", "refused"],
+        ),
+        (
+            "image absolute path",
+            gltf(&d, "image_abs", |j| with_texture(j, "/etc/hostname")),
+            vec!["image_abs.gltf", "refused"],
+        ),
+        (
+            "bad data URI",
+            gltf(&d, "bad_data", |j| {
+                j["buffers"][0]["uri"] = json!("data:application/octet-stream;base64,@@@@")
+            }),
+            vec!["bad_data.gltf", "data URI"],
+        ),
+        (
+            "missing buffer file",
+            gltf(&d, "lost_bin", |j| {
+                j["buffers"][0]["uri"] = json!("lost.bin")
+            }),
+            vec!["lost_bin.gltf", "not found"],
+        ),
+        (
+            "buffer is /dev/zero link",
+            {
+                let p = gltf(&d, "zero_bin", |j| {
+                    j["buffers"][0]["uri"] = json!("zero.bin")
+                });
+                let _ = std::os::unix::fs::symlink("/dev/zero", d.join("zero.bin"));
+                p
+            },
+            vec!["zero_bin.gltf", "not a regular file"],
+        ),
+        (
+            "buffer file shorter than its byteLength",
+            gltf(&d, "short_buffer", |j| {
+                j["buffers"][0]["byteLength"] = json!(100000)
+            }),
+            vec!["short_buffer.gltf", "byteLength is 100000"],
+        ),
+        (
+            "NaN positions",
+            gltf_with(&d, "nan_pos", None, Some(&nan_positions), |_| {}),
+            vec!["nan_pos.gltf", "not finite"],
+        ),
+        (
+            "all triangles degenerate",
+            gltf_with(&d, "degenerate", None, Some(&degenerate), |_| {}),
+            vec!["degenerate.gltf", "no usable triangles"],
+        ),
+        (
+            "index out of range",
+            gltf(&d, "bad_index", |j| j["accessors"][3]["count"] = json!(13)),
+            vec!["bad_index.gltf"],
+        ),
+        (
+            "no meshes in the scene",
+            gltf(&d, "no_mesh", |j| j["scenes"] = json!([{"nodes": []}])),
+            vec!["no_mesh.gltf", "no meshes"],
+        ),
+        (
+            "node cycle",
+            gltf(&d, "cycle", |j| {
+                j["nodes"] = json!([{"mesh": 0, "children": [1]}, {"children": [0]}])
+            }),
+            vec!["cycle.gltf"],
+        ),
+        (
+            "corrupt texture",
+            {
+                write(&d.join("corrupt.png"), &png(4, 4)[..30]);
+                gltf(&d, "corrupt_tex", |j| with_texture(j, "corrupt.png"))
+            },
+            vec!["corrupt_tex.gltf", "image 0"],
+        ),
+        (
+            "texture not an image",
+            {
+                write(&d.join("notes.png"), b"hello");
+                gltf(&d, "text_tex", |j| with_texture(j, "notes.png"))
+            },
+            vec!["text_tex.gltf", "image 0"],
+        ),
+    ];
+    let unknown = PathBuf::from("castle");
+    cases.push(("unknown built-in", unknown, vec!["castle", "unknown scene"]));
+    let dir_scene = d.join("folder.gltf");
+    std::fs::create_dir_all(&dir_scene).unwrap();
+    cases.push(("scene is a directory", dir_scene, vec!["folder.gltf"]));
+    for (i, (name, scene, needles)) in cases.into_iter().enumerate() {
+        let out = d.join(format!("out-{i}"));
+        suite.add(
+            Kind::SceneFiles,
+            name,
+            &[
+                "bake",
+                "--scene",
+                &s(&scene),
+                "--vis-res",
+                "16",
+                "--rays",
+                "4",
+                "--order",
+                "2",
+                "--out",
+                &s(&out),
+            ],
+            Some(out),
+            error(1, &needles),
+        );
+    }
+    let caps = gltf(&d, "capitals", |_| {});
+    let caps_upper = d.join("CAPITALS.GLTF");
+    std::fs::rename(&caps, &caps_upper).unwrap();
+    let out = d.join("out-capitals");
+    suite.add(
+        Kind::SceneFiles,
+        ".GLTF in capitals loads",
+        &[
+            "bake",
+            "--scene",
+            &s(&caps_upper),
+            "--vis-res",
+            "16",
+            "--rays",
+            "4",
+            "--order",
+            "2",
+            "--out",
+            &s(&out),
+        ],
+        Some(out.join("manifest.json")),
+        Expect::Ok,
+    );
+    let sub = d.join("sub");
+    std::fs::create_dir_all(&sub).unwrap();
+    let (json, bin) = scene_json(None, None);
+    write(&sub.join("mesh.bin"), &bin);
+    let mut json = json;
+    json["buffers"][0]["uri"] = json!("sub/mesh.bin");
+    let nested = d.join("nested.gltf");
+    write(&nested, json.to_string().as_bytes());
+    let out = d.join("out-nested");
+    suite.add(
+        Kind::SceneFiles,
+        "relative path into a subfolder loads",
+        &[
+            "bake",
+            "--scene",
+            &s(&nested),
+            "--vis-res",
+            "16",
+            "--rays",
+            "4",
+            "--order",
+            "2",
+            "--out",
+            &s(&out),
+        ],
+        Some(out.join("manifest.json")),
+        Expect::Ok,
+    );
+}
+
+/// Output and cache locations, checked before any bake; a full disk.
+fn output_cases(suite: &mut Suite) {
+    let d = suite.dir.clone();
+    let file = d.join("a_file");
+    write(&file, b"x");
+    let as_dir = d.join("dir.png");
+    std::fs::create_dir_all(&as_dir).unwrap();
+    let quick = [
+        "--vis-res",
+        "64",
+        "--rays",
+        "4",
+        "--order",
+        "2",
+        "--width",
+        "8",
+        "--height",
+        "8",
+    ];
+    let render = |out: &str| {
+        let mut v = strings(&["render", "--technique", "preconv"]);
+        v.extend(strings(&quick));
+        v.extend(strings(&["--out", out]));
+        v
+    };
+    let cases: Vec<(&str, Vec<String>, Vec<&str>, Option<PathBuf>)> = vec![
+        (
+            "render into /proc",
+            render("/proc/shvis/x.png"),
+            vec!["/proc/shvis", "--out is not writable"],
+            None,
+        ),
+        (
+            "render over a directory",
+            render(&s(&as_dir)),
+            vec!["dir.png", "is a directory"],
+            None,
+        ),
+        (
+            "render under a file",
+            render(&s(&file.join("x.png"))),
+            vec!["a_file"],
+            None,
+        ),
+        (
+            "render to .jpg",
+            render(&s(&d.join("x.jpg"))),
+            vec!["x.jpg", "extension"],
+            Some(d.join("x.jpg")),
+        ),
+        (
+            "reference into /proc",
+            strings(&[
+                "reference",
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "--out",
+                "/proc/shvis/r.exr",
+            ]),
+            vec!["/proc/shvis"],
+            None,
+        ),
+        (
+            "reference to .tiff",
+            strings(&["reference", "--out", &s(&d.join("r.tiff"))]),
+            vec!["r.tiff"],
+            Some(d.join("r.tiff")),
+        ),
+        (
+            "bake into /proc",
+            strings(&[
+                "bake",
+                "--vis-res",
+                "64",
+                "--rays",
+                "4",
+                "--out",
+                "/proc/shvis/bake",
+            ]),
+            vec!["/proc/shvis/bake", "--out is not writable"],
+            None,
+        ),
+        (
+            "bake into a file",
+            strings(&["bake", "--vis-res", "64", "--rays", "4", "--out", &s(&file)]),
+            vec!["a_file", "not a directory"],
+            None,
+        ),
+        (
+            "bench into /proc",
+            strings(&["bench", "--out", "/proc/shvis/bench"]),
+            vec!["/proc/shvis/bench"],
+            None,
+        ),
+        (
+            "probe into a file",
+            strings(&["probe", "--out", &s(&file)]),
+            vec!["a_file"],
+            None,
+        ),
+        (
+            "relight into /proc",
+            strings(&["relight", "--out", "/proc/shvis/relight"]),
+            vec!["/proc/shvis/relight"],
+            None,
+        ),
+    ];
+    for (name, args, needles, out) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let cache = PathBuf::from(suite.cache(name));
+        suite.add(Kind::Outputs, name, &args, out, error(1, &needles));
+        // Checked before any bake: the cache stays empty.
+        suite.last().check = Some(Box::new(move |_, _| {
+            let baked = std::fs::read_dir(&cache).is_ok_and(|mut e| e.next().is_some());
+            if baked {
+                return Err("a bake ran before the output was checked".into());
+            }
+            Ok(())
+        }));
+    }
+    for (name, cache, needles) in [
+        (
+            "cache in /proc",
+            "/proc/shvis-cache",
+            vec!["/proc/shvis-cache", "bake cache"],
+        ),
+        ("cache is a file", &*s(&file), vec!["a_file", "bake cache"]),
+    ] {
+        let out = d.join(format!("{}.png", name.replace(' ', "_")));
+        let args = render(&s(&out));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        suite.add(Kind::Outputs, name, &args, Some(out), error(1, &needles));
+        suite.last().env = vec![("SHVIS_CACHE_DIR".into(), cache.to_string())];
+        let out = d.join(format!("{}-bake", name.replace(' ', "_")));
+        suite.add(
+            Kind::Outputs,
+            &format!("bake with {name}"),
+            &["bake", "--vis-res", "64", "--rays", "4", "--out", &s(&out)],
+            None,
+            error(1, &needles),
+        );
+        suite.last().env = vec![("SHVIS_CACHE_DIR".into(), cache.to_string())];
+    }
+    // A full disk: files limited to 64 KiB (SIGXFSZ ignored, so writes fail with EFBIG).
+    // The bake cache is filled first without the limit, so the frame is what fails.
+    let warm = d.join("full-warm.exr");
+    let cache = suite.cache("full disk");
+    let mut warm_args = strings(&[
+        "render",
+        "--technique",
+        "preconv",
+        "--vis-res",
+        "64",
+        "--rays",
+        "4",
+        "--order",
+        "2",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--out",
+        &s(&warm),
+    ]);
+    let warm_run = Command::new(env!("CARGO_BIN_EXE_shvis"))
+        .args(&warm_args)
+        .env("SHVIS_CACHE_DIR", &cache)
+        .env("RUST_LOG", "off")
+        .output()
+        .unwrap();
+    assert!(
+        warm_run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&warm_run.stderr)
+    );
+    let out = d.join("full.exr");
+    warm_args.truncate(warm_args.len() - 6);
+    warm_args.extend(strings(&[
+        "--width",
+        "256",
+        "--height",
+        "256",
+        "--out",
+        &s(&out),
+    ]));
+    let args: Vec<&str> = warm_args.iter().map(String::as_str).collect();
+    suite.add(
+        Kind::Outputs,
+        "disk full while writing the frame",
+        &args,
+        Some(out),
+        error(1, &["full.exr", "cannot write"]),
+    );
+    suite.last().env = vec![("SHVIS_CACHE_DIR".into(), cache)];
+    suite.last().shell = Some("ulimit -f 64; trap '' XFSZ;".into());
+}
+
+/// Bake caches: every damaged or foreign file is rebuilt with a warning, never trusted.
+fn cache_cases(suite: &mut Suite) {
+    let d = suite.dir.clone();
+    let bake = |out: &Path| {
+        strings(&[
+            "bake",
+            "--vis-res",
+            "64",
+            "--rays",
+            "8",
+            "--order",
+            "3",
+            "--out",
+            &s(out),
+        ])
+    };
+    // One clean run whose cache file and outputs every case is compared with.
+    let clean_cache = PathBuf::from(suite.cache("clean"));
+    let clean_out = d.join("cache-clean-out");
+    let run = Command::new(env!("CARGO_BIN_EXE_shvis"))
+        .args(bake(&clean_out))
+        .env("SHVIS_CACHE_DIR", &clean_cache)
+        .env("RUST_LOG", "off")
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let cache_file = std::fs::read_dir(&clean_cache)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.extension().is_some_and(|e| e == "bin"))
+        .expect("a cache file");
+    let name = cache_file.file_name().unwrap().to_owned();
+    let good = std::fs::read(&cache_file).unwrap();
+    const HEADER: usize = 40;
+    // Payload: res u32, order u32, rays u64, seconds f64, then coefficients (f32) …
+    let resealed = |mut bytes: Vec<u8>| {
+        let h = shvis::bake::cache::hash64(&bytes[HEADER..]);
+        bytes[32..40].copy_from_slice(&h.to_le_bytes());
+        bytes
+    };
+    let texels = 64 * 64;
+    let coeff0 = HEADER + 24;
+    let flags0 = coeff0 + 4 * texels * 9;
+    let ao0 = flags0 + texels;
+    let mut variants: Vec<(&str, Option<Vec<u8>>, &str)> = Vec::new();
+    let mut flipped = good.clone();
+    flipped[good.len() / 2] ^= 0x10;
+    variants.push(("flipped payload byte", Some(flipped), "checksum"));
+    variants.push((
+        "truncated",
+        Some(good[..good.len() - 100].to_vec()),
+        "payload length",
+    ));
+    variants.push(("header only", Some(good[..20].to_vec()), "truncated header"));
+    variants.push(("empty", Some(Vec::new()), "truncated header"));
+    let mut version = good.clone();
+    version[8] = 99;
+    variants.push(("other version", Some(version), "format version 99"));
+    let mut key = good.clone();
+    key[16] ^= 1;
+    variants.push(("foreign key", Some(key), "key"));
+    let mut magic = good.clone();
+    magic[0] = b'X';
+    variants.push(("wrong magic", Some(magic), "magic"));
+    let mut nan = good.clone();
+    nan[coeff0 + 40..coeff0 + 44].copy_from_slice(&f32::NAN.to_le_bytes());
+    variants.push((
+        "NaN coefficient, valid checksum",
+        Some(resealed(nan)),
+        "coefficient 10 is NaN",
+    ));
+    let mut huge = good.clone();
+    huge[coeff0..coeff0 + 4].copy_from_slice(&1e30f32.to_le_bytes());
+    variants.push((
+        "1e30 coefficient, valid checksum",
+        Some(resealed(huge)),
+        "not what a bake produces",
+    ));
+    let mut ao = good.clone();
+    ao[ao0 + 8..ao0 + 12].copy_from_slice(&2.0f32.to_le_bytes());
+    variants.push(("AO 2, valid checksum", Some(resealed(ao)), "outside [0, 1]"));
+    let mut flag = good.clone();
+    flag[flags0 + 3] = 7;
+    variants.push((
+        "coverage flag 7, valid checksum",
+        Some(resealed(flag)),
+        "coverage flag 7",
+    ));
+    let mut res = good.clone();
+    res[HEADER..HEADER + 4].copy_from_slice(&32u32.to_le_bytes());
+    variants.push((
+        "other resolution, valid checksum",
+        Some(resealed(res)),
+        "holds res 32",
+    ));
+    variants.push(("link to /dev/zero", None, "not a regular file"));
+    let clean_layers: Vec<(PathBuf, Vec<u8>)> = std::fs::read_dir(&clean_out)
+        .unwrap()
+        .flatten()
+        .map(|e| (e.path(), std::fs::read(e.path()).unwrap()))
+        .collect();
+    for (i, (what, bytes, needle)) in variants.into_iter().enumerate() {
+        let case_name = format!("cache {what}");
+        let cache = PathBuf::from(suite.cache(&case_name));
+        std::fs::create_dir_all(&cache).unwrap();
+        match bytes {
+            Some(b) => write(&cache.join(&name), &b),
+            None => std::os::unix::fs::symlink("/dev/zero", cache.join(&name)).unwrap(),
+        }
+        let out = d.join(format!("cache-out-{i}"));
+        let args = bake(&out);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        suite.add(
+            Kind::Cache,
+            &case_name,
+            &args,
+            Some(out.join("manifest.json")),
+            warn(&["bake cache", needle, "rebuilding"]),
+        );
+        let layers = clean_layers.clone();
+        let (cache_path, good) = (cache.join(&name), good.clone());
+        suite.last().check = Some(Box::new(move |_, _| {
+            for (p, want) in &layers {
+                let got =
+                    std::fs::read(out.join(p.file_name().unwrap())).map_err(|e| e.to_string())?;
+                if &got != want {
+                    return Err(format!("{} differs from the clean run's", p.display()));
+                }
+            }
+            // The rebuilt cache equals the clean one except for the timing field.
+            let rebuilt = std::fs::read(&cache_path).map_err(|e| e.to_string())?;
+            if rebuilt.len() != good.len() || rebuilt[HEADER + 24..] != good[HEADER + 24..] {
+                return Err("the rebuilt cache differs from a clean bake's".into());
+            }
+            Ok(())
+        }));
+    }
+    // A directory where the cache file goes: cannot be rebuilt, so an error naming it.
+    let cache = PathBuf::from(suite.cache("cache path is a directory"));
+    std::fs::create_dir_all(cache.join(&name)).unwrap();
+    let out = d.join("cache-dir-out");
+    let args = bake(&out);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    suite.add(
+        Kind::Cache,
+        "cache path is a directory",
+        &args,
+        None,
+        error(1, &[&name.to_string_lossy(), "cannot write"]),
+    );
+    // Temporaries of a killed run are removed; those of live processes are kept.
+    let cache = PathBuf::from(suite.cache("stale temporaries"));
+    std::fs::create_dir_all(&cache).unwrap();
+    let dead = cache.join(format!(".{}.tmp-2147483600-0", name.to_string_lossy()));
+    let live = cache.join(format!(".{}.tmp-1-0", name.to_string_lossy()));
+    write(&dead, b"half a file");
+    write(&live, b"pid 1 is alive");
+    let out = d.join("cache-stale-out");
+    let args = bake(&out);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    suite.add(
+        Kind::Cache,
+        "stale temporaries",
+        &args,
+        Some(out),
+        Expect::Ok,
+    );
+    suite.last().check = Some(Box::new(move |_, _| {
+        if dead.exists() || !live.exists() {
+            return Err(format!(
+                "dead temp exists {}, live temp exists {}",
+                dead.exists(),
+                live.exists()
+            ));
+        }
+        Ok(())
+    }));
+}
+
+/// DESIGN §6 at the command line.
+fn hard_cases(suite: &mut Suite) {
+    let d = suite.dir.clone();
+    // An HDR sun of 1e5 (a 2×2-texel disc in a 1 sky): finite, unclipped, on both paths.
+    let sun = exr(&d.join("sun1e5.exr"), 128, 64, |x, y| {
+        if (60..62).contains(&x) && (20..22).contains(&y) {
+            [1e5; 3]
+        } else {
+            [0.5; 3]
+        }
+    });
+    for technique in ["unc6", "preconv", "pca8", "sh2"] {
+        for path in ["dx9", "dx10"] {
+            let out = d.join(format!("sun-{technique}-{path}.exr"));
+            suite.add(
+                Kind::HardCases,
+                &format!("1e5 sun: {technique} {path}"),
+                &[
+                    "render",
+                    "--technique",
+                    technique,
+                    "--path",
+                    path,
+                    "--vis-res",
+                    "64",
+                    "--rays",
+                    "64",
+                    "--width",
+                    "32",
+                    "--height",
+                    "20",
+                    "--env",
+                    &s(&sun),
+                    "--out",
+                    &s(&out),
+                ],
+                Some(out.clone()),
+                Expect::Ok,
+            );
+            suite.last().check = Some(Box::new(move |_, stderr| {
+                if stderr.contains("clipped") {
+                    return Err(format!("clipped: {stderr}"));
+                }
+                let img = exr::prelude::read_first_rgba_layer_from_file(
+                    &out,
+                    |r, _| vec![[0.0f32; 4]; r.width() * r.height()],
+                    |px: &mut Vec<[f32; 4]>, p, (r, g, b, a): (f32, f32, f32, f32)| {
+                        px[p.y() * 32 + p.x()] = [r, g, b, a]
+                    },
+                )
+                .map_err(|e| e.to_string())?;
+                let px = img.layer_data.channel_data.pixels;
+                let lit = px.iter().filter(|p| p[3] > 0.5 && p[0] > 0.0).count();
+                if !px.iter().flatten().all(|c| c.is_finite()) || lit == 0 {
+                    return Err(format!(
+                        "{lit} lit pixels, finite: {}",
+                        px.iter().flatten().all(|c| c.is_finite())
+                    ));
+                }
+                Ok(())
+            }));
+        }
+    }
+    // Degenerate and zero-UV-area triangles beside good ones: skipped with a warning.
+    let mut p = vec![
+        -2., 0., -2., 2., 0., -2., 2., 0., 2., -2., 0., 2., -1., 0., 0., 1., 0., 0., 1., 1., 0.,
+        -1., 1., 0.,
+    ];
+    p[18..24].copy_from_slice(&[1., 0., 0., 1., 0., 0.]); // wall corners 6, 7 collapse onto 5
+    let degenerate = gltf_with(&d, "some_degenerate", None, Some(&p), |_| {});
+    let out = d.join("degenerate-out");
+    suite.add(
+        Kind::HardCases,
+        "degenerate triangles skipped",
+        &[
+            "bake",
+            "--scene",
+            &s(&degenerate),
+            "--vis-res",
+            "32",
+            "--rays",
+            "4",
+            "--order",
+            "2",
+            "--out",
+            &s(&out),
+        ],
+        Some(out),
+        warn(&["degenerate"]),
+    );
+    // Zero-length normals from a normal map of (128, 128, 128) texels.
+    let mut grey = Vec::new();
+    image::RgbaImage::from_pixel(4, 4, image::Rgba([128, 128, 128, 255]))
+        .write_to(
+            &mut std::io::Cursor::new(&mut grey),
+            image::ImageFormat::Png,
+        )
+        .unwrap();
+    write(&d.join("grey.png"), &grey);
+    let zero_normals = gltf(&d, "zero_normals", |j| {
+        j["images"] = json!([{"uri": "grey.png"}]);
+        j["textures"] = json!([{"source": 0}]);
+        j["materials"] = json!([{"normalTexture": {"index": 0}}]);
+        j["meshes"][0]["primitives"][0]["material"] = json!(0);
+    });
+    for technique in ["unc6", "preconv"] {
+        let out = d.join(format!("zero-normals-{technique}.exr"));
+        suite.add(
+            Kind::HardCases,
+            &format!("zero-length normal-map normals: {technique}"),
+            &[
+                "render",
+                "--technique",
+                technique,
+                "--scene",
+                &s(&zero_normals),
+                "--vis-res",
+                "32",
+                "--rays",
+                "64",
+                "--width",
+                "16",
+                "--height",
+                "16",
+                "--out",
+                &s(&out),
+            ],
+            Some(out),
+            Expect::Ok,
+        );
+    }
+}
+
+#[test]
+fn bad_input_suite() {
+    let started = Instant::now();
+    let mut suite = Suite::new("suite");
+    argument_cases(&mut suite);
+    budget_cases(&mut suite);
+    value_cases(&mut suite);
+    env_file_cases(&mut suite);
+    scene_file_cases(&mut suite);
+    output_cases(&mut suite);
+    cache_cases(&mut suite);
+    hard_cases(&mut suite);
+    let total = suite.cases.len();
+    let counts = suite.run();
+    println!("{total} cases in {:.1} s", started.elapsed().as_secs_f64());
+    assert!(total >= 150, "only {total} cases");
+    assert_eq!(counts.len(), 8, "every kind has cases: {counts:?}");
+}
+
+/// `kill -9` at each of a bake's five writes (three visibility layers, AO, the cache file),
+/// then a rerun: its outputs are byte-identical to an uninterrupted run's, the killed run's
+/// directory was detectably incomplete, and no temporary is left.
+#[test]
+fn killed_bakes_rerun_to_identical_outputs() {
+    let dir = std::env::temp_dir().join(format!("shvis-kill9-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let bake = |out: &Path, cache: &Path, kill_at: Option<&str>| {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_shvis"));
+        cmd.args([
+            "bake",
+            "--vis-res",
+            "64",
+            "--rays",
+            "16",
+            "--order",
+            "3",
+            "--out",
+            &s(out),
+        ])
+        .env("SHVIS_CACHE_DIR", cache)
+        .env("RUST_LOG", "off");
+        if let Some(file) = kill_at {
+            cmd.env(shvis::files::KILL_WHILE_WRITING_ENV, file);
+        }
+        cmd.output().unwrap()
+    };
+    let read_dir = |d: &Path| -> BTreeMap<String, Vec<u8>> {
+        std::fs::read_dir(d)
+            .unwrap()
+            .flatten()
+            .map(|e| {
+                (
+                    e.file_name().to_string_lossy().into_owned(),
+                    std::fs::read(e.path()).unwrap(),
+                )
+            })
+            .collect()
+    };
+    let clean_out = dir.join("clean");
+    let clean_cache = dir.join("clean-cache");
+    let run = bake(&clean_out, &clean_cache, None);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let clean = read_dir(&clean_out);
+    assert_eq!(
+        clean.keys().cloned().collect::<Vec<_>>(),
+        [
+            "ao.exr",
+            "manifest.json",
+            "visibility_0.exr",
+            "visibility_1.exr",
+            "visibility_2.exr"
+        ]
+    );
+    let cache_name = read_dir(&clean_cache).into_keys().next().unwrap();
+    // An earlier, complete output of other settings (seed 1) that each killed run writes
+    // over: the hard case, where new, truncated and old layers would mix.
+    let old_out = dir.join("old");
+    let old = Command::new(env!("CARGO_BIN_EXE_shvis"))
+        .args([
+            "bake",
+            "--vis-res",
+            "64",
+            "--rays",
+            "16",
+            "--order",
+            "3",
+            "--seed",
+            "1",
+            "--out",
+            &s(&old_out),
+        ])
+        .env("SHVIS_CACHE_DIR", dir.join("old-cache"))
+        .env("RUST_LOG", "off")
+        .output()
+        .unwrap();
+    assert!(
+        old.status.success(),
+        "{}",
+        String::from_utf8_lossy(&old.stderr)
+    );
+    assert_ne!(
+        read_dir(&old_out)["visibility_0.exr"],
+        clean["visibility_0.exr"]
+    );
+    for point in [
+        "visibility_0.exr",
+        "visibility_1.exr",
+        "visibility_2.exr",
+        "ao.exr",
+        cache_name.as_str(),
+    ] {
+        // The killed run writes over an earlier, complete output (the hard case: old and
+        // new files mixed) with its own cache.
+        let out = dir.join(format!("out-{point}"));
+        let cache = dir.join(format!("cache-{point}"));
+        copy_dir(&old_out, &out);
+        let killed = bake(&out, &cache, Some(point));
+        assert_eq!(
+            killed.status.code(),
+            None,
+            "{point}: the bake was not killed: {}",
+            String::from_utf8_lossy(&killed.stderr)
+        );
+        // Killed at a layer: the directory is detectably incomplete. Killed at the cache
+        // write (before any layer), it still holds the earlier complete output, intact.
+        let verified = shvis::files::Manifest::verify(&out);
+        if point.ends_with(".exr") {
+            assert!(
+                verified.is_err(),
+                "{point}: the interrupted directory passes as complete"
+            );
+        } else {
+            assert_eq!(verified.unwrap().settings["seed"], 1, "{point}");
+        }
+        let rerun = bake(&out, &cache, None);
+        assert!(
+            rerun.status.success(),
+            "{point}: {}",
+            String::from_utf8_lossy(&rerun.stderr)
+        );
+        let got = read_dir(&out);
+        assert_eq!(
+            got.keys().collect::<Vec<_>>(),
+            clean.keys().collect::<Vec<_>>(),
+            "{point}: files (temporaries left?)"
+        );
+        for (name, bytes) in &clean {
+            assert!(
+                &got[name] == bytes,
+                "{point}: {name} differs from the uninterrupted run's"
+            );
+        }
+        let cache_files: Vec<String> = read_dir(&cache).into_keys().collect();
+        assert_eq!(
+            cache_files,
+            [cache_name.clone()],
+            "{point}: cache holds {cache_files:?}"
+        );
+        shvis::files::Manifest::verify(&out).unwrap();
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap().flatten() {
+        std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+    }
+}
