@@ -63,19 +63,32 @@ pub fn load_as(path: &Path, square: SquareLayout) -> Result<EnvMap, EnvError> {
                     .replacen(&format!("{}: ", path.display()), "", 1),
             },
         })?;
+    decode(&bytes, path, square)
+}
+
+/// [`load`] of bytes in memory (`<memory>` in messages): the entry point of the
+/// `env_map` fuzz target and of the loaders' mutation test.
+///
+/// # Errors
+/// As [`load`], less [`EnvError::Io`].
+pub fn load_from_slice(bytes: &[u8]) -> Result<EnvMap, EnvError> {
+    decode(bytes, Path::new("<memory>"), SquareLayout::Detect)
+}
+
+fn decode(bytes: &[u8], path: &Path, square: SquareLayout) -> Result<EnvMap, EnvError> {
     let format_err = |detail: String| EnvError::Format {
         path: path.to_owned(),
         detail,
     };
     let map = if bytes.starts_with(&EXR_MAGIC) {
-        check_exr_header(&bytes, path)?;
-        decode_exr(&bytes).map_err(|e| format_err(format!("invalid OpenEXR file: {e}")))?
+        check_exr_header(bytes, path)?;
+        decode_exr(bytes).map_err(|e| format_err(format!("invalid OpenEXR file: {e}")))?
     } else if RADIANCE_MAGICS.iter().any(|m| bytes.starts_with(m)) {
-        let meta = image::codecs::hdr::HdrDecoder::new(Cursor::new(&bytes))
+        let meta = image::codecs::hdr::HdrDecoder::new(Cursor::new(bytes))
             .map_err(|e| format_err(format!("invalid Radiance HDR file: {e}")))?
             .metadata();
         check_env_size(path, u64::from(meta.width), u64::from(meta.height))?;
-        decode_hdr(&bytes).map_err(|e| format_err(format!("invalid Radiance HDR file: {e}")))?
+        decode_hdr(bytes).map_err(|e| format_err(format!("invalid Radiance HDR file: {e}")))?
     } else {
         let ext = path
             .extension()
