@@ -51,6 +51,13 @@ enum Expect {
     Ok,
 }
 
+/// A further check after a run: (stdout, stderr) → what is wrong.
+type Check = Box<dyn Fn(&str, &str) -> Result<(), String>>;
+/// (name, command line, memory limit, needles).
+type BudgetCase<'a> = (&'a str, Vec<String>, Option<&'a str>, Vec<&'a str>);
+/// (name, command line, needles, output).
+type OutputCase<'a> = (&'a str, Vec<String>, Vec<&'a str>, Option<PathBuf>);
+
 struct Case {
     kind: Kind,
     name: String,
@@ -62,7 +69,7 @@ struct Case {
     out: Option<PathBuf>,
     expect: Expect,
     /// A further check after the run (stdout, stderr) → problem.
-    check: Option<Box<dyn Fn(&str, &str) -> Result<(), String>>>,
+    check: Option<Check>,
 }
 
 fn strings(v: &[&str]) -> Vec<String> {
@@ -719,7 +726,7 @@ fn budget_cases(suite: &mut Suite) {
             s(env),
         ]
     };
-    let cases: Vec<(&str, Vec<String>, Option<&str>, Vec<&str>)> = vec![
+    let cases: Vec<BudgetCase> = vec![
         (
             "exr header 200000×100000",
             project(&huge_exr),
@@ -1593,7 +1600,7 @@ fn output_cases(suite: &mut Suite) {
         v.extend(strings(&["--out", out]));
         v
     };
-    let cases: Vec<(&str, Vec<String>, Vec<&str>, Option<PathBuf>)> = vec![
+    let cases: Vec<OutputCase> = vec![
         (
             "render into /proc",
             render("/proc/shvis/x.png"),
@@ -2244,7 +2251,7 @@ fn killed_bakes_rerun_to_identical_outputs() {
         let cache_files: Vec<String> = read_dir(&cache).into_keys().collect();
         assert_eq!(
             cache_files,
-            [cache_name.clone()],
+            std::slice::from_ref(&cache_name),
             "{point}: cache holds {cache_files:?}"
         );
         shvis::files::Manifest::verify(&out).unwrap();

@@ -104,11 +104,10 @@ fn check_loaded(map: &EnvMap) -> Result<(), String> {
     if map.texels.len() != (map.width * map.height) as usize {
         return Err("texel count".into());
     }
-    if let Some(t) = map
-        .texels
-        .iter()
-        .find(|t| t.iter().any(|c| !c.is_finite() || *c < 0.0 || *c > MAX_ENV_RADIANCE))
-    {
+    if let Some(t) = map.texels.iter().find(|t| {
+        t.iter()
+            .any(|c| !c.is_finite() || *c < 0.0 || *c > MAX_ENV_RADIANCE)
+    }) {
         return Err(format!("texel {t:?} loaded"));
     }
     Ok(())
@@ -183,7 +182,10 @@ fn check_cache(m: &VisibilityMap, res: u32, order: Order) -> Result<(), String> 
     if m.res != res || m.order != order {
         return Err("res/order".into());
     }
-    if m.coeffs.len() != texels * order.coeff_count() || m.covered.len() != texels || m.ao.len() != texels {
+    if m.coeffs.len() != texels * order.coeff_count()
+        || m.covered.len() != texels
+        || m.ao.len() != texels
+    {
         return Err("lengths".into());
     }
     if m.coeffs.iter().any(|c| !c.is_finite() || c.abs() > 1e3) {
@@ -212,7 +214,9 @@ fn mutated_cache_files_are_rejected_or_valid() {
             bytes[24..32].copy_from_slice(&len.to_le_bytes());
             bytes[32..40].copy_from_slice(&h.to_le_bytes());
         }
-        match catch_unwind(AssertUnwindSafe(|| decode_visibility(&bytes, key, res, order))) {
+        match catch_unwind(AssertUnwindSafe(|| {
+            decode_visibility(&bytes, key, res, order)
+        })) {
             Err(_) => panic!("cache mutation {case} panicked"),
             Ok(Ok(m)) => {
                 if let Err(e) = check_cache(&m, res, order) {

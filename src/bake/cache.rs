@@ -698,7 +698,11 @@ mod tests {
             files.push(entries);
         }
         let _ = fs::remove_dir_all(&root);
-        assert_eq!(files[0].len(), 11, "9 coefficient layers, AO and the manifest");
+        assert_eq!(
+            files[0].len(),
+            11,
+            "9 coefficient layers, AO and the manifest"
+        );
         for (a, b) in files[0].iter().zip(&files[1]) {
             assert_eq!(a.0, b.0);
             assert!(a.1 == b.1, "{} differs between 1 and 3 threads", a.0);
