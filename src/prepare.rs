@@ -143,8 +143,8 @@ pub fn bake_memory_bytes(res: u32, order: u32) -> u64 {
 
 /// The checks of [`prepare`] that need no file, run by the command line before it opens a
 /// device or bakes: the lightmap resolution against the scene's range (one message for
-/// every scene), rays, order, table resolution, the bake's memory, and a warning when
-/// there are fewer rays per texel than SH coefficients to project.
+/// every scene), rays, order, table resolution and the bake's memory; and
+/// [`warn_if_few_rays`].
 ///
 /// # Errors
 /// One line naming the option and its range, or the memory it needs.
@@ -174,15 +174,23 @@ pub fn check_settings(settings: &PrepareSettings) -> Result<(), PrepareError> {
         bake_memory_bytes(settings.vis_res, settings.order.get()),
         "lower --vis-res or --order",
     )?;
-    let n2 = settings.order.coeff_count();
-    if (settings.rays as usize) < n2 {
-        log::warn!(
-            "--rays {} is fewer than the {n2} SH coefficients of --order {} each texel projects: the visibility of unc*/pca*/cluster techniques will be badly wrong (use at least {n2})",
-            settings.rays,
-            settings.order.get()
-        );
-    }
+    warn_if_few_rays(settings.rays, settings.order);
     Ok(())
+}
+
+/// Warns, once per process, when there are fewer rays per texel than SH coefficients to
+/// project (the projection is rank-deficient: visibility comes out badly wrong).
+pub fn warn_if_few_rays(rays: u32, order: Order) {
+    static WARNED: std::sync::Once = std::sync::Once::new();
+    let n2 = order.coeff_count();
+    if (rays as usize) < n2 {
+        WARNED.call_once(|| {
+            log::warn!(
+                "--rays {rays} is fewer than the {n2} SH coefficients of --order {} each texel projects: the visibility of unc*/pca*/cluster techniques will be badly wrong (use at least {n2})",
+                order.get()
+            );
+        });
+    }
 }
 
 impl Prepared {

@@ -1136,6 +1136,41 @@ fn value_cases(suite: &mut Suite) {
         Some(out),
         warn(&["lightmap UVs overlap", "TEXCOORD_1"]),
     );
+    // The reference's sums stay finite under the brightest accepted sky: the noise it
+    // prints is a finite positive number.
+    let out = d.join("bright-reference.exr");
+    suite.add(
+        Kind::Values,
+        "reference under a 1e9 sky",
+        &[
+            "reference",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "16",
+            "--vis-res",
+            "64",
+            "--env",
+            &s(&env_bright),
+            "--out",
+            &s(&out),
+        ],
+        Some(out),
+        Expect::Ok,
+    );
+    suite.last().check = Some(Box::new(|stdout, _| {
+        let noise: Option<f64> = stdout
+            .split("image) ")
+            .nth(1)
+            .and_then(|t| t.split_whitespace().next())
+            .and_then(|t| t.parse().ok());
+        match noise {
+            Some(n) if n.is_finite() && n > 0.0 => Ok(()),
+            _ => Err(format!("noise not a finite positive number: {stdout}")),
+        }
+    }));
     let out = d.join("exposure.png");
     suite.add(
         Kind::Values,
@@ -1310,6 +1345,22 @@ fn env_file_cases(suite: &mut Suite) {
             expect,
         );
     }
+    let out = d.join("fifo-height.png");
+    suite.add(
+        Kind::EnvFiles,
+        "height map is a FIFO",
+        &[
+            "render",
+            "--technique",
+            "preconv",
+            "--height-map",
+            &s(&fifo),
+            "--out",
+            &s(&out),
+        ],
+        Some(out),
+        error(1, &["fifo.exr", "not a regular file (a FIFO)"]),
+    );
     let out = d.join("env-render.png");
     suite.add(
         Kind::EnvFiles,

@@ -248,7 +248,34 @@ pub fn load_height_map(
             "height scale {scale} must be positive and finite"
         )));
     }
-    let image = image::open(path)
+    // Regular files only (a FIFO would block, /dev/zero never end); sized from the header.
+    let bytes = crate::files::read_bounded(path, 4 << 30, "a height map").map_err(|e| {
+        err(match e {
+            crate::files::FileError::Io { cause, .. } => {
+                format!("cannot read the height map: {cause}")
+            }
+            e => e
+                .to_string()
+                .replacen(&format!("{}: ", path.display()), "", 1),
+        })
+    })?;
+    let reader = || {
+        image::ImageReader::new(std::io::Cursor::new(&bytes))
+            .with_guessed_format()
+            .map_err(|e| err(format!("cannot read the height map: {e}")))
+    };
+    let (w, h) = reader()?
+        .into_dimensions()
+        .map_err(|e| err(format!("cannot read the height map: {e}")))?;
+    if u64::from(w) * u64::from(h) > MAX_HEIGHT_MAP_TEXELS as u64 {
+        return Err(err(format!("{w}×{h} is not a usable height map")));
+    }
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(u64::from(w) * u64::from(h) * 16 + (1 << 20));
+    let mut r = reader()?;
+    r.limits(limits);
+    let image = r
+        .decode()
         .map_err(|e| err(format!("cannot read the height map: {e}")))?
         .to_luma32f();
     let (width, height) = (image.width() as usize, image.height() as usize);
