@@ -821,7 +821,19 @@ struct RelightArgs {
     out: PathBuf,
 }
 
+/// The frames' memory on the host, checked before any work: `bytes_per_pixel` covers the
+/// readbacks (RGBA32F) and the images a command keeps (render 48, reference's G-buffers and
+/// sums 160, the bench's reference, row and ladder images 320).
+fn check_frame_memory(width: u32, height: u32, bytes_per_pixel: u64) -> Result<()> {
+    Ok(shvis::limits::check_memory(
+        format_args!("--width {width} × --height {height}: the frames"),
+        shvis::limits::image_bytes(u64::from(width), u64::from(height), bytes_per_pixel),
+        "lower --width or --height",
+    )?)
+}
+
 fn run_relight(a: RelightArgs) -> Result<()> {
+    check_frame_memory(a.width, a.height, 320)?;
     if !a.turns.is_finite() {
         bail!("--turns {} is not a finite number", a.turns);
     }
@@ -1694,6 +1706,7 @@ fn with_normal_filter(techniques: Vec<Technique>, filter: NormalFilterArg) -> Ve
 
 fn run_render(mut a: RenderArgs) -> Result<()> {
     frame_format(&a.out)?;
+    check_frame_memory(a.width, a.height, 48)?;
     shvis::files::check_writable_file(&a.out, "--out")?;
     a.technique = with_normal_filter(vec![a.technique], a.normal_filter)[0];
     let bounces = a.technique.needs().sh_lightmap.then_some(a.bounces);
@@ -1729,6 +1742,7 @@ fn run_render(mut a: RenderArgs) -> Result<()> {
 
 fn run_reference(a: ReferenceArgs) -> Result<()> {
     frame_format(&a.out)?;
+    check_frame_memory(a.width, a.height, 160)?;
     shvis::files::check_writable_file(&a.out, "--out")?;
     let min = shvis::prepare::min_vis_res(&a.scene);
     if !(min..=bake::MAX_RES).contains(&a.vis_res) {
@@ -1811,6 +1825,7 @@ where
 }
 
 fn run_probe(a: ProbeArgs) -> Result<()> {
+    check_frame_memory(a.width, a.height, 48)?;
     create_dir(&a.out)?;
     let ctx = open_gpu(&a.gpu)?;
     let probe = shvis::probe::run(
@@ -1831,6 +1846,7 @@ fn run_probe(a: ProbeArgs) -> Result<()> {
 }
 
 fn run_bench(a: BenchArgs) -> Result<()> {
+    check_frame_memory(a.width, a.height, 320)?;
     let mut settings = BenchSettings {
         techniques: with_normal_filter(parse_list(&a.techniques, Technique::ALL)?, a.normal_filter),
         paths: parse_list(&a.paths, HwPath::ALL)?,

@@ -784,6 +784,31 @@ fn budget_cases(suite: &mut Suite) {
                 .push(("SHVIS_MEMORY_LIMIT".into(), l.into()));
         }
     }
+    for (cmd, width, height, limit) in [
+        ("render", "16384", "16384", "4G"),
+        ("reference", "16384", "16384", "16G"),
+        ("bench", "16384", "8192", "16G"),
+        ("probe", "8192", "8192", "1G"),
+        ("relight", "16384", "16384", "16G"),
+    ] {
+        let mut args = vec![cmd, "--width", width, "--height", height];
+        let out = d.join(format!("frames-{cmd}.exr"));
+        let out_s = s(&out);
+        match cmd {
+            "render" => args.extend(["--technique", "preconv", "--out", &out_s]),
+            "reference" => args.extend(["--out", &out_s]),
+            _ => args.extend(["--out", &out_s]),
+        }
+        suite.add(
+            Kind::Budget,
+            &format!("{cmd} frames of {width}×{height}"),
+            &args,
+            Some(out),
+            error(1, &[&format!("--width {width} × --height {height}"), "needs"]),
+        );
+        // A stated budget, so that the case does not depend on the machine's memory.
+        suite.last().env.push(("SHVIS_MEMORY_LIMIT".into(), limit.into()));
+    }
     for (name, vis_res, order, limit) in [
         ("vis-res 8192 × order 28", "8192", "28", None),
         ("vis-res 8192 × order 6", "8192", "6", Some("16G")),
