@@ -120,7 +120,7 @@ struct NormalmapArgs {
     #[arg(long, default_value_t = 1024)]
     res: u32,
     /// Border-expansion passes (texels filled around each chart).
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=1024))]
     expand: u32,
     /// Search distance from the low surface, metres (default: 5 % of the low mesh's
     /// bounding-box diagonal).
@@ -257,7 +257,7 @@ struct StudyNormalmapArgs {
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
     repeats: u32,
     /// Map side of the triangle-count and strategy tables.
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(16..=8192))]
     res: u32,
     /// The real model (skipped with a note when the file is missing).
     #[arg(
@@ -269,13 +269,13 @@ struct StudyNormalmapArgs {
     #[arg(long, value_delimiter = ',', default_value = "0.05,0.02", value_parser = finite_f32)]
     ratios: Vec<f32>,
     /// Map side for the model.
-    #[arg(long, default_value_t = 1024)]
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(16..=8192))]
     model_res: u32,
     #[arg(long, default_value = "sky")]
     env: String,
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=8192))]
     vis_res: u32,
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
     rays: u32,
     #[arg(long, value_delimiter = ',', default_value = "dx9,dx10")]
     paths: Vec<HwPath>,
@@ -305,9 +305,9 @@ struct StudyRnmArgs {
         default_value = "sky:15,../shared/assets/env/potsdamer_platz_1k.exr"
     )]
     envs: Vec<String>,
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=8192))]
     vis_res: u32,
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=65536))]
     rays: u32,
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -589,7 +589,7 @@ struct BakeArgs {
     #[arg(long, value_enum, default_value_t = VisibilityBakerArg::Cpu)]
     baker: VisibilityBakerArg,
     /// `--baker gpu`: depth-map texels per side.
-    #[arg(long, default_value_t = shvis::bake::gpu_visibility::GpuVisibilitySettings::default().depth_res)]
+    #[arg(long, default_value_t = shvis::bake::gpu_visibility::GpuVisibilitySettings::default().depth_res, value_parser = clap::value_parser!(u32).range(16..=16384))]
     depth_res: u32,
     /// `--baker gpu`: constant depth bias, depth-map texels.
     #[arg(long, default_value_t = shvis::bake::gpu_visibility::GpuVisibilitySettings::default().bias_texels, value_parser = finite_f32)]
@@ -1470,6 +1470,12 @@ fn run_study_params(a: StudyParamsArgs) -> Result<()> {
         bail!(
             "--directions {} is out of range 1..=100000000",
             a.directions
+        );
+    }
+    if a.gpu_directions == 0 || a.gpu_directions > 100_000_000 {
+        bail!(
+            "--gpu-directions {} is out of range 1..=100000000",
+            a.gpu_directions
         );
     }
     create_dir(&a.out)?;

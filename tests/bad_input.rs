@@ -670,6 +670,36 @@ fn argument_cases(suite: &mut Suite) {
     for (flag, v) in [("--frames", "0"), ("--warmup", "10001"), ("--width", "0")] {
         table.push((vec!["probe", flag, v, "--out", &out], 2, vec![flag]));
     }
+    for (args, flag) in [
+        (vec!["study", "normalmap", "--rays", "0"], "--rays"),
+        (vec!["study", "normalmap", "--res", "9000"], "--res"),
+        (vec!["study", "rnm", "--vis-res", "9000"], "--vis-res"),
+        (
+            vec![
+                "normalmap",
+                "--high",
+                "sphere:1",
+                "--low",
+                "sphere:0",
+                "--expand",
+                "5000",
+            ],
+            "--expand",
+        ),
+        (
+            vec!["bake", "--baker", "gpu", "--depth-res", "8"],
+            "--depth-res",
+        ),
+    ] {
+        let mut args = args;
+        args.extend(["--out", &out]);
+        table.push((args, 2, vec![flag]));
+    }
+    table.push((
+        vec!["study", "params", "--gpu-directions", "0", "--out", &out],
+        1,
+        vec!["--gpu-directions 0", "1..=100000000"],
+    ));
     table.push((vec!["sh", "eval", "--order", "0"], 1, vec!["order"]));
     table.push((vec!["sh", "eval", "--order", "31"], 1, vec!["order"]));
     table.push((vec!["sh", "project", "--order", "31"], 1, vec!["order"]));
@@ -804,10 +834,16 @@ fn budget_cases(suite: &mut Suite) {
             &format!("{cmd} frames of {width}×{height}"),
             &args,
             Some(out),
-            error(1, &[&format!("--width {width} × --height {height}"), "needs"]),
+            error(
+                1,
+                &[&format!("--width {width} × --height {height}"), "needs"],
+            ),
         );
         // A stated budget, so that the case does not depend on the machine's memory.
-        suite.last().env.push(("SHVIS_MEMORY_LIMIT".into(), limit.into()));
+        suite
+            .last()
+            .env
+            .push(("SHVIS_MEMORY_LIMIT".into(), limit.into()));
     }
     for (name, vis_res, order, limit) in [
         ("vis-res 8192 × order 28", "8192", "28", None),
