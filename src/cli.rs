@@ -580,6 +580,10 @@ struct GpuArgs {
 struct BakeArgs {
     #[command(flatten)]
     scene: SceneArgs,
+    /// Bake nothing: check that --out holds a complete bake (its manifest.json lists every
+    /// file with the size and hash it has) and print its settings; exit 1 if not.
+    #[arg(long)]
+    check: bool,
     /// Also run the standalone cosine-sampled AO bake (`bake::ao`) and print its figures;
     /// the AO layer written is the visibility bake's, as the techniques use.
     #[arg(long)]
@@ -1554,6 +1558,16 @@ fn create_dir(dir: &Path) -> Result<()> {
 }
 
 fn run_bake(a: BakeArgs) -> Result<()> {
+    if a.check {
+        let manifest = shvis::files::Manifest::verify(&a.out).map_err(anyhow::Error::msg)?;
+        println!(
+            "{}: complete, {} files, settings {}",
+            a.out.display(),
+            manifest.files.len(),
+            manifest.settings
+        );
+        return Ok(());
+    }
     let settings = prepare_settings(&a.scene, "sky", None)?;
     let vis_res = bake::validate_res(a.scene.vis_res)?;
     let rays = bake::validate_rays(a.scene.rays)?;
