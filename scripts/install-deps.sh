@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Installs what shvis needs on Debian when it is missing: the Vulkan loader, Mesa's
 # lavapipe (CPU Vulkan), the Khronos validation layer, and shaderc + glslang static
-# libraries (linked by build.rs), and the DejaVu font for plot labels. As root it runs apt-get; otherwise it prints the exact
-# command and fails.
+# libraries (linked by build.rs), the DejaVu font for plot labels, and Chromium (the
+# headless browser test of the bench's index.html). As root it runs apt-get; otherwise it
+# prints the exact command and fails.
 set -euo pipefail
 
-packages=(libvulkan1 mesa-vulkan-drivers vulkan-validationlayers libshaderc-dev glslang-dev fonts-dejavu-core)
+packages=(libvulkan1 mesa-vulkan-drivers vulkan-validationlayers libshaderc-dev glslang-dev fonts-dejavu-core chromium)
 missing=()
 for p in "${packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
@@ -23,7 +24,7 @@ if [ ${#missing[@]} -eq 0 ]; then
 fi
 
 if ! command -v apt-get >/dev/null 2>&1; then
-  echo "error: missing packages (${missing[*]}) and no apt-get: install the Vulkan loader, Mesa lavapipe, the Khronos validation layer and shaderc/glslang static libraries by hand" >&2
+  echo "error: missing packages (${missing[*]}) and no apt-get: install the Vulkan loader, Mesa lavapipe, the Khronos validation layer, shaderc/glslang static libraries and Chromium by hand" >&2
   exit 1
 fi
 

@@ -263,6 +263,8 @@ pub fn run(
     lap.split(&mut table.phases.figures);
     table.seconds = started.elapsed().as_secs_f64();
     table.write(&settings.out)?;
+    let page = crate::report::html::write_index(&table, &settings.out)?;
+    log::info!("wrote {}", page.display());
     log::info!(
         "bench: {} rows in {:.1} s ({})",
         table.results.len(),

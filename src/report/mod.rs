@@ -2,6 +2,7 @@
 //! (`table.md`, `table.json`, DESIGN §4).
 
 pub mod figures;
+pub mod html;
 pub mod image;
 pub mod metrics;
 pub mod plot;
