@@ -70,6 +70,10 @@ enum Command {
     /// varyings, uniform reads, depth test) and the cost model fitted to them → probe.md,
     /// probe.json (`shvis bench` runs it first).
     Probe(ProbeArgs),
+    /// A window (issue 22): the scene with any technique × path switched by keys, an orbit
+    /// camera, the sun turned or animated with the dynamic-lighting machinery, an overlay
+    /// with GPU ms and frame rate. Needs a display (X11; `xvfb-run -a` without one).
+    View(ViewArgs),
     /// Dynamic lighting (§3.3): turn the environment about +Y over a run of frames, rebuild
     /// each technique's lighting data every K frames, and report rebuild and GPU times and
     /// the errors at sampled frames (static and lag).
@@ -779,6 +783,53 @@ struct BenchArgs {
 }
 
 #[derive(Args, Debug)]
+struct ViewArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    #[arg(long, default_value = "sky")]
+    env: String,
+    /// Comma-separated techniques Tab cycles through (`all`: the cost table's).
+    #[arg(long, default_value = "preconv,unc6,pca8,sh2,shlmap")]
+    techniques: String,
+    /// Hardware path shown first (P switches).
+    #[arg(long, default_value = "dx10")]
+    path: HwPath,
+    #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
+    exposure: f32,
+    /// Quit after this many frames (else when the window closes).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10_000_000))]
+    frames: Option<u32>,
+    /// Switch to the next technique at this frame.
+    #[arg(long)]
+    switch_at: Option<u32>,
+    /// Write the last frame, read back from the swapchain, as PNG (with --frames).
+    #[arg(long, requires = "frames")]
+    screenshot: Option<PathBuf>,
+    /// Rebuild the lighting data at most every this many frames while the sun moves.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    every: u32,
+    /// Start with the sun turning this many degrees per frame.
+    #[arg(long, allow_hyphen_values = true, value_parser = finite_f64)]
+    animate: Option<f64>,
+    /// No overlay.
+    #[arg(long)]
+    no_overlay: bool,
+}
+
+impl ViewArgs {
+    /// shlmap's bounces, when it is among the techniques.
+    fn scene_bounces(&self) -> u32 {
+        shvis::bake::shlmap::DEFAULT_BOUNCES
+    }
+}
+
+#[derive(Args, Debug)]
 struct RelightArgs {
     #[command(flatten)]
     scene: SceneArgs,
@@ -834,6 +885,62 @@ fn check_frame_memory(width: u32, height: u32, bytes_per_pixel: u64) -> Result<(
         shvis::limits::image_bytes(u64::from(width), u64::from(height), bytes_per_pixel),
         "lower --width or --height",
     )?)
+}
+
+fn run_view(a: ViewArgs) -> Result<()> {
+    check_frame_memory(a.width, a.height, 48)?;
+    if let Some(shot) = &a.screenshot {
+        frame_format(shot)?;
+        shvis::files::check_writable_file(shot, "--screenshot")?;
+    }
+    let techniques: Vec<Technique> = parse_list(&a.techniques, Technique::ALL)?;
+    let settings = prepare_settings(&a.scene, &a.env, Some(a.scene_bounces()))?;
+    let mut prepared = prepare(&settings)?;
+    prepared.prepare_techniques(&techniques)?;
+    let report = shvis::view::run(
+        &prepared,
+        &shvis::view::ViewSettings {
+            techniques,
+            path: a.path,
+            width: a.width,
+            height: a.height,
+            exposure: a.exposure,
+            frames: a.frames,
+            switch_at: a.switch_at,
+            screenshot: a.screenshot.clone(),
+            every: a.every,
+            animate: a.animate,
+            overlay: !a.no_overlay,
+            validate: a.gpu.validate,
+            device: a.gpu.device.clone(),
+        },
+    )?;
+    println!(
+        "view on {} ({} present): median frame {} ms, longest {} ms",
+        report.device,
+        report.present_mode,
+        report.median_frame_ms.map_or("—".into(), |m| format!("{m:.2}")),
+        report.longest_frame_ms.map_or("—".into(), |m| format!("{m:.2}")),
+    );
+    for (label, frames, wall, gpu) in &report.shown {
+        println!(
+            "  {label}: {frames} frames, {:.2} ms a frame ({:.1} frames/s), GPU {}",
+            wall,
+            1e3 / wall,
+            gpu.map_or("—".into(), |g| format!("{g:.2} ms"))
+        );
+    }
+    println!(
+        "  lighting rebuilds swapped in: {} (CPU build median {}), longest frame that swapped one in {} ms",
+        report.rebuilds,
+        report.rebuild_cpu_ms.map_or("—".into(), |m| format!("{m:.1} ms")),
+        report.longest_swap_frame_ms.map_or("—".into(), |m| format!("{m:.2}"))
+    );
+    let (errors, warnings) = report.validation;
+    if a.gpu.validate && (errors > 0 || warnings > 0) {
+        bail!("validation reported {errors} errors and {warnings} warnings (see the log above)");
+    }
+    Ok(())
 }
 
 fn run_relight(a: RelightArgs) -> Result<()> {
@@ -895,6 +1002,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Bench(a) => run_bench(a).context("bench"),
         Command::Probe(a) => run_probe(a).context("probe"),
         Command::Relight(a) => run_relight(a).context("relight"),
+        Command::View(a) => run_view(a).context("view"),
         Command::Sh(c) => run_sh(c).context("sh"),
         Command::Study(StudyCommand::Params(a)) => run_study_params(a).context("study params"),
         Command::Study(StudyCommand::Compression(a)) => {
@@ -1547,6 +1655,7 @@ fn open_gpu(gpu: &GpuArgs) -> Result<Arc<Context>> {
     let ctx = Context::new(&ContextDesc {
         validate: gpu.validate,
         device: gpu.device.clone(),
+        ..ContextDesc::default()
     })?;
     log::info!("device: {}", ctx.device_name());
     Ok(ctx)

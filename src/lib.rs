@@ -29,3 +29,4 @@ pub mod sphere;
 pub mod study;
 pub mod technique;
 pub mod tools;
+pub mod view;

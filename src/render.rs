@@ -229,6 +229,14 @@ impl SceneGpu {
         self.frame.write(bytemuck::bytes_of(&params))
     }
 
+    /// Renders from `camera` from now on (`shvis view`'s orbit).
+    pub fn set_camera(&mut self, camera: &crate::scene::Camera) -> Result<(), GpuError> {
+        let aspect = self.target.width() as f32 / self.target.height() as f32;
+        self.frame_params.clip_from_world = camera.clip_from_world(aspect).to_cols_array_2d();
+        self.frame_params.camera_position = camera.position.extend(1.0).to_array();
+        self.frame.write(bytemuck::bytes_of(&self.frame_params))
+    }
+
     pub fn target(&self) -> &RenderTarget {
         &self.target
     }

@@ -25,12 +25,15 @@ pub struct ContextDesc {
     pub validate: bool,
     /// Pick the first device whose name contains this (case-insensitive).
     pub device: Option<String>,
+    /// Instance extensions a window surface needs (`gpu::swapchain::surface_extensions`);
+    /// when there are any, the device must also have VK_KHR_swapchain (`shvis view`).
+    pub surface_extensions: Vec<&'static CStr>,
 }
 
 /// Everything Vulkan that lives as long as the program: see the module doc.
 pub struct Context {
     // Field order is irrelevant: `Drop` tears down explicitly in reverse creation order.
-    _entry: ash::Entry,
+    entry: ash::Entry,
     instance: ash::Instance,
     debug_instance: Option<ash::ext::debug_utils::Instance>,
     messenger: vk::DebugUtilsMessengerEXT,
@@ -88,11 +91,26 @@ impl Context {
         } else {
             vec![]
         };
-        let ext_names: Vec<*const c_char> = if has_debug_utils {
+        let mut ext_names: Vec<*const c_char> = if has_debug_utils {
             vec![ash::ext::debug_utils::NAME.as_ptr()]
         } else {
             vec![]
         };
+        for wanted in &desc.surface_extensions {
+            let present = extensions
+                .iter()
+                .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == *wanted));
+            if !present {
+                return Err(GpuError::MissingFeature {
+                    device: "the Vulkan loader".into(),
+                    feature: format!(
+                        "{} (needed to open a window)",
+                        wanted.to_string_lossy()
+                    ),
+                });
+            }
+            ext_names.push(wanted.as_ptr());
+        }
         let messages = std::sync::Arc::<MessageCounts>::default();
         let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
             .message_severity(
@@ -192,11 +210,24 @@ impl Context {
             e.extension_name_as_c_str()
                 .is_ok_and(|n| n == ash::khr::maintenance4::NAME)
         });
-        let device_ext_names: Vec<*const c_char> = if has_maintenance4 {
+        let mut device_ext_names: Vec<*const c_char> = if has_maintenance4 {
             vec![ash::khr::maintenance4::NAME.as_ptr()]
         } else {
             vec![]
         };
+        if !desc.surface_extensions.is_empty() {
+            let has_swapchain = device_extensions.iter().any(|e| {
+                e.extension_name_as_c_str()
+                    .is_ok_and(|n| n == ash::khr::swapchain::NAME)
+            });
+            if !has_swapchain {
+                return Err(GpuError::MissingFeature {
+                    device: device_name.clone(),
+                    feature: "VK_KHR_swapchain (needed to present to a window)".into(),
+                });
+            }
+            device_ext_names.push(ash::khr::swapchain::NAME.as_ptr());
+        }
         let mut maintenance4 = vk::PhysicalDeviceMaintenance4Features::default().maintenance4(true);
         let mut device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
@@ -269,7 +300,7 @@ impl Context {
             }
         };
         let ctx = Context {
-            _entry: entry,
+            entry,
             instance,
             debug_instance,
             messenger,
@@ -295,6 +326,11 @@ impl Context {
     pub fn device(&self) -> &ash::Device {
         &self.device
     }
+    /// The loaded Vulkan entry points (surface creation needs them).
+    pub fn entry(&self) -> &ash::Entry {
+        &self.entry
+    }
+
     pub fn instance(&self) -> &ash::Instance {
         &self.instance
     }

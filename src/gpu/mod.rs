@@ -20,6 +20,7 @@ pub mod pass;
 mod pass_objects;
 pub mod shader;
 pub mod spirv_counts;
+pub mod swapchain;
 pub mod target;
 pub mod upload;
 pub mod visibility_sim;

@@ -48,6 +48,7 @@ pub fn validated_context() -> Arc<Context> {
     Context::new(&ContextDesc {
         validate: true,
         device: None,
+        ..ContextDesc::default()
     })
     .expect("a Vulkan device with the validation layer (lavapipe in CI)")
 }
