@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # Installs what shvis needs on Debian when it is missing: the Vulkan loader, Mesa's
 # lavapipe (CPU Vulkan), the Khronos validation layer, and shaderc + glslang static
-# libraries (linked by build.rs), the DejaVu font for plot labels, and Chromium (the
-# headless browser test of the bench's index.html). As root it runs apt-get; otherwise it
+# libraries (linked by build.rs), the DejaVu font for plot labels, Chromium (the headless
+# browser test of the bench's index.html) and Xvfb (the `shvis view` test's display). As root it runs apt-get; otherwise it
 # prints the exact command and fails.
 set -euo pipefail
 
-packages=(libvulkan1 mesa-vulkan-drivers vulkan-validationlayers libshaderc-dev glslang-dev fonts-dejavu-core chromium)
+packages=(libvulkan1 mesa-vulkan-drivers vulkan-validationlayers libshaderc-dev glslang-dev fonts-dejavu-core chromium xvfb xauth)
 missing=()
 for p in "${packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then

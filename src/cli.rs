@@ -822,13 +822,6 @@ struct ViewArgs {
     no_overlay: bool,
 }
 
-impl ViewArgs {
-    /// shlmap's bounces, when it is among the techniques.
-    fn scene_bounces(&self) -> u32 {
-        shvis::bake::shlmap::DEFAULT_BOUNCES
-    }
-}
-
 #[derive(Args, Debug)]
 struct RelightArgs {
     #[command(flatten)]
@@ -894,7 +887,11 @@ fn run_view(a: ViewArgs) -> Result<()> {
         shvis::files::check_writable_file(shot, "--screenshot")?;
     }
     let techniques: Vec<Technique> = parse_list(&a.techniques, Technique::ALL)?;
-    let settings = prepare_settings(&a.scene, &a.env, Some(a.scene_bounces()))?;
+    let bounces = techniques
+        .iter()
+        .any(|t| t.needs().sh_lightmap)
+        .then_some(shvis::bake::shlmap::DEFAULT_BOUNCES);
+    let settings = prepare_settings(&a.scene, &a.env, bounces)?;
     let mut prepared = prepare(&settings)?;
     prepared.prepare_techniques(&techniques)?;
     let report = shvis::view::run(
@@ -919,8 +916,12 @@ fn run_view(a: ViewArgs) -> Result<()> {
         "view on {} ({} present): median frame {} ms, longest {} ms",
         report.device,
         report.present_mode,
-        report.median_frame_ms.map_or("—".into(), |m| format!("{m:.2}")),
-        report.longest_frame_ms.map_or("—".into(), |m| format!("{m:.2}")),
+        report
+            .median_frame_ms
+            .map_or("—".into(), |m| format!("{m:.2}")),
+        report
+            .longest_frame_ms
+            .map_or("—".into(), |m| format!("{m:.2}")),
     );
     for (label, frames, wall, gpu) in &report.shown {
         println!(
@@ -933,8 +934,12 @@ fn run_view(a: ViewArgs) -> Result<()> {
     println!(
         "  lighting rebuilds swapped in: {} (CPU build median {}), longest frame that swapped one in {} ms",
         report.rebuilds,
-        report.rebuild_cpu_ms.map_or("—".into(), |m| format!("{m:.1} ms")),
-        report.longest_swap_frame_ms.map_or("—".into(), |m| format!("{m:.2}"))
+        report
+            .rebuild_cpu_ms
+            .map_or("—".into(), |m| format!("{m:.1} ms")),
+        report
+            .longest_swap_frame_ms
+            .map_or("—".into(), |m| format!("{m:.2}"))
     );
     let (errors, warnings) = report.validation;
     if a.gpu.validate && (errors > 0 || warnings > 0) {

@@ -144,7 +144,10 @@ struct App<'a> {
 }
 
 /// A lighting rebuild on the worker: the sun step it builds and its result with CPU ms.
-type Building = (u32, std::thread::JoinHandle<Result<(LightingData, f64), String>>);
+type Building = (
+    u32,
+    std::thread::JoinHandle<Result<(LightingData, f64), String>>,
+);
 
 struct State {
     // Drop order: the technique and scene before the presenter, the presenter before the
@@ -226,15 +229,23 @@ impl App<'_> {
             },
         )?;
         let n = self.prepared.radiance_sh.len();
-        let order = Order::new((n as f64).sqrt() as u32)
-            .map_err(|e| ViewError::Other(e.to_string()))?;
+        let order =
+            Order::new((n as f64).sqrt() as u32).map_err(|e| ViewError::Other(e.to_string()))?;
         let schedule = Arc::new(LightingSchedule::rotating(
             order,
             self.prepared.radiance_sh.clone(),
             1.0,
             SUN_STEPS_PER_TURN,
         ));
-        let (tech, recipe) = build(&ctx, &scene, self.prepared, &schedule, s.techniques[0], s.path, 0)?;
+        let (tech, recipe) = build(
+            &ctx,
+            &scene,
+            self.prepared,
+            &schedule,
+            s.techniques[0],
+            s.path,
+            0,
+        )?;
         let camera = self.prepared.scene.camera;
         self.report.device = ctx.device_name().to_string();
         self.report.present_mode = format!("{:?}", presenter.present_mode());
@@ -334,8 +345,16 @@ impl App<'_> {
                 format!(
                     "sun {:.0}°{}{}",
                     f64::from(st.sun_built) / 10.0,
-                    if st.animate.is_some() { "  (animating)" } else { "" },
-                    if st.recipe.is_none() { "  (lighting baked in)" } else { "" }
+                    if st.animate.is_some() {
+                        "  (animating)"
+                    } else {
+                        ""
+                    },
+                    if st.recipe.is_none() {
+                        "  (lighting baked in)"
+                    } else {
+                        ""
+                    }
                 ),
                 "Tab technique · P path · ←/→ sun · Space animate · drag orbit".to_string(),
             ];
@@ -346,8 +365,9 @@ impl App<'_> {
             .presenter
             .present(&rgb, last_frame && s.screenshot.is_some())?;
         if let (Some(pixels), Some(path)) = (shot, &s.screenshot) {
-            let png = crate::report::image::encode_png(&pixels, w, h, image::ExtendedColorType::Rgb8)
-                .map_err(|e| ViewError::Other(format!("{}: {e}", path.display())))?;
+            let png =
+                crate::report::image::encode_png(&pixels, w, h, image::ExtendedColorType::Rgb8)
+                    .map_err(|e| ViewError::Other(format!("{}: {e}", path.display())))?;
             crate::report::image::write_file(path, &png)?;
             log::info!("wrote {}", path.display());
         }
@@ -366,7 +386,11 @@ impl App<'_> {
             st.gpu_since_switch.push(g);
         }
         st.fps = 1e3 / ms.max(1e-3);
-        st.window.set_title(&format!("shvis view — {} — {:.1} fps", st.tech.label(), st.fps));
+        st.window.set_title(&format!(
+            "shvis view — {} — {:.1} fps",
+            st.tech.label(),
+            st.fps
+        ));
         st.frame += 1;
         if last_frame {
             event_loop.exit();
@@ -399,7 +423,14 @@ impl App<'_> {
                     HwPath::Dx9 => HwPath::Dx10,
                     HwPath::Dx10 => HwPath::Dx9,
                 };
-                switch(st, self.prepared, &mut self.report, s, st.technique_index, path)?;
+                switch(
+                    st,
+                    self.prepared,
+                    &mut self.report,
+                    s,
+                    st.technique_index,
+                    path,
+                )?;
             }
             (Key::Named(NamedKey::ArrowLeft), _) => st.sun = (st.sun - 150.0).rem_euclid(3600.0),
             (Key::Named(NamedKey::ArrowRight), _) => st.sun = (st.sun + 150.0).rem_euclid(3600.0),
@@ -444,7 +475,10 @@ fn build(
         let (tech, recipe) = technique::build_dynamic(ctx, scene, technique, path, &inputs)?;
         Ok((tech, Some(Arc::new(recipe))))
     } else {
-        Ok((technique::build(ctx, scene, technique, path, &inputs)?, None))
+        Ok((
+            technique::build(ctx, scene, technique, path, &inputs)?,
+            None,
+        ))
     }
 }
 
@@ -526,8 +560,12 @@ fn draw_overlay(rgb: &mut [u8], width: u32, height: u32, lines: &[String]) -> Re
     .map_err(|e| e.to_string())?;
     let font = ("sans-serif", 15).into_font().color(&WHITE);
     for (i, line) in lines.iter().enumerate() {
-        root.draw(&Text::new(line.as_str(), (8, 6 + 22 * i as i32), font.clone()))
-            .map_err(|e| e.to_string())?;
+        root.draw(&Text::new(
+            line.as_str(),
+            (8, 6 + 22 * i as i32),
+            font.clone(),
+        ))
+        .map_err(|e| e.to_string())?;
     }
     root.present().map_err(|e| e.to_string())
 }
@@ -614,7 +652,8 @@ impl ApplicationHandler for App<'_> {
             self.report.median_frame_ms = stats.map(|t| t.ms_median);
             self.report.longest_frame_ms = stats.map(|t| t.ms_max);
             self.report.rebuilds = st.rebuild_cpu_ms.len();
-            self.report.rebuild_cpu_ms = TimingStats::from_ms(&st.rebuild_cpu_ms).map(|t| t.ms_median);
+            self.report.rebuild_cpu_ms =
+                TimingStats::from_ms(&st.rebuild_cpu_ms).map(|t| t.ms_median);
             self.report.longest_swap_frame_ms = st.swap_frames_ms.iter().copied().reduce(f64::max);
             self.report.validation = st.ctx.message_counts();
             drop(st);

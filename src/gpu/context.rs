@@ -103,10 +103,7 @@ impl Context {
             if !present {
                 return Err(GpuError::MissingFeature {
                     device: "the Vulkan loader".into(),
-                    feature: format!(
-                        "{} (needed to open a window)",
-                        wanted.to_string_lossy()
-                    ),
+                    feature: format!("{} (needed to open a window)", wanted.to_string_lossy()),
                 });
             }
             ext_names.push(wanted.as_ptr());

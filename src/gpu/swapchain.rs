@@ -30,7 +30,10 @@ pub fn surface_extensions(display: RawDisplayHandle) -> Result<Vec<&'static CStr
         }
     })?;
     // SAFETY: ash-window returns pointers to the static extension-name constants of ash.
-    Ok(names.iter().map(|&p| unsafe { CStr::from_ptr(p) }).collect())
+    Ok(names
+        .iter()
+        .map(|&p| unsafe { CStr::from_ptr(p) })
+        .collect())
 }
 
 /// The surface, its swapchain and the buffers a present goes through.
@@ -381,7 +384,13 @@ impl Presenter {
             (Some(b), true) => Some(
                 b.read()?
                     .chunks_exact(4)
-                    .flat_map(|p| if bgra { [p[2], p[1], p[0]] } else { [p[0], p[1], p[2]] })
+                    .flat_map(|p| {
+                        if bgra {
+                            [p[2], p[1], p[0]]
+                        } else {
+                            [p[0], p[1], p[2]]
+                        }
+                    })
                     .collect(),
             ),
             _ => None,
