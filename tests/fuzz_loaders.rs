@@ -6,7 +6,11 @@
 //! whose values a bake can produce). The glTF loader has its own (`tests/scene_gltf.rs`,
 //! `mutated_files_never_panic`); `fuzz/` keeps cargo-fuzz targets for nightly users.
 
+mod common;
+
 use std::panic::{AssertUnwindSafe, catch_unwind};
+
+use common::Rng;
 
 use shvis::bake::BakeStats;
 use shvis::bake::cache::{HEADER_BYTES, decode_visibility, encode_visibility, hash64};
@@ -14,20 +18,6 @@ use shvis::bake::visibility::VisibilityMap;
 use shvis::env::EnvMap;
 use shvis::env::equirect::{MAX_ENV_RADIANCE, load_from_slice};
 use shvis::sh::Order;
-
-/// xorshift64*: the same cases every run.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
 
 /// One mutation of `seed`: bit flips, a truncation, a byte run overwritten with an edge
 /// value (0x00, 0x7f, 0x80, 0xff), or a chunk duplicated.

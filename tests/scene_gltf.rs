@@ -860,19 +860,7 @@ fn mirror_test_keeps_given_tangent_signs() {
 
 // ---- Fuzz stand-in --------------------------------------------------------------------
 
-/// xorshift64*: deterministic mutations without a dependency.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
+use common::Rng;
 
 /// A valid scene with every feature the loader reads, including an embedded PNG.
 fn fuzz_seed() -> Gltf {

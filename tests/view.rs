@@ -22,6 +22,23 @@ fn xvfb_run() -> PathBuf {
         })
 }
 
+/// `shvis view ARGS` under Xvfb, with the shared bake cache and warnings only.
+fn run_view(args: &[&str], cache: &str) -> std::process::Output {
+    Command::new(xvfb_run())
+        .args([
+            "-a",
+            "-s",
+            "-screen 0 1024x768x24",
+            env!("CARGO_BIN_EXE_shvis"),
+            "view",
+        ])
+        .args(args)
+        .env("SHVIS_CACHE_DIR", cache)
+        .env("RUST_LOG", "warn")
+        .output()
+        .expect("xvfb-run runs")
+}
+
 fn rgb(path: &Path) -> image::RgbImage {
     image::open(path)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -48,23 +65,21 @@ fn viewer_presents_switches_and_matches_render() {
     ]
     .map(String::from);
     let shot = root.join("view.png");
-    let view = Command::new(xvfb_run())
-        .args([
-            "-a",
-            "-s",
-            "-screen 0 1024x768x24",
-            env!("CARGO_BIN_EXE_shvis"),
-            "view",
-        ])
-        .args(["--techniques", "preconv,unc6", "--path", "dx10"])
-        .args(["--frames", "12", "--switch-at", "4"])
-        .args(&common)
-        .arg("--screenshot")
-        .arg(&shot)
-        .env("SHVIS_CACHE_DIR", cache)
-        .env("RUST_LOG", "warn")
-        .output()
-        .expect("xvfb-run runs");
+    let shot_arg = shot.display().to_string();
+    let mut args = vec![
+        "--techniques",
+        "preconv,unc6",
+        "--path",
+        "dx10",
+        "--frames",
+        "12",
+        "--switch-at",
+        "4",
+        "--screenshot",
+        &shot_arg,
+    ];
+    args.extend(common.iter().map(String::as_str));
+    let view = run_view(&args, cache);
     let stdout = String::from_utf8_lossy(&view.stdout);
     let stderr = String::from_utf8_lossy(&view.stderr);
     assert!(view.status.success(), "view failed:\n{stdout}\n{stderr}");
@@ -119,17 +134,19 @@ fn viewer_presents_switches_and_matches_render() {
     );
 
     // The sun animating: lighting rebuilt on the worker and swapped in, validation clean.
-    let spin = Command::new(xvfb_run())
-        .args([
-            "-a",
-            "-s",
-            "-screen 0 1024x768x24",
-            env!("CARGO_BIN_EXE_shvis"),
-            "view",
-        ])
-        .args(["--techniques", "unc6", "--path", "dx9", "--frames", "60"])
-        .args(["--animate", "3", "--every", "2", "--no-overlay"])
-        .args([
+    let spin = run_view(
+        &[
+            "--techniques",
+            "unc6",
+            "--path",
+            "dx9",
+            "--frames",
+            "60",
+            "--animate",
+            "3",
+            "--every",
+            "2",
+            "--no-overlay",
             "--vis-res",
             "64",
             "--rays",
@@ -139,11 +156,9 @@ fn viewer_presents_switches_and_matches_render() {
             "--height",
             "100",
             "--validate",
-        ])
-        .env("SHVIS_CACHE_DIR", cache)
-        .env("RUST_LOG", "warn")
-        .output()
-        .expect("xvfb-run runs");
+        ],
+        cache,
+    );
     let stdout = String::from_utf8_lossy(&spin.stdout);
     assert!(
         spin.status.success(),

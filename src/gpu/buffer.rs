@@ -129,3 +129,31 @@ impl Drop for Buffer {
         }
     }
 }
+
+/// Records the barrier that makes transfer writes into `buffer` visible to host reads (after
+/// a copy into a readback buffer, before `Buffer::read`).
+pub(crate) fn record_transfer_to_host(
+    device: &ash::Device,
+    cmd: vk::CommandBuffer,
+    buffer: vk::Buffer,
+) {
+    let to_host = vk::BufferMemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(vk::AccessFlags::HOST_READ)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .buffer(buffer)
+        .size(vk::WHOLE_SIZE);
+    // SAFETY: recording a barrier into a command buffer in the recording state.
+    unsafe {
+        device.cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::HOST,
+            vk::DependencyFlags::empty(),
+            &[],
+            &[to_host],
+            &[],
+        );
+    }
+}

@@ -347,22 +347,7 @@ impl Presenter {
                     );
                     layout = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
                     device.cmd_copy_image_to_buffer(cmd, image, layout, buffer, &[region]);
-                    let to_host = vk::BufferMemoryBarrier::default()
-                        .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-                        .dst_access_mask(vk::AccessFlags::HOST_READ)
-                        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                        .buffer(buffer)
-                        .size(vk::WHOLE_SIZE);
-                    device.cmd_pipeline_barrier(
-                        cmd,
-                        vk::PipelineStageFlags::TRANSFER,
-                        vk::PipelineStageFlags::HOST,
-                        vk::DependencyFlags::empty(),
-                        &[],
-                        &[to_host],
-                        &[],
-                    );
+                    super::buffer::record_transfer_to_host(device, cmd, buffer);
                 }
                 device.cmd_pipeline_barrier(
                     cmd,

@@ -236,26 +236,8 @@ impl RenderTarget {
         )?;
         let device = self.ctx.device();
         self.ctx.one_shot("readback target.color", |cmd| {
-            let to_host = vk::BufferMemoryBarrier::default()
-                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-                .dst_access_mask(vk::AccessFlags::HOST_READ)
-                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .buffer(buffer.raw())
-                .size(vk::WHOLE_SIZE);
             self.record_copy_to_buffer(cmd, &buffer, 0);
-            // SAFETY: recording a barrier; one_shot waits for completion.
-            unsafe {
-                device.cmd_pipeline_barrier(
-                    cmd,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::PipelineStageFlags::HOST,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[to_host],
-                    &[],
-                );
-            }
+            super::buffer::record_transfer_to_host(device, cmd, buffer.raw());
         })?;
         let bytes = buffer.read()?;
         if self.format == COLOR_FORMAT_F32 {

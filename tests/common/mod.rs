@@ -142,3 +142,20 @@ pub const NO_UV: [[f32; 2]; 4] = [[0.0; 2]; 4];
 pub fn solid_texture(texel: [u8; 4]) -> Texture8 {
     Texture8::solid(texel)
 }
+
+/// xorshift64*: deterministic mutations (the stable fuzz stand-ins) without a dependency.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+
+    /// Uniform in 0..n (n = 0 counts as 1).
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+}
