@@ -17,7 +17,8 @@
 //!
 //! Keys: Tab / N next technique, B previous, P switch dx9 ↔ dx10, ← / → turn
 //! the sun by 15°, Space start/stop the sun's animation, R reset camera and sun, Esc / Q
-//! quit. Drag with the left button to orbit the camera, wheel to move closer.
+//! quit. Drag with the left button to orbit the camera, with the right one to turn the sun;
+//! wheel to move closer.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -167,6 +168,8 @@ struct State {
     pitch: f32,
     distance_scale: f32,
     dragging: Option<(f64, f64)>,
+    /// Right-button drag: the cursor x where it last turned the sun.
+    sun_drag: Option<f64>,
     cursor: (f64, f64),
     /// The sun angle wanted (schedule steps) and the one the front lighting set holds.
     sun: f64,
@@ -265,6 +268,7 @@ impl App<'_> {
             pitch: 0.0,
             distance_scale: 1.0,
             dragging: None,
+            sun_drag: None,
             cursor: (0.0, 0.0),
             sun: 0.0,
             sun_built: 0,
@@ -604,9 +608,25 @@ impl ApplicationHandler for App<'_> {
                 }
                 Ok(())
             }
+            WindowEvent::MouseInput {
+                state,
+                button: MouseButton::Right,
+                ..
+            } => {
+                if let Some(st) = self.state.as_mut() {
+                    st.sun_drag = (state == ElementState::Pressed).then_some(st.cursor.0);
+                }
+                Ok(())
+            }
             WindowEvent::CursorMoved { position, .. } => match self.state.as_mut() {
                 Some(st) => {
                     st.cursor = (position.x, position.y);
+                    if let Some(x0) = st.sun_drag {
+                        // Half a degree per pixel dragged.
+                        st.sun = (st.sun + (position.x - x0) * 5.0)
+                            .rem_euclid(f64::from(SUN_STEPS_PER_TURN));
+                        st.sun_drag = Some(position.x);
+                    }
                     if let Some((x0, y0)) = st.dragging {
                         st.yaw -= ((position.x - x0) * 0.01) as f32;
                         st.pitch = (st.pitch - ((position.y - y0) * 0.01) as f32).clamp(-1.2, 1.2);
