@@ -10,6 +10,8 @@
 //! - [`gpu_visibility`]: the same bake by depth maps on the GPU (PRT course's simulator).
 //! - [`surface`]: attributes of ray hit points (oriented normal, albedo, lightmap texel).
 //! - [`shlmap`]: order-3 SH of incident radiance with inter-reflection, the `shlmap` data.
+//! - [`transfer`]: per-texel transfer matrices M (lighting → order-3 transferred incident
+//!   radiance, inter-reflection included) of normal mapping for PRT (issue 23).
 //! - [`cache`]: versioned, checksummed bake cache files, and EXR dumps for inspection.
 //!
 //! Inputs a user controls (ray counts, resolutions) are validated here once, by
@@ -27,6 +29,7 @@ pub mod shlmap;
 pub mod ssbump;
 pub mod surface;
 pub mod trace;
+pub mod transfer;
 pub mod vertex_pca;
 pub mod visibility;
 

@@ -1,0 +1,276 @@
+//! Transfer matrices of normal mapping for PRT (Sloan, PRT course, "Normal Mapping for
+//! PRT"; issue 23, Build 1): per lightmap texel a matrix M that maps distant SH lighting l
+//! (order O, N = O² coefficients) to the order-3 SH of *transferred incident radiance* at
+//! the texel — shadows and inter-reflection baked in, the lighting left free:
+//!
+//! ```text
+//! e(n) = y(n)ᵀ C R M l        (course: C the clamped-cosine convolution, R the rotation
+//!                              to tangent space; M here is in world space, R = I)
+//! ```
+//!
+//! With the bake's shared direction set {ω_r} (weights w = 4π/R) and the SH lightmap's
+//! notation (`super::shlmap`, eqs. (1)–(2)), per colour channel c:
+//!
+//! ```text
+//! M⁰_c[i][j](x) = Σ_{r: n_g·ω_r > 0, escapes} w · y_i(ω_r) · y_j(ω_r)                 (1)
+//! e^k_c[j](x)   = Σ_{i<9} A_{l(i)} · y_i(n_g(x)) · M^k_c[i][j](x)                      (2)
+//! M^{k+1}_c[i][j](x) = M⁰[i][j](x)
+//!                 + Σ_{r: hits the front of x'} w · y_i(ω_r) · ρ_c(x')/π · e^k_c[j](x') (3)
+//! ```
+//!
+//! (2) is the irradiance of a unit lighting coefficient j at x; (3) re-traces the same
+//! rays with it, read at the hit texel (dilated into the gutters, as the SH lightmap
+//! does). M⁰ is the same for the three channels; the albedo makes the bounces coloured.
+//! Because every step is linear in l, M·l equals the SH lightmap's coefficients for the
+//! lighting l truncated to order O — except where the SH lightmap clamps a negative
+//! bounce irradiance to 0, which a linear operator cannot do (smooth skies never reach
+//! it; `tests/transfer.rs` holds the two equal).
+//!
+//! Storage: per texel, per channel, 9 rows of N f32 (texel-major), accumulated in f64 per
+//! texel, summed in a fixed ray order (bit-identical for any thread count), dilated like
+//! every other lightmap bake.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::directions::{DirectionSet, above_horizon};
+use super::raster::{DilationPlan, LightmapTexels};
+use super::surface::SurfaceReader;
+use super::trace::Tracer;
+use super::visibility::DILATION_PASSES;
+use super::{BakeStats, progress_bar};
+use crate::scene::Scene;
+use crate::sh::{Order, basis::eval_basis, zonal};
+
+/// Rows of M: the order-3 SH of transferred incident radiance.
+pub const TRANSFER_ROWS: usize = 9;
+
+/// What a transfer bake does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TransferSettings {
+    /// Order O of the lighting M takes (N = O² columns).
+    pub lighting_order: Order,
+    pub rays: u32,
+    pub seed: u64,
+    /// Reflections of light before it reaches a texel (0: shadowed direct light only).
+    pub bounces: u32,
+    pub progress: bool,
+}
+
+/// Per texel the three channels' 9 × N transfer matrices.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TransferMap {
+    pub res: u32,
+    pub lighting_order: Order,
+    pub bounces: u32,
+    /// Texel-major: texel t, channel c, row i, column j at
+    /// `((t·3 + c)·9 + i)·N + j`.
+    pub matrices: Vec<f32>,
+    pub covered: Vec<bool>,
+    pub stats: BakeStats,
+}
+
+impl TransferMap {
+    /// N = O², the columns of each matrix.
+    pub fn columns(&self) -> usize {
+        self.lighting_order.coeff_count()
+    }
+
+    /// The 3 × 9 × N floats of texel `index`.
+    pub fn texel(&self, index: usize) -> &[f32] {
+        let size = 3 * TRANSFER_ROWS * self.columns();
+        &self.matrices[index * size..(index + 1) * size]
+    }
+
+    /// l' = M l at texel `index`: the 9 RGB coefficients of transferred incident radiance
+    /// for lighting `l` (RGB SH with at least N coefficients), in f64.
+    pub fn transferred(&self, index: usize, l: &[[f64; 3]]) -> [[f64; 3]; TRANSFER_ROWS] {
+        let n = self.columns();
+        let m = self.texel(index);
+        let mut out = [[0.0; 3]; TRANSFER_ROWS];
+        for (i, row) in out.iter_mut().enumerate() {
+            for (c, value) in row.iter_mut().enumerate() {
+                let base = (c * TRANSFER_ROWS + i) * n;
+                *value = (0..n).map(|j| f64::from(m[base + j]) * l[j][c]).sum();
+            }
+        }
+        out
+    }
+}
+
+/// Bakes the transfer matrices of `scene` over `texels` (module doc).
+pub fn bake_transfer(
+    scene: &Scene,
+    tracer: &Tracer,
+    texels: &LightmapTexels,
+    settings: &TransferSettings,
+) -> TransferMap {
+    let start = Instant::now();
+    let res = texels.res as usize;
+    let n = settings.lighting_order.coeff_count();
+    let per_channel = TRANSFER_ROWS * n;
+    let per_texel = 3 * per_channel;
+    let dirs = DirectionSet::new(settings.rays, settings.seed);
+    let weight = dirs.weight();
+    // Per direction: the 9 rows' basis values, then the N columns'.
+    let basis: Vec<(Vec<f64>, Vec<f64>)> = dirs
+        .dirs()
+        .iter()
+        .map(|d| {
+            let d = d.as_dvec3().normalize();
+            let mut rows = vec![0.0; TRANSFER_ROWS];
+            eval_basis(Order::THREE, d, &mut rows);
+            let mut cols = vec![0.0; n];
+            eval_basis(settings.lighting_order, d, &mut cols);
+            (rows, cols)
+        })
+        .collect();
+    let surfaces = SurfaceReader::new(scene);
+    let covered: Vec<u32> = (0..res * res)
+        .filter(|&i| texels.covered[i])
+        .map(|i| i as u32)
+        .collect();
+    let rays_done = AtomicU64::new(0);
+
+    // Eq. (1): the unbounced matrix, one for the three channels.
+    let bar = progress_bar(settings.progress, covered.len(), "transfer direct");
+    let direct: Vec<Vec<f64>> = covered
+        .par_iter()
+        .with_min_len(16)
+        .map(|&i| {
+            let i = i as usize;
+            let normal = texels.normal[i];
+            let origin = tracer.offset_origin(texels.position[i], normal);
+            let mut m = vec![0.0f64; per_channel];
+            let mut rays = 0u64;
+            for (r, &d) in dirs.dirs().iter().enumerate() {
+                if !above_horizon(normal, d) {
+                    continue;
+                }
+                rays += 1;
+                if !tracer.occluded(origin, d, f32::INFINITY) {
+                    let (rows, cols) = &basis[r];
+                    for (row, &yi) in rows.iter().enumerate() {
+                        for (mij, &yj) in m[row * n..(row + 1) * n].iter_mut().zip(cols) {
+                            *mij += yi * yj;
+                        }
+                    }
+                }
+            }
+            m.iter_mut().for_each(|v| *v *= weight);
+            rays_done.fetch_add(rays, Ordering::Relaxed);
+            bar.inc(1);
+            m
+        })
+        .collect();
+    bar.finish_and_clear();
+
+    let expand = |m: &[f64]| -> Vec<f64> { [m, m, m].concat() };
+    let mut current: Vec<Vec<f64>> = direct.iter().map(|m| expand(m)).collect();
+    let dilation = DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES);
+    let a: Vec<f64> = (0..TRANSFER_ROWS)
+        .map(|i| zonal::clamped_cosine_convolution((i as f64).sqrt() as u32))
+        .collect();
+    for bounce in 1..=settings.bounces {
+        // Eq. (2) at every texel: 3 × N irradiance row vectors, dilated into the gutters.
+        let mut irradiance = vec![0.0f32; res * res * 3 * n];
+        for (k, &i) in covered.iter().enumerate() {
+            let i = i as usize;
+            let nd = texels.normal[i].as_dvec3().normalize();
+            let mut y = [0.0f64; TRANSFER_ROWS];
+            eval_basis(Order::THREE, nd, &mut y);
+            let m = &current[k];
+            for c in 0..3 {
+                for j in 0..n {
+                    let e: f64 = (0..TRANSFER_ROWS)
+                        .map(|row| a[row] * y[row] * m[(c * TRANSFER_ROWS + row) * n + j])
+                        .sum();
+                    irradiance[(i * 3 + c) * n + j] = e as f32;
+                }
+            }
+        }
+        dilation.apply_vectors(&mut irradiance, 3 * n);
+        let bar = progress_bar(
+            settings.progress,
+            covered.len(),
+            &format!("transfer bounce {bounce}"),
+        );
+        current = covered
+            .par_iter()
+            .with_min_len(16)
+            .zip(direct.par_iter())
+            .map(|(&i, direct)| {
+                let i = i as usize;
+                let normal = texels.normal[i];
+                let origin = tracer.offset_origin(texels.position[i], normal);
+                let mut m = vec![0.0f64; per_texel];
+                let mut rays = 0u64;
+                for (r, &d) in dirs.dirs().iter().enumerate() {
+                    if !above_horizon(normal, d) {
+                        continue;
+                    }
+                    rays += 1;
+                    let Some(hit) = tracer.closest_hit(origin, d) else {
+                        continue;
+                    };
+                    let surface = surfaces.at(&hit, origin, d);
+                    if !surface.front_face {
+                        continue;
+                    }
+                    let t = texels.texel_index(surface.uv_lightmap.into());
+                    let rows = &basis[r].0;
+                    for c in 0..3 {
+                        let albedo = f64::from(surface.albedo[c]) / std::f64::consts::PI;
+                        let e = &irradiance[(t * 3 + c) * n..(t * 3 + c + 1) * n];
+                        for (row, &yi) in rows.iter().enumerate() {
+                            let s = yi * albedo;
+                            let out = &mut m[(c * TRANSFER_ROWS + row) * n..][..n];
+                            for (o, &ej) in out.iter_mut().zip(e) {
+                                *o += s * f64::from(ej);
+                            }
+                        }
+                    }
+                }
+                for chunk in m.chunks_exact_mut(per_channel) {
+                    for (v, &d0) in chunk.iter_mut().zip(direct) {
+                        *v = d0 + weight * *v;
+                    }
+                }
+                rays_done.fetch_add(rays, Ordering::Relaxed);
+                bar.inc(1);
+                m
+            })
+            .collect();
+        bar.finish_and_clear();
+    }
+
+    let mut matrices = vec![0.0f32; res * res * per_texel];
+    for (k, &i) in covered.iter().enumerate() {
+        let out = &mut matrices[i as usize * per_texel..(i as usize + 1) * per_texel];
+        for (o, &v) in out.iter_mut().zip(&current[k]) {
+            *o = v as f32;
+        }
+    }
+    dilation.apply_vectors(&mut matrices, per_texel);
+    let map = TransferMap {
+        res: texels.res,
+        lighting_order: settings.lighting_order,
+        bounces: settings.bounces,
+        matrices,
+        covered: texels.covered.clone(),
+        stats: BakeStats {
+            rays_traced: rays_done.into_inner(),
+            seconds: start.elapsed().as_secs_f64(),
+        },
+    };
+    log::info!(
+        "transfer bake: {} texels × {} directions, 9 × {n} matrices, {} bounces: {}",
+        covered.len(),
+        settings.rays,
+        settings.bounces,
+        map.stats
+    );
+    map
+}

@@ -1,0 +1,83 @@
+//! Issue 23, Build 1: the transfer-matrix bake (`bake::transfer`). With the lighting fixed,
+//! M·l must equal the SH lightmap's per-texel coefficients for the same bake (same rays,
+//! seed, bounces, lighting truncated to M's order) — with and without inter-reflection —
+//! and the bounces must change M.
+
+use shvis::bake::raster::rasterize;
+use shvis::bake::shlmap::{ShLightmapSettings, bake_sh_lightmap};
+use shvis::bake::trace::Tracer;
+use shvis::bake::transfer::{TransferSettings, bake_transfer};
+use shvis::env::project::project_sh;
+use shvis::env::sky::{SkyParams, sky};
+use shvis::sh::Order;
+
+#[test]
+fn transfer_times_lighting_equals_the_sh_lightmap() {
+    let res = 64;
+    let scene = shvis::scene::house::build(res).expect("the house builds");
+    let texels = rasterize(&scene.mesh, res);
+    let tracer = Tracer::new(&scene.mesh);
+    let order = Order::new(4).unwrap();
+    // The built-in sky's gradient and ground without the sun: directional, yet its order-3
+    // irradiance stays positive, so the SH lightmap's clamp of negative bounce irradiance
+    // (the one non-linear step, module doc of bake::transfer) never acts.
+    let smooth = SkyParams {
+        sun_radiance: 0.0,
+        ..SkyParams::default()
+    };
+    let l = project_sh(&sky(256, &smooth), order);
+    let mut bounced_differs = false;
+    let mut direct_rows = Vec::new();
+    for bounces in [0, 2] {
+        let shl = bake_sh_lightmap(
+            &scene,
+            &tracer,
+            &texels,
+            &l,
+            &ShLightmapSettings {
+                rays: 64,
+                seed: 3,
+                bounces,
+                progress: false,
+            },
+        );
+        let transfer = bake_transfer(
+            &scene,
+            &tracer,
+            &texels,
+            &TransferSettings {
+                lighting_order: order,
+                rays: 64,
+                seed: 3,
+                bounces,
+                progress: false,
+            },
+        );
+        let (mut worst, mut scale, mut texels_compared) = (0.0f64, 0.0f64, 0usize);
+        for i in (0..texels.covered.len()).filter(|&i| texels.covered[i]) {
+            let got = transfer.transferred(i, &l);
+            let want = shl.texel(i);
+            for (g, w) in got.iter().zip(want) {
+                for c in 0..3 {
+                    worst = worst.max((g[c] - f64::from(w[c])).abs());
+                    scale = scale.max(f64::from(w[c]).abs());
+                }
+            }
+            if bounces == 0 {
+                direct_rows.push(got);
+            } else if (got[0][0] - direct_rows[texels_compared][0][0]).abs() > 1e-3 * scale {
+                bounced_differs = true;
+            }
+            texels_compared += 1;
+        }
+        println!(
+            "{bounces} bounces: {texels_compared} texels, max |M·l − shlmap| = {worst:.3e} of max |coefficient| {scale:.3}"
+        );
+        assert!(texels_compared > 500);
+        assert!(
+            worst <= 2e-5 * scale,
+            "{bounces} bounces: M·l differs from the SH lightmap by {worst:e} (scale {scale})"
+        );
+    }
+    assert!(bounced_differs, "inter-reflection did not change M");
+}
