@@ -202,6 +202,22 @@ enum StudyCommand {
     /// per-texel normalisation), against its footprint reference, with a composite per
     /// scene; the diffuse techniques and their NDF variants.
     Ndf(StudyNdfArgs),
+    /// Issue 23: energy captured by the first M = 1…9 singular values of normal mapping for
+    /// PRT's normal basis (PRT course), uniform and cosine-weighted, beside the course's.
+    NmprtSvd(StudyNmprtSvdArgs),
+}
+
+#[derive(Args, Debug)]
+struct StudyNmprtSvdArgs {
+    /// Disk grid of normals per side (the U textures' resolution).
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    side: u32,
+    /// Hemisphere quadrature cells per side (in cos θ and φ).
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(4..=4096))]
+    quadrature: u32,
+    /// Output directory (nmprt_svd.md).
+    #[arg(long, default_value = "study-out")]
+    out: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -1016,6 +1032,9 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Study(StudyCommand::Seams(a)) => run_study_seams(a).context("study seams"),
         Command::Study(StudyCommand::Rnm(a)) => run_study_rnm(a).context("study rnm"),
         Command::Study(StudyCommand::Ndf(a)) => run_study_ndf(a).context("study ndf"),
+        Command::Study(StudyCommand::NmprtSvd(a)) => {
+            run_study_nmprt_svd(a).context("study nmprt-svd")
+        }
         Command::Study(StudyCommand::Normalmap(a)) => {
             run_study_normalmap(a).context("study normalmap")
         }
@@ -1311,6 +1330,30 @@ fn run_ssbump(a: SsbumpArgs) -> Result<()> {
         a.out.display(),
         started.elapsed().as_secs_f64()
     );
+    Ok(())
+}
+
+fn run_study_nmprt_svd(a: StudyNmprtSvdArgs) -> Result<()> {
+    use shvis::study::nmprt_svd::{
+        NormalWeighting, energy_captured, normal_matrix_over, to_markdown,
+    };
+    create_dir(&a.out)?;
+    let (side, quadrature) = (a.side as usize, a.quadrature as usize);
+    let energy = |w, clamped| energy_captured(&normal_matrix_over(side, quadrature, w, clamped));
+    let (cu, cc) = (
+        energy(NormalWeighting::Uniform, true),
+        energy(NormalWeighting::Cosine, true),
+    );
+    let (su, sc) = (
+        energy(NormalWeighting::Uniform, false),
+        energy(NormalWeighting::Cosine, false),
+    );
+    let markdown = to_markdown(side, [&cu, &cc], [&su, &sc]);
+    println!("{markdown}");
+    let path = a.out.join("nmprt_svd.md");
+    shvis::files::write(&path, &markdown)
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    println!("wrote {}", path.display());
     Ok(())
 }
 

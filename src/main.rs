@@ -8,6 +8,13 @@ use std::process::ExitCode;
 use clap::Parser;
 
 fn main() -> ExitCode {
+    // `shvis sh eval | head`: a closed pipe ends the process quietly, as for other tools,
+    // instead of a failed print.
+    #[cfg(target_os = "linux")]
+    // SAFETY: restoring the default disposition of SIGPIPE before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     // A panic is a bug, but even then the user sees one line, not a backtrace dump.
     std::panic::set_hook(Box::new(|info| {
         let msg = info.to_string().replace('\n', " ");

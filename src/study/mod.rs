@@ -14,12 +14,15 @@
 //! - [`normalmap`]: issue 18 — GPU normal-map generation timed against triangle counts and
 //!   resolution beside the CPU baker, checked on a real model, rendered through `unc6`
 //!   (`shvis study normalmap`).
+//! - [`nmprt_svd`]: issue 23 — the energy of normal mapping for PRT's "normal basis" (the
+//!   SVD of the hemisphere-clamped quadratic SH over normals), `shvis study nmprt-svd`.
 //! - [`ndf`]: issue 19 — the specular term under naive MIP and normal-distribution filtering
 //!   on the receding bumpy plane against its footprint reference (`shvis study ndf`).
 
 pub mod compression;
 pub mod ndf;
 pub mod ndf_diffuse;
+pub mod nmprt_svd;
 pub mod normalmap;
 pub mod params;
 pub mod params_gpu;
