@@ -120,9 +120,9 @@ pub fn energy_captured(a: &DMatrix<f64>) -> [f64; 9] {
     let total: f64 = s.iter().map(|v| v * v).sum();
     let mut out = [0.0; 9];
     let mut acc = 0.0;
-    for m in 0..9 {
+    for (m, share) in out.iter_mut().enumerate() {
         acc += s.get(m).map_or(0.0, |v| v * v);
-        out[m] = acc / total;
+        *share = acc / total;
     }
     out
 }
