@@ -81,3 +81,62 @@ fn transfer_times_lighting_equals_the_sh_lightmap() {
     }
     assert!(bounced_differs, "inter-reflection did not change M");
 }
+
+/// PCA of the matrices: every vector kept rebuilds M·l; fewer keep less, monotonically, and
+/// the error of K vectors is what the left-out variance allows.
+#[test]
+fn compressed_transfer_converges_to_the_full_matrices() {
+    let res = 64;
+    let scene = shvis::scene::house::build(res).expect("the house builds");
+    let texels = rasterize(&scene.mesh, res);
+    let tracer = Tracer::new(&scene.mesh);
+    let order = Order::new(3).unwrap();
+    let transfer = bake_transfer(
+        &scene,
+        &tracer,
+        &texels,
+        &TransferSettings {
+            lighting_order: order,
+            rays: 64,
+            seed: 3,
+            bounces: 1,
+            progress: false,
+        },
+    );
+    let l = project_sh(&sky(128, &SkyParams::default()), order);
+    let covered: Vec<usize> = (0..texels.covered.len())
+        .filter(|&i| texels.covered[i])
+        .collect();
+    let scale = covered
+        .iter()
+        .flat_map(|&i| transfer.transferred(i, &l))
+        .flatten()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut last_error = f64::INFINITY;
+    let mut last_energy = 0.0;
+    for k in [1, 4, 16, 64, 3 * 9 * 9] {
+        let compressed = transfer.compress(k).unwrap();
+        let error = covered
+            .iter()
+            .map(|&i| {
+                let (a, b) = (transfer.transferred(i, &l), compressed.transferred(i, &l));
+                a.iter()
+                    .zip(&b)
+                    .flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs()))
+                    .fold(0.0f64, f64::max)
+            })
+            .fold(0.0f64, f64::max);
+        println!(
+            "K = {k}: energy {:.5}, max |M·l − M_K·l| = {:.3e} of {scale:.3}",
+            compressed.energy, error
+        );
+        assert!(compressed.energy >= last_energy - 1e-12);
+        assert!(
+            error <= last_error * 1.0001 + 1e-6 * scale,
+            "K = {k}: {error} after {last_error}"
+        );
+        (last_error, last_energy) = (error, compressed.energy);
+    }
+    assert!(last_error < 1e-4 * scale, "all vectors: {last_error}");
+    assert!(transfer.compress(0).is_err() && transfer.compress(3 * 9 * 9 + 1).is_err());
+}

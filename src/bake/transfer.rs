@@ -29,6 +29,12 @@
 //! Storage: per texel, per channel, 9 rows of N f32 (texel-major), accumulated in f64 per
 //! texel, summed in a fixed ray order (bit-identical for any thread count), dilated like
 //! every other lightmap bake.
+//!
+//! Compression ([`TransferMap::compress`]): the course's "can be compressed just like
+//! diffuse transfer" — PCA of the 3·9·N-vectors of the covered texels with the visibility
+//! PCA's own principal-subspace fit (`super::pca`): M = mean + Σ_k w_k B_k, so that
+//! M·l = mean·l + Σ_k w_k (B_k·l): per texel K weights, and K + 1 matrices whose products
+//! with l are formed once per lighting change.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
@@ -87,16 +93,91 @@ impl TransferMap {
     /// l' = M l at texel `index`: the 9 RGB coefficients of transferred incident radiance
     /// for lighting `l` (RGB SH with at least N coefficients), in f64.
     pub fn transferred(&self, index: usize, l: &[[f64; 3]]) -> [[f64; 3]; TRANSFER_ROWS] {
-        let n = self.columns();
-        let m = self.texel(index);
-        let mut out = [[0.0; 3]; TRANSFER_ROWS];
-        for (i, row) in out.iter_mut().enumerate() {
-            for (c, value) in row.iter_mut().enumerate() {
-                let base = (c * TRANSFER_ROWS + i) * n;
-                *value = (0..n).map(|j| f64::from(m[base + j]) * l[j][c]).sum();
+        apply(self.texel(index), self.columns(), l)
+    }
+}
+
+/// A PCA-compressed [`TransferMap`] (module doc): the mean matrix, K basis matrices and K
+/// weights per texel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CompressedTransfer {
+    pub lighting_order: Order,
+    /// 3·9·N, in [`TransferMap::matrices`]' per-texel layout.
+    pub mean: Vec<f64>,
+    /// K vectors of 3·9·N, by decreasing variance.
+    pub basis: Vec<Vec<f64>>,
+    /// Texel-major, K per texel.
+    pub weights: Vec<f32>,
+    /// The share of the covered texels' variance the K vectors hold.
+    pub energy: f64,
+}
+
+impl CompressedTransfer {
+    /// l' = M l at texel `index` from the compressed matrices.
+    pub fn transferred(&self, index: usize, l: &[[f64; 3]]) -> [[f64; 3]; TRANSFER_ROWS] {
+        let k = self.basis.len();
+        let w = &self.weights[index * k..(index + 1) * k];
+        let m = super::pca::combine(&self.mean, &self.basis, w.iter().map(|&x| f64::from(x)));
+        apply(&m, self.lighting_order.coeff_count(), l)
+    }
+}
+
+/// l' = M l for one texel's 3 × 9 × N matrices `m` (any float type).
+fn apply<T: Copy + Into<f64>>(m: &[T], n: usize, l: &[[f64; 3]]) -> [[f64; 3]; TRANSFER_ROWS] {
+    let mut out = [[0.0; 3]; TRANSFER_ROWS];
+    for (i, row) in out.iter_mut().enumerate() {
+        for (c, value) in row.iter_mut().enumerate() {
+            let base = (c * TRANSFER_ROWS + i) * n;
+            *value = (0..n).map(|j| m[base + j].into() * l[j][c]).sum();
+        }
+    }
+    out
+}
+
+impl TransferMap {
+    /// PCA with `k` vectors of the covered texels' matrices (module doc).
+    ///
+    /// # Errors
+    /// [`super::BakeError::PcaBasisOutOfRange`] unless 1 ≤ k ≤ 3·9·N;
+    /// [`super::BakeError::EmptyLightmap`] when no texel is covered.
+    pub fn compress(&self, k: usize) -> Result<CompressedTransfer, super::BakeError> {
+        let size = 3 * TRANSFER_ROWS * self.columns();
+        if k == 0 || k > size {
+            return Err(super::BakeError::PcaBasisOutOfRange { m: k, n: size });
+        }
+        let covered: Vec<usize> = (0..self.covered.len())
+            .filter(|&t| self.covered[t])
+            .collect();
+        if covered.is_empty() {
+            return Err(super::BakeError::EmptyLightmap);
+        }
+        let (mean, eigenvalues, mut basis) =
+            super::pca::principal_subspace(covered.iter().map(|&t| self.texel(t)), size);
+        basis.truncate(k);
+        let total: f64 = eigenvalues.iter().sum();
+        let kept: f64 = eigenvalues.iter().take(k).sum();
+        let texels = self.covered.len();
+        let mut weights = vec![0.0f32; texels * k];
+        let mut d = vec![0.0f64; size];
+        for t in 0..texels {
+            let v = self.texel(t);
+            if !self.covered[t] && v.iter().all(|&c| c == 0.0) {
+                continue;
+            }
+            for ((d, &c), &mu) in d.iter_mut().zip(v).zip(&mean) {
+                *d = f64::from(c) - mu;
+            }
+            for (w, b) in weights[t * k..(t + 1) * k].iter_mut().zip(&basis) {
+                *w = super::pca::dot(b, &d) as f32;
             }
         }
-        out
+        Ok(CompressedTransfer {
+            lighting_order: self.lighting_order,
+            mean,
+            basis,
+            weights,
+            energy: if total > 0.0 { kept / total } else { 1.0 },
+        })
     }
 }
 
