@@ -93,21 +93,7 @@ pub fn fit(vis: &VisibilityMap, m: usize) -> Result<PcaModel, BakeError> {
     let (mean, eigenvalues, mut basis) =
         principal_subspace(covered.iter().map(|&t| vis.texel(t)), n);
     basis.truncate(m);
-    let mut d = vec![0.0f64; n];
-
-    let mut weights = vec![0.0f32; texels * m];
-    for t in 0..texels {
-        let v = vis.texel(t);
-        if !vis.covered[t] && v.iter().all(|&c| c == 0.0) {
-            continue;
-        }
-        for ((&c, &mu), d) in v.iter().zip(&mean).zip(d.iter_mut()) {
-            *d = f64::from(c) - mu;
-        }
-        for (w, b) in weights[t * m..(t + 1) * m].iter_mut().zip(&basis) {
-            *w = dot(b, &d) as f32;
-        }
-    }
+    let weights = project_weights(&vis.covered, |t| vis.texel(t), &mean, &basis);
     Ok(PcaModel {
         order: vis.order,
         mean,
@@ -168,6 +154,32 @@ pub(crate) fn principal_subspace<'a>(
     let eigenvalues = pairs.iter().map(|p| p.0).collect();
     let basis = pairs.into_iter().map(|p| p.1).collect();
     (mean, eigenvalues, basis)
+}
+
+/// Per texel (texel-major) the weights ⟨basis_k, v − mean⟩ of its vector `vector(t)`, for
+/// the covered texels and the gutter texels that hold data (uncovered all-zero ones stay 0).
+pub(crate) fn project_weights<'a>(
+    covered: &[bool],
+    vector: impl Fn(usize) -> &'a [f32],
+    mean: &[f64],
+    basis: &[Vec<f64>],
+) -> Vec<f32> {
+    let m = basis.len();
+    let mut weights = vec![0.0f32; covered.len() * m];
+    let mut d = vec![0.0f64; mean.len()];
+    for (t, &is_covered) in covered.iter().enumerate() {
+        let v = vector(t);
+        if !is_covered && v.iter().all(|&c| c == 0.0) {
+            continue;
+        }
+        for ((&c, &mu), d) in v.iter().zip(mean).zip(d.iter_mut()) {
+            *d = f64::from(c) - mu;
+        }
+        for (w, b) in weights[t * m..(t + 1) * m].iter_mut().zip(basis) {
+            *w = dot(b, &d) as f32;
+        }
+    }
+    weights
 }
 
 /// Makes the largest-magnitude component (the first on a tie) positive.

@@ -70,7 +70,7 @@ use rayon::prelude::*;
 
 use super::directions::{DirectionSet, above_horizon};
 use super::raster::{DilationPlan, LightmapTexels, texel_index_of};
-use super::surface::SurfaceReader;
+use super::surface::{SurfaceReader, for_each_front_hit};
 use super::trace::Tracer;
 use super::visibility::DILATION_PASSES;
 use super::{BakeStats, progress_bar};
@@ -244,24 +244,13 @@ pub fn bake_sh_lightmap(
                 let lobes = world_basis(texels, i);
                 let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
                 let mut rnm = [DVec3::ZERO; RNM_LOBES];
-                let mut rays = 0u64;
-                for (r, &d) in dirs.dirs().iter().enumerate() {
-                    if !above_horizon(n, d) {
-                        continue;
-                    }
-                    rays += 1;
-                    let Some(hit) = tracer.closest_hit(origin, d) else {
-                        continue;
-                    };
-                    let surface = surfaces.at(&hit, origin, d);
-                    if !surface.front_face {
-                        continue;
-                    }
-                    let e = irradiance[texels.texel_index(surface.uv_lightmap.into())];
-                    let radiance = (surface.albedo * e / std::f32::consts::PI).as_dvec3();
-                    accumulate(&mut sum, &basis[r], radiance.into());
-                    accumulate_lobes(&mut rnm, &lobes, d, radiance.into());
-                }
+                let rays =
+                    for_each_front_hit(tracer, &surfaces, &dirs, n, origin, |r, d, surface| {
+                        let e = irradiance[texels.texel_index(surface.uv_lightmap.into())];
+                        let radiance = (surface.albedo * e / std::f32::consts::PI).as_dvec3();
+                        accumulate(&mut sum, &basis[r], radiance.into());
+                        accumulate_lobes(&mut rnm, &lobes, d, radiance.into());
+                    });
                 rays_done.fetch_add(rays, Ordering::Relaxed);
                 bar.inc(1);
                 (

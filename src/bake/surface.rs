@@ -133,6 +133,34 @@ impl LinearTexture {
     }
 }
 
+/// The bounce gather of the lightmap bakes (`super::shlmap`, `super::transfer`): for each
+/// direction `r` of `dirs` above the horizon of `normal`, the ray from `origin` is traced;
+/// `f(r, d, surface)` is called when it hits the front of a surface. Returns the rays traced.
+pub(crate) fn for_each_front_hit(
+    tracer: &super::trace::Tracer,
+    surfaces: &SurfaceReader<'_>,
+    dirs: &super::directions::DirectionSet,
+    normal: Vec3,
+    origin: Vec3,
+    mut f: impl FnMut(usize, Vec3, &SurfacePoint),
+) -> u64 {
+    let mut rays = 0u64;
+    for (r, &d) in dirs.dirs().iter().enumerate() {
+        if !super::directions::above_horizon(normal, d) {
+            continue;
+        }
+        rays += 1;
+        let Some(hit) = tracer.closest_hit(origin, d) else {
+            continue;
+        };
+        let surface = surfaces.at(&hit, origin, d);
+        if surface.front_face {
+            f(r, d, &surface);
+        }
+    }
+    rays
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -43,7 +43,7 @@ use rayon::prelude::*;
 
 use super::directions::{DirectionSet, above_horizon};
 use super::raster::{DilationPlan, LightmapTexels};
-use super::surface::SurfaceReader;
+use super::surface::{SurfaceReader, for_each_front_hit};
 use super::trace::Tracer;
 use super::visibility::DILATION_PASSES;
 use super::{BakeStats, progress_bar};
@@ -156,21 +156,7 @@ impl TransferMap {
         basis.truncate(k);
         let total: f64 = eigenvalues.iter().sum();
         let kept: f64 = eigenvalues.iter().take(k).sum();
-        let texels = self.covered.len();
-        let mut weights = vec![0.0f32; texels * k];
-        let mut d = vec![0.0f64; size];
-        for t in 0..texels {
-            let v = self.texel(t);
-            if !self.covered[t] && v.iter().all(|&c| c == 0.0) {
-                continue;
-            }
-            for ((d, &c), &mu) in d.iter_mut().zip(v).zip(&mean) {
-                *d = f64::from(c) - mu;
-            }
-            for (w, b) in weights[t * k..(t + 1) * k].iter_mut().zip(&basis) {
-                *w = super::pca::dot(b, &d) as f32;
-            }
-        }
+        let weights = super::pca::project_weights(&self.covered, |t| self.texel(t), &mean, &basis);
         Ok(CompressedTransfer {
             lighting_order: self.lighting_order,
             mean,
@@ -287,33 +273,28 @@ pub fn bake_transfer(
                 let normal = texels.normal[i];
                 let origin = tracer.offset_origin(texels.position[i], normal);
                 let mut m = vec![0.0f64; per_texel];
-                let mut rays = 0u64;
-                for (r, &d) in dirs.dirs().iter().enumerate() {
-                    if !above_horizon(normal, d) {
-                        continue;
-                    }
-                    rays += 1;
-                    let Some(hit) = tracer.closest_hit(origin, d) else {
-                        continue;
-                    };
-                    let surface = surfaces.at(&hit, origin, d);
-                    if !surface.front_face {
-                        continue;
-                    }
-                    let t = texels.texel_index(surface.uv_lightmap.into());
-                    let rows = &basis[r].0;
-                    for c in 0..3 {
-                        let albedo = f64::from(surface.albedo[c]) / std::f64::consts::PI;
-                        let e = &irradiance[(t * 3 + c) * n..(t * 3 + c + 1) * n];
-                        for (row, &yi) in rows.iter().enumerate() {
-                            let s = yi * albedo;
-                            let out = &mut m[(c * TRANSFER_ROWS + row) * n..][..n];
-                            for (o, &ej) in out.iter_mut().zip(e) {
-                                *o += s * f64::from(ej);
+                let rays = for_each_front_hit(
+                    tracer,
+                    &surfaces,
+                    &dirs,
+                    normal,
+                    origin,
+                    |r, _, surface| {
+                        let t = texels.texel_index(surface.uv_lightmap.into());
+                        let rows = &basis[r].0;
+                        for c in 0..3 {
+                            let albedo = f64::from(surface.albedo[c]) / std::f64::consts::PI;
+                            let e = &irradiance[(t * 3 + c) * n..(t * 3 + c + 1) * n];
+                            for (row, &yi) in rows.iter().enumerate() {
+                                let s = yi * albedo;
+                                let out = &mut m[(c * TRANSFER_ROWS + row) * n..][..n];
+                                for (o, &ej) in out.iter_mut().zip(e) {
+                                    *o += s * f64::from(ej);
+                                }
                             }
                         }
-                    }
-                }
+                    },
+                );
                 for chunk in m.chunks_exact_mut(per_channel) {
                     for (v, &d0) in chunk.iter_mut().zip(direct) {
                         *v = d0 + weight * *v;
