@@ -902,6 +902,12 @@ fn run_view(a: ViewArgs) -> Result<()> {
         frame_format(shot)?;
         shvis::files::check_writable_file(shot, "--screenshot")?;
     }
+    let set = |name: &str| std::env::var_os(name).is_some_and(|v| !v.is_empty());
+    if !set("DISPLAY") && !set("WAYLAND_DISPLAY") {
+        bail!(
+            "no display to open a window on (DISPLAY is not set): run under `xvfb-run -a shvis view …`, or use `shvis render` / `shvis bench`"
+        );
+    }
     let techniques: Vec<Technique> = parse_list(&a.techniques, Technique::ALL)?;
     let bounces = techniques
         .iter()

@@ -119,7 +119,7 @@ pub fn run(prepared: &Prepared, settings: &ViewSettings) -> Result<ViewReport, V
     if settings.techniques.is_empty() {
         return Err(ViewError::Other("no technique to show".into()));
     }
-    let event_loop = EventLoop::new().map_err(|e| ViewError::Display(e.to_string()))?;
+    let event_loop = EventLoop::new().map_err(|e| ViewError::Display(winit_message(&e)))?;
     let mut app = App {
         prepared,
         settings,
@@ -134,6 +134,16 @@ pub fn run(prepared: &Prepared, settings: &ViewSettings) -> Result<ViewReport, V
         return Err(e);
     }
     Ok(app.report)
+}
+
+/// winit's error text without the source location it puts in front ("os error at
+/// …/mod.rs:765: neither … is set").
+fn winit_message(e: &impl std::fmt::Display) -> String {
+    let text = e.to_string();
+    match text.rsplit_once(".rs:") {
+        Some((_, tail)) => tail.split_once(": ").map_or(tail, |(_, m)| m).to_string(),
+        None => text,
+    }
 }
 
 struct App<'a> {

@@ -1809,6 +1809,32 @@ fn output_cases(suite: &mut Suite) {
             Ok(())
         }));
     }
+    let out = d.join("view-shot.png");
+    suite.add(
+        Kind::Outputs,
+        "view without a display",
+        &["view", "--frames", "2", "--screenshot", &s(&out)],
+        Some(out.clone()),
+        error(1, &["no display", "xvfb-run"]),
+    );
+    suite.last().env.push(("DISPLAY".into(), String::new()));
+    suite
+        .last()
+        .env
+        .push(("WAYLAND_DISPLAY".into(), String::new()));
+    suite.add(
+        Kind::Outputs,
+        "view screenshot into /proc",
+        &[
+            "view",
+            "--frames",
+            "2",
+            "--screenshot",
+            "/proc/shvis/shot.png",
+        ],
+        None,
+        error(1, &["/proc/shvis", "--screenshot is not writable"]),
+    );
     for (name, cache, needles) in [
         (
             "cache in /proc",
