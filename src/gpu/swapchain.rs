@@ -283,17 +283,35 @@ impl Presenter {
                 .aspect_mask(vk::ImageAspectFlags::COLOR)
                 .level_count(1)
                 .layer_count(1);
-            let barrier = |from, to, src, dst| {
-                vk::ImageMemoryBarrier::default()
-                    .old_layout(from)
-                    .new_layout(to)
-                    .src_access_mask(src)
-                    .dst_access_mask(dst)
-                    .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                    .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                    .image(image)
-                    .subresource_range(range)
-            };
+            // One layout transition of the image, recorded at once.
+            let transition =
+                |from,
+                 to,
+                 access: (vk::AccessFlags, vk::AccessFlags),
+                 stages: (vk::PipelineStageFlags, vk::PipelineStageFlags)| {
+                    let barrier = vk::ImageMemoryBarrier::default()
+                        .old_layout(from)
+                        .new_layout(to)
+                        .src_access_mask(access.0)
+                        .dst_access_mask(access.1)
+                        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                        .image(image)
+                        .subresource_range(range);
+                    // SAFETY: recording into one_shot's command buffer; the image was acquired
+                    // and its acquire fence waited for above.
+                    unsafe {
+                        device.cmd_pipeline_barrier(
+                            cmd,
+                            stages.0,
+                            stages.1,
+                            vk::DependencyFlags::empty(),
+                            &[],
+                            &[],
+                            &[barrier],
+                        );
+                    }
+                };
             let region = vk::BufferImageCopy::default()
                 .image_subresource(
                     vk::ImageSubresourceLayers::default()
@@ -305,23 +323,17 @@ impl Presenter {
                     height: extent.height,
                     depth: 1,
                 });
-            // SAFETY: recording into a command buffer one_shot submits and waits for; the
-            // image was acquired and its acquire fence waited for above.
-            unsafe {
-                device.cmd_pipeline_barrier(
-                    cmd,
+            transition(
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                (vk::AccessFlags::empty(), vk::AccessFlags::TRANSFER_WRITE),
+                (
                     vk::PipelineStageFlags::TOP_OF_PIPE,
                     vk::PipelineStageFlags::TRANSFER,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
-                    &[barrier(
-                        vk::ImageLayout::UNDEFINED,
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        vk::AccessFlags::empty(),
-                        vk::AccessFlags::TRANSFER_WRITE,
-                    )],
-                );
+                ),
+            );
+            // SAFETY: as above; the staging buffer holds the frame.
+            unsafe {
                 device.cmd_copy_buffer_to_image(
                     cmd,
                     staging,
@@ -329,41 +341,38 @@ impl Presenter {
                     vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                     &[region],
                 );
-                let mut layout = vk::ImageLayout::TRANSFER_DST_OPTIMAL;
-                if let Some(buffer) = read {
-                    device.cmd_pipeline_barrier(
-                        cmd,
+            }
+            let mut layout = vk::ImageLayout::TRANSFER_DST_OPTIMAL;
+            if let Some(buffer) = read {
+                transition(
+                    layout,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    (
+                        vk::AccessFlags::TRANSFER_WRITE,
+                        vk::AccessFlags::TRANSFER_READ,
+                    ),
+                    (
                         vk::PipelineStageFlags::TRANSFER,
                         vk::PipelineStageFlags::TRANSFER,
-                        vk::DependencyFlags::empty(),
-                        &[],
-                        &[],
-                        &[barrier(
-                            layout,
-                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                            vk::AccessFlags::TRANSFER_WRITE,
-                            vk::AccessFlags::TRANSFER_READ,
-                        )],
-                    );
-                    layout = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
-                    device.cmd_copy_image_to_buffer(cmd, image, layout, buffer, &[region]);
-                    super::buffer::record_transfer_to_host(device, cmd, buffer);
-                }
-                device.cmd_pipeline_barrier(
-                    cmd,
+                    ),
+                );
+                layout = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
+                // SAFETY: as above; the readback buffer is as large as the image.
+                unsafe { device.cmd_copy_image_to_buffer(cmd, image, layout, buffer, &[region]) };
+                super::buffer::record_transfer_to_host(device, cmd, buffer);
+            }
+            transition(
+                layout,
+                vk::ImageLayout::PRESENT_SRC_KHR,
+                (
+                    vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::TRANSFER_READ,
+                    vk::AccessFlags::empty(),
+                ),
+                (
                     vk::PipelineStageFlags::TRANSFER,
                     vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
-                    &[barrier(
-                        layout,
-                        vk::ImageLayout::PRESENT_SRC_KHR,
-                        vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::TRANSFER_READ,
-                        vk::AccessFlags::empty(),
-                    )],
-                );
-            }
+                ),
+            );
         })?;
         let shot = match (&self.readback, screenshot) {
             (Some(b), true) => Some(
