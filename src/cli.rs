@@ -1341,20 +1341,26 @@ fn run_ssbump(a: SsbumpArgs) -> Result<()> {
 
 fn run_study_nmprt_svd(a: StudyNmprtSvdArgs) -> Result<()> {
     use shvis::study::nmprt_svd::{
-        NormalWeighting, energy_captured, normal_matrix_over, to_markdown,
+        NormalWeighting, energy_captured, hl2_energy, normal_matrix_over, to_markdown,
     };
     create_dir(&a.out)?;
     let (side, quadrature) = (a.side as usize, a.quadrature as usize);
-    let energy = |w, clamped| energy_captured(&normal_matrix_over(side, quadrature, w, clamped));
-    let (cu, cc) = (
-        energy(NormalWeighting::Uniform, true),
-        energy(NormalWeighting::Cosine, true),
-    );
-    let (su, sc) = (
-        energy(NormalWeighting::Uniform, false),
-        energy(NormalWeighting::Cosine, false),
-    );
-    let markdown = to_markdown(side, [&cu, &cc], [&su, &sc]);
+    let mut svd = Vec::new();
+    let mut hl2 = [0.0; 4];
+    for (k, (clamped, w)) in [
+        (true, NormalWeighting::Uniform),
+        (true, NormalWeighting::Cosine),
+        (false, NormalWeighting::Uniform),
+        (false, NormalWeighting::Cosine),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let a = normal_matrix_over(side, quadrature, w, clamped);
+        svd.push(energy_captured(&a));
+        hl2[k] = hl2_energy(side, &a, w);
+    }
+    let markdown = to_markdown(side, [&svd[0], &svd[1]], [&svd[2], &svd[3]], hl2);
     println!("{markdown}");
     let path = a.out.join("nmprt_svd.md");
     shvis::files::write(&path, &markdown)

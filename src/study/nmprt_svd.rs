@@ -113,6 +113,30 @@ pub fn normal_matrix_over(
     a
 }
 
+/// The three-row HL2 alternative (the course: "HL2 basis (3 rows for the matrix)"): the
+/// share of ‖A‖² that the span of the Half-Life 2 blend weights D_k(n) (Green's eq. (3),
+/// `bake::ssbump::d_encoding`, as functions of the normal, rows weighted as A's) captures
+/// — the least-squares fit e(n) ≈ Σ_k D_k(n) h_k of every column. Never above the first
+/// three singular values', which are the best any three functions of n can do.
+pub fn hl2_energy(side: usize, a: &DMatrix<f64>, weighting: NormalWeighting) -> f64 {
+    let normals = disk_normals(side);
+    assert_eq!(normals.len(), a.nrows(), "A was built on the same grid");
+    let mut f = DMatrix::<f64>::zeros(normals.len(), 3);
+    for (k, (n, area)) in normals.iter().enumerate() {
+        let weight = match weighting {
+            NormalWeighting::Uniform => area / n.z.max(1e-6),
+            NormalWeighting::Cosine => *area,
+        };
+        for (j, d) in crate::bake::ssbump::d_encoding(*n).iter().enumerate() {
+            f[(k, j)] = d * weight.sqrt();
+        }
+    }
+    // Orthonormal basis of F's columns, then the projection of A onto it.
+    let q = f.qr().q();
+    let projected = &q * (q.transpose() * a);
+    projected.norm_squared() / a.norm_squared()
+}
+
 /// The share of ‖A‖² captured by the first M = 1…9 singular values.
 pub fn energy_captured(a: &DMatrix<f64>) -> [f64; 9] {
     let mut s: Vec<f64> = a.singular_values().iter().copied().collect();
@@ -130,7 +154,12 @@ pub fn energy_captured(a: &DMatrix<f64>) -> [f64; 9] {
 /// The study's table: energy captured for M = 1…9, uniform and cosine-weighted, with the
 /// lighting clamped to the hemisphere (`clamped`) and over the whole sphere (`sphere`),
 /// beside the course's figures.
-pub fn to_markdown(side: usize, clamped: [&[f64; 9]; 2], sphere: [&[f64; 9]; 2]) -> String {
+pub fn to_markdown(
+    side: usize,
+    clamped: [&[f64; 9]; 2],
+    sphere: [&[f64; 9]; 2],
+    hl2: [f64; 4],
+) -> String {
     let mut s = format!(
         "Normal basis of normal mapping for PRT: energy of A ({side}² disk grid of normals, quadratic SH) captured by the first M singular values, %\n\n| M | clamped, uniform | clamped, cosine | whole sphere, uniform | whole sphere, cosine | course (uniform / cosine) |\n|---:|---:|---:|---:|---:|---|\n"
     );
@@ -147,6 +176,13 @@ pub fn to_markdown(side: usize, clamped: [&[f64; 9]; 2], sphere: [&[f64; 9]; 2])
             100.0 * sphere[1][m - 1]
         );
     }
+    s += &format!(
+        "| HL2 (3 rows) | {:.1} | {:.1} | {:.1} | {:.1} | — |\n",
+        100.0 * hl2[0],
+        100.0 * hl2[1],
+        100.0 * hl2[2],
+        100.0 * hl2[3]
+    );
     s
 }
 
@@ -170,6 +206,13 @@ mod tests {
         assert!(e.windows(2).all(|w| w[1] >= w[0]), "{e:?}");
         // Band 0 alone is a large share (irradiance is smooth in n).
         assert!(e[0] > 0.5 && e[0] < 1.0, "{e:?}");
+        // Three HL2 weights can do no better than the first three singular vectors.
+        let hl2 = hl2_energy(12, &a, NormalWeighting::Uniform);
+        assert!(
+            hl2 > 0.5 && hl2 <= e[2] + 1e-12,
+            "HL2 {hl2} vs SVD-3 {}",
+            e[2]
+        );
     }
 
     #[test]
