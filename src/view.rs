@@ -172,7 +172,6 @@ struct State {
     schedule: Arc<LightingSchedule>,
     technique_index: usize,
     path: HwPath,
-    camera: Camera,
     home: Camera,
     yaw: f32,
     pitch: f32,
@@ -194,7 +193,6 @@ struct State {
     rebuild_cpu_ms: Vec<f64>,
     last: Instant,
     fps: f64,
-    gpu_ms: Option<f64>,
 }
 
 impl App<'_> {
@@ -272,7 +270,6 @@ impl App<'_> {
             schedule,
             technique_index: 0,
             path: s.path,
-            camera,
             home: camera,
             yaw: 0.0,
             pitch: 0.0,
@@ -292,7 +289,6 @@ impl App<'_> {
             rebuild_cpu_ms: Vec::new(),
             last: Instant::now(),
             fps: 0.0,
-            gpu_ms: None,
         })
     }
 
@@ -344,7 +340,7 @@ impl App<'_> {
             ));
         }
         let frame = st.tech.render(&st.scene, 0, 1)?;
-        st.gpu_ms = frame.ms.first().copied();
+        let gpu_ms = frame.ms.first().copied();
         let mut rgb = to_srgb8(&frame, s.exposure);
         let (w, h) = st.presenter.extent();
         if s.overlay {
@@ -352,8 +348,7 @@ impl App<'_> {
                 st.tech.label(),
                 format!(
                     "GPU {}  ·  {:.1} frames/s",
-                    st.gpu_ms
-                        .map_or("— (no timestamps)".into(), |m| format!("{m:.2} ms")),
+                    gpu_ms.map_or("— (no timestamps)".into(), |m| format!("{m:.2} ms")),
                     st.fps
                 ),
                 format!(
@@ -396,7 +391,7 @@ impl App<'_> {
                 st.swap_frames_ms.push(ms);
             }
         }
-        if let Some(g) = st.gpu_ms {
+        if let Some(g) = gpu_ms {
             st.gpu_since_switch.push(g);
         }
         st.fps = 1e3 / ms.max(1e-3);
@@ -550,11 +545,10 @@ fn orbit(st: &mut State) -> Result<(), ViewError> {
             offset.cross(Vec3::Y).try_normalize().unwrap_or(Vec3::X),
             st.pitch,
         );
-    st.camera = Camera {
+    st.scene.set_camera(&Camera {
         position: home.target + rotation * offset * st.distance_scale,
         ..home
-    };
-    st.scene.set_camera(&st.camera)?;
+    })?;
     Ok(())
 }
 

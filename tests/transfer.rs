@@ -11,12 +11,42 @@ use shvis::env::project::project_sh;
 use shvis::env::sky::{SkyParams, sky};
 use shvis::sh::Order;
 
+/// The house at 64² texels: its scene, lightmap texels and tracer.
+struct House {
+    scene: shvis::scene::Scene,
+    texels: shvis::bake::raster::LightmapTexels,
+    tracer: Tracer,
+}
+
+impl House {
+    fn new() -> House {
+        let scene = shvis::scene::house::build(64).expect("the house builds");
+        let texels = rasterize(&scene.mesh, 64);
+        let tracer = Tracer::new(&scene.mesh);
+        House {
+            scene,
+            texels,
+            tracer,
+        }
+    }
+
+    /// The transfer bake with the tests' 64 rays and seed 3.
+    fn transfer(&self, order: Order, bounces: u32) -> shvis::bake::transfer::TransferMap {
+        let settings = TransferSettings {
+            lighting_order: order,
+            rays: 64,
+            seed: 3,
+            bounces,
+            progress: false,
+        };
+        bake_transfer(&self.scene, &self.tracer, &self.texels, &settings)
+    }
+}
+
 #[test]
 fn transfer_times_lighting_equals_the_sh_lightmap() {
-    let res = 64;
-    let scene = shvis::scene::house::build(res).expect("the house builds");
-    let texels = rasterize(&scene.mesh, res);
-    let tracer = Tracer::new(&scene.mesh);
+    let house = House::new();
+    let (scene, texels, tracer) = (&house.scene, &house.texels, &house.tracer);
     let order = Order::new(4).unwrap();
     // The built-in sky's gradient and ground without the sun: directional, yet its order-3
     // irradiance stays positive, so the SH lightmap's clamp of negative bounce irradiance
@@ -30,9 +60,9 @@ fn transfer_times_lighting_equals_the_sh_lightmap() {
     let mut direct_rows = Vec::new();
     for bounces in [0, 2] {
         let shl = bake_sh_lightmap(
-            &scene,
-            &tracer,
-            &texels,
+            scene,
+            tracer,
+            texels,
             &l,
             &ShLightmapSettings {
                 rays: 64,
@@ -41,18 +71,7 @@ fn transfer_times_lighting_equals_the_sh_lightmap() {
                 progress: false,
             },
         );
-        let transfer = bake_transfer(
-            &scene,
-            &tracer,
-            &texels,
-            &TransferSettings {
-                lighting_order: order,
-                rays: 64,
-                seed: 3,
-                bounces,
-                progress: false,
-            },
-        );
+        let transfer = house.transfer(order, bounces);
         let (mut worst, mut scale, mut texels_compared) = (0.0f64, 0.0f64, 0usize);
         for i in (0..texels.covered.len()).filter(|&i| texels.covered[i]) {
             let got = transfer.transferred(i, &l);
@@ -86,23 +105,10 @@ fn transfer_times_lighting_equals_the_sh_lightmap() {
 /// the error of K vectors is what the left-out variance allows.
 #[test]
 fn compressed_transfer_converges_to_the_full_matrices() {
-    let res = 64;
-    let scene = shvis::scene::house::build(res).expect("the house builds");
-    let texels = rasterize(&scene.mesh, res);
-    let tracer = Tracer::new(&scene.mesh);
+    let house = House::new();
+    let texels = &house.texels;
     let order = Order::new(3).unwrap();
-    let transfer = bake_transfer(
-        &scene,
-        &tracer,
-        &texels,
-        &TransferSettings {
-            lighting_order: order,
-            rays: 64,
-            seed: 3,
-            bounces: 1,
-            progress: false,
-        },
-    );
+    let transfer = house.transfer(order, 1);
     let l = project_sh(&sky(128, &SkyParams::default()), order);
     let covered: Vec<usize> = (0..texels.covered.len())
         .filter(|&i| texels.covered[i])
