@@ -81,10 +81,10 @@ impl SpecularSettings {
 }
 
 impl BenchSettings {
-    /// Whether a technique of the run needs the SH lightmap bake (and so the
+    /// Whether a technique of the run bakes inter-reflection (and so needs the
     /// inter-reflected reference).
-    pub fn needs_sh_lightmap(&self) -> bool {
-        self.techniques.iter().any(|t| t.needs().sh_lightmap)
+    pub fn needs_inter_reflection(&self) -> bool {
+        self.techniques.iter().any(|t| t.needs().inter_reflection())
     }
 }
 
@@ -300,7 +300,7 @@ fn render_references(
             height: settings.height,
             spp: settings.ref_spp,
             seed: settings.seed,
-            bounces: if settings.needs_sh_lightmap() {
+            bounces: if settings.needs_inter_reflection() {
                 settings.bounces
             } else {
                 0

@@ -909,11 +909,12 @@ fn run_view(a: ViewArgs) -> Result<()> {
         );
     }
     let techniques: Vec<Technique> = parse_list(&a.techniques, Technique::ALL)?;
-    let bounces = techniques
-        .iter()
-        .any(|t| t.needs().sh_lightmap)
-        .then_some(shvis::bake::shlmap::DEFAULT_BOUNCES);
-    let settings = prepare_settings(&a.scene, &a.env, bounces)?;
+    let settings = prepare_settings(
+        &a.scene,
+        &a.env,
+        &techniques,
+        shvis::bake::shlmap::DEFAULT_BOUNCES,
+    )?;
     let mut prepared = prepare(&settings)?;
     prepared.prepare_techniques(&techniques)?;
     let report = shvis::view::run(
@@ -997,7 +998,7 @@ fn run_relight(a: RelightArgs) -> Result<()> {
     };
     create_dir(&a.out)?;
     let started = Instant::now();
-    let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, None)?)?;
+    let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, &[], 0)?)?;
     prepared.prepare_techniques(&settings.techniques)?;
     let ctx = open_gpu(&a.gpu)?;
     let table = shvis::relight::run(&ctx, &prepared, &settings)?;
@@ -1053,7 +1054,7 @@ fn run_study_compression(a: StudyCompressionArgs) -> Result<()> {
     use shvis::study::compression;
     create_dir(&a.out)?;
     let started = Instant::now();
-    let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, None)?)?;
+    let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, &[], 0)?)?;
     let rows = compression::run(
         &prepared.visibility,
         &compression::default_configs(),
@@ -1615,7 +1616,7 @@ fn run_study_seams(a: StudySeamsArgs) -> Result<()> {
     create_dir(&a.out)?;
     let started = Instant::now();
     let ctx = open_gpu(&a.gpu)?;
-    let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, None)?)?;
+    let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, &[], 0)?)?;
     prepared.prepare_techniques(&a.techniques)?;
     let mut rows = Vec::new();
     for &technique in &a.techniques {
@@ -1684,11 +1685,17 @@ fn run_sh(c: ShCommand) -> Result<()> {
     Ok(())
 }
 
+/// The bake settings of `scene` under `env` for `techniques`: the inter-reflected bakes
+/// (SH lightmap, transfer matrices) with `bounces` where a technique needs them.
 fn prepare_settings(
     scene: &SceneArgs,
     env: &str,
-    sh_lightmap_bounces: Option<u32>,
+    techniques: &[Technique],
+    bounces: u32,
 ) -> Result<PrepareSettings> {
+    let needs = |f: fn(&shvis::technique::BakeNeeds) -> bool| {
+        techniques.iter().any(|t| f(&t.needs())).then_some(bounces)
+    };
     let settings = PrepareSettings {
         scene: scene.scene.clone(),
         env: env.to_string(),
@@ -1700,7 +1707,8 @@ fn prepare_settings(
         table_res: scene.table_res,
         h_order: shvis::sh::Order::new(scene.h_order).context("--h-order")?,
         cache_dir: None,
-        sh_lightmap_bounces,
+        sh_lightmap_bounces: needs(|n| n.sh_lightmap),
+        transfer_bounces: needs(|n| n.transfer),
         height_map: scene
             .height_map
             .clone()
@@ -1737,7 +1745,7 @@ fn run_bake(a: BakeArgs) -> Result<()> {
         );
         return Ok(());
     }
-    let settings = prepare_settings(&a.scene, "sky", None)?;
+    let settings = prepare_settings(&a.scene, "sky", &[], 0)?;
     let vis_res = bake::validate_res(a.scene.vis_res)?;
     let rays = bake::validate_rays(a.scene.rays)?;
     create_dir(&a.out)?;
@@ -1898,8 +1906,7 @@ fn run_render(mut a: RenderArgs) -> Result<()> {
     check_frame_memory(a.width, a.height, 48)?;
     shvis::files::check_writable_file(&a.out, "--out")?;
     a.technique = with_normal_filter(vec![a.technique], a.normal_filter)[0];
-    let bounces = a.technique.needs().sh_lightmap.then_some(a.bounces);
-    let settings = prepare_settings(&a.scene, &a.env, bounces)?;
+    let settings = prepare_settings(&a.scene, &a.env, &[a.technique], a.bounces)?;
     // The device next: a missing GPU should not cost a bake.
     let ctx = open_gpu(&a.gpu)?;
     let mut prepared = prepare(&settings)?;
@@ -2058,8 +2065,12 @@ fn run_bench(a: BenchArgs) -> Result<()> {
         let _ = std::fs::remove_file(a.out.join(stale));
     }
     let started = Instant::now();
-    let bounces = settings.needs_sh_lightmap().then_some(a.bounces);
-    let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, bounces)?)?;
+    let mut prepared = prepare(&prepare_settings(
+        &a.scene,
+        &a.env,
+        &settings.techniques,
+        a.bounces,
+    )?)?;
     prepared.prepare_techniques(&settings.techniques)?;
     settings.specular = a.specular.settings(&prepared.env)?;
     if a.techniques == "all" && prepared.ssbump.is_none() {

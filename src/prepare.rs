@@ -4,6 +4,7 @@
 
 use std::cell::OnceCell;
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Instant;
 
 use crate::bake::ao::{AoMap, AoSettings, bake_ao};
@@ -12,6 +13,7 @@ use crate::bake::cluster::{self, ClusteredModel};
 use crate::bake::pca::{PcaModel, fit};
 use crate::bake::raster::{LightmapTexels, rasterize};
 use crate::bake::shlmap::{ShLightmap, ShLightmapSettings, bake_sh_lightmap};
+use crate::bake::transfer::{self, TransferMap, TransferSettings, bake_transfer};
 use crate::bake::ssbump::{self, SsBumpMaps};
 use crate::bake::trace::Tracer;
 use crate::bake::vertex_pca::{VertexPca, bake_vertex_pca};
@@ -47,6 +49,8 @@ pub struct PrepareSettings {
     pub cache_dir: Option<PathBuf>,
     /// Bake the SH lightmap (`shlmap`) with this many bounces; `None`: skip it.
     pub sh_lightmap_bounces: Option<u32>,
+    /// Bake transfer matrices (`nmprt*`) with this many bounces; `None`: skip them.
+    pub transfer_bounces: Option<u32>,
     /// `--height-map FILE --height-scale S`: the scene material's height field (replaces
     /// the built-in one), heights in texels = S × value.
     pub height_map: Option<(PathBuf, f64)>,
@@ -66,6 +70,7 @@ impl Default for PrepareSettings {
             h_order: Order::THREE,
             cache_dir: None,
             sh_lightmap_bounces: None,
+            transfer_bounces: None,
             height_map: None,
         }
     }
@@ -92,6 +97,9 @@ pub struct Prepared {
     pub h_order: Order,
     /// Order-3 SH of incident radiance with inter-reflection, when asked for.
     pub sh_lightmap: Option<ShLightmap>,
+    /// Transfer matrices with inter-reflection (lighting of order
+    /// `bake::transfer::DEFAULT_LIGHTING_ORDER`), when asked for.
+    pub transfer: Option<Arc<TransferMap>>,
     /// VQ / CPCA fits of `visibility` the techniques of the run need
     /// ([`Prepared::fit_clusters`]).
     pub clusters: Vec<ClusteredModel>,
@@ -174,6 +182,18 @@ pub fn check_settings(settings: &PrepareSettings) -> Result<(), PrepareError> {
         bake_memory_bytes(settings.vis_res, settings.order.get()),
         "lower --vis-res or --order",
     )?;
+    if settings.transfer_bounces.is_some() {
+        let n = transfer::DEFAULT_LIGHTING_ORDER.coeff_count() as u64;
+        let texels = u64::from(settings.vis_res) * u64::from(settings.vis_res);
+        // Per texel and matrix entry: the f32 result, the f64 matrices of two bounces and a
+        // third of the f64 unbounced one (shared by the colours).
+        let bytes = texels.saturating_mul(3 * 9 * n * (4 + 16 + 3));
+        crate::limits::check_memory(
+            format_args!("--vis-res {}: the transfer-matrix bake", settings.vis_res),
+            bytes,
+            "lower --vis-res",
+        )?;
+    }
     warn_if_few_rays(settings.rays, settings.order);
     Ok(())
 }
@@ -333,6 +353,7 @@ impl Prepared {
             sh_lightmap: self.sh_lightmap.as_ref(),
             ssbump: self.ssbump.as_ref(),
             ndf_moments: self.ndf_moments.as_ref(),
+            transfer: self.transfer.as_ref(),
             table_res: self.table_res,
             h_order: self.h_order,
         }
@@ -449,9 +470,24 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
             },
         )
     });
+    let transfer = settings.transfer_bounces.map(|bounces| {
+        Arc::new(bake_transfer(
+            &scene,
+            geometry.tracer(),
+            geometry.texels(),
+            &TransferSettings {
+                lighting_order: transfer::DEFAULT_LIGHTING_ORDER,
+                rays,
+                seed: settings.seed,
+                bounces,
+                progress: settings.progress,
+            },
+        ))
+    });
     drop(geometry);
     Ok(Prepared {
         sh_lightmap,
+        transfer,
         scene,
         env,
         ao,

@@ -134,6 +134,7 @@ fn listing_2_with_the_unoccluded_d_encoding_equals_listing_1_per_pixel() {
         let inputs = technique::Inputs {
             ssbump: Some(&maps),
             ndf_moments: None,
+            transfer: None,
             ..prepared.inputs()
         };
         let settings = FrameSettings {

@@ -285,6 +285,7 @@ fn shlmap_tracks_strong_inter_reflection() {
         sh_lightmap: Some(&map),
         ssbump: None,
         ndf_moments: None,
+        transfer: None,
         table_res: 16,
         h_order: Order::THREE,
     };

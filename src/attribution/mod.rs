@@ -710,7 +710,9 @@ pub fn cpu_rungs(
         // against the displaced-geometry reference (`study rnm`), not split into rungs.
         // The NDF variants' rungs are their base technique's; their own step (the normal
         // map's filtering) is measured by `shvis study ndf`.
-        Technique::Rnm { .. } | Technique::Ndf { .. } => {}
+        // `nmprt*`: no ladder yet (its rungs would be the transfer bake's lighting order,
+        // the normal basis' truncation and the bounces; issue 23 reports its error only).
+        Technique::Rnm { .. } | Technique::Ndf { .. } | Technique::Nmprt { .. } => {}
         Technique::Shlmap => {
             let Some(map) = prepared.sh_lightmap.as_ref() else {
                 return Ok(rungs.into_inner());

@@ -53,6 +53,10 @@ use crate::sh::{Order, basis::eval_basis, zonal};
 /// Rows of M: the order-3 SH of transferred incident radiance.
 pub const TRANSFER_ROWS: usize = 9;
 
+/// The lighting order the `nmprt*` techniques bake M for: unc6's visibility order, so the
+/// two see the same sharpness of the lighting.
+pub const DEFAULT_LIGHTING_ORDER: Order = Order::SIX;
+
 /// What a transfer bake does.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TransferSettings {
@@ -75,6 +79,10 @@ pub struct TransferMap {
     /// `((t·3 + c)·9 + i)·N + j`.
     pub matrices: Vec<f32>,
     pub covered: Vec<bool>,
+    /// The normal map's frame at each texel centre, world space: tangent, bitangent (with
+    /// the tangent's handedness) and shading normal, as `glsl/include/common.glsl` builds
+    /// it per pixel (zero where not covered) — what turns l' into tangent space.
+    pub frames: Vec<[glam::Vec3; 3]>,
     pub stats: BakeStats,
 }
 
@@ -322,6 +330,16 @@ pub fn bake_transfer(
         bounces: settings.bounces,
         matrices,
         covered: texels.covered.clone(),
+        frames: (0..res * res)
+            .map(|i| {
+                if !texels.covered[i] {
+                    return [glam::Vec3::ZERO; 3];
+                }
+                let n = texels.shading_normal[i].normalize_or(texels.normal[i]);
+                let t = crate::scene::tangent::orthonormalize(n, texels.tangent[i]);
+                [t.truncate(), n.cross(t.truncate()) * t.w, n]
+            })
+            .collect(),
         stats: BakeStats {
             rays_traced: rays_done.into_inner(),
             seconds: start.elapsed().as_secs_f64(),

@@ -105,7 +105,8 @@ pub fn write_pca_error_plot(
                 | Technique::Cpca { .. }
                 | Technique::PcaVertex { .. }
                 | Technique::Rnm { .. }
-                | Technique::Ndf { .. } => None,
+                | Technique::Ndf { .. }
+                | Technique::Nmprt { .. } => None,
             })
             .collect()
     };

@@ -31,6 +31,10 @@ pub enum SlotKind {
     /// `uncOndf` / `preconvndf`), sampled with the material sampler: one fetch per layer; like albedo and normal map its bytes are
     /// the material's, not the lightmap's or the lighting's.
     Material,
+    /// A fixed normal-indexed basis (`nmprtsvdM`'s U(n) on the disk of tangent-space
+    /// normals, `super::nmprt`): one dependent fetch per layer; its bytes count with the
+    /// tables'.
+    NormalBasis,
 }
 
 /// The images bound at one binding.
@@ -76,7 +80,7 @@ impl SlotLayout {
         self.images
             .iter()
             .map(|d| match self.kind {
-                SlotKind::PerTexel | SlotKind::Material => d.layers,
+                SlotKind::PerTexel | SlotKind::Material | SlotKind::NormalBasis => d.layers,
                 SlotKind::NormalTable => match d.view_type {
                     vk::ImageViewType::CUBE | vk::ImageViewType::CUBE_ARRAY => d.layers / 6,
                     // dx9 strips: each sphere is two res × res hemisphere squares.
@@ -108,6 +112,7 @@ pub fn stats(
     TechniqueStats {
         texel_bytes: of_kind(SlotKind::PerTexel).map(SlotLayout::bytes).sum(),
         table_bytes: of_kind(SlotKind::NormalTable)
+            .chain(of_kind(SlotKind::NormalBasis))
             .map(SlotLayout::bytes)
             .sum::<u64>()
             + params_bytes as u64,
@@ -122,8 +127,10 @@ pub fn stats(
 /// for double-buffered dynamic lighting, `super::lighting`): checks the path rules, uploads
 /// each copy's uniform block and tables, compiles the fragment shader
 /// ([`super::fragment_shader`]) once and builds one pipeline per copy over the per-texel
-/// images (binding TEXTURE0), the technique's material-space textures if it has any (the
-/// next binding) and that copy's tables (the bindings after those).
+/// images (binding TEXTURE0: the bake's, shared by the copies, or — when the lighting data
+/// has per-texel images — that copy's), the technique's extra slot if it has one (material
+/// textures, a normal basis; the next binding) and that copy's tables (the bindings after
+/// those).
 #[allow(clippy::too_many_arguments)]
 pub fn finish(
     ctx: &Arc<Context>,
@@ -131,16 +138,12 @@ pub fn finish(
     technique: Technique,
     path: HwPath,
     per_texel: Vec<Image>,
-    material: Vec<Image>,
+    material: Option<TextureSlot>,
     lighting: &LightingData,
     sets: usize,
 ) -> Result<TechniqueGpu, TechniqueError> {
     let label = format!("{technique}.{path}");
-    let per_texel = TextureSlot::per_texel(per_texel);
-    let material = (!material.is_empty()).then_some(TextureSlot {
-        kind: SlotKind::Material,
-        images: material,
-    });
+    let shared_per_texel = TextureSlot::per_texel(per_texel);
     let fragment = compile_fragment(technique, path, scene)?;
     check_uniform_size(ctx, lighting.params.len(), &label)?;
     let sampler = scene.lightmap_sampler();
@@ -152,7 +155,16 @@ pub fn finish(
             Some(tables) => tables.upload(ctx, &suffix)?,
             None => Vec::new(),
         };
-        let slots: Vec<&TextureSlot> = std::iter::once(&per_texel)
+        let own_per_texel = match &lighting.texels {
+            Some(texels) => {
+                let mut texels = texels.clone();
+                texels.name += &suffix;
+                Some(TextureSlot::per_texel(texels.upload(ctx, path)?))
+            }
+            None => None,
+        };
+        let per_texel = own_per_texel.as_ref().unwrap_or(&shared_per_texel);
+        let slots: Vec<&TextureSlot> = std::iter::once(per_texel)
             .chain(&material)
             .chain(&table_slots)
             .collect();
@@ -186,7 +198,7 @@ pub fn finish(
         for (binding, slot) in (layout::BINDING_TECHNIQUE_TEXTURE0..).zip(&slots) {
             let sampler = match slot.kind {
                 SlotKind::Material => scene.material_sampler(),
-                SlotKind::PerTexel | SlotKind::NormalTable => sampler,
+                SlotKind::PerTexel | SlotKind::NormalTable | SlotKind::NormalBasis => sampler,
             };
             let resource = match slot.images.as_slice() {
                 [one] => gpu::Resource::Texture(one, sampler),
@@ -200,10 +212,14 @@ pub fn finish(
         built.push(LightingSet {
             pipeline,
             params,
-            tables: table_slots.into_iter().flat_map(|s| s.images).collect(),
+            images: table_slots
+                .into_iter()
+                .chain(own_per_texel)
+                .flat_map(|s| s.images)
+                .collect(),
         });
     }
-    let mut images = per_texel.images;
+    let mut images = shared_per_texel.images;
     images.extend(material.into_iter().flat_map(|s| s.images));
     Ok(TechniqueGpu::new(
         ctx, technique, path, stats, images, built,
@@ -237,6 +253,7 @@ fn cost_counts(
             (SlotKind::PerTexel, HwPath::Dx10) => Kind::Array2d,
             (SlotKind::NormalTable, HwPath::Dx9) => Kind::Dependent2d,
             (SlotKind::NormalTable, HwPath::Dx10) => Kind::CubeArray,
+            (SlotKind::NormalBasis, _) => Kind::Dependent2d,
         };
         lookups.push((kind, n));
     }

@@ -21,9 +21,10 @@
 use std::sync::Arc;
 
 use super::tables::NormalTableData;
+use super::texels::TexelGroups;
 use super::{HwPath, Technique, TechniqueError};
 use crate::bake::lxh::SymmetricBuild;
-use crate::gpu::{self, Image, MeshPipeline};
+use crate::gpu::{self, Image, ImageDesc, MeshPipeline};
 use crate::sh::Order;
 
 /// A technique's lighting-dependent data (module doc).
@@ -33,6 +34,10 @@ pub struct LightingData {
     pub params: Vec<u8>,
     /// Its normal-indexed tables, if it has any.
     pub tables: Option<NormalTableData>,
+    /// Per-texel data that depends on the lighting (`nmprt*`: the transferred radiance
+    /// formed from each texel's transfer matrix), bound where other families bind their
+    /// bake's per-texel data.
+    pub texels: Option<TexelGroups>,
 }
 
 impl LightingData {
@@ -41,7 +46,23 @@ impl LightingData {
         LightingData {
             params,
             tables: None,
+            texels: None,
         }
+    }
+
+    /// Every image's description and texel bytes (one slice per layer, level 0), tables
+    /// first, on `path`: what one update uploads.
+    pub fn image_uploads(&self, path: HwPath) -> Vec<(ImageDesc, Vec<Vec<&[u8]>>)> {
+        let mut out = Vec::new();
+        if let Some(tables) = &self.tables {
+            for (i, image) in tables.images.iter().enumerate() {
+                out.push((image.desc, tables.image_levels(i)));
+            }
+        }
+        if let Some(texels) = &self.texels {
+            out.extend(texels.image_levels(path));
+        }
+        out
     }
 }
 
@@ -71,6 +92,8 @@ pub(crate) enum Recipe {
     },
     /// Lighting baked into the per-texel data (`shlmap`): the data never changes.
     Baked(LightingData),
+    /// `nmprt*`: the transfer matrices and what the variant evaluates them with.
+    Nmprt(Arc<super::nmprt::NmprtRecipe>),
     /// `uncOndf` / `preconvndf`: the base technique's data; for `unc` (`order`) its uniform
     /// block followed by the L×H table's band-0 constants (`crate::ndf::diffuse`).
     Ndf {
@@ -149,6 +172,7 @@ impl LightingRecipe {
                 means,
             } => super::cluster::lighting(bases, means, *order, radiance_sh, &label),
             Recipe::Baked(data) => Ok(data.clone()),
+            Recipe::Nmprt(recipe) => recipe.lighting(radiance_sh, irradiance_sh, &label),
             Recipe::Ndf { base, order } => {
                 let mut data = self.build_recipe(base, radiance_sh, irradiance_sh)?;
                 if let Some(order) = order {
@@ -172,19 +196,25 @@ impl LightingRecipe {
 pub(crate) struct LightingSet {
     pub pipeline: MeshPipeline,
     pub params: gpu::Buffer,
-    /// In binding order (`NormalTableData::images`).
-    pub tables: Vec<Image>,
+    /// In upload order ([`LightingData::image_uploads`]): the tables, then the
+    /// lighting-dependent per-texel images.
+    pub images: Vec<Image>,
 }
 
 impl LightingSet {
-    /// Checks `data` has this set's layout: same uniform size, same table images.
-    pub fn check_layout(&self, data: &LightingData, label: &str) -> Result<(), TechniqueError> {
-        let tables = data.tables.as_ref().map_or(&[][..], |t| &t.images[..]);
-        let same_tables = tables.len() == self.tables.len()
-            && tables
+    /// Checks `data` has this set's layout: same uniform size, same images.
+    pub fn check_layout(
+        &self,
+        data: &LightingData,
+        path: HwPath,
+        label: &str,
+    ) -> Result<(), TechniqueError> {
+        let uploads = data.image_uploads(path);
+        let same_tables = uploads.len() == self.images.len()
+            && uploads
                 .iter()
-                .zip(&self.tables)
-                .all(|(t, i)| t.desc == *i.desc());
+                .zip(&self.images)
+                .all(|((desc, _), i)| desc == i.desc());
         if data.params.len() as u64 != self.params.size() || !same_tables {
             return Err(TechniqueError::Input {
                 label: label.into(),

@@ -20,6 +20,7 @@
 pub mod cluster;
 pub mod finish;
 pub mod lighting;
+pub mod nmprt;
 pub mod pca;
 pub mod preconv;
 pub mod rnm;
@@ -35,7 +36,8 @@ use std::sync::Arc;
 
 pub use lighting::{LightingData, LightingRecipe};
 pub use spec::{
-    BakeNeeds, ClusterNeed, HwPath, NdfBase, ParseError, ReferenceModel, RnmVariant, SeamMode,
+    BakeNeeds, ClusterNeed, HwPath, NdfBase, NmprtVariant, ParseError, ReferenceModel, RnmVariant,
+    SeamMode,
     Technique,
 };
 
@@ -75,6 +77,8 @@ pub struct Inputs<'a> {
     /// The moments of the material's normal map (`uncOndf`, `preconvndf`;
     /// `crate::ndf::moment_maps`).
     pub ndf_moments: Option<&'a crate::ndf::NdfMaps>,
+    /// Transfer matrices with inter-reflection per texel (`nmprt*`).
+    pub transfer: Option<&'a Arc<crate::bake::transfer::TransferMap>>,
     /// L×H table texels per hemisphere / face side.
     pub table_res: u32,
     /// Clamped-cosine order of the L×H product.
@@ -118,6 +122,7 @@ pub fn fragment_shader(technique: Technique) -> ShaderVariant {
         Technique::Cpca { k, m, seams, .. } => cluster::fragment_shader(k, m, seams),
         Technique::PcaVertex { m, .. } => vertex::fragment_shader(m),
         Technique::Rnm { variant } => rnm::fragment_shader(variant),
+        Technique::Nmprt { variant } => nmprt::fragment_shader(variant),
         Technique::Ndf { base } => {
             let mut shader = fragment_shader(base.technique());
             shader.defines.push(("NDF_DIFFUSE", 1));
@@ -139,7 +144,8 @@ pub fn per_texel_lookups(technique: Technique) -> Option<u32> {
         | Technique::Sh2
         | Technique::PcaVertex { .. }
         | Technique::Rnm { .. }
-        | Technique::Ndf { .. } => None,
+        | Technique::Ndf { .. }
+        | Technique::Nmprt { .. } => None,
     }
 }
 
@@ -282,20 +288,18 @@ impl TechniqueGpu {
         }
         let back = (self.front + 1) % self.sets.len();
         let set = &mut self.sets[back];
-        set.check_layout(data, &label)?;
+        set.check_layout(data, self.path, &label)?;
         set.params.write(&data.params)?;
         // The previous copy went into the other set; its staging buffer is released once
         // the GPU is done with it (dropping waits, and by now it has long landed).
         self.upload = None;
-        if let Some(tables) = &data.tables {
-            let levels: Vec<_> = (0..tables.images.len())
-                .map(|i| tables.image_levels(i))
-                .collect();
+        let levels = data.image_uploads(self.path);
+        if !levels.is_empty() {
             let uploads: Vec<(&Image, &[Vec<&[u8]>])> = set
-                .tables
+                .images
                 .iter()
                 .zip(&levels)
-                .map(|(image, l)| (image, l.as_slice()))
+                .map(|(image, (_, l))| (image, l.as_slice()))
                 .collect();
             let name = format!("{label}.update");
             self.upload = Some(gpu::PendingUpload::submit(&self.ctx, &uploads, &name)?);
@@ -376,6 +380,7 @@ fn prepare(
         }
         Technique::PcaVertex { m, .. } => vertex::prepare(m, inputs, &label)?,
         Technique::Rnm { .. } => rnm::prepare(inputs, &label)?,
+        Technique::Nmprt { variant } => nmprt::prepare(variant, inputs, &label)?,
         Technique::Ndf { base } => {
             let (texels, recipe) = prepare(base.technique(), path, inputs)?;
             let order = match base {
@@ -414,10 +419,19 @@ fn build_sets(
     }
     let per_texel = texels.upload(ctx, path)?;
     let label = format!("{technique}.{path}");
-    let material = match technique {
+    let material: Vec<Image> = match technique {
         Technique::Rnm { variant } => rnm::material_texture(ctx, variant, inputs, &label)?
             .into_iter()
             .collect(),
+        Technique::Nmprt { variant } => {
+            let basis = nmprt::basis_images(ctx, variant, path, &label)?;
+            let slot = (!basis.is_empty()).then(|| finish::TextureSlot {
+                kind: finish::SlotKind::NormalBasis,
+                images: basis,
+            });
+            let gpu = finish::finish(ctx, scene, technique, path, Vec::new(), slot, &data, sets)?;
+            return Ok((gpu, recipe));
+        }
         Technique::Ndf { base } => {
             let maps = inputs.ndf_moments.ok_or_else(|| TechniqueError::Input {
                 label: label.clone(),
@@ -428,6 +442,10 @@ fn build_sets(
         }
         _ => Vec::new(),
     };
+    let material = (!material.is_empty()).then(|| finish::TextureSlot {
+        kind: finish::SlotKind::Material,
+        images: material,
+    });
     let gpu = finish::finish(
         ctx, scene, technique, path, per_texel, material, &data, sets,
     )?;

@@ -138,6 +138,7 @@ pub fn lighting(
     Ok(LightingData {
         params: bytemuck::bytes_of(&tables.params(table.map().res())).to_vec(),
         tables: Some(tables),
+        texels: None,
     })
 }
 

@@ -57,7 +57,32 @@ pub enum Technique {
     /// normals — isotropic from the mean length for `unc`, exact from all nine moments for
     /// `preconv`.
     Ndf { base: NdfBase },
+    /// Normal mapping for PRT (Sloan, PRT course; issue 23; `super::nmprt`): per texel a
+    /// transfer matrix M (`bake::transfer`: shadows and inter-reflection baked, lighting
+    /// free) gives transferred incident radiance l' = M·l, formed on the CPU when the
+    /// lighting changes and evaluated per pixel at the normal-mapped normal in one of four
+    /// ways ([`NmprtVariant`]).
+    Nmprt { variant: NmprtVariant },
 }
+
+/// How `nmprt*` evaluates the transferred radiance at the normal-mapped normal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum NmprtVariant {
+    /// `nmprt`: y(n)ᵀ C l', the 27 coefficients of l' per texel.
+    Full,
+    /// `nmprtsvdM`: the course's normal basis, e(n) = U(n) S_M V_Mᵀ R l' — M values per
+    /// colour per texel, U(n) looked up by the tangent-space normal.
+    Svd { m: u32 },
+    /// `nmprthl2`: three rows — the least-squares fit of e(n) by the HL2 blend weights,
+    /// three RGB values per texel blended like `rnm`.
+    Hl2,
+    /// `nmprtratio`: the shadowed/unshadowed luminance ratio at the texel's shading normal
+    /// times the unshadowed irradiance at the normal-mapped normal.
+    Ratio,
+}
+
+/// Singular vectors an `nmprtsvdM` name may keep (M = 9 is the full evaluation).
+pub const NMPRT_SVD_VECTORS: std::ops::RangeInclusive<u32> = 1..=9;
 
 /// The technique an NDF-filtered variant ([`Technique::Ndf`]) extends.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -181,6 +206,16 @@ pub struct BakeNeeds {
     pub ssbump: bool,
     /// The moments of the material's normal map (`crate::ndf::moment_maps`).
     pub ndf_moments: bool,
+    /// Transfer matrices with inter-reflection (`bake::transfer`).
+    pub transfer: bool,
+}
+
+impl BakeNeeds {
+    /// Whether it bakes inter-reflection (the SH lightmap or transfer matrices), so its
+    /// error is against the inter-reflected reference.
+    pub fn inter_reflection(&self) -> bool {
+        self.sh_lightmap || self.transfer
+    }
 }
 
 /// Which ground truth a technique's error is measured against.
@@ -294,6 +329,21 @@ impl Technique {
         Technique::Ndf {
             base: NdfBase::Preconv,
         },
+        Technique::Nmprt {
+            variant: NmprtVariant::Full,
+        },
+        Technique::Nmprt {
+            variant: NmprtVariant::Svd { m: 4 },
+        },
+        Technique::Nmprt {
+            variant: NmprtVariant::Svd { m: 6 },
+        },
+        Technique::Nmprt {
+            variant: NmprtVariant::Hl2,
+        },
+        Technique::Nmprt {
+            variant: NmprtVariant::Ratio,
+        },
     ];
 
     /// The CLI name: `unc6`, `pca12`, `pca12w`, `shlmap`, `preconv`, `sh2`.
@@ -328,6 +378,12 @@ impl Technique {
             }
             .into(),
             Technique::Ndf { base } => format!("{}ndf", base.technique().name()),
+            Technique::Nmprt { variant } => match variant {
+                NmprtVariant::Full => "nmprt".into(),
+                NmprtVariant::Svd { m } => format!("nmprtsvd{m}"),
+                NmprtVariant::Hl2 => "nmprthl2".into(),
+                NmprtVariant::Ratio => "nmprtratio".into(),
+            },
         }
     }
 
@@ -380,7 +436,8 @@ impl Technique {
             | Technique::Sh2
             | Technique::PcaVertex { .. }
             | Technique::Rnm { .. }
-            | Technique::Ndf { .. } => None,
+            | Technique::Ndf { .. }
+            | Technique::Nmprt { .. } => None,
         }
     }
 
@@ -402,7 +459,8 @@ impl Technique {
             | Technique::Cpca { .. }
             | Technique::PcaVertex { .. }
             | Technique::Rnm { .. }
-            | Technique::Ndf { .. } => None,
+            | Technique::Ndf { .. }
+            | Technique::Nmprt { .. } => None,
         }
     }
 
@@ -454,13 +512,19 @@ impl Technique {
                 ndf_moments: true,
                 ..base.technique().needs()
             },
+            Technique::Nmprt { .. } => BakeNeeds {
+                transfer: true,
+                ..BakeNeeds::default()
+            },
         }
     }
 
     /// The ground truth its error is measured against.
     pub fn reference(self) -> ReferenceModel {
         match self {
-            Technique::Shlmap | Technique::Rnm { .. } => ReferenceModel::InterReflected,
+            Technique::Shlmap | Technique::Rnm { .. } | Technique::Nmprt { .. } => {
+                ReferenceModel::InterReflected
+            }
             Technique::Unc { .. }
             | Technique::Pca { .. }
             | Technique::Preconv
@@ -484,7 +548,8 @@ impl Technique {
             | Technique::Vq { .. }
             | Technique::Cpca { .. }
             | Technique::PcaVertex { .. }
-            | Technique::Ndf { .. } => true,
+            | Technique::Ndf { .. }
+            | Technique::Nmprt { .. } => true,
         }
     }
 
@@ -535,6 +600,11 @@ impl Technique {
                 .map(|order| NdfBase::Unc { order })
                 .chain([NdfBase::Preconv])
                 .map(|base| Technique::Ndf { base })
+                .collect(),
+            Technique::Nmprt { .. } => [NmprtVariant::Full, NmprtVariant::Hl2, NmprtVariant::Ratio]
+                .into_iter()
+                .chain(NMPRT_SVD_VECTORS.map(|m| NmprtVariant::Svd { m }))
+                .map(|variant| Technique::Nmprt { variant })
                 .collect(),
         }
     }
@@ -587,7 +657,7 @@ impl FromStr for Technique {
             known: format!(
                 "{} (and uncO for O in {}..={}, pcaM/pcaMw for M a multiple of {} up to {}, \
                  vqK[n] for K in {:?}, cpcaK_M[s][n] for K in {:?}, M in {:?}, K·(M+1) ≤ {}, \
-                 pcaMv[E] for E in {:?} cm, uncOndf and preconvndf)",
+                 pcaMv[E] for E in {:?} cm, uncOndf and preconvndf, nmprtsvdM for M in 1..=9)",
                 join_names(Technique::ALL.iter().map(|t| t.name())),
                 UNC_ORDERS.start(),
                 UNC_ORDERS.end(),
@@ -773,9 +843,22 @@ mod tests {
         assert_eq!(pca.needs().visibility, Some(Order::SIX));
         assert!(Technique::Shlmap.needs().sh_lightmap && !Technique::Shlmap.dynamic_lighting());
         assert!(Technique::Preconv.needs().ao);
+        let nmprt: Technique = "nmprtsvd6".parse().unwrap();
+        assert_eq!(
+            nmprt,
+            Technique::Nmprt {
+                variant: NmprtVariant::Svd { m: 6 }
+            }
+        );
+        assert!(nmprt.needs().transfer && nmprt.needs().inter_reflection());
+        assert!(nmprt.dynamic_lighting() && !nmprt.needs().sh_lightmap);
+        assert!("nmprtsvd10".parse::<Technique>().is_err());
         for &t in Technique::ALL {
             let bounced = t.reference() == ReferenceModel::InterReflected;
-            let lightmapped = matches!(t, Technique::Shlmap | Technique::Rnm { .. });
+            let lightmapped = matches!(
+                t,
+                Technique::Shlmap | Technique::Rnm { .. } | Technique::Nmprt { .. }
+            );
             assert_eq!(bounced, lightmapped, "{t}");
         }
     }

@@ -71,10 +71,51 @@ impl TexelGroups {
         let bytes: Vec<&[u8]> = self.groups.iter().map(Vec::as_slice).collect();
         upload_texel_groups(ctx, path, self.res, self.format, &bytes, &self.name)
     }
+
+    /// The images the groups become on `path`, each with its bytes (one slice per layer,
+    /// level 0) and debug name ([`image_layout`]).
+    pub fn image_levels(&self, path: HwPath) -> Vec<(ImageDesc, Vec<Vec<&[u8]>>)> {
+        let bytes: Vec<&[u8]> = self.groups.iter().map(Vec::as_slice).collect();
+        image_layout(path, self.res, self.format, &bytes, &self.name)
+            .into_iter()
+            .map(|(desc, levels, _)| (desc, levels))
+            .collect()
+    }
 }
 
-/// Uploads per-texel groups (`groups[g]` = res² texels of `format`): one 2D texture per
-/// group on dx9, one 2D array on dx10.
+/// Per-texel groups as images (`groups[g]` = res² texels of `format`): one 2D texture per
+/// group on dx9, one 2D array on dx10; each with its level-0 layers and name.
+fn image_layout<'a>(
+    path: HwPath,
+    res: u32,
+    format: vk::Format,
+    groups: &[&'a [u8]],
+    name: &str,
+) -> Vec<(ImageDesc, Vec<Vec<&'a [u8]>>, String)> {
+    if groups.is_empty() {
+        return Vec::new();
+    }
+    match path {
+        HwPath::Dx9 => groups
+            .iter()
+            .enumerate()
+            .map(|(g, bytes)| {
+                (
+                    ImageDesc::texture_2d(format, res, res),
+                    vec![vec![*bytes]],
+                    format!("{name}.{g}"),
+                )
+            })
+            .collect(),
+        HwPath::Dx10 => vec![(
+            ImageDesc::texture_2d_array(format, res, res, groups.len() as u32),
+            vec![groups.to_vec()],
+            name.to_string(),
+        )],
+    }
+}
+
+/// Uploads per-texel groups ([`image_layout`]).
 pub fn upload_texel_groups(
     ctx: &Arc<Context>,
     path: HwPath,
@@ -83,26 +124,10 @@ pub fn upload_texel_groups(
     groups: &[&[u8]],
     name: &str,
 ) -> Result<Vec<Image>, TechniqueError> {
-    Ok(match path {
-        HwPath::Dx9 => groups
-            .iter()
-            .enumerate()
-            .map(|(g, bytes)| {
-                Image::with_data(
-                    ctx,
-                    &ImageDesc::texture_2d(format, res, res),
-                    &[vec![*bytes]],
-                    &format!("{name}.{g}"),
-                )
-            })
-            .collect::<Result<_, _>>()?,
-        HwPath::Dx10 => vec![Image::with_data(
-            ctx,
-            &ImageDesc::texture_2d_array(format, res, res, groups.len() as u32),
-            &[groups.to_vec()],
-            name,
-        )?],
-    })
+    image_layout(path, res, format, groups, name)
+        .into_iter()
+        .map(|(desc, levels, name)| Ok(Image::with_data(ctx, &desc, &levels, &name)?))
+        .collect()
 }
 
 #[cfg(test)]

@@ -105,5 +105,6 @@ pub fn lighting(
     Ok(LightingData {
         params: bytemuck::bytes_of(&tables.params(map.res())).to_vec(),
         tables: Some(tables),
+        texels: None,
     })
 }

@@ -178,7 +178,7 @@ pub(crate) fn finish(
         built.push(LightingSet {
             pipeline,
             params,
-            tables: Vec::new(),
+            images: Vec::new(),
         });
     }
     let mut stats = TechniqueStats {
