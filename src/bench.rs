@@ -56,6 +56,9 @@ pub struct BenchSettings {
     pub specular: Option<SpecularSettings>,
     /// Output directory (must exist).
     pub out: PathBuf,
+    /// `--relight-rotate DEG`: measure under the bake's environment turned this many
+    /// degrees about +Y ([`Relit`]).
+    pub relight_degrees: Option<f64>,
     /// Run the device probe first (`crate::probe`, at the bench's size) and give every row
     /// the model's time (`model_ms`, `x_model`); `probe.md`/`probe.json` beside the table.
     pub probe: bool,
@@ -85,6 +88,40 @@ impl BenchSettings {
     /// inter-reflected reference).
     pub fn needs_inter_reflection(&self) -> bool {
         self.techniques.iter().any(|t| t.needs().inter_reflection())
+    }
+}
+
+/// The lighting of a `--relight-rotate` bench (issue 23): the bake's environment turned
+/// about +Y (g(ω) = f(Rᵀω), the map resampled bilinearly) and its SH projections. The
+/// references are rendered under it; every technique with dynamic lighting is built for
+/// the bake's lighting and then relit to it through its lighting recipe and
+/// `TechniqueGpu::update_lighting` (the path `shvis relight` takes); the baked ones
+/// (`shlmap`, `rnm*`) keep the lighting they were baked with — what not relighting costs.
+pub struct Relit {
+    pub degrees: f64,
+    pub env: crate::env::EnvMap,
+    pub radiance_sh: Vec<[f64; 3]>,
+    pub irradiance_sh: Vec<[f64; 3]>,
+}
+
+impl Relit {
+    pub fn new(prepared: &Prepared, degrees: f64) -> Relit {
+        let r = crate::env::schedule::rotation_about_y(degrees.to_radians()).transpose();
+        let env = &prepared.env;
+        let env = crate::env::EnvMap::from_fn(env.width, env.height, |d| {
+            env.sample_bilinear(r * d)
+        });
+        let order = crate::sh::Order::new(prepared.radiance_sh.len().isqrt() as u32)
+            .expect("the prepared lighting has a valid order");
+        let radiance_sh = crate::env::project::project_sh(&env, order);
+        let irradiance_sh =
+            crate::sh::zonal::irradiance_from_radiance(&radiance_sh[..9], crate::sh::Order::THREE);
+        Relit {
+            degrees,
+            env,
+            radiance_sh,
+            irradiance_sh,
+        }
     }
 }
 
@@ -137,7 +174,9 @@ pub fn run(
         None
     };
     lap.split(&mut phases.probe);
-    let reference = render_references(ctx, prepared, settings)?;
+    let relit = settings.relight_degrees.map(|d| Relit::new(prepared, d));
+    let env = relit.as_ref().map_or(&prepared.env, |r| &r.env);
+    let reference = render_references(ctx, prepared, env, settings)?;
     lap.split(&mut phases.references);
     let frame_settings = FrameSettings {
         width: settings.width,
@@ -148,6 +187,10 @@ pub fn run(
     // The ladder's CPU rungs model the diffuse techniques alone (`attribution` leaves
     // specular rows out).
     let ladder = match reference.as_ref().and_then(|r| r.point.as_ref()) {
+        Some(_) if relit.is_some() => {
+            log::info!("error ladder: left out when relit (its CPU rungs use the bake's lighting)");
+            None
+        }
         Some(_) if settings.specular.is_some() => {
             log::info!("error ladder: left out with --specular (its CPU rungs are diffuse)");
             None
@@ -181,6 +224,7 @@ pub fn run(
                     prepared,
                     technique,
                     path,
+                    relit.as_ref(),
                     reference,
                     &mut ladder,
                     settings,
@@ -248,6 +292,12 @@ pub fn run(
         height: settings.height,
         vis_res: prepared.visibility.res,
         cost_model: cost_model.map(|p| p.model),
+        relit: relit.as_ref().map(|r| {
+            format!(
+                "the environment turned {}° about +Y after the bake; dynamic-lighting rows relit to it, baked rows (shlmap, rnm*) as baked",
+                r.degrees
+            )
+        }),
         specular: settings.specular.as_ref().map(|s| {
             let (d, e) = (s.light.direction, s.light.radiance);
             format!(
@@ -289,6 +339,7 @@ pub struct References {
 fn render_references(
     ctx: &Arc<Context>,
     prepared: &Prepared,
+    env: &crate::env::EnvMap,
     settings: &BenchSettings,
 ) -> Result<Option<References>, BenchError> {
     if settings.ref_spp == 0 {
@@ -307,7 +358,7 @@ fn render_references(
             },
             footprint,
         };
-        let mut image = render_reference(ctx, &prepared.scene, &prepared.env, &reference_settings)?;
+        let mut image = render_reference(ctx, &prepared.scene, env, &reference_settings)?;
         if let Some(s) = &settings.specular {
             let term = s.term(NormalFilter::Mip);
             let specular = specular_reference(ctx, prepared, &term, &reference_settings)?;
@@ -503,7 +554,10 @@ fn attribution(
         .out
         .join(LADDER_DIR)
         .join(format!("{technique}.{path}.sheet.png"));
-    match write_ladder_sheet(&file, &sheet, settings.exposure) {
+    let written = std::fs::create_dir_all(settings.out.join(LADDER_DIR))
+        .map_err(|e| format!("{}: cannot create: {e}", settings.out.join(LADDER_DIR).display()))
+        .and_then(|()| write_ladder_sheet(&file, &sheet, settings.exposure).map_err(|e| e.to_string()));
+    match written {
         Ok(()) => log::info!("wrote {}", file.display()),
         Err(e) => log::warn!("{e}"),
     }
@@ -543,13 +597,24 @@ fn measure_row(
     prepared: &Prepared,
     technique: Technique,
     path: HwPath,
+    relit: Option<&Relit>,
     references: Option<&References>,
     ladder: &mut Ladder,
     settings: &BenchSettings,
     lap: &mut Lap,
     phases: &mut BenchPhases,
 ) -> Result<(BenchRow, Frame), BenchError> {
-    let tech = technique::build(ctx, scene, technique, path, &prepared.inputs())?;
+    let tech = match relit {
+        Some(relit) if technique.dynamic_lighting() => {
+            let (mut tech, recipe) =
+                technique::build_dynamic(ctx, scene, technique, path, &prepared.inputs())?;
+            let data = recipe.build(&relit.radiance_sh, &relit.irradiance_sh)?;
+            tech.update_lighting(&data)?;
+            tech.wait_for_upload()?;
+            tech
+        }
+        _ => technique::build(ctx, scene, technique, path, &prepared.inputs())?,
+    };
     lap.split(&mut phases.build);
     let frame = tech.render(scene, settings.warmup, settings.frames)?;
     lap.split(&mut phases.render);
@@ -575,6 +640,18 @@ fn measure_row(
             e.rel_rmse
         );
     }
+    // Every row against the inter-reflected reference too, where there is one: the
+    // comparison of techniques with and without inter-reflection on one ground truth.
+    let rel_rmse_bounced = match (reference_kind, references) {
+        (RowReference::Bounced(_), _) => error.map(|e| e.rel_rmse),
+        (_, Some(r)) => r
+            .main
+            .bounced
+            .as_ref()
+            .and_then(|b| image_error(&frame, &b.frame))
+            .map(|e| e.rel_rmse),
+        (_, None) => None,
+    };
     write_images(&settings.out, &label, &frame, settings.exposure)?;
     if let Some(r) = reference_frame {
         let diff = difference(&frame, r, DIFFERENCE_SCALE);
@@ -602,6 +679,7 @@ fn measure_row(
         ms_max: timing.map(|s| s.ms_max),
         frames: frame.ms.len(),
         rel_rmse: error.map(|e| e.rel_rmse),
+        rel_rmse_bounced,
         psnr: error.map(|e| e.psnr),
         texel_bytes: tech.stats.texel_bytes,
         table_bytes: tech.stats.table_bytes,

@@ -793,9 +793,24 @@ struct BenchArgs {
     /// Leave out the device probe and the rows' model columns.
     #[arg(long)]
     no_probe: bool,
+    /// Measure under the environment turned DEG degrees about +Y after the bake (issue
+    /// 23): references under the turned map, techniques with dynamic lighting relit to it
+    /// through their lighting update, baked ones (shlmap, rnm*) as baked. No error ladder.
+    #[arg(long, value_name = "DEG", value_parser = finite_degrees)]
+    relight_rotate: Option<f64>,
     /// Output directory.
     #[arg(long, default_value = "bench-out")]
     out: PathBuf,
+}
+
+/// A rotation in degrees: finite, within ±360.
+fn finite_degrees(s: &str) -> std::result::Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|e| format!("{e}"))?;
+    if v.is_finite() && v.abs() <= 360.0 {
+        Ok(v)
+    } else {
+        Err(format!("{s} is not a finite angle within ±360 degrees"))
+    }
 }
 
 #[derive(Args, Debug)]
@@ -2058,7 +2073,11 @@ fn run_bench(a: BenchArgs) -> Result<()> {
         specular: None,
         out: a.out.clone(),
         probe: !a.no_probe,
+        relight_degrees: a.relight_rotate,
     };
+    if a.relight_rotate.is_some() && !a.specular.specular.is_empty() {
+        bail!("--relight-rotate: not with --specular (its light is the bake's sun)");
+    }
     create_dir(&a.out)?;
     // A table from an earlier run must not sit beside this run's images if it stops early.
     for stale in ["table.md", "table.json"] {

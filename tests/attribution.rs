@@ -85,6 +85,7 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
             specular: None,
             out: out_dir.clone(),
             probe: false,
+            relight_degrees: None,
         },
     )
     .expect("bench runs");

@@ -191,6 +191,9 @@ fn settings_list(t: &BenchTable) -> String {
     if let Some(spec) = &t.specular {
         item("specular term", spec.clone());
     }
+    if let Some(relit) = &t.relit {
+        item("relit", relit.clone());
+    }
     item(
         "bench wall time",
         format!("{:.1} s: {}", t.seconds, t.phases.summary()),

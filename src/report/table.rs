@@ -136,6 +136,9 @@ pub struct BenchRow {
     pub ms_max: Option<f64>,
     pub frames: usize,
     pub rel_rmse: Option<f64>,
+    /// Its relative RMSE against the inter-reflected reference, when the bench rendered
+    /// one (for the inter-reflected rows, `rel_rmse` itself).
+    pub rel_rmse_bounced: Option<f64>,
     pub psnr: Option<f64>,
     pub texel_bytes: u64,
     pub table_bytes: u64,
@@ -201,6 +204,9 @@ pub struct BenchTable {
     /// The specular material term of the rows that have one (`--specular`): its light and
     /// base spread.
     pub specular: Option<String>,
+    /// `--relight-rotate`: the lighting the rows and references are under when it is not
+    /// the one baked (techniques with dynamic lighting relit to it, baked ones as baked).
+    pub relit: Option<String>,
     /// The device cost model the rows' `model_ms` come from (`probe.md`).
     pub cost_model: Option<crate::probe::CostModel>,
     /// Wall time of the bench itself (probe, references, rows, files; the bake before it
@@ -276,6 +282,9 @@ impl BenchTable {
                 "; rows `+spec{{filter}}` add the specular term ({term}) with its normal map filtered as named, against references with its footprint reference added"
             );
         }
+        if let Some(relit) = &self.relit {
+            s += &format!("; relit: {relit}");
+        }
         if self.reference_bounces > 0 {
             s += &format!(
                 "; shlmap against the reference with {} bounces (relative noise {})",
@@ -317,7 +326,25 @@ impl BenchTable {
                 r.lookups_per_pixel
             );
         }
+        s += &self.bounced_markdown();
         s += &self.attribution_markdown();
+        s
+    }
+
+    /// Every row against the inter-reflected reference (empty without one): techniques
+    /// that model direct light only and those with inter-reflection on one ground truth.
+    fn bounced_markdown(&self) -> String {
+        if self.reference_bounces == 0 || self.results.iter().all(|r| r.rel_rmse_bounced.is_none())
+        {
+            return String::new();
+        }
+        let mut s = format!(
+            "\nEvery row against the reference with {} bounces (relative RMSE):\n\n| technique | path | rel. RMSE, {} bounces |\n|---|---|---:|\n",
+            self.reference_bounces, self.reference_bounces
+        );
+        for r in &self.results {
+            s += &format!("| {} | {} | {} |\n", r.name(), r.path, opt(r.rel_rmse_bounced, 4));
+        }
         s
     }
 
@@ -396,6 +423,7 @@ mod tests {
             ms_max: Some(ms),
             frames: 1,
             rel_rmse: Some(0.25),
+            rel_rmse_bounced: None,
             psnr: Some(30.0),
             texel_bytes: 8,
             table_bytes: 16,
@@ -447,6 +475,7 @@ mod tests {
             reference_bounces: 0,
             reference_bounced_rel_noise: None,
             specular: None,
+            relit: None,
             cost_model: None,
             seconds: 0.0,
             phases: BenchPhases::default(),
