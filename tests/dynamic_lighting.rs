@@ -13,8 +13,19 @@ use shvis::sh::Order;
 use shvis::sh::zonal::irradiance_from_radiance;
 use shvis::technique::{self, HwPath, Inputs, LightingData, Technique};
 
-const DYNAMIC: [&str; 8] = [
-    "unc3", "unc4", "unc6", "pca4", "pca16", "pca4w", "sh2", "preconv",
+const DYNAMIC: [&str; 12] = [
+    "unc3",
+    "unc4",
+    "unc6",
+    "pca4",
+    "pca16",
+    "pca4w",
+    "sh2",
+    "preconv",
+    "nmprt",
+    "nmprtsvd6",
+    "nmprthl2",
+    "nmprtratio",
 ];
 
 fn settings() -> FrameSettings {

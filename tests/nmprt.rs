@@ -1,0 +1,195 @@
+//! Issue 23, Build 2 / Acceptance: the normal-mapping-for-PRT techniques (`technique::nmprt`)
+//! against what they must equal — with the lighting fixed, `nmprt` renders `shlmap`'s
+//! image of the same bake (f16 on the GPU, both paths, validation on); with zero bounces
+//! its irradiance is unc6's direct lighting of the same rays (lighting band-limited so the
+//! two products are exact: the clamped-cosine truncation is their only approximation, and
+//! it is the same); the normal basis with all nine vectors is the full evaluation in f64,
+//! through the tangent-frame change.
+
+mod common;
+
+use std::sync::Arc;
+
+use glam::DVec3;
+use shvis::bake::lxh::LxhMatrices;
+use shvis::bake::raster::rasterize;
+use shvis::bake::shlmap::{ShLightmapSettings, bake_sh_lightmap};
+use shvis::bake::trace::Tracer;
+use shvis::bake::transfer::{DEFAULT_LIGHTING_ORDER, TransferSettings, bake_transfer};
+use shvis::env::project::project_sh;
+use shvis::env::sky::{SkyParams, sky};
+use shvis::render::{FrameSettings, SceneGpu};
+use shvis::sh::Order;
+use shvis::sh::zonal::irradiance_from_radiance;
+use shvis::technique::nmprt::{NmprtRecipe, convolved_basis};
+use shvis::technique::{self, HwPath, Inputs, NmprtVariant, Technique};
+
+/// The built-in sky without its sun, to `order`: directional, and its bounce irradiance
+/// stays positive (the SH lightmap's clamp never acts, `bake::transfer`).
+fn smooth_sky(order: Order) -> Vec<[f64; 3]> {
+    let smooth = SkyParams {
+        sun_radiance: 0.0,
+        ..SkyParams::default()
+    };
+    project_sh(&sky(256, &smooth), order)
+}
+
+#[test]
+fn nmprt_renders_the_sh_lightmap_of_the_same_bake_on_both_paths() {
+    let prepared = common::house();
+    let transfer = prepared.transfer.as_ref().expect("the test house bakes M");
+    let settings = &prepared.visibility_settings;
+    let texels = rasterize(&prepared.scene.mesh, prepared.visibility.res);
+    let tracer = Tracer::new(&prepared.scene.mesh);
+    let l = smooth_sky(DEFAULT_LIGHTING_ORDER);
+    let shl = bake_sh_lightmap(
+        &prepared.scene,
+        &tracer,
+        &texels,
+        &l,
+        &ShLightmapSettings {
+            rays: settings.rays,
+            seed: settings.seed,
+            bounces: transfer.bounces,
+            progress: false,
+        },
+    );
+    let irradiance = irradiance_from_radiance(&l[..9], Order::THREE);
+    let inputs = Inputs {
+        radiance_sh: &l,
+        irradiance_sh: &irradiance,
+        sh_lightmap: Some(&shl),
+        ..prepared.inputs()
+    };
+    let ctx = common::validated_context();
+    let frame = FrameSettings {
+        width: 160,
+        height: 100,
+        ..FrameSettings::default()
+    };
+    let scene = SceneGpu::new(&ctx, &prepared.scene, &frame).expect("scene");
+    for &path in HwPath::ALL {
+        let render = |t: Technique| {
+            technique::build(&ctx, &scene, t, path, &inputs)
+                .expect("builds")
+                .render(&scene, 0, 1)
+                .expect("renders")
+        };
+        let want = render(Technique::Shlmap);
+        let got = render(Technique::Nmprt {
+            variant: NmprtVariant::Full,
+        });
+        let largest = want
+            .rgba
+            .iter()
+            .flat_map(|p| p[..3].iter().copied())
+            .fold(0.0f32, f32::max);
+        let (mut worst, mut lit) = (0.0f32, 0usize);
+        for (a, b) in got.rgba.iter().zip(&want.rgba) {
+            if b[3] > 0.5 {
+                lit += 1;
+                for c in 0..3 {
+                    worst = worst.max((a[c] - b[c]).abs());
+                }
+            }
+        }
+        println!("{path}: {lit} pixels, max |nmprt − shlmap| = {worst:.3e} of max {largest:.3}");
+        assert!(lit > 1000 && largest > 0.0);
+        // Both store the same values in f16 and write an f16 target: a few f16 steps.
+        assert!(
+            worst <= 4e-3 * largest,
+            "{path}: nmprt differs from shlmap by {worst} (max {largest})"
+        );
+    }
+    common::assert_validation_clean(&ctx, "nmprt and shlmap");
+}
+
+#[test]
+fn unbounced_nmprt_is_unc6_direct_lighting_of_the_same_rays() {
+    let prepared = common::house();
+    let vis = &prepared.visibility;
+    let settings = &prepared.visibility_settings;
+    let texels = rasterize(&prepared.scene.mesh, vis.res);
+    let tracer = Tracer::new(&prepared.scene.mesh);
+    let transfer = bake_transfer(
+        &prepared.scene,
+        &tracer,
+        &texels,
+        &TransferSettings {
+            lighting_order: DEFAULT_LIGHTING_ORDER,
+            rays: settings.rays,
+            seed: settings.seed,
+            bounces: 0,
+            progress: false,
+        },
+    );
+    // Lighting of order 3: L·H₃ is of order 5 < 6, so unc6's product and visibility
+    // truncations are exact and both sum L·H₃ over the same unoccluded rays.
+    let mut l = smooth_sky(Order::new(8).unwrap());
+    l[9..].iter_mut().for_each(|c| *c = [0.0; 3]);
+    let lxh = LxhMatrices::new(&l, Order::SIX, Order::THREE);
+    let n2 = Order::SIX.coeff_count();
+    let stride = vis.order.coeff_count();
+    let (mut worst, mut scale, mut compared) = (0.0f64, 0.0f64, 0usize);
+    for t in (0..texels.covered.len()).filter(|&t| texels.covered[t]) {
+        let n = texels.normal[t].as_dvec3().normalize();
+        let transferred = transfer.transferred(t, &l);
+        let a = convolved_basis(n);
+        let v: Vec<f64> = vis.coeffs[t * stride..t * stride + n2]
+            .iter()
+            .map(|&x| f64::from(x))
+            .collect();
+        let unc = lxh.shade(n, &v);
+        for c in 0..3 {
+            let e: f64 = (0..9).map(|j| a[j] * transferred[j][c]).sum();
+            worst = worst.max((e - unc[c]).abs());
+            scale = scale.max(unc[c].abs());
+        }
+        compared += 1;
+    }
+    println!("{compared} texels: max |nmprt(0 bounces) − unc6| = {worst:.3e} of {scale:.3}");
+    assert!(compared > 1000);
+    // f32 storage of M and V: relative 1e-6 of the summands.
+    assert!(worst <= 1e-5 * scale, "{worst} of {scale}");
+}
+
+#[test]
+fn nine_singular_vectors_are_the_full_evaluation_at_normal_mapped_normals() {
+    let prepared = common::house();
+    let transfer: &Arc<_> = prepared.transfer.as_ref().expect("the test house bakes M");
+    let l = &prepared.radiance_sh;
+    let irradiance = &prepared.irradiance_sh;
+    let svd = NmprtRecipe::new(NmprtVariant::Svd { m: 9 }, transfer.clone());
+    let full = NmprtRecipe::new(NmprtVariant::Full, transfer.clone());
+    let normals = [
+        DVec3::Z,
+        DVec3::new(0.4, -0.3, 0.866).normalize(),
+        DVec3::new(-0.7, 0.5, 0.3).normalize(),
+    ];
+    let (mut worst, mut scale, mut compared) = (0.0f64, 0.0f64, 0usize);
+    for t in (0..transfer.covered.len()).filter(|&t| transfer.covered[t]).step_by(7) {
+        let c = svd.texel_values(t, l, irradiance);
+        let world = full.texel_values(t, l, irradiance);
+        // The frame as `nmprt::to_tangent` takes it: re-orthonormalized in f64, its
+        // handedness kept.
+        let [tg, bt, ns] = transfer.frames[t].map(|v| v.as_dvec3());
+        let ns = ns.normalize();
+        let tg = (tg - ns * ns.dot(tg)).normalize();
+        let bt = ns.cross(tg) * tg.cross(bt).dot(ns).signum();
+        for n in normals {
+            let a_world = convolved_basis(tg * n.x + bt * n.y + ns * n.z);
+            for ch in 0..3 {
+                let want: f64 = (0..9).map(|j| a_world[j] * world[3 * j + ch]).sum();
+                let got: f64 = (0..9)
+                    .map(|m| svd.basis.basis_value(m, n) * c[3 * m + ch])
+                    .sum();
+                worst = worst.max((got - want).abs());
+                scale = scale.max(want.abs());
+            }
+        }
+        compared += 1;
+    }
+    println!("{compared} texels × 3 normals: max |svd9 − full| = {worst:.3e} of {scale:.3}");
+    assert!(compared > 100);
+    assert!(worst <= 1e-9 * scale, "{worst} of {scale}");
+}
