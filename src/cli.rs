@@ -476,6 +476,10 @@ struct SceneArgs {
     /// SH order of the clamped cosine in the L×H product (the paper uses 3).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=shvis::sh::MAX_ORDER as i64))]
     h_order: u32,
+    /// Lighting order O of the transfer matrices of the nmprt* techniques (9 × O² per
+    /// texel and colour): at most the prepared lighting's order 8.
+    #[arg(long, default_value_t = shvis::bake::transfer::DEFAULT_LIGHTING_ORDER.get(), value_parser = clap::value_parser!(u32).range(1..=shvis::prepare::LIGHTING_ORDER as i64))]
+    transfer_order: u32,
     /// Height map of the scene's material (PNG/EXR luminance), tiled by its UVs like the
     /// normal map: what `ssbump` and `rnmao` shadow with (replaces the built-in bricks').
     #[arg(long)]
@@ -1013,7 +1017,12 @@ fn run_relight(a: RelightArgs) -> Result<()> {
     };
     create_dir(&a.out)?;
     let started = Instant::now();
-    let mut prepared = prepare(&prepare_settings(&a.scene, &a.env, &[], 0)?)?;
+    let mut prepared = prepare(&prepare_settings(
+        &a.scene,
+        &a.env,
+        &settings.techniques,
+        shvis::bake::shlmap::DEFAULT_BOUNCES,
+    )?)?;
     prepared.prepare_techniques(&settings.techniques)?;
     let ctx = open_gpu(&a.gpu)?;
     let table = shvis::relight::run(&ctx, &prepared, &settings)?;
@@ -1724,6 +1733,7 @@ fn prepare_settings(
         cache_dir: None,
         sh_lightmap_bounces: needs(|n| n.sh_lightmap),
         transfer_bounces: needs(|n| n.transfer),
+        transfer_order: shvis::sh::Order::new(scene.transfer_order).context("--transfer-order")?,
         height_map: scene
             .height_map
             .clone()

@@ -51,6 +51,8 @@ pub struct PrepareSettings {
     pub sh_lightmap_bounces: Option<u32>,
     /// Bake transfer matrices (`nmprt*`) with this many bounces; `None`: skip them.
     pub transfer_bounces: Option<u32>,
+    /// Their lighting order (≤ `LIGHTING_ORDER`).
+    pub transfer_order: Order,
     /// `--height-map FILE --height-scale S`: the scene material's height field (replaces
     /// the built-in one), heights in texels = S × value.
     pub height_map: Option<(PathBuf, f64)>,
@@ -71,6 +73,7 @@ impl Default for PrepareSettings {
             cache_dir: None,
             sh_lightmap_bounces: None,
             transfer_bounces: None,
+            transfer_order: transfer::DEFAULT_LIGHTING_ORDER,
             height_map: None,
         }
     }
@@ -98,7 +101,7 @@ pub struct Prepared {
     /// Order-3 SH of incident radiance with inter-reflection, when asked for.
     pub sh_lightmap: Option<ShLightmap>,
     /// Transfer matrices with inter-reflection (lighting of order
-    /// `bake::transfer::DEFAULT_LIGHTING_ORDER`), when asked for.
+    /// `PrepareSettings::transfer_order`), when asked for.
     pub transfer: Option<Arc<TransferMap>>,
     /// VQ / CPCA fits of `visibility` the techniques of the run need
     /// ([`Prepared::fit_clusters`]).
@@ -183,7 +186,10 @@ pub fn check_settings(settings: &PrepareSettings) -> Result<(), PrepareError> {
         "lower --vis-res or --order",
     )?;
     if settings.transfer_bounces.is_some() {
-        let n = transfer::DEFAULT_LIGHTING_ORDER.coeff_count() as u64;
+        if settings.transfer_order.get() > LIGHTING_ORDER {
+            return Err(PrepareError::TransferOrder(settings.transfer_order.get()));
+        }
+        let n = settings.transfer_order.coeff_count() as u64;
         let texels = u64::from(settings.vis_res) * u64::from(settings.vis_res);
         // Per texel and matrix entry: the f32 result, the f64 matrices of two bounces and a
         // third of the f64 unbounced one (shared by the colours).
@@ -369,6 +375,8 @@ pub enum PrepareError {
     Env(#[from] EnvError),
     #[error(transparent)]
     Bake(#[from] BakeError),
+    #[error("--transfer-order {0} is above the prepared lighting's order {LIGHTING_ORDER}")]
+    TransferOrder(u32),
     #[error("--table-res {0} is out of range 4..=256")]
     TableRes(u32),
     #[error(
@@ -476,7 +484,7 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
             geometry.tracer(),
             geometry.texels(),
             &TransferSettings {
-                lighting_order: transfer::DEFAULT_LIGHTING_ORDER,
+                lighting_order: settings.transfer_order,
                 rays,
                 seed: settings.seed,
                 bounces,
