@@ -146,3 +146,59 @@ fn compressed_transfer_converges_to_the_full_matrices() {
     assert!(last_error < 1e-4 * scale, "all vectors: {last_error}");
     assert!(transfer.compress(0).is_err() && transfer.compress(3 * 9 * 9 + 1).is_err());
 }
+
+/// CPCA of the matrices (the visibility's cluster fit on the 3·9·N-vectors): one cluster is
+/// the PCA; more clusters of the same M reconstruct M·l better (iterative CPCA never raises
+/// the squared error it minimizes; checked on the RMS over texels).
+#[test]
+fn clustered_transfer_is_pca_with_one_cluster_and_improves_with_more() {
+    use shvis::bake::cluster::Clustering;
+    let house = House::new();
+    let texels = &house.texels;
+    let order = Order::new(3).unwrap();
+    let transfer = house.transfer(order, 1);
+    let l = project_sh(&sky(128, &SkyParams::default()), order);
+    let covered: Vec<usize> = (0..texels.covered.len())
+        .filter(|&i| texels.covered[i])
+        .collect();
+    let rms = |f: &dyn Fn(usize) -> [[f64; 3]; 9]| {
+        let sum: f64 = covered
+            .iter()
+            .map(|&i| {
+                let (a, b) = (transfer.transferred(i, &l), f(i));
+                a.iter()
+                    .zip(&b)
+                    .flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).powi(2)))
+                    .sum::<f64>()
+            })
+            .sum();
+        (sum / covered.len() as f64).sqrt()
+    };
+    let m = 4;
+    let pca = transfer.compress(m).unwrap();
+    let pca_error = rms(&|i| pca.transferred(i, &l));
+    let one = transfer
+        .compress_clustered(1, m, Clustering::Iterative, 3)
+        .unwrap();
+    let one_error = rms(&|i| one.transferred(i, &l));
+    println!("M = {m}: PCA RMS {pca_error:.4e}, CPCA 1 cluster {one_error:.4e}");
+    assert!(
+        (one_error - pca_error).abs() <= 1e-3 * pca_error,
+        "{one_error} against {pca_error}"
+    );
+    let mut last = one_error;
+    for k in [4, 16] {
+        let cpca = transfer
+            .compress_clustered(k, m, Clustering::Iterative, 3)
+            .unwrap();
+        let error = rms(&|i| cpca.transferred(i, &l));
+        println!("CPCA {k} × {m}: RMS {error:.4e}");
+        assert!(error < last, "{k} clusters: {error} after {last}");
+        last = error;
+    }
+    assert!(
+        transfer
+            .compress_clustered(0, m, Clustering::Iterative, 3)
+            .is_err()
+    );
+}

@@ -85,16 +85,32 @@ pub struct ClusteredModel {
     pub iterations: u32,
 }
 
-/// The covered texels' vectors and the gutter texels to project after the fit.
+/// Texel-major vectors of `dim` f32 each (a visibility or transfer lightmap) and the
+/// covered texels among them.
 struct Samples<'a> {
-    vis: &'a VisibilityMap,
+    data: &'a [f32],
+    dim: usize,
     covered: Vec<usize>,
 }
 
 impl Samples<'_> {
+    /// The vector of covered sample `i`.
     fn vector(&self, i: usize) -> &[f32] {
-        self.vis.texel(self.covered[i])
+        self.texel(self.covered[i])
     }
+
+    fn texel(&self, t: usize) -> &[f32] {
+        &self.data[t * self.dim..(t + 1) * self.dim]
+    }
+}
+
+/// A fit of texel-major vectors ([`fit_vectors`]): what [`ClusteredModel`] holds besides
+/// the vectors' meaning.
+pub struct VectorFit {
+    pub clusters: Vec<Cluster>,
+    pub cluster_of: Vec<u32>,
+    pub weights: Vec<f32>,
+    pub iterations: u32,
 }
 
 fn squared_distance(v: &[f32], mean: &[f64]) -> f64 {
@@ -320,16 +336,45 @@ pub fn fit(
     seed: u64,
 ) -> Result<ClusteredModel, BakeError> {
     let n = vis.order.coeff_count();
+    let fit = fit_vectors(&vis.coeffs, n, &vis.covered, k, m, clustering, seed)?;
+    Ok(ClusteredModel {
+        order: vis.order,
+        res: vis.res,
+        clustering,
+        m,
+        clusters: fit.clusters,
+        cluster_of: fit.cluster_of,
+        weights: fit.weights,
+        iterations: fit.iterations,
+    })
+}
+
+/// [`fit`] for any texel-major vectors: `data` holds `dim` values per texel, `covered`
+/// one flag per texel (the transfer matrices' CPCA, `bake::transfer`, fits through here).
+///
+/// # Errors
+/// As [`fit`], with n = `dim`.
+pub fn fit_vectors(
+    data: &[f32],
+    dim: usize,
+    covered: &[bool],
+    k: usize,
+    m: usize,
+    clustering: Clustering,
+    seed: u64,
+) -> Result<VectorFit, BakeError> {
+    let n = dim;
     if m > n {
         return Err(BakeError::PcaBasisOutOfRange { m, n });
     }
     if k == 0 || k > 1 << 16 {
         return Err(BakeError::ClusterCountOutOfRange { k });
     }
-    let texels = (vis.res as usize).pow(2);
+    let texels = covered.len();
     let samples = Samples {
-        vis,
-        covered: (0..texels).filter(|&t| vis.covered[t]).collect(),
+        data,
+        dim,
+        covered: (0..texels).filter(|&t| covered[t]).collect(),
     };
     if samples.covered.is_empty() {
         return Err(BakeError::EmptyLightmap);
@@ -373,7 +418,7 @@ pub fn fit(
         cluster_of[t] = assignment[i];
     }
     let gutter: Vec<usize> = (0..texels)
-        .filter(|&t| !vis.covered[t] && vis.texel(t).iter().any(|&c| c != 0.0))
+        .filter(|&t| !covered[t] && samples.texel(t).iter().any(|&c| c != 0.0))
         .collect();
     let cost = |v: &[f32], c: usize| {
         if clusters[c].members == 0 {
@@ -386,7 +431,7 @@ pub fn fit(
     };
     let gutter_clusters: Vec<u32> = gutter
         .par_iter()
-        .map(|&t| best(k, |c| cost(vis.texel(t), c)).0)
+        .map(|&t| best(k, |c| cost(samples.texel(t), c)).0)
         .collect();
     for (&t, &c) in gutter.iter().zip(&gutter_clusters) {
         cluster_of[t] = c;
@@ -395,7 +440,7 @@ pub fn fit(
     if m > 0 {
         for t in samples.covered.iter().chain(&gutter) {
             let cluster = &clusters[cluster_of[*t] as usize];
-            let d: Vec<f64> = vis
+            let d: Vec<f64> = samples
                 .texel(*t)
                 .iter()
                 .zip(&cluster.mean)
@@ -406,11 +451,7 @@ pub fn fit(
             }
         }
     }
-    Ok(ClusteredModel {
-        order: vis.order,
-        res: vis.res,
-        clustering,
-        m,
+    Ok(VectorFit {
         clusters,
         cluster_of,
         weights,

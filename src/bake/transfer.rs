@@ -34,7 +34,8 @@
 //! diffuse transfer" — PCA of the 3·9·N-vectors of the covered texels with the visibility
 //! PCA's own principal-subspace fit (`super::pca`): M = mean + Σ_k w_k B_k, so that
 //! M·l = mean·l + Σ_k w_k (B_k·l): per texel K weights, and K + 1 matrices whose products
-//! with l are formed once per lighting change.
+//! with l are formed once per lighting change. [`TransferMap::compress_clustered`]: CPCA,
+//! the same per cluster (`super::cluster`), M·l = μ_C·l + Σ_k w_k (B_C,k·l).
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
@@ -53,9 +54,11 @@ use crate::sh::{Order, basis::eval_basis, zonal};
 /// Rows of M: the order-3 SH of transferred incident radiance.
 pub const TRANSFER_ROWS: usize = 9;
 
-/// The lighting order the `nmprt*` techniques bake M for: unc6's visibility order, so the
-/// two see the same sharpness of the lighting.
-pub const DEFAULT_LIGHTING_ORDER: Order = Order::SIX;
+/// The lighting order the `nmprt*` techniques bake M for: the order of the lighting unc6's
+/// L×H product takes (`prepare::LIGHTING_ORDER`), so the two see the sun equally sharp. At
+/// order 6 the sun's truncation costs more than the inter-reflection gains (README,
+/// issue 23: 0.142 against unc6's 0.136 on the house, turned sun; 0.128 at order 8).
+pub const DEFAULT_LIGHTING_ORDER: Order = Order::EIGHT;
 
 /// What a transfer bake does.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -142,7 +145,62 @@ fn apply<T: Copy + Into<f64>>(m: &[T], n: usize, l: &[[f64; 3]]) -> [[f64; 3]; T
     out
 }
 
+/// A CPCA-compressed [`TransferMap`] (module doc): per texel a cluster and M weights in
+/// its affine subspace, M·l = μ_C·l + Σ_k w_k (B_C,k·l).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClusteredTransfer {
+    pub lighting_order: Order,
+    /// Vectors per cluster.
+    pub m: usize,
+    /// Means and bases in [`TransferMap::matrices`]' per-texel layout.
+    pub clusters: Vec<super::cluster::Cluster>,
+    pub cluster_of: Vec<u32>,
+    /// Texel-major, M per texel.
+    pub weights: Vec<f32>,
+}
+
+impl ClusteredTransfer {
+    /// l' = M l at texel `index` from its cluster's mean, basis and weights.
+    pub fn transferred(&self, index: usize, l: &[[f64; 3]]) -> [[f64; 3]; TRANSFER_ROWS] {
+        let cluster = &self.clusters[self.cluster_of[index] as usize];
+        let w = &self.weights[index * self.m..(index + 1) * self.m];
+        let m = super::pca::combine(&cluster.mean, &cluster.basis, w.iter().map(|&x| f64::from(x)));
+        apply(&m, self.lighting_order.coeff_count(), l)
+    }
+}
+
 impl TransferMap {
+    /// CPCA of the covered texels' matrices with `k` clusters of `m` vectors — the
+    /// visibility's VQ/CPCA fit (`super::cluster::fit_vectors`) on the 3·9·N-vectors.
+    ///
+    /// # Errors
+    /// As [`super::cluster::fit`].
+    pub fn compress_clustered(
+        &self,
+        k: usize,
+        m: usize,
+        clustering: super::cluster::Clustering,
+        seed: u64,
+    ) -> Result<ClusteredTransfer, super::BakeError> {
+        let size = 3 * TRANSFER_ROWS * self.columns();
+        let fit = super::cluster::fit_vectors(
+            &self.matrices,
+            size,
+            &self.covered,
+            k,
+            m,
+            clustering,
+            seed,
+        )?;
+        Ok(ClusteredTransfer {
+            lighting_order: self.lighting_order,
+            m,
+            clusters: fit.clusters,
+            cluster_of: fit.cluster_of,
+            weights: fit.weights,
+        })
+    }
+
     /// PCA with `k` vectors of the covered texels' matrices (module doc).
     ///
     /// # Errors

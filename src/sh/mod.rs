@@ -81,6 +81,8 @@ impl Order {
     pub const FOUR: Order = Order(4);
     /// Order 6 (36 coefficients): the paper's visibility order.
     pub const SIX: Order = Order(6);
+    /// Order 8 (64 coefficients): the lighting of order-6 visibility's L×H product.
+    pub const EIGHT: Order = Order(8);
 
     /// Validates a user-supplied order.
     ///
