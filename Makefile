@@ -20,6 +20,8 @@ OVERCAST ?= ../shared/assets/env/potsdamer_platz_1k.exr
 RNM_ENVS = sky:15$(if $(wildcard $(OVERCAST)),$(comma)$(OVERCAST))
 NDF_ENVS = sky$(if $(wildcard $(OVERCAST)),$(comma)$(OVERCAST))
 comma := ,
+# Issue 23: normal mapping for PRT against unc6 under the sun turned 90° after the bake.
+NMPRT_ROWS = unc6,preconv,shlmap,nmprt,nmprtsvd4,nmprtsvd6,nmprthl2,nmprtratio
 
 bench: build
 	start=$$(date +%s); \
@@ -27,6 +29,8 @@ bench: build
 	target/release/shvis study rnm --envs $(RNM_ENVS) --out $(BENCH_OUT)/rnm && \
 	target/release/shvis study normalmap --out $(BENCH_OUT)/normalmap && \
 	target/release/shvis study ndf --diffuse-envs $(NDF_ENVS) --out $(BENCH_OUT)/ndf && \
+	target/release/shvis study nmprt-svd --out $(BENCH_OUT)/nmprt && \
+	target/release/shvis bench --techniques $(NMPRT_ROWS) --relight-rotate 90 --point-reference --ref-spp 256 --no-probe --frames 3 --warmup 1 --out $(BENCH_OUT)/relit90 && \
 	target/release/shvis bench --scene bumpy --techniques unc6,preconv,unc6ndf,preconvndf --specular mip,ndf,ndfn --light-dir 0,0.3,-1 --vis-res 256 --rays 256 --width 640 --height 360 --out $(BENCH_OUT)/specular && \
 	echo "make bench: $$(( $$(date +%s) - start )) s after the build"
 
