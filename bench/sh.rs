@@ -170,6 +170,7 @@ fn lighting_update(c: &mut Criterion) {
         sh_lightmap: None,
         ssbump: None,
         ndf_moments: None,
+        transfer: None,
         table_res: 32,
         h_order: Order::THREE,
     };

@@ -108,9 +108,8 @@ impl Relit {
     pub fn new(prepared: &Prepared, degrees: f64) -> Relit {
         let r = crate::env::schedule::rotation_about_y(degrees.to_radians()).transpose();
         let env = &prepared.env;
-        let env = crate::env::EnvMap::from_fn(env.width, env.height, |d| {
-            env.sample_bilinear(r * d)
-        });
+        let env =
+            crate::env::EnvMap::from_fn(env.width, env.height, |d| env.sample_bilinear(r * d));
         let order = crate::sh::Order::new(prepared.radiance_sh.len().isqrt() as u32)
             .expect("the prepared lighting has a valid order");
         let radiance_sh = crate::env::project::project_sh(&env, order);
@@ -555,8 +554,15 @@ fn attribution(
         .join(LADDER_DIR)
         .join(format!("{technique}.{path}.sheet.png"));
     let written = std::fs::create_dir_all(settings.out.join(LADDER_DIR))
-        .map_err(|e| format!("{}: cannot create: {e}", settings.out.join(LADDER_DIR).display()))
-        .and_then(|()| write_ladder_sheet(&file, &sheet, settings.exposure).map_err(|e| e.to_string()));
+        .map_err(|e| {
+            format!(
+                "{}: cannot create: {e}",
+                settings.out.join(LADDER_DIR).display()
+            )
+        })
+        .and_then(|()| {
+            write_ladder_sheet(&file, &sheet, settings.exposure).map_err(|e| e.to_string())
+        });
     match written {
         Ok(()) => log::info!("wrote {}", file.display()),
         Err(e) => log::warn!("{e}"),

@@ -167,7 +167,10 @@ fn nine_singular_vectors_are_the_full_evaluation_at_normal_mapped_normals() {
         DVec3::new(-0.7, 0.5, 0.3).normalize(),
     ];
     let (mut worst, mut scale, mut compared) = (0.0f64, 0.0f64, 0usize);
-    for t in (0..transfer.covered.len()).filter(|&t| transfer.covered[t]).step_by(7) {
+    for t in (0..transfer.covered.len())
+        .filter(|&t| transfer.covered[t])
+        .step_by(7)
+    {
         let c = svd.texel_values(t, l, irradiance);
         let world = full.texel_values(t, l, irradiance);
         // The frame as `nmprt::to_tangent` takes it: re-orthonormalized in f64, its

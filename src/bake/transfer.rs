@@ -164,7 +164,11 @@ impl ClusteredTransfer {
     pub fn transferred(&self, index: usize, l: &[[f64; 3]]) -> [[f64; 3]; TRANSFER_ROWS] {
         let cluster = &self.clusters[self.cluster_of[index] as usize];
         let w = &self.weights[index * self.m..(index + 1) * self.m];
-        let m = super::pca::combine(&cluster.mean, &cluster.basis, w.iter().map(|&x| f64::from(x)));
+        let m = super::pca::combine(
+            &cluster.mean,
+            &cluster.basis,
+            w.iter().map(|&x| f64::from(x)),
+        );
         apply(&m, self.lighting_order.coeff_count(), l)
     }
 }

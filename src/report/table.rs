@@ -343,7 +343,12 @@ impl BenchTable {
             self.reference_bounces, self.reference_bounces
         );
         for r in &self.results {
-            s += &format!("| {} | {} | {} |\n", r.name(), r.path, opt(r.rel_rmse_bounced, 4));
+            s += &format!(
+                "| {} | {} | {} |\n",
+                r.name(),
+                r.path,
+                opt(r.rel_rmse_bounced, 4)
+            );
         }
         s
     }

@@ -253,7 +253,10 @@ fn cost_counts(
             (SlotKind::PerTexel, HwPath::Dx10) => Kind::Array2d,
             (SlotKind::NormalTable, HwPath::Dx9) => Kind::Dependent2d,
             (SlotKind::NormalTable, HwPath::Dx10) => Kind::CubeArray,
-            (SlotKind::NormalBasis, _) => Kind::Dependent2d,
+            // The disk texture is read at the normal map's coordinates: dependent, a 2D
+            // array layer on dx10.
+            (SlotKind::NormalBasis, HwPath::Dx9) => Kind::Dependent2d,
+            (SlotKind::NormalBasis, HwPath::Dx10) => Kind::Array2d,
         };
         lookups.push((kind, n));
     }

@@ -37,8 +37,7 @@ use std::sync::Arc;
 pub use lighting::{LightingData, LightingRecipe};
 pub use spec::{
     BakeNeeds, ClusterNeed, HwPath, NdfBase, NmprtVariant, ParseError, ReferenceModel, RnmVariant,
-    SeamMode,
-    Technique,
+    SeamMode, Technique,
 };
 
 use lighting::LightingSet;

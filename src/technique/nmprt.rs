@@ -115,8 +115,7 @@ impl NormalBasis {
             let col = order[m];
             std::array::from_fn(|j| eigen.eigenvectors[(j, col)])
         });
-        let singular_values =
-            std::array::from_fn(|m| eigen.eigenvalues[order[m]].max(0.0).sqrt());
+        let singular_values = std::array::from_fn(|m| eigen.eigenvalues[order[m]].max(0.0).sqrt());
         let h = ftf
             .try_inverse()
             .expect("the HL2 weights are independent functions of the normal")
@@ -179,10 +178,7 @@ pub fn disk_texel_normal(i: usize, j: usize, side: usize) -> DVec3 {
 /// Order-3 RGB SH `x` (world space) in the tangent frame `frame` = [t, b, n] (columns):
 /// the coefficients of g(ω_t) = f(F ω_t). A left-handed frame is rotated as right-handed
 /// (b negated) and then mirrored in y (the coefficients odd in y negated: y, xy, yz).
-pub fn to_tangent(
-    frame: &[Vec3; 3],
-    x: &[[f64; 3]; TRANSFER_ROWS],
-) -> [[f64; 3]; TRANSFER_ROWS] {
+pub fn to_tangent(frame: &[Vec3; 3], x: &[[f64; 3]; TRANSFER_ROWS]) -> [[f64; 3]; TRANSFER_ROWS] {
     let (t, b, n) = (
         frame[0].as_dvec3(),
         frame[1].as_dvec3(),
@@ -365,7 +361,10 @@ impl NmprtRecipe {
 
 /// RGBA groups of `nmprtsvdM`'s per-texel values (3M) and basis channels (M).
 pub fn svd_groups(m: u32) -> (u32, u32) {
-    ((3 * m).div_ceil(VALUES_PER_TEXEL as u32), m.div_ceil(VALUES_PER_TEXEL as u32))
+    (
+        (3 * m).div_ceil(VALUES_PER_TEXEL as u32),
+        m.div_ceil(VALUES_PER_TEXEL as u32),
+    )
 }
 
 /// The fragment shader of each variant (module doc).
@@ -461,11 +460,14 @@ mod tests {
                 .map(|(a, v)| a * v[0])
                 .sum();
             let svd: f64 = (0..9).map(|m| basis.basis_value(m, n) * c[m][0]).sum();
-            assert!((full - svd).abs() < 1e-10 * full.abs().max(1.0), "{full} {svd}");
+            assert!(
+                (full - svd).abs() < 1e-10 * full.abs().max(1.0),
+                "{full} {svd}"
+            );
         }
         let a = crate::study::nmprt_svd::normal_matrix_over(
             16,
-            8,
+            96,
             crate::study::nmprt_svd::NormalWeighting::Cosine,
             false,
         );
@@ -492,7 +494,7 @@ mod tests {
             for d in [DVec3::new(0.3, 0.4, 0.866), DVec3::new(-0.7, 0.1, 0.7)] {
                 let d = d.normalize();
                 let world =
-                    t.as_dvec3() * d.x + b.as_dvec3() * d.y + n.as_dvec3() * d.z;
+                    (t.as_dvec3() * d.x + b.as_dvec3() * d.y + n.as_dvec3() * d.z).normalize();
                 let eval = |c: &[[f64; 3]; 9], dir: DVec3| {
                     let mut y = [0.0; 9];
                     eval_basis(Order::THREE, dir, &mut y);

@@ -83,6 +83,9 @@ impl TexelGroups {
     }
 }
 
+/// An image's description, its level-0 layers' bytes and its debug name.
+type ImageBytes<'a> = (ImageDesc, Vec<Vec<&'a [u8]>>, String);
+
 /// Per-texel groups as images (`groups[g]` = res² texels of `format`): one 2D texture per
 /// group on dx9, one 2D array on dx10; each with its level-0 layers and name.
 fn image_layout<'a>(
@@ -91,7 +94,7 @@ fn image_layout<'a>(
     format: vk::Format,
     groups: &[&'a [u8]],
     name: &str,
-) -> Vec<(ImageDesc, Vec<Vec<&'a [u8]>>, String)> {
+) -> Vec<ImageBytes<'a>> {
     if groups.is_empty() {
         return Vec::new();
     }
