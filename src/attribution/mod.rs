@@ -712,7 +712,40 @@ pub fn cpu_rungs(
         // map's filtering) is measured by `shvis study ndf`.
         // `nmprt*`: no ladder yet (its rungs would be the transfer bake's lighting order,
         // the normal basis' truncation and the bounces; issue 23 reports its error only).
-        Technique::Rnm { .. } | Technique::Ndf { .. } | Technique::Nmprt { .. } => {}
+        Technique::Rnm { .. } | Technique::Ndf { .. } => {}
+        // `nmprt*`: the technique's own model per pixel, exact (f32 texel values, f64
+        // evaluation, the SVD basis evaluated rather than looked up); what remains to the
+        // GPU image is f16 storage and the basis texture. No rungs before it yet (the
+        // transfer's lighting order, the order-3 transferred radiance, the bounces).
+        Technique::Nmprt { variant } => {
+            let Some(transfer) = prepared.transfer.as_ref() else {
+                return Ok(rungs.into_inner());
+            };
+            let recipe = crate::technique::nmprt::NmprtRecipe::new(variant, transfer.clone());
+            let irradiance = &prepared.irradiance_sh;
+            push(
+                AttributionKind::Technique,
+                format!("{technique}.model"),
+                &|| {
+                    let values = recipe.texel_values_all(radiance, irradiance);
+                    let v = recipe.values_per_texel();
+                    px.image(|k| {
+                        let x = lightmap_bilinear(transfer.res, px.uv[k], v, |t, j| {
+                            f64::from(values[t * v + j])
+                        });
+                        // The frame of the nearest covered tap.
+                        let (taps, weights) = lightmap_taps(transfer.res, px.uv[k]);
+                        let frame = taps
+                            .iter()
+                            .zip(weights)
+                            .filter(|(t, _)| transfer.covered[**t])
+                            .max_by(|a, b| a.1.total_cmp(&b.1))
+                            .map_or([Vec3::ZERO; 3], |(t, _)| transfer.frames[*t]);
+                        recipe.eval(&x[..v], px.normal[k], &frame, irradiance)
+                    })
+                },
+            );
+        }
         Technique::Shlmap => {
             let Some(map) = prepared.sh_lightmap.as_ref() else {
                 return Ok(rungs.into_inner());

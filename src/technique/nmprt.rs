@@ -288,18 +288,11 @@ impl NmprtRecipe {
         }
     }
 
-    /// The lighting data for `radiance_sh` (≥ O² coefficients) and its order-3
-    /// irradiance: every covered texel's values, dilated into the gutters, in f16 (range-
-    /// scaled but for the ratio), and the shader's uniform block.
-    pub fn lighting(
-        &self,
-        radiance_sh: &[[f64; 3]],
-        irradiance_sh: &[[f64; 3]],
-        label: &str,
-    ) -> Result<LightingData, TechniqueError> {
+    /// Every texel's values (the layout of [`Self::values_per_texel`]) for `radiance_sh`
+    /// and its order-3 irradiance, formed at the covered texels and dilated into the
+    /// gutters: what [`Self::lighting`] stores in f16.
+    pub fn texel_values_all(&self, radiance_sh: &[[f64; 3]], irradiance_sh: &[[f64; 3]]) -> Vec<f32> {
         let map = &*self.transfer;
-        super::require_coefficients(radiance_sh, map.columns(), "lighting", label)?;
-        super::require_coefficients(irradiance_sh, TRANSFER_ROWS, "irradiance", label)?;
         let v = self.values_per_texel();
         let texels = (map.res * map.res) as usize;
         let mut values = vec![0.0f32; texels * v];
@@ -317,6 +310,64 @@ impl NmprtRecipe {
                 }
             });
         self.dilation.apply_vectors(&mut values, v);
+        values
+    }
+
+    /// What the pixel shader computes (before the albedo) from a pixel's interpolated
+    /// `values`, its normal-mapped world normal `n` and the texel's frame (module doc; the
+    /// SVD basis evaluated exactly rather than from its texture).
+    pub fn eval(
+        &self,
+        values: &[f64],
+        n: DVec3,
+        frame: &[Vec3; 3],
+        irradiance_sh: &[[f64; 3]],
+    ) -> [f64; 3] {
+        let tangent = || {
+            let [t, b, ns] = frame.map(|v| v.as_dvec3());
+            DVec3::new(t.dot(n), b.dot(n), ns.dot(n)).try_normalize().unwrap_or(DVec3::Z)
+        };
+        let e: [f64; 3] = match self.variant {
+            NmprtVariant::Full => {
+                let a = convolved_basis(n);
+                std::array::from_fn(|c| (0..TRANSFER_ROWS).map(|j| a[j] * values[3 * j + c]).sum())
+            }
+            NmprtVariant::Svd { m } => {
+                let nt = tangent();
+                let u: Vec<f64> = (0..m as usize).map(|k| self.basis.basis_value(k, nt)).collect();
+                std::array::from_fn(|c| u.iter().enumerate().map(|(k, uk)| uk * values[3 * k + c]).sum())
+            }
+            NmprtVariant::Hl2 => {
+                let d = crate::bake::ssbump::d_encoding(tangent());
+                std::array::from_fn(|c| (0..3).map(|b| d[b] * values[VALUES_PER_TEXEL * b + c]).sum())
+            }
+            NmprtVariant::Ratio => {
+                let mut y = [0.0; TRANSFER_ROWS];
+                eval_basis(Order::THREE, n, &mut y);
+                std::array::from_fn(|c| {
+                    let e: f64 = (0..TRANSFER_ROWS).map(|j| y[j] * irradiance_sh[j][c]).sum();
+                    e.max(0.0) * values[0]
+                })
+            }
+        };
+        e.map(|x| x.max(0.0))
+    }
+
+    /// The lighting data for `radiance_sh` (≥ O² coefficients) and its order-3
+    /// irradiance: every covered texel's values, dilated into the gutters, in f16 (range-
+    /// scaled but for the ratio), and the shader's uniform block.
+    pub fn lighting(
+        &self,
+        radiance_sh: &[[f64; 3]],
+        irradiance_sh: &[[f64; 3]],
+        label: &str,
+    ) -> Result<LightingData, TechniqueError> {
+        let map = &*self.transfer;
+        super::require_coefficients(radiance_sh, map.columns(), "lighting", label)?;
+        super::require_coefficients(irradiance_sh, TRANSFER_ROWS, "irradiance", label)?;
+        let v = self.values_per_texel();
+        let texels = (map.res * map.res) as usize;
+        let values = self.texel_values_all(radiance_sh, irradiance_sh);
         let name = format!("{label}.transferred");
         if self.variant == NmprtVariant::Ratio {
             let ratio: Vec<f16> = values.iter().map(|&x| f16::from_f32(x)).collect();
