@@ -187,12 +187,66 @@ fn lighting_update(c: &mut Criterion) {
     g.finish();
 }
 
+/// One lighting update of the `nmprt*` techniques (issue 23): per covered texel l' = M·l
+/// from order-8 transfer matrices, the variant's projection, gutter dilation and f16
+/// packing — on a synthetic 256² lightmap (all texels covered, tangent frames turning with
+/// the texel), a quarter of the bench's 512² house (152 372 covered texels).
+fn nmprt_lighting_update(c: &mut Criterion) {
+    use glam::Vec3;
+    use shvis::bake::transfer::{TRANSFER_ROWS, TransferMap};
+    use shvis::sh::zonal::irradiance_from_radiance;
+    use shvis::technique::nmprt::NmprtRecipe;
+    use shvis::technique::{NmprtVariant, Technique};
+    use std::sync::Arc;
+    let env = sky(128, &SkyParams::default());
+    let order = Order::new(8).expect("valid");
+    let radiance = project_sh(&env, order);
+    let irradiance = irradiance_from_radiance(&radiance[..9], Order::THREE);
+    let res = 256u32;
+    let texels = (res * res) as usize;
+    let size = 3 * TRANSFER_ROWS * order.coeff_count();
+    let transfer = Arc::new(TransferMap {
+        res,
+        lighting_order: order,
+        bounces: 2,
+        matrices: (0..texels * size)
+            .map(|i| ((i % 977) as f32 * 0.013).sin() * 0.1)
+            .collect(),
+        covered: vec![true; texels],
+        frames: (0..texels)
+            .map(|t| {
+                let a = t as f32 * 0.001;
+                let n = Vec3::new(a.sin() * 0.3, 0.2, 1.0).normalize();
+                let t = n.any_orthonormal_vector();
+                [t, n.cross(t), n]
+            })
+            .collect(),
+        stats: Default::default(),
+    });
+    let mut g = c.benchmark_group("lighting_update");
+    g.sample_size(10);
+    for variant in [
+        NmprtVariant::Full,
+        NmprtVariant::Svd { m: 6 },
+        NmprtVariant::Hl2,
+        NmprtVariant::Ratio,
+    ] {
+        let name = Technique::Nmprt { variant }.name();
+        let recipe = NmprtRecipe::new(variant, transfer.clone());
+        g.bench_function(format!("{name}_256"), |b| {
+            b.iter(|| black_box(recipe.lighting(black_box(&radiance), &irradiance, "bench")))
+        });
+    }
+    g.finish();
+}
+
 criterion_group!(
     benches,
     sh_eval,
     env_projection,
     product_matrix,
     lxh_table,
-    lighting_update
+    lighting_update,
+    nmprt_lighting_update
 );
 criterion_main!(benches);

@@ -137,7 +137,7 @@ pub struct RelightRow {
     /// Median frames from a rebuild's request to the first frame drawing it (0 in blocking
     /// mode).
     pub swap_latency_frames_median: Option<f64>,
-    /// Bytes one update uploads (tables and uniforms).
+    /// Bytes one update uploads (uniforms, tables, per-texel data formed from the lighting).
     pub table_bytes: u64,
     /// GPU ms per frame over the run (timestamps).
     pub gpu_ms_median: Option<f64>,
@@ -523,7 +523,7 @@ fn run_row(
         tech.wait_for_upload()?;
         Ok(())
     })?;
-    let table_bytes = tech.stats.table_bytes;
+    let table_bytes = tech.update_bytes();
     drop(tech);
     write_apng(
         &settings.out.join(format!("{label}.apng.png")),

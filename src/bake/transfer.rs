@@ -133,8 +133,57 @@ impl CompressedTransfer {
     }
 }
 
-/// l' = M l for one texel's 3 × 9 × N matrices `m` (any float type).
+/// l' = M l for one texel's 3 × 9 × N matrices `m` (any float type). The lighting is
+/// split into one contiguous row per colour first, so each output is a plain dot product
+/// (vectorized; the `nmprt*` rebuild runs through here for every texel).
 fn apply<T: Copy + Into<f64>>(m: &[T], n: usize, l: &[[f64; 3]]) -> [[f64; 3]; TRANSFER_ROWS] {
+    let mut channels = [[0.0f64; MAX_APPLY_COLUMNS]; 3];
+    if n > MAX_APPLY_COLUMNS {
+        return apply_strided(m, n, l);
+    }
+    for (j, rgb) in l[..n].iter().enumerate() {
+        for c in 0..3 {
+            channels[c][j] = rgb[c];
+        }
+    }
+    let mut out = [[0.0; 3]; TRANSFER_ROWS];
+    for (i, row) in out.iter_mut().enumerate() {
+        for (c, value) in row.iter_mut().enumerate() {
+            let base = (c * TRANSFER_ROWS + i) * n;
+            *value = dot4(&m[base..base + n], &channels[c][..n]);
+        }
+    }
+    out
+}
+
+/// Σ a_j b_j in four interleaved partial sums (a fixed order the compiler can vectorize;
+/// one running sum cannot be reordered).
+fn dot4<T: Copy + Into<f64>>(a: &[T], b: &[f64]) -> f64 {
+    let mut acc = [0.0f64; 4];
+    let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail: f64 = a4
+        .remainder()
+        .iter()
+        .zip(b4.remainder())
+        .map(|(&x, &y)| x.into() * y)
+        .sum();
+    for (x, y) in a4.zip(b4) {
+        for k in 0..4 {
+            acc[k] += x[k].into() * y[k];
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
+
+/// Columns [`apply`] splits on the stack: lighting of order ≤ 8 (`prepare::LIGHTING_ORDER`).
+const MAX_APPLY_COLUMNS: usize = 64;
+
+/// [`apply`] reading the interleaved lighting directly (orders above 8).
+fn apply_strided<T: Copy + Into<f64>>(
+    m: &[T],
+    n: usize,
+    l: &[[f64; 3]],
+) -> [[f64; 3]; TRANSFER_ROWS] {
     let mut out = [[0.0; 3]; TRANSFER_ROWS];
     for (i, row) in out.iter_mut().enumerate() {
         for (c, value) in row.iter_mut().enumerate() {

@@ -263,6 +263,18 @@ impl TechniqueGpu {
             .map_or_else(|| scene.triangle_count(), gpu::MeshBuffers::triangle_count)
     }
 
+    /// Bytes one lighting update writes: the uniform block and every lighting image (tables,
+    /// and per-texel data formed from the lighting, `nmprt*`).
+    pub fn update_bytes(&self) -> u64 {
+        let set = &self.sets[self.front];
+        set.params.size()
+            + set
+                .images
+                .iter()
+                .map(|i| i.desc().level0_bytes())
+                .sum::<u64>()
+    }
+
     /// Copies of the lighting data (2 when built with [`build_dynamic`]).
     pub fn lighting_sets(&self) -> usize {
         self.sets.len()

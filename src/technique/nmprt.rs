@@ -216,17 +216,62 @@ pub struct NmprtRecipe {
     pub basis: Arc<NormalBasis>,
     /// Fills the gutters of the values formed at covered texels.
     dilation: DilationPlan,
+    /// `nmprtsvdM` / `nmprthl2`: per covered texel the rows of W·R_t (W = V_Mᵀ or H, R_t
+    /// the texel's world → tangent change), `rows` × 9 f64 — formed once, so a lighting
+    /// change costs M·l and this small product per texel.
+    tangent_rows: Vec<f64>,
+    rows: usize,
 }
 
 impl NmprtRecipe {
     pub fn new(variant: NmprtVariant, transfer: Arc<TransferMap>) -> NmprtRecipe {
         let dilation = DilationPlan::new(&transfer.covered, transfer.res, DILATION_PASSES);
+        let basis = NormalBasis::shared();
+        let w: Vec<[f64; TRANSFER_ROWS]> = match variant {
+            NmprtVariant::Svd { m } => basis.vectors[..m as usize].to_vec(),
+            NmprtVariant::Hl2 => basis.hl2.to_vec(),
+            NmprtVariant::Full | NmprtVariant::Ratio => Vec::new(),
+        };
+        let rows = w.len();
+        let mut tangent_rows = vec![0.0f64; transfer.covered.len() * rows * TRANSFER_ROWS];
+        if rows > 0 {
+            tangent_rows
+                .par_chunks_mut(rows * TRANSFER_ROWS)
+                .enumerate()
+                .filter(|(t, _)| transfer.covered[*t])
+                .for_each(|(t, out)| {
+                    // Row r of W·R = (Rᵀ w_r)ᵀ: each unit vector's image gives a column.
+                    let mut columns = [[[0.0f64; 3]; TRANSFER_ROWS]; TRANSFER_ROWS];
+                    for (j, column) in columns.iter_mut().enumerate() {
+                        let mut e = [[0.0f64; 3]; TRANSFER_ROWS];
+                        e[j] = [1.0; 3];
+                        *column = to_tangent(&transfer.frames[t], &e);
+                    }
+                    for (r, wr) in w.iter().enumerate() {
+                        for j in 0..TRANSFER_ROWS {
+                            out[r * TRANSFER_ROWS + j] = (0..TRANSFER_ROWS)
+                                .map(|i| wr[i] * columns[j][i][0])
+                                .sum::<f64>();
+                        }
+                    }
+                });
+        }
         NmprtRecipe {
             variant,
             transfer,
-            basis: NormalBasis::shared(),
+            basis,
             dilation,
+            tangent_rows,
+            rows,
         }
+    }
+
+    /// Σ_j (W R_t)_rj x_j per colour for the rows of texel `t`.
+    fn tangent_project(&self, t: usize, x: &[[f64; 3]; TRANSFER_ROWS]) -> Vec<[f64; 3]> {
+        let rows = &self.tangent_rows[t * self.rows * TRANSFER_ROWS..][..self.rows * TRANSFER_ROWS];
+        rows.chunks_exact(TRANSFER_ROWS)
+            .map(|row| std::array::from_fn(|c| row.iter().zip(x).map(|(&w, v)| w * v[c]).sum()))
+            .collect()
     }
 
     /// Values stored per texel: 27, 3M, 12 (three RGB groups), 1.
@@ -247,22 +292,15 @@ impl NmprtRecipe {
         let frame = &self.transfer.frames[t];
         match self.variant {
             NmprtVariant::Full => transferred.iter().flatten().copied().collect(),
-            NmprtVariant::Svd { m } => {
-                let tangent = to_tangent(frame, &transferred);
-                self.basis
-                    .project(m as usize, &tangent)
-                    .into_iter()
-                    .flatten()
-                    .collect()
-            }
+            NmprtVariant::Svd { .. } => self
+                .tangent_project(t, &transferred)
+                .into_iter()
+                .flatten()
+                .collect(),
             NmprtVariant::Hl2 => {
-                let tangent = to_tangent(frame, &transferred);
                 let mut out = vec![0.0; 3 * VALUES_PER_TEXEL];
-                for (b, row) in self.basis.hl2.iter().enumerate() {
-                    for c in 0..3 {
-                        out[VALUES_PER_TEXEL * b + c] =
-                            (0..TRANSFER_ROWS).map(|j| row[j] * tangent[j][c]).sum();
-                    }
+                for (b, h) in self.tangent_project(t, &transferred).iter().enumerate() {
+                    out[VALUES_PER_TEXEL * b..][..3].copy_from_slice(h);
                 }
                 out
             }
@@ -291,7 +329,11 @@ impl NmprtRecipe {
     /// Every texel's values (the layout of [`Self::values_per_texel`]) for `radiance_sh`
     /// and its order-3 irradiance, formed at the covered texels and dilated into the
     /// gutters: what [`Self::lighting`] stores in f16.
-    pub fn texel_values_all(&self, radiance_sh: &[[f64; 3]], irradiance_sh: &[[f64; 3]]) -> Vec<f32> {
+    pub fn texel_values_all(
+        &self,
+        radiance_sh: &[[f64; 3]],
+        irradiance_sh: &[[f64; 3]],
+    ) -> Vec<f32> {
         let map = &*self.transfer;
         let v = self.values_per_texel();
         let texels = (map.res * map.res) as usize;
@@ -325,7 +367,9 @@ impl NmprtRecipe {
     ) -> [f64; 3] {
         let tangent = || {
             let [t, b, ns] = frame.map(|v| v.as_dvec3());
-            DVec3::new(t.dot(n), b.dot(n), ns.dot(n)).try_normalize().unwrap_or(DVec3::Z)
+            DVec3::new(t.dot(n), b.dot(n), ns.dot(n))
+                .try_normalize()
+                .unwrap_or(DVec3::Z)
         };
         let e: [f64; 3] = match self.variant {
             NmprtVariant::Full => {
@@ -334,12 +378,23 @@ impl NmprtRecipe {
             }
             NmprtVariant::Svd { m } => {
                 let nt = tangent();
-                let u: Vec<f64> = (0..m as usize).map(|k| self.basis.basis_value(k, nt)).collect();
-                std::array::from_fn(|c| u.iter().enumerate().map(|(k, uk)| uk * values[3 * k + c]).sum())
+                let u: Vec<f64> = (0..m as usize)
+                    .map(|k| self.basis.basis_value(k, nt))
+                    .collect();
+                std::array::from_fn(|c| {
+                    u.iter()
+                        .enumerate()
+                        .map(|(k, uk)| uk * values[3 * k + c])
+                        .sum()
+                })
             }
             NmprtVariant::Hl2 => {
                 let d = crate::bake::ssbump::d_encoding(tangent());
-                std::array::from_fn(|c| (0..3).map(|b| d[b] * values[VALUES_PER_TEXEL * b + c]).sum())
+                std::array::from_fn(|c| {
+                    (0..3)
+                        .map(|b| d[b] * values[VALUES_PER_TEXEL * b + c])
+                        .sum()
+                })
             }
             NmprtVariant::Ratio => {
                 let mut y = [0.0; TRANSFER_ROWS];
