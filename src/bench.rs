@@ -216,6 +216,14 @@ pub fn run(
         }
         for &technique in &settings.techniques {
             for &path in &settings.paths {
+                if !technique.runs_on(path) {
+                    if k == 0 {
+                        log::info!(
+                            "{technique}.{path}: left out (it does not fit the path's rules)"
+                        );
+                    }
+                    continue;
+                }
                 let reference = reference.as_ref();
                 let measured = measure_row(
                     ctx,

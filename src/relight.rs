@@ -334,7 +334,7 @@ pub fn run(
             static_only.push(technique);
             continue;
         }
-        for &path in &settings.paths {
+        for &path in settings.paths.iter().filter(|&&p| technique.runs_on(p)) {
             rows.push(run_row(
                 ctx,
                 &scene,

@@ -196,3 +196,58 @@ fn nine_singular_vectors_are_the_full_evaluation_at_normal_mapped_normals() {
     assert!(compared > 100);
     assert!(worst <= 1e-9 * scale, "{worst} of {scale}");
 }
+
+/// `nmprtsvd4p`, the course's pixel shader (per-texel V_MᵀRM, l in uniforms, the product
+/// per pixel), renders what `nmprtsvd4` (the same product formed per texel on the CPU)
+/// renders, to f16 storage of the two; dx9 refuses it by its texture count.
+#[test]
+fn the_pixel_shader_form_renders_the_per_texel_form() {
+    let prepared = common::house();
+    let ctx = common::validated_context();
+    let frame = FrameSettings {
+        width: 160,
+        height: 100,
+        ..FrameSettings::default()
+    };
+    let scene = SceneGpu::new(&ctx, &prepared.scene, &frame).expect("scene");
+    let inputs = prepared.inputs();
+    let render = |t: &str, path: HwPath| {
+        technique::build(&ctx, &scene, t.parse().unwrap(), path, &inputs)
+            .expect("builds")
+            .render(&scene, 0, 1)
+            .expect("renders")
+    };
+    let want = render("nmprtsvd4", HwPath::Dx10);
+    let got = render("nmprtsvd4p", HwPath::Dx10);
+    let largest = want
+        .rgba
+        .iter()
+        .flat_map(|p| p[..3].iter().copied())
+        .fold(0.0f32, f32::max);
+    let (mut worst, mut sum, mut count) = (0.0f32, 0.0f64, 0usize);
+    for (a, b) in got.rgba.iter().zip(&want.rgba) {
+        if b[3] > 0.5 {
+            for c in 0..3 {
+                let d = (a[c] - b[c]).abs();
+                worst = worst.max(d);
+                sum += f64::from(d);
+                count += 1;
+            }
+        }
+    }
+    println!(
+        "nmprtsvd4p against nmprtsvd4: max {worst:.3e}, mean {:.3e} of max {largest:.3}",
+        sum / count as f64
+    );
+    assert!(count > 3000 && largest > 0.0);
+    // 256 f16 matrix entries times the lighting against 12 f16 values: a few 1e-3.
+    assert!(worst <= 1e-2 * largest, "{worst} of {largest}");
+    let technique: Technique = "nmprtsvd4p".parse().unwrap();
+    assert!(!technique.runs_on(HwPath::Dx9) && technique.runs_on(HwPath::Dx10));
+    match technique::build(&ctx, &scene, technique, HwPath::Dx9, &inputs) {
+        Err(technique::TechniqueError::Dx9Rule { detail, .. }) => println!("dx9: {detail}"),
+        Err(e) => panic!("dx9: refused for another reason: {e}"),
+        Ok(_) => panic!("dx9: built with more than 16 textures"),
+    }
+    common::assert_validation_clean(&ctx, "nmprtsvd4p");
+}

@@ -440,7 +440,7 @@ fn build_sets(
                 kind: finish::SlotKind::NormalBasis,
                 images: basis,
             });
-            let gpu = finish::finish(ctx, scene, technique, path, Vec::new(), slot, &data, sets)?;
+            let gpu = finish::finish(ctx, scene, technique, path, per_texel, slot, &data, sets)?;
             return Ok((gpu, recipe));
         }
         Technique::Ndf { base } => {

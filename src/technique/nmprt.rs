@@ -221,6 +221,8 @@ pub struct NmprtRecipe {
     /// change costs M·l and this small product per texel.
     tangent_rows: Vec<f64>,
     rows: usize,
+    /// `nmprtsvdMp`: the factor undoing its matrices' f16 range scaling.
+    pixel_unscale: f32,
 }
 
 impl NmprtRecipe {
@@ -228,7 +230,9 @@ impl NmprtRecipe {
         let dilation = DilationPlan::new(&transfer.covered, transfer.res, DILATION_PASSES);
         let basis = NormalBasis::shared();
         let w: Vec<[f64; TRANSFER_ROWS]> = match variant {
-            NmprtVariant::Svd { m } => basis.vectors[..m as usize].to_vec(),
+            NmprtVariant::Svd { m } | NmprtVariant::SvdPixel { m } => {
+                basis.vectors[..m as usize].to_vec()
+            }
             NmprtVariant::Hl2 => basis.hl2.to_vec(),
             NmprtVariant::Full | NmprtVariant::Ratio => Vec::new(),
         };
@@ -263,6 +267,79 @@ impl NmprtRecipe {
             dilation,
             tangent_rows,
             rows,
+            pixel_unscale: 1.0,
+        }
+    }
+
+    /// `nmprtsvdMp`'s per-texel matrices P = V_Mᵀ R M (M × O² per colour), dilated, range-
+    /// scaled into f16: row (m, c) in ⌈O²/4⌉ RGBA groups, group g of the texel's data =
+    /// (3m + c)·⌈O²/4⌉ + k holding columns 4k … 4k+3; and the scale.
+    fn pixel_matrices(&self, label: &str) -> Result<(Vec<Vec<f16>>, f32), TechniqueError> {
+        let map = &*self.transfer;
+        let n = map.columns();
+        let row_groups = n.div_ceil(VALUES_PER_TEXEL);
+        if row_groups > PIXEL_MAX_ROW_GROUPS {
+            return Err(TechniqueError::Input {
+                label: label.into(),
+                detail: format!(
+                    "takes lighting of order ≤ 8; the transfer bake has order {}",
+                    map.lighting_order
+                ),
+            });
+        }
+        let stride = row_groups * VALUES_PER_TEXEL;
+        let size = self.rows * 3 * stride;
+        let texels = (map.res * map.res) as usize;
+        let mut values = vec![0.0f32; texels * size];
+        values
+            .par_chunks_mut(size)
+            .enumerate()
+            .filter(|(t, _)| map.covered[*t])
+            .for_each(|(t, out)| {
+                let m = map.texel(t);
+                let rows = &self.tangent_rows[t * self.rows * TRANSFER_ROWS..]
+                    [..self.rows * TRANSFER_ROWS];
+                for (r, w) in rows.chunks_exact(TRANSFER_ROWS).enumerate() {
+                    for c in 0..3 {
+                        let dst = &mut out[(3 * r + c) * stride..][..n];
+                        for (i, &wi) in w.iter().enumerate() {
+                            let src = &m[(c * TRANSFER_ROWS + i) * n..][..n];
+                            for (d, &x) in dst.iter_mut().zip(src) {
+                                *d += (wi * f64::from(x)) as f32;
+                            }
+                        }
+                    }
+                }
+            });
+        self.dilation.apply_vectors(&mut values, size);
+        let largest = max_abs(values.iter().copied());
+        if !largest.is_finite() {
+            return Err(TechniqueError::Input {
+                label: label.into(),
+                detail: "the transfer matrices are not finite".into(),
+            });
+        }
+        let scale = f16_range_scale(largest);
+        let groups = pack_groups(texels, size, |t, j| {
+            f16::from_f32(values[t * size + j] * scale)
+        });
+        Ok((groups, scale))
+    }
+
+    /// `nmprtsvdMp`'s uniform block for lighting `l`: the matrices' unscale, the row
+    /// layout and l per colour.
+    fn pixel_params(&self, l: &[[f64; 3]]) -> NmprtPixelParams {
+        let n = self.transfer.columns();
+        let mut light = [[0.0f32; 4]; 3 * PIXEL_MAX_ROW_GROUPS];
+        for (j, rgb) in l[..n].iter().enumerate() {
+            for c in 0..3 {
+                light[c * PIXEL_MAX_ROW_GROUPS + j / 4][j % 4] = rgb[c] as f32;
+            }
+        }
+        NmprtPixelParams {
+            unscale: [self.pixel_unscale, 0.0, 0.0, 0.0],
+            shape: [n.div_ceil(VALUES_PER_TEXEL) as f32, 0.0, 0.0, 0.0],
+            light,
         }
     }
 
@@ -278,7 +355,7 @@ impl NmprtRecipe {
     pub fn values_per_texel(&self) -> usize {
         match self.variant {
             NmprtVariant::Full => 3 * TRANSFER_ROWS,
-            NmprtVariant::Svd { m } => 3 * m as usize,
+            NmprtVariant::Svd { m } | NmprtVariant::SvdPixel { m } => 3 * m as usize,
             NmprtVariant::Hl2 => 3 * VALUES_PER_TEXEL,
             NmprtVariant::Ratio => 1,
         }
@@ -292,7 +369,7 @@ impl NmprtRecipe {
         let frame = &self.transfer.frames[t];
         match self.variant {
             NmprtVariant::Full => transferred.iter().flatten().copied().collect(),
-            NmprtVariant::Svd { .. } => self
+            NmprtVariant::Svd { .. } | NmprtVariant::SvdPixel { .. } => self
                 .tangent_project(t, &transferred)
                 .into_iter()
                 .flatten()
@@ -376,7 +453,7 @@ impl NmprtRecipe {
                 let a = convolved_basis(n);
                 std::array::from_fn(|c| (0..TRANSFER_ROWS).map(|j| a[j] * values[3 * j + c]).sum())
             }
-            NmprtVariant::Svd { m } => {
+            NmprtVariant::Svd { m } | NmprtVariant::SvdPixel { m } => {
                 let nt = tangent();
                 let u: Vec<f64> = (0..m as usize)
                     .map(|k| self.basis.basis_value(k, nt))
@@ -420,6 +497,11 @@ impl NmprtRecipe {
         let map = &*self.transfer;
         super::require_coefficients(radiance_sh, map.columns(), "lighting", label)?;
         super::require_coefficients(irradiance_sh, TRANSFER_ROWS, "irradiance", label)?;
+        if let NmprtVariant::SvdPixel { .. } = self.variant {
+            // Nothing per texel depends on the lighting: the pixel shader multiplies.
+            let params = self.pixel_params(radiance_sh);
+            return Ok(LightingData::params(bytemuck::bytes_of(&params).to_vec()));
+        }
         let v = self.values_per_texel();
         let texels = (map.res * map.res) as usize;
         let values = self.texel_values_all(radiance_sh, irradiance_sh);
@@ -490,7 +572,31 @@ pub fn fragment_shader(variant: NmprtVariant) -> ShaderVariant {
                 ],
             }
         }
+        NmprtVariant::SvdPixel { m } => ShaderVariant {
+            path: "technique/nmprtsvdp.frag",
+            defines: vec![
+                ("NMPRT_VECTORS", m),
+                ("NMPRT_MAX_ROW_GROUPS", PIXEL_MAX_ROW_GROUPS as u32),
+                ("NMPRT_BASIS_LAYERS", m.div_ceil(VALUES_PER_TEXEL as u32)),
+            ],
+        },
     }
+}
+
+/// RGBA groups of one row of `nmprtsvdMp`'s per-texel matrices at most: lighting of order
+/// ≤ 8 (`prepare::LIGHTING_ORDER`), ⌈64/4⌉.
+pub const PIXEL_MAX_ROW_GROUPS: usize = 16;
+
+/// Uniforms of glsl/technique/nmprtsvdp.frag, block `NmprtPixelParams` (std140).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct NmprtPixelParams {
+    /// x: factor undoing the matrices' f16 range scaling.
+    pub unscale: [f32; 4],
+    /// x: RGBA groups per matrix row, ⌈O²/4⌉.
+    pub shape: [f32; 4],
+    /// Colour c, group k at `c·16 + k`: lighting coefficients 4k … 4k+3.
+    pub light: [[f32; 4]; 3 * PIXEL_MAX_ROW_GROUPS],
 }
 
 /// No per-texel bake data (the lighting's per-texel images replace it) and the recipe.
@@ -503,7 +609,7 @@ pub(crate) fn prepare(
         label: label.into(),
         detail: "needs the transfer-matrix bake".into(),
     })?;
-    if let NmprtVariant::Svd { m } = variant
+    if let NmprtVariant::Svd { m } | NmprtVariant::SvdPixel { m } = variant
         && !super::spec::NMPRT_SVD_VECTORS.contains(&m)
     {
         return Err(TechniqueError::Input {
@@ -511,13 +617,25 @@ pub(crate) fn prepare(
             detail: format!("keeps {m} singular vectors; 1 to 9 exist"),
         });
     }
-    let texels = TexelGroups {
-        format: vk::Format::R16G16B16A16_SFLOAT,
-        res: transfer.res,
-        groups: Vec::new(),
-        name: format!("{label}.none"),
+    let mut recipe = NmprtRecipe::new(variant, transfer.clone());
+    let texels = match variant {
+        NmprtVariant::SvdPixel { .. } => {
+            let (groups, scale) = recipe.pixel_matrices(label)?;
+            recipe.pixel_unscale = 1.0 / scale;
+            TexelGroups::new(
+                vk::Format::R16G16B16A16_SFLOAT,
+                transfer.res,
+                &groups,
+                format!("{label}.matrices"),
+            )
+        }
+        _ => TexelGroups {
+            format: vk::Format::R16G16B16A16_SFLOAT,
+            res: transfer.res,
+            groups: Vec::new(),
+            name: format!("{label}.none"),
+        },
     };
-    let recipe = NmprtRecipe::new(variant, transfer.clone());
     Ok((texels, Recipe::Nmprt(Arc::new(recipe))))
 }
 
@@ -529,7 +647,7 @@ pub fn basis_images(
     path: HwPath,
     label: &str,
 ) -> Result<Vec<Image>, TechniqueError> {
-    let NmprtVariant::Svd { m } = variant else {
+    let (NmprtVariant::Svd { m } | NmprtVariant::SvdPixel { m }) = variant else {
         return Ok(Vec::new());
     };
     let basis = NormalBasis::shared();

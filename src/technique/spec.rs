@@ -73,6 +73,11 @@ pub enum NmprtVariant {
     /// `nmprtsvdM`: the course's normal basis, e(n) = U(n) S_M V_Mᵀ R l' — M values per
     /// colour per texel, U(n) looked up by the tangent-space normal.
     Svd { m: u32 },
+    /// `nmprtsvdMp`: the same normal basis with the course's pixel shader — per texel the
+    /// M × O² matrices V_Mᵀ R M (per colour) as bake data, the lighting l in uniforms, the
+    /// matrix–vector product per pixel; nothing per texel changes with the lighting. Its
+    /// 3·M·⌈O²/4⌉ RGBA layers exceed dx9's 16 textures: dx10 only.
+    SvdPixel { m: u32 },
     /// `nmprthl2`: three rows — the least-squares fit of e(n) by the HL2 blend weights,
     /// three RGB values per texel blended like `rnm`.
     Hl2,
@@ -339,6 +344,9 @@ impl Technique {
             variant: NmprtVariant::Svd { m: 6 },
         },
         Technique::Nmprt {
+            variant: NmprtVariant::SvdPixel { m: 4 },
+        },
+        Technique::Nmprt {
             variant: NmprtVariant::Hl2,
         },
         Technique::Nmprt {
@@ -381,6 +389,7 @@ impl Technique {
             Technique::Nmprt { variant } => match variant {
                 NmprtVariant::Full => "nmprt".into(),
                 NmprtVariant::Svd { m } => format!("nmprtsvd{m}"),
+                NmprtVariant::SvdPixel { m } => format!("nmprtsvd{m}p"),
                 NmprtVariant::Hl2 => "nmprthl2".into(),
                 NmprtVariant::Ratio => "nmprtratio".into(),
             },
@@ -553,6 +562,21 @@ impl Technique {
         }
     }
 
+    /// Whether it can run on `path`: every technique runs on dx10; `nmprtsvdMp`'s per-texel
+    /// matrices need more than dx9's 16 textures (`finish` refuses it there by the path
+    /// rules; the bench and the suites leave that row out).
+    pub fn runs_on(self, path: HwPath) -> bool {
+        !matches!(
+            (self, path),
+            (
+                Technique::Nmprt {
+                    variant: NmprtVariant::SvdPixel { .. }
+                },
+                HwPath::Dx9
+            )
+        )
+    }
+
     /// Every technique of this one's family that a name may denote: each valid parameter.
     pub fn family_members(self) -> Vec<Technique> {
         match self {
@@ -604,6 +628,7 @@ impl Technique {
             Technique::Nmprt { .. } => [NmprtVariant::Full, NmprtVariant::Hl2, NmprtVariant::Ratio]
                 .into_iter()
                 .chain(NMPRT_SVD_VECTORS.map(|m| NmprtVariant::Svd { m }))
+                .chain(NMPRT_SVD_VECTORS.map(|m| NmprtVariant::SvdPixel { m }))
                 .map(|variant| Technique::Nmprt { variant })
                 .collect(),
         }
@@ -657,7 +682,7 @@ impl FromStr for Technique {
             known: format!(
                 "{} (and uncO for O in {}..={}, pcaM/pcaMw for M a multiple of {} up to {}, \
                  vqK[n] for K in {:?}, cpcaK_M[s][n] for K in {:?}, M in {:?}, K·(M+1) ≤ {}, \
-                 pcaMv[E] for E in {:?} cm, uncOndf and preconvndf, nmprtsvdM for M in 1..=9)",
+                 pcaMv[E] for E in {:?} cm, uncOndf and preconvndf, nmprtsvdM[p] for M in 1..=9)",
                 join_names(Technique::ALL.iter().map(|t| t.name())),
                 UNC_ORDERS.start(),
                 UNC_ORDERS.end(),
