@@ -6,7 +6,7 @@
 use shvis::bake::raster::rasterize;
 use shvis::bake::shlmap::{ShLightmapSettings, bake_sh_lightmap};
 use shvis::bake::trace::Tracer;
-use shvis::bake::transfer::{TransferSettings, bake_transfer};
+use shvis::bake::transfer::{TransferMap, TransferSettings, bake_transfer};
 use shvis::env::project::project_sh;
 use shvis::env::sky::{SkyParams, sky};
 use shvis::sh::Order;
@@ -31,7 +31,7 @@ impl House {
     }
 
     /// The transfer bake with the tests' 64 rays and seed 3.
-    fn transfer(&self, order: Order, bounces: u32) -> shvis::bake::transfer::TransferMap {
+    fn transfer(&self, order: Order, bounces: u32) -> TransferMap {
         let settings = TransferSettings {
             lighting_order: order,
             rays: 64,
@@ -101,18 +101,24 @@ fn transfer_times_lighting_equals_the_sh_lightmap() {
     assert!(bounced_differs, "inter-reflection did not change M");
 }
 
+/// The compression tests' bake: order-3 lighting, 1 bounce; the built-in sky to order 3;
+/// the covered texels.
+fn order3_transfer() -> (TransferMap, Vec<[f64; 3]>, Vec<usize>) {
+    let house = House::new();
+    let order = Order::new(3).unwrap();
+    let transfer = house.transfer(order, 1);
+    let l = project_sh(&sky(128, &SkyParams::default()), order);
+    let covered = (0..house.texels.covered.len())
+        .filter(|&i| house.texels.covered[i])
+        .collect();
+    (transfer, l, covered)
+}
+
 /// PCA of the matrices: every vector kept rebuilds M·l; fewer keep less, monotonically, and
 /// the error of K vectors is what the left-out variance allows.
 #[test]
 fn compressed_transfer_converges_to_the_full_matrices() {
-    let house = House::new();
-    let texels = &house.texels;
-    let order = Order::new(3).unwrap();
-    let transfer = house.transfer(order, 1);
-    let l = project_sh(&sky(128, &SkyParams::default()), order);
-    let covered: Vec<usize> = (0..texels.covered.len())
-        .filter(|&i| texels.covered[i])
-        .collect();
+    let (transfer, l, covered) = order3_transfer();
     let scale = covered
         .iter()
         .flat_map(|&i| transfer.transferred(i, &l))
@@ -153,14 +159,7 @@ fn compressed_transfer_converges_to_the_full_matrices() {
 #[test]
 fn clustered_transfer_is_pca_with_one_cluster_and_improves_with_more() {
     use shvis::bake::cluster::Clustering;
-    let house = House::new();
-    let texels = &house.texels;
-    let order = Order::new(3).unwrap();
-    let transfer = house.transfer(order, 1);
-    let l = project_sh(&sky(128, &SkyParams::default()), order);
-    let covered: Vec<usize> = (0..texels.covered.len())
-        .filter(|&i| texels.covered[i])
-        .collect();
+    let (transfer, l, covered) = order3_transfer();
     let rms = |f: &dyn Fn(usize) -> [[f64; 3]; 9]| {
         let sum: f64 = covered
             .iter()
