@@ -10,7 +10,7 @@ use clap::{Args, Parser, Subcommand};
 
 use shvis::bench::BenchSettings;
 use shvis::gpu::{Context, ContextDesc};
-use shvis::prepare::{PrepareSettings, bake_scene_ao, prepare, resolve_scene};
+use shvis::prepare::{PrepareSettings, bake_scene_ao, prepare, prepare_with, resolve_scene};
 use shvis::render::{FrameSettings, SceneGpu};
 use shvis::report::image::{frame_format, write_frame};
 use shvis::technique::{self, HwPath, Technique};
@@ -612,6 +612,22 @@ struct BakeArgs {
     /// the AO layer written is the visibility bake's, as the techniques use.
     #[arg(long)]
     separate_ao: bool,
+    #[command(flatten)]
+    baker: BakerArgs,
+    /// `--baker gpu`: also run the CPU bake (and one with the next seed, for the
+    /// quadrature noise) and print how far the GPU's coefficients are from it.
+    #[arg(long)]
+    compare_cpu: bool,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    /// Output directory (ao.exr).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// Who bakes the visibility (`bake`, `render`, `bench`).
+#[derive(Args, Debug)]
+struct BakerArgs {
     /// Who bakes the visibility: `cpu` (ray tracing, cached) or `gpu` (the PRT course's
     /// GPU simulator: a depth map per direction, not cached).
     #[arg(long, value_enum, default_value_t = VisibilityBakerArg::Cpu)]
@@ -625,18 +641,30 @@ struct BakeArgs {
     /// `--baker gpu`: depth bias per unit tan of the ray's angle to the normal, texels.
     #[arg(long, default_value_t = shvis::bake::gpu_visibility::GpuVisibilitySettings::default().slope_bias_texels, value_parser = finite_f32)]
     slope_bias: f32,
-    /// `--baker gpu`: also run the CPU bake (and one with the next seed, for the
-    /// quadrature noise) and print how far the GPU's coefficients are from it.
-    #[arg(long)]
-    compare_cpu: bool,
-    #[command(flatten)]
-    gpu: GpuArgs,
-    /// Output directory (ao.exr).
-    #[arg(long)]
-    out: PathBuf,
 }
 
-/// `shvis bake --baker`.
+impl BakerArgs {
+    fn gpu_settings(&self) -> shvis::bake::gpu_visibility::GpuVisibilitySettings {
+        shvis::bake::gpu_visibility::GpuVisibilitySettings {
+            depth_res: self.depth_res,
+            bias_texels: self.depth_bias,
+            slope_bias_texels: self.slope_bias,
+        }
+    }
+
+    /// The baker `prepare_with` runs, on `ctx` for `gpu`.
+    fn visibility_baker(&self, ctx: &Arc<Context>) -> shvis::prepare::VisibilityBaker {
+        match self.baker {
+            VisibilityBakerArg::Cpu => shvis::prepare::VisibilityBaker::Cpu,
+            VisibilityBakerArg::Gpu => shvis::prepare::VisibilityBaker::Gpu {
+                ctx: ctx.clone(),
+                settings: self.gpu_settings(),
+            },
+        }
+    }
+}
+
+/// `--baker`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 enum VisibilityBakerArg {
     /// Ray tracing (cached).
@@ -649,6 +677,8 @@ enum VisibilityBakerArg {
 struct RenderArgs {
     #[command(flatten)]
     scene: SceneArgs,
+    #[command(flatten)]
+    baker: BakerArgs,
     #[command(flatten)]
     gpu: GpuArgs,
     /// `sky` (built-in), an .exr/.hdr equirectangular map (2:1) or angular probe (1:1,
@@ -752,6 +782,8 @@ struct ProbeArgs {
 struct BenchArgs {
     #[command(flatten)]
     scene: SceneArgs,
+    #[command(flatten)]
+    baker: BakerArgs,
     #[command(flatten)]
     gpu: GpuArgs,
     #[arg(long, default_value = "sky")]
@@ -1775,7 +1807,7 @@ fn run_bake(a: BakeArgs) -> Result<()> {
     let rays = bake::validate_rays(a.scene.rays)?;
     create_dir(&a.out)?;
     let cache_dir = shvis::bake::cache::default_cache_dir();
-    if a.baker == VisibilityBakerArg::Cpu {
+    if a.baker.baker == VisibilityBakerArg::Cpu {
         shvis::files::check_writable_dir(&cache_dir, "the bake cache (SHVIS_CACHE_DIR)")?;
     }
     let scene = resolve_scene(&a.scene.scene, vis_res)?;
@@ -1787,7 +1819,7 @@ fn run_bake(a: BakeArgs) -> Result<()> {
             ao.stats
         );
     }
-    let visibility = match a.baker {
+    let visibility = match a.baker.baker {
         VisibilityBakerArg::Cpu => {
             shvis::prepare::bake_scene_visibility(&scene, vis_res, rays, &settings)?
         }
@@ -1795,7 +1827,7 @@ fn run_bake(a: BakeArgs) -> Result<()> {
     };
     println!(
         "visibility and AO bake ({:?}): order {} × {rays} rays, {} triangles: {}",
-        a.baker,
+        a.baker.baker,
         visibility.order,
         scene.mesh.triangle_count(),
         visibility.stats
@@ -1806,7 +1838,7 @@ fn run_bake(a: BakeArgs) -> Result<()> {
         "rays": rays,
         "order": a.scene.order,
         "seed": a.scene.seed,
-        "baker": format!("{:?}", a.baker).to_lowercase(),
+        "baker": format!("{:?}", a.baker.baker).to_lowercase(),
     });
     shvis::bake::cache::write_exr_layers(&a.out, &visibility, manifest_settings)?;
     println!(
@@ -1825,7 +1857,7 @@ fn bake_on_gpu(
     rays: u32,
     settings: &PrepareSettings,
 ) -> Result<bake::visibility::VisibilityMap> {
-    use shvis::bake::gpu_visibility::{self, GpuVisibilitySettings};
+    use shvis::bake::gpu_visibility;
     use shvis::bake::visibility::{VisibilitySettings, bake_visibility};
     let ctx = open_gpu(&a.gpu)?;
     let texels = bake::raster::rasterize(&scene.mesh, vis_res);
@@ -1835,11 +1867,7 @@ fn bake_on_gpu(
         seed: settings.seed,
         progress: true,
     };
-    let gpu_settings = GpuVisibilitySettings {
-        depth_res: a.depth_res,
-        bias_texels: a.depth_bias,
-        slope_bias_texels: a.slope_bias,
-    };
+    let gpu_settings = a.baker.gpu_settings();
     let baked = gpu_visibility::bake_visibility_gpu(
         &ctx,
         &scene.mesh,
@@ -1853,9 +1881,9 @@ fn bake_on_gpu(
     println!(
         "gpu simulator on {}: {}² depth maps, bias {} + {}·tanθ texels: {:.2} s ({:.2} s set-up; {gpu_ms})",
         ctx.device_name(),
-        a.depth_res,
-        a.depth_bias,
-        a.slope_bias,
+        a.baker.depth_res,
+        a.baker.depth_bias,
+        a.baker.slope_bias,
         baked.map.stats.seconds,
         baked.setup_s
     );
@@ -1934,7 +1962,7 @@ fn run_render(mut a: RenderArgs) -> Result<()> {
     let settings = prepare_settings(&a.scene, &a.env, &[a.technique], a.bounces)?;
     // The device next: a missing GPU should not cost a bake.
     let ctx = open_gpu(&a.gpu)?;
-    let mut prepared = prepare(&settings)?;
+    let mut prepared = prepare_with(&settings, &a.baker.visibility_baker(&ctx))?;
     prepared.prepare_techniques(&[a.technique])?;
     let settings = FrameSettings {
         width: a.width,
@@ -2094,12 +2122,11 @@ fn run_bench(a: BenchArgs) -> Result<()> {
         let _ = std::fs::remove_file(a.out.join(stale));
     }
     let started = Instant::now();
-    let mut prepared = prepare(&prepare_settings(
-        &a.scene,
-        &a.env,
-        &settings.techniques,
-        a.bounces,
-    )?)?;
+    let prepare_settings = prepare_settings(&a.scene, &a.env, &settings.techniques, a.bounces)?;
+    // The device before the bake: a missing GPU should not cost one, and `--baker gpu`
+    // bakes on it.
+    let ctx = open_gpu(&a.gpu)?;
+    let mut prepared = prepare_with(&prepare_settings, &a.baker.visibility_baker(&ctx))?;
     prepared.prepare_techniques(&settings.techniques)?;
     settings.specular = a.specular.settings(&prepared.env)?;
     if a.techniques == "all" && prepared.ssbump.is_none() {
@@ -2120,7 +2147,6 @@ fn run_bench(a: BenchArgs) -> Result<()> {
         }
         settings.techniques = kept;
     }
-    let ctx = open_gpu(&a.gpu)?;
     let table = shvis::bench::run(&ctx, &prepared, &settings)?;
     print_table(
         &table.to_markdown(),

@@ -393,6 +393,8 @@ pub enum PrepareError {
     #[error(transparent)]
     Limit(#[from] crate::limits::LimitError),
     #[error(transparent)]
+    Gpu(#[from] crate::gpu::GpuError),
+    #[error(transparent)]
     File(#[from] crate::files::FileError),
 }
 
@@ -414,8 +416,27 @@ pub fn resolve_scene(name: &str, vis_res: u32) -> Result<Scene, SceneError> {
     }
 }
 
+/// Who bakes the visibility: the CPU ray tracer (through the bake cache) or the PRT
+/// course's GPU simulator on a device (`bake::gpu_visibility`; not cached — its bakes must
+/// never be mistaken for the tracer's).
+pub enum VisibilityBaker {
+    Cpu,
+    Gpu {
+        ctx: Arc<crate::gpu::Context>,
+        settings: crate::bake::gpu_visibility::GpuVisibilitySettings,
+    },
+}
+
 /// Validates inputs (cheap checks first), then bakes and prepares the lighting.
 pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
+    prepare_with(settings, &VisibilityBaker::Cpu)
+}
+
+/// [`prepare`] with the visibility baked by `baker`.
+pub fn prepare_with(
+    settings: &PrepareSettings,
+    baker: &VisibilityBaker,
+) -> Result<Prepared, PrepareError> {
     check_settings(settings)?;
     let cache_dir = settings.cache_dir.clone().unwrap_or_else(default_cache_dir);
     crate::files::check_writable_dir(&cache_dir, "the bake cache (SHVIS_CACHE_DIR)")?;
@@ -430,7 +451,30 @@ pub fn prepare(settings: &PrepareSettings) -> Result<Prepared, PrepareError> {
         scene.material.height = Some(crate::scene::load_height_map(path, *scale)?);
     }
     let geometry = BakeGeometry::new(&scene.mesh, vis_res);
-    let visibility = bake_visibility_cached(&geometry, rays, settings)?;
+    let visibility = match baker {
+        VisibilityBaker::Cpu => bake_visibility_cached(&geometry, rays, settings)?,
+        VisibilityBaker::Gpu { ctx, settings: gpu } => {
+            let baked = crate::bake::gpu_visibility::bake_visibility_gpu(
+                ctx,
+                &scene.mesh,
+                geometry.texels(),
+                &VisibilitySettings {
+                    order: settings.order,
+                    rays,
+                    seed: settings.seed,
+                    progress: settings.progress,
+                },
+                gpu,
+            )?;
+            log::info!(
+                "visibility on the GPU simulator ({}): {}² depth maps, {:.2} s",
+                ctx.device_name(),
+                gpu.depth_res,
+                baked.map.stats.seconds
+            );
+            baked.map
+        }
+    };
     let ao = AoMap {
         res: visibility.res,
         values: visibility.ao.clone(),

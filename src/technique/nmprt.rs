@@ -1,4 +1,4 @@
-//! `nmprt`, `nmprtsvdM`, `nmprthl2`, `nmprtratio`: normal mapping for PRT (Sloan, PRT
+//! `nmprt`, `nmprtsvdM`, `nmprtsvdMp`, `nmprthl2`, `nmprtratio`: normal mapping for PRT (Sloan, PRT
 //! course, "Normal Mapping for PRT"; issue 23). Per lightmap texel a transfer matrix M
 //! (`bake::transfer`: order-3 transferred incident radiance from order-O lighting, shadows
 //! and inter-reflection baked in) turns the distant lighting l into l' = M·l; the pixel
@@ -21,16 +21,17 @@
 //! evaluation. U S is stored as an M-channel texture on the disk (`n.xy·½ + ½`, bilinear),
 //! built once.
 //!
-//! **Where the matrix–vector products run.** All four relight through the dynamic-lighting
-//! machinery (`super::lighting`): when the lighting changes, the CPU forms each texel's
-//! values — M·l, then R and V_Mᵀ / H, or the ratio — and the update uploads them as the
-//! lighting set's per-texel images. The course's pixel shader for the SVD form instead
-//! holds per-texel V_MᵀRM (M × O²) and multiplies by l per pixel; the per-pixel work here is
-//! the lookups and the M-term dot product only (README, issue 23).
+//! **Where the matrix–vector products run.** All relight through the dynamic-lighting
+//! machinery (`super::lighting`). For `nmprt`, `nmprtsvdM`, `nmprthl2` and `nmprtratio`,
+//! when the lighting changes the CPU forms each texel's values — M·l, then the rows W·R_t
+//! (V_Mᵀ or H, formed once per texel) or the ratio — and the update uploads them as the
+//! lighting set's per-texel images. `nmprtsvdMp` is the course's pixel shader: per texel
+//! P = V_MᵀR M (M × O² per colour) as bake data, l in the uniform block, c = P l per pixel —
+//! a lighting change writes the uniforms only; its 3·M·⌈O²/4⌉ layers are dx10 only.
 //!
 //! Shaders: `nmprt` runs `shlmap.frag` (same 27-value layout), `nmprthl2` `rnm.frag`
 //! (three RGB lightmaps, Listing 1 weights), `nmprtratio` `preconv.frag` (ρ in the AO
-//! slot), `nmprtsvdM` its own `nmprtsvd.frag`.
+//! slot), `nmprtsvdM` its own `nmprtsvd.frag`, `nmprtsvdMp` `nmprtsvdp.frag`.
 
 use std::sync::{Arc, OnceLock};
 
