@@ -700,7 +700,7 @@ struct RenderArgs {
     /// built-in sky's sunlit ground out of clipping.
     #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
     exposure: f32,
-    /// Bounces of inter-reflection baked for shlmap.
+    /// Bounces of inter-reflection baked for shlmap and the nmprt* transfer matrices.
     #[arg(long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
     bounces: u32,
     /// How unc* and preconv read the normal map: `mip` (its MIP chain of averaged normals)
@@ -822,8 +822,9 @@ struct BenchArgs {
     /// instead of the footprint reference.
     #[arg(long)]
     point_reference: bool,
-    /// Bounces of inter-reflection in shlmap's bake and in the reference it is measured
-    /// against (the other techniques model direct light and meet the direct reference).
+    /// Bounces of inter-reflection in shlmap's and the nmprt* transfer bakes and in the
+    /// reference they are measured against (the other techniques model direct light and
+    /// meet the direct reference).
     #[arg(long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
     bounces: u32,
     /// Leave out the device probe and the rows' model columns.
