@@ -148,19 +148,6 @@ impl NormalBasis {
         let a = convolved_basis(n);
         (0..TRANSFER_ROWS).map(|j| a[j] * self.vectors[m][j]).sum()
     }
-
-    /// c_m = Σ_j V_jm x_j for the first `m` vectors, per colour.
-    pub fn project(&self, m: usize, x: &[[f64; 3]; TRANSFER_ROWS]) -> Vec<[f64; 3]> {
-        (0..m)
-            .map(|k| {
-                std::array::from_fn(|c| {
-                    (0..TRANSFER_ROWS)
-                        .map(|j| self.vectors[k][j] * x[j][c])
-                        .sum()
-                })
-            })
-            .collect()
-    }
 }
 
 /// The normal of the disk texel (i, j) of a `side`² grid (orthographic, `uv = n.xy·½ + ½`;
@@ -677,7 +664,12 @@ mod tests {
         // Any l': Σ_m (US)_m(n) (Vᵀl')_m = y(n)ᵀ C l' when all nine are kept.
         let x: [[f64; 3]; 9] =
             std::array::from_fn(|j| [0.3 + j as f64, -0.2 * j as f64, (j as f64).sin()]);
-        let c = basis.project(9, &x);
+        // c_m = Σ_j V_jm x_j (red channel), as the recipe's rows W = V_Mᵀ form it.
+        let c: Vec<[f64; 1]> = basis
+            .vectors
+            .iter()
+            .map(|v| [(0..9).map(|j| v[j] * x[j][0]).sum()])
+            .collect();
         for n in [DVec3::Z, DVec3::new(0.3, -0.5, 0.81).normalize(), DVec3::X] {
             let full: f64 = convolved_basis(n)
                 .iter()
