@@ -13,6 +13,10 @@ layout(push_constant) uniform Push {
     uint direction;   // index of d in the bake's direction set
     uint point_count;
     uint mask_words;  // 32-bit mask words per point
+    float t_min;      // smallest hit distance counted by the exact test, metres (the CPU tracer's)
+    float epsilon;    // the ray origins' offset along the normal, metres (the CPU tracer's)
+    uint pad1;
+    uint pad2;
 } push;
 
 // (x, y) in [-1, 1]² and the sky distance of world point p.

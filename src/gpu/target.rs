@@ -14,7 +14,7 @@ pub const COLOR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 pub const COLOR_FORMAT_F32: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 /// The one-channel f32 colour format of the visibility simulator's sky-distance maps.
-pub const DEPTH_MAP_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
+pub const DEPTH_MAP_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
 
 /// Colour and depth images at one size, with the render pass that clears them.
 pub struct RenderTarget {

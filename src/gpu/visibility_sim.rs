@@ -2,11 +2,12 @@
 //! `crate::bake::gpu_visibility` prepares the data and states the math). Per direction d
 //! of the bake's set, in command buffers of [`DIRECTIONS_PER_SUBMIT`] directions:
 //!
-//! 1. **depth** — the scene drawn orthographically along d into an R32F target holding the
-//!    sky distance of the nearest surface (`glsl/bake/depth.*`), copied to a buffer;
+//! 1. **depth** — the scene drawn orthographically along d into an RG32F target holding the
+//!    sky distance of the nearest surface and its triangle (`glsl/bake/depth.*`), copied to
+//!    a buffer;
 //! 2. **mark** — one invocation per point sets bit d of its visibility mask when nothing
-//!    in the map lies nearer the sky than the point by more than the bias
-//!    (`glsl/bake/mark.comp`).
+//!    in the map lies nearer the sky than the point by more than the bias and no triangle
+//!    of the 3 × 3 map texels around it lies on its ray (`glsl/bake/mark.comp`).
 //!
 //! Then **project** (`glsl/bake/project.comp`) sums w·y_i(d) over each point's visible
 //! directions into its coefficients and forms its AO. Timestamps bracket the direction
@@ -51,6 +52,11 @@ pub struct DirectionView {
     pub direction: u32,
     pub point_count: u32,
     pub mask_words: u32,
+    /// Smallest hit distance the exact silhouette test counts, metres.
+    pub t_min: f32,
+    /// The ray origins' offset along the normal, metres.
+    pub epsilon: f32,
+    pub pad: [u32; 2],
 }
 
 /// Everything one simulation needs.
@@ -149,9 +155,34 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
         vk::BufferUsageFlags::STORAGE_BUFFER,
         "bake.gpu-visibility.directions",
     )?;
+    // Triangle t's corners at 3t, 3t + 1, 3t + 2 (the map's ids), for the exact test; the
+    // depth pass's triangle ids count on unindexed corners (`glsl/bake/depth.vert`).
+    if job
+        .indices
+        .iter()
+        .enumerate()
+        .any(|(k, &i)| i as usize != k)
+        || job.indices.len() / 3 >= 1 << 24
+    {
+        return Err(GpuError::Invalid {
+            what: name.into(),
+            detail: "the simulator takes unindexed triangles, fewer than 2^24".into(),
+        });
+    }
+    let corners: Vec<[f32; 4]> = job
+        .positions
+        .iter()
+        .map(|p| [p[0], p[1], p[2], 1.0])
+        .collect();
+    let triangles = device_local_buffer(
+        ctx,
+        bytemuck::cast_slice(&corners),
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        "bake.gpu-visibility.triangles",
+    )?;
     let depth = storage_buffer(
         ctx,
-        u64::from(res) * u64::from(res) * 4,
+        u64::from(res) * u64::from(res) * 8,
         "bake.gpu-visibility.depth",
     )?;
     let masks = storage_buffer(
@@ -182,6 +213,7 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
                 (0, Resource::Storage(&depth)),
                 (1, Resource::Storage(&points)),
                 (2, Resource::Storage(&masks)),
+                (3, Resource::Storage(&triangles)),
             ],
             push_constant_bytes: size_of::<DirectionView>() as u32,
         },
@@ -246,6 +278,7 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
     let clears = [
         vk::ClearValue {
             color: vk::ClearColorValue {
+                // No surface: nothing nearer the sky, no triangle.
                 float32: [EMPTY_SKY, 0.0, 0.0, 0.0],
             },
         },
