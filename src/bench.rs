@@ -158,6 +158,9 @@ pub fn run(
             &crate::probe::ProbeSettings {
                 width: settings.width,
                 height: settings.height,
+                triangle_pixels: prepared
+                    .scene
+                    .pixel_weighted_triangle_area(settings.width, settings.height),
                 warmup: settings.warmup.min(5),
                 frames: settings.frames.clamp(5, 30),
             },

@@ -44,6 +44,16 @@ fn finite_f64(text: &str) -> Result<f64, String> {
     }
 }
 
+/// A finite f64 of at least 1 (clap value parser): a screen area in pixels.
+fn at_least_one_f64(text: &str) -> Result<f64, String> {
+    let v = finite_f64(text)?;
+    if v >= 1.0 {
+        Ok(v)
+    } else {
+        Err(format!("{text} is below 1"))
+    }
+}
+
 #[derive(Parser, Debug)]
 #[command(
     name = "shvis",
@@ -773,6 +783,10 @@ struct ProbeArgs {
     /// Untimed frames before them.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=10_000))]
     warmup: u32,
+    /// Screen area of the probe's triangles, pixels (default: the built-in house's
+    /// pixel-weighted triangle area at this size, as `shvis bench` sizes them for its scene).
+    #[arg(long, value_parser = at_least_one_f64)]
+    triangle_pixels: Option<f64>,
     /// Output directory (probe.md, probe.json).
     #[arg(long, default_value = "probe-out")]
     out: PathBuf,
@@ -2083,6 +2097,11 @@ fn run_probe(a: ProbeArgs) -> Result<()> {
         &shvis::probe::ProbeSettings {
             width: a.width,
             height: a.height,
+            triangle_pixels: match a.triangle_pixels {
+                Some(px) => px,
+                None => shvis::scene::house::build(shvis::scene::house::MIN_LIGHTMAP_RES)?
+                    .pixel_weighted_triangle_area(a.width, a.height),
+            },
             warmup: a.warmup,
             frames: a.frames,
         },

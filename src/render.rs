@@ -344,6 +344,18 @@ impl SceneGpu {
         })
     }
 
+    /// The GPU times of `frames` frames of `mesh` with `pipeline`, ms; nothing read back (the
+    /// device probe's interleaved rounds).
+    pub fn time_pipeline_on(
+        &self,
+        pipeline: &MeshPipeline,
+        mesh: &MeshBuffers,
+        warmup: u32,
+        frames: u32,
+    ) -> Result<Vec<f64>, GpuError> {
+        pipeline.render_frames(&self.target, mesh, warmup, frames)
+    }
+
     /// Renders with any mesh pipeline built for this scene's target (e.g. G-buffer passes).
     pub fn render_pipeline(
         &self,

@@ -17,14 +17,15 @@ fn the_probe_runs_every_microbenchmark_and_fits_a_model_to_them() {
         &ProbeSettings {
             width: 320,
             height: 200,
+            triangle_pixels: 200.0,
             warmup: 1,
             frames: 5,
         },
     )
     .expect("probe runs");
     eprintln!("{}", probe.to_markdown());
-    // 3 empty-shader points, 3 triangle grids and 4 counts of each kind.
-    assert_eq!(probe.points.len(), 3 + 3 + 4 * Kind::ALL.len());
+    // The empty frame, 3 empty-shader points, 3 finer triangle grids and 4 counts of each kind.
+    assert_eq!(probe.points.len(), 4 + 3 + 4 * Kind::ALL.len());
     for p in &probe.points {
         assert!(p.ms_median.is_finite() && p.ms_median > 0.0, "{p:?}");
         assert!(p.model_ms.is_finite(), "{p:?}");

@@ -9,7 +9,10 @@
 //!   times a vector 9, a normalize 3 per component); comparisons, conversions and selects
 //!   are not counted;
 //! - **uniform reads**: loads from `Uniform` / `StorageBuffer` / `PushConstant` memory, in
-//!   16-byte units (one `vec4` is 1, a `float` is 1);
+//!   16-byte units (one `vec4` is 1, a `float` is 1), split by how they are addressed:
+//!   *indexed* when an access chain on the way to them has an index that is not a constant
+//!   (computed per invocation, e.g. a cluster's block from a texel's cluster id), constant
+//!   otherwise;
 //! - **varying reads**: float components loaded from `Input` variables (interpolants);
 //! - **samples**: image sample / fetch / gather instructions;
 //! - **loops**: loops left in the code (`OpLoopMerge`): where there are any, the other counts
@@ -19,13 +22,14 @@
 //! loops marked `[[unroll]]`; most shaders here are unrolled by macros) they are what each
 //! invocation executes, except inside branches, which are counted as if both sides ran.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// Per-invocation operation counts of a shader ([`count`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct OpCounts {
     pub float_ops: u32,
     pub uniform_reads: u32,
+    pub indexed_uniform_reads: u32,
     pub varying_reads: u32,
     pub samples: u32,
     pub loops: u32,
@@ -92,6 +96,8 @@ pub fn count(spirv: &[u32]) -> OpCounts {
     let mut value_types: HashMap<u32, u32> = HashMap::new();
     // 32-bit constant id → its value (array lengths).
     let mut constants: HashMap<u32, u32> = HashMap::new();
+    // Access chains with a non-constant index on their way (module doc).
+    let mut indexed_pointers: HashSet<u32> = HashSet::new();
     let mut i = 5; // after the header
     while i < spirv.len() {
         let word = spirv[i];
@@ -177,6 +183,13 @@ pub fn count(spirv: &[u32]) -> OpCounts {
             }
             OP_VARIABLE | OP_ACCESS_CHAIN | OP_IN_BOUNDS_ACCESS_CHAIN if w.len() >= 2 => {
                 value_types.insert(w[1], w[0]);
+                if op != OP_VARIABLE
+                    && w.len() >= 3
+                    && (indexed_pointers.contains(&w[2])
+                        || w[3..].iter().any(|index| !constants.contains_key(index)))
+                {
+                    indexed_pointers.insert(w[1]);
+                }
             }
             OP_LOAD if w.len() >= 3 => {
                 value_types.insert(w[1], w[0]);
@@ -187,7 +200,11 @@ pub fn count(spirv: &[u32]) -> OpCounts {
                 let loaded = shape_of(&shapes, w[0]);
                 match storage {
                     Some(STORAGE_UNIFORM | STORAGE_STORAGE_BUFFER | STORAGE_PUSH_CONSTANT) => {
-                        counts.uniform_reads += loaded.units16.max(1);
+                        if indexed_pointers.contains(&w[2]) {
+                            counts.indexed_uniform_reads += loaded.units16.max(1);
+                        } else {
+                            counts.uniform_reads += loaded.units16.max(1);
+                        }
                     }
                     Some(STORAGE_INPUT) => counts.varying_reads += loaded.floats,
                     _ => {}
@@ -317,9 +334,18 @@ mod tests {
         );
         assert_eq!(unrolled.loops, 0, "{unrolled:?}");
         assert_eq!(unrolled.uniform_reads, 8, "{unrolled:?}");
+        assert_eq!(unrolled.indexed_uniform_reads, 0, "{unrolled:?}");
         let kept = counts_of(
             "vec4 s = vec4(0.0);\n[[dont_unroll]] for (int i = 0; i < 8; ++i) { s += p.c[i]; }\no = s;",
         );
         assert_eq!(kept.loops, 1, "{kept:?}");
+    }
+
+    #[test]
+    fn reads_at_an_index_computed_per_invocation_are_counted_apart() {
+        // Two reads at a varying-derived index, one at a constant one.
+        let c = counts_of("int k = int(uv.x * 4.0) & 3;\no = p.c[k] + p.c[k + 4] + p.c[1];");
+        assert_eq!(c.indexed_uniform_reads, 2, "{c:?}");
+        assert_eq!(c.uniform_reads, 1, "{c:?}");
     }
 }

@@ -1,29 +1,35 @@
 //! The device probe and the cost model (issue 20; `shvis probe`, run first by `shvis bench`).
 //!
 //! **Probe.** On the current Vulkan device, at the bench's target format and resolution, a
-//! screen-filling quad is drawn with generated fragment shaders that each do N operations
-//! of one kind (straight-line code, no loops): bilinear 2D lookups (RGBA16F, the lightmap
+//! screen-filling grid of triangles as large as the scene's (`ProbeSettings::triangle_pixels`:
+//! lavapipe shades in blocks, and the smaller the triangles the more of a block's lanes idle —
+//! a bilinear lookup cost 2.3 ns per pixel over two screen-filling triangles and 3.6 ns over
+//! 125-pixel ones) is drawn with generated fragment shaders that each do N operations of one kind (straight-line code, no loops): bilinear 2D lookups (RGBA16F, the lightmap
 //! sampler, a texture each, as dx9 binds them), trilinear lookups (RGBA8 with MIP chains, the
 //! material sampler, ≈ 2.7 texels per pixel), 2D-array lookups, cube-array lookups (32²
 //! faces, as the tables), dependent lookups (each one's coordinates from the previous one's
 //! result, into textures the size of a dx9 table strip), scalar fused
 //! multiply-adds (four independent vec4 chains), interpolated varyings read, and uniform
-//! vec4 reads; plus the empty shader over the full screen, over half of it (fixed vs
-//! per-pixel cost), with the depth test off, and over the screen split into 2·32², 2·64²
-//! and 2·128² triangles (the per-triangle cost). Each point is the median of `frames` timed
-//! frames (`gpu::pass`).
+//! vec4 reads; plus the empty shader (it writes its lightmap coordinates, which every
+//! technique reads) over the full screen, over half of it (fixed vs
+//! per-pixel cost), with the depth test off, and over grids of 1.5, 2 and 2.5 times as many
+//! rows and columns (the per-triangle cost). Each point is the median of `frames` timed
+//! frames (`gpu::pass`), taken in rounds over all points so that a slow drift of a shared
+//! device spreads over every point instead of landing on a few.
 //!
 //! **Model.** t = fixed + T·c_T + f · (p + Σ_k n_k c_k), T the triangles drawn and c_T the
 //! cost of one (setup, rasterization, vertex shading), f the fragments shaded per screen pixel
 //! (`SceneGpu::shaded_fragments`: counted exactly by additive blending, so overdraw — hidden
-//! surfaces drawn before their occluders — is included; 1 for the probe's quad), p the
+//! surfaces drawn before their occluders — is included; 1 for the probe's grid), p the
 //! per-screen cost of the empty shader with the depth test (the depth test's own part, p −
 //! p_off, is reported), n_k a shader's count of kind k per pixel and c_k the cost of one per
 //! pixel over the whole screen. The lookup counts of a probe point are what it was generated
 //! with; its float ops, uniform and varying reads are read off its SPIR-V
 //! (`gpu::spirv_counts`), exactly as a technique's are, so probe and techniques are counted
-//! alike. p and the c_k are fitted jointly by least squares over the full-screen points
-//! (nalgebra's SVD); fixed = 2·t(half) − t(full) − 2·c_T from the two empty-shader points.
+//! alike. p and the c_k are fitted jointly by least squares
+//! (nalgebra's SVD) together with fixed and c_T, over every point with the depth test: among
+//! them a frame that draws one zero-area triangle (fixed) and the empty shader over half the
+//! screen (half the triangles, half the fragments).
 //!
 //! **Limits.** The per-triangle cost is the probe's: small screen-filling triangles with
 //! the shared vertex shader (pcaMv's passes more weights on). Counts are static: branches count both sides, and loops left in a shader (the
@@ -64,12 +70,14 @@ pub enum Kind {
     FloatOp,
     /// Interpolated float read from the vertex stage.
     Varying,
-    /// vec4 read from a uniform block.
+    /// vec4 read from a uniform block at a constant index.
     UniformRead,
+    /// vec4 read from a uniform block at an index computed per pixel (a cluster's block).
+    IndexedUniformRead,
 }
 
 impl Kind {
-    pub const ALL: [Kind; 8] = [
+    pub const ALL: [Kind; 9] = [
         Kind::Bilinear2d,
         Kind::Trilinear2d,
         Kind::Array2d,
@@ -78,6 +86,7 @@ impl Kind {
         Kind::FloatOp,
         Kind::Varying,
         Kind::UniformRead,
+        Kind::IndexedUniformRead,
     ];
 
     pub fn name(self) -> &'static str {
@@ -90,6 +99,7 @@ impl Kind {
             Kind::FloatOp => "float op",
             Kind::Varying => "varying float",
             Kind::UniformRead => "uniform vec4 read",
+            Kind::IndexedUniformRead => "indexed uniform vec4 read",
         }
     }
 
@@ -102,7 +112,7 @@ impl Kind {
         match self {
             Kind::FloatOp => [64, 128, 256, 512],
             Kind::Varying => [2, 5, 9, 14],
-            Kind::UniformRead => [16, 32, 64, 128],
+            Kind::UniformRead | Kind::IndexedUniformRead => [16, 32, 64, 128],
             _ => [4, 8, 12, 16],
         }
     }
@@ -110,18 +120,19 @@ impl Kind {
 
 /// Per-pixel counts of a shader, by [`Kind`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct CostCounts(pub [f64; 8]);
+pub struct CostCounts(pub [f64; 9]);
 
 impl CostCounts {
     /// The counts of a shader with `lookups` (kind, count) and the SPIR-V counts `ops`.
     pub fn new(lookups: &[(Kind, u32)], ops: &OpCounts) -> Self {
-        let mut c = [0.0; 8];
+        let mut c = [0.0; 9];
         for &(kind, n) in lookups {
             c[kind.index()] += f64::from(n);
         }
         c[Kind::FloatOp.index()] += f64::from(ops.float_ops);
         c[Kind::Varying.index()] += f64::from(ops.varying_reads);
         c[Kind::UniformRead.index()] += f64::from(ops.uniform_reads);
+        c[Kind::IndexedUniformRead.index()] += f64::from(ops.indexed_uniform_reads);
         CostCounts(c)
     }
 
@@ -142,7 +153,7 @@ pub struct CostModel {
     /// Per triangle drawn (setup, rasterization, vertex shading), ms.
     pub per_triangle_ms: f64,
     /// ms per unit of each kind per pixel over the whole screen, in [`Kind::ALL`] order.
-    pub per_unit_ms: [f64; 8],
+    pub per_unit_ms: [f64; 9],
 }
 
 impl CostModel {
@@ -193,6 +204,10 @@ pub struct Probe {
     /// Fragments the screen-filling quad shades (`SceneGpu::shaded_fragments`): one per
     /// pixel, the unit of [`CostModel::predict`]'s coverage.
     pub screen_fragments: u64,
+    /// The triangles' screen area asked for, pixels, and the grid side it gave (2·side²
+    /// triangles over 1.2 × the view each way).
+    pub triangle_pixels: f64,
+    pub grid: u32,
     pub model: CostModel,
     pub points: Vec<ProbePoint>,
     pub seconds: f64,
@@ -222,13 +237,16 @@ impl Probe {
     pub fn to_markdown(&self) -> String {
         let m = &self.model;
         let mut s = format!(
-            "device: {} · {}×{} ({} fragments shaded by the screen quad) · {} timed frames per point · {:.1} s\n\n\
+            "device: {} · {}×{} ({} fragments shaded by the screen grid of 2·{}² triangles, {:.0} pixels each) · at least {} timed frames per point (more for cheap ones), in interleaved rounds · {:.1} s\n\n\
              fixed {:.3} ms per frame; {:.3} µs per triangle; empty shader {:.3} ms per screen, of which the depth test {:.3} ms\n\n\
              | kind | ms per unit per screen | ns per unit per pixel |\n|---|---:|---:|\n",
             self.device,
             self.width,
             self.height,
             self.screen_fragments,
+            self.grid,
+            0.72 * f64::from(self.width) * f64::from(self.height)
+                / f64::from(self.grid * self.grid),
             self.frames,
             self.seconds,
             m.fixed_ms,
@@ -272,6 +290,9 @@ impl Probe {
 pub struct ProbeSettings {
     pub width: u32,
     pub height: u32,
+    /// Screen area of the probe's triangles, pixels: the scene's
+    /// [`Scene::pixel_weighted_triangle_area`] (`shvis bench`), the built-in house's by default.
+    pub triangle_pixels: f64,
     pub warmup: u32,
     pub frames: u32,
 }
@@ -282,8 +303,13 @@ pub struct ProbeSettings {
 const TEXTURES: u32 = 16;
 /// Side of the probe's textures.
 const TEXTURE_SIDE: u32 = 512;
-/// Grid sides of the per-triangle points (2·side² triangles over the screen).
-const TRIANGLE_GRIDS: [u32; 3] = [32, 64, 128];
+/// Grid sides of the per-triangle points: small triangles (125, 55 and 31 pixels at
+/// 1280×800), as a scene's many small ones.
+const TRIANGLE_GRIDS: [u32; 3] = [64, 96, 128];
+/// Points faster than this get proportionally more frames (up to 6×) after the first round.
+const CHEAP_POINT_MS: f64 = 40.0;
+/// Interleaved rounds the timed frames are split into.
+const PROBE_ROUNDS: u32 = 10;
 /// Uniform vec4s in the probe's block.
 const UNIFORM_VEC4S: u32 = 256;
 
@@ -305,20 +331,27 @@ fn probe_scene(width: u32, height: u32, left_half: bool, grid: u32) -> Scene {
             albedo_tint: [1.0; 3],
         }
     };
-    // grid × grid quads, two triangles each (the per-triangle cost's points).
+    // columns × grid quads, two triangles each; the left half keeps the quads' size. Grid 0:
+    // one triangle of zero area (a frame that shades nothing).
+    let columns = if left_half { grid / 2 } else { grid };
     let mut mesh = Mesh::default();
-    for j in 0..=grid {
-        for i in 0..=grid {
-            let (fx, fy) = (i as f32 / grid as f32, j as f32 / grid as f32);
-            mesh.vertices
-                .push(vertex(x0 + (x1 - x0) * fx, -1.2 + 2.4 * fy));
+    if grid == 0 {
+        mesh.vertices = vec![vertex(0.0, 0.0); 3];
+        mesh.indices = vec![0, 1, 2];
+    } else {
+        for j in 0..=grid {
+            for i in 0..=columns {
+                let (fx, fy) = (i as f32 / columns as f32, j as f32 / grid as f32);
+                mesh.vertices
+                    .push(vertex(x0 + (x1 - x0) * fx, -1.2 + 2.4 * fy));
+            }
         }
-    }
-    for j in 0..grid {
-        for i in 0..grid {
-            let a = j * (grid + 1) + i;
-            let (b, c, d) = (a + 1, a + grid + 2, a + grid + 1);
-            mesh.indices.extend([a, b, c, a, c, d]);
+        for j in 0..grid {
+            for i in 0..columns {
+                let a = j * (columns + 1) + i;
+                let (b, c, d) = (a + 1, a + columns + 2, a + columns + 1);
+                mesh.indices.extend([a, b, c, a, c, d]);
+            }
         }
     }
     Scene {
@@ -348,7 +381,10 @@ fn probe_source(kind: Option<Kind>, count: u32) -> String {
     let mut body = String::new();
     let step = format!("{:.8}", 1.0 / TEXTURE_SIDE as f64);
     match kind {
-        None => {}
+        // Every technique reads at least its lightmap coordinates; a shader that reads no
+        // varying skips the interpolation set-up on lavapipe (2.6 ms less per screen at
+        // 1280×800), a path no technique takes.
+        None => body += "    acc.xy = in_uv_lightmap;\n",
         Some(k @ (Kind::Bilinear2d | Kind::Trilinear2d)) => {
             let uv = if k == Kind::Bilinear2d {
                 "in_uv_lightmap"
@@ -438,6 +474,16 @@ fn probe_source(kind: Option<Kind>, count: u32) -> String {
             );
             for k in 0..count.min(UNIFORM_VEC4S) {
                 body += &format!("    acc += probe.v[{k}];\n");
+            }
+        }
+        Some(Kind::IndexedUniformRead) => {
+            decl = format!(
+                "layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform Probe {{ vec4 v[{UNIFORM_VEC4S}]; }} probe;\n"
+            );
+            // A base that varies across the screen, as a cluster id does between texels.
+            body += "    int base = int(in_uv_lightmap.x * 8.0) & 7;\n";
+            for k in 0..count.min(UNIFORM_VEC4S - 8) {
+                body += &format!("    acc += probe.v[base + {k}];\n");
             }
         }
     }
@@ -567,7 +613,8 @@ fn probe_resources(ctx: &Arc<Context>) -> Result<ProbeResources, GpuError> {
 /// all zero).
 pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
     let started = std::time::Instant::now();
-    let scene = probe_scene(s.width, s.height, false, 1);
+    let base = base_grid(s.width, s.height, s.triangle_pixels);
+    let scene = probe_scene(s.width, s.height, false, base);
     let gpu = SceneGpu::new(
         ctx,
         &scene,
@@ -586,7 +633,9 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
             &format!("probe.mesh{}{grid}", if left_half { ".half" } else { "" }),
         )
     };
-    let half_mesh = upload(true, 1)?;
+    let nothing_mesh = upload(false, 0)?;
+    let full_mesh = upload(false, base)?;
+    let half_mesh = upload(true, base)?;
     let grids = TRIANGLE_GRIDS
         .iter()
         .map(|&g| upload(false, g))
@@ -594,14 +643,19 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
     let res = probe_resources(ctx)?;
     let linear = Sampler::new(ctx, SamplerKind::LinearClamp, "probe.linear")?;
     let material = gpu.material_sampler();
-    let mut points = Vec::new();
     let screen_fragments = gpu.shaded_fragments(ctx)?;
-    let mut measure = |kind: Option<Kind>,
-                       count: u32,
-                       depth_test: bool,
-                       mesh: Option<&MeshBuffers>|
-     -> Result<(), GpuError> {
-        let half_screen = mesh.is_some_and(|m| std::ptr::eq(m, &half_mesh));
+
+    // Every point's pipeline first, then the timed frames in interleaved rounds.
+    struct Planned<'m> {
+        point: ProbePoint,
+        pipeline: crate::gpu::MeshPipeline,
+        mesh: &'m MeshBuffers,
+    }
+    let plan = |kind: Option<Kind>,
+                count: u32,
+                depth_test: bool,
+                mesh: &MeshBuffers|
+     -> Result<(ProbePoint, crate::gpu::MeshPipeline), GpuError> {
         let name = format!(
             "probe.{}{count}",
             kind.map_or("empty".to_string(), |k| format!("{k:?}").to_lowercase())
@@ -639,12 +693,6 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
             _ => {}
         }
         let pipeline = gpu.mesh_pipeline_with_depth(ctx, &name, &spirv, &resources, depth_test)?;
-        drop(resources);
-        let frame = match mesh {
-            Some(m) => gpu.render_pipeline_on(&pipeline, m, s.warmup, s.frames)?,
-            None => gpu.render_pipeline(&pipeline, s.warmup, s.frames)?,
-        };
-        let ms = TimingStats::from_ms(&frame.ms).map_or(f64::NAN, |t| t.ms_median);
         let lookups: Vec<(Kind, u32)> = match kind {
             Some(
                 k @ (Kind::Bilinear2d
@@ -657,29 +705,79 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
             }
             _ => vec![],
         };
-        points.push(ProbePoint {
+        let point = ProbePoint {
             kind,
             count,
-            coverage: if half_screen { 0.5 } else { 1.0 },
-            triangles: mesh.map_or(2, MeshBuffers::triangle_count),
+            coverage: if std::ptr::eq(mesh, &nothing_mesh) {
+                0.0
+            } else if std::ptr::eq(mesh, &half_mesh) {
+                0.5
+            } else {
+                1.0
+            },
+            triangles: mesh.triangle_count(),
             depth_test,
             counts: CostCounts::new(&lookups, &ops),
-            ms_median: ms,
+            ms_median: f64::NAN,
             model_ms: f64::NAN,
-        });
-        Ok(())
+        };
+        Ok((point, pipeline))
     };
-    measure(None, 0, true, None)?;
-    measure(None, 0, true, Some(&half_mesh))?;
-    measure(None, 0, false, None)?;
-    for grid in &grids {
-        measure(None, 0, true, Some(grid))?;
-    }
+    let mut specs: Vec<(Option<Kind>, u32, bool, &MeshBuffers)> = vec![
+        (None, 0, true, &nothing_mesh),
+        (None, 0, true, &full_mesh),
+        (None, 0, true, &half_mesh),
+        (None, 0, false, &full_mesh),
+    ];
+    specs.extend(grids.iter().map(|g| (None, 0, true, g)));
     for kind in Kind::ALL {
         for count in kind.probe_counts() {
-            measure(Some(kind), count, true, None)?;
+            specs.push((Some(kind), count, true, &full_mesh));
         }
     }
+    let planned = specs
+        .into_iter()
+        .map(|(kind, count, depth_test, mesh)| {
+            let (point, pipeline) = plan(kind, count, depth_test, mesh)?;
+            Ok(Planned {
+                point,
+                pipeline,
+                mesh,
+            })
+        })
+        .collect::<Result<Vec<_>, GpuError>>()?;
+    // A slow drift of the device (another tenant, clocks) would otherwise land on whichever
+    // points ran during it; in rounds it spreads over all of them and the median drops it.
+    let rounds = s.frames.clamp(1, PROBE_ROUNDS);
+    let per_round = s.frames.div_ceil(rounds);
+    let mut times: Vec<Vec<f64>> = vec![Vec::new(); planned.len()];
+    for round in 0..rounds {
+        let warmup = if round == 0 {
+            s.warmup
+        } else {
+            s.warmup.min(1)
+        };
+        for (p, t) in planned.iter().zip(&mut times) {
+            // After the first round, cheap points get more frames: a millisecond of jitter
+            // is 10 % of them.
+            let frames = match TimingStats::from_ms(t) {
+                Some(first) if round > 0 => {
+                    let scale = (CHEAP_POINT_MS / first.ms_median).clamp(1.0, 6.0);
+                    (f64::from(per_round) * scale).round() as u32
+                }
+                _ => per_round,
+            };
+            t.extend(gpu.time_pipeline_on(&p.pipeline, p.mesh, warmup, frames)?);
+        }
+    }
+    let mut points: Vec<ProbePoint> = planned
+        .into_iter()
+        .zip(&times)
+        .map(|(p, t)| ProbePoint {
+            ms_median: TimingStats::from_ms(t).map_or(f64::NAN, |t| t.ms_median),
+            ..p.point
+        })
+        .collect();
     let model = fit(&points).ok_or_else(|| GpuError::Invalid {
         what: "probe".into(),
         detail: format!("{}: the timings do not fit a cost model", ctx.device_name()),
@@ -696,53 +794,53 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
         device: ctx.device_name().to_string(),
         width: s.width,
         height: s.height,
-        frames: s.frames,
+        frames: rounds * per_round,
         screen_fragments,
+        triangle_pixels: s.triangle_pixels,
+        grid: base,
         model,
         points,
         seconds: started.elapsed().as_secs_f64(),
     })
 }
 
+/// Side of the grid whose triangles cover `triangle_pixels` each on a `width` × `height`
+/// screen (the grid spans 1.2 × the view each way), even so that the half screen halves it.
+fn base_grid(width: u32, height: u32, triangle_pixels: f64) -> u32 {
+    let cells = 0.5 * 1.44 * f64::from(width) * f64::from(height) / triangle_pixels.max(1.0);
+    let half = (0.5 * cells.sqrt()).round().clamp(1.0, 128.0) as u32;
+    2 * half
+}
+
 /// Least-squares fit of the model (module doc) to the points.
 fn fit(points: &[ProbePoint]) -> Option<CostModel> {
-    let full: Vec<&ProbePoint> = points
-        .iter()
-        .filter(|p| p.coverage == 1.0 && p.depth_test)
-        .collect();
-    // Unknowns: B = fixed + p, the per-triangle cost, then c_k. Rows weighted by 1/t so
-    // relative errors count.
-    let n = 2 + Kind::ALL.len();
-    let a = nalgebra::DMatrix::from_fn(full.len(), n, |r, c| {
-        let w = 1.0 / full[r].ms_median;
-        match c {
-            0 => w,
-            1 => f64::from(full[r].triangles) * w,
-            _ => full[r].counts.0[c - 2] * w,
+    let on: Vec<&ProbePoint> = points.iter().filter(|p| p.depth_test).collect();
+    // Unknowns: fixed, the per-triangle cost, p, then c_k; t = fixed + T·c_T + f·(p + Σ n_k
+    // c_k). Rows weighted by 1/t so relative errors count.
+    let n = 3 + Kind::ALL.len();
+    let a = nalgebra::DMatrix::from_fn(on.len(), n, |r, c| {
+        let p = on[r];
+        let w = 1.0 / p.ms_median;
+        w * match c {
+            0 => 1.0,
+            1 => f64::from(p.triangles),
+            2 => p.coverage,
+            _ => p.coverage * p.counts.0[c - 3],
         }
     });
-    let b = nalgebra::DVector::from_element(full.len(), 1.0);
+    let b = nalgebra::DVector::from_element(on.len(), 1.0);
     let x = a.svd(true, true).solve(&b, 1e-12).ok()?;
-    let empty = |depth: bool, coverage: f64| {
-        points
-            .iter()
-            .find(|p| {
-                p.kind.is_none()
-                    && p.triangles == 2
-                    && p.depth_test == depth
-                    && p.coverage == coverage
-            })
-            .map(|p| p.ms_median)
-    };
-    let (full_ms, half_ms, off_ms) = (empty(true, 1.0)?, empty(true, 0.5)?, empty(false, 1.0)?);
-    // Both empty points draw 2 triangles: 2·t(half) − t(full) = fixed + 2·c_T.
-    let fixed_ms = (2.0 * half_ms - full_ms - 2.0 * x[1]).max(0.0);
+    // The depth test's part: the empty shader with it off against the same mesh with it on.
+    let off = points.iter().find(|p| p.kind.is_none() && !p.depth_test)?;
+    let on = points.iter().find(|p| {
+        p.kind.is_none() && p.depth_test && p.triangles == off.triangles && p.coverage == 1.0
+    })?;
     let model = CostModel {
-        fixed_ms,
-        pixel_ms: x[0] - fixed_ms,
-        depth_test_ms: full_ms - off_ms,
+        fixed_ms: x[0],
+        pixel_ms: x[2],
+        depth_test_ms: on.ms_median - off.ms_median,
         per_triangle_ms: x[1],
-        per_unit_ms: std::array::from_fn(|k| x[k + 2]),
+        per_unit_ms: std::array::from_fn(|k| x[k + 3]),
     };
     let finite = model.per_unit_ms.iter().all(|c| c.is_finite())
         && model.pixel_ms.is_finite()
@@ -769,6 +867,9 @@ mod tests {
                 assert_eq!(ops.loops, 0, "{kind:?} {count}");
                 match kind {
                     Kind::UniformRead => assert!(ops.uniform_reads >= count, "{ops:?}"),
+                    Kind::IndexedUniformRead => {
+                        assert_eq!(ops.indexed_uniform_reads, count, "{ops:?}");
+                    }
                     Kind::Varying => assert_eq!(ops.varying_reads, count, "{ops:?}"),
                     Kind::FloatOp => assert!(ops.float_ops >= count, "{ops:?}"),
                     _ => assert_eq!(ops.samples, count, "{kind:?}: {ops:?}"),
@@ -785,7 +886,7 @@ mod tests {
             pixel_ms: 1.2,
             depth_test_ms: 0.3,
             per_triangle_ms: 2e-4,
-            per_unit_ms: [2.0, 3.0, 2.5, 4.0, 2.2, 0.01, 0.05, 0.5],
+            per_unit_ms: [2.0, 3.0, 2.5, 4.0, 2.2, 0.01, 0.05, 0.5, 1.5],
         };
         let mut points = Vec::new();
         let mut push =
@@ -807,9 +908,11 @@ mod tests {
                     model_ms: 0.0,
                 });
             };
-        push(None, CostCounts::default(), 1.0, true, 2);
-        push(None, CostCounts::default(), 0.5, true, 2);
-        push(None, CostCounts::default(), 1.0, false, 2);
+        push(None, CostCounts::default(), 0.0, true, 1);
+        let base = 2 * 40 * 40;
+        push(None, CostCounts::default(), 1.0, true, base);
+        push(None, CostCounts::default(), 0.5, true, base / 2);
+        push(None, CostCounts::default(), 1.0, false, base);
         for g in TRIANGLE_GRIDS {
             push(None, CostCounts::default(), 1.0, true, 2 * g * g);
         }
@@ -819,7 +922,7 @@ mod tests {
                 c.0[kind.index()] = f64::from(n);
                 c.0[Kind::Varying.index()] += 2.0;
                 c.0[Kind::FloatOp.index()] += 7.0;
-                push(Some(kind), c, 1.0, true, 2);
+                push(Some(kind), c, 1.0, true, base);
             }
         }
         let model = fit(&points).unwrap();

@@ -171,6 +171,76 @@ impl Camera {
     }
 }
 
+impl Scene {
+    /// The screen area of the triangle under an average shaded fragment, pixels: Σ a_i² /
+    /// Σ a_i over the triangles' areas a_i on a `width` × `height` screen after clipping to
+    /// the view (occlusion ignored, as every drawn fragment is shaded). What the device probe
+    /// sizes its triangles by: a rasterizer works in blocks, and small triangles leave more
+    /// of each block's lanes idle (`crate::probe`).
+    pub fn pixel_weighted_triangle_area(&self, width: u32, height: u32) -> f64 {
+        let clip_from_world = self.camera.clip_from_world(width as f32 / height as f32);
+        let clip: Vec<Vec4> = self
+            .mesh
+            .vertices
+            .iter()
+            .map(|v| clip_from_world * Vec3::from(v.position).extend(1.0))
+            .collect();
+        let (mut sum, mut sum_sq) = (0.0f64, 0.0f64);
+        for tri in self.mesh.indices.chunks_exact(3) {
+            let polygon = clip_to_view(tri.iter().map(|&i| clip[i as usize]).collect());
+            let pixels: Vec<(f64, f64)> = polygon
+                .iter()
+                .map(|c| {
+                    (
+                        f64::from(c.x / c.w) * 0.5 * f64::from(width),
+                        f64::from(c.y / c.w) * 0.5 * f64::from(height),
+                    )
+                })
+                .collect();
+            let twice: f64 = (0..pixels.len())
+                .map(|k| {
+                    let (a, b) = (pixels[k], pixels[(k + 1) % pixels.len()]);
+                    a.0 * b.1 - b.0 * a.1
+                })
+                .sum();
+            let area = 0.5 * twice.abs();
+            sum += area;
+            sum_sq += area * area;
+        }
+        if sum > 0.0 { sum_sq / sum } else { 0.0 }
+    }
+}
+
+/// Sutherland–Hodgman clipping of a clip-space polygon to the view volume's side and near
+/// planes (w ± x ≥ 0, w ± y ≥ 0, z ≥ 0).
+fn clip_to_view(mut polygon: Vec<Vec4>) -> Vec<Vec4> {
+    let planes: [fn(Vec4) -> f32; 5] = [
+        |c| c.w + c.x,
+        |c| c.w - c.x,
+        |c| c.w + c.y,
+        |c| c.w - c.y,
+        |c| c.z,
+    ];
+    for distance in planes {
+        let mut out = Vec::with_capacity(polygon.len() + 1);
+        for k in 0..polygon.len() {
+            let (a, b) = (polygon[k], polygon[(k + 1) % polygon.len()]);
+            let (da, db) = (distance(a), distance(b));
+            if da >= 0.0 {
+                out.push(a);
+            }
+            if (da >= 0.0) != (db >= 0.0) {
+                out.push(a + (b - a) * (da / (da - db)));
+            }
+        }
+        polygon = out;
+        if polygon.is_empty() {
+            break;
+        }
+    }
+    polygon
+}
+
 /// Vertical field of view of [`framing_camera`], degrees.
 pub const FRAMING_FOV_Y_DEG: f32 = 50.0;
 
