@@ -1,21 +1,23 @@
 //! The device probe and the cost model (issue 20; `shvis probe`, run first by `shvis bench`).
 //!
 //! **Probe.** On the current Vulkan device, at the bench's target format and resolution, a
-//! screen-filling grid of triangles as large as the scene's (`ProbeSettings::triangle_pixels`:
-//! lavapipe shades in blocks, and the smaller the triangles the more of a block's lanes idle —
-//! a bilinear lookup cost 2.3 ns per pixel over two screen-filling triangles and 3.6 ns over
-//! 125-pixel ones) is drawn with generated fragment shaders that each do N operations of one kind (straight-line code, no loops): bilinear 2D lookups (RGBA16F, the lightmap
-//! sampler, a texture each, as dx9 binds them), trilinear lookups (RGBA8 with MIP chains, the
-//! material sampler, ≈ 2.7 texels per pixel), 2D-array lookups, cube-array lookups (32²
-//! faces, as the tables), dependent lookups (each one's coordinates from the previous one's
-//! result, into textures the size of a dx9 table strip), scalar fused
-//! multiply-adds (four independent vec4 chains), interpolated varyings read, and uniform
-//! vec4 reads; plus the empty shader (it writes its lightmap coordinates, which every
-//! technique reads) over the full screen, over half of it (fixed vs
-//! per-pixel cost), with the depth test off, and over grids of 1.5, 2 and 2.5 times as many
-//! rows and columns (the per-triangle cost). Each point is the median of `frames` timed
-//! frames (`gpu::pass`), taken in rounds over all points so that a slow drift of a shared
-//! device spreads over every point instead of landing on a few.
+//! screen-filling grid of triangles as large as the scene's (`ProbeSettings::triangle_pixels`,
+//! the scene's pixel-weighted triangle area: lavapipe shades in blocks, and the smaller the
+//! triangles the more of a block's lanes idle — a bilinear lookup cost 2.3 ns per pixel over
+//! two screen-filling triangles and 3.6 ns over 125-pixel ones) is drawn with generated
+//! fragment shaders that each do N operations of one kind (straight-line code, no loops):
+//! bilinear 2D lookups (RGBA16F, the lightmap sampler, a texture each, as dx9 binds them),
+//! trilinear lookups (RGBA8 with MIP chains, the material sampler, ≈ 2.7 texels per pixel),
+//! 2D-array lookups, cube-array lookups (32² faces, as the tables), dependent lookups (each
+//! one's coordinates from the previous one's result, into textures the size of a dx9 table
+//! strip), scalar fused multiply-adds (four independent vec4 chains), interpolated varyings
+//! read, and uniform vec4 reads at constant and at per-pixel indices; plus the empty shader
+//! (it writes its lightmap coordinates, which every technique reads) over the full screen,
+//! over half of it, with the depth test off, and over grids of 2·64², 2·96² and 2·128²
+//! triangles (the per-triangle cost), and a frame that shades nothing. Each point is the
+//! median of its timed frames (`gpu::pass`), taken in rounds over all points so that a slow
+//! drift of a shared device spreads over every point instead of landing on a few; cheap
+//! points get more frames.
 //!
 //! **Model.** t = fixed + T·c_T + f · (p + Σ_k n_k c_k), T the triangles drawn and c_T the
 //! cost of one (setup, rasterization, vertex shading), f the fragments shaded per screen pixel
@@ -26,16 +28,21 @@
 //! pixel over the whole screen. The lookup counts of a probe point are what it was generated
 //! with; its float ops, uniform and varying reads are read off its SPIR-V
 //! (`gpu::spirv_counts`), exactly as a technique's are, so probe and techniques are counted
-//! alike. p and the c_k are fitted jointly by least squares
-//! (nalgebra's SVD) together with fixed and c_T, over every point with the depth test: among
-//! them a frame that draws one zero-area triangle (fixed) and the empty shader over half the
-//! screen (half the triangles, half the fragments).
+//! alike. p and the c_k are fitted jointly by least squares (nalgebra's SVD) together with
+//! fixed and c_T, over every point with the depth test: among them a frame that draws one
+//! zero-area triangle (fixed) and the empty shader over half the screen (half the
+//! triangles, half the fragments).
 //!
 //! **Limits.** The per-triangle cost is the probe's: small screen-filling triangles with
-//! the shared vertex shader (pcaMv's passes more weights on). Counts are static: branches count both sides, and loops left in a shader (the
-//! clustered techniques') count once. Caches: every probe lookup reads its own texture at
-//! neighbouring coordinates, as the techniques' texel and table fetches do, but a scene's
-//! access pattern (table lookups scattered by the normal map) may hit worse.
+//! the shared vertex shader (pcaMv's passes more weights on), and on lavapipe it is not
+//! linear — a screen of 125-pixel triangles costs more per pixel than one of large ones
+//! (partly covered blocks), which the dense grids' points put into c_T. Counts are static:
+//! branches count both sides, and loops left in a shader (the clustered techniques') count
+//! once. Uniform reads at a per-pixel index are their own kind; the probe's index is
+//! coherent over a band of the screen, as a cluster id over a chart. Caches: every probe
+//! lookup reads its own texture at neighbouring coordinates, as the techniques' texel and
+//! table fetches do, but a scene's access pattern (table lookups scattered by the normal
+//! map) may hit worse.
 
 use std::sync::Arc;
 
