@@ -3,8 +3,10 @@
 //! ([`Technique::reference`]), and write the cost table, images and plots.
 //!
 //! A row's error is the relative RMSE of its image against the reference over covered
-//! pixels (`report::metrics`); its time is the median of `frames` timed frames after
-//! `warmup` untimed ones (`gpu::pass`: timestamps around the scene pass).
+//! pixels (`report::metrics`); its time is the median of `frames` timed frames
+//! (`gpu::pass`: timestamps around the scene pass), taken in [`TIMING_ROUNDS`] rounds over
+//! every row — the row rebuilt for each, `warmup` untimed frames before the first and one
+//! before each later round — so that a slow spell of a shared device spreads over all rows.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -211,6 +213,14 @@ pub fn run(
         None => vec![None],
     };
     let mut rows = Vec::new();
+    // Every row's frame times so far (the later timing rounds add to them).
+    let mut samples: Vec<Vec<f64>> = Vec::new();
+    let rounds = if settings.specular.is_some() {
+        1
+    } else {
+        TIMING_ROUNDS.min(settings.frames.max(1))
+    };
+    let per_round = settings.frames.div_ceil(rounds);
     // The images the figures need, kept until they are drawn (the first filtering's).
     let mut figure_frames = std::collections::HashMap::new();
     for (k, &filter) in filters.iter().enumerate() {
@@ -238,6 +248,7 @@ pub fn run(
                     reference,
                     &mut ladder,
                     settings,
+                    per_round,
                     &mut lap,
                     &mut phases,
                 );
@@ -252,6 +263,7 @@ pub fn run(
                     other => other?,
                 };
                 rows.push(row);
+                samples.push(frame.ms.clone());
                 if k == 0
                     && FIGURES
                         .iter()
@@ -278,6 +290,28 @@ pub fn run(
         }
     }
     drop(figure_frames);
+    for _ in 1..rounds {
+        for (row, times) in rows.iter().zip(&mut samples) {
+            let tech = build_row_technique(
+                ctx,
+                &scene,
+                prepared,
+                row.technique,
+                row.path,
+                relit.as_ref(),
+            )?;
+            lap.split(&mut phases.build);
+            times.extend(tech.render(&scene, settings.warmup.min(1), per_round)?.ms);
+            lap.split(&mut phases.render);
+        }
+    }
+    for (row, times) in rows.iter_mut().zip(&samples) {
+        let timing = TimingStats::from_ms(times);
+        row.ms_median = timing.map(|t| t.ms_median);
+        row.ms_min = timing.map(|t| t.ms_min);
+        row.ms_max = timing.map(|t| t.ms_max);
+        row.frames = times.len();
+    }
     fill_ratios_to_preconv(&mut rows);
     if let Some(probe) = &cost_model {
         // Fragments shaded per screen pixel, overdraw included: the same for every row.
@@ -499,6 +533,11 @@ fn ladder_pixels(
 /// Folder of the ladder's CPU rung images, inside the bench's output.
 pub const LADDER_DIR: &str = "ladder";
 
+/// Rounds a row's timed frames are split into, each round over every row (the main bench;
+/// with `--specular` one): a slow spell of a shared device then lands on a share of every
+/// row's frames instead of on all of a few rows'.
+const TIMING_ROUNDS: u32 = 3;
+
 /// The file stem of the reference image `frame` was taken from (`reference_for`).
 fn reference_stem(name: &str, kind: RowReference) -> String {
     match kind {
@@ -606,7 +645,31 @@ impl Lap {
     }
 }
 
-/// Builds, times, writes and measures one technique × path; returns its row and image.
+/// One row's technique, built for the bench's lighting (relit through `update_lighting`
+/// when the bench turns the light and the technique can follow).
+fn build_row_technique(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    prepared: &Prepared,
+    technique: Technique,
+    path: HwPath,
+    relit: Option<&Relit>,
+) -> Result<technique::TechniqueGpu, BenchError> {
+    Ok(match relit {
+        Some(relit) if technique.dynamic_lighting() => {
+            let (mut tech, recipe) =
+                technique::build_dynamic(ctx, scene, technique, path, &prepared.inputs())?;
+            let data = recipe.build(&relit.radiance_sh, &relit.irradiance_sh)?;
+            tech.update_lighting(&data)?;
+            tech.wait_for_upload()?;
+            tech
+        }
+        _ => technique::build(ctx, scene, technique, path, &prepared.inputs())?,
+    })
+}
+
+/// Builds, times (the first of the timing rounds: `frames`), writes and measures one
+/// technique × path; returns its row and image.
 #[allow(clippy::too_many_arguments)]
 fn measure_row(
     ctx: &Arc<Context>,
@@ -618,22 +681,13 @@ fn measure_row(
     references: Option<&References>,
     ladder: &mut Ladder,
     settings: &BenchSettings,
+    frames: u32,
     lap: &mut Lap,
     phases: &mut BenchPhases,
 ) -> Result<(BenchRow, Frame), BenchError> {
-    let tech = match relit {
-        Some(relit) if technique.dynamic_lighting() => {
-            let (mut tech, recipe) =
-                technique::build_dynamic(ctx, scene, technique, path, &prepared.inputs())?;
-            let data = recipe.build(&relit.radiance_sh, &relit.irradiance_sh)?;
-            tech.update_lighting(&data)?;
-            tech.wait_for_upload()?;
-            tech
-        }
-        _ => technique::build(ctx, scene, technique, path, &prepared.inputs())?,
-    };
+    let tech = build_row_technique(ctx, scene, prepared, technique, path, relit)?;
     lap.split(&mut phases.build);
-    let frame = tech.render(scene, settings.warmup, settings.frames)?;
+    let frame = tech.render(scene, settings.warmup, frames)?;
     lap.split(&mut phases.render);
     let specular = scene.specular().map(|s| s.term.filter);
     let label = match specular {
