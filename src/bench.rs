@@ -227,6 +227,12 @@ pub fn run(
         if let (Some(filter), Some(s)) = (filter, &settings.specular) {
             scene.add_specular(ctx, &prepared.scene, s.term(filter))?;
         }
+        let rows_of = RowTechniques {
+            ctx,
+            scene: &scene,
+            prepared,
+            relit: relit.as_ref(),
+        };
         for &technique in &settings.techniques {
             for &path in &settings.paths {
                 if !technique.runs_on(path) {
@@ -239,12 +245,9 @@ pub fn run(
                 }
                 let reference = reference.as_ref();
                 let measured = measure_row(
-                    ctx,
-                    &scene,
-                    prepared,
+                    &rows_of,
                     technique,
                     path,
-                    relit.as_ref(),
                     reference,
                     &mut ladder,
                     settings,
@@ -290,16 +293,15 @@ pub fn run(
         }
     }
     drop(figure_frames);
+    let rows_of = RowTechniques {
+        ctx,
+        scene: &scene,
+        prepared,
+        relit: relit.as_ref(),
+    };
     for _ in 1..rounds {
         for (row, times) in rows.iter().zip(&mut samples) {
-            let tech = build_row_technique(
-                ctx,
-                &scene,
-                prepared,
-                row.technique,
-                row.path,
-                relit.as_ref(),
-            )?;
+            let tech = rows_of.build(row.technique, row.path)?;
             lap.split(&mut phases.build);
             times.extend(tech.render(&scene, settings.warmup.min(1), per_round)?.ms);
             lap.split(&mut phases.render);
@@ -645,39 +647,45 @@ impl Lap {
     }
 }
 
-/// One row's technique, built for the bench's lighting (relit through `update_lighting`
-/// when the bench turns the light and the technique can follow).
-fn build_row_technique(
-    ctx: &Arc<Context>,
-    scene: &SceneGpu,
-    prepared: &Prepared,
-    technique: Technique,
-    path: HwPath,
-    relit: Option<&Relit>,
-) -> Result<technique::TechniqueGpu, BenchError> {
-    Ok(match relit {
-        Some(relit) if technique.dynamic_lighting() => {
-            let (mut tech, recipe) =
-                technique::build_dynamic(ctx, scene, technique, path, &prepared.inputs())?;
-            let data = recipe.build(&relit.radiance_sh, &relit.irradiance_sh)?;
-            tech.update_lighting(&data)?;
-            tech.wait_for_upload()?;
-            tech
-        }
-        _ => technique::build(ctx, scene, technique, path, &prepared.inputs())?,
-    })
+/// What every row's technique is built from: the device, the scene on it, the bake, and
+/// the turned light when the bench relights.
+struct RowTechniques<'a> {
+    ctx: &'a Arc<Context>,
+    scene: &'a SceneGpu,
+    prepared: &'a Prepared,
+    relit: Option<&'a Relit>,
+}
+
+impl RowTechniques<'_> {
+    /// One row's technique, built for the bench's lighting (relit through
+    /// `update_lighting` when the bench turns the light and the technique can follow).
+    fn build(
+        &self,
+        technique: Technique,
+        path: HwPath,
+    ) -> Result<technique::TechniqueGpu, BenchError> {
+        let (ctx, scene, inputs) = (self.ctx, self.scene, self.prepared.inputs());
+        Ok(match self.relit {
+            Some(relit) if technique.dynamic_lighting() => {
+                let (mut tech, recipe) =
+                    technique::build_dynamic(ctx, scene, technique, path, &inputs)?;
+                let data = recipe.build(&relit.radiance_sh, &relit.irradiance_sh)?;
+                tech.update_lighting(&data)?;
+                tech.wait_for_upload()?;
+                tech
+            }
+            _ => technique::build(ctx, scene, technique, path, &inputs)?,
+        })
+    }
 }
 
 /// Builds, times (the first of the timing rounds: `frames`), writes and measures one
 /// technique × path; returns its row and image.
 #[allow(clippy::too_many_arguments)]
 fn measure_row(
-    ctx: &Arc<Context>,
-    scene: &SceneGpu,
-    prepared: &Prepared,
+    rows_of: &RowTechniques<'_>,
     technique: Technique,
     path: HwPath,
-    relit: Option<&Relit>,
     references: Option<&References>,
     ladder: &mut Ladder,
     settings: &BenchSettings,
@@ -685,7 +693,8 @@ fn measure_row(
     lap: &mut Lap,
     phases: &mut BenchPhases,
 ) -> Result<(BenchRow, Frame), BenchError> {
-    let tech = build_row_technique(ctx, scene, prepared, technique, path, relit)?;
+    let (scene, prepared) = (rows_of.scene, rows_of.prepared);
+    let tech = rows_of.build(technique, path)?;
     lap.split(&mut phases.build);
     let frame = tech.render(scene, settings.warmup, frames)?;
     lap.split(&mut phases.render);

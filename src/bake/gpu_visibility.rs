@@ -148,7 +148,6 @@ pub fn bake_visibility_gpu(
     };
 
     let positions: Vec<[f32; 3]> = corners().map(|v| v.to_array()).collect();
-    let indices: Vec<u32> = (0..positions.len() as u32).collect();
     let points: Vec<[f32; 4]> = covered
         .iter()
         .flat_map(|&i| {
@@ -210,7 +209,6 @@ pub fn bake_visibility_gpu(
         &SimulationJob {
             res: gpu.depth_res,
             positions: &positions,
-            indices: &indices,
             points: &points,
             views: &views,
             directions: &directions,

@@ -63,9 +63,9 @@ pub struct DirectionView {
 pub struct SimulationJob<'a> {
     /// Depth-map texels per side.
     pub res: u32,
-    /// Scene vertices, xyz f32 each.
+    /// Triangle corners, unindexed: triangle t is corners 3t, 3t + 1, 3t + 2 (the depth
+    /// pass's triangle ids, `glsl/bake/depth.vert`), xyz f32 each.
     pub positions: &'a [[f32; 3]],
-    pub indices: &'a [u32],
     /// Per point: ray origin then unit normal (w unused).
     pub points: &'a [[f32; 4]],
     /// One view per direction of the set, in order (`direction` = index).
@@ -114,7 +114,7 @@ fn storage_buffer(ctx: &Arc<Context>, bytes: u64, name: &str) -> Result<Buffer, 
 pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResult, GpuError> {
     let setup = Instant::now();
     let name = "bake.gpu-visibility";
-    if job.indices.is_empty() || job.points.is_empty() || job.views.is_empty() {
+    if job.positions.len() < 3 || job.points.is_empty() || job.views.is_empty() {
         return Err(GpuError::Invalid {
             what: name.into(),
             detail: "nothing to simulate (no triangles, points or directions)".into(),
@@ -125,17 +125,23 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
     let mask_words = job.views.len().div_ceil(32) as u64;
     let coeff_count = u64::from(job.coeff_count);
     let target = RenderTarget::with_format(ctx, res, res, DEPTH_MAP_FORMAT)?;
-    let vertices = device_local_buffer(
+    if job.positions.len() % 3 != 0 || job.positions.len() / 3 >= 1 << 24 {
+        return Err(GpuError::Invalid {
+            what: name.into(),
+            detail: "the simulator takes whole triangles, fewer than 2^24".into(),
+        });
+    }
+    // One buffer for the depth pass's vertices and the mark pass's exact test.
+    let corners: Vec<[f32; 4]> = job
+        .positions
+        .iter()
+        .map(|p| [p[0], p[1], p[2], 1.0])
+        .collect();
+    let triangles = device_local_buffer(
         ctx,
-        bytemuck::cast_slice(job.positions),
-        vk::BufferUsageFlags::VERTEX_BUFFER,
-        "bake.gpu-visibility.vertices",
-    )?;
-    let indices = device_local_buffer(
-        ctx,
-        bytemuck::cast_slice(job.indices),
-        vk::BufferUsageFlags::INDEX_BUFFER,
-        "bake.gpu-visibility.indices",
+        bytemuck::cast_slice(&corners),
+        vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+        "bake.gpu-visibility.triangles",
     )?;
     let points = device_local_buffer(
         ctx,
@@ -154,31 +160,6 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
         bytemuck::cast_slice(job.directions),
         vk::BufferUsageFlags::STORAGE_BUFFER,
         "bake.gpu-visibility.directions",
-    )?;
-    // Triangle t's corners at 3t, 3t + 1, 3t + 2 (the map's ids), for the exact test; the
-    // depth pass's triangle ids count on unindexed corners (`glsl/bake/depth.vert`).
-    if job
-        .indices
-        .iter()
-        .enumerate()
-        .any(|(k, &i)| i as usize != k)
-        || job.indices.len() / 3 >= 1 << 24
-    {
-        return Err(GpuError::Invalid {
-            what: name.into(),
-            detail: "the simulator takes unindexed triangles, fewer than 2^24".into(),
-        });
-    }
-    let corners: Vec<[f32; 4]> = job
-        .positions
-        .iter()
-        .map(|p| [p[0], p[1], p[2], 1.0])
-        .collect();
-    let triangles = device_local_buffer(
-        ctx,
-        bytemuck::cast_slice(&corners),
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        "bake.gpu-visibility.triangles",
     )?;
     let depth = storage_buffer(
         ctx,
@@ -259,7 +240,7 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
         layout,
         vs,
         fs,
-        12,
+        16,
         &[(0, vk::Format::R32G32B32_SFLOAT, 0)],
         "bake.gpu-visibility.depth",
     )?;
@@ -328,9 +309,8 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
                     device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
                     device.cmd_set_scissor(cmd, 0, &[full]);
                     device.cmd_push_constants(cmd, layout, vk::ShaderStageFlags::VERTEX, 0, push);
-                    device.cmd_bind_vertex_buffers(cmd, 0, &[vertices.raw()], &[0]);
-                    device.cmd_bind_index_buffer(cmd, indices.raw(), 0, vk::IndexType::UINT32);
-                    device.cmd_draw_indexed(cmd, job.indices.len() as u32, 1, 0, 0, 0);
+                    device.cmd_bind_vertex_buffers(cmd, 0, &[triangles.raw()], &[0]);
+                    device.cmd_draw(cmd, job.positions.len() as u32, 1, 0, 0);
                     device.cmd_end_render_pass(cmd);
                     target.record_copy_to_buffer(cmd, &depth, 0);
                     ctx.end_label(cmd);

@@ -364,6 +364,59 @@ mod tests {
     use super::*;
 
     #[test]
+    fn pixel_weighted_triangle_area_clips_to_the_view() {
+        // 90° vertical field of view at z = −1: the view is x ∈ ±aspect, y ∈ ±1. A quad
+        // twice that each way, split on its diagonal, leaves half the screen to each
+        // triangle (unclipped each would be twice the screen); a small triangle fully in
+        // view adds its own area, weighted by it.
+        let (w, h) = (320u32, 200u32);
+        let a = w as f32 / h as f32;
+        let v = |x: f32, y: f32, z: f32| Vertex {
+            position: [x, y, z],
+            ..Vertex::default()
+        };
+        let mut mesh = Mesh {
+            vertices: vec![
+                v(-2.0 * a, -2.0, -1.0),
+                v(2.0 * a, -2.0, -1.0),
+                v(2.0 * a, 2.0, -1.0),
+                v(-2.0 * a, 2.0, -1.0),
+            ],
+            indices: vec![0, 1, 2, 0, 2, 3],
+        };
+        let scene = |mesh: Mesh| Scene {
+            name: "quad".into(),
+            mesh,
+            material: Material {
+                albedo: Texture8::solid([255; 4]),
+                normal: Texture8::solid([128, 128, 255, 255]),
+                normal_scale: 1.0,
+                height: None,
+            },
+            camera: Camera {
+                position: Vec3::ZERO,
+                target: Vec3::NEG_Z,
+                up: Vec3::Y,
+                fov_y: 90f32.to_radians(),
+                z_near: 0.1,
+                z_far: 10.0,
+            },
+        };
+        let half = f64::from(w * h) / 2.0;
+        let area = scene(mesh.clone()).pixel_weighted_triangle_area(w, h);
+        assert!((area - half).abs() < 1e-3 * half, "{area} against {half}");
+        // A triangle of 0.1 × 0.1 view units: (0.1 · h/2)² / 2 pixels.
+        let small = (0.1 * f64::from(h) / 2.0).powi(2) / 2.0;
+        let n = mesh.vertices.len() as u32;
+        mesh.vertices
+            .extend([v(0.0, 0.0, -1.0), v(0.1, 0.0, -1.0), v(0.1, 0.1, -1.0)]);
+        mesh.indices.extend([n, n + 1, n + 2]);
+        let want = (2.0 * half * half + small * small) / (2.0 * half + small);
+        let area = scene(mesh).pixel_weighted_triangle_area(w, h);
+        assert!((area - want).abs() < 1e-3 * want, "{area} against {want}");
+    }
+
+    #[test]
     fn height_maps_read_as_luminance_times_scale_and_bad_ones_are_refused() {
         let dir = std::env::temp_dir().join(format!("shvis-height-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
