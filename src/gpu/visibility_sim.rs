@@ -125,7 +125,7 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
     let mask_words = job.views.len().div_ceil(32) as u64;
     let coeff_count = u64::from(job.coeff_count);
     let target = RenderTarget::with_format(ctx, res, res, DEPTH_MAP_FORMAT)?;
-    if job.positions.len() % 3 != 0 || job.positions.len() / 3 >= 1 << 24 {
+    if !job.positions.len().is_multiple_of(3) || job.positions.len() / 3 >= 1 << 24 {
         return Err(GpuError::Invalid {
             what: name.into(),
             detail: "the simulator takes whole triangles, fewer than 2^24".into(),
