@@ -237,6 +237,11 @@ impl SceneGpu {
         self.frame.write(bytemuck::bytes_of(&self.frame_params))
     }
 
+    /// The scene mesh's vertex shader.
+    pub fn vertex_spirv(&self) -> &[u32] {
+        &self.vertex_spirv
+    }
+
     pub fn target(&self) -> &RenderTarget {
         &self.target
     }

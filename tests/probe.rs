@@ -92,6 +92,27 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
                 c.get(Kind::FloatOp) > 0.0 && c.get(Kind::Varying) > 0.0,
                 "{t}.{path}"
             );
+            // The clustered decodes are counted as run, their loops unrolled: 9 reads of
+            // the cluster's block per vector and mean inside a cluster, four decodes for
+            // the measured share of fragments whose batch straddles a boundary.
+            let vectors = match t {
+                Technique::Vq { .. } => Some(0),
+                Technique::Cpca { m, .. } => Some(m),
+                _ => None,
+            };
+            if let Some(m) = vectors {
+                let inside = f64::from(9 * (m + 1));
+                let reads = c.get(Kind::IndexedUniformRead);
+                assert!(
+                    reads >= inside && reads < 4.0 * inside,
+                    "{t}.{path}: {reads} block reads, {inside} per decode"
+                );
+                if t.to_string().ends_with('n') {
+                    assert_eq!(reads, inside, "{t}.{path}: the naive shader decodes once");
+                } else {
+                    assert!(reads > inside, "{t}.{path}: no fragment straddles clusters");
+                }
+            }
         }
     }
     // Overdraw: every covered pixel is shaded at least once, hidden surfaces drawn before

@@ -9,8 +9,32 @@
 // where all four share a cluster that is one decode of the blended weights; 0
 // filters the weights bilinearly across the boundary and decodes them in the nearest
 // texel's cluster (the known artifact).
+//
+// SHVIS_COUNT_PATH, only for the cost model (`technique::finish::CountPlan`, never drawn as
+// a technique): 1 keeps the decode inside a cluster, 2 the decode across a boundary, 4
+// neither (the work before the branch), all with every loop unrolled so that their SPIR-V
+// counts are what one pixel runs; 3 measures, drawn once additively: red 1 where the
+// fragment's subgroup takes the boundary path (SHVIS_SUBGROUP_VOTE: subgroupAny; else the
+// fragment's own), green 1 per fragment.
 #version 450
 #extension GL_GOOGLE_include_directive : require
+#ifndef SHVIS_COUNT_PATH
+#define SHVIS_COUNT_PATH 0
+#endif
+#ifndef SHVIS_SUBGROUP_VOTE
+#define SHVIS_SUBGROUP_VOTE 0
+#endif
+#if SHVIS_COUNT_PATH == 3 && SHVIS_SUBGROUP_VOTE
+#extension GL_KHR_shader_subgroup_vote : require
+#endif
+#extension GL_EXT_control_flow_attributes : require
+#if SHVIS_COUNT_PATH
+#define UNROLL [[unroll]]
+#define KEEP_LOOP [[unroll]]
+#else
+#define UNROLL
+#define KEEP_LOOP [[dont_unroll]]
+#endif
 #define SHVIS_FRAGMENT 1
 #include "common.glsl"
 #include "sh.glsl"
@@ -76,25 +100,36 @@ int cluster_index(vec4 index_group) {
     return min(int(index_group[M % 4] * 255.0 + 0.5), K - 1);
 }
 
-// e += tap · (mean_c + Σ_k w_k B_c,k), in SH(·L) coefficients.
-void add_cluster(inout vec4 e[9], float tap, vec4 v[GROUPS], int c) {
+// The block's vector at `at` (9 coefficients) dotted with the basis values y(n), RGB.
+vec3 block_dot(int at, float y[9]) {
+    vec3 sum = vec3(0.0);
+    UNROLL for (int i = 0; i < 9; ++i) {
+        sum += params.coeffs[at + i].rgb * y[i];
+    }
+    return sum;
+}
+
+// tap · (mean_c + Σ_k w_k B_c,k) · y(n): the cluster's share of the irradiance at n. Each
+// vector is dotted with y(n) as it is read, so that only y and a running RGB sum stay live
+// (accumulating the 9 SH coefficients first and evaluating them once holds 36 floats per
+// pixel, and measured slower on lavapipe).
+vec3 cluster_irradiance(float tap, vec4 v[GROUPS], int c, float y[9]) {
     int base = c * BLOCK;
-    for (int i = 0; i < 9; ++i) {
-        e[i] += tap * params.coeffs[base + 9 * M + i];
+    vec3 e = tap * block_dot(base + 9 * M, y);
+#if M > 0
+    // Kept a loop when drawn: Mesa's NIR unrolls short loops in full, and unrolled the
+    // decode measured 2× slower on lavapipe (cpca8_7 183 against 90 ms).
+    KEEP_LOOP for (int k = 0; k < M; ++k) {
+        e += (tap * v[k / 4][k % 4]) * block_dot(base + 9 * k, y);
     }
-    for (int k = 0; k < M; ++k) {
-        float w = tap * v[k / 4][k % 4];
-        for (int i = 0; i < 9; ++i) {
-            e[i] += w * params.coeffs[base + 9 * k + i];
-        }
-    }
+#endif
+    return e;
 }
 
 void main() {
-    vec4 e[9];
-    for (int i = 0; i < 9; ++i) {
-        e[i] = vec4(0.0);
-    }
+    float y[9];
+    sh_eval_order3(shading_normal(), y);
+    vec3 e;
     ivec2 res = PER_TEXEL_SIZE;
 #if SHVIS_SEAM_BLEND
     // The sampler's own bilinear footprint: texel centres at (i + 0.5) / res, clamped.
@@ -104,37 +139,54 @@ void main() {
     vec4 v[4][GROUPS];
     float w[4];
     int c[4];
-    for (int tap = 0; tap < 4; ++tap) {
+    UNROLL for (int tap = 0; tap < 4; ++tap) {
         ivec2 offset = ivec2(tap & 1, tap >> 1);
         ivec2 ij = clamp(ivec2(base) + offset, ivec2(0), res - 1);
         vec2 w2 = mix(1.0 - f, f, vec2(offset));
-        for (int g = 0; g < GROUPS; ++g) {
+        UNROLL for (int g = 0; g < GROUPS; ++g) {
             v[tap][g] = fetch_group(g, ij);
         }
         w[tap] = w2.x * w2.y;
         c[tap] = cluster_index(v[tap][M / 4]);
     }
-    if (c[0] == c[1] && c[0] == c[2] && c[0] == c[3]) {
+#if SHVIS_COUNT_PATH == 1 || SHVIS_COUNT_PATH == 2
+    bool inside = SHVIS_COUNT_PATH == 1;
+#else
+    bool inside = c[0] == c[1] && c[0] == c[2] && c[0] == c[3];
+#endif
+#if SHVIS_COUNT_PATH == 3
+    bool across = !inside;
+#if SHVIS_SUBGROUP_VOTE
+    across = subgroupAny(across);
+#endif
+    out_radiance = vec4(across ? 1.0 : 0.0, 1.0, 0.0, 1.0);
+    return;
+#elif SHVIS_COUNT_PATH == 4
+    e = vec3(0.0);
+#else
+    if (inside) {
         // Inside a cluster the decode is linear: blend the weights, decode once (the
         // same sum, a quarter of the cluster block's reads).
         vec4 blended[GROUPS];
-        for (int g = 0; g < GROUPS; ++g) {
+        UNROLL for (int g = 0; g < GROUPS; ++g) {
             blended[g] = w[0] * v[0][g] + w[1] * v[1][g] + w[2] * v[2][g] + w[3] * v[3][g];
         }
-        add_cluster(e, 1.0, blended, c[0]);
+        e = cluster_irradiance(1.0, blended, c[0], y);
     } else {
-        for (int tap = 0; tap < 4; ++tap) {
-            add_cluster(e, w[tap], v[tap], c[tap]);
+        e = vec3(0.0);
+        UNROLL for (int tap = 0; tap < 4; ++tap) {
+            e += cluster_irradiance(w[tap], v[tap], c[tap], y);
         }
     }
+#endif
 #else
     ivec2 nearest = clamp(ivec2(floor(in_uv_lightmap * vec2(res))), ivec2(0), res - 1);
     vec4 v[GROUPS];
-    for (int g = 0; g < GROUPS; ++g) {
+    UNROLL for (int g = 0; g < GROUPS; ++g) {
         v[g] = sample_group(g);
     }
-    add_cluster(e, 1.0, v, cluster_index(fetch_group(M / 4, nearest)));
+    e = cluster_irradiance(1.0, v, cluster_index(fetch_group(M / 4, nearest)), y);
 #endif
-    vec3 irradiance = max(sh_eval_rgb_order3(e, shading_normal()), vec3(0.0));
+    vec3 irradiance = max(e, vec3(0.0));
     write_diffuse(irradiance);
 }

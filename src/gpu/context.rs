@@ -49,6 +49,7 @@ pub struct Context {
     timestamp_valid_bits: u32,
     image_cube_array: bool,
     multi_draw_indirect: bool,
+    fragment_subgroup_vote: bool,
     messages: std::sync::Arc<MessageCounts>,
 }
 
@@ -182,6 +183,18 @@ impl Context {
                 instance.get_physical_device_queue_family_properties(physical),
             )
         };
+        let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+        // SAFETY: as above; Vulkan 1.1 core, the instance asks for 1.2.
+        unsafe {
+            let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
+            instance.get_physical_device_properties2(physical, &mut props2);
+        }
+        let fragment_subgroup_vote = subgroup
+            .supported_stages
+            .contains(vk::ShaderStageFlags::FRAGMENT)
+            && subgroup
+                .supported_operations
+                .contains(vk::SubgroupFeatureFlags::VOTE);
         let priorities = [1.0f32];
         let queue_info = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
@@ -313,6 +326,7 @@ impl Context {
             timestamp_valid_bits: families[queue_family as usize].timestamp_valid_bits,
             image_cube_array: features.image_cube_array != 0,
             multi_draw_indirect,
+            fragment_subgroup_vote,
             messages,
         };
         ctx.set_name(pool, "shvis.command_pool");
@@ -357,6 +371,12 @@ impl Context {
     /// Whether `multiDrawIndirect` and `drawIndirectFirstInstance` are enabled.
     pub fn supports_multi_draw_indirect(&self) -> bool {
         self.multi_draw_indirect
+    }
+
+    /// Whether fragment shaders may use subgroup votes (`subgroupAny`; the cost model's
+    /// divergence measure, `technique::finish::CountPlan`).
+    pub fn supports_fragment_subgroup_vote(&self) -> bool {
+        self.fragment_subgroup_vote
     }
 
     pub fn supports_cube_arrays(&self) -> bool {

@@ -143,6 +143,17 @@ impl CostCounts {
         CostCounts(c)
     }
 
+    /// Σ share · counts: the counts of a shader whose pixels run different paths.
+    pub fn shared(parts: impl IntoIterator<Item = (f64, CostCounts)>) -> Self {
+        let mut c = [0.0; 9];
+        for (share, counts) in parts {
+            for (sum, n) in c.iter_mut().zip(counts.0) {
+                *sum += share * n;
+            }
+        }
+        CostCounts(c)
+    }
+
     pub fn get(&self, kind: Kind) -> f64 {
         self.0[kind.index()]
     }

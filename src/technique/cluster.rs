@@ -19,6 +19,7 @@
 
 use ash::vk;
 
+use super::finish::{CountPlan, CountVariant};
 use super::lighting::{LightingData, Recipe};
 use super::spec::{ClusterNeed, SeamMode, clusters_fit_uniforms};
 use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
@@ -51,6 +52,34 @@ pub fn per_texel_lookups(m: u32, seams: SeamMode) -> u32 {
         SeamMode::Blended => 4 * groups,
         SeamMode::Naive if m == 0 => 1,
         SeamMode::Naive => groups + 1,
+    }
+}
+
+/// How the cost model counts the shader ([`CountPlan`]): its decode runs once where the
+/// bilinear footprint lies inside one cluster and four times where it straddles clusters
+/// (blended seams), so its counts are the inside path's (glsl/technique/cluster.frag,
+/// `SHVIS_COUNT_PATH` 1, loops unrolled) plus, for the measured share of fragments whose
+/// subgroup takes the boundary path, the boundary path's (2) less the work before the
+/// branch (4), counted once already; the naive shader runs one path.
+pub fn count_plan(seams: SeamMode) -> CountPlan {
+    let variant = |path, share, share_per_measured| CountVariant {
+        defines: vec![("COUNT_PATH", path)],
+        share,
+        share_per_measured,
+    };
+    match seams {
+        SeamMode::Naive => CountPlan {
+            measure_defines: None,
+            variants: vec![variant(1, 1.0, 0.0)],
+        },
+        SeamMode::Blended => CountPlan {
+            measure_defines: Some(vec![("COUNT_PATH", 3)]),
+            variants: vec![
+                variant(1, 1.0, 0.0),
+                variant(2, 0.0, 1.0),
+                variant(4, 0.0, -1.0),
+            ],
+        },
     }
 }
 

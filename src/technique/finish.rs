@@ -123,6 +123,27 @@ pub fn stats(
     }
 }
 
+/// How the cost model counts a shader whose work per pixel depends on its data (the
+/// clustered techniques' decodes, `super::cluster::count_plan`): Σ (share +
+/// share_per_measured · s) · counts(variant), each variant the fragment shader compiled with
+/// its defines (never drawn), s the share of shaded fragments that the measuring build
+/// (`measure_defines`, drawn once over the scene, additively: red 1 where the fragment's
+/// subgroup — the SIMD batch it runs in — takes the costly path, green 1 per fragment)
+/// finds (0 without one). A batch with one fragment on the costly path runs both paths.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CountPlan {
+    pub measure_defines: Option<Vec<(&'static str, u32)>>,
+    pub variants: Vec<CountVariant>,
+}
+
+/// One build of a [`CountPlan`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct CountVariant {
+    pub defines: Vec<(&'static str, u32)>,
+    pub share: f64,
+    pub share_per_measured: f64,
+}
+
 /// Makes `technique` on `path` drawable with `sets` copies of its lighting data (1, or 2
 /// for double-buffered dynamic lighting, `super::lighting`): checks the path rules, uploads
 /// each copy's uniform block and tables, compiles the fragment shader
@@ -130,7 +151,8 @@ pub fn stats(
 /// images (binding TEXTURE0: the bake's, shared by the copies, or — when the lighting data
 /// has per-texel images — that copy's), the technique's extra slot if it has one (material
 /// textures, a normal basis; the next binding) and that copy's tables (the bindings after
-/// those).
+/// those). `counted`: how the cost model counts the shader, `None` for the drawn shader's
+/// own counts.
 #[allow(clippy::too_many_arguments)]
 pub fn finish(
     ctx: &Arc<Context>,
@@ -141,10 +163,11 @@ pub fn finish(
     material: Option<TextureSlot>,
     lighting: &LightingData,
     sets: usize,
+    counted: Option<&CountPlan>,
 ) -> Result<TechniqueGpu, TechniqueError> {
     let label = format!("{technique}.{path}");
     let shared_per_texel = TextureSlot::per_texel(per_texel);
-    let fragment = compile_fragment(technique, path, scene)?;
+    let fragment = compile_fragment(technique, path, scene, &[])?;
     check_uniform_size(ctx, lighting.params.len(), &label)?;
     let sampler = scene.lightmap_sampler();
     let mut built = Vec::with_capacity(sets);
@@ -187,7 +210,6 @@ pub fn finish(
             .sum();
         stats.lookups_per_pixel += (super::table_fetches(technique) - 1) * table_lookups;
         add_specular_stats(scene, path, &mut stats);
-        stats.cost = cost_counts(technique, path, scene, &layouts, &fragment);
         let params = params_buffer(ctx, &lighting.params, &label, &suffix)?;
         let mut resources = base_resources(scene, &params, path);
         assert!(
@@ -205,6 +227,14 @@ pub fn finish(
                 many => gpu::Resource::TextureArray(many.iter().map(|i| (i, sampler)).collect()),
             };
             resources.push((binding, resource));
+        }
+        let op_counts = match counted {
+            None => vec![(1.0, gpu::spirv_counts::count(&fragment))],
+            Some(plan) if set == 0 => plan_counts(ctx, scene, technique, path, plan, &resources)?,
+            Some(_) => Vec::new(),
+        };
+        if !op_counts.is_empty() {
+            stats.cost = cost_counts(technique, path, scene, &layouts, &op_counts);
         }
         let pipeline =
             scene.mesh_pipeline(ctx, &format!("{label}{suffix}"), &fragment, &resources)?;
@@ -226,17 +256,90 @@ pub fn finish(
     ))
 }
 
+/// The shares and SPIR-V counts of `plan`'s variants, its measuring build drawn once over
+/// the scene with the technique's `resources`.
+fn plan_counts(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    technique: Technique,
+    path: HwPath,
+    plan: &CountPlan,
+    resources: &[(u32, gpu::Resource<'_>)],
+) -> Result<Vec<(f64, gpu::spirv_counts::OpCounts)>, TechniqueError> {
+    let measured = match &plan.measure_defines {
+        Some(defines) => measure_costly_share(ctx, scene, technique, path, defines, resources)?,
+        None => 0.0,
+    };
+    plan.variants
+        .iter()
+        .map(|v| {
+            let spirv = compile_fragment(technique, path, scene, &v.defines)?;
+            Ok((
+                v.share + v.share_per_measured * measured,
+                gpu::spirv_counts::count(&spirv),
+            ))
+        })
+        .collect()
+}
+
+/// The share s of [`CountPlan`]: its measuring build (`defines`) drawn once over the scene.
+fn measure_costly_share(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    technique: Technique,
+    path: HwPath,
+    defines: &[(&'static str, u32)],
+    resources: &[(u32, gpu::Resource<'_>)],
+) -> Result<f64, TechniqueError> {
+    let label = format!("{technique}.{path}");
+    let mut defines = defines.to_vec();
+    defines.push((
+        "SUBGROUP_VOTE",
+        u32::from(ctx.supports_fragment_subgroup_vote()),
+    ));
+    let measure = compile_fragment(technique, path, scene, &defines)?;
+    let pipeline = gpu::MeshPipeline::new(
+        ctx,
+        scene.target(),
+        &gpu::MeshPipelineDesc {
+            name: &format!("{label}.count_paths"),
+            vertex_spirv: scene.vertex_spirv(),
+            fragment_spirv: &measure,
+            vertex_layout: scene.vertex_layout(),
+            resources,
+            depth_test: true,
+            additive: true,
+        },
+    )?;
+    let frame = scene.render_pipeline(&pipeline, 0, 1)?;
+    let (costly, fragments) = frame.rgba.iter().fold((0.0, 0.0), |(r, g), p| {
+        (r + f64::from(p[0]), g + f64::from(p[1]))
+    });
+    let measured = if fragments > 0.0 {
+        costly / fragments
+    } else {
+        0.0
+    };
+    log::debug!(
+        "{label}: {:.1} % of the shaded fragments run the costly path (subgroup vote: {})",
+        100.0 * measured,
+        ctx.supports_fragment_subgroup_vote()
+    );
+    Ok(measured)
+}
+
 /// The cost model's counts of `technique` on `path` (`crate::probe`): its lookups by kind
 /// from the slots — material textures trilinear, per-texel data bilinear 2D (dx9) or 2D
 /// array (dx10), normal-indexed tables dependent 2D (dx9) or cube array (dx10), the
 /// specular term's moment maps trilinear — and the float ops, uniform and varying reads of
-/// its compiled fragment shader (`gpu::spirv_counts`).
+/// its compiled fragment shader (`gpu::spirv_counts`), or the shares of its counted
+/// variants' ([`CountVariant`]).
 fn cost_counts(
     technique: Technique,
     path: HwPath,
     scene: &SceneGpu,
     layouts: &[SlotLayout],
-    fragment: &[u32],
+    op_counts: &[(f64, gpu::spirv_counts::OpCounts)],
 ) -> crate::probe::CostCounts {
     use crate::probe::Kind;
     let material = layout::MATERIAL_TEXTURES - u32::from(super::skips_normal_map(technique));
@@ -263,7 +366,11 @@ fn cost_counts(
     if let Some(specular) = scene.specular() {
         lookups.push((Kind::Trilinear2d, specular.term.filter.extra_lookups()));
     }
-    crate::probe::CostCounts::new(&lookups, &gpu::spirv_counts::count(fragment))
+    crate::probe::CostCounts::shared(
+        op_counts
+            .iter()
+            .map(|(share, ops)| (*share, crate::probe::CostCounts::new(&lookups, ops))),
+    )
 }
 
 /// What the scene's specular term (if any) adds to a technique's columns on `path`: its
@@ -283,6 +390,7 @@ pub(crate) fn compile_fragment(
     technique: Technique,
     path: HwPath,
     scene: &SceneGpu,
+    extra_defines: &[(&'static str, u32)],
 ) -> Result<Vec<u32>, TechniqueError> {
     let shader = super::fragment_shader(technique);
     let mut defines = vec![
@@ -290,6 +398,7 @@ pub(crate) fn compile_fragment(
         ("MATERIAL_LEVEL0", scene.material_level0() as u32),
     ];
     defines.extend_from_slice(&shader.defines);
+    defines.extend_from_slice(extra_defines);
     if let Some(specular) = scene.specular() {
         defines.extend(specular.defines());
     }

@@ -440,7 +440,9 @@ fn build_sets(
                 kind: finish::SlotKind::NormalBasis,
                 images: basis,
             });
-            let gpu = finish::finish(ctx, scene, technique, path, per_texel, slot, &data, sets)?;
+            let gpu = finish::finish(
+                ctx, scene, technique, path, per_texel, slot, &data, sets, None,
+            )?;
             return Ok((gpu, recipe));
         }
         Technique::Ndf { base } => {
@@ -457,8 +459,22 @@ fn build_sets(
         kind: finish::SlotKind::Material,
         images: material,
     });
+    let counted = match technique {
+        Technique::Vq { seams, .. } | Technique::Cpca { seams, .. } => {
+            Some(cluster::count_plan(seams))
+        }
+        _ => None,
+    };
     let gpu = finish::finish(
-        ctx, scene, technique, path, per_texel, material, &data, sets,
+        ctx,
+        scene,
+        technique,
+        path,
+        per_texel,
+        material,
+        &data,
+        sets,
+        counted.as_ref(),
     )?;
     Ok((gpu, recipe))
 }
