@@ -316,12 +316,17 @@ pub fn run(
     }
     fill_ratios_to_preconv(&mut rows);
     if let Some(probe) = &cost_model {
-        // Fragments shaded per screen pixel, overdraw included: the same for every row.
-        let shaded = scene.shaded_fragments(ctx)? as f64
-            / (f64::from(settings.width) * f64::from(settings.height));
-        log::info!("cost model: {shaded:.3} fragments shaded per screen pixel");
+        // Lanes busy per screen pixel, overdraw included: the same for every row that draws
+        // the scene's mesh.
+        let pixels = f64::from(settings.width) * f64::from(settings.height);
+        let load = scene.shading_load(ctx, None)?;
+        let lanes = load.lanes / pixels;
+        log::info!(
+            "cost model: {:.3} fragments shaded and {lanes:.3} lanes busy per screen pixel",
+            load.fragments as f64 / pixels
+        );
         for row in &mut rows {
-            row.coverage = shaded;
+            row.coverage = row.own_mesh_lanes.unwrap_or(lanes);
             let predicted = probe.model.predict(&row.cost, row.coverage, row.triangles);
             row.model_ms = Some(predicted);
             row.x_model = row.ms_median.map(|ms| ms / predicted);
@@ -751,6 +756,9 @@ fn measure_row(
         specular,
         cost: tech.stats.cost,
         coverage: covered as f64 / frame.rgba.len().max(1) as f64,
+        own_mesh_lanes: tech
+            .own_mesh_load
+            .map(|l| l.lanes / frame.rgba.len().max(1) as f64),
         triangles: tech.triangle_count(scene),
         model_ms: None,
         x_model: None,

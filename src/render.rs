@@ -296,7 +296,24 @@ impl SceneGpu {
     /// count, as they are shaded): the overdraw every technique of the scene pays, since
     /// they all draw the same surfaces in the same order (`crate::probe`'s coverage).
     pub fn shaded_fragments(&self, ctx: &Arc<Context>) -> Result<u64, GpuError> {
-        let fragment = compile_glsl("probe/count.frag", ShaderStage::Fragment, &[])?;
+        Ok(self.shading_load(ctx, None)?.fragments)
+    }
+
+    /// Fragments shaded and lanes kept busy in one frame of `mesh` (the scene's when `None`)
+    /// with the depth test (glsl/probe/count.frag): where triangles are small, the device's
+    /// SIMD batches (subgroups) run partly empty, and the lanes, not the fragments, are what
+    /// a fragment shader's frame time follows.
+    pub fn shading_load(
+        &self,
+        ctx: &Arc<Context>,
+        mesh: Option<&MeshBuffers>,
+    ) -> Result<ShadingLoad, GpuError> {
+        let ballot = ctx.supports_fragment_subgroup_ballot();
+        let fragment = compile_glsl(
+            "probe/count.frag",
+            ShaderStage::Fragment,
+            &[("SUBGROUP_BALLOT", u32::from(ballot))],
+        )?;
         let resources = self.common_resources();
         let pipeline = MeshPipeline::new(
             ctx,
@@ -312,8 +329,12 @@ impl SceneGpu {
             },
         )?;
         drop(resources);
-        let frame = self.render_pipeline(&pipeline, 0, 1)?;
-        Ok(frame.rgba.iter().map(|p| p[0].round() as u64).sum())
+        let frame = self.render_pipeline_on(&pipeline, mesh.unwrap_or(&self.mesh), 0, 1)?;
+        Ok(ShadingLoad {
+            fragments: frame.rgba.iter().map(|p| p[0].round() as u64).sum(),
+            lanes: frame.rgba.iter().map(|p| f64::from(p[1])).sum(),
+            measured_lanes: ballot,
+        })
     }
 
     /// Triangles of the scene mesh.
@@ -379,6 +400,15 @@ impl SceneGpu {
 }
 
 /// A rendered image (linear radiance, RGBA f32, row 0 at the top) and its frame times.
+/// What one frame of a mesh shades ([`SceneGpu::shading_load`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingLoad {
+    pub fragments: u64,
+    /// Subgroup lanes kept busy (the fragments where the device has no subgroup ballot).
+    pub lanes: f64,
+    pub measured_lanes: bool,
+}
+
 #[derive(Clone, Debug)]
 pub struct Frame {
     pub width: u32,

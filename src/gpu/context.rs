@@ -49,7 +49,7 @@ pub struct Context {
     timestamp_valid_bits: u32,
     image_cube_array: bool,
     multi_draw_indirect: bool,
-    fragment_subgroup_vote: bool,
+    fragment_subgroup_ops: vk::SubgroupFeatureFlags,
     messages: std::sync::Arc<MessageCounts>,
 }
 
@@ -189,12 +189,14 @@ impl Context {
             let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
             instance.get_physical_device_properties2(physical, &mut props2);
         }
-        let fragment_subgroup_vote = subgroup
+        let fragment_subgroup_ops = if subgroup
             .supported_stages
             .contains(vk::ShaderStageFlags::FRAGMENT)
-            && subgroup
-                .supported_operations
-                .contains(vk::SubgroupFeatureFlags::VOTE);
+        {
+            subgroup.supported_operations
+        } else {
+            vk::SubgroupFeatureFlags::empty()
+        };
         let priorities = [1.0f32];
         let queue_info = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
@@ -326,7 +328,7 @@ impl Context {
             timestamp_valid_bits: families[queue_family as usize].timestamp_valid_bits,
             image_cube_array: features.image_cube_array != 0,
             multi_draw_indirect,
-            fragment_subgroup_vote,
+            fragment_subgroup_ops,
             messages,
         };
         ctx.set_name(pool, "shvis.command_pool");
@@ -376,7 +378,15 @@ impl Context {
     /// Whether fragment shaders may use subgroup votes (`subgroupAny`; the cost model's
     /// divergence measure, `technique::finish::CountPlan`).
     pub fn supports_fragment_subgroup_vote(&self) -> bool {
-        self.fragment_subgroup_vote
+        self.fragment_subgroup_ops
+            .contains(vk::SubgroupFeatureFlags::VOTE)
+    }
+
+    /// Whether fragment shaders may use subgroup ballots (`subgroupBallot`; the lanes a
+    /// draw occupies, `render::SceneGpu::shaded_fragments`).
+    pub fn supports_fragment_subgroup_ballot(&self) -> bool {
+        self.fragment_subgroup_ops
+            .contains(vk::SubgroupFeatureFlags::BALLOT)
     }
 
     pub fn supports_cube_arrays(&self) -> bool {

@@ -662,6 +662,19 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
     let linear = Sampler::new(ctx, SamplerKind::LinearClamp, "probe.linear")?;
     let material = gpu.material_sampler();
     let screen_fragments = gpu.shaded_fragments(ctx)?;
+    // Lanes per screen pixel of each mesh: the coverage the model's per-pixel costs multiply.
+    let pixels = f64::from(s.width) * f64::from(s.height);
+    let mut lanes_per_pixel = Vec::new();
+    for m in [&full_mesh, &half_mesh].into_iter().chain(&grids) {
+        let load = gpu.shading_load(ctx, Some(m))?;
+        lanes_per_pixel.push((m as *const MeshBuffers, load.lanes / pixels));
+    }
+    let coverage_of = |mesh: &MeshBuffers| {
+        lanes_per_pixel
+            .iter()
+            .find(|(m, _)| std::ptr::eq(*m, mesh))
+            .map_or(0.0, |(_, c)| *c)
+    };
 
     // Every point's pipeline first, then the timed frames in interleaved rounds.
     struct Planned<'m> {
@@ -726,13 +739,7 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
         let point = ProbePoint {
             kind,
             count,
-            coverage: if std::ptr::eq(mesh, &nothing_mesh) {
-                0.0
-            } else if std::ptr::eq(mesh, &half_mesh) {
-                0.5
-            } else {
-                1.0
-            },
+            coverage: coverage_of(mesh),
             triangles: mesh.triangle_count(),
             depth_test,
             counts: CostCounts::new(&lookups, &ops),
@@ -850,9 +857,9 @@ fn fit(points: &[ProbePoint]) -> Option<CostModel> {
     let x = a.svd(true, true).solve(&b, 1e-12).ok()?;
     // The depth test's part: the empty shader with it off against the same mesh with it on.
     let off = points.iter().find(|p| p.kind.is_none() && !p.depth_test)?;
-    let on = points.iter().find(|p| {
-        p.kind.is_none() && p.depth_test && p.triangles == off.triangles && p.coverage == 1.0
-    })?;
+    let on = points
+        .iter()
+        .find(|p| p.kind.is_none() && p.depth_test && p.triangles == off.triangles)?;
     let model = CostModel {
         fixed_ms: x[0],
         pixel_ms: x[2],

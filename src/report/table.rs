@@ -121,10 +121,14 @@ pub struct BenchRow {
     /// The specular term's normal-map filtering, for a row with one (`--specular`).
     pub specular: Option<crate::ndf::render::NormalFilter>,
     /// Per-pixel operation counts by kind (`crate::probe`), and the share of the screen
-    /// shaded: with the probe, the fragments shaded per screen pixel (overdraw included,
-    /// `SceneGpu::shaded_fragments`); else the covered pixels' share.
+    /// shaded: with the probe, the device lanes kept busy per screen pixel (fragments,
+    /// overdraw included, and the idle lanes of partly covered SIMD batches;
+    /// `SceneGpu::shading_load` over the row's mesh); else the covered pixels' share.
     pub cost: crate::probe::CostCounts,
     pub coverage: f64,
+    /// `coverage` with the probe for a row that draws its own mesh (`pcaMv`).
+    #[serde(skip)]
+    pub own_mesh_lanes: Option<f64>,
     /// Triangles one frame draws.
     pub triangles: u32,
     /// The device cost model's frame time for the row (`shvis bench` runs the probe first),
@@ -420,6 +424,7 @@ mod tests {
             specular: None,
             cost: crate::probe::CostCounts::default(),
             coverage: 1.0,
+            own_mesh_lanes: None,
             triangles: 2,
             model_ms: None,
             x_model: None,
