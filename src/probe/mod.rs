@@ -20,29 +20,35 @@
 //! points get more frames.
 //!
 //! **Model.** t = fixed + T·c_T + f · (p + Σ_k n_k c_k), T the triangles drawn and c_T the
-//! cost of one (setup, rasterization, vertex shading), f the fragments shaded per screen pixel
-//! (`SceneGpu::shaded_fragments`: counted exactly by additive blending, so overdraw — hidden
-//! surfaces drawn before their occluders — is included; 1 for the probe's grid), p the
-//! per-screen cost of the empty shader with the depth test (the depth test's own part, p −
-//! p_off, is reported), n_k a shader's count of kind k per pixel and c_k the cost of one per
-//! pixel over the whole screen. The lookup counts of a probe point are what it was generated
-//! with; its float ops, uniform and varying reads are read off its SPIR-V
-//! (`gpu::spirv_counts`), exactly as a technique's are, so probe and techniques are counted
-//! alike. p and the c_k are fitted jointly by least squares (nalgebra's SVD) together with
-//! fixed and c_T, over every point with the depth test: among them a frame that draws one
-//! zero-area triangle (fixed) and the empty shader over half the screen (half the
-//! triangles, half the fragments).
+//! cost of one (setup, rasterization, vertex shading), f the device lanes a frame of the mesh
+//! keeps busy per screen pixel (`SceneGpu::shading_load`: by additive blending each fragment
+//! adds its share of the subgroup it ran in, so overdraw — hidden surfaces drawn before
+//! their occluders — counts, and so do the idle lanes of SIMD batches that small triangles
+//! cover in part: on lavapipe 1.01 lanes per fragment over screen-sized triangles, 1.27,
+//! 1.30 and 1.54 over the 125, 55 and 31-pixel grids), p the per-lane cost of the empty
+//! shader with the depth test over a screen (the depth test's own part, p − p_off, is
+//! reported), n_k a shader's count of kind k per pixel and c_k the cost of one per lane
+//! over a screen. The lookup counts of a probe point are what it was generated with; its
+//! float ops, uniform and varying reads are read off its SPIR-V (`gpu::spirv_counts`),
+//! exactly as a technique's are, so probe and techniques are counted alike (a technique
+//! whose work depends on its data — the clustered decodes — by the shares of its paths,
+//! `technique::finish::CountPlan`). p and the c_k are fitted jointly by least squares
+//! (nalgebra's SVD) together with fixed and c_T, over every point with the depth test:
+//! among them a frame that draws one zero-area triangle (fixed) and the empty shader over
+//! half the screen (half the triangles, half the fragments).
 //!
 //! **Limits.** The per-triangle cost is the probe's: small screen-filling triangles with
 //! the shared vertex shader (pcaMv's passes more weights on), and on lavapipe it is not
-//! linear — a screen of 125-pixel triangles costs more per pixel than one of large ones
-//! (partly covered blocks), which the dense grids' points put into c_T. Counts are static:
-//! branches count both sides, and loops left in a shader (the clustered techniques') count
-//! once. Uniform reads at a per-pixel index are their own kind; the probe's index is
-//! coherent over a band of the screen, as a cluster id over a chart. Caches: every probe
-//! lookup reads its own texture at neighbouring coordinates, as the techniques' texel and
-//! table fetches do, but a scene's access pattern (table lookups scattered by the normal
-//! map) may hit worse.
+//! linear — past what the idle lanes explain, going from screen-sized triangles to 125-pixel
+//! ones costs a step (≈ 2.5 ms per screen) that further steps do not, which the dense
+//! grids' points put into c_T. Counts are static: branches count both sides unless a
+//! [`CountPlan`](crate::technique::finish::CountPlan) weights them. Uniform reads at a
+//! per-pixel index are their own kind; the probe's index is coherent over a band of the
+//! screen, as a cluster id over a chart. Caches: every probe lookup reads its own texture at
+//! neighbouring coordinates, as the techniques' texel and table fetches do, but a scene's
+//! access pattern (table lookups scattered by the normal map) may hit worse. Register
+//! pressure is not priced: the probe's chains keep little live, and a shader that keeps
+//! much (cluster.frag fully unrolled, 36 floats of SH sums live) ran 2–3× its model.
 
 use std::sync::Arc;
 
@@ -201,6 +207,7 @@ pub struct ProbePoint {
     pub kind: Option<Kind>,
     /// Operations of `kind` generated.
     pub count: u32,
+    /// Lanes busy per screen pixel (`SceneGpu::shading_load`).
     pub coverage: f64,
     /// Triangles drawn (2, or a grid's for the per-triangle cost).
     pub triangles: u32,
@@ -220,7 +227,7 @@ pub struct Probe {
     pub height: u32,
     pub frames: u32,
     /// Fragments the screen-filling quad shades (`SceneGpu::shaded_fragments`): one per
-    /// pixel, the unit of [`CostModel::predict`]'s coverage.
+    /// pixel ([`CostModel::predict`]'s coverage is in lanes per pixel, `ProbePoint::coverage`).
     pub screen_fragments: u64,
     /// The triangles' screen area asked for, pixels, and the grid side it gave (2·side²
     /// triangles over 1.2 × the view each way).
