@@ -320,14 +320,20 @@ pub fn run(
         // the scene's mesh.
         let pixels = f64::from(settings.width) * f64::from(settings.height);
         let load = scene.shading_load(ctx, None)?;
-        let lanes = load.lanes / pixels;
         log::info!(
-            "cost model: {:.3} fragments shaded and {lanes:.3} lanes busy per screen pixel",
-            load.fragments as f64 / pixels
+            "cost model: {:.3} fragments shaded and {:.3} lanes busy per screen pixel, {:.0} pixels of triangle edges",
+            load.fragments as f64 / pixels,
+            load.lanes / pixels,
+            load.edge_pixels
         );
         for row in &mut rows {
-            row.coverage = row.own_mesh_lanes.unwrap_or(lanes);
-            let predicted = probe.model.predict(&row.cost, row.coverage, row.triangles);
+            let load = row.own_mesh_load.unwrap_or(load);
+            row.coverage = load.lanes / pixels;
+            row.edge_pixels = load.edge_pixels;
+            let predicted =
+                probe
+                    .model
+                    .predict(&row.cost, row.coverage, row.triangles, row.edge_pixels);
             row.model_ms = Some(predicted);
             row.x_model = row.ms_median.map(|ms| ms / predicted);
         }
@@ -756,10 +762,9 @@ fn measure_row(
         specular,
         cost: tech.stats.cost,
         coverage: covered as f64 / frame.rgba.len().max(1) as f64,
-        own_mesh_lanes: tech
-            .own_mesh_load
-            .map(|l| l.lanes / frame.rgba.len().max(1) as f64),
+        own_mesh_load: tech.own_mesh_load,
         triangles: tech.triangle_count(scene),
+        edge_pixels: 0.0,
         model_ms: None,
         x_model: None,
         ms_median: timing.map(|s| s.ms_median),

@@ -11,7 +11,7 @@ use crate::gpu::{
     Buffer, Context, GpuError, Image, ImageDesc, MeshBuffers, MeshPipeline, RenderTarget, Resource,
     Sampler, SamplerKind, ShaderStage, VertexLayout, compile_glsl, layout,
 };
-use crate::scene::{Scene, Texture8, Vertex};
+use crate::scene::{Mesh, Scene, Texture8, Vertex};
 
 /// How a frame is rendered.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -44,6 +44,8 @@ impl Default for FrameSettings {
 pub struct SceneGpu {
     target: RenderTarget,
     mesh: MeshBuffers,
+    /// The mesh on the CPU, for the cost model's screen edges ([`Self::shading_load`]).
+    cpu_mesh: Mesh,
     albedo: Image,
     normal: Image,
     material_sampler: Sampler,
@@ -146,6 +148,7 @@ impl SceneGpu {
         Ok(SceneGpu {
             target,
             mesh,
+            cpu_mesh: scene.mesh.clone(),
             albedo,
             normal,
             material_sampler: Sampler::new(
@@ -299,15 +302,27 @@ impl SceneGpu {
         Ok(self.shading_load(ctx, None)?.fragments)
     }
 
-    /// Fragments shaded and lanes kept busy in one frame of `mesh` (the scene's when `None`)
-    /// with the depth test (glsl/probe/count.frag): where triangles are small, the device's
-    /// SIMD batches (subgroups) run partly empty, and the lanes, not the fragments, are what
-    /// a fragment shader's frame time follows.
+    /// Fragments shaded and lanes kept busy in one frame of `mesh` (its buffers and the same
+    /// mesh on the CPU; the scene's when `None`) with the depth test (glsl/probe/count.frag):
+    /// where triangles are small, the device's SIMD batches (subgroups) run partly empty, and
+    /// the lanes, not the fragments, are what a fragment shader's frame time follows. And the
+    /// length of the triangles' edges on the screen (`scene::screen_triangles`), which the
+    /// rasterizer walks.
     pub fn shading_load(
         &self,
         ctx: &Arc<Context>,
-        mesh: Option<&MeshBuffers>,
+        mesh: Option<(&MeshBuffers, &Mesh)>,
     ) -> Result<ShadingLoad, GpuError> {
+        let (buffers, cpu_mesh) = mesh.unwrap_or((&self.mesh, &self.cpu_mesh));
+        let clip_from_world = glam::Mat4::from_cols_array_2d(&self.frame_params.clip_from_world);
+        let edge_pixels = crate::scene::screen_triangles(
+            cpu_mesh,
+            clip_from_world,
+            self.target.width(),
+            self.target.height(),
+        )
+        .map(|t| t.perimeter)
+        .sum();
         let ballot = ctx.supports_fragment_subgroup_ballot();
         let fragment = compile_glsl(
             "probe/count.frag",
@@ -329,8 +344,9 @@ impl SceneGpu {
             },
         )?;
         drop(resources);
-        let frame = self.render_pipeline_on(&pipeline, mesh.unwrap_or(&self.mesh), 0, 1)?;
+        let frame = self.render_pipeline_on(&pipeline, buffers, 0, 1)?;
         Ok(ShadingLoad {
+            edge_pixels,
             fragments: frame.rgba.iter().map(|p| p[0].round() as u64).sum(),
             lanes: frame.rgba.iter().map(|p| f64::from(p[1])).sum(),
             measured_lanes: ballot,
@@ -407,6 +423,9 @@ pub struct ShadingLoad {
     /// Subgroup lanes kept busy (the fragments where the device has no subgroup ballot).
     pub lanes: f64,
     pub measured_lanes: bool,
+    /// Σ over the triangles of their clipped screen perimeters, pixels (occlusion ignored:
+    /// hidden triangles are rasterized too).
+    pub edge_pixels: f64,
 }
 
 #[derive(Clone, Debug)]

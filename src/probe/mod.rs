@@ -19,8 +19,11 @@
 //! drift of a shared device spreads over every point instead of landing on a few; cheap
 //! points get more frames.
 //!
-//! **Model.** t = fixed + T·c_T + f · (p + Σ_k n_k c_k), T the triangles drawn and c_T the
-//! cost of one (setup, rasterization, vertex shading), f the device lanes a frame of the mesh
+//! **Model.** t = fixed + T·c_T + E·c_E + f · (p + Σ_k n_k c_k), T the triangles drawn and
+//! c_T the cost of one (setup, vertex shading), E the length of their edges on the screen in
+//! pixels (`scene::screen_triangles`, clipped to the view, hidden ones included: the
+//! rasterizer walks them) and c_E the cost of a pixel of edge (the partly covered blocks
+//! along it), f the device lanes a frame of the mesh
 //! keeps busy per screen pixel (`SceneGpu::shading_load`: by additive blending each fragment
 //! adds its share of the subgroup it ran in, so overdraw — hidden surfaces drawn before
 //! their occluders — counts, and so do the idle lanes of SIMD batches that small triangles
@@ -33,15 +36,16 @@
 //! exactly as a technique's are, so probe and techniques are counted alike (a technique
 //! whose work depends on its data — the clustered decodes — by the shares of its paths,
 //! `technique::finish::CountPlan`). p and the c_k are fitted jointly by least squares
-//! (nalgebra's SVD) together with fixed and c_T, over every point with the depth test:
+//! (nalgebra's SVD) together with fixed, c_T and c_E, over every point with the depth test:
 //! among them a frame that draws one zero-area triangle (fixed) and the empty shader over
 //! half the screen (half the triangles, half the fragments).
 //!
-//! **Limits.** The per-triangle cost is the probe's: small screen-filling triangles with
-//! the shared vertex shader (pcaMv's passes more weights on), and on lavapipe it is not
-//! linear — past what the idle lanes explain, going from screen-sized triangles to 125-pixel
-//! ones costs a step (≈ 2.5 ms per screen) that further steps do not, which the dense
-//! grids' points put into c_T. Counts are static: branches count both sides unless a
+//! **Limits.** The per-triangle and per-edge costs are the probe's: screen-filling grids
+//! with the shared vertex shader (pcaMv's passes more weights on). On lavapipe a term in
+//! triangles alone could not hold the grids (from screen-sized triangles to 125-pixel ones
+//! cost a step of ≈ 2.5 ms per screen, further steps less: ≈ T^0.4); with the edges it
+//! does, and the fit puts nearly all of it there (≈ 5 ns per edge pixel, ≈ 0.01 µs per
+//! triangle). Counts are static: branches count both sides unless a
 //! [`CountPlan`](crate::technique::finish::CountPlan) weights them. Uniform reads at a
 //! per-pixel index are their own kind; the probe's index is coherent over a band of the
 //! screen, as a cluster id over a chart. Caches: every probe lookup reads its own texture at
@@ -176,14 +180,23 @@ pub struct CostModel {
     pub depth_test_ms: f64,
     /// Per triangle drawn (setup, rasterization, vertex shading), ms.
     pub per_triangle_ms: f64,
+    /// Per pixel of triangle edge on the screen (the rasterizer's partly covered blocks), ms.
+    pub per_edge_pixel_ms: f64,
     /// ms per unit of each kind per pixel over the whole screen, in [`Kind::ALL`] order.
     pub per_unit_ms: [f64; 9],
 }
 
 impl CostModel {
-    /// Predicted frame time of a shader with `counts` shading `coverage` fragments per
-    /// screen pixel over a mesh of `triangles`.
-    pub fn predict(&self, counts: &CostCounts, coverage: f64, triangles: u32) -> f64 {
+    /// Predicted frame time of a shader with `counts` keeping `coverage` lanes busy per
+    /// screen pixel over a mesh of `triangles` whose edges are `edge_pixels` long on the
+    /// screen.
+    pub fn predict(
+        &self,
+        counts: &CostCounts,
+        coverage: f64,
+        triangles: u32,
+        edge_pixels: f64,
+    ) -> f64 {
         let per_pixel: f64 = counts
             .0
             .iter()
@@ -192,6 +205,7 @@ impl CostModel {
             .sum();
         self.fixed_ms
             + f64::from(triangles) * self.per_triangle_ms
+            + edge_pixels * self.per_edge_pixel_ms
             + coverage * (self.pixel_ms + per_pixel)
     }
 
@@ -211,6 +225,8 @@ pub struct ProbePoint {
     pub coverage: f64,
     /// Triangles drawn (2, or a grid's for the per-triangle cost).
     pub triangles: u32,
+    /// Their edges on the screen, pixels.
+    pub edge_pixels: f64,
     pub depth_test: bool,
     /// What the shader's SPIR-V counts (all kinds).
     pub counts: CostCounts,
@@ -263,8 +279,8 @@ impl Probe {
         let m = &self.model;
         let mut s = format!(
             "device: {} · {}×{} ({} fragments shaded by the screen grid of 2·{}² triangles, {:.0} pixels each) · at least {} timed frames per point (more for cheap ones), in interleaved rounds · {:.1} s\n\n\
-             fixed {:.3} ms per frame; {:.3} µs per triangle; empty shader {:.3} ms per screen, of which the depth test {:.3} ms\n\n\
-             | kind | ms per unit per screen | ns per unit per pixel |\n|---|---:|---:|\n",
+             fixed {:.3} ms per frame; {:.3} µs per triangle; {:.3} ns per pixel of triangle edge; empty shader {:.3} ms per screen of lanes, of which the depth test {:.3} ms\n\n\
+             | kind | ms per unit per screen of lanes | ns per unit per lane |\n|---|---:|---:|\n",
             self.device,
             self.width,
             self.height,
@@ -276,6 +292,7 @@ impl Probe {
             self.seconds,
             m.fixed_ms,
             1e3 * m.per_triangle_ms,
+            1e6 * m.per_edge_pixel_ms,
             m.pixel_ms,
             m.depth_test_ms
         );
@@ -288,14 +305,15 @@ impl Probe {
                 m.cost(kind) * 1e6 / pixels
             );
         }
-        s += "\n| point | count | coverage | triangles | depth | ms median | model ms | model / measured |\n|---|---:|---:|---:|---|---:|---:|---:|\n";
+        s += "\n| point | count | lanes per pixel | triangles | edge pixels | depth | ms median | model ms | model / measured |\n|---|---:|---:|---:|---:|---|---:|---:|---:|\n";
         for p in &self.points {
             s += &format!(
-                "| {} | {} | {:.2} | {} | {} | {:.3} | {:.3} | {:.3} |\n",
+                "| {} | {} | {:.2} | {} | {:.0} | {} | {:.3} | {:.3} | {:.3} |\n",
                 p.kind.map_or("empty shader", Kind::name),
                 p.count,
                 p.coverage,
                 p.triangles,
+                p.edge_pixels,
                 if p.depth_test { "on" } else { "off" },
                 p.ms_median,
                 p.model_ms,
@@ -331,7 +349,7 @@ const TEXTURE_SIDE: u32 = 512;
 /// Grid sides of the per-triangle points: small triangles (125, 55 and 31 pixels at
 /// 1280×800), as a scene's many small ones.
 const TRIANGLE_GRIDS: [u32; 3] = [64, 96, 128];
-/// Points faster than this get proportionally more frames (up to 6×) after the first round.
+/// Points faster than this get proportionally more frames (up to 20×) after the first round.
 const CHEAP_POINT_MS: f64 = 40.0;
 /// Interleaved rounds the timed frames are split into.
 const PROBE_ROUNDS: u32 = 10;
@@ -649,14 +667,15 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
             ..FrameSettings::default()
         },
     )?;
-    let upload = |left_half: bool, grid: u32| -> Result<MeshBuffers, GpuError> {
+    let upload = |left_half: bool, grid: u32| -> Result<(MeshBuffers, Mesh), GpuError> {
         let m = probe_scene(s.width, s.height, left_half, grid).mesh;
-        MeshBuffers::new(
+        let buffers = MeshBuffers::new(
             ctx,
             bytemuck::cast_slice(&m.vertices),
             &m.indices,
             &format!("probe.mesh{}{grid}", if left_half { ".half" } else { "" }),
-        )
+        )?;
+        Ok((buffers, m))
     };
     let nothing_mesh = upload(false, 0)?;
     let full_mesh = upload(false, base)?;
@@ -671,16 +690,19 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
     let screen_fragments = gpu.shaded_fragments(ctx)?;
     // Lanes per screen pixel of each mesh: the coverage the model's per-pixel costs multiply.
     let pixels = f64::from(s.width) * f64::from(s.height);
-    let mut lanes_per_pixel = Vec::new();
-    for m in [&full_mesh, &half_mesh].into_iter().chain(&grids) {
-        let load = gpu.shading_load(ctx, Some(m))?;
-        lanes_per_pixel.push((m as *const MeshBuffers, load.lanes / pixels));
+    let mut loads = Vec::new();
+    for (buffers, m) in [&nothing_mesh, &full_mesh, &half_mesh]
+        .into_iter()
+        .chain(&grids)
+    {
+        let load = gpu.shading_load(ctx, Some((buffers, m)))?;
+        loads.push((buffers as *const MeshBuffers, load));
     }
-    let coverage_of = |mesh: &MeshBuffers| {
-        lanes_per_pixel
+    let load_of = |mesh: &MeshBuffers| {
+        loads
             .iter()
             .find(|(m, _)| std::ptr::eq(*m, mesh))
-            .map_or(0.0, |(_, c)| *c)
+            .map(|(_, l)| *l)
     };
 
     // Every point's pipeline first, then the timed frames in interleaved rounds.
@@ -746,8 +768,9 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
         let point = ProbePoint {
             kind,
             count,
-            coverage: coverage_of(mesh),
+            coverage: load_of(mesh).map_or(0.0, |l| l.lanes / pixels),
             triangles: mesh.triangle_count(),
+            edge_pixels: load_of(mesh).map_or(0.0, |l| l.edge_pixels),
             depth_test,
             counts: CostCounts::new(&lookups, &ops),
             ms_median: f64::NAN,
@@ -756,15 +779,15 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
         Ok((point, pipeline))
     };
     let mut specs: Vec<(Option<Kind>, u32, bool, &MeshBuffers)> = vec![
-        (None, 0, true, &nothing_mesh),
-        (None, 0, true, &full_mesh),
-        (None, 0, true, &half_mesh),
-        (None, 0, false, &full_mesh),
+        (None, 0, true, &nothing_mesh.0),
+        (None, 0, true, &full_mesh.0),
+        (None, 0, true, &half_mesh.0),
+        (None, 0, false, &full_mesh.0),
     ];
-    specs.extend(grids.iter().map(|g| (None, 0, true, g)));
+    specs.extend(grids.iter().map(|g| (None, 0, true, &g.0)));
     for kind in Kind::ALL {
         for count in kind.probe_counts() {
-            specs.push((Some(kind), count, true, &full_mesh));
+            specs.push((Some(kind), count, true, &full_mesh.0));
         }
     }
     let planned = specs
@@ -794,7 +817,7 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
             // is 10 % of them.
             let frames = match TimingStats::from_ms(t) {
                 Some(first) if round > 0 => {
-                    let scale = (CHEAP_POINT_MS / first.ms_median).clamp(1.0, 6.0);
+                    let scale = (CHEAP_POINT_MS / first.ms_median).clamp(1.0, 20.0);
                     (f64::from(per_round) * scale).round() as u32
                 }
                 _ => per_round,
@@ -820,7 +843,8 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
         } else {
             model.depth_test_ms
         };
-        p.model_ms = model.predict(&p.counts, p.coverage, p.triangles) - p.coverage * depth_off;
+        p.model_ms = model.predict(&p.counts, p.coverage, p.triangles, p.edge_pixels)
+            - p.coverage * depth_off;
     }
     Ok(Probe {
         device: ctx.device_name().to_string(),
@@ -847,17 +871,18 @@ fn base_grid(width: u32, height: u32, triangle_pixels: f64) -> u32 {
 /// Least-squares fit of the model (module doc) to the points.
 fn fit(points: &[ProbePoint]) -> Option<CostModel> {
     let on: Vec<&ProbePoint> = points.iter().filter(|p| p.depth_test).collect();
-    // Unknowns: fixed, the per-triangle cost, p, then c_k; t = fixed + T·c_T + f·(p + Σ n_k
-    // c_k). Rows weighted by 1/t so relative errors count.
-    let n = 3 + Kind::ALL.len();
+    // Unknowns: fixed, the per-triangle and per-edge-pixel costs, p, then c_k; t = fixed +
+    // T·c_T + E·c_E + f·(p + Σ n_k c_k). Rows weighted by 1/t so relative errors count.
+    let n = 4 + Kind::ALL.len();
     let a = nalgebra::DMatrix::from_fn(on.len(), n, |r, c| {
         let p = on[r];
         let w = 1.0 / p.ms_median;
         w * match c {
             0 => 1.0,
             1 => f64::from(p.triangles),
-            2 => p.coverage,
-            _ => p.coverage * p.counts.0[c - 3],
+            2 => p.edge_pixels,
+            3 => p.coverage,
+            _ => p.coverage * p.counts.0[c - 4],
         }
     });
     let b = nalgebra::DVector::from_element(on.len(), 1.0);
@@ -869,14 +894,16 @@ fn fit(points: &[ProbePoint]) -> Option<CostModel> {
         .find(|p| p.kind.is_none() && p.depth_test && p.triangles == off.triangles)?;
     let model = CostModel {
         fixed_ms: x[0],
-        pixel_ms: x[2],
+        pixel_ms: x[3],
         depth_test_ms: on.ms_median - off.ms_median,
         per_triangle_ms: x[1],
-        per_unit_ms: std::array::from_fn(|k| x[k + 3]),
+        per_edge_pixel_ms: x[2],
+        per_unit_ms: std::array::from_fn(|k| x[k + 4]),
     };
     let finite = model.per_unit_ms.iter().all(|c| c.is_finite())
         && model.pixel_ms.is_finite()
-        && model.per_triangle_ms.is_finite();
+        && model.per_triangle_ms.is_finite()
+        && model.per_edge_pixel_ms.is_finite();
     finite.then_some(model)
 }
 
@@ -918,12 +945,24 @@ mod tests {
             pixel_ms: 1.2,
             depth_test_ms: 0.3,
             per_triangle_ms: 2e-4,
+            per_edge_pixel_ms: 5e-6,
             per_unit_ms: [2.0, 3.0, 2.5, 4.0, 2.2, 0.01, 0.05, 0.5, 1.5],
+        };
+        // Edges of a screen of 1000 × 600 pixels cut into 2·g² right triangles.
+        let edges = |g: u32| {
+            let (w, h) = (1000.0 / f64::from(g), 600.0 / f64::from(g));
+            f64::from(2 * g * g) * (w + h + w.hypot(h))
         };
         let mut points = Vec::new();
         let mut push =
             |kind: Option<Kind>, counts: CostCounts, coverage: f64, depth: bool, triangles: u32| {
-                let ms = truth.predict(&counts, coverage, triangles)
+                let grid = f64::from(triangles / 2).sqrt().round() as u32;
+                let edge_pixels = if coverage > 0.0 {
+                    edges(grid) * coverage
+                } else {
+                    0.0
+                };
+                let ms = truth.predict(&counts, coverage, triangles, edge_pixels)
                     - if depth {
                         0.0
                     } else {
@@ -934,6 +973,7 @@ mod tests {
                     count: 0,
                     coverage,
                     triangles,
+                    edge_pixels,
                     depth_test: depth,
                     counts,
                     ms_median: ms,
@@ -963,6 +1003,10 @@ mod tests {
         assert!((model.depth_test_ms - truth.depth_test_ms).abs() < 1e-9);
         assert!(
             (model.per_triangle_ms - truth.per_triangle_ms).abs() < 1e-9,
+            "{model:?}"
+        );
+        assert!(
+            (model.per_edge_pixel_ms - truth.per_edge_pixel_ms).abs() < 1e-11,
             "{model:?}"
         );
         for (m, t) in model.per_unit_ms.iter().zip(truth.per_unit_ms) {

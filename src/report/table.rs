@@ -126,11 +126,13 @@ pub struct BenchRow {
     /// `SceneGpu::shading_load` over the row's mesh); else the covered pixels' share.
     pub cost: crate::probe::CostCounts,
     pub coverage: f64,
-    /// `coverage` with the probe for a row that draws its own mesh (`pcaMv`).
+    /// What a frame of the row's own mesh shades (`pcaMv`), for the probe's columns.
     #[serde(skip)]
-    pub own_mesh_lanes: Option<f64>,
+    pub own_mesh_load: Option<crate::render::ShadingLoad>,
     /// Triangles one frame draws.
     pub triangles: u32,
+    /// Their edges on the screen, pixels (with the probe; `render::ShadingLoad`).
+    pub edge_pixels: f64,
     /// The device cost model's frame time for the row (`shvis bench` runs the probe first),
     /// and the measured median over it.
     pub model_ms: Option<f64>,
@@ -424,8 +426,9 @@ mod tests {
             specular: None,
             cost: crate::probe::CostCounts::default(),
             coverage: 1.0,
-            own_mesh_lanes: None,
+            own_mesh_load: None,
             triangles: 2,
+            edge_pixels: 0.0,
             model_ms: None,
             x_model: None,
             ms_median: Some(ms),

@@ -179,36 +179,58 @@ impl Scene {
     /// of each block's lanes idle (`crate::probe`).
     pub fn pixel_weighted_triangle_area(&self, width: u32, height: u32) -> f64 {
         let clip_from_world = self.camera.clip_from_world(width as f32 / height as f32);
-        let clip: Vec<Vec4> = self
-            .mesh
-            .vertices
-            .iter()
-            .map(|v| clip_from_world * Vec3::from(v.position).extend(1.0))
-            .collect();
         let (mut sum, mut sum_sq) = (0.0f64, 0.0f64);
-        for tri in self.mesh.indices.chunks_exact(3) {
-            let polygon = clip_to_view(tri.iter().map(|&i| clip[i as usize]).collect());
-            let pixels: Vec<(f64, f64)> = polygon
-                .iter()
-                .map(|c| {
-                    (
-                        f64::from(c.x / c.w) * 0.5 * f64::from(width),
-                        f64::from(c.y / c.w) * 0.5 * f64::from(height),
-                    )
-                })
-                .collect();
-            let twice: f64 = (0..pixels.len())
-                .map(|k| {
-                    let (a, b) = (pixels[k], pixels[(k + 1) % pixels.len()]);
-                    a.0 * b.1 - b.0 * a.1
-                })
-                .sum();
-            let area = 0.5 * twice.abs();
-            sum += area;
-            sum_sq += area * area;
+        for t in screen_triangles(&self.mesh, clip_from_world, width, height) {
+            sum += t.area;
+            sum_sq += t.area * t.area;
         }
         if sum > 0.0 { sum_sq / sum } else { 0.0 }
     }
+}
+
+/// A triangle's screen footprint after clipping to the view, pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScreenTriangle {
+    pub area: f64,
+    /// The clipped polygon's perimeter (edges along the view's border included).
+    pub perimeter: f64,
+}
+
+/// The triangles of `mesh` as `clip_from_world` puts them on a `width` × `height` screen,
+/// each clipped to the view (occlusion ignored; empty polygons left out).
+pub fn screen_triangles(
+    mesh: &Mesh,
+    clip_from_world: glam::Mat4,
+    width: u32,
+    height: u32,
+) -> impl Iterator<Item = ScreenTriangle> + '_ {
+    let clip: Vec<Vec4> = mesh
+        .vertices
+        .iter()
+        .map(|v| clip_from_world * Vec3::from(v.position).extend(1.0))
+        .collect();
+    mesh.indices.chunks_exact(3).filter_map(move |tri| {
+        let polygon = clip_to_view(tri.iter().map(|&i| clip[i as usize]).collect());
+        if polygon.len() < 3 {
+            return None;
+        }
+        let pixels: Vec<(f64, f64)> = polygon
+            .iter()
+            .map(|c| {
+                (
+                    f64::from(c.x / c.w) * 0.5 * f64::from(width),
+                    f64::from(c.y / c.w) * 0.5 * f64::from(height),
+                )
+            })
+            .collect();
+        let edges = (0..pixels.len()).map(|k| (pixels[k], pixels[(k + 1) % pixels.len()]));
+        let twice: f64 = edges.clone().map(|(a, b)| a.0 * b.1 - b.0 * a.1).sum();
+        let perimeter = edges.map(|(a, b)| (b.0 - a.0).hypot(b.1 - a.1)).sum();
+        Some(ScreenTriangle {
+            area: 0.5 * twice.abs(),
+            perimeter,
+        })
+    })
 }
 
 /// Sutherland–Hodgman clipping of a clip-space polygon to the view volume's side and near
@@ -412,8 +434,21 @@ mod tests {
             .extend([v(0.0, 0.0, -1.0), v(0.1, 0.0, -1.0), v(0.1, 0.1, -1.0)]);
         mesh.indices.extend([n, n + 1, n + 2]);
         let want = (2.0 * half * half + small * small) / (2.0 * half + small);
-        let area = scene(mesh).pixel_weighted_triangle_area(w, h);
+        let area = scene(mesh.clone()).pixel_weighted_triangle_area(w, h);
         assert!((area - want).abs() < 1e-3 * want, "{area} against {want}");
+        // Perimeters: the clipped halves are the screen's two triangles (2 sides and the
+        // diagonal each), the small one 0.1 + 0.1 + 0.1·√2 view units.
+        let s = scene(mesh);
+        let clip_from_world = s.camera.clip_from_world(a);
+        let perimeter: f64 = screen_triangles(&s.mesh, clip_from_world, w, h)
+            .map(|t| t.perimeter)
+            .sum();
+        let (wf, hf) = (f64::from(w), f64::from(h));
+        let want = 2.0 * (wf + hf + wf.hypot(hf)) + (2.0 + 2f64.sqrt()) * 0.1 * hf / 2.0;
+        assert!(
+            (perimeter - want).abs() < 1e-3 * want,
+            "{perimeter} against {want}"
+        );
     }
 
     #[test]

@@ -208,7 +208,7 @@ pub(crate) fn finish(
         &bake.mesh.indices,
         &format!("{label}.mesh.count"),
     )?;
-    let load = scene.shading_load(ctx, Some(&plain))?;
+    let load = scene.shading_load(ctx, Some((&plain, &bake.mesh)))?;
     let mut gpu = TechniqueGpu::new(ctx, technique, path, stats, Vec::new(), built);
     gpu.mesh = Some(mesh);
     gpu.own_mesh_load = Some(load);
