@@ -321,9 +321,14 @@ pub fn run(
         let pixels = f64::from(settings.width) * f64::from(settings.height);
         let load = scene.shading_load(ctx, None)?;
         log::info!(
-            "cost model: {:.3} fragments shaded and {:.3} lanes busy per screen pixel, {:.0} pixels of triangle edges",
+            "cost model: {:.3} fragments shaded and {:.3} lanes busy per screen pixel{}, {:.0} pixels of triangle edges",
             load.fragments as f64 / pixels,
             load.lanes / pixels,
+            if load.measured_lanes {
+                ""
+            } else {
+                " (no subgroup ballot in fragment shaders: lanes = fragments)"
+            },
             load.edge_pixels
         );
         for row in &mut rows {

@@ -112,6 +112,10 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
                 } else {
                     assert!(reads > inside, "{t}.{path}: no fragment straddles clusters");
                 }
+                // Built for changing lighting (two copies of the block), counted the same.
+                let (dynamic, _) =
+                    technique::build_dynamic(&ctx, &scene, t, path, &inputs).unwrap();
+                assert_eq!(dynamic.stats.cost, c, "{t}.{path}: double-buffered counts");
             }
         }
     }

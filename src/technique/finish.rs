@@ -172,6 +172,7 @@ pub fn finish(
     let sampler = scene.lightmap_sampler();
     let mut built = Vec::with_capacity(sets);
     let mut stats = TechniqueStats::default();
+    let mut op_counts = Vec::new();
     for set in 0..sets.max(1) {
         let suffix = set_suffix(set);
         let table_slots = match &lighting.tables {
@@ -228,14 +229,14 @@ pub fn finish(
             };
             resources.push((binding, resource));
         }
-        let op_counts = match counted {
-            None => vec![(1.0, gpu::spirv_counts::count(&fragment))],
-            Some(plan) if set == 0 => plan_counts(ctx, scene, technique, path, plan, &resources)?,
-            Some(_) => Vec::new(),
-        };
-        if !op_counts.is_empty() {
-            stats.cost = cost_counts(technique, path, scene, &layouts, &op_counts);
+        // The plan's measure needs a set's resources; every set has the same counts.
+        if op_counts.is_empty() {
+            op_counts = match counted {
+                None => vec![(1.0, gpu::spirv_counts::count(&fragment))],
+                Some(plan) => plan_counts(ctx, scene, technique, path, plan, &resources)?,
+            };
         }
+        stats.cost = cost_counts(technique, path, scene, &layouts, &op_counts);
         let pipeline =
             scene.mesh_pipeline(ctx, &format!("{label}{suffix}"), &fragment, &resources)?;
         drop(resources);
