@@ -44,8 +44,9 @@
 //! with the shared vertex shader (pcaMv's passes more weights on). On lavapipe a term in
 //! triangles alone could not hold the grids (from screen-sized triangles to 125-pixel ones
 //! cost a step of ≈ 2.5 ms per screen, further steps less: ≈ T^0.4); with the edges it
-//! does, and the fit puts nearly all of it there (≈ 5 ns per edge pixel, ≈ 0.01 µs per
-//! triangle). Counts are static: branches count both sides unless a
+//! does, and the fit puts nearly all of it there (4–8 ns per edge pixel, the per-triangle
+//! cost near zero — held at zero where the fit would put it below, as T and E of the grids
+//! grow together). Counts are static: branches count both sides unless a
 //! [`CountPlan`](crate::technique::finish::CountPlan) weights them. Uniform reads at a
 //! per-pixel index are their own kind; the probe's index is coherent over a band of the
 //! screen, as a cluster id over a chart. Caches: every probe lookup reads its own texture at
@@ -872,21 +873,39 @@ fn base_grid(width: u32, height: u32, triangle_pixels: f64) -> u32 {
 fn fit(points: &[ProbePoint]) -> Option<CostModel> {
     let on: Vec<&ProbePoint> = points.iter().filter(|p| p.depth_test).collect();
     // Unknowns: fixed, the per-triangle and per-edge-pixel costs, p, then c_k; t = fixed +
-    // T·c_T + E·c_E + f·(p + Σ n_k c_k). Rows weighted by 1/t so relative errors count.
+    // T·c_T + E·c_E + f·(p + Σ n_k c_k). Rows weighted by 1/t so relative errors count. The
+    // geometry terms go together (the grids' T and E grow together): one the fit puts below
+    // zero — a cost cannot be negative — is left out and the rest refitted.
     let n = 4 + Kind::ALL.len();
-    let a = nalgebra::DMatrix::from_fn(on.len(), n, |r, c| {
-        let p = on[r];
-        let w = 1.0 / p.ms_median;
-        w * match c {
-            0 => 1.0,
-            1 => f64::from(p.triangles),
-            2 => p.edge_pixels,
-            3 => p.coverage,
-            _ => p.coverage * p.counts.0[c - 4],
-        }
-    });
-    let b = nalgebra::DVector::from_element(on.len(), 1.0);
-    let x = a.svd(true, true).solve(&b, 1e-12).ok()?;
+    let solve = |dropped: &[usize]| {
+        let a = nalgebra::DMatrix::from_fn(on.len(), n, |r, c| {
+            let p = on[r];
+            let w = 1.0 / p.ms_median;
+            let column = match c {
+                _ if dropped.contains(&c) => 0.0,
+                0 => 1.0,
+                1 => f64::from(p.triangles),
+                2 => p.edge_pixels,
+                3 => p.coverage,
+                _ => p.coverage * p.counts.0[c - 4],
+            };
+            w * column
+        });
+        let b = nalgebra::DVector::from_element(on.len(), 1.0);
+        a.svd(true, true).solve(&b, 1e-12).ok()
+    };
+    let mut dropped = Vec::new();
+    let mut x = solve(&dropped)?;
+    while let Some(c) = [1, 2]
+        .into_iter()
+        .find(|&c| !dropped.contains(&c) && x[c] < 0.0)
+    {
+        dropped.push(c);
+        x = solve(&dropped)?;
+    }
+    for &c in &dropped {
+        x[c] = 0.0;
+    }
     // The depth test's part: the empty shader with it off against the same mesh with it on.
     let off = points.iter().find(|p| p.kind.is_none() && !p.depth_test)?;
     let on = points
@@ -935,6 +954,37 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_geometry_cost_the_fit_puts_below_zero_is_left_out() {
+        // Timings with no per-triangle cost and a little noise that pulls it negative: the
+        // model keeps it at zero, and the edges carry the grids.
+        let mut points = Vec::new();
+        let mut push = |triangles: u32, edge_pixels: f64, coverage: f64, ms: f64| {
+            points.push(ProbePoint {
+                kind: None,
+                count: 0,
+                coverage,
+                triangles,
+                edge_pixels,
+                depth_test: true,
+                counts: CostCounts::default(),
+                ms_median: ms,
+                model_ms: 0.0,
+            });
+        };
+        push(1, 0.0, 0.0, 0.5);
+        push(8, 1e4, 1.0, 2.5 + 0.05);
+        push(4, 5e3, 0.5, 1.5 + 0.025);
+        push(8192, 4e5, 1.0, 2.5 + 2.0);
+        push(18432, 6e5, 1.0, 2.5 + 3.0 - 0.2);
+        push(32768, 8e5, 1.0, 2.5 + 4.0 - 0.3);
+        push(8, 1e4, 1.0, 1.9);
+        points.last_mut().unwrap().depth_test = false;
+        let model = fit(&points).unwrap();
+        assert_eq!(model.per_triangle_ms, 0.0, "{model:?}");
+        assert!(model.per_edge_pixel_ms > 0.0, "{model:?}");
     }
 
     #[test]
