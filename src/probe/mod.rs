@@ -58,7 +58,7 @@
 use std::sync::Arc;
 
 use ash::vk;
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 use serde::Serialize;
 
 use crate::gpu::spirv_counts::{self, OpCounts};
@@ -68,7 +68,7 @@ use crate::gpu::{
 };
 use crate::render::{FrameSettings, SceneGpu};
 use crate::report::metrics::TimingStats;
-use crate::scene::{Camera, Material, Mesh, Scene, Texture8, Vertex};
+use crate::scene::{Mesh, Scene, Vertex};
 
 /// The operation kinds the model prices.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
@@ -398,24 +398,7 @@ fn probe_scene(width: u32, height: u32, left_half: bool, grid: u32) -> Scene {
             }
         }
     }
-    Scene {
-        name: "probe".into(),
-        mesh,
-        material: Material {
-            albedo: Texture8::solid([255; 4]),
-            normal: Texture8::solid([128, 128, 255, 255]),
-            normal_scale: 1.0,
-            height: None,
-        },
-        camera: Camera {
-            position: Vec3::ZERO,
-            target: Vec3::NEG_Z,
-            up: Vec3::Y,
-            fov_y: 90f32.to_radians(),
-            z_near: 0.1,
-            z_far: 10.0,
-        },
-    }
+    Scene::flat_view("probe", mesh)
 }
 
 /// The GLSL of a probe point: `count` operations of `kind` (`None`: the empty shader).

@@ -172,6 +172,30 @@ impl Camera {
 }
 
 impl Scene {
+    /// `mesh` in white with a flat normal map, seen from the origin down −Z with a 90°
+    /// vertical field of view (at z = −1 the view spans y ∈ ±1, x ∈ ±aspect): the device
+    /// probe's screen-filling grids.
+    pub fn flat_view(name: &str, mesh: Mesh) -> Scene {
+        Scene {
+            name: name.into(),
+            mesh,
+            material: Material {
+                albedo: Texture8::solid([255; 4]),
+                normal: Texture8::solid([128, 128, 255, 255]),
+                normal_scale: 1.0,
+                height: None,
+            },
+            camera: Camera {
+                position: Vec3::ZERO,
+                target: Vec3::NEG_Z,
+                up: Vec3::Y,
+                fov_y: 90f32.to_radians(),
+                z_near: 0.1,
+                z_far: 10.0,
+            },
+        }
+    }
+
     /// The screen area of the triangle under an average shaded fragment, pixels: Σ a_i² /
     /// Σ a_i over the triangles' areas a_i on a `width` × `height` screen after clipping to
     /// the view (occlusion ignored, as every drawn fragment is shaded). What the device probe
@@ -406,24 +430,7 @@ mod tests {
             ],
             indices: vec![0, 1, 2, 0, 2, 3],
         };
-        let scene = |mesh: Mesh| Scene {
-            name: "quad".into(),
-            mesh,
-            material: Material {
-                albedo: Texture8::solid([255; 4]),
-                normal: Texture8::solid([128, 128, 255, 255]),
-                normal_scale: 1.0,
-                height: None,
-            },
-            camera: Camera {
-                position: Vec3::ZERO,
-                target: Vec3::NEG_Z,
-                up: Vec3::Y,
-                fov_y: 90f32.to_radians(),
-                z_near: 0.1,
-                z_far: 10.0,
-            },
-        };
+        let scene = |mesh: Mesh| Scene::flat_view("quad", mesh);
         let half = f64::from(w * h) / 2.0;
         let area = scene(mesh.clone()).pixel_weighted_triangle_area(w, h);
         assert!((area - half).abs() < 1e-3 * half, "{area} against {half}");
