@@ -767,7 +767,11 @@ fn measure_row(
         specular,
         cost: tech.stats.cost,
         coverage: covered as f64 / frame.rgba.len().max(1) as f64,
-        own_mesh_load: tech.own_mesh_load,
+        own_mesh_load: if settings.probe {
+            technique::vertex::own_mesh_load(rows_of.ctx, scene, technique, &prepared.inputs())?
+        } else {
+            None
+        },
         triangles: tech.triangle_count(scene),
         edge_pixels: 0.0,
         model_ms: None,

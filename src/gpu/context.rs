@@ -383,7 +383,7 @@ impl Context {
     }
 
     /// Whether fragment shaders may use subgroup ballots (`subgroupBallot`; the lanes a
-    /// draw occupies, `render::SceneGpu::shaded_fragments`).
+    /// draw occupies, `render::SceneGpu::shading_load`).
     pub fn supports_fragment_subgroup_ballot(&self) -> bool {
         self.fragment_subgroup_ops
             .contains(vk::SubgroupFeatureFlags::BALLOT)

@@ -243,7 +243,7 @@ pub struct Probe {
     pub width: u32,
     pub height: u32,
     pub frames: u32,
-    /// Fragments the screen-filling quad shades (`SceneGpu::shaded_fragments`): one per
+    /// Fragments the screen-filling grid shades (`SceneGpu::shading_load`): one per
     /// pixel ([`CostModel::predict`]'s coverage is in lanes per pixel, `ProbePoint::coverage`).
     pub screen_fragments: u64,
     /// The triangles' screen area asked for, pixels, and the grid side it gave (2·side²
@@ -671,7 +671,6 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
     let res = probe_resources(ctx)?;
     let linear = Sampler::new(ctx, SamplerKind::LinearClamp, "probe.linear")?;
     let material = gpu.material_sampler();
-    let screen_fragments = gpu.shaded_fragments(ctx)?;
     // Lanes per screen pixel of each mesh: the coverage the model's per-pixel costs multiply.
     let pixels = f64::from(s.width) * f64::from(s.height);
     let mut loads = Vec::new();
@@ -688,6 +687,7 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
             .find(|(m, _)| std::ptr::eq(*m, mesh))
             .map(|(_, l)| *l)
     };
+    let screen_fragments = load_of(&full_mesh.0).map_or(0, |l| l.fragments);
 
     // Every point's pipeline first, then the timed frames in interleaved rounds.
     struct Planned<'m> {

@@ -215,8 +215,6 @@ pub struct TechniqueGpu {
     /// The technique's own mesh (`pcaMv`: the scene's surface with weights per vertex);
     /// `None` draws the scene's.
     mesh: Option<gpu::MeshBuffers>,
-    /// What a frame of the own mesh shades (`SceneGpu::shading_load`), for the cost model.
-    pub own_mesh_load: Option<crate::render::ShadingLoad>,
     ctx: Arc<Context>,
 }
 
@@ -238,7 +236,6 @@ impl TechniqueGpu {
             front: 0,
             _per_texel: per_texel,
             mesh: None,
-            own_mesh_load: None,
             ctx: ctx.clone(),
         }
     }

@@ -200,19 +200,32 @@ pub(crate) fn finish(
         ),
     };
     super::finish::add_specular_stats(scene, path, &mut stats);
-    // Its finer mesh keeps more of the device's lanes busy per pixel than the scene's: drawn
-    // once in the scene's vertex format to count them (the cost model's coverage).
+    let mut gpu = TechniqueGpu::new(ctx, technique, path, stats, Vec::new(), built);
+    gpu.mesh = Some(mesh);
+    Ok(gpu)
+}
+
+/// What a frame of `pcaMv`'s own mesh shades (`SceneGpu::shading_load`, the cost model's
+/// coverage): its finer mesh keeps more of the device's lanes busy per pixel than the
+/// scene's. Drawn once in the scene's vertex format; `None` for the other techniques.
+pub fn own_mesh_load(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    technique: Technique,
+    inputs: &Inputs<'_>,
+) -> Result<Option<crate::render::ShadingLoad>, TechniqueError> {
+    let Technique::PcaVertex { m, max_edge_cm } = technique else {
+        return Ok(None);
+    };
+    let label = format!("{technique}");
+    let bake = find(inputs, m, max_edge_cm, &label)?;
     let plain = MeshBuffers::new(
         ctx,
         bytemuck::cast_slice(&bake.mesh.vertices),
         &bake.mesh.indices,
         &format!("{label}.mesh.count"),
     )?;
-    let load = scene.shading_load(ctx, Some((&plain, &bake.mesh)))?;
-    let mut gpu = TechniqueGpu::new(ctx, technique, path, stats, Vec::new(), built);
-    gpu.mesh = Some(mesh);
-    gpu.own_mesh_load = Some(load);
-    Ok(gpu)
+    Ok(Some(scene.shading_load(ctx, Some((&plain, &bake.mesh)))?))
 }
 
 #[cfg(test)]
