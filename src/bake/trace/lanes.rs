@@ -7,6 +7,8 @@
 
 use glam::Vec4;
 
+use super::{NodeTest, RayPacket, child_masks_by_block};
+
 /// A vector of `WIDTH` f32 lanes. Methods are `#[inline(always)]` so that, inlined into a
 /// function compiled with the matching target feature, the intrinsics inline too.
 pub(super) trait RayLanes: Copy {
@@ -29,6 +31,13 @@ pub(super) trait RayLanes: Copy {
     fn ge(self, o: Self) -> u32;
     /// Bit i set where lane i's sign bit is set.
     fn negative(self) -> u32;
+
+    /// The rays of `mask` (bit i = ray i of `packet`) that enter each child slot of the
+    /// node, as obvhs's single-ray `CwBvhNode::intersect_ray_simd` decides per ray.
+    #[inline(always)]
+    fn child_masks(test: &NodeTest, packet: &RayPacket, mask: u64) -> [u64; 8] {
+        child_masks_by_block::<Self>(test, packet, mask)
+    }
 }
 
 impl RayLanes for Vec4 {
@@ -137,7 +146,7 @@ pub(super) use x86::{Avx2, Avx512};
 mod x86 {
     use std::arch::x86_64::*;
 
-    use super::RayLanes;
+    use super::{NodeTest, RayLanes, RayPacket};
 
     /// The arithmetic methods of [`RayLanes`] for a register wrapper `$lanes` of `$width`
     /// lanes, from its intrinsics (the same shape for AVX2 and AVX-512F).
@@ -175,6 +184,85 @@ mod x86 {
         };
     }
 
+    /// [`RayLanes::child_masks`] a ray at a time, the node's 8 child slots in the lanes of
+    /// an AVX register — obvhs's `intersect_ray_simd` at 8 wide. The child planes are
+    /// decoded once per node (u8 → f32 of all 8 slots by vector), each live ray costs one
+    /// 8-slot slab test whose movemask is its byte of entered slots, and the 64 bytes are
+    /// transposed into the slots' ray masks by `movemask_epi8`. Cheaper than a block of
+    /// rays per child where few rays of a block reach the node (big: 3 of 8).
+    #[inline(always)]
+    unsafe fn child_masks_by_ray(test: &NodeTest, packet: &RayPacket, mask: u64) -> [u64; 8] {
+        let node = test.node;
+        let (adj, inv) = (test.adj, test.inv);
+        unsafe {
+            let decode = |planes: &[u8; 8], scale: f32| {
+                let bytes = _mm_loadl_epi64(planes.as_ptr().cast());
+                _mm256_mul_ps(
+                    _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes)),
+                    _mm256_set1_ps(scale),
+                )
+            };
+            let near_far = |lo: &[u8; 8], hi: &[u8; 8], neg: bool, scale: f32| {
+                let (near, far) = if neg { (hi, lo) } else { (lo, hi) };
+                (decode(near, scale), decode(far, scale))
+            };
+            let [rdx, rdy, rdz] = test.negative;
+            let (x0, x1) = near_far(&node.child_min_x, &node.child_max_x, rdx, adj.x);
+            let (y0, y1) = near_far(&node.child_min_y, &node.child_max_y, rdy, adj.y);
+            let (z0, z1) = near_far(&node.child_min_z, &node.child_max_z, rdz, adj.z);
+            let meta = _mm_loadl_epi64(node.child_meta.as_ptr().cast());
+            let empty = _mm_movemask_epi8(_mm_cmpeq_epi8(meta, _mm_setzero_si128())) as u32;
+            let occupied = !empty & 0xff;
+            let (node_t_min, ray_t_max) = (
+                _mm256_set1_ps(super::super::NODE_T_MIN),
+                _mm256_set1_ps(test.t_max),
+            );
+            let p = node.p;
+            let mut entered = [0u8; super::super::PACKET_RAYS];
+            let mut any = 0u32;
+            let mut todo = mask;
+            while todo != 0 {
+                let i = todo.trailing_zeros() as usize;
+                todo &= todo - 1;
+                // (p − origin)·(1/d), as obvhs's Vec3A arithmetic per lane.
+                let ox = _mm256_set1_ps((p.x - packet.x[i]) * inv.x);
+                let oy = _mm256_set1_ps((p.y - packet.y[i]) * inv.y);
+                let oz = _mm256_set1_ps((p.z - packet.z[i]) * inv.z);
+                let tmin = _mm256_max_ps(
+                    _mm256_add_ps(x0, ox),
+                    _mm256_max_ps(_mm256_add_ps(y0, oy), _mm256_add_ps(z0, oz)),
+                );
+                let tmax = _mm256_min_ps(
+                    _mm256_add_ps(x1, ox),
+                    _mm256_min_ps(_mm256_add_ps(y1, oy), _mm256_add_ps(z1, oz)),
+                );
+                let tmin = _mm256_max_ps(tmin, node_t_min);
+                let tmax = _mm256_min_ps(tmax, ray_t_max);
+                let hits =
+                    _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax)) as u32 & occupied;
+                entered[i] = hits as u8;
+                any |= hits;
+            }
+            // Transpose: bit c of ray i's byte → bit i of slot c's mask.
+            let mut child_masks = [0u64; 8];
+            for half in 0..2 {
+                if (mask >> (32 * half)) as u32 == 0 {
+                    continue;
+                }
+                let bytes = _mm256_loadu_si256(entered[32 * half..].as_ptr().cast());
+                let mut slots = any;
+                while slots != 0 {
+                    let c = slots.trailing_zeros();
+                    slots &= slots - 1;
+                    let shifted = _mm256_sll_epi16(bytes, _mm_cvtsi32_si128(7 - c as i32));
+                    let rays = _mm256_movemask_epi8(shifted) as u32;
+                    child_masks[c as usize] |= u64::from(rays) << (32 * half);
+                }
+            }
+            child_masks
+        }
+    }
+
     /// Eight lanes in an AVX register; only used inside `#[target_feature(enable = "avx2")]`.
     #[derive(Clone, Copy)]
     pub(in super::super) struct Avx2(__m256);
@@ -209,6 +297,10 @@ mod x86 {
         #[inline(always)]
         fn negative(self) -> u32 {
             unsafe { _mm256_movemask_ps(self.0) as u32 }
+        }
+        #[inline(always)]
+        fn child_masks(test: &NodeTest, packet: &RayPacket, mask: u64) -> [u64; 8] {
+            unsafe { child_masks_by_ray(test, packet, mask) }
         }
     }
 
