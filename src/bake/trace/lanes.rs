@@ -347,13 +347,29 @@ mod x86 {
 /// issues these for the children it is about to visit, so their cache misses overlap.
 #[inline(always)]
 pub(super) fn prefetch<T>(value: &T) {
+    prefetch_address(value as *const T as usize);
+}
+
+#[inline(always)]
+fn prefetch_address(address: usize) {
     #[cfg(target_arch = "x86_64")]
     #[allow(unsafe_code)]
     // SAFETY: a prefetch is a hint; it reads nothing and cannot fault.
     unsafe {
         use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        _mm_prefetch::<_MM_HINT_T0>((value as *const T).cast());
+        _mm_prefetch::<_MM_HINT_T0>(address as *const i8);
     }
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = value;
+    let _ = address;
+}
+
+/// [`prefetch`] of every cache line `value` spans.
+#[inline(always)]
+pub(super) fn prefetch_lines<T>(value: &T) {
+    const LINE: usize = 64;
+    let start = value as *const T as usize;
+    let (first, last) = (start / LINE, (start + size_of::<T>() - 1) / LINE);
+    for line in first..=last {
+        prefetch_address(line * LINE);
+    }
 }
