@@ -100,9 +100,10 @@ pub(super) enum Width {
 
 impl Width {
     /// AVX2's 8 lanes where the CPU has them, else 4. `SHVIS_TRACE_LANES=4|8|16` picks
-    /// another width (if the CPU has it), for comparisons: 16 lanes (AVX-512F) measured
-    /// slower than 8 on this project's AMD EPYC (house 38 vs 42 Mrays/s, big 6.4 vs 7.8:
-    /// its 512-bit operations run as two 256-bit halves), so they are not the default.
+    /// another width (if the CPU has it), for comparisons. Only the 8-lane walk tests a
+    /// node a ray at a time (the 4- and 16-lane ones a block of rays per child); on this
+    /// project's AMD EPYC the queries alone ran at 8 / 16 / 4 lanes: big 13.5–13.8 /
+    /// 8.3–8.8 / 9.7–10.1 Mrays/s, house 69–78 / 54 / 50–52 (2 threads, 512² × 256).
     pub(super) fn detect() -> Width {
         let cap: usize = std::env::var("SHVIS_TRACE_LANES")
             .ok()
