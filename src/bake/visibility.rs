@@ -46,7 +46,7 @@ use glam::Vec3;
 
 use rayon::prelude::*;
 
-use super::directions::{DirectionSet, ShProjector, above_horizon};
+use super::directions::{DirectionSet, ShProjector};
 use super::raster::{DilationPlan, LightmapTexels};
 use super::trace::{PACKET_RAYS, RayPacket, Tracer};
 use super::{BakeStats, progress_bar};
@@ -205,15 +205,19 @@ fn bake_group(
     let (mut up_cos, mut vis_cos) = (vec![0.0f64; group.len()], vec![0.0f64; group.len()]);
     let mut rays = 0u64;
     let mut trace_ns = 0u64;
-    let mut cos = vec![0.0f32; group.len()];
+    // The normals by coordinate, so that the 64 horizon tests of a direction vectorize;
+    // n·d summed in `Vec3::dot`'s order (x, y, z), as [`super::directions::above_horizon`] computes it.
+    let mut normal_axes = [[0.0f32; PACKET_RAYS]; 3];
+    for (k, n) in normals.iter().enumerate() {
+        (normal_axes[0][k], normal_axes[1][k], normal_axes[2][k]) = (n.x, n.y, n.z);
+    }
+    let [nx, ny, nz] = &normal_axes;
+    let mut cos = [0.0f32; PACKET_RAYS];
     for (r, &d) in dirs.dirs().iter().enumerate() {
-        let mut active = 0u64;
-        for (k, &n) in normals.iter().enumerate() {
-            if above_horizon(n, d) {
-                active |= 1 << k;
-                cos[k] = n.dot(d);
-            }
+        for k in 0..PACKET_RAYS {
+            cos[k] = nx[k] * d.x + ny[k] * d.y + nz[k] * d.z;
         }
+        let active = (0..group.len()).fold(0u64, |a, k| a | u64::from(cos[k] > 0.0) << k);
         if active == 0 {
             continue;
         }
