@@ -50,6 +50,8 @@
 //! triangles, and charts that do not fit the lightmap.
 
 use std::collections::HashMap;
+
+use rustc_hash::FxHashMap;
 use std::path::{Path, PathBuf};
 
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
@@ -298,12 +300,19 @@ impl Loader {
                     self.file
                 );
             }
+            let charting = std::time::Instant::now();
             let charts = lightmap_uv::generate(&mut mesh, lightmap_res).map_err(|e| {
                 self.err(format!(
                     "{} lightmap charts do not fit a {lightmap_res}² lightmap; raise --vis-res",
                     e.charts
                 ))
             })?;
+            log::debug!(
+                "{}: {} lightmap charts generated in {:.3} s",
+                self.file,
+                charts.charts,
+                charting.elapsed().as_secs_f64()
+            );
             report.generated_charts = Some(charts.charts);
         }
 
@@ -643,10 +652,20 @@ impl Loader {
 
         // Append, splitting a vertex only where its corners' tangents differ.
         let tint = prim.material().pbr_metallic_roughness().base_color_factor();
-        let mut remap: HashMap<(u32, [u32; 4]), u32> = HashMap::new();
+        // A vertex's first tangent's index kept per vertex (most have one); the others
+        // in a map.
+        let mut first_tangent: Vec<Option<([u32; 4], u32)>> = vec![None; p.len()];
+        let mut remap: FxHashMap<(u32, [u32; 4]), u32> = FxHashMap::default();
         for (&i, t) in flat.iter().zip(&corner_tangents) {
-            let key = (i, t.to_array().map(f32::to_bits));
-            let index = *remap.entry(key).or_insert_with(|| {
+            let bits = t.to_array().map(f32::to_bits);
+            let first = first_tangent[i as usize];
+            if let Some((first_bits, index)) = first
+                && first_bits == bits
+            {
+                mesh.indices.push(index);
+                continue;
+            }
+            let mut new_vertex = || {
                 let k = i as usize;
                 mesh.vertices.push(Vertex {
                     position: p[k].to_array(),
@@ -657,7 +676,15 @@ impl Loader {
                     albedo_tint: [tint[0], tint[1], tint[2]],
                 });
                 (mesh.vertices.len() - 1) as u32
-            });
+            };
+            let index = match first {
+                None => {
+                    let index = new_vertex();
+                    first_tangent[i as usize] = Some((bits, index));
+                    index
+                }
+                Some(_) => *remap.entry((i, bits)).or_insert_with(new_vertex),
+            };
             mesh.indices.push(index);
         }
         Ok(())

@@ -217,22 +217,31 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
             *weld.entry(v.position.map(f32::to_bits)).or_insert(next)
         })
         .collect();
-    // (edge key, triangle) sorted: an edge's triangles are one run, in triangle order.
+    // (edge key, triangle, corner) sorted: an edge's triangles are one run, in triangle
+    // order; `edge_run[3t + k]` is the run of triangle t's edge from corner k (one pass
+    // over the runs instead of a binary search per edge visit).
     let edge_key = |a: u32, b: u32| (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
-    let mut edge_triangles: Vec<(u64, u32)> = Vec::with_capacity(3 * tri_count);
+    let mut edge_triangles: Vec<(u64, u32, u32)> = Vec::with_capacity(3 * tri_count);
     for t in 0..tri_count {
         for k in 0..3 {
             let (a, b) = (welded[corner(t, k)], welded[corner(t, (k + 1) % 3)]);
             if a != b {
-                edge_triangles.push((edge_key(a, b), t as u32));
+                edge_triangles.push((edge_key(a, b), t as u32, k as u32));
             }
         }
     }
     edge_triangles.sort_unstable();
-    let edge_neighbours = |key: u64| {
-        let first = edge_triangles.partition_point(|e| e.0 < key);
-        let count = edge_triangles[first..].partition_point(|e| e.0 == key);
-        &edge_triangles[first..first + count]
+    let mut edge_run = vec![(0u32, 0u32); 3 * tri_count];
+    for run in edge_triangles.chunk_by(|x, y| x.0 == y.0) {
+        let first = (run.as_ptr() as usize - edge_triangles.as_ptr() as usize)
+            / size_of::<(u64, u32, u32)>();
+        for &(_, t, k) in run {
+            edge_run[3 * t as usize + k as usize] = (first as u32, run.len() as u32);
+        }
+    }
+    let edge_neighbours = |t: usize, k: usize| {
+        let (first, count) = edge_run[3 * t + k];
+        &edge_triangles[first as usize..(first + count) as usize]
     };
 
     // Flood fill from the largest unassigned triangle.
@@ -254,11 +263,7 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
             let t = members[next];
             next += 1;
             for k in 0..3 {
-                let (a, b) = (welded[corner(t, k)], welded[corner(t, (k + 1) % 3)]);
-                if a == b {
-                    continue;
-                }
-                for &(_, o) in edge_neighbours(edge_key(a, b)) {
+                for &(_, o, _) in edge_neighbours(t, k) {
                     let o = o as usize;
                     if chart_of[o] == u32::MAX && normals[o].dot(n_seed) >= cos_max {
                         chart_of[o] = id;
@@ -325,6 +330,10 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
 
     // Split vertices per chart and write the lightmap UVs.
     let inv_res = 1.0 / f64::from(res);
+    // The new index of (old vertex, chart): most vertices lie in one chart, kept per
+    // vertex; a vertex's further charts go to a map.
+    const NONE: u32 = u32::MAX;
+    let mut first_chart = vec![(NONE, NONE); mesh.vertices.len()];
     let mut remap: FxHashMap<(u32, u32), u32> = FxHashMap::default();
     let mut vertices: Vec<Vertex> = Vec::with_capacity(mesh.vertices.len());
     let mut indices = Vec::with_capacity(mesh.indices.len());
@@ -337,7 +346,12 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
             + DVec2::new(f64::from(rect.x), f64::from(rect.y));
         for k in 0..3 {
             let old = corner(t, k) as u32;
-            let index = *remap.entry((old, id)).or_insert_with(|| {
+            let (chart, first_index) = first_chart[old as usize];
+            if chart == id {
+                indices.push(first_index);
+                continue;
+            }
+            let mut new_vertex = || {
                 let p = local[3 * t + k] - mins[id as usize];
                 let mut uv = (offset + p * d) * inv_res;
                 if !uv.is_finite() {
@@ -350,7 +364,14 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
                 v.uv_lightmap = [uv.x as f32, uv.y as f32];
                 vertices.push(v);
                 (vertices.len() - 1) as u32
-            });
+            };
+            let index = if chart == NONE {
+                let index = new_vertex();
+                first_chart[old as usize] = (id, index);
+                index
+            } else {
+                *remap.entry((old, id)).or_insert_with(new_vertex)
+            };
             indices.push(index);
         }
     }
