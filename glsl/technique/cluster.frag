@@ -119,8 +119,18 @@ vec3 cluster_irradiance(float tap, vec4 v[GROUPS], int c, float y[9]) {
 #if M > 0
     // Kept a loop when drawn: Mesa's NIR unrolls short loops in full, and unrolled the
     // decode measured 2× slower on lavapipe (cpca8_7 183 against 90 ms).
+    // The weights shift down one place per vector, so that weight k is always lane 0 of
+    // the first group: `v[k / 4][k % 4]` in a kept loop indexes a local array, which
+    // lavapipe spills to memory and gathers from at every vector (cpca8_11 144 against
+    // 103 ms with the weight read taken out), while a shift is register moves.
+    vec4 w[GROUPS] = v;
     KEEP_LOOP for (int k = 0; k < M; ++k) {
-        e += (tap * v[k / 4][k % 4]) * block_dot(base + 9 * k, y);
+        float weight = w[0].x;
+        UNROLL for (int g = 0; g + 1 < GROUPS; ++g) {
+            w[g] = vec4(w[g].yzw, w[g + 1].x);
+        }
+        w[GROUPS - 1] = w[GROUPS - 1].yzwx;
+        e += (tap * weight) * block_dot(base + 9 * k, y);
     }
 #endif
     return e;
