@@ -122,14 +122,35 @@ vec3 cluster_irradiance(float tap, vec4 v[GROUPS], int c, float y[9]) {
     // The weights shift down one place per vector, so that weight k is always lane 0 of
     // the first group: `v[k / 4][k % 4]` in a kept loop indexes a local array, which
     // lavapipe spills to memory and gathers from at every vector (cpca8_11 144 against
-    // 103 ms with the weight read taken out), while a shift is register moves.
-    vec4 w[GROUPS] = v;
+    // 103 ms with the weight read taken out), while a shift is register moves. Groups as
+    // plain variables (no array), so that the count builds unroll the loop.
+    vec4 w0 = v[0];
+#if GROUPS > 1
+    vec4 w1 = v[1];
+#endif
+#if GROUPS > 2
+    vec4 w2 = v[2];
+#endif
+#if GROUPS > 3
+    vec4 w3 = v[3];
+#endif
     KEEP_LOOP for (int k = 0; k < M; ++k) {
-        float weight = w[0].x;
-        UNROLL for (int g = 0; g + 1 < GROUPS; ++g) {
-            w[g] = vec4(w[g].yzw, w[g + 1].x);
-        }
-        w[GROUPS - 1] = w[GROUPS - 1].yzwx;
+        float weight = w0.x;
+#if GROUPS == 1
+        w0 = w0.yzwx;
+#elif GROUPS == 2
+        w0 = vec4(w0.yzw, w1.x);
+        w1 = w1.yzwx;
+#elif GROUPS == 3
+        w0 = vec4(w0.yzw, w1.x);
+        w1 = vec4(w1.yzw, w2.x);
+        w2 = w2.yzwx;
+#else
+        w0 = vec4(w0.yzw, w1.x);
+        w1 = vec4(w1.yzw, w2.x);
+        w2 = vec4(w2.yzw, w3.x);
+        w3 = w3.yzwx;
+#endif
         e += (tap * weight) * block_dot(base + 9 * k, y);
     }
 #endif

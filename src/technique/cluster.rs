@@ -176,6 +176,38 @@ mod tests {
     use super::*;
 
     #[test]
+    fn every_count_build_unrolls_every_loop() {
+        // A loop left in a count build would be counted once instead of per iteration.
+        for m in crate::technique::spec::CPCA_VECTORS
+            .iter()
+            .copied()
+            .chain([0])
+        {
+            for seams in [SeamMode::Blended, SeamMode::Naive] {
+                for path in [
+                    super::super::spec::HwPath::Dx9,
+                    super::super::spec::HwPath::Dx10,
+                ] {
+                    for variant in count_plan(seams).variants {
+                        let mut defines = fragment_shader(8, m, seams).defines;
+                        defines.push(path.shader_define());
+                        defines.push(("MATERIAL_LEVEL0", 0));
+                        defines.extend_from_slice(&variant.defines);
+                        let spirv = crate::gpu::compile_glsl(
+                            "technique/cluster.frag",
+                            crate::gpu::ShaderStage::Fragment,
+                            &defines,
+                        )
+                        .unwrap();
+                        let counts = crate::gpu::spirv_counts::count(&spirv);
+                        assert_eq!(counts.loops, 0, "M = {m}, {seams:?}, {path:?}, {defines:?}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn index_follows_the_weights_and_lookups_count_the_taps() {
         let q = QuantizedClusters {
             order: Order::TWO,

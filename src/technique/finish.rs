@@ -275,10 +275,15 @@ fn plan_counts(
         .iter()
         .map(|v| {
             let spirv = compile_fragment(technique, path, scene, &v.defines)?;
-            Ok((
-                v.share + v.share_per_measured * measured,
-                gpu::spirv_counts::count(&spirv),
-            ))
+            let counts = gpu::spirv_counts::count(&spirv);
+            if counts.loops > 0 {
+                log::warn!(
+                    "{technique} on {path}: count build {:?} keeps {} loop(s), whose bodies are counted once",
+                    v.defines,
+                    counts.loops
+                );
+            }
+            Ok((v.share + v.share_per_measured * measured, counts))
         })
         .collect()
 }
