@@ -155,7 +155,7 @@ pub fn run(
     let mut phases = BenchPhases::default();
     let mut lap = Lap::start();
     let cost_model = if settings.probe {
-        let probe = crate::probe::run(
+        let probe = crate::probe::run_with_reference(
             ctx,
             &crate::probe::ProbeSettings {
                 width: settings.width,
@@ -167,16 +167,19 @@ pub fn run(
                 frames: settings.frames.clamp(5, 30),
             },
         )?;
+        let (probe, reference) = probe;
         log::info!(
             "probe: {:.1} s, model within {:.1} % of its microbenchmarks",
             probe.seconds,
             100.0 * probe.worst_relative_error()
         );
         probe.write(&settings.out)?;
-        Some(probe)
+        Some((probe, reference))
     } else {
         None
     };
+    // The probe's reference point, timed after every round of rows.
+    let mut reference_frames: Vec<f64> = Vec::new();
     lap.split(&mut phases.probe);
     let relit = settings.relight_degrees.map(|d| Relit::new(prepared, d));
     let env = relit.as_ref().map_or(&prepared.env, |r| &r.env);
@@ -299,6 +302,14 @@ pub fn run(
         prepared,
         relit: relit.as_ref(),
     };
+    let mut time_reference = |lap: &mut Lap, phases: &mut BenchPhases| -> Result<(), BenchError> {
+        if let Some((_, reference)) = &cost_model {
+            reference_frames.extend(reference.time(settings.warmup.min(1), per_round)?);
+            lap.split(&mut phases.render);
+        }
+        Ok(())
+    };
+    time_reference(&mut lap, &mut phases)?;
     for _ in 1..rounds {
         for (row, times) in rows.iter().zip(&mut samples) {
             let tech = rows_of.build(row.technique, row.path)?;
@@ -306,6 +317,7 @@ pub fn run(
             times.extend(tech.render(&scene, settings.warmup.min(1), per_round)?.ms);
             lap.split(&mut phases.render);
         }
+        time_reference(&mut lap, &mut phases)?;
     }
     for (row, times) in rows.iter_mut().zip(&samples) {
         let timing = TimingStats::from_ms(times);
@@ -315,7 +327,13 @@ pub fn run(
         row.frames = times.len();
     }
     fill_ratios_to_preconv(&mut rows);
-    if let Some(probe) = &cost_model {
+    let mut model_drift = None;
+    if let Some((probe, reference)) = &cost_model {
+        let drift = reference.drift(&reference_frames);
+        log::info!(
+            "cost model: the probe's reference point (8 bilinear lookups) ran ×{drift:.3} its probe time beside the rows; the rows' model times are scaled by it"
+        );
+        model_drift = Some(drift);
         // Lanes busy per screen pixel, overdraw included: the same for every row that draws
         // the scene's mesh.
         let pixels = f64::from(settings.width) * f64::from(settings.height);
@@ -335,8 +353,8 @@ pub fn run(
             let load = row.own_mesh_load.unwrap_or(load);
             row.coverage = load.lanes / pixels;
             row.edge_pixels = load.edge_pixels;
-            let predicted =
-                probe
+            let predicted = drift
+                * probe
                     .model
                     .predict(&row.cost, row.coverage, row.triangles, row.edge_pixels);
             row.model_ms = Some(predicted);
@@ -353,7 +371,8 @@ pub fn run(
         width: settings.width,
         height: settings.height,
         vis_res: prepared.visibility.res,
-        cost_model: cost_model.map(|p| p.model),
+        cost_model: cost_model.map(|(p, _)| p.model),
+        model_drift,
         relit: relit.as_ref().map(|r| {
             format!(
                 "the environment turned {}° about +Y after the bake; dynamic-lighting rows relit to it, baked rows (shlmap, rnm*) as baked",

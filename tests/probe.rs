@@ -5,14 +5,14 @@
 
 mod common;
 
-use shvis::probe::{Kind, ProbeSettings, run};
+use shvis::probe::{Kind, ProbeSettings, run_with_reference};
 use shvis::render::FrameSettings;
 use shvis::technique::{self, HwPath, Technique};
 
 #[test]
 fn the_probe_runs_every_microbenchmark_and_fits_a_model_to_them() {
     let ctx = common::validated_context();
-    let probe = run(
+    let (probe, reference) = run_with_reference(
         &ctx,
         &ProbeSettings {
             width: 320,
@@ -40,6 +40,19 @@ fn the_probe_runs_every_microbenchmark_and_fits_a_model_to_them() {
     assert!(m.per_triangle_ms.is_finite(), "{m:?}");
     // The screen-filling quad shades every pixel exactly once.
     assert_eq!(probe.screen_fragments, 320 * 200);
+    // The kept reference point is the probe's 8 bilinear lookups, and times again.
+    let kept = probe
+        .points
+        .iter()
+        .find(|p| p.kind == Some(Kind::Bilinear2d) && p.count == 8)
+        .expect("the reference point");
+    assert_eq!(reference.probe_ms, kept.ms_median);
+    let again = reference.time(1, 3).expect("the reference times");
+    assert_eq!(again.len(), 3);
+    let drift = reference.drift(&again);
+    assert!(drift.is_finite() && drift > 0.0, "{drift}");
+    assert_eq!(reference.drift(&[]), 1.0);
+    drop(reference);
     common::assert_validation_clean(&ctx, "probe");
 }
 

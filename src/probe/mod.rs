@@ -657,6 +657,14 @@ fn probe_resources(ctx: &Arc<Context>) -> Result<ProbeResources, GpuError> {
 /// Vulkan or shader failures, and a fit that is not finite (a device whose timings are
 /// all zero).
 pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
+    run_with_reference(ctx, s).map(|(probe, _)| probe)
+}
+
+/// [`run`], keeping its [`Reference`] point.
+pub fn run_with_reference(
+    ctx: &Arc<Context>,
+    s: &ProbeSettings,
+) -> Result<(Probe, Reference), GpuError> {
     let started = std::time::Instant::now();
     let base = base_grid(s.width, s.height, s.triangle_pixels);
     let scene = probe_scene(s.width, s.height, false, base);
@@ -793,7 +801,7 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
             specs.push((Some(kind), count, true, &full_mesh.0));
         }
     }
-    let planned = specs
+    let mut planned = specs
         .into_iter()
         .map(|(kind, count, depth_test, mesh)| {
             let (point, pipeline) = plan(kind, count, depth_test, mesh)?;
@@ -888,7 +896,15 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
     for p in &mut points {
         p.model_ms = predict_point(&model, p);
     }
-    Ok(Probe {
+    let (reference_kind, reference_count) = REFERENCE_POINT;
+    let reference_index = planned
+        .iter()
+        .position(|p| p.point.kind == Some(reference_kind) && p.point.count == reference_count)
+        .expect("the reference point is among the probe's points");
+    let reference_ms = points[reference_index].ms_median;
+    let reference_pipeline = planned.swap_remove(reference_index).pipeline;
+    drop(planned);
+    let probe = Probe {
         device: ctx.device_name().to_string(),
         width: s.width,
         height: s.height,
@@ -899,7 +915,48 @@ pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
         model,
         points,
         seconds: started.elapsed().as_secs_f64(),
-    })
+    };
+    let reference = Reference {
+        pipeline: reference_pipeline,
+        mesh: full_mesh.0,
+        _resources: res,
+        _linear: linear,
+        gpu,
+        probe_ms: reference_ms,
+    };
+    Ok((probe, reference))
+}
+
+/// The probe point [`Reference`] keeps.
+const REFERENCE_POINT: (Kind, u32) = (Kind::Bilinear2d, 8);
+
+/// One probe point kept past the probe (8 bilinear lookups over the screen, a technique's
+/// kind of work), for `shvis bench` to time between its rows: a shared machine's speed
+/// drifts over the minutes between the probe and a row, and the ratio of this point's time
+/// beside the rows to its time in the probe ([`Reference::drift`]) scales the model to the
+/// speed the rows ran at.
+pub struct Reference {
+    pipeline: crate::gpu::MeshPipeline,
+    mesh: MeshBuffers,
+    _resources: ProbeResources,
+    _linear: Sampler,
+    gpu: SceneGpu,
+    /// Its median in the probe, ms.
+    pub probe_ms: f64,
+}
+
+impl Reference {
+    /// Timed frames of the point now, ms.
+    pub fn time(&self, warmup: u32, frames: u32) -> Result<Vec<f64>, GpuError> {
+        self.gpu
+            .time_pipeline_on(&self.pipeline, &self.mesh, warmup, frames)
+    }
+
+    /// The median of `beside_rows` (its frames timed between the rows) over its median in
+    /// the probe; 1 without frames.
+    pub fn drift(&self, beside_rows: &[f64]) -> f64 {
+        TimingStats::from_ms(beside_rows).map_or(1.0, |t| t.ms_median / self.probe_ms)
+    }
 }
 
 /// The model's time for a probe point (its depth test's part taken off where it is off).

@@ -215,6 +215,10 @@ pub struct BenchTable {
     pub relit: Option<String>,
     /// The device cost model the rows' `model_ms` come from (`probe.md`).
     pub cost_model: Option<crate::probe::CostModel>,
+    /// The device's speed while the rows ran against during the probe: the probe's
+    /// reference point timed between the rows over its time in the probe
+    /// (`probe::Reference`); the rows' `model_ms` are the model's times × this.
+    pub model_drift: Option<f64>,
     /// Wall time of the bench itself (probe, references, rows, files; the bake before it
     /// is not counted), s.
     pub seconds: f64,
@@ -290,6 +294,11 @@ impl BenchTable {
         }
         if let Some(relit) = &self.relit {
             s += &format!("; relit: {relit}");
+        }
+        if let Some(drift) = self.model_drift {
+            s += &format!(
+                "; model ms = the probe's model × {drift:.3}, the device's speed beside the rows against during the probe (its reference point)"
+            );
         }
         if self.reference_bounces > 0 {
             s += &format!(
@@ -490,6 +499,7 @@ mod tests {
             specular: None,
             relit: None,
             cost_model: None,
+            model_drift: None,
             seconds: 0.0,
             phases: BenchPhases::default(),
             results: vec![
