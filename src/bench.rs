@@ -331,7 +331,7 @@ pub fn run(
     if let Some((probe, reference)) = &cost_model {
         let drift = reference.drift(&reference_frames);
         log::info!(
-            "cost model: the probe's reference point (8 bilinear lookups) ran ×{drift:.3} its probe time beside the rows; the rows' model times are scaled by it"
+            "cost model: the probe's reference point (8 bilinear lookups) ran ×{drift:.3} its probe time beside the rows (the device's drift; model times are the probe's, not scaled)"
         );
         model_drift = Some(drift);
         // Lanes busy per screen pixel, overdraw included: the same for every row that draws
@@ -353,8 +353,8 @@ pub fn run(
             let load = row.own_mesh_load.unwrap_or(load);
             row.coverage = load.lanes / pixels;
             row.edge_pixels = load.edge_pixels;
-            let predicted = drift
-                * probe
+            let predicted =
+                probe
                     .model
                     .predict(&row.cost, row.coverage, row.triangles, row.edge_pixels);
             row.model_ms = Some(predicted);

@@ -933,8 +933,10 @@ const REFERENCE_POINT: (Kind, u32) = (Kind::Bilinear2d, 8);
 /// One probe point kept past the probe (8 bilinear lookups over the screen, a technique's
 /// kind of work), for `shvis bench` to time between its rows: a shared machine's speed
 /// drifts over the minutes between the probe and a row, and the ratio of this point's time
-/// beside the rows to its time in the probe ([`Reference::drift`]) scales the model to the
-/// speed the rows ran at.
+/// beside the rows to its time in the probe ([`Reference::drift`]) says by how much. The
+/// bench reports it and does not scale the model by it: on this project's VM the slowdowns
+/// are uneven across kinds of work, and one texture-bound point over-corrected the rows
+/// bound by uniform reads, ALU or geometry (README).
 pub struct Reference {
     pipeline: crate::gpu::MeshPipeline,
     mesh: MeshBuffers,

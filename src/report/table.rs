@@ -217,7 +217,8 @@ pub struct BenchTable {
     pub cost_model: Option<crate::probe::CostModel>,
     /// The device's speed while the rows ran against during the probe: the probe's
     /// reference point timed between the rows over its time in the probe
-    /// (`probe::Reference`); the rows' `model_ms` are the model's times × this.
+    /// (`probe::Reference`). Reported, not applied: one texture-bound point over-corrected
+    /// the uniform-, ALU- and geometry-bound rows when this VM slowed unevenly (README).
     pub model_drift: Option<f64>,
     /// Wall time of the bench itself (probe, references, rows, files; the bake before it
     /// is not counted), s.
@@ -297,7 +298,7 @@ impl BenchTable {
         }
         if let Some(drift) = self.model_drift {
             s += &format!(
-                "; model ms = the probe's model × {drift:.3}, the device's speed beside the rows against during the probe (its reference point)"
+                "; the probe's reference point ran ×{drift:.3} its probe time beside the rows (the device's drift between probe and rows; model ms are the probe's model, not scaled)"
             );
         }
         if self.reference_bounces > 0 {

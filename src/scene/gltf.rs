@@ -50,13 +50,12 @@
 //! triangles, and charts that do not fit the lightmap.
 
 use std::collections::HashMap;
-
-use rustc_hash::FxHashMap;
 use std::path::{Path, PathBuf};
 
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::{Mode, Semantic};
+use rustc_hash::FxHashMap;
 
 use super::lightmap_uv;
 use super::{Camera, Material, Mesh, Scene, SceneError, Texture8, Vertex, framing_camera, tangent};

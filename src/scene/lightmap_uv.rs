@@ -232,12 +232,12 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
     }
     edge_triangles.sort_unstable();
     let mut edge_run = vec![(0u32, 0u32); 3 * tri_count];
+    let mut first = 0;
     for run in edge_triangles.chunk_by(|x, y| x.0 == y.0) {
-        let first = (run.as_ptr() as usize - edge_triangles.as_ptr() as usize)
-            / size_of::<(u64, u32, u32)>();
         for &(_, t, k) in run {
             edge_run[3 * t as usize + k as usize] = (first as u32, run.len() as u32);
         }
+        first += run.len();
     }
     let edge_neighbours = |t: usize, k: usize| {
         let (first, count) = edge_run[3 * t + k];

@@ -191,6 +191,10 @@ mod x86 {
     /// 8-slot slab test whose movemask is its byte of entered slots, and the 64 bytes are
     /// transposed into the slots' ray masks by `movemask_epi8`. Cheaper than a block of
     /// rays per child where few rays of a block reach the node (big: 3 of 8).
+    ///
+    /// # Safety
+    /// The CPU must have AVX2: called only inlined into a walk compiled with it, which
+    /// `Width::detect` picked after checking.
     #[inline(always)]
     unsafe fn child_masks_by_ray(test: &NodeTest, packet: &RayPacket, mask: u64) -> [u64; 8] {
         let node = test.node;
