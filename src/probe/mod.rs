@@ -900,7 +900,12 @@ pub fn run_with_reference(
     let reference_index = planned
         .iter()
         .position(|p| p.point.kind == Some(reference_kind) && p.point.count == reference_count)
-        .expect("the reference point is among the probe's points");
+        .ok_or_else(|| GpuError::Invalid {
+            what: "probe".into(),
+            detail: format!(
+                "no {reference_kind:?} ×{reference_count} point to keep as the reference"
+            ),
+        })?;
     let reference_ms = points[reference_index].ms_median;
     let reference_pipeline = planned.swap_remove(reference_index).pipeline;
     drop(planned);
