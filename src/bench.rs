@@ -16,6 +16,7 @@ use crate::attribution::{LadderPixels, cpu_rungs};
 use crate::gpu::{Context, GpuError};
 use crate::ndf::render::{NormalFilter, SpecularLight, SpecularTerm};
 use crate::prepare::Prepared;
+use crate::probe::Segmented;
 use crate::reference::{ReferenceImage, ReferenceSettings, render_reference};
 use crate::render::{Frame, FrameSettings, SceneGpu};
 use crate::report::ReportError;
@@ -155,7 +156,7 @@ pub fn run(
     let mut phases = BenchPhases::default();
     let mut lap = Lap::start();
     let cost_model = if settings.probe {
-        let probe = crate::probe::run_with_reference(
+        let probe = crate::probe::run_with_monitor(
             ctx,
             &crate::probe::ProbeSettings {
                 width: settings.width,
@@ -167,19 +168,26 @@ pub fn run(
                 frames: settings.frames.clamp(5, 30),
             },
         )?;
-        let (probe, reference) = probe;
+        let (probe, monitor) = probe;
         log::info!(
-            "probe: {:.1} s, model within {:.1} % of its microbenchmarks",
+            "probe: {:.1} s, model within {:.1} % of its microbenchmarks; {}",
             probe.seconds,
-            100.0 * probe.worst_relative_error()
+            100.0 * probe.worst_relative_error(),
+            probe.states.describe()
         );
         probe.write(&settings.out)?;
-        Some((probe, reference))
+        Some((probe, monitor))
     } else {
         None
     };
-    // The probe's reference point, timed after every round of rows.
-    let mut reference_frames: Vec<f64> = Vec::new();
+    // The probe's monitor frame, timed after every row's frames (`probe::states`).
+    let read_monitor = || -> Result<f64, BenchError> {
+        match &cost_model {
+            Some((_, monitor)) => Ok(monitor.read()?),
+            None => Ok(f64::NAN),
+        }
+    };
+    let mut monitor_frames: Vec<f64> = Vec::new();
     lap.split(&mut phases.probe);
     let relit = settings.relight_degrees.map(|d| Relit::new(prepared, d));
     let env = relit.as_ref().map_or(&prepared.env, |r| &r.env);
@@ -216,8 +224,9 @@ pub fn run(
         None => vec![None],
     };
     let mut rows = Vec::new();
-    // Every row's frame times so far (the later timing rounds add to them).
-    let mut samples: Vec<Vec<f64>> = Vec::new();
+    // Every row's frame times so far, in segments between monitor frames (the later timing
+    // rounds add to them).
+    let mut samples: Vec<Segmented> = Vec::new();
     let rounds = if settings.specular.is_some() {
         1
     } else {
@@ -247,6 +256,7 @@ pub fn run(
                     continue;
                 }
                 let reference = reference.as_ref();
+                let monitor_before = read_monitor()?;
                 let measured = measure_row(
                     &rows_of,
                     technique,
@@ -269,7 +279,11 @@ pub fn run(
                     other => other?,
                 };
                 rows.push(row);
-                samples.push(frame.ms.clone());
+                let monitor_after = read_monitor()?;
+                monitor_frames.extend([monitor_before, monitor_after]);
+                let mut segments = Segmented::default();
+                segments.push(monitor_before, frame.ms.clone(), monitor_after);
+                samples.push(segments);
                 if k == 0
                     && FIGURES
                         .iter()
@@ -302,38 +316,39 @@ pub fn run(
         prepared,
         relit: relit.as_ref(),
     };
-    let mut time_reference = |lap: &mut Lap, phases: &mut BenchPhases| -> Result<(), BenchError> {
-        if let Some((_, reference)) = &cost_model {
-            reference_frames.extend(reference.time(settings.warmup.min(1), per_round)?);
-            lap.split(&mut phases.render);
-        }
-        Ok(())
-    };
-    time_reference(&mut lap, &mut phases)?;
     for _ in 1..rounds {
         for (row, times) in rows.iter().zip(&mut samples) {
             let tech = rows_of.build(row.technique, row.path)?;
             lap.split(&mut phases.build);
-            times.extend(tech.render(&scene, settings.warmup.min(1), per_round)?.ms);
+            let monitor_before = read_monitor()?;
+            let ms = tech.render(&scene, settings.warmup.min(1), per_round)?.ms;
+            let monitor_after = read_monitor()?;
+            monitor_frames.extend([monitor_before, monitor_after]);
+            times.push(monitor_before, ms, monitor_after);
             lap.split(&mut phases.render);
         }
-        time_reference(&mut lap, &mut phases)?;
     }
     for (row, times) in rows.iter_mut().zip(&samples) {
-        let timing = TimingStats::from_ms(times);
+        let timing = TimingStats::from_ms(&times.all());
         row.ms_median = timing.map(|t| t.ms_median);
         row.ms_min = timing.map(|t| t.ms_min);
         row.ms_max = timing.map(|t| t.ms_max);
-        row.frames = times.len();
+        row.frames = times.all().len();
     }
     fill_ratios_to_preconv(&mut rows);
-    let mut model_drift = None;
-    if let Some((probe, reference)) = &cost_model {
-        let drift = reference.drift(&reference_frames);
+    let mut bench_state_shares = None;
+    if let Some((probe, monitor)) = &cost_model {
+        let shares = monitor.states.shares_of(&monitor_frames);
         log::info!(
-            "cost model: the probe's reference point (8 bilinear lookups) ran ×{drift:.3} its probe time beside the rows (the device's drift; model times are the probe's, not scaled)"
+            "cost model: {}; the bench's monitor frames: {} in each state",
+            monitor.states.describe(),
+            shares
+                .iter()
+                .map(|s| format!("{:.0} %", 100.0 * s))
+                .collect::<Vec<_>>()
+                .join(" / ")
         );
-        model_drift = Some(drift);
+        bench_state_shares = Some(shares);
         // Lanes busy per screen pixel, overdraw included: the same for every row that draws
         // the scene's mesh.
         let pixels = f64::from(settings.width) * f64::from(settings.height);
@@ -349,7 +364,7 @@ pub fn run(
             },
             load.edge_pixels
         );
-        for row in &mut rows {
+        for (row, times) in rows.iter_mut().zip(&samples) {
             let load = row.own_mesh_load.unwrap_or(load);
             row.coverage = load.lanes / pixels;
             row.edge_pixels = load.edge_pixels;
@@ -358,7 +373,10 @@ pub fn run(
                     .model
                     .predict(&row.cost, row.coverage, row.triangles, row.edge_pixels);
             row.model_ms = Some(predicted);
-            row.x_model = row.ms_median.map(|ms| ms / predicted);
+            // Like with like: the row's frames in the state the model was fitted in.
+            let (in_state_ms, state_frames) = times.median(&monitor.states);
+            row.model_state_frames = Some(state_frames);
+            row.x_model = in_state_ms.map(|ms| ms / predicted);
         }
     }
     let bounced = reference.as_ref().and_then(|r| r.main.bounced.as_ref());
@@ -371,8 +389,9 @@ pub fn run(
         width: settings.width,
         height: settings.height,
         vis_res: prepared.visibility.res,
+        device_states: cost_model.as_ref().map(|(p, _)| p.states.clone()),
+        bench_state_shares,
         cost_model: cost_model.map(|(p, _)| p.model),
-        model_drift,
         relit: relit.as_ref().map(|r| {
             format!(
                 "the environment turned {}° about +Y after the bake; dynamic-lighting rows relit to it, baked rows (shlmap, rnm*) as baked",
@@ -795,6 +814,7 @@ fn measure_row(
         edge_pixels: 0.0,
         model_ms: None,
         x_model: None,
+        model_state_frames: None,
         ms_median: timing.map(|s| s.ms_median),
         ms_min: timing.map(|s| s.ms_min),
         ms_max: timing.map(|s| s.ms_max),

@@ -5,14 +5,14 @@
 
 mod common;
 
-use shvis::probe::{Kind, ProbeSettings, run_with_reference};
+use shvis::probe::{Kind, ProbeSettings, run_with_monitor};
 use shvis::render::FrameSettings;
 use shvis::technique::{self, HwPath, Technique};
 
 #[test]
 fn the_probe_runs_every_microbenchmark_and_fits_a_model_to_them() {
     let ctx = common::validated_context();
-    let (probe, reference) = run_with_reference(
+    let (probe, monitor) = run_with_monitor(
         &ctx,
         &ProbeSettings {
             width: 320,
@@ -24,10 +24,13 @@ fn the_probe_runs_every_microbenchmark_and_fits_a_model_to_them() {
     )
     .expect("probe runs");
     eprintln!("{}", probe.to_markdown());
-    // The empty frame, 3 empty-shader points, 3 finer triangle grids and 4 counts of each kind.
-    assert_eq!(probe.points.len(), 4 + 3 + 4 * Kind::ALL.len());
+    // The empty frame, 3 empty-shader points, 3 finer triangle grids and the counts of each
+    // kind.
+    let counts: usize = Kind::ALL.iter().map(|k| k.probe_counts().len()).sum();
+    assert_eq!(probe.points.len(), 4 + 3 + counts);
     for p in &probe.points {
         assert!(p.ms_median.is_finite() && p.ms_median > 0.0, "{p:?}");
+        assert!(p.frames > 0 && p.state_frames <= p.frames, "{p:?}");
         assert!(p.model_ms.is_finite(), "{p:?}");
         if let Some(kind) = p.kind {
             // The point is counted as what it was generated with.
@@ -40,19 +43,17 @@ fn the_probe_runs_every_microbenchmark_and_fits_a_model_to_them() {
     assert!(m.per_triangle_ms.is_finite(), "{m:?}");
     // The screen-filling quad shades every pixel exactly once.
     assert_eq!(probe.screen_fragments, 320 * 200);
-    // The kept reference point is the probe's 8 bilinear lookups, and times again.
-    let kept = probe
-        .points
-        .iter()
-        .find(|p| p.kind == Some(Kind::Bilinear2d) && p.count == 8)
-        .expect("the reference point");
-    assert_eq!(reference.probe_ms, kept.ms_median);
-    let again = reference.time(1, 3).expect("the reference times");
-    assert_eq!(again.len(), 3);
-    let drift = reference.drift(&again);
-    assert!(drift.is_finite() && drift > 0.0, "{drift}");
-    assert_eq!(reference.drift(&[]), 1.0);
-    drop(reference);
+    // The states come from the monitor frames, and the kept monitor times again.
+    let states = &probe.states;
+    assert!(!states.monitor_ms.is_empty() && states.model_state < states.monitor_ms.len());
+    assert!(
+        (states.shares.iter().sum::<f64>() - 1.0).abs() < 1e-9,
+        "{states:?}"
+    );
+    let again = monitor.read().expect("the monitor times");
+    assert!(again.is_finite() && again > 0.0, "{again}");
+    assert_eq!(monitor.states, probe.states);
+    drop(monitor);
     common::assert_validation_clean(&ctx, "probe");
 }
 

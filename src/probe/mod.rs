@@ -14,14 +14,15 @@
 //! read, and uniform vec4 reads at constant and at per-pixel indices; plus the empty shader
 //! (it writes its lightmap coordinates, which every technique reads) over the full screen,
 //! over half of it, with the depth test off, and over grids of 2·64², 2·96² and 2·128²
-//! triangles (the per-triangle cost), and a frame that shades nothing. Each point is the
-//! median of its timed frames (`gpu::pass`), taken in rounds over all points so that a slow
-//! drift of a shared device spreads over every point instead of landing on a few; cheap
-//! points get more frames. A point the first fit misses by more than 8 % is timed in two
-//! more batches of rounds and stands at the median of the three batches' medians: a slow
-//! spell that hit one batch drops out, a point the model really misses stays missed (on
-//! lavapipe: the 4-lookup points of the array, cube and dependent kinds, ≈ 9 % above the
-//! model in every batch and run — those kinds cost more per lookup in short runs).
+//! triangles (the per-triangle cost), and a frame that shades nothing. The points' frames
+//! (`gpu::pass`) are taken in rounds over all points so that a slow drift of a shared
+//! device spreads over every point instead of landing on a few; cheap points get more
+//! frames. A shared device also switches between speed states every few seconds (on this
+//! project's VM the empty shader over the screen takes 1.7 or 3.4 ms, a neighbour's memory
+//! traffic by the look of it): a monitor frame after each point's frames tells which state
+//! they ran in ([`states`]), and each point stands at the median of its frames in the
+//! model's state. A point the first fit misses by more than 8 %, or without frames in that
+//! state, is timed in two more batches of rounds, its frames pooled with the first.
 //!
 //! **Model.** t = fixed + T·c_T + E·c_E + f · (p + Σ_k n_k c_k), T the triangles drawn and
 //! c_T the cost of one (setup, vertex shading), E the length of their edges on the screen in
@@ -59,6 +60,8 @@
 //! pressure is not priced: the probe's chains keep little live, and a shader that keeps
 //! much (cluster.frag fully unrolled, 36 floats of SH sums live) ran 2–3× its model.
 
+pub mod states;
+
 use std::sync::Arc;
 
 use ash::vk;
@@ -73,6 +76,8 @@ use crate::gpu::{
 use crate::render::{FrameSettings, SceneGpu};
 use crate::report::metrics::TimingStats;
 use crate::scene::{Mesh, Scene, Vertex};
+
+pub use states::{DeviceStates, Segmented};
 
 /// The operation kinds the model prices.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
@@ -129,13 +134,14 @@ impl Kind {
         Kind::ALL.iter().position(|&k| k == self).unwrap_or(0)
     }
 
-    /// The counts a probe point of this kind is generated with.
-    fn probe_counts(self) -> [u32; 4] {
+    /// The counts its probe points are generated with (the lookups' from 1, as the rows
+    /// use 1–3 of many kinds).
+    pub fn probe_counts(self) -> &'static [u32] {
         match self {
-            Kind::FloatOp => [64, 128, 256, 512],
-            Kind::Varying => [2, 5, 9, 14],
-            Kind::UniformRead | Kind::IndexedUniformRead => [16, 32, 64, 128],
-            _ => [4, 8, 12, 16],
+            Kind::FloatOp => &[64, 128, 256, 512],
+            Kind::Varying => &[2, 5, 9, 14],
+            Kind::UniformRead | Kind::IndexedUniformRead => &[16, 32, 64, 128],
+            _ => &[1, 2, 4, 8, 12, 16],
         }
     }
 }
@@ -235,11 +241,14 @@ pub struct ProbePoint {
     pub depth_test: bool,
     /// What the shader's SPIR-V counts (all kinds).
     pub counts: CostCounts,
-    /// Median of its timed frames; for a point timed in several batches, the median of
-    /// the batches' medians.
+    /// Median of its timed frames in the model's state (of all of them where none ran in
+    /// it: `state_frames` 0).
     pub ms_median: f64,
     /// Batches of interleaved rounds it was timed in (1, or 1 + RETIME_BATCHES).
     pub batches: u32,
+    /// Frames timed, and of them in the model's state ([`states`]).
+    pub frames: usize,
+    pub state_frames: usize,
     /// The fitted model's prediction.
     pub model_ms: f64,
 }
@@ -259,6 +268,8 @@ pub struct Probe {
     pub triangle_pixels: f64,
     pub grid: u32,
     pub model: CostModel,
+    /// The speed states the monitor frames fell into; the model is fitted in one.
+    pub states: DeviceStates,
     pub points: Vec<ProbePoint>,
     pub seconds: f64,
 }
@@ -316,13 +327,14 @@ impl Probe {
         }
         let retimed = self.points.iter().filter(|p| p.batches > 1).count();
         s += &format!(
-            "\n{retimed} point(s) that the first fit missed by more than {:.0} % timed in {RETIME_BATCHES} more batches of rounds (ms median: the median of the batches' medians)\n",
+            "\ndevice: {} (a monitor frame after every point's frames; ms median: of the point's frames in the model's state)\n\n{retimed} point(s) that the first fit missed by more than {:.0} %, or that had no frames in the model's state, timed in {RETIME_BATCHES} more batches of rounds\n",
+            self.states.describe(),
             100.0 * RETIME_ERROR
         );
-        s += "\n| point | count | lanes per pixel | triangles | edge pixels | depth | batches | ms median | model ms | model / measured |\n|---|---:|---:|---:|---:|---|---:|---:|---:|---:|\n";
+        s += "\n| point | count | lanes per pixel | triangles | edge pixels | depth | batches | frames in state / timed | ms median | model ms | model / measured |\n|---|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
         for p in &self.points {
             s += &format!(
-                "| {} | {} | {:.2} | {} | {:.0} | {} | {} | {:.3} | {:.3} | {:.3} |\n",
+                "| {} | {} | {:.2} | {} | {:.0} | {} | {} | {} / {} | {:.3} | {:.3} | {:.3} |\n",
                 p.kind.map_or("empty shader", Kind::name),
                 p.count,
                 p.coverage,
@@ -330,6 +342,8 @@ impl Probe {
                 p.edge_pixels,
                 if p.depth_test { "on" } else { "off" },
                 p.batches,
+                p.state_frames,
+                p.frames,
                 p.ms_median,
                 p.model_ms,
                 p.model_ms / p.ms_median
@@ -657,14 +671,14 @@ fn probe_resources(ctx: &Arc<Context>) -> Result<ProbeResources, GpuError> {
 /// Vulkan or shader failures, and a fit that is not finite (a device whose timings are
 /// all zero).
 pub fn run(ctx: &Arc<Context>, s: &ProbeSettings) -> Result<Probe, GpuError> {
-    run_with_reference(ctx, s).map(|(probe, _)| probe)
+    run_with_monitor(ctx, s).map(|(probe, _)| probe)
 }
 
-/// [`run`], keeping its [`Reference`] point.
-pub fn run_with_reference(
+/// [`run`], keeping its [`Monitor`].
+pub fn run_with_monitor(
     ctx: &Arc<Context>,
     s: &ProbeSettings,
-) -> Result<(Probe, Reference), GpuError> {
+) -> Result<(Probe, Monitor), GpuError> {
     let started = std::time::Instant::now();
     let base = base_grid(s.width, s.height, s.triangle_pixels);
     let scene = probe_scene(s.width, s.height, false, base);
@@ -785,6 +799,8 @@ pub fn run_with_reference(
             counts: CostCounts::new(&lookups, &ops),
             ms_median: f64::NAN,
             batches: 1,
+            frames: 0,
+            state_frames: 0,
             model_ms: f64::NAN,
         };
         Ok((point, pipeline))
@@ -797,7 +813,7 @@ pub fn run_with_reference(
     ];
     specs.extend(grids.iter().map(|g| (None, 0, true, &g.0)));
     for kind in Kind::ALL {
-        for count in kind.probe_counts() {
+        for &count in kind.probe_counts() {
             specs.push((Some(kind), count, true, &full_mesh.0));
         }
     }
@@ -814,24 +830,45 @@ pub fn run_with_reference(
         .collect::<Result<Vec<_>, GpuError>>()?;
     // A slow drift of the device (another tenant, clocks) would otherwise land on whichever
     // points ran during it; in rounds it spreads over all of them and the median drops it.
+    // The faster switches between speed states are told apart by the monitor (`states`).
     let rounds = s.frames.clamp(1, PROBE_ROUNDS);
     let per_round = s.frames.div_ceil(rounds);
-    // One batch: the timed frames of the points `which`, in interleaved rounds. Cheap
-    // points get more frames (a millisecond of jitter is 10 % of them), scaled by a known
-    // median or, failing that, by the batch's first round.
-    let time_batch = |which: &[usize], known_ms: &[f64]| -> Result<Vec<Vec<f64>>, GpuError> {
-        let mut times: Vec<Vec<f64>> = vec![Vec::new(); which.len()];
+    let monitor_index = planned
+        .iter()
+        .position(|p| {
+            p.point.kind.is_none() && p.point.depth_test && std::ptr::eq(p.mesh, &full_mesh.0)
+        })
+        .ok_or_else(|| GpuError::Invalid {
+            what: "probe".into(),
+            detail: "no empty-shader point over the screen to monitor the device with".into(),
+        })?;
+    let read_monitor = |planned: &[Planned]| -> Result<f64, GpuError> {
+        let m = &planned[monitor_index];
+        let ms = gpu.time_pipeline_on(&m.pipeline, m.mesh, 0, 1)?;
+        Ok(ms.first().copied().unwrap_or(f64::NAN))
+    };
+    // One batch: the timed frames of the points `which`, in interleaved rounds, a monitor
+    // frame after each point's frames; returns their segments and the monitor frames.
+    // Cheap points get more frames (a millisecond of jitter is 10 % of them), scaled by a
+    // known median or, failing that, by the batch's first round.
+    let time_batch = |planned: &[Planned],
+                      which: &[usize],
+                      known_ms: &[f64]|
+     -> Result<(Vec<Segmented>, Vec<f64>), GpuError> {
+        let mut timed = vec![Segmented::default(); which.len()];
+        let mut before = read_monitor(planned)?;
+        let mut monitor = vec![before];
         for round in 0..rounds {
             let warmup = if round == 0 {
                 s.warmup
             } else {
                 s.warmup.min(1)
             };
-            for (&i, t) in which.iter().zip(&mut times) {
+            for (&i, t) in which.iter().zip(&mut timed) {
                 let ms = if known_ms[i].is_finite() {
                     Some(known_ms[i])
                 } else if round > 0 {
-                    TimingStats::from_ms(t).map(|first| first.ms_median)
+                    TimingStats::from_ms(&t.all()).map(|first| first.ms_median)
                 } else {
                     None
                 };
@@ -843,22 +880,29 @@ pub fn run_with_reference(
                     None => per_round,
                 };
                 let p = &planned[i];
-                t.extend(gpu.time_pipeline_on(&p.pipeline, p.mesh, warmup, frames)?);
+                let got = gpu.time_pipeline_on(&p.pipeline, p.mesh, warmup, frames)?;
+                let after = read_monitor(planned)?;
+                t.push(before, got, after);
+                monitor.push(after);
+                before = after;
             }
         }
-        Ok(times)
+        Ok((timed, monitor))
     };
-    let median = |t: &[f64]| TimingStats::from_ms(t).map_or(f64::NAN, |t| t.ms_median);
+    // Each point at the median of its frames in the model's state (module doc).
+    let measure = |points: &mut [ProbePoint], timed: &[Segmented], states: &DeviceStates| {
+        for (p, t) in points.iter_mut().zip(timed) {
+            let (median, in_state) = t.median(states);
+            p.ms_median = median.unwrap_or(f64::NAN);
+            p.frames = t.all().len();
+            p.state_frames = in_state;
+        }
+    };
     let all: Vec<usize> = (0..planned.len()).collect();
-    let first = time_batch(&all, &vec![f64::NAN; planned.len()])?;
-    let mut points: Vec<ProbePoint> = planned
-        .iter()
-        .zip(&first)
-        .map(|(p, t)| ProbePoint {
-            ms_median: median(t),
-            ..p.point.clone()
-        })
-        .collect();
+    let (mut timed, mut monitor) = time_batch(&planned, &all, &vec![f64::NAN; planned.len()])?;
+    let mut states = DeviceStates::from_monitor(&monitor);
+    let mut points: Vec<ProbePoint> = planned.iter().map(|p| p.point.clone()).collect();
+    measure(&mut points, &timed, &states);
     let fit_points = |points: &[ProbePoint]| {
         fit(points).ok_or_else(|| GpuError::Invalid {
             what: "probe".into(),
@@ -866,48 +910,45 @@ pub fn run_with_reference(
         })
     };
     let mut model = fit_points(&points)?;
-    // A point the fit misses by more than RETIME_ERROR is timed in RETIME_BATCHES more
-    // batches and stands at the median of its batches' medians: a slow spell of the
-    // device that hit one batch drops out, a real misfit stays (module doc).
+    // A point the fit misses by more than RETIME_ERROR, or without frames in the model's
+    // state, is timed in RETIME_BATCHES more batches, each on a pipeline built afresh (on
+    // lavapipe one build of a shader can run ≈ 2× another for a whole run — uniform reads
+    // ×64 at 63.7 ms against ×128's at 60 — where its rebuild does not); its segments
+    // join the first ones and the states are told apart again over every monitor frame.
     let missed: Vec<usize> = all
         .iter()
         .copied()
         .filter(|&i| {
             let p = &points[i];
             let predicted = predict_point(&model, p);
-            (predicted - p.ms_median).abs() > RETIME_ERROR * p.ms_median
+            p.state_frames == 0 || (predicted - p.ms_median).abs() > RETIME_ERROR * p.ms_median
         })
         .collect();
     if !missed.is_empty() {
         let known: Vec<f64> = points.iter().map(|p| p.ms_median).collect();
-        let mut batch_medians: Vec<Vec<f64>> = missed.iter().map(|&i| vec![known[i]]).collect();
         for _ in 0..RETIME_BATCHES {
-            let batch = time_batch(&missed, &known)?;
-            for (m, t) in batch_medians.iter_mut().zip(&batch) {
-                m.push(median(t));
+            for &i in &missed {
+                let p = &planned[i];
+                let (_, pipeline) = plan(p.point.kind, p.point.count, p.point.depth_test, p.mesh)?;
+                planned[i].pipeline = pipeline;
             }
+            let (batch, batch_monitor) = time_batch(&planned, &missed, &known)?;
+            for (&i, t) in missed.iter().zip(batch) {
+                timed[i].0.extend(t.0);
+            }
+            monitor.extend(batch_monitor);
         }
-        for (&i, m) in missed.iter().zip(&batch_medians) {
-            points[i].ms_median = median(m);
-            points[i].batches = m.len() as u32;
+        states = DeviceStates::from_monitor(&monitor);
+        measure(&mut points, &timed, &states);
+        for &i in &missed {
+            points[i].batches = 1 + RETIME_BATCHES as u32;
         }
         model = fit_points(&points)?;
     }
     for p in &mut points {
         p.model_ms = predict_point(&model, p);
     }
-    let (reference_kind, reference_count) = REFERENCE_POINT;
-    let reference_index = planned
-        .iter()
-        .position(|p| p.point.kind == Some(reference_kind) && p.point.count == reference_count)
-        .ok_or_else(|| GpuError::Invalid {
-            what: "probe".into(),
-            detail: format!(
-                "no {reference_kind:?} ×{reference_count} point to keep as the reference"
-            ),
-        })?;
-    let reference_ms = points[reference_index].ms_median;
-    let reference_pipeline = planned.swap_remove(reference_index).pipeline;
+    let monitor_pipeline = planned.swap_remove(monitor_index).pipeline;
     drop(planned);
     let probe = Probe {
         device: ctx.device_name().to_string(),
@@ -918,51 +959,42 @@ pub fn run_with_reference(
         triangle_pixels: s.triangle_pixels,
         grid: base,
         model,
+        states: states.clone(),
         points,
         seconds: started.elapsed().as_secs_f64(),
     };
-    let reference = Reference {
-        pipeline: reference_pipeline,
+    let monitor = Monitor {
+        pipeline: monitor_pipeline,
         mesh: full_mesh.0,
         _resources: res,
         _linear: linear,
         gpu,
-        probe_ms: reference_ms,
+        states,
     };
-    Ok((probe, reference))
+    Ok((probe, monitor))
 }
 
-/// The probe point [`Reference`] keeps.
-const REFERENCE_POINT: (Kind, u32) = (Kind::Bilinear2d, 8);
-
-/// One probe point kept past the probe (8 bilinear lookups over the screen, a technique's
-/// kind of work), for `shvis bench` to time between its rows: a shared machine's speed
-/// drifts over the minutes between the probe and a row, and the ratio of this point's time
-/// beside the rows to its time in the probe ([`Reference::drift`]) says by how much. The
-/// bench reports it and does not scale the model by it: on this project's VM the slowdowns
-/// are uneven across kinds of work, and one texture-bound point over-corrected the rows
-/// bound by uniform reads, ALU or geometry (README).
-pub struct Reference {
+/// The probe's monitor point (the empty shader over the screen), kept past the probe for
+/// `shvis bench` to time one frame of after every row's frames, so that its rows are
+/// compared with the model in the state it was fitted in (`states`).
+pub struct Monitor {
     pipeline: crate::gpu::MeshPipeline,
     mesh: MeshBuffers,
+    /// What the pipeline's descriptor set refers to (every probe point binds the uniforms).
     _resources: ProbeResources,
     _linear: Sampler,
     gpu: SceneGpu,
-    /// Its median in the probe, ms.
-    pub probe_ms: f64,
+    /// The states the probe told apart.
+    pub states: DeviceStates,
 }
 
-impl Reference {
-    /// Timed frames of the point now, ms.
-    pub fn time(&self, warmup: u32, frames: u32) -> Result<Vec<f64>, GpuError> {
-        self.gpu
-            .time_pipeline_on(&self.pipeline, &self.mesh, warmup, frames)
-    }
-
-    /// The median of `beside_rows` (its frames timed between the rows) over its median in
-    /// the probe; 1 without frames.
-    pub fn drift(&self, beside_rows: &[f64]) -> f64 {
-        TimingStats::from_ms(beside_rows).map_or(1.0, |t| t.ms_median / self.probe_ms)
+impl Monitor {
+    /// One monitor frame now, ms (NaN without timestamps).
+    pub fn read(&self) -> Result<f64, GpuError> {
+        let ms = self
+            .gpu
+            .time_pipeline_on(&self.pipeline, &self.mesh, 0, 1)?;
+        Ok(ms.first().copied().unwrap_or(f64::NAN))
     }
 }
 
@@ -1048,7 +1080,7 @@ mod tests {
     #[test]
     fn probe_shaders_compile_and_count_what_they_were_generated_with() {
         for kind in Kind::ALL {
-            for count in kind.probe_counts() {
+            for &count in kind.probe_counts() {
                 let spirv = crate::gpu::shader::compile_source(
                     "probe.frag",
                     &probe_source(Some(kind), count),
@@ -1087,6 +1119,8 @@ mod tests {
                 counts: CostCounts::default(),
                 ms_median: ms,
                 batches: 1,
+                frames: 0,
+                state_frames: 0,
                 model_ms: 0.0,
             });
         };
@@ -1144,6 +1178,8 @@ mod tests {
                     counts,
                     ms_median: ms,
                     batches: 1,
+                    frames: 0,
+                    state_frames: 0,
                     model_ms: 0.0,
                 });
             };
@@ -1156,7 +1192,7 @@ mod tests {
             push(None, CostCounts::default(), 1.0, true, 2 * g * g);
         }
         for kind in Kind::ALL {
-            for n in kind.probe_counts() {
+            for &n in kind.probe_counts() {
                 let mut c = CostCounts::default();
                 c.0[kind.index()] = f64::from(n);
                 c.0[Kind::Varying.index()] += 2.0;

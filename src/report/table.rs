@@ -136,7 +136,10 @@ pub struct BenchRow {
     /// The device cost model's frame time for the row (`shvis bench` runs the probe first),
     /// and the measured median over it.
     pub model_ms: Option<f64>,
+    /// Its median over the model's time, of its frames in the state the model was fitted in
+    /// (`probe::states`; all its frames where none ran in it: `model_state_frames` 0).
     pub x_model: Option<f64>,
+    pub model_state_frames: Option<usize>,
     pub ms_median: Option<f64>,
     pub ms_min: Option<f64>,
     pub ms_max: Option<f64>,
@@ -215,11 +218,10 @@ pub struct BenchTable {
     pub relit: Option<String>,
     /// The device cost model the rows' `model_ms` come from (`probe.md`).
     pub cost_model: Option<crate::probe::CostModel>,
-    /// The device's speed while the rows ran against during the probe: the probe's
-    /// reference point timed between the rows over its time in the probe
-    /// (`probe::Reference`). Reported, not applied: one texture-bound point over-corrected
-    /// the uniform-, ALU- and geometry-bound rows when this VM slowed unevenly (README).
-    pub model_drift: Option<f64>,
+    /// The device's speed states the probe told apart (`probe::states`), and the share of
+    /// the bench's monitor frames (one after every row's frames) in each.
+    pub device_states: Option<crate::probe::DeviceStates>,
+    pub bench_state_shares: Option<Vec<f64>>,
     /// Wall time of the bench itself (probe, references, rows, files; the bake before it
     /// is not counted), s.
     pub seconds: f64,
@@ -296,9 +298,15 @@ impl BenchTable {
         if let Some(relit) = &self.relit {
             s += &format!("; relit: {relit}");
         }
-        if let Some(drift) = self.model_drift {
+        if let (Some(states), Some(shares)) = (&self.device_states, &self.bench_state_shares) {
             s += &format!(
-                "; the probe's reference point ran ×{drift:.3} its probe time beside the rows (the device's drift between probe and rows; model ms are the probe's model, not scaled)"
+                "; {}; the rows' monitor frames {} in each state; ×model compares a row's frames in the model's state",
+                states.describe(),
+                shares
+                    .iter()
+                    .map(|s| format!("{:.0} %", 100.0 * s))
+                    .collect::<Vec<_>>()
+                    .join(" / ")
             );
         }
         if self.reference_bounces > 0 {
@@ -441,6 +449,7 @@ mod tests {
             edge_pixels: 0.0,
             model_ms: None,
             x_model: None,
+            model_state_frames: None,
             ms_median: Some(ms),
             ms_min: Some(ms),
             ms_max: Some(ms),
@@ -500,7 +509,8 @@ mod tests {
             specular: None,
             relit: None,
             cost_model: None,
-            model_drift: None,
+            device_states: None,
+            bench_state_shares: None,
             seconds: 0.0,
             phases: BenchPhases::default(),
             results: vec![

@@ -1,0 +1,271 @@
+//! The device's speed states, and timings labelled by them (issue 20).
+//!
+//! A shared machine does not run at one speed. On this project's VM the probe's frames
+//! showed two states that the device switches between every few seconds: in one, the
+//! empty shader over the screen (clear, depth test, framebuffer writes: memory traffic)
+//! takes 1.5 ms, in the other 3.1 ms, while 16 bilinear lookups move by 10 % and the frame
+//! that shades nothing by 0.4 ms — a slowdown additive per frame and uneven across kinds of
+//! work, so no single scale factor corrects it (`shvis bench` tried one: it over-corrected
+//! the rows bound by ALU and uniform reads). Within a state the same frames repeat to ±3 %.
+//!
+//! So the probe and the bench time every point or row in segments of frames with one
+//! **monitor** frame (the empty shader over the screen, the most state-sensitive point)
+//! after each: a segment whose monitor frames before and after fall in the same state ran
+//! in it. [`DeviceStates::from_monitor`] tells the states apart from the probe's monitor
+//! frames (two clusters of log-times by 2-means, kept apart where their centres differ by
+//! more than [`STATE_RATIO`]; else one state); the model is fitted to the points' frames in
+//! one state (the faster, unless the device spent less than [`MODEL_STATE_SHARE`] of the
+//! probe in it), and each row's `x_model` compares its frames in that same state. A dedicated device has one state, and every frame counts.
+
+use serde::Serialize;
+
+use crate::report::metrics::TimingStats;
+
+/// Monitor clusters closer than this ratio of their centres are one state.
+pub const STATE_RATIO: f64 = 1.25;
+/// The faster state is the model's when it holds at least this share of the monitor frames.
+pub const MODEL_STATE_SHARE: f64 = 0.25;
+
+/// The speed states the probe's monitor frames fell into.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DeviceStates {
+    /// Each state's median monitor frame, ms, fastest first (one entry: one state).
+    pub monitor_ms: Vec<f64>,
+    /// Monitor frames at or above this are the slower state (`None`: one state).
+    pub threshold_ms: Option<f64>,
+    /// Monitor frames above this are spikes, in no state (a frame that met a hiccup of
+    /// the host; the segments on either side of it do not count).
+    pub spike_ms: f64,
+    /// Share of the probe's monitor frames in each state.
+    pub shares: Vec<f64>,
+    /// The state the model is fitted in: the faster where it holds at least
+    /// [`MODEL_STATE_SHARE`] of the monitor frames (the device undisturbed: the slower
+    /// state slows memory-bound work more, beyond what a model linear in the counts
+    /// holds), else the slower.
+    pub model_state: usize,
+}
+
+impl DeviceStates {
+    /// One state: every frame counts.
+    pub fn single(monitor_ms: f64) -> Self {
+        DeviceStates {
+            monitor_ms: vec![monitor_ms],
+            threshold_ms: None,
+            spike_ms: f64::INFINITY,
+            shares: vec![1.0],
+            model_state: 0,
+        }
+    }
+
+    /// The states of a device from its monitor frames (module doc). Non-finite or
+    /// non-positive frames are ignored; without any, one state.
+    pub fn from_monitor(monitor: &[f64]) -> Self {
+        let mut logs: Vec<f64> = monitor
+            .iter()
+            .filter(|m| m.is_finite() && **m > 0.0)
+            .map(|m| m.ln())
+            .collect();
+        logs.sort_by(f64::total_cmp);
+        let median_ms = |l: &[f64]| {
+            let ms: Vec<f64> = l.iter().map(|v| v.exp()).collect();
+            TimingStats::from_ms(&ms).map_or(f64::NAN, |t| t.ms_median)
+        };
+        if logs.len() < 2 {
+            return DeviceStates::single(median_ms(&logs));
+        }
+        // Spikes: beyond the upper quartile by three interquartile ranges (at least 10 %
+        // each) in log-time; a slower state that rare is left out with them.
+        let quartile = |q: f64| logs[((logs.len() - 1) as f64 * q).round() as usize];
+        let spread = (quartile(0.75) - quartile(0.25)).max(1.1f64.ln());
+        let spike_log = quartile(0.75) + 3.0 * spread;
+        logs.retain(|&l| l <= spike_log);
+        let spike_ms = spike_log.exp();
+        let single = |logs: &[f64]| DeviceStates {
+            spike_ms,
+            ..DeviceStates::single(median_ms(logs))
+        };
+        // 2-means in one dimension: the best split of the sorted values.
+        let n = logs.len();
+        let mut prefix = vec![0.0; n + 1];
+        let mut prefix_sq = vec![0.0; n + 1];
+        for (i, l) in logs.iter().enumerate() {
+            prefix[i + 1] = prefix[i] + l;
+            prefix_sq[i + 1] = prefix_sq[i] + l * l;
+        }
+        let sse = |a: usize, b: usize| {
+            let (s, q, k) = (
+                prefix[b] - prefix[a],
+                prefix_sq[b] - prefix_sq[a],
+                (b - a) as f64,
+            );
+            q - s * s / k
+        };
+        let split = (1..n)
+            .min_by(|&a, &b| (sse(0, a) + sse(a, n)).total_cmp(&(sse(0, b) + sse(b, n))))
+            .unwrap_or(1);
+        let (fast, slow) = logs.split_at(split);
+        let mean = |l: &[f64]| l.iter().sum::<f64>() / l.len() as f64;
+        if (mean(slow) - mean(fast)).exp() < STATE_RATIO {
+            return single(&logs);
+        }
+        let shares = vec![fast.len() as f64 / n as f64, slow.len() as f64 / n as f64];
+        DeviceStates {
+            monitor_ms: vec![median_ms(fast), median_ms(slow)],
+            // Halfway between the clusters' edges, in log-time.
+            threshold_ms: Some((0.5 * (fast[fast.len() - 1] + slow[0])).exp()),
+            spike_ms,
+            model_state: usize::from(shares[0] < MODEL_STATE_SHARE),
+            shares,
+        }
+    }
+
+    /// The state a monitor frame was in (`None` for a missing one or a spike).
+    pub fn state_of(&self, monitor_ms: f64) -> Option<usize> {
+        if !monitor_ms.is_finite() || monitor_ms > self.spike_ms {
+            return None;
+        }
+        Some(match self.threshold_ms {
+            Some(t) if monitor_ms >= t => 1,
+            _ => 0,
+        })
+    }
+
+    /// Whether a segment between these monitor frames ran in the model's state.
+    pub fn in_model_state(&self, segment: &Segment) -> bool {
+        let state = self.state_of(segment.monitor_before);
+        state == Some(self.model_state) && state == self.state_of(segment.monitor_after)
+    }
+
+    /// Share of these monitor frames in each state.
+    pub fn shares_of(&self, monitor: &[f64]) -> Vec<f64> {
+        let mut counts = vec![0usize; self.monitor_ms.len()];
+        for s in monitor.iter().filter_map(|&m| self.state_of(m)) {
+            counts[s] += 1;
+        }
+        let total = counts.iter().sum::<usize>().max(1) as f64;
+        counts.iter().map(|&c| c as f64 / total).collect()
+    }
+
+    /// One line for the reports.
+    pub fn describe(&self) -> String {
+        let spikes = if self.spike_ms.is_finite() {
+            format!("; monitor frames above {:.3} ms are spikes", self.spike_ms)
+        } else {
+            String::new()
+        };
+        let states = match self.threshold_ms {
+            None => format!(
+                "one speed state (monitor frame {:.3} ms)",
+                self.monitor_ms[0]
+            ),
+            Some(t) => format!(
+                "two speed states (monitor frame {:.3} ms in {:.0} % of the probe's monitor frames, {:.3} ms in {:.0} %; threshold {:.3} ms); the model is the {} state's",
+                self.monitor_ms[0],
+                100.0 * self.shares[0],
+                self.monitor_ms[1],
+                100.0 * self.shares[1],
+                t,
+                if self.model_state == 0 {
+                    "faster"
+                } else {
+                    "slower"
+                }
+            ),
+        };
+        states + &spikes
+    }
+}
+
+/// Frames timed in one go, with the monitor frames around them (NaN: none).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Segment {
+    pub monitor_before: f64,
+    pub ms: Vec<f64>,
+    pub monitor_after: f64,
+}
+
+/// A point's or row's segments.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Segmented(pub Vec<Segment>);
+
+impl Segmented {
+    pub fn push(&mut self, monitor_before: f64, ms: Vec<f64>, monitor_after: f64) {
+        self.0.push(Segment {
+            monitor_before,
+            ms,
+            monitor_after,
+        });
+    }
+
+    /// Every frame.
+    pub fn all(&self) -> Vec<f64> {
+        self.0.iter().flat_map(|s| s.ms.iter().copied()).collect()
+    }
+
+    /// The frames of the segments that ran in the model's state.
+    pub fn in_model_state(&self, states: &DeviceStates) -> Vec<f64> {
+        self.0
+            .iter()
+            .filter(|s| states.in_model_state(s))
+            .flat_map(|s| s.ms.iter().copied())
+            .collect()
+    }
+
+    /// The median of the frames in the model's state, or of every frame where none ran in
+    /// it; and how many frames it is the median of (0: none in the state).
+    pub fn median(&self, states: &DeviceStates) -> (Option<f64>, usize) {
+        let in_state = self.in_model_state(states);
+        let frames = in_state.len();
+        let chosen = if frames > 0 { in_state } else { self.all() };
+        (TimingStats::from_ms(&chosen).map(|t| t.ms_median), frames)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn two_monitor_clusters_are_two_states_and_a_rare_faster_one_is_not_the_model_s() {
+        let monitor = [3.1, 3.15, 1.55, 3.2, 3.05, 3.12, 3.3, 3.12, 7.3];
+        let states = DeviceStates::from_monitor(&monitor);
+        assert_eq!(states.monitor_ms.len(), 2, "{states:?}");
+        let t = states.threshold_ms.unwrap();
+        assert!(t > 1.55 && t < 3.05, "{states:?}");
+        assert_eq!(states.model_state, 1, "{states:?}");
+        let common_fast = DeviceStates::from_monitor(&[3.1, 1.5, 1.6, 3.2, 3.0, 3.3, 3.1]);
+        assert_eq!(common_fast.model_state, 0, "{common_fast:?}");
+        let seg = |a: f64, b: f64| Segment {
+            monitor_before: a,
+            ms: vec![10.0],
+            monitor_after: b,
+        };
+        assert!(states.spike_ms < 7.3, "{states:?}");
+        assert!(states.in_model_state(&seg(3.1, 3.2)));
+        assert!(
+            !states.in_model_state(&seg(3.1, 7.3)),
+            "a spike is in no state"
+        );
+        assert!(!states.in_model_state(&seg(1.5, 3.2)), "a switch inside");
+        assert!(!states.in_model_state(&seg(1.5, 1.6)));
+        assert!(!states.in_model_state(&seg(f64::NAN, 3.2)));
+    }
+
+    #[test]
+    fn monitor_frames_within_the_ratio_are_one_state() {
+        let states = DeviceStates::from_monitor(&[3.0, 3.3, 2.9, 3.1, 3.5, 3.2]);
+        assert_eq!(states.threshold_ms, None, "{states:?}");
+        assert!((states.monitor_ms[0] - 3.15).abs() < 1e-9, "{states:?}");
+    }
+
+    #[test]
+    fn a_row_without_frames_in_the_model_state_falls_back_to_all() {
+        let states = DeviceStates::from_monitor(&[1.0, 1.0, 2.0, 2.0]);
+        assert_eq!(states.model_state, 0);
+        let mut row = Segmented::default();
+        row.push(2.0, vec![9.0, 11.0], 2.0);
+        assert_eq!(row.median(&states), (Some(10.0), 0));
+        row.push(1.0, vec![5.0], 1.0);
+        assert_eq!(row.median(&states), (Some(5.0), 1));
+    }
+}
