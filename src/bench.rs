@@ -368,15 +368,23 @@ pub fn run(
             let load = row.own_mesh_load.unwrap_or(load);
             row.coverage = load.lanes / pixels;
             row.edge_pixels = load.edge_pixels;
-            let predicted =
-                probe
-                    .model
-                    .predict(&row.cost, row.coverage, row.triangles, row.edge_pixels);
+            // Like with like: the row's frames in the state most of them ran in that the
+            // probe has a model of, against that model; else every frame against the main
+            // model.
+            let states = &monitor.states;
+            let modelled = probe.state_models.iter().map(|m| m.state);
+            let (model, measured, state, state_frames) = match times.busiest_state(states, modelled)
+            {
+                Some((state, ms, frames)) => (probe.model_of(state), Some(ms), Some(state), frames),
+                None => (None, None, None, 0),
+            };
+            let model = model.unwrap_or(&probe.model);
+            let measured = measured.or(row.ms_median);
+            let predicted = model.predict(&row.cost, row.coverage, row.triangles, row.edge_pixels);
             row.model_ms = Some(predicted);
-            // Like with like: the row's frames in the state the model was fitted in.
-            let (in_state_ms, state_frames) = times.median(&monitor.states);
+            row.model_state = state;
             row.model_state_frames = Some(state_frames);
-            row.x_model = in_state_ms.map(|ms| ms / predicted);
+            row.x_model = measured.map(|ms| ms / predicted);
         }
     }
     let bounced = reference.as_ref().and_then(|r| r.main.bounced.as_ref());
@@ -391,6 +399,10 @@ pub fn run(
         vis_res: prepared.visibility.res,
         device_states: cost_model.as_ref().map(|(p, _)| p.states.clone()),
         bench_state_shares,
+        state_cost_models: cost_model
+            .as_ref()
+            .map(|(p, _)| p.state_models.clone())
+            .unwrap_or_default(),
         cost_model: cost_model.map(|(p, _)| p.model),
         relit: relit.as_ref().map(|r| {
             format!(
@@ -814,6 +826,7 @@ fn measure_row(
         edge_pixels: 0.0,
         model_ms: None,
         x_model: None,
+        model_state: None,
         model_state_frames: None,
         ms_median: timing.map(|s| s.ms_median),
         ms_min: timing.map(|s| s.ms_min),

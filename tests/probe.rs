@@ -24,10 +24,10 @@ fn the_probe_runs_every_microbenchmark_and_fits_a_model_to_them() {
     )
     .expect("probe runs");
     eprintln!("{}", probe.to_markdown());
-    // The empty frame, 3 empty-shader points, 3 finer triangle grids and the counts of each
+    // The empty frame, 3 empty-shader points, 4 finer triangle grids and the counts of each
     // kind.
     let counts: usize = Kind::ALL.iter().map(|k| k.probe_counts().len()).sum();
-    assert_eq!(probe.points.len(), 4 + 3 + counts);
+    assert_eq!(probe.points.len(), 4 + 4 + counts);
     for p in &probe.points {
         assert!(p.ms_median.is_finite() && p.ms_median > 0.0, "{p:?}");
         assert!(p.frames > 0 && p.state_frames <= p.frames, "{p:?}");
@@ -45,7 +45,9 @@ fn the_probe_runs_every_microbenchmark_and_fits_a_model_to_them() {
     assert_eq!(probe.screen_fragments, 320 * 200);
     // The states come from the monitor frames, and the kept monitor times again.
     let states = &probe.states;
-    assert!(!states.monitor_ms.is_empty() && states.model_state < states.monitor_ms.len());
+    assert!(!states.monitor_ms.is_empty() && states.main_state < states.count());
+    // The main state has a model, and it is the probe's.
+    assert_eq!(probe.model_of(states.main_state), Some(&probe.model));
     assert!(
         (states.shares.iter().sum::<f64>() - 1.0).abs() < 1e-9,
         "{states:?}"

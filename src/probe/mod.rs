@@ -13,16 +13,17 @@
 //! strip), scalar fused multiply-adds (four independent vec4 chains), interpolated varyings
 //! read, and uniform vec4 reads at constant and at per-pixel indices; plus the empty shader
 //! (it writes its lightmap coordinates, which every technique reads) over the full screen,
-//! over half of it, with the depth test off, and over grids of 2·64², 2·96² and 2·128²
+//! over half of it, with the depth test off, and over grids of 2·64², 2·96², 2·128², 2·256²
 //! triangles (the per-triangle cost), and a frame that shades nothing. The points' frames
 //! (`gpu::pass`) are taken in rounds over all points so that a slow drift of a shared
 //! device spreads over every point instead of landing on a few; cheap points get more
 //! frames. A shared device also switches between speed states every few seconds (on this
 //! project's VM the empty shader over the screen takes 1.7 or 3.4 ms, a neighbour's memory
 //! traffic by the look of it): a monitor frame after each point's frames tells which state
-//! they ran in ([`states`]), and each point stands at the median of its frames in the
-//! model's state. A point the first fit misses by more than 8 %, or without frames in that
-//! state, is timed in two more batches of rounds, its frames pooled with the first.
+//! they ran in ([`states`]); a model is fitted per state to the points' medians in it
+//! (the main one: the state most monitor frames fell in). A point the first fit misses by
+//! more than 8 %, or without frames in a common state, is timed in two more batches of
+//! rounds on freshly built pipelines, its frames pooled with the first.
 //!
 //! **Model.** t = fixed + T·c_T + E·c_E + f · (p + Σ_k n_k c_k), T the triangles drawn and
 //! c_T the cost of one (setup, vertex shading), E the length of their edges on the screen in
@@ -253,6 +254,23 @@ pub struct ProbePoint {
     pub model_ms: f64,
 }
 
+/// The model fitted to the points' frames in one speed state ([`states`]).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StateModel {
+    pub state: usize,
+    pub model: CostModel,
+    /// Largest |model − measured| / measured over the points in this state.
+    pub worst_relative_error: f64,
+}
+
+/// Largest |model − measured| / measured over `points`.
+fn worst_relative_error(points: &[ProbePoint]) -> f64 {
+    points
+        .iter()
+        .map(|p| (p.model_ms - p.ms_median).abs() / p.ms_median)
+        .fold(0.0, f64::max)
+}
+
 /// The probe's result.
 #[derive(Clone, Debug, Serialize)]
 pub struct Probe {
@@ -268,8 +286,11 @@ pub struct Probe {
     pub triangle_pixels: f64,
     pub grid: u32,
     pub model: CostModel,
-    /// The speed states the monitor frames fell into; the model is fitted in one.
+    /// The speed states the monitor frames fell into; `model` and the points' medians are
+    /// the main state's.
     pub states: DeviceStates,
+    /// A model per state that every point has frames in (the main state's among them).
+    pub state_models: Vec<StateModel>,
     pub points: Vec<ProbePoint>,
     pub seconds: f64,
 }
@@ -277,10 +298,15 @@ pub struct Probe {
 impl Probe {
     /// Largest |model − measured| / measured over the points.
     pub fn worst_relative_error(&self) -> f64 {
-        self.points
+        worst_relative_error(&self.points)
+    }
+
+    /// The model of `state`, if the probe fitted one.
+    pub fn model_of(&self, state: usize) -> Option<&CostModel> {
+        self.state_models
             .iter()
-            .map(|p| (p.model_ms - p.ms_median).abs() / p.ms_median)
-            .fold(0.0, f64::max)
+            .find(|m| m.state == state)
+            .map(|m| &m.model)
     }
 
     /// Writes `probe.md` and `probe.json` into `dir`; returns their paths.
@@ -331,6 +357,26 @@ impl Probe {
             self.states.describe(),
             100.0 * RETIME_ERROR
         );
+        for m in &self.state_models {
+            s += &format!(
+                "\nstate {} (monitor frame {:.3} ms){}: largest model error {:.1} %; fixed {:.3} ms, empty shader {:.3} ms per screen, ns per unit per lane: {}\n",
+                m.state,
+                self.states.monitor_ms[m.state],
+                if m.state == self.states.main_state {
+                    ", the main model (the table below)"
+                } else {
+                    ""
+                },
+                100.0 * m.worst_relative_error,
+                m.model.fixed_ms,
+                m.model.pixel_ms,
+                Kind::ALL
+                    .iter()
+                    .map(|&k| format!("{} {:.3}", k.name(), m.model.cost(k) * 1e6 / pixels))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
         s += "\n| point | count | lanes per pixel | triangles | edge pixels | depth | batches | frames in state / timed | ms median | model ms | model / measured |\n|---|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
         for p in &self.points {
             s += &format!(
@@ -375,17 +421,20 @@ pub struct ProbeSettings {
 const TEXTURES: u32 = 16;
 /// Side of the probe's textures.
 const TEXTURE_SIDE: u32 = 512;
-/// Grid sides of the per-triangle points: small triangles (125, 55 and 31 pixels at
-/// 1280×800), as a scene's many small ones.
-const TRIANGLE_GRIDS: [u32; 3] = [64, 96, 128];
+/// Grid sides of the per-triangle points: small triangles (125, 55, 31 and 8 pixels at
+/// 1280×800), as a scene's many small ones (pca12v25's 115k triangles are ≈ 7 pixels).
+const TRIANGLE_GRIDS: [u32; 4] = [64, 96, 128, 256];
 /// Points faster than this get proportionally more frames (up to 20×) after the first round.
 const CHEAP_POINT_MS: f64 = 40.0;
 /// Interleaved rounds the timed frames are split into.
 const PROBE_ROUNDS: u32 = 10;
 /// A point the first fit misses by more than this (relative) is timed again.
 const RETIME_ERROR: f64 = 0.08;
-/// Batches a missed point is timed again in (with the first: a median of three).
+/// Batches a missed point is timed again in.
 const RETIME_BATCHES: usize = 2;
+/// A state with this share of the monitor frames gets a model: the points without frames
+/// in it are timed again.
+const STATE_MODEL_SHARE: f64 = 0.2;
 /// Uniform vec4s in the probe's block.
 const UNIFORM_VEC4S: u32 = 256;
 
@@ -890,19 +939,24 @@ pub fn run_with_monitor(
         Ok((timed, monitor))
     };
     // Each point at the median of its frames in the model's state (module doc).
-    let measure = |points: &mut [ProbePoint], timed: &[Segmented], states: &DeviceStates| {
-        for (p, t) in points.iter_mut().zip(timed) {
-            let (median, in_state) = t.median(states);
-            p.ms_median = median.unwrap_or(f64::NAN);
-            p.frames = t.all().len();
-            p.state_frames = in_state;
-        }
-    };
+    // Each point at the median of its frames in `state` (of all of them where none ran in
+    // it: `state_frames` 0).
+    let measure =
+        |points: &mut [ProbePoint], timed: &[Segmented], states: &DeviceStates, state: usize| {
+            for (p, t) in points.iter_mut().zip(timed) {
+                let (median, in_state) = t.median_in(states, state);
+                p.ms_median = median
+                    .or_else(|| TimingStats::from_ms(&t.all()).map(|t| t.ms_median))
+                    .unwrap_or(f64::NAN);
+                p.frames = t.all().len();
+                p.state_frames = in_state;
+            }
+        };
     let all: Vec<usize> = (0..planned.len()).collect();
     let (mut timed, mut monitor) = time_batch(&planned, &all, &vec![f64::NAN; planned.len()])?;
     let mut states = DeviceStates::from_monitor(&monitor);
     let mut points: Vec<ProbePoint> = planned.iter().map(|p| p.point.clone()).collect();
-    measure(&mut points, &timed, &states);
+    measure(&mut points, &timed, &states, states.main_state);
     let fit_points = |points: &[ProbePoint]| {
         fit(points).ok_or_else(|| GpuError::Invalid {
             what: "probe".into(),
@@ -910,8 +964,8 @@ pub fn run_with_monitor(
         })
     };
     let mut model = fit_points(&points)?;
-    // A point the fit misses by more than RETIME_ERROR, or without frames in the model's
-    // state, is timed in RETIME_BATCHES more batches, each on a pipeline built afresh (on
+    // A point the fit misses by more than RETIME_ERROR, or without frames in a state that
+    // held at least STATE_MODEL_SHARE of the monitor frames, is timed in RETIME_BATCHES more batches, each on a pipeline built afresh (on
     // lavapipe one build of a shader can run ≈ 2× another for a whole run — uniform reads
     // ×64 at 63.7 ms against ×128's at 60 — where its rebuild does not); its segments
     // join the first ones and the states are told apart again over every monitor frame.
@@ -921,7 +975,11 @@ pub fn run_with_monitor(
         .filter(|&i| {
             let p = &points[i];
             let predicted = predict_point(&model, p);
-            p.state_frames == 0 || (predicted - p.ms_median).abs() > RETIME_ERROR * p.ms_median
+            let unseen = (0..states.count()).any(|state| {
+                states.shares[state] >= STATE_MODEL_SHARE
+                    && timed[i].ran_in(&states, state).is_empty()
+            });
+            unseen || (predicted - p.ms_median).abs() > RETIME_ERROR * p.ms_median
         })
         .collect();
     if !missed.is_empty() {
@@ -939,7 +997,7 @@ pub fn run_with_monitor(
             monitor.extend(batch_monitor);
         }
         states = DeviceStates::from_monitor(&monitor);
-        measure(&mut points, &timed, &states);
+        measure(&mut points, &timed, &states, states.main_state);
         for &i in &missed {
             points[i].batches = 1 + RETIME_BATCHES as u32;
         }
@@ -947,6 +1005,30 @@ pub fn run_with_monitor(
     }
     for p in &mut points {
         p.model_ms = predict_point(&model, p);
+    }
+    // A model per state that every point has frames in: the bench compares a row's frames
+    // in a state with that state's model.
+    let mut state_models = Vec::new();
+    for state in 0..states.count() {
+        if state == states.main_state {
+            state_models.push(StateModel {
+                state,
+                worst_relative_error: worst_relative_error(&points),
+                model: model.clone(),
+            });
+        } else if timed.iter().all(|t| !t.ran_in(&states, state).is_empty()) {
+            let mut in_state = points.clone();
+            measure(&mut in_state, &timed, &states, state);
+            let state_model = fit_points(&in_state)?;
+            for p in &mut in_state {
+                p.model_ms = predict_point(&state_model, p);
+            }
+            state_models.push(StateModel {
+                state,
+                worst_relative_error: worst_relative_error(&in_state),
+                model: state_model,
+            });
+        }
     }
     let monitor_pipeline = planned.swap_remove(monitor_index).pipeline;
     drop(planned);
@@ -960,6 +1042,7 @@ pub fn run_with_monitor(
         grid: base,
         model,
         states: states.clone(),
+        state_models,
         points,
         seconds: started.elapsed().as_secs_f64(),
     };

@@ -13,9 +13,12 @@
 //! after each: a segment whose monitor frames before and after fall in the same state ran
 //! in it. [`DeviceStates::from_monitor`] tells the states apart from the probe's monitor
 //! frames (two clusters of log-times by 2-means, kept apart where their centres differ by
-//! more than [`STATE_RATIO`]; else one state); the model is fitted to the points' frames in
-//! one state (the faster, unless the device spent less than [`MODEL_STATE_SHARE`] of the
-//! probe in it), and each row's `x_model` compares its frames in that same state. A dedicated device has one state, and every frame counts.
+//! more than [`STATE_RATIO`]; else one state). The probe fits a model to the points'
+//! frames in each state it has frames of every point in (the state it spent most monitor
+//! frames in is the main one, whose model `probe.md` and `table.json` report first), and
+//! a row's `x_model` compares its frames in the state it ran in most with that state's
+//! model: like with like, whichever state the device was in when. A dedicated device has
+//! one state, and every frame counts.
 
 use serde::Serialize;
 
@@ -23,8 +26,6 @@ use crate::report::metrics::TimingStats;
 
 /// Monitor clusters closer than this ratio of their centres are one state.
 pub const STATE_RATIO: f64 = 1.25;
-/// The faster state is the model's when it holds at least this share of the monitor frames.
-pub const MODEL_STATE_SHARE: f64 = 0.25;
 
 /// The speed states the probe's monitor frames fell into.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -38,11 +39,8 @@ pub struct DeviceStates {
     pub spike_ms: f64,
     /// Share of the probe's monitor frames in each state.
     pub shares: Vec<f64>,
-    /// The state the model is fitted in: the faster where it holds at least
-    /// [`MODEL_STATE_SHARE`] of the monitor frames (the device undisturbed: the slower
-    /// state slows memory-bound work more, beyond what a model linear in the counts
-    /// holds), else the slower.
-    pub model_state: usize,
+    /// The state with most of the probe's monitor frames (its model is the probe's main one).
+    pub main_state: usize,
 }
 
 impl DeviceStates {
@@ -53,7 +51,7 @@ impl DeviceStates {
             threshold_ms: None,
             spike_ms: f64::INFINITY,
             shares: vec![1.0],
-            model_state: 0,
+            main_state: 0,
         }
     }
 
@@ -114,7 +112,7 @@ impl DeviceStates {
             // Halfway between the clusters' edges, in log-time.
             threshold_ms: Some((0.5 * (fast[fast.len() - 1] + slow[0])).exp()),
             spike_ms,
-            model_state: usize::from(shares[0] < MODEL_STATE_SHARE),
+            main_state: usize::from(shares[1] > shares[0]),
             shares,
         }
     }
@@ -130,10 +128,15 @@ impl DeviceStates {
         })
     }
 
-    /// Whether a segment between these monitor frames ran in the model's state.
-    pub fn in_model_state(&self, segment: &Segment) -> bool {
-        let state = self.state_of(segment.monitor_before);
-        state == Some(self.model_state) && state == self.state_of(segment.monitor_after)
+    /// Whether a segment between these monitor frames ran in `state`.
+    pub fn ran_in(&self, segment: &Segment, state: usize) -> bool {
+        let before = self.state_of(segment.monitor_before);
+        before == Some(state) && before == self.state_of(segment.monitor_after)
+    }
+
+    /// How many states.
+    pub fn count(&self) -> usize {
+        self.monitor_ms.len()
     }
 
     /// Share of these monitor frames in each state.
@@ -159,13 +162,13 @@ impl DeviceStates {
                 self.monitor_ms[0]
             ),
             Some(t) => format!(
-                "two speed states (monitor frame {:.3} ms in {:.0} % of the probe's monitor frames, {:.3} ms in {:.0} %; threshold {:.3} ms); the model is the {} state's",
+                "two speed states (monitor frame {:.3} ms in {:.0} % of the probe's monitor frames, {:.3} ms in {:.0} %; threshold {:.3} ms); the main model is the {} state's",
                 self.monitor_ms[0],
                 100.0 * self.shares[0],
                 self.monitor_ms[1],
                 100.0 * self.shares[1],
                 t,
-                if self.model_state == 0 {
+                if self.main_state == 0 {
                     "faster"
                 } else {
                     "slower"
@@ -202,22 +205,38 @@ impl Segmented {
         self.0.iter().flat_map(|s| s.ms.iter().copied()).collect()
     }
 
-    /// The frames of the segments that ran in the model's state.
-    pub fn in_model_state(&self, states: &DeviceStates) -> Vec<f64> {
+    /// The frames of the segments that ran in `state`.
+    pub fn ran_in(&self, states: &DeviceStates, state: usize) -> Vec<f64> {
         self.0
             .iter()
-            .filter(|s| states.in_model_state(s))
+            .filter(|s| states.ran_in(s, state))
             .flat_map(|s| s.ms.iter().copied())
             .collect()
     }
 
-    /// The median of the frames in the model's state, or of every frame where none ran in
-    /// it; and how many frames it is the median of (0: none in the state).
-    pub fn median(&self, states: &DeviceStates) -> (Option<f64>, usize) {
-        let in_state = self.in_model_state(states);
-        let frames = in_state.len();
-        let chosen = if frames > 0 { in_state } else { self.all() };
-        (TimingStats::from_ms(&chosen).map(|t| t.ms_median), frames)
+    /// The median of the frames in `state`, and how many there are.
+    pub fn median_in(&self, states: &DeviceStates, state: usize) -> (Option<f64>, usize) {
+        let frames = self.ran_in(states, state);
+        (
+            TimingStats::from_ms(&frames).map(|t| t.ms_median),
+            frames.len(),
+        )
+    }
+
+    /// The state most of these frames ran in, among `candidates`, with their median and
+    /// count; `None` where none ran in any.
+    pub fn busiest_state(
+        &self,
+        states: &DeviceStates,
+        candidates: impl IntoIterator<Item = usize>,
+    ) -> Option<(usize, f64, usize)> {
+        candidates
+            .into_iter()
+            .filter_map(|s| match self.median_in(states, s) {
+                (Some(ms), n) => Some((s, ms, n)),
+                (None, _) => None,
+            })
+            .max_by_key(|&(_, _, n)| n)
     }
 }
 
@@ -226,29 +245,27 @@ mod tests {
     use super::*;
 
     #[test]
-    fn two_monitor_clusters_are_two_states_and_a_rare_faster_one_is_not_the_model_s() {
+    fn two_monitor_clusters_are_two_states_and_the_commoner_is_the_main_one() {
         let monitor = [3.1, 3.15, 1.55, 3.2, 3.05, 3.12, 3.3, 3.12, 7.3];
         let states = DeviceStates::from_monitor(&monitor);
         assert_eq!(states.monitor_ms.len(), 2, "{states:?}");
         let t = states.threshold_ms.unwrap();
         assert!(t > 1.55 && t < 3.05, "{states:?}");
-        assert_eq!(states.model_state, 1, "{states:?}");
-        let common_fast = DeviceStates::from_monitor(&[3.1, 1.5, 1.6, 3.2, 3.0, 3.3, 3.1]);
-        assert_eq!(common_fast.model_state, 0, "{common_fast:?}");
+        assert_eq!(states.main_state, 1, "{states:?}");
+        let fast = DeviceStates::from_monitor(&[3.1, 1.5, 1.6, 3.2, 1.5, 1.55, 1.6]);
+        assert_eq!(fast.main_state, 0, "{fast:?}");
         let seg = |a: f64, b: f64| Segment {
             monitor_before: a,
             ms: vec![10.0],
             monitor_after: b,
         };
         assert!(states.spike_ms < 7.3, "{states:?}");
-        assert!(states.in_model_state(&seg(3.1, 3.2)));
-        assert!(
-            !states.in_model_state(&seg(3.1, 7.3)),
-            "a spike is in no state"
-        );
-        assert!(!states.in_model_state(&seg(1.5, 3.2)), "a switch inside");
-        assert!(!states.in_model_state(&seg(1.5, 1.6)));
-        assert!(!states.in_model_state(&seg(f64::NAN, 3.2)));
+        assert!(states.ran_in(&seg(3.1, 3.2), 1));
+        assert!(!states.ran_in(&seg(3.1, 7.3), 1), "a spike is in no state");
+        assert!(!states.ran_in(&seg(1.5, 3.2), 0), "a switch inside");
+        assert!(!states.ran_in(&seg(1.5, 3.2), 1), "a switch inside");
+        assert!(states.ran_in(&seg(1.5, 1.6), 0));
+        assert!(!states.ran_in(&seg(f64::NAN, 3.2), 1));
     }
 
     #[test]
@@ -259,13 +276,15 @@ mod tests {
     }
 
     #[test]
-    fn a_row_without_frames_in_the_model_state_falls_back_to_all() {
+    fn a_row_is_compared_in_the_state_most_of_its_frames_ran_in() {
         let states = DeviceStates::from_monitor(&[1.0, 1.0, 2.0, 2.0]);
-        assert_eq!(states.model_state, 0);
         let mut row = Segmented::default();
         row.push(2.0, vec![9.0, 11.0], 2.0);
-        assert_eq!(row.median(&states), (Some(10.0), 0));
         row.push(1.0, vec![5.0], 1.0);
-        assert_eq!(row.median(&states), (Some(5.0), 1));
+        row.push(1.0, vec![50.0], 2.0);
+        assert_eq!(row.median_in(&states, 0), (Some(5.0), 1));
+        assert_eq!(row.busiest_state(&states, [0, 1]), Some((1, 10.0, 2)));
+        assert_eq!(row.busiest_state(&states, [0]), Some((0, 5.0, 1)));
+        assert_eq!(Segmented::default().busiest_state(&states, [0, 1]), None);
     }
 }

@@ -136,9 +136,13 @@ pub struct BenchRow {
     /// The device cost model's frame time for the row (`shvis bench` runs the probe first),
     /// and the measured median over it.
     pub model_ms: Option<f64>,
-    /// Its median over the model's time, of its frames in the state the model was fitted in
-    /// (`probe::states`; all its frames where none ran in it: `model_state_frames` 0).
+    /// Measured over model: the median of its frames in `model_state` (`probe::states`: the
+    /// state most of its frames ran in that the probe has a model of) over that state's
+    /// model time; where none ran in such a state (`model_state` `None`), the median of all
+    /// its frames over the main model's.
     pub x_model: Option<f64>,
+    pub model_state: Option<usize>,
+    /// Frames of the row in `model_state`.
     pub model_state_frames: Option<usize>,
     pub ms_median: Option<f64>,
     pub ms_min: Option<f64>,
@@ -216,8 +220,11 @@ pub struct BenchTable {
     /// `--relight-rotate`: the lighting the rows and references are under when it is not
     /// the one baked (techniques with dynamic lighting relit to it, baked ones as baked).
     pub relit: Option<String>,
-    /// The device cost model the rows' `model_ms` come from (`probe.md`).
+    /// The probe's main cost model (`probe.md`).
     pub cost_model: Option<crate::probe::CostModel>,
+    /// Its model per speed state (`probe::states`), the rows' `model_ms` come from the one
+    /// of their `model_state`.
+    pub state_cost_models: Vec<crate::probe::StateModel>,
     /// The device's speed states the probe told apart (`probe::states`), and the share of
     /// the bench's monitor frames (one after every row's frames) in each.
     pub device_states: Option<crate::probe::DeviceStates>,
@@ -300,7 +307,7 @@ impl BenchTable {
         }
         if let (Some(states), Some(shares)) = (&self.device_states, &self.bench_state_shares) {
             s += &format!(
-                "; {}; the rows' monitor frames {} in each state; ×model compares a row's frames in the model's state",
+                "; {}; the rows' monitor frames {} in each state; ×model compares a row's frames in the state most of them ran in with that state's model",
                 states.describe(),
                 shares
                     .iter()
@@ -449,6 +456,7 @@ mod tests {
             edge_pixels: 0.0,
             model_ms: None,
             x_model: None,
+            model_state: None,
             model_state_frames: None,
             ms_median: Some(ms),
             ms_min: Some(ms),
@@ -511,6 +519,7 @@ mod tests {
             cost_model: None,
             device_states: None,
             bench_state_shares: None,
+            state_cost_models: Vec::new(),
             seconds: 0.0,
             phases: BenchPhases::default(),
             results: vec![
