@@ -29,13 +29,20 @@ layout(location = 6) in vec4 in_vertex_weights[GROUPS];
 // Every uniform read has a constant index: the groups and coefficients are unrolled here,
 // not left to the driver (with loop-derived indices lavapipe gathers the block per pixel,
 // issue 20: pca24w 215 ms against pca24's 62 ms at 1280×800), and the sums are RGB only.
+// y(n) is evaluated first and each basis vector dotted with it as it is read, so only y,
+// one dot and the RGB sum stay live (summing the 9 SH coefficients over the basis first
+// kept 27 floats live across every group — more than the 16 vector registers lavapipe
+// has, as in cluster.frag): E = Σ_i (m_i + Σ_k w_k c_ki) y_i = m·y + Σ_k w_k (c_k·y).
 #define COEFF(k, i) params.coeffs[9 * (k) + (i)].rgb
-#define ACC_I(w, g, i) e[i] += w.x * COEFF(4 * (g), i) + w.y * COEFF(4 * (g) + 1, i) \
-    + w.z * COEFF(4 * (g) + 2, i) + w.w * COEFF(4 * (g) + 3, i);
+#define DOT_Y(k) (COEFF(k, 0) * y[0] + COEFF(k, 1) * y[1] + COEFF(k, 2) * y[2] \
+    + COEFF(k, 3) * y[3] + COEFF(k, 4) * y[4] + COEFF(k, 5) * y[5] + COEFF(k, 6) * y[6] \
+    + COEFF(k, 7) * y[7] + COEFF(k, 8) * y[8])
 #define ACC_GROUP(g) { \
     vec4 w = GROUP_WEIGHTS(g); \
-    ACC_I(w, g, 0) ACC_I(w, g, 1) ACC_I(w, g, 2) ACC_I(w, g, 3) ACC_I(w, g, 4) \
-    ACC_I(w, g, 5) ACC_I(w, g, 6) ACC_I(w, g, 7) ACC_I(w, g, 8) \
+    irradiance += w.x * DOT_Y(4 * (g)); \
+    irradiance += w.y * DOT_Y(4 * (g) + 1); \
+    irradiance += w.z * DOT_Y(4 * (g) + 2); \
+    irradiance += w.w * DOT_Y(4 * (g) + 3); \
 }
 #if defined(SHVIS_VERTEX_WEIGHTS) && SHVIS_VERTEX_WEIGHTS
 #define GROUP_WEIGHTS(g) in_vertex_weights[g]
@@ -44,9 +51,9 @@ layout(location = 6) in vec4 in_vertex_weights[GROUPS];
 #endif
 
 void main() {
-    vec3 e[9] = vec3[9](COEFF(BASIS_COUNT, 0), COEFF(BASIS_COUNT, 1), COEFF(BASIS_COUNT, 2),
-                        COEFF(BASIS_COUNT, 3), COEFF(BASIS_COUNT, 4), COEFF(BASIS_COUNT, 5),
-                        COEFF(BASIS_COUNT, 6), COEFF(BASIS_COUNT, 7), COEFF(BASIS_COUNT, 8));
+    float y[9];
+    sh_eval_order3(shading_normal(), y);
+    vec3 irradiance = DOT_Y(BASIS_COUNT);
     ACC_GROUP(0)
 #if GROUPS > 1
     ACC_GROUP(1)
@@ -66,12 +73,6 @@ void main() {
 #if GROUPS > 6
 #error "at most 6 groups (24 basis vectors)"
 #endif
-    float y[9];
-    sh_eval_order3(shading_normal(), y);
-    vec3 irradiance = vec3(0.0);
-    for (int i = 0; i < 9; ++i) {
-        irradiance += e[i] * y[i];
-    }
     irradiance = max(irradiance, vec3(0.0));
     write_diffuse(irradiance);
 }
