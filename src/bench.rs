@@ -342,11 +342,7 @@ pub fn run(
         log::info!(
             "cost model: {}; the bench's monitor frames: {} in each state",
             monitor.states.describe(),
-            shares
-                .iter()
-                .map(|s| format!("{:.0} %", 100.0 * s))
-                .collect::<Vec<_>>()
-                .join(" / ")
+            crate::probe::DeviceStates::format_shares(&shares)
         );
         bench_state_shares = Some(shares);
         // Lanes busy per screen pixel, overdraw included: the same for every row that draws

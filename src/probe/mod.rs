@@ -242,12 +242,12 @@ pub struct ProbePoint {
     pub depth_test: bool,
     /// What the shader's SPIR-V counts (all kinds).
     pub counts: CostCounts,
-    /// Median of its timed frames in the model's state (of all of them where none ran in
+    /// Median of its timed frames in the main state (of all of them where none ran in
     /// it: `state_frames` 0).
     pub ms_median: f64,
     /// Batches of interleaved rounds it was timed in (1, or 1 + RETIME_BATCHES).
     pub batches: u32,
-    /// Frames timed, and of them in the model's state ([`states`]).
+    /// Frames timed, and of them in the main state ([`states`]).
     pub frames: usize,
     pub state_frames: usize,
     /// The fitted model's prediction.
@@ -353,9 +353,10 @@ impl Probe {
         }
         let retimed = self.points.iter().filter(|p| p.batches > 1).count();
         s += &format!(
-            "\ndevice: {} (a monitor frame after every point's frames; ms median: of the point's frames in the model's state)\n\n{retimed} point(s) that the first fit missed by more than {:.0} %, or that had no frames in the model's state, timed in {RETIME_BATCHES} more batches of rounds\n",
+            "\ndevice: {} (a monitor frame after every point's frames; ms median: of the point's frames in the main state)\n\n{retimed} point(s) that the first fit missed by more than {:.0} %, or that had no frames in a state holding {:.0} % of the monitor frames or more, timed in {RETIME_BATCHES} more batches of rounds\n",
             self.states.describe(),
-            100.0 * RETIME_ERROR
+            100.0 * RETIME_ERROR,
+            100.0 * STATE_MODEL_SHARE
         );
         for m in &self.state_models {
             s += &format!(
@@ -938,7 +939,6 @@ pub fn run_with_monitor(
         }
         Ok((timed, monitor))
     };
-    // Each point at the median of its frames in the model's state (module doc).
     // Each point at the median of its frames in `state` (of all of them where none ran in
     // it: `state_frames` 0).
     let measure =
@@ -1059,7 +1059,7 @@ pub fn run_with_monitor(
 
 /// The probe's monitor point (the empty shader over the screen), kept past the probe for
 /// `shvis bench` to time one frame of after every row's frames, so that its rows are
-/// compared with the model in the state it was fitted in (`states`).
+/// compared with the model of the state they ran in (`states`).
 pub struct Monitor {
     pipeline: crate::gpu::MeshPipeline,
     mesh: MeshBuffers,

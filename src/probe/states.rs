@@ -149,6 +149,15 @@ impl DeviceStates {
         counts.iter().map(|&c| c as f64 / total).collect()
     }
 
+    /// Shares as "15 % / 85 %".
+    pub fn format_shares(shares: &[f64]) -> String {
+        shares
+            .iter()
+            .map(|s| format!("{:.0} %", 100.0 * s))
+            .collect::<Vec<_>>()
+            .join(" / ")
+    }
+
     /// One line for the reports.
     pub fn describe(&self) -> String {
         let spikes = if self.spike_ms.is_finite() {

@@ -309,11 +309,7 @@ impl BenchTable {
             s += &format!(
                 "; {}; the rows' monitor frames {} in each state; ×model compares a row's frames in the state most of them ran in with that state's model",
                 states.describe(),
-                shares
-                    .iter()
-                    .map(|s| format!("{:.0} %", 100.0 * s))
-                    .collect::<Vec<_>>()
-                    .join(" / ")
+                crate::probe::DeviceStates::format_shares(shares)
             );
         }
         if self.reference_bounces > 0 {
