@@ -16,7 +16,8 @@ use crate::attribution::{LadderPixels, cpu_rungs};
 use crate::gpu::{Context, GpuError};
 use crate::ndf::render::{NormalFilter, SpecularLight, SpecularTerm};
 use crate::prepare::Prepared;
-use crate::probe::Segmented;
+use crate::probe::states::Segment;
+use crate::probe::{Monitor, Segmented};
 use crate::reference::{ReferenceImage, ReferenceSettings, render_reference};
 use crate::render::{Frame, FrameSettings, SceneGpu};
 use crate::report::ReportError;
@@ -180,14 +181,8 @@ pub fn run(
     } else {
         None
     };
-    // The probe's monitor frame, timed after every row's frames (`probe::states`).
-    let read_monitor = || -> Result<f64, BenchError> {
-        match &cost_model {
-            Some((_, monitor)) => Ok(monitor.read()?),
-            None => Ok(f64::NAN),
-        }
-    };
-    let mut monitor_frames: Vec<f64> = Vec::new();
+    // The probe's monitor, timed around every row's frames (`probe::states`).
+    let monitor = cost_model.as_ref().map(|(_, m)| m);
     lap.split(&mut phases.probe);
     let relit = settings.relight_degrees.map(|d| Relit::new(prepared, d));
     let env = relit.as_ref().map_or(&prepared.env, |r| &r.env);
@@ -256,7 +251,6 @@ pub fn run(
                     continue;
                 }
                 let reference = reference.as_ref();
-                let monitor_before = read_monitor()?;
                 let measured = measure_row(
                     &rows_of,
                     technique,
@@ -265,10 +259,11 @@ pub fn run(
                     &mut ladder,
                     settings,
                     per_round,
+                    monitor,
                     &mut lap,
                     &mut phases,
                 );
-                let (row, frame) = match measured {
+                let (row, frame, segment) = match measured {
                     // The specular term's moment maps can take a dx9 draw past its textures.
                     Err(BenchError::Technique(e @ TechniqueError::Dx9Rule { .. }))
                         if filter.is_some() =>
@@ -279,11 +274,7 @@ pub fn run(
                     other => other?,
                 };
                 rows.push(row);
-                let monitor_after = read_monitor()?;
-                monitor_frames.extend([monitor_before, monitor_after]);
-                let mut segments = Segmented::default();
-                segments.push(monitor_before, frame.ms.clone(), monitor_after);
-                samples.push(segments);
+                samples.push(Segmented(vec![segment]));
                 if k == 0
                     && FIGURES
                         .iter()
@@ -320,11 +311,10 @@ pub fn run(
         for (row, times) in rows.iter().zip(&mut samples) {
             let tech = rows_of.build(row.technique, row.path)?;
             lap.split(&mut phases.build);
-            let monitor_before = read_monitor()?;
-            let ms = tech.render(&scene, settings.warmup.min(1), per_round)?.ms;
-            let monitor_after = read_monitor()?;
-            monitor_frames.extend([monitor_before, monitor_after]);
-            times.push(monitor_before, ms, monitor_after);
+            let (segment, _) = timed_segment(monitor, || {
+                Ok(tech.render(&scene, settings.warmup.min(1), per_round)?)
+            })?;
+            times.0.push(segment);
             lap.split(&mut phases.render);
         }
     }
@@ -338,6 +328,7 @@ pub fn run(
     fill_ratios_to_preconv(&mut rows);
     let mut bench_state_shares = None;
     if let Some((probe, monitor)) = &cost_model {
+        let monitor_frames: Vec<f64> = samples.iter().flat_map(Segmented::monitor_frames).collect();
         let shares = monitor.states.shares_of(&monitor_frames);
         log::info!(
             "cost model: {}; the bench's monitor frames: {} in each state",
@@ -741,8 +732,28 @@ impl RowTechniques<'_> {
     }
 }
 
+/// Renders `render`'s frames between two monitor frames (NaN without a monitor); returns
+/// the segment and the frame.
+fn timed_segment(
+    monitor: Option<&Monitor>,
+    render: impl FnOnce() -> Result<Frame, BenchError>,
+) -> Result<(Segment, Frame), BenchError> {
+    let read = || -> Result<f64, BenchError> {
+        Ok(monitor.map(Monitor::read).transpose()?.unwrap_or(f64::NAN))
+    };
+    let monitor_before = read()?;
+    let frame = render()?;
+    let monitor_after = read()?;
+    let segment = Segment {
+        monitor_before,
+        ms: frame.ms.clone(),
+        monitor_after,
+    };
+    Ok((segment, frame))
+}
+
 /// Builds, times (the first of the timing rounds: `frames`), writes and measures one
-/// technique × path; returns its row and image.
+/// technique × path; returns its row, image and timed segment.
 #[allow(clippy::too_many_arguments)]
 fn measure_row(
     rows_of: &RowTechniques<'_>,
@@ -752,13 +763,16 @@ fn measure_row(
     ladder: &mut Ladder,
     settings: &BenchSettings,
     frames: u32,
+    monitor: Option<&Monitor>,
     lap: &mut Lap,
     phases: &mut BenchPhases,
-) -> Result<(BenchRow, Frame), BenchError> {
+) -> Result<(BenchRow, Frame, Segment), BenchError> {
     let (scene, prepared) = (rows_of.scene, rows_of.prepared);
     let tech = rows_of.build(technique, path)?;
     lap.split(&mut phases.build);
-    let frame = tech.render(scene, settings.warmup, frames)?;
+    let (segment, frame) = timed_segment(monitor, || {
+        Ok(tech.render(scene, settings.warmup, frames)?)
+    })?;
     lap.split(&mut phases.render);
     let specular = scene.specular().map(|s| s.term.filter);
     let label = match specular {
@@ -848,7 +862,7 @@ fn measure_row(
             row.clipped_pixels
         );
     }
-    Ok((row, frame))
+    Ok((row, frame, segment))
 }
 
 /// `{name}.png` (with `exposure`) and `{name}.exr` in `dir`.

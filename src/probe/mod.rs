@@ -892,10 +892,9 @@ pub fn run_with_monitor(
             what: "probe".into(),
             detail: "no empty-shader point over the screen to monitor the device with".into(),
         })?;
-    let read_monitor = |planned: &[Planned]| -> Result<f64, GpuError> {
+    let read_monitor = |planned: &[Planned]| {
         let m = &planned[monitor_index];
-        let ms = gpu.time_pipeline_on(&m.pipeline, m.mesh, 0, 1)?;
-        Ok(ms.first().copied().unwrap_or(f64::NAN))
+        one_frame(&gpu, &m.pipeline, m.mesh)
     };
     // One batch: the timed frames of the points `which`, in interleaved rounds, a monitor
     // frame after each point's frames; returns their segments and the monitor frames.
@@ -1058,7 +1057,7 @@ pub fn run_with_monitor(
 }
 
 /// The probe's monitor point (the empty shader over the screen), kept past the probe for
-/// `shvis bench` to time one frame of after every row's frames, so that its rows are
+/// `shvis bench` to time one frame of before and after every row's frames, so that its rows are
 /// compared with the model of the state they ran in (`states`).
 pub struct Monitor {
     pipeline: crate::gpu::MeshPipeline,
@@ -1074,11 +1073,18 @@ pub struct Monitor {
 impl Monitor {
     /// One monitor frame now, ms (NaN without timestamps).
     pub fn read(&self) -> Result<f64, GpuError> {
-        let ms = self
-            .gpu
-            .time_pipeline_on(&self.pipeline, &self.mesh, 0, 1)?;
-        Ok(ms.first().copied().unwrap_or(f64::NAN))
+        one_frame(&self.gpu, &self.pipeline, &self.mesh)
     }
+}
+
+/// One timed frame of `pipeline` over `mesh` with no warm-up, ms (NaN without timestamps).
+fn one_frame(
+    gpu: &SceneGpu,
+    pipeline: &crate::gpu::MeshPipeline,
+    mesh: &MeshBuffers,
+) -> Result<f64, GpuError> {
+    let ms = gpu.time_pipeline_on(pipeline, mesh, 0, 1)?;
+    Ok(ms.first().copied().unwrap_or(f64::NAN))
 }
 
 /// The model's time for a probe point (its depth test's part taken off where it is off).

@@ -209,6 +209,13 @@ impl Segmented {
         });
     }
 
+    /// The monitor frames around its segments.
+    pub fn monitor_frames(&self) -> impl Iterator<Item = f64> + '_ {
+        self.0
+            .iter()
+            .flat_map(|s| [s.monitor_before, s.monitor_after])
+    }
+
     /// Every frame.
     pub fn all(&self) -> Vec<f64> {
         self.0.iter().flat_map(|s| s.ms.iter().copied()).collect()
