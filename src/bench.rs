@@ -311,7 +311,8 @@ pub fn run(
         for (row, times) in rows.iter().zip(&mut samples) {
             let tech = rows_of.build(row.technique, row.path)?;
             lap.split(&mut phases.build);
-            let (segment, _) = timed_segment(monitor, || {
+            // Each round times a build of its own (`probe::states`: builds differ).
+            let (segment, _) = timed_segment(monitor, times.0.len(), || {
                 Ok(tech.render(&scene, settings.warmup.min(1), per_round)?)
             })?;
             times.0.push(segment);
@@ -355,12 +356,12 @@ pub fn run(
             let load = row.own_mesh_load.unwrap_or(load);
             row.coverage = load.lanes / pixels;
             row.edge_pixels = load.edge_pixels;
-            // Like with like: the row's frames in the state most of them ran in that the
-            // probe has a model of, against that model; else every frame against the main
-            // model.
+            // Like with like: the row's frames in the fastest state it ran in that the probe
+            // has a model of (its fastest build's), against that model; else every frame
+            // against the main model.
             let states = &monitor.states;
             let modelled = probe.state_models.iter().map(|m| m.state);
-            let (model, measured, state, state_frames) = match times.busiest_state(states, modelled)
+            let (model, measured, state, state_frames) = match times.fastest_state(states, modelled)
             {
                 Some((state, ms, frames)) => (probe.model_of(state), Some(ms), Some(state), frames),
                 None => (None, None, None, 0),
@@ -732,10 +733,11 @@ impl RowTechniques<'_> {
     }
 }
 
-/// Renders `render`'s frames between two monitor frames (NaN without a monitor); returns
-/// the segment and the frame.
+/// Renders `render`'s frames (timed on pipeline build `build`) between two monitor frames
+/// (NaN without a monitor); returns the segment and the frame.
 fn timed_segment(
     monitor: Option<&Monitor>,
+    build: usize,
     render: impl FnOnce() -> Result<Frame, BenchError>,
 ) -> Result<(Segment, Frame), BenchError> {
     let read = || -> Result<f64, BenchError> {
@@ -745,6 +747,7 @@ fn timed_segment(
     let frame = render()?;
     let monitor_after = read()?;
     let segment = Segment {
+        build,
         monitor_before,
         ms: frame.ms.clone(),
         monitor_after,
@@ -770,7 +773,7 @@ fn measure_row(
     let (scene, prepared) = (rows_of.scene, rows_of.prepared);
     let tech = rows_of.build(technique, path)?;
     lap.split(&mut phases.build);
-    let (segment, frame) = timed_segment(monitor, || {
+    let (segment, frame) = timed_segment(monitor, 0, || {
         Ok(tech.render(scene, settings.warmup, frames)?)
     })?;
     lap.split(&mut phases.render);

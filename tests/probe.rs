@@ -46,8 +46,16 @@ fn the_probe_runs_every_microbenchmark_and_fits_a_model_to_them() {
     // The states come from the monitor frames, and the kept monitor times again.
     let states = &probe.states;
     assert!(!states.monitor_ms.is_empty() && states.main_state < states.count());
-    // The main state has a model, and it is the probe's.
+    // The main state has a model, and it is the probe's: that of the fastest state with a
+    // model.
     assert_eq!(probe.model_of(states.main_state), Some(&probe.model));
+    for m in &probe.state_models {
+        assert!(
+            states.monitor_ms[m.state] >= states.monitor_ms[states.main_state],
+            "{states:?}"
+        );
+        assert!(!m.worst_point.is_empty(), "{m:?}");
+    }
     assert!(
         (states.shares.iter().sum::<f64>() - 1.0).abs() < 1e-9,
         "{states:?}"

@@ -14,11 +14,22 @@
 //! in it. [`DeviceStates::from_monitor`] tells the states apart from the probe's monitor
 //! frames (two clusters of log-times by 2-means, kept apart where their centres differ by
 //! more than [`STATE_RATIO`]; else one state). The probe fits a model to the points'
-//! frames in each state it has frames of every point in (the state it spent most monitor
-//! frames in is the main one, whose model `probe.md` and `table.json` report first), and
-//! a row's `x_model` compares its frames in the state it ran in most with that state's
-//! model: like with like, whichever state the device was in when. A dedicated device has
-//! one state, and every frame counts.
+//! frames in each state it has frames of every point in (the main one, whose model
+//! `probe.md` and `table.json` report first: the fastest of those, the device least
+//! disturbed; else the state most monitor frames fell in), and a row's `x_model` compares
+//! its frames in the fastest modelled state it ran in with that state's model: like with
+//! like, whichever state the device was in when. A dedicated device has one state, and
+//! every frame counts.
+//!
+//! Two more things the traces showed. The first frame after a long segment of heavy work is
+//! often slow when the next is not (32 of 600 monitor frames of one probe crossed the
+//! threshold that way, 1 the other way; the second frame after: 4 against 3), so a monitor
+//! reading is one untimed frame, then the timed one. And one **build** of a pipeline can
+//! run a shader ≈ 25 % slower than another build of the same SPIR-V for as long as it lives
+//! (128 uniform reads: 70.7–77.5 ms over 20 segments on two builds, 57.3–61.6 on the third,
+//! in both states) — where the JIT put its code, by the look of it, not the shader's
+//! cost. So every segment says which build it timed, and a point's or row's time in a state
+//! is the median of its fastest build there ([`Segmented::median_in`]).
 
 use serde::Serialize;
 
@@ -39,7 +50,9 @@ pub struct DeviceStates {
     pub spike_ms: f64,
     /// Share of the probe's monitor frames in each state.
     pub shares: Vec<f64>,
-    /// The state with most of the probe's monitor frames (its model is the probe's main one).
+    /// The state whose model is the probe's main one: from the monitor frames alone the
+    /// state with most of them; the probe makes it the fastest state that every point has
+    /// frames in, where there is one (the device least disturbed).
     pub main_state: usize,
 }
 
@@ -191,6 +204,8 @@ impl DeviceStates {
 /// Frames timed in one go, with the monitor frames around them (NaN: none).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Segment {
+    /// Which build of the pipeline timed them (module doc): segments of one build pool.
+    pub build: usize,
     pub monitor_before: f64,
     pub ms: Vec<f64>,
     pub monitor_after: f64,
@@ -201,8 +216,9 @@ pub struct Segment {
 pub struct Segmented(pub Vec<Segment>);
 
 impl Segmented {
-    pub fn push(&mut self, monitor_before: f64, ms: Vec<f64>, monitor_after: f64) {
+    pub fn push(&mut self, build: usize, monitor_before: f64, ms: Vec<f64>, monitor_after: f64) {
         self.0.push(Segment {
+            build,
             monitor_before,
             ms,
             monitor_after,
@@ -230,18 +246,41 @@ impl Segmented {
             .collect()
     }
 
-    /// The median of the frames in `state`, and how many there are.
+    /// The median of the frames in `state` of the build whose median there is lowest
+    /// (module doc), and how many frames of every build ran in `state`.
     pub fn median_in(&self, states: &DeviceStates, state: usize) -> (Option<f64>, usize) {
-        let frames = self.ran_in(states, state);
-        (
-            TimingStats::from_ms(&frames).map(|t| t.ms_median),
-            frames.len(),
-        )
+        self.fastest_build(|s| states.ran_in(s, state))
     }
 
-    /// The state most of these frames ran in, among `candidates`, with their median and
-    /// count; `None` where none ran in any.
-    pub fn busiest_state(
+    /// The median of every frame of its fastest build, whatever state it ran in.
+    pub fn fastest_build_median(&self) -> Option<f64> {
+        self.fastest_build(|_| true).0
+    }
+
+    /// The lowest of the builds' medians over the segments `keep` keeps, and the frames kept.
+    fn fastest_build(&self, keep: impl Fn(&Segment) -> bool) -> (Option<f64>, usize) {
+        let kept: Vec<&Segment> = self.0.iter().filter(|s| keep(s)).collect();
+        let mut builds: Vec<usize> = kept.iter().map(|s| s.build).collect();
+        builds.sort_unstable();
+        builds.dedup();
+        let fastest = builds
+            .into_iter()
+            .filter_map(|b| {
+                let frames: Vec<f64> = kept
+                    .iter()
+                    .filter(|s| s.build == b)
+                    .flat_map(|s| s.ms.iter().copied())
+                    .collect();
+                TimingStats::from_ms(&frames).map(|t| t.ms_median)
+            })
+            .min_by(f64::total_cmp);
+        (fastest, kept.iter().map(|s| s.ms.len()).sum())
+    }
+
+    /// The fastest state among `candidates` that any of these frames ran in (the device
+    /// least disturbed, as the probe's main model), with their median ([`Self::median_in`])
+    /// and count; `None` where none ran in any.
+    pub fn fastest_state(
         &self,
         states: &DeviceStates,
         candidates: impl IntoIterator<Item = usize>,
@@ -252,7 +291,7 @@ impl Segmented {
                 (Some(ms), n) => Some((s, ms, n)),
                 (None, _) => None,
             })
-            .max_by_key(|&(_, _, n)| n)
+            .min_by_key(|&(s, _, _)| states.monitor_ms.get(s).map(|m| m.to_bits()))
     }
 }
 
@@ -271,6 +310,7 @@ mod tests {
         let fast = DeviceStates::from_monitor(&[3.1, 1.5, 1.6, 3.2, 1.5, 1.55, 1.6]);
         assert_eq!(fast.main_state, 0, "{fast:?}");
         let seg = |a: f64, b: f64| Segment {
+            build: 0,
             monitor_before: a,
             ms: vec![10.0],
             monitor_after: b,
@@ -292,15 +332,32 @@ mod tests {
     }
 
     #[test]
-    fn a_row_is_compared_in_the_state_most_of_its_frames_ran_in() {
+    fn a_row_is_compared_in_the_fastest_state_it_ran_in() {
         let states = DeviceStates::from_monitor(&[1.0, 1.0, 2.0, 2.0]);
         let mut row = Segmented::default();
-        row.push(2.0, vec![9.0, 11.0], 2.0);
-        row.push(1.0, vec![5.0], 1.0);
-        row.push(1.0, vec![50.0], 2.0);
+        row.push(0, 2.0, vec![9.0, 11.0], 2.0);
+        row.push(0, 1.0, vec![5.0], 1.0);
+        row.push(0, 1.0, vec![50.0], 2.0);
         assert_eq!(row.median_in(&states, 0), (Some(5.0), 1));
-        assert_eq!(row.busiest_state(&states, [0, 1]), Some((1, 10.0, 2)));
-        assert_eq!(row.busiest_state(&states, [0]), Some((0, 5.0, 1)));
-        assert_eq!(Segmented::default().busiest_state(&states, [0, 1]), None);
+        assert_eq!(row.fastest_state(&states, [1, 0]), Some((0, 5.0, 1)));
+        assert_eq!(row.fastest_state(&states, [1]), Some((1, 10.0, 2)));
+        assert_eq!(Segmented::default().fastest_state(&states, [0, 1]), None);
+    }
+
+    #[test]
+    fn a_slow_build_does_not_set_the_time_but_its_frames_count() {
+        let states = DeviceStates::single(1.0);
+        let mut point = Segmented::default();
+        point.push(0, 1.0, vec![73.0, 74.0, 72.0], 1.0);
+        point.push(1, 1.0, vec![58.0, 61.0], 1.0);
+        point.push(0, 1.0, vec![75.0], 1.0);
+        point.push(1, 1.0, vec![59.0], 1.0);
+        assert_eq!(point.median_in(&states, 0), (Some(59.0), 7));
+        assert_eq!(point.fastest_build_median(), Some(59.0));
+        // One build: the median of all its frames, as before builds were told apart.
+        let mut one = Segmented::default();
+        one.push(3, 1.0, vec![10.0, 30.0], 1.0);
+        one.push(3, 1.0, vec![20.0], 1.0);
+        assert_eq!(one.median_in(&states, 0), (Some(20.0), 3));
     }
 }

@@ -137,9 +137,9 @@ pub struct BenchRow {
     /// and the measured median over it.
     pub model_ms: Option<f64>,
     /// Measured over model: the median of its frames in `model_state` (`probe::states`: the
-    /// state most of its frames ran in that the probe has a model of) over that state's
-    /// model time; where none ran in such a state (`model_state` `None`), the median of all
-    /// its frames over the main model's.
+    /// fastest state it ran in that the probe has a model of), of its fastest build there,
+    /// over that state's model time; where none ran in such a state (`model_state` `None`),
+    /// the median of all its frames over the main model's.
     pub x_model: Option<f64>,
     pub model_state: Option<usize>,
     /// Frames of the row in `model_state`.
@@ -307,7 +307,7 @@ impl BenchTable {
         }
         if let (Some(states), Some(shares)) = (&self.device_states, &self.bench_state_shares) {
             s += &format!(
-                "; {}; the rows' monitor frames {} in each state; ×model compares a row's frames in the state most of them ran in with that state's model",
+                "; {}; the rows' monitor frames {} in each state; ×model compares a row's frames in the fastest modelled state it ran in (its fastest build's) with that state's model",
                 states.describe(),
                 crate::probe::DeviceStates::format_shares(shares)
             );
