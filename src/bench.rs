@@ -6,7 +6,9 @@
 //! pixels (`report::metrics`); its time is the median of `frames` timed frames
 //! (`gpu::pass`: timestamps around the scene pass), taken in [`TIMING_ROUNDS`] rounds over
 //! every row — the row rebuilt for each, `warmup` untimed frames before the first and one
-//! before each later round — so that a slow spell of a shared device spreads over all rows.
+//! before each later round — so that a slow spell of a shared device spreads over all rows;
+//! a row that ran in none of the speed states the probe has a model of gets up to
+//! [`MODEL_STATE_ROUNDS`] more (`probe::states`).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -319,6 +321,39 @@ pub fn run(
             lap.split(&mut phases.render);
         }
     }
+    // A row with no frames in a state the probe has a model of (the device sat in another
+    // through all its rounds) is timed in up to MODEL_STATE_ROUNDS more, each on a build of
+    // its own, until it has some: else its ×model would set frames of one state against the
+    // model of another.
+    if let Some((probe, monitor)) = &cost_model {
+        let modelled: Vec<usize> = probe.state_models.iter().map(|m| m.state).collect();
+        for _ in 0..MODEL_STATE_ROUNDS {
+            let unmodelled: Vec<usize> = (0..rows.len())
+                .filter(|&i| {
+                    samples[i]
+                        .fastest_state(&monitor.states, modelled.iter().copied())
+                        .is_none()
+                })
+                .collect();
+            if unmodelled.is_empty() {
+                break;
+            }
+            log::info!(
+                "cost model: {} row(s) without frames in a modelled state, timed again",
+                unmodelled.len()
+            );
+            for i in unmodelled {
+                let tech = rows_of.build(rows[i].technique, rows[i].path)?;
+                lap.split(&mut phases.build);
+                let times = &mut samples[i];
+                let (segment, _) = timed_segment(Some(monitor), times.0.len(), || {
+                    Ok(tech.render(&scene, settings.warmup.min(1), per_round)?)
+                })?;
+                times.0.push(segment);
+                lap.split(&mut phases.render);
+            }
+        }
+    }
     for (row, times) in rows.iter_mut().zip(&samples) {
         let timing = TimingStats::from_ms(&times.all());
         row.ms_median = timing.map(|t| t.ms_median);
@@ -593,6 +628,9 @@ pub const LADDER_DIR: &str = "ladder";
 /// with `--specular` one): a slow spell of a shared device then lands on a share of every
 /// row's frames instead of on all of a few rows'.
 const TIMING_ROUNDS: u32 = 3;
+
+/// Rounds more, at most, for a row that has no frames in a state the probe has a model of.
+const MODEL_STATE_ROUNDS: usize = 2;
 
 /// The file stem of the reference image `frame` was taken from (`reference_for`).
 fn reference_stem(name: &str, kind: RowReference) -> String {
