@@ -265,7 +265,7 @@ pub fn run(
                     &mut lap,
                     &mut phases,
                 );
-                let (row, frame, segment) = match measured {
+                let (row, frame, segments) = match measured {
                     // The specular term's moment maps can take a dx9 draw past its textures.
                     Err(BenchError::Technique(e @ TechniqueError::Dx9Rule { .. }))
                         if filter.is_some() =>
@@ -276,7 +276,7 @@ pub fn run(
                     other => other?,
                 };
                 rows.push(row);
-                samples.push(Segmented(vec![segment]));
+                samples.push(Segmented(segments));
                 if k == 0
                     && FIGURES
                         .iter()
@@ -314,10 +314,14 @@ pub fn run(
             let tech = rows_of.build(row.technique, row.path)?;
             lap.split(&mut phases.build);
             // Each round times a build of its own (`probe::states`: builds differ).
-            let (segment, _) = timed_segment(monitor, times.0.len(), || {
-                Ok(tech.render(&scene, settings.warmup.min(1), per_round)?)
-            })?;
-            times.0.push(segment);
+            let build = times.0.last().map_or(0, |s| s.build + 1);
+            times.0.extend(timed_segments(
+                monitor,
+                build,
+                settings.warmup.min(1),
+                per_round,
+                |w, n| tech.time(&scene, w, n),
+            )?);
             lap.split(&mut phases.render);
         }
     }
@@ -346,10 +350,14 @@ pub fn run(
                 let tech = rows_of.build(rows[i].technique, rows[i].path)?;
                 lap.split(&mut phases.build);
                 let times = &mut samples[i];
-                let (segment, _) = timed_segment(Some(monitor), times.0.len(), || {
-                    Ok(tech.render(&scene, settings.warmup.min(1), per_round)?)
-                })?;
-                times.0.push(segment);
+                let build = times.0.last().map_or(0, |s| s.build + 1);
+                times.0.extend(timed_segments(
+                    Some(monitor),
+                    build,
+                    settings.warmup.min(1),
+                    per_round,
+                    |w, n| tech.time(&scene, w, n),
+                )?);
                 lap.split(&mut phases.render);
             }
         }
@@ -629,6 +637,9 @@ pub const LADDER_DIR: &str = "ladder";
 /// row's frames instead of on all of a few rows'.
 const TIMING_ROUNDS: u32 = 3;
 
+/// Frames of a row timed between two monitor readings, at most ([`timed_segments`]).
+const CHUNK_FRAMES: u32 = 3;
+
 /// Rounds more, at most, for a row that has no frames in a state the probe has a model of.
 const MODEL_STATE_ROUNDS: usize = 2;
 
@@ -771,30 +782,42 @@ impl RowTechniques<'_> {
     }
 }
 
-/// Renders `render`'s frames (timed on pipeline build `build`) between two monitor frames
-/// (NaN without a monitor); returns the segment and the frame.
-fn timed_segment(
+/// Times `frames` frames (after `warmup` untimed ones) with `time` (warm-up, frames → ms),
+/// on pipeline build `build`, in chunks of at most [`CHUNK_FRAMES`] with a monitor reading
+/// before each and after the last (NaN without a monitor): the states (`probe::states`) are
+/// told apart per chunk, not per round (one round of a row can span a second, as long as
+/// the device's stay in a state).
+fn timed_segments(
     monitor: Option<&Monitor>,
     build: usize,
-    render: impl FnOnce() -> Result<Frame, BenchError>,
-) -> Result<(Segment, Frame), BenchError> {
+    warmup: u32,
+    frames: u32,
+    time: impl Fn(u32, u32) -> Result<Vec<f64>, GpuError>,
+) -> Result<Vec<Segment>, BenchError> {
     let read = || -> Result<f64, BenchError> {
         Ok(monitor.map(Monitor::read).transpose()?.unwrap_or(f64::NAN))
     };
-    let monitor_before = read()?;
-    let frame = render()?;
-    let monitor_after = read()?;
-    let segment = Segment {
-        build,
-        monitor_before,
-        ms: frame.ms.clone(),
-        monitor_after,
-    };
-    Ok((segment, frame))
+    let chunks = frames.div_ceil(CHUNK_FRAMES).max(1);
+    let mut before = read()?;
+    let mut segments = Vec::new();
+    for c in 0..chunks {
+        // Even chunks: 7 frames are 3 + 2 + 2.
+        let n = frames / chunks + u32::from(c < frames % chunks);
+        let ms = time(if c == 0 { warmup } else { 0 }, n)?;
+        let after = read()?;
+        segments.push(Segment {
+            build,
+            monitor_before: before,
+            ms,
+            monitor_after: after,
+        });
+        before = after;
+    }
+    Ok(segments)
 }
 
 /// Builds, times (the first of the timing rounds: `frames`), writes and measures one
-/// technique × path; returns its row, image and timed segment.
+/// technique × path; returns its row, image and timed segments.
 #[allow(clippy::too_many_arguments)]
 fn measure_row(
     rows_of: &RowTechniques<'_>,
@@ -807,20 +830,23 @@ fn measure_row(
     monitor: Option<&Monitor>,
     lap: &mut Lap,
     phases: &mut BenchPhases,
-) -> Result<(BenchRow, Frame, Segment), BenchError> {
+) -> Result<(BenchRow, Frame, Vec<Segment>), BenchError> {
     let (scene, prepared) = (rows_of.scene, rows_of.prepared);
     let tech = rows_of.build(technique, path)?;
     lap.split(&mut phases.build);
-    let (segment, frame) = timed_segment(monitor, 0, || {
-        Ok(tech.render(scene, settings.warmup, frames)?)
+    let segments = timed_segments(monitor, 0, settings.warmup, frames, |w, n| {
+        tech.time(scene, w, n)
     })?;
+    // The image: one more frame, read back (its time is not kept).
+    let frame = tech.render(scene, 0, 1)?;
+    let frame_ms: Vec<f64> = segments.iter().flat_map(|s| s.ms.iter().copied()).collect();
     lap.split(&mut phases.render);
     let specular = scene.specular().map(|s| s.term.filter);
     let label = match specular {
         Some(f) => format!("{}.spec{}", tech.label(), f.name()),
         None => tech.label(),
     };
-    let timing = TimingStats::from_ms(&frame.ms);
+    let timing = TimingStats::from_ms(&frame_ms);
     let (reference_frame, reference_kind) = match references {
         Some(r) => {
             let (f, kind) = reference_for(technique, &r.main);
@@ -882,7 +908,7 @@ fn measure_row(
         ms_median: timing.map(|s| s.ms_median),
         ms_min: timing.map(|s| s.ms_min),
         ms_max: timing.map(|s| s.ms_max),
-        frames: frame.ms.len(),
+        frames: frame_ms.len(),
         rel_rmse: error.map(|e| e.rel_rmse),
         rel_rmse_bounced,
         psnr: error.map(|e| e.psnr),
@@ -903,7 +929,7 @@ fn measure_row(
             row.clipped_pixels
         );
     }
-    Ok((row, frame, segment))
+    Ok((row, frame, segments))
 }
 
 /// `{name}.png` (with `exposure`) and `{name}.exr` in `dir`.

@@ -398,6 +398,17 @@ impl SceneGpu {
         pipeline.render_frames(&self.target, mesh, warmup, frames)
     }
 
+    /// Times `pipeline` over the scene's mesh, as [`Self::render_pipeline`] without reading
+    /// the image back.
+    pub fn time_pipeline(
+        &self,
+        pipeline: &MeshPipeline,
+        warmup: u32,
+        frames: u32,
+    ) -> Result<Vec<f64>, GpuError> {
+        pipeline.render_frames(&self.target, &self.mesh, warmup, frames)
+    }
+
     /// Renders with any mesh pipeline built for this scene's target (e.g. G-buffer passes).
     pub fn render_pipeline(
         &self,

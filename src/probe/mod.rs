@@ -468,7 +468,7 @@ const RETIME_ERROR: f64 = 0.08;
 const RETIME_BATCHES: usize = 2;
 /// A state with this share of the monitor frames gets a model: the points without frames
 /// in it are timed again.
-const STATE_MODEL_SHARE: f64 = 0.2;
+const STATE_MODEL_SHARE: f64 = 0.1;
 /// Uniform vec4s in the probe's block.
 const UNIFORM_VEC4S: u32 = 256;
 

@@ -256,6 +256,15 @@ impl TechniqueGpu {
         }
     }
 
+    /// Frame times of [`Self::render`], the image not read back.
+    pub fn time(&self, scene: &SceneGpu, warmup: u32, frames: u32) -> Result<Vec<f64>, GpuError> {
+        let pipeline = &self.sets[self.front].pipeline;
+        match &self.mesh {
+            Some(mesh) => scene.time_pipeline_on(pipeline, mesh, warmup, frames),
+            None => scene.time_pipeline(pipeline, warmup, frames),
+        }
+    }
+
     /// Triangles one frame draws: the technique's own mesh's, else the scene's.
     pub fn triangle_count(&self, scene: &SceneGpu) -> u32 {
         self.mesh
