@@ -21,10 +21,11 @@
 //! project's VM the empty shader over the screen takes 1.7 or 3.4 ms, a neighbour's memory
 //! traffic by the look of it): a monitor frame after each point's frames tells which state
 //! they ran in ([`states`]); a model is fitted per state to the points' medians in it
-//! (the main one: the state most monitor frames fell in). A point the first fit misses by
-//! more than 8 %, or without frames in a common state, is timed in two more batches of
-//! rounds on freshly built pipelines, its frames pooled with the first and its time that
-//! of its fastest build (a build can run ≈ 25 % slow for as long as it lives, `states`).
+//! (the main one: the fastest state every point ran in, the device least disturbed). A
+//! point the first fit misses by more than 8 %, or with fewer than 5 frames in a state of
+//! ≥ 10 % of the monitor frames, is timed in two more batches of rounds on freshly built
+//! pipelines, its frames pooled with the first and its time that of its fastest build (a
+//! build can run ≈ 25 % slow for as long as it lives, `states`).
 //!
 //! **Model.** t = fixed + T·c_T + E·c_E + f · (p + Σ_k n_k c_k), T the triangles drawn and
 //! c_T the cost of one (setup, vertex shading), E the length of their edges on the screen in
@@ -385,7 +386,7 @@ impl Probe {
         }
         let retimed = self.points.iter().filter(|p| p.batches > 1).count();
         s += &format!(
-            "\ndevice: {} (a monitor frame after every point's frames; ms median: of the point's frames in the main state, of its fastest build there)\n\n{retimed} point(s) that the first fit missed by more than {:.0} %, or that had no frames in a state holding {:.0} % of the monitor frames or more, timed in {RETIME_BATCHES} more batches of rounds\n",
+            "\ndevice: {} (a monitor frame after every point's frames; ms median: of the point's frames in the main state, of its fastest build there)\n\n{retimed} point(s) that the first fit missed by more than {:.0} %, or that had fewer than {MIN_STATE_FRAMES} frames in a state holding {:.0} % of the monitor frames or more, timed in {RETIME_BATCHES} more batches of rounds\n",
             self.states.describe(),
             100.0 * RETIME_ERROR,
             100.0 * STATE_MODEL_SHARE
@@ -466,9 +467,12 @@ const PROBE_ROUNDS: u32 = 10;
 const RETIME_ERROR: f64 = 0.08;
 /// Batches a missed point is timed again in.
 const RETIME_BATCHES: usize = 2;
-/// A state with this share of the monitor frames gets a model: the points without frames
-/// in it are timed again.
+/// A state with this share of the monitor frames gets a model: the points with fewer than
+/// [`MIN_STATE_FRAMES`] in it are timed again.
 const STATE_MODEL_SHARE: f64 = 0.1;
+/// Frames in a state below which a point's median there is too few to fit (one run put the
+/// 2·128² grid at 1.10× the model on 2 frames).
+const MIN_STATE_FRAMES: usize = 5;
 /// Uniform vec4s in the probe's block.
 const UNIFORM_VEC4S: u32 = 256;
 
@@ -999,12 +1003,12 @@ pub fn run_with_monitor(
         })
     };
     let mut model = fit_points(&points)?;
-    // A point the fit misses by more than RETIME_ERROR, or without frames in a state that
-    // held at least STATE_MODEL_SHARE of the monitor frames, is timed in RETIME_BATCHES
-    // more batches, each on a pipeline built afresh (a build can run a shader ≈ 25 % slower
-    // than another for as long as it lives, `states`); its segments join the first ones,
-    // each point's time is its fastest build's, and the states are told apart again over
-    // every monitor frame.
+    // A point the fit misses by more than RETIME_ERROR, or with fewer than MIN_STATE_FRAMES
+    // frames in a state that held at least STATE_MODEL_SHARE of the monitor frames, is
+    // timed in RETIME_BATCHES more batches, each on a pipeline built afresh (a build can run
+    // a shader ≈ 25 % slower than another for as long as it lives, `states`); its segments
+    // join the first ones, each point's time is its fastest build's, and the states are
+    // told apart again over every monitor frame.
     let missed: Vec<usize> = all
         .iter()
         .copied()
@@ -1013,7 +1017,7 @@ pub fn run_with_monitor(
             let predicted = predict_point(&model, p);
             let unseen = (0..states.count()).any(|state| {
                 states.shares[state] >= STATE_MODEL_SHARE
-                    && timed[i].ran_in(&states, state).is_empty()
+                    && timed[i].ran_in(&states, state).len() < MIN_STATE_FRAMES
             });
             unseen || (predicted - p.ms_median).abs() > RETIME_ERROR * p.ms_median
         })
