@@ -309,27 +309,31 @@ pub fn run(
         prepared,
         relit: relit.as_ref(),
     };
+    // One more round of a row, on a build of its own (`probe::states`: builds differ).
+    let mut time_round = |technique, path, times: &mut Segmented| -> Result<(), BenchError> {
+        let tech = rows_of.build(technique, path)?;
+        lap.split(&mut phases.build);
+        let build = times.0.last().map_or(0, |s| s.build + 1);
+        times.0.extend(timed_segments(
+            monitor,
+            build,
+            settings.warmup.min(1),
+            per_round,
+            |w, n| tech.time(&scene, w, n),
+        )?);
+        lap.split(&mut phases.render);
+        Ok(())
+    };
     for _ in 1..rounds {
         for (row, times) in rows.iter().zip(&mut samples) {
-            let tech = rows_of.build(row.technique, row.path)?;
-            lap.split(&mut phases.build);
-            // Each round times a build of its own (`probe::states`: builds differ).
-            let build = times.0.last().map_or(0, |s| s.build + 1);
-            times.0.extend(timed_segments(
-                monitor,
-                build,
-                settings.warmup.min(1),
-                per_round,
-                |w, n| tech.time(&scene, w, n),
-            )?);
-            lap.split(&mut phases.render);
+            time_round(row.technique, row.path, times)?;
         }
     }
     // A row with no frames in a state the probe has a model of (the device sat in another
-    // through all its rounds) is timed in up to MODEL_STATE_ROUNDS more, each on a build of
-    // its own, until it has some: else its ×model would set frames of one state against the
-    // model of another. Not with `--specular`: its rows differ by the specular term bound
-    // when they were measured, and only the last one is bound now.
+    // through all its rounds) is timed in up to MODEL_STATE_ROUNDS more until it has some:
+    // else its ×model would set frames of one state against the model of another. Not
+    // with `--specular`: its rows differ by the specular term bound when they were
+    // measured, and only the last one is bound now.
     if let Some((probe, monitor)) = cost_model.as_ref().filter(|_| settings.specular.is_none()) {
         let modelled: Vec<usize> = probe.state_models.iter().map(|m| m.state).collect();
         for _ in 0..MODEL_STATE_ROUNDS {
@@ -348,18 +352,7 @@ pub fn run(
                 unmodelled.len()
             );
             for i in unmodelled {
-                let tech = rows_of.build(rows[i].technique, rows[i].path)?;
-                lap.split(&mut phases.build);
-                let times = &mut samples[i];
-                let build = times.0.last().map_or(0, |s| s.build + 1);
-                times.0.extend(timed_segments(
-                    Some(monitor),
-                    build,
-                    settings.warmup.min(1),
-                    per_round,
-                    |w, n| tech.time(&scene, w, n),
-                )?);
-                lap.split(&mut phases.render);
+                time_round(rows[i].technique, rows[i].path, &mut samples[i])?;
             }
         }
     }
