@@ -947,3 +947,34 @@ fn write_plots(table: &BenchTable, paths: &[HwPath], dir: &Path) {
     report(write_error_plot(table, dir, CostAxis::Time));
     report(write_error_plot(table, dir, CostAxis::Storage));
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_round_is_timed_in_even_chunks_of_at_most_chunk_frames_with_one_warm_up() {
+        for frames in [0, 1, 3, 7, 34] {
+            let calls = std::cell::RefCell::new(Vec::new());
+            let segments = timed_segments(None, 2, 5, frames, |warmup, n| {
+                calls.borrow_mut().push((warmup, n));
+                Ok(vec![1.0; n as usize])
+            })
+            .unwrap();
+            let calls = calls.into_inner();
+            let sizes: Vec<u32> = calls.iter().map(|&(_, n)| n).collect();
+            assert_eq!(sizes.iter().sum::<u32>(), frames, "{sizes:?}");
+            assert!(sizes.iter().all(|&n| n <= CHUNK_FRAMES), "{sizes:?}");
+            let (min, max) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
+            assert!(max - min <= 1, "uneven chunks {sizes:?}");
+            assert_eq!(calls[0].0, 5, "the warm-up goes before the first chunk");
+            assert!(calls[1..].iter().all(|&(w, _)| w == 0), "{calls:?}");
+            assert_eq!(segments.len(), calls.len());
+            assert!(
+                segments
+                    .iter()
+                    .all(|s| s.build == 2 && s.monitor_after.is_nan())
+            );
+        }
+    }
+}
