@@ -47,9 +47,8 @@
 //! and the depth test's part of p, none below zero, over every point — among them a frame
 //! that draws one zero-area triangle (fixed), the empty shader over half the screen (half
 //! the triangles, half the fragments) and over the screen with the depth test off — by a
-//! **minimax** fit: the costs that make the largest
-//! relative error over the points least (a linear program, [`chebyshev_fit`]), as the
-//! model is judged by its worst point. A least-squares fit (weighted by 1/t, until
+//! **minimax** fit: the costs that make the largest relative error over the points least
+//! (a linear program, [`chebyshev_fit`]), as the model is judged by its worst point. A least-squares fit (weighted by 1/t, until
 //! 2026-12-04) left 7.6–9.5 % on the same runs' points where this leaves 6.1–8.0 %; the
 //! costs move by a few per cent (the bilinear lookup 1.75 → 1.78 ns per lane).
 //!
@@ -249,8 +248,8 @@ pub struct ProbePoint {
     pub depth_test: bool,
     /// What the shader's SPIR-V counts (all kinds).
     pub counts: CostCounts,
-    /// Median of its timed frames in the main state (of all of them where none ran in
-    /// it: `state_frames` 0).
+    /// Median of its timed frames in the main state, of its fastest build there (of all
+    /// its frames where none ran in it: `state_frames` 0).
     pub ms_median: f64,
     /// Batches of interleaved rounds it was timed in (1, or 1 + RETIME_BATCHES).
     pub batches: u32,
@@ -274,14 +273,13 @@ pub struct StateModel {
 
 impl StateModel {
     fn new(state: usize, model: CostModel, points: &[ProbePoint]) -> Self {
-        let worst = points.iter().max_by(|a, b| {
-            let error = |p: &ProbePoint| (p.model_ms - p.ms_median).abs() / p.ms_median;
-            error(a).total_cmp(&error(b))
-        });
+        let worst = points
+            .iter()
+            .max_by(|a, b| relative_error(a).total_cmp(&relative_error(b)));
         StateModel {
             state,
             model,
-            worst_relative_error: worst_relative_error(points),
+            worst_relative_error: worst.map_or(0.0, relative_error),
             worst_point: worst.map_or(String::new(), |p| {
                 format!(
                     "{} ×{} ({:.3} ms measured over {} frames, {:.3} modelled)",
@@ -296,12 +294,14 @@ impl StateModel {
     }
 }
 
-/// Largest |model − measured| / measured over `points`.
+/// |model − measured| / measured of a point.
+fn relative_error(p: &ProbePoint) -> f64 {
+    (p.model_ms - p.ms_median).abs() / p.ms_median
+}
+
+/// Largest [`relative_error`] over `points`.
 fn worst_relative_error(points: &[ProbePoint]) -> f64 {
-    points
-        .iter()
-        .map(|p| (p.model_ms - p.ms_median).abs() / p.ms_median)
-        .fold(0.0, f64::max)
+    points.iter().map(relative_error).fold(0.0, f64::max)
 }
 
 /// The probe's result.
@@ -1048,8 +1048,12 @@ pub fn run_with_monitor(
     // disturbed by its neighbours (in the slower state of this VM texture lookups cost
     // more the more a shader makes: 16 bilinear lookups 0.90× the model where 4 are 1.10×,
     // a shared memory bus by the look of it) — else the state most monitor frames fell in.
-    let fastest_seen = (0..states.count())
-        .find(|&state| timed.iter().all(|t| !t.ran_in(&states, state).is_empty()));
+    let every_point_ran_in = |states: &DeviceStates, state: usize| {
+        timed
+            .iter()
+            .all(|t| t.0.iter().any(|s| states.ran_in(s, state)))
+    };
+    let fastest_seen = (0..states.count()).find(|&state| every_point_ran_in(&states, state));
     if let Some(fastest) = fastest_seen.filter(|&f| f != states.main_state) {
         states.main_state = fastest;
         measure(&mut points, &timed, &states, fastest);
@@ -1064,7 +1068,7 @@ pub fn run_with_monitor(
     for state in 0..states.count() {
         if state == states.main_state {
             state_models.push(StateModel::new(state, model.clone(), &points));
-        } else if timed.iter().all(|t| !t.ran_in(&states, state).is_empty()) {
+        } else if every_point_ran_in(&states, state) {
             let mut in_state = points.clone();
             measure(&mut in_state, &timed, &states, state);
             let state_model = fit_points(&in_state)?;
@@ -1102,8 +1106,8 @@ pub fn run_with_monitor(
 }
 
 /// The probe's monitor point (the empty shader over the screen), kept past the probe for
-/// `shvis bench` to time one frame of before and after every row's frames, so that its rows are
-/// compared with the model of the state they ran in (`states`).
+/// `shvis bench` to read between every few frames of its rows, so that they are compared
+/// with the model of the state they ran in (`states`).
 pub struct Monitor {
     pipeline: crate::gpu::MeshPipeline,
     mesh: MeshBuffers,
@@ -1178,19 +1182,17 @@ fn fit(points: &[ProbePoint]) -> Option<CostModel> {
         })
         .collect();
     let x = chebyshev_fit(&rows)?;
-    let model = CostModel {
+    if !x.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    Some(CostModel {
         fixed_ms: x[0],
         pixel_ms: x[3],
         depth_test_ms: x[4],
         per_triangle_ms: x[1],
         per_edge_pixel_ms: x[2],
         per_unit_ms: std::array::from_fn(|k| x[k + 5]),
-    };
-    let finite = model.per_unit_ms.iter().all(|c| c.is_finite())
-        && model.pixel_ms.is_finite()
-        && model.per_triangle_ms.is_finite()
-        && model.per_edge_pixel_ms.is_finite();
-    finite.then_some(model)
+    })
 }
 
 /// x ≥ 0 with the least max_r |a_r·x − 1| (a linear program, `microlp`), and among those
@@ -1276,7 +1278,7 @@ mod tests {
     }
 
     #[test]
-    fn a_geometry_cost_the_fit_puts_below_zero_is_left_out() {
+    fn a_geometry_cost_the_fit_would_put_below_zero_is_held_at_zero() {
         // Timings with no per-triangle cost and a little noise that pulls it negative: the
         // model keeps it at zero, and the edges carry the grids.
         let mut points = Vec::new();

@@ -226,7 +226,7 @@ pub struct BenchTable {
     /// of their `model_state`.
     pub state_cost_models: Vec<crate::probe::StateModel>,
     /// The device's speed states the probe told apart (`probe::states`), and the share of
-    /// the bench's monitor frames (one before and one after every row's frames) in each.
+    /// the bench's monitor frames (read between every few frames of every row) in each.
     pub device_states: Option<crate::probe::DeviceStates>,
     pub bench_state_shares: Option<Vec<f64>>,
     /// Wall time of the bench itself (probe, references, rows, files; the bake before it
