@@ -405,7 +405,8 @@ pub fn run(
             };
             let model = model.unwrap_or(&probe.model);
             let measured = measured.or(row.ms_median);
-            let predicted = model.predict(&row.cost, row.coverage, row.triangles, row.edge_pixels);
+            let counts = model.with_untaken(&row.cost, &row.untaken_cost);
+            let predicted = model.predict(&counts, row.coverage, row.triangles, row.edge_pixels);
             row.model_ms = Some(predicted);
             row.model_state = state;
             row.model_state_frames = Some(state_frames);
@@ -887,6 +888,7 @@ fn measure_row(
         path,
         specular,
         cost: tech.stats.cost,
+        untaken_cost: tech.stats.untaken_cost,
         coverage: covered as f64 / frame.rgba.len().max(1) as f64,
         own_mesh_load: if settings.probe {
             technique::vertex::own_mesh_load(rows_of.ctx, scene, technique, &prepared.inputs())?

@@ -24,21 +24,33 @@ fn the_probe_runs_every_microbenchmark_and_fits_a_model_to_them() {
     )
     .expect("probe runs");
     eprintln!("{}", probe.to_markdown());
-    // The empty frame, 3 empty-shader points, 4 finer triangle grids and the counts of each
-    // kind.
+    // The empty frame, 3 empty-shader points, 4 finer triangle grids, the counts of each
+    // kind and the untaken-branch points.
     let counts: usize = Kind::ALL.iter().map(|k| k.probe_counts().len()).sum();
-    assert_eq!(probe.points.len(), 4 + 4 + counts);
+    let branches = shvis::probe::UNTAKEN_BRANCH_READS.len();
+    assert_eq!(probe.points.len(), 4 + 4 + counts + branches);
+    assert_eq!(
+        probe.points.iter().filter(|p| p.in_untaken_branch).count(),
+        branches
+    );
     for p in &probe.points {
         assert!(p.ms_median.is_finite() && p.ms_median > 0.0, "{p:?}");
         assert!(p.frames > 0 && p.state_frames <= p.frames, "{p:?}");
         assert!(p.model_ms.is_finite(), "{p:?}");
         if let Some(kind) = p.kind {
-            // The point is counted as what it was generated with.
-            assert!(p.counts.get(kind) >= f64::from(p.count), "{p:?}");
+            // The point is counted as what it was generated with, its branch's work apart.
+            let counts = if p.in_untaken_branch {
+                assert!(p.counts.get(kind) < f64::from(p.count), "{p:?}");
+                p.untaken
+            } else {
+                p.counts
+            };
+            assert!(counts.get(kind) >= f64::from(p.count), "{p:?}");
         }
     }
     let m = &probe.model;
     assert!(m.per_unit_ms.iter().all(|c| c.is_finite()), "{m:?}");
+    assert!((0.0..=1.0).contains(&m.untaken_share), "{m:?}");
     assert!(m.fixed_ms.is_finite() && m.pixel_ms.is_finite() && m.depth_test_ms.is_finite());
     assert!(m.per_triangle_ms.is_finite(), "{m:?}");
     // The screen-filling quad shades every pixel exactly once.
@@ -88,6 +100,7 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
                 Kind::Array2d,
                 Kind::CubeArray,
                 Kind::Dependent2d,
+                Kind::TexelFetch,
             ]
             .iter()
             .map(|&k| c.get(k))
@@ -127,14 +140,31 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
             if let Some(m) = vectors {
                 let inside = f64::from(9 * (m + 1));
                 let reads = c.get(Kind::IndexedUniformRead);
+                // Where no lane of a batch straddles a boundary, the boundary path's
+                // straight-line code — four reads of a mean block — is untaken work.
+                let untaken = tech.stats.untaken_cost.get(Kind::IndexedUniformRead);
+                let fetches = c.get(Kind::TexelFetch);
                 assert!(
                     reads >= inside && reads < 4.0 * inside,
                     "{t}.{path}: {reads} block reads, {inside} per decode"
                 );
                 if t.to_string().ends_with('n') {
                     assert_eq!(reads, inside, "{t}.{path}: the naive shader decodes once");
+                    assert_eq!(untaken, 0.0, "{t}.{path}: the naive shader has no branch");
+                    assert_eq!(fetches, 1.0, "{t}.{path}: the nearest texel's index");
                 } else {
                     assert!(reads > inside, "{t}.{path}: no fragment straddles clusters");
+                    assert!(
+                        untaken > 0.0 && untaken < 4.0 * 9.0,
+                        "{t}.{path}: {untaken} untaken block reads"
+                    );
+                    assert_eq!(
+                        fetches,
+                        f64::from(
+                            tech.stats.lookups_per_pixel - shvis::gpu::layout::MATERIAL_TEXTURES
+                        ),
+                        "{t}.{path}: every tap fetched unfiltered"
+                    );
                 }
                 // Built for changing lighting (two copies of the block), counted the same.
                 let (dynamic, _) =

@@ -12,8 +12,10 @@
 //
 // SHVIS_COUNT_PATH, only for the cost model (`technique::finish::CountPlan`, never drawn as
 // a technique): 1 keeps the decode inside a cluster, 2 the decode across a boundary, 4
-// neither (the work before the branch), all with every loop unrolled so that their SPIR-V
-// counts are what one pixel runs; 3 measures, drawn once additively: red 1 where the
+// neither (the work before the branch, kept alive by a sum of it), 5 the decode across a
+// boundary with its loop cut (what a batch that no lane of takes it runs where the device
+// runs untaken branches masked and skips loops no lane enters), all with every loop
+// unrolled so that their SPIR-V counts are what one pixel runs; 3 measures, drawn once additively: red 1 where the
 // fragment's subgroup takes the boundary path (SHVIS_SUBGROUP_VOTE: subgroupAny; else the
 // fragment's own), green 1 per fragment.
 #version 450
@@ -116,7 +118,7 @@ vec3 block_dot(int at, float y[9]) {
 vec3 cluster_irradiance(float tap, vec4 v[GROUPS], int c, float y[9]) {
     int base = c * BLOCK;
     vec3 e = tap * block_dot(base + 9 * M, y);
-#if M > 0
+#if M > 0 && SHVIS_COUNT_PATH != 5
     // Kept a loop when drawn: Mesa's NIR unrolls short loops in full, and unrolled the
     // decode measured 2× slower on lavapipe (cpca8_7 183 against 90 ms).
     // The weights shift down one place per vector, so that weight k is always lane 0 of
@@ -180,7 +182,7 @@ void main() {
         w[tap] = w2.x * w2.y;
         c[tap] = cluster_index(v[tap][M / 4]);
     }
-#if SHVIS_COUNT_PATH == 1 || SHVIS_COUNT_PATH == 2
+#if SHVIS_COUNT_PATH == 1 || SHVIS_COUNT_PATH == 2 || SHVIS_COUNT_PATH == 5
     bool inside = SHVIS_COUNT_PATH == 1;
 #else
     bool inside = c[0] == c[1] && c[0] == c[2] && c[0] == c[3];
@@ -193,7 +195,11 @@ void main() {
     out_radiance = vec4(across ? 1.0 : 0.0, 1.0, 0.0, 1.0);
     return;
 #elif SHVIS_COUNT_PATH == 4
-    e = vec3(0.0);
+    float before = float(c[0] + c[1] + c[2] + c[3]) + w[0] + w[1] + w[2] + w[3];
+    UNROLL for (int i = 0; i < 9; ++i) {
+        before += y[i];
+    }
+    e = vec3(before);
 #else
     if (inside) {
         // Inside a cluster the decode is linear: blend the weights, decode once (the

@@ -86,6 +86,9 @@ use crate::scene::{Mesh, Scene, Vertex};
 
 pub use states::{DeviceStates, Segmented};
 
+/// How many kinds the model prices.
+pub const KINDS: usize = 10;
+
 /// The operation kinds the model prices.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -108,10 +111,13 @@ pub enum Kind {
     UniformRead,
     /// vec4 read from a uniform block at an index computed per pixel (a cluster's block).
     IndexedUniformRead,
+    /// Unfiltered 2D texel fetch (`texelFetch`), four per texture at the texels of a
+    /// bilinear footprint (the clustered techniques' taps).
+    TexelFetch,
 }
 
 impl Kind {
-    pub const ALL: [Kind; 9] = [
+    pub const ALL: [Kind; KINDS] = [
         Kind::Bilinear2d,
         Kind::Trilinear2d,
         Kind::Array2d,
@@ -121,6 +127,7 @@ impl Kind {
         Kind::Varying,
         Kind::UniformRead,
         Kind::IndexedUniformRead,
+        Kind::TexelFetch,
     ];
 
     pub fn name(self) -> &'static str {
@@ -134,6 +141,7 @@ impl Kind {
             Kind::Varying => "varying float",
             Kind::UniformRead => "uniform vec4 read",
             Kind::IndexedUniformRead => "indexed uniform vec4 read",
+            Kind::TexelFetch => "texel fetch",
         }
     }
 
@@ -148,6 +156,7 @@ impl Kind {
             Kind::FloatOp => &[64, 128, 256, 512],
             Kind::Varying => &[2, 5, 9, 14],
             Kind::UniformRead | Kind::IndexedUniformRead => &[16, 32, 64, 128],
+            Kind::TexelFetch => &[4, 8, 12, 16],
             _ => &[1, 2, 4, 8, 12, 16],
         }
     }
@@ -155,12 +164,12 @@ impl Kind {
 
 /// Per-pixel counts of a shader, by [`Kind`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct CostCounts(pub [f64; 9]);
+pub struct CostCounts(pub [f64; KINDS]);
 
 impl CostCounts {
     /// The counts of a shader with `lookups` (kind, count) and the SPIR-V counts `ops`.
     pub fn new(lookups: &[(Kind, u32)], ops: &OpCounts) -> Self {
-        let mut c = [0.0; 9];
+        let mut c = [0.0; KINDS];
         for &(kind, n) in lookups {
             c[kind.index()] += f64::from(n);
         }
@@ -173,7 +182,7 @@ impl CostCounts {
 
     /// Σ share · counts: the counts of a shader whose pixels run different paths.
     pub fn shared(parts: impl IntoIterator<Item = (f64, CostCounts)>) -> Self {
-        let mut c = [0.0; 9];
+        let mut c = [0.0; KINDS];
         for (share, counts) in parts {
             for (sum, n) in c.iter_mut().zip(counts.0) {
                 *sum += share * n;
@@ -184,6 +193,11 @@ impl CostCounts {
 
     pub fn get(&self, kind: Kind) -> f64 {
         self.0[kind.index()]
+    }
+
+    /// `self − other`, none below zero.
+    fn less(&self, other: &CostCounts) -> CostCounts {
+        CostCounts(std::array::from_fn(|k| (self.0[k] - other.0[k]).max(0.0)))
     }
 }
 
@@ -201,7 +215,12 @@ pub struct CostModel {
     /// Per pixel of triangle edge on the screen (the rasterizer's partly covered blocks), ms.
     pub per_edge_pixel_ms: f64,
     /// ms per unit of each kind per pixel over the whole screen, in [`Kind::ALL`] order.
-    pub per_unit_ms: [f64; 9],
+    pub per_unit_ms: [f64; KINDS],
+    /// The share of a branch's work that the device runs where no lane of a SIMD batch
+    /// takes the branch: 0 where it jumps over it (GPUs, on coherent branches), 1 where it
+    /// runs the branch's straight-line code with the lanes masked off (lavapipe; a loop no
+    /// lane enters it skips). Fitted to the untaken-branch points after the costs.
+    pub untaken_share: f64,
 }
 
 impl CostModel {
@@ -230,6 +249,13 @@ impl CostModel {
     pub fn cost(&self, kind: Kind) -> f64 {
         self.per_unit_ms[kind.index()]
     }
+
+    /// The counts this device runs of a shader that does `taken` and skips `untaken` (the
+    /// straight-line work of branches no lane of a batch takes): `taken + untaken_share ·
+    /// untaken`.
+    pub fn with_untaken(&self, taken: &CostCounts, untaken: &CostCounts) -> CostCounts {
+        CostCounts::shared([(1.0, *taken), (self.untaken_share, *untaken)])
+    }
 }
 
 /// One microbenchmark.
@@ -246,8 +272,13 @@ pub struct ProbePoint {
     /// Their edges on the screen, pixels.
     pub edge_pixels: f64,
     pub depth_test: bool,
-    /// What the shader's SPIR-V counts (all kinds).
+    /// Whether its operations sit in a branch that no lane takes (the untaken-branch
+    /// points, [`CostModel::untaken_share`]).
+    pub in_untaken_branch: bool,
+    /// What the shader's SPIR-V counts (all kinds), less `untaken`.
     pub counts: CostCounts,
+    /// What its untaken branch counts.
+    pub untaken: CostCounts,
     /// Median of its timed frames in the main state, of its fastest build there (of all
     /// its frames where none ran in it: `state_frames` 0).
     pub ms_median: f64,
@@ -283,13 +314,25 @@ impl StateModel {
             worst_point: worst.map_or(String::new(), |p| {
                 format!(
                     "{} ×{} ({:.3} ms measured over {} frames, {:.3} modelled)",
-                    p.kind.map_or("empty shader", Kind::name),
+                    p.label(),
                     p.count,
                     p.ms_median,
                     p.state_frames,
                     p.model_ms
                 )
             }),
+        }
+    }
+}
+
+impl ProbePoint {
+    /// Its kind's name, or the empty shader's, and where its operations sit.
+    pub fn label(&self) -> String {
+        let name = self.kind.map_or("empty shader", Kind::name);
+        if self.in_untaken_branch {
+            format!("{name} in a branch no lane takes")
+        } else {
+            name.to_string()
         }
     }
 }
@@ -384,6 +427,10 @@ impl Probe {
                 m.cost(kind) * 1e6 / pixels
             );
         }
+        s += &format!(
+            "\nA branch that no lane of a SIMD batch takes costs {:.2} of its straight-line work (0: the device jumps over it; 1: it runs it with the lanes masked off)\n",
+            m.untaken_share
+        );
         let retimed = self.points.iter().filter(|p| p.batches > 1).count();
         s += &format!(
             "\ndevice: {} (a monitor frame after every point's frames; ms median: of the point's frames in the main state, of its fastest build there)\n\n{retimed} point(s) that the first fit missed by more than {:.0} %, or that had fewer than {MIN_STATE_FRAMES} frames in a state holding {:.0} % of the monitor frames or more, timed in {RETIME_BATCHES} more batches of rounds\n",
@@ -416,7 +463,7 @@ impl Probe {
         for p in &self.points {
             s += &format!(
                 "| {} | {} | {:.2} | {} | {:.0} | {} | {} | {} / {} | {:.3} | {:.3} | {:.3} |\n",
-                p.kind.map_or("empty shader", Kind::name),
+                p.label(),
                 p.count,
                 p.coverage,
                 p.triangles,
@@ -473,6 +520,9 @@ const STATE_MODEL_SHARE: f64 = 0.1;
 /// Frames in a state below which a point's median there is too few to fit (one run put the
 /// 2·128² grid at 1.10× the model on 2 frames).
 const MIN_STATE_FRAMES: usize = 5;
+/// The untaken-branch points: indexed uniform reads (a cluster's block, as the clustered
+/// techniques' boundary path reads them) in a branch that no lane takes.
+pub const UNTAKEN_BRANCH_READS: &[u32] = &[32, 64, 128];
 /// Uniform vec4s in the probe's block.
 const UNIFORM_VEC4S: u32 = 256;
 
@@ -520,8 +570,9 @@ fn probe_scene(width: u32, height: u32, left_half: bool, grid: u32) -> Scene {
     Scene::flat_view("probe", mesh)
 }
 
-/// The GLSL of a probe point: `count` operations of `kind` (`None`: the empty shader).
-fn probe_source(kind: Option<Kind>, count: u32) -> String {
+/// The GLSL of a probe point: `count` operations of `kind` (`None`: the empty shader), in
+/// a branch that no lane takes where `untaken`.
+fn probe_source(kind: Option<Kind>, count: u32, untaken: bool) -> String {
     let t0 = "SHVIS_BINDING_TECHNIQUE_TEXTURE0";
     let mut decl = String::new();
     let mut body = String::new();
@@ -545,6 +596,23 @@ fn probe_source(kind: Option<Kind>, count: u32) -> String {
                     "    acc += texture(probe_tex[{}], {uv} + vec2({} * {step}, 0.0));\n",
                     k % TEXTURES,
                     k / TEXTURES
+                );
+            }
+        }
+        Some(Kind::TexelFetch) => {
+            decl = format!(
+                "layout(set = 0, binding = {t0}) uniform sampler2D probe_tex[{TEXTURES}];\n"
+            );
+            body += &format!(
+                "    ivec2 texel = clamp(ivec2(in_uv_lightmap * {TEXTURE_SIDE}.0), ivec2(0), ivec2({}));\n",
+                TEXTURE_SIDE - 2
+            );
+            for k in 0..count {
+                body += &format!(
+                    "    acc += texelFetch(probe_tex[{}], texel + ivec2({}, {}), 0);\n",
+                    (k / 4) % TEXTURES,
+                    k & 1,
+                    (k >> 1) & 1
                 );
             }
         }
@@ -632,6 +700,10 @@ fn probe_source(kind: Option<Kind>, count: u32) -> String {
                 body += &format!("    acc += probe.v[base + {k}];\n");
             }
         }
+    }
+    if untaken {
+        // Lightmap coordinates are never below 0: no lane takes it, and no compiler knows.
+        body = format!("    if (in_uv_lightmap.x < -1.0) {{\n{body}    }}\n");
     }
     format!(
         "#version 450\n#extension GL_GOOGLE_include_directive : require\n#define SHVIS_FRAGMENT 1\n\
@@ -826,19 +898,24 @@ pub fn run_with_monitor(
     }
     let plan = |kind: Option<Kind>,
                 count: u32,
+                untaken: bool,
                 depth_test: bool,
                 mesh: &MeshBuffers|
      -> Result<(ProbePoint, crate::gpu::MeshPipeline), GpuError> {
         let name = format!(
-            "probe.{}{count}",
-            kind.map_or("empty".to_string(), |k| format!("{k:?}").to_lowercase())
+            "probe.{}{count}{}",
+            kind.map_or("empty".to_string(), |k| format!("{k:?}").to_lowercase()),
+            if untaken { ".untaken" } else { "" }
         );
-        let spirv = crate::gpu::shader::compile_source(
-            &format!("{name}.frag"),
-            &probe_source(kind, count),
-            ShaderStage::Fragment,
-            &[],
-        )?;
+        let compile = |kind, count, untaken| {
+            crate::gpu::shader::compile_source(
+                &format!("{name}.frag"),
+                &probe_source(kind, count, untaken),
+                ShaderStage::Fragment,
+                &[],
+            )
+        };
+        let spirv = compile(kind, count, untaken)?;
         let ops = spirv_counts::count(&spirv);
         let mut resources = gpu.common_resources();
         resources.push((
@@ -847,7 +924,7 @@ pub fn run_with_monitor(
         ));
         let t0 = layout::BINDING_TECHNIQUE_TEXTURE0;
         match kind {
-            Some(Kind::Bilinear2d) => resources.push((
+            Some(Kind::Bilinear2d | Kind::TexelFetch) => resources.push((
                 t0,
                 Resource::TextureArray(res.bilinear.iter().map(|i| (i, &linear)).collect()),
             )),
@@ -869,6 +946,7 @@ pub fn run_with_monitor(
         let lookups: Vec<(Kind, u32)> = match kind {
             Some(
                 k @ (Kind::Bilinear2d
+                | Kind::TexelFetch
                 | Kind::Trilinear2d
                 | Kind::Array2d
                 | Kind::CubeArray
@@ -878,6 +956,19 @@ pub fn run_with_monitor(
             }
             _ => vec![],
         };
+        // SPIR-V counts both sides of a branch: the untaken work is the operations' own
+        // (their shader without the branch, less the empty shader's).
+        let all = CostCounts::new(&lookups, &ops);
+        let untaken_counts = if untaken {
+            let own = CostCounts::new(
+                &lookups,
+                &spirv_counts::count(&compile(kind, count, false)?),
+            );
+            let empty = CostCounts::new(&[], &spirv_counts::count(&compile(None, 0, false)?));
+            own.less(&empty)
+        } else {
+            CostCounts::default()
+        };
         let point = ProbePoint {
             kind,
             count,
@@ -885,7 +976,9 @@ pub fn run_with_monitor(
             triangles: mesh.triangle_count(),
             edge_pixels: load_of(mesh).map_or(0.0, |l| l.edge_pixels),
             depth_test,
-            counts: CostCounts::new(&lookups, &ops),
+            in_untaken_branch: untaken,
+            counts: all.less(&untaken_counts),
+            untaken: untaken_counts,
             ms_median: f64::NAN,
             batches: 1,
             frames: 0,
@@ -894,22 +987,31 @@ pub fn run_with_monitor(
         };
         Ok((point, pipeline))
     };
-    let mut specs: Vec<(Option<Kind>, u32, bool, &MeshBuffers)> = vec![
-        (None, 0, true, &nothing_mesh.0),
-        (None, 0, true, &full_mesh.0),
-        (None, 0, true, &half_mesh.0),
-        (None, 0, false, &full_mesh.0),
+    let mut specs: Vec<(Option<Kind>, u32, bool, bool, &MeshBuffers)> = vec![
+        (None, 0, false, true, &nothing_mesh.0),
+        (None, 0, false, true, &full_mesh.0),
+        (None, 0, false, true, &half_mesh.0),
+        (None, 0, false, false, &full_mesh.0),
     ];
-    specs.extend(grids.iter().map(|g| (None, 0, true, &g.0)));
+    specs.extend(grids.iter().map(|g| (None, 0, false, true, &g.0)));
     for kind in Kind::ALL {
         for &count in kind.probe_counts() {
-            specs.push((Some(kind), count, true, &full_mesh.0));
+            specs.push((Some(kind), count, false, true, &full_mesh.0));
         }
+    }
+    for &count in UNTAKEN_BRANCH_READS {
+        specs.push((
+            Some(Kind::IndexedUniformRead),
+            count,
+            true,
+            true,
+            &full_mesh.0,
+        ));
     }
     let mut planned = specs
         .into_iter()
-        .map(|(kind, count, depth_test, mesh)| {
-            let (point, pipeline) = plan(kind, count, depth_test, mesh)?;
+        .map(|(kind, count, untaken, depth_test, mesh)| {
+            let (point, pipeline) = plan(kind, count, untaken, depth_test, mesh)?;
             Ok(Planned {
                 point,
                 pipeline,
@@ -1027,7 +1129,13 @@ pub fn run_with_monitor(
         for _ in 0..RETIME_BATCHES {
             for &i in &missed {
                 let p = &planned[i];
-                let (_, pipeline) = plan(p.point.kind, p.point.count, p.point.depth_test, p.mesh)?;
+                let (_, pipeline) = plan(
+                    p.point.kind,
+                    p.point.count,
+                    p.point.in_untaken_branch,
+                    p.point.depth_test,
+                    p.mesh,
+                )?;
                 planned[i].pipeline = pipeline;
                 planned[i].build += 1;
             }
@@ -1144,7 +1252,8 @@ fn predict_point(model: &CostModel, p: &ProbePoint) -> f64 {
     } else {
         model.depth_test_ms
     };
-    model.predict(&p.counts, p.coverage, p.triangles, p.edge_pixels) - p.coverage * depth_off
+    let counts = model.with_untaken(&p.counts, &p.untaken);
+    model.predict(&counts, p.coverage, p.triangles, p.edge_pixels) - p.coverage * depth_off
 }
 
 /// Side of the grid whose triangles cover `triangle_pixels` each on a `width` × `height`
@@ -1162,6 +1271,8 @@ fn fit(points: &[ProbePoint]) -> Option<CostModel> {
     // d, then c_k; t = fixed + T·c_T + E·c_E + f·(p − d·[depth test off] + Σ n_k c_k), each
     // row over its t so that errors are relative.
     let n = 5 + Kind::ALL.len();
+    let (branch_points, points): (Vec<&ProbePoint>, Vec<&ProbePoint>) =
+        points.iter().partition(|p| p.in_untaken_branch);
     let rows: Vec<Vec<f64>> = points
         .iter()
         .map(|p| {
@@ -1185,14 +1296,36 @@ fn fit(points: &[ProbePoint]) -> Option<CostModel> {
     if !x.iter().all(|v| v.is_finite()) {
         return None;
     }
-    Some(CostModel {
+    let mut model = CostModel {
         fixed_ms: x[0],
         pixel_ms: x[3],
         depth_test_ms: x[4],
         per_triangle_ms: x[1],
         per_edge_pixel_ms: x[2],
         per_unit_ms: std::array::from_fn(|k| x[k + 5]),
-    })
+        untaken_share: 1.0,
+    };
+    // The share: the median over the untaken-branch points of (measured − the model without
+    // the branch) / the branch's modelled work; none (a device without the points): 1, as
+    // SPIR-V counts both sides of a branch.
+    let shares: Vec<f64> = branch_points
+        .iter()
+        .filter_map(|p| {
+            let without = CostModel {
+                untaken_share: 0.0,
+                ..model.clone()
+            };
+            let base = predict_point(&without, p);
+            let work = predict_point(&model, p) - base;
+            (work > 0.0).then(|| (p.ms_median - base) / work)
+        })
+        .filter(|share| share.is_finite())
+        .collect();
+    // (A plain median.)
+    if let Some(t) = TimingStats::from_ms(&shares) {
+        model.untaken_share = t.ms_median.clamp(0.0, 1.0);
+    }
+    Some(model)
 }
 
 /// x ≥ 0 with the least max_r |a_r·x − 1| (a linear program, `microlp`), and among those
@@ -1257,7 +1390,7 @@ mod tests {
             for &count in kind.probe_counts() {
                 let spirv = crate::gpu::shader::compile_source(
                     "probe.frag",
-                    &probe_source(Some(kind), count),
+                    &probe_source(Some(kind), count, false),
                     ShaderStage::Fragment,
                     &[],
                 )
@@ -1275,6 +1408,20 @@ mod tests {
                 }
             }
         }
+        for &count in UNTAKEN_BRANCH_READS {
+            let source = probe_source(Some(Kind::IndexedUniformRead), count, true);
+            let spirv = crate::gpu::shader::compile_source(
+                "probe.frag",
+                &source,
+                ShaderStage::Fragment,
+                &[],
+            )
+            .unwrap();
+            // SPIR-V counts the branch's reads though no lane runs them.
+            let ops = spirv_counts::count(&spirv);
+            assert_eq!(ops.indexed_uniform_reads, count, "{ops:?}");
+            assert!(source.contains("if (in_uv_lightmap.x < -1.0)"), "{source}");
+        }
     }
 
     #[test]
@@ -1290,7 +1437,9 @@ mod tests {
                 triangles,
                 edge_pixels,
                 depth_test: true,
+                in_untaken_branch: false,
                 counts: CostCounts::default(),
+                untaken: CostCounts::default(),
                 ms_median: ms,
                 batches: 1,
                 frames: 0,
@@ -1341,7 +1490,9 @@ mod tests {
                 triangles,
                 edge_pixels: 0.0,
                 depth_test: true,
+                in_untaken_branch: false,
                 counts,
+                untaken: CostCounts::default(),
                 ms_median: truth * off,
                 batches: 1,
                 frames: 0,
@@ -1371,7 +1522,8 @@ mod tests {
             depth_test_ms: 0.3,
             per_triangle_ms: 2e-4,
             per_edge_pixel_ms: 5e-6,
-            per_unit_ms: [2.0, 3.0, 2.5, 4.0, 2.2, 0.01, 0.05, 0.5, 1.5],
+            per_unit_ms: [2.0, 3.0, 2.5, 4.0, 2.2, 0.01, 0.05, 0.5, 1.5, 1.2],
+            untaken_share: 0.6,
         };
         // Edges of a screen of 1000 × 600 pixels cut into 2·g² right triangles.
         let edges = |g: u32| {
@@ -1379,35 +1531,52 @@ mod tests {
             f64::from(2 * g * g) * (w + h + w.hypot(h))
         };
         let mut points = Vec::new();
-        let mut push =
-            |kind: Option<Kind>, counts: CostCounts, coverage: f64, depth: bool, triangles: u32| {
-                let grid = f64::from(triangles / 2).sqrt().round() as u32;
-                let edge_pixels = if coverage > 0.0 {
-                    edges(grid) * coverage
-                } else {
-                    0.0
-                };
-                let ms = truth.predict(&counts, coverage, triangles, edge_pixels)
-                    - if depth {
-                        0.0
-                    } else {
-                        coverage * truth.depth_test_ms
-                    };
-                points.push(ProbePoint {
-                    kind,
-                    count: 0,
-                    coverage,
-                    triangles,
-                    edge_pixels,
-                    depth_test: depth,
-                    counts,
-                    ms_median: ms,
-                    batches: 1,
-                    frames: 0,
-                    state_frames: 0,
-                    model_ms: 0.0,
-                });
+        let mut push_with = |kind: Option<Kind>,
+                             counts: CostCounts,
+                             untaken: CostCounts,
+                             coverage: f64,
+                             depth: bool,
+                             triangles: u32| {
+            let grid = f64::from(triangles / 2).sqrt().round() as u32;
+            let edge_pixels = if coverage > 0.0 {
+                edges(grid) * coverage
+            } else {
+                0.0
             };
+            let done = truth.with_untaken(&counts, &untaken);
+            let ms = truth.predict(&done, coverage, triangles, edge_pixels)
+                - if depth {
+                    0.0
+                } else {
+                    coverage * truth.depth_test_ms
+                };
+            points.push(ProbePoint {
+                kind,
+                count: 0,
+                coverage,
+                triangles,
+                edge_pixels,
+                depth_test: depth,
+                in_untaken_branch: untaken != CostCounts::default(),
+                counts,
+                untaken,
+                ms_median: ms,
+                batches: 1,
+                frames: 0,
+                state_frames: 0,
+                model_ms: 0.0,
+            });
+        };
+        let mut push = |kind, counts, coverage, depth, triangles| {
+            push_with(
+                kind,
+                counts,
+                CostCounts::default(),
+                coverage,
+                depth,
+                triangles,
+            );
+        };
         push(None, CostCounts::default(), 0.0, true, 1);
         let base = 2 * 40 * 40;
         push(None, CostCounts::default(), 1.0, true, base);
@@ -1425,7 +1594,20 @@ mod tests {
                 push(Some(kind), c, 1.0, true, base);
             }
         }
+        for &n in UNTAKEN_BRANCH_READS {
+            let mut c = CostCounts::default();
+            c.0[Kind::Varying.index()] = 3.0;
+            c.0[Kind::FloatOp.index()] = 1.0;
+            let mut u = CostCounts::default();
+            u.0[Kind::IndexedUniformRead.index()] = f64::from(n);
+            u.0[Kind::FloatOp.index()] = 4.0 * f64::from(n);
+            push_with(Some(Kind::IndexedUniformRead), c, u, 1.0, true, base);
+        }
         let model = fit(&points).unwrap();
+        assert!(
+            (model.untaken_share - truth.untaken_share).abs() < 1e-6,
+            "{model:?}"
+        );
         assert!((model.fixed_ms - truth.fixed_ms).abs() < 1e-9, "{model:?}");
         assert!((model.pixel_ms - truth.pixel_ms).abs() < 1e-6, "{model:?}");
         assert!((model.depth_test_ms - truth.depth_test_ms).abs() < 1e-9);

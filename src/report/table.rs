@@ -125,6 +125,9 @@ pub struct BenchRow {
     /// overdraw included, and the idle lanes of partly covered SIMD batches;
     /// `SceneGpu::shading_load` over the row's mesh); else the covered pixels' share.
     pub cost: crate::probe::CostCounts,
+    /// The straight-line work of its branches where no lane takes them
+    /// (`technique::TechniqueStats::untaken_cost`).
+    pub untaken_cost: crate::probe::CostCounts,
     pub coverage: f64,
     /// What a frame of the row's own mesh shades (`pcaMv`), for the probe's columns.
     #[serde(skip)]
@@ -446,6 +449,7 @@ mod tests {
             path: HwPath::Dx10,
             specular: None,
             cost: crate::probe::CostCounts::default(),
+            untaken_cost: crate::probe::CostCounts::default(),
             coverage: 1.0,
             own_mesh_load: None,
             triangles: 2,

@@ -120,6 +120,7 @@ pub fn stats(
             + slots.iter().map(|s| s.images.len() as u32).sum::<u32>(),
         lookups_per_pixel: layout::MATERIAL_TEXTURES + slots.iter().map(slot_lookups).sum::<u32>(),
         cost: crate::probe::CostCounts::default(),
+        untaken_cost: crate::probe::CostCounts::default(),
     }
 }
 
@@ -130,6 +131,9 @@ pub fn stats(
 /// (`measure_defines`, drawn once over the scene, additively: red 1 where the fragment's
 /// subgroup — the SIMD batch it runs in — takes the costly path, green 1 per fragment)
 /// finds (0 without one). A batch with one fragment on the costly path runs both paths.
+/// Variants marked `untaken` count, the same way, the work of a branch in the batches that
+/// do not take it — which a device that runs untaken branches masked (lavapipe) pays in
+/// part: `TechniqueStats::untaken_cost`, priced by `probe::CostModel::untaken_share`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CountPlan {
     pub measure_defines: Option<Vec<(&'static str, u32)>>,
@@ -142,6 +146,9 @@ pub struct CountVariant {
     pub defines: Vec<(&'static str, u32)>,
     pub share: f64,
     pub share_per_measured: f64,
+    /// Counted as work of a branch that no lane of a batch takes
+    /// (`TechniqueStats::untaken_cost`), not as work done.
+    pub untaken: bool,
 }
 
 /// Makes `technique` on `path` drawable with `sets` copies of its lighting data (1, or 2
@@ -232,11 +239,20 @@ pub fn finish(
         // The plan's measure needs a set's resources; every set has the same counts.
         if op_counts.is_empty() {
             op_counts = match counted {
-                None => vec![(1.0, gpu::spirv_counts::count(&fragment))],
+                None => vec![(1.0, gpu::spirv_counts::count(&fragment), false)],
                 Some(plan) => plan_counts(ctx, scene, technique, path, plan, &resources)?,
             };
         }
-        stats.cost = cost_counts(technique, path, scene, &layouts, &op_counts);
+        let counted = |untaken: bool| {
+            let of: Vec<_> = op_counts
+                .iter()
+                .filter(|c| c.2 == untaken)
+                .map(|&(share, ops, _)| (share, ops))
+                .collect();
+            cost_counts(technique, path, scene, &layouts, &of)
+        };
+        stats.cost = counted(false);
+        stats.untaken_cost = counted(true);
         let pipeline =
             scene.mesh_pipeline(ctx, &format!("{label}{suffix}"), &fragment, &resources)?;
         drop(resources);
@@ -266,7 +282,7 @@ fn plan_counts(
     path: HwPath,
     plan: &CountPlan,
     resources: &[(u32, gpu::Resource<'_>)],
-) -> Result<Vec<(f64, gpu::spirv_counts::OpCounts)>, TechniqueError> {
+) -> Result<Vec<(f64, gpu::spirv_counts::OpCounts, bool)>, TechniqueError> {
     let measured = match &plan.measure_defines {
         Some(defines) => measure_costly_share(ctx, scene, technique, path, defines, resources)?,
         None => 0.0,
@@ -283,7 +299,12 @@ fn plan_counts(
                     counts.loops
                 );
             }
-            Ok((v.share + v.share_per_measured * measured, counts))
+            let share = v.share + v.share_per_measured * measured;
+            log::debug!(
+                "{technique} on {path}: count build {:?}, share {share:.4}: {counts:?}",
+                v.defines
+            );
+            Ok((share, counts, v.untaken))
         })
         .collect()
 }
@@ -336,7 +357,8 @@ fn measure_costly_share(
 
 /// The cost model's counts of `technique` on `path` (`crate::probe`): its lookups by kind
 /// from the slots — material textures trilinear, per-texel data bilinear 2D (dx9) or 2D
-/// array (dx10), normal-indexed tables dependent 2D (dx9) or cube array (dx10), the
+/// array (dx10) or, where a shader reads its taps one by one, texel fetches (priced as 2D
+/// fetches on both paths: the probe has no array fetch), normal-indexed tables dependent 2D (dx9) or cube array (dx10), the
 /// specular term's moment maps trilinear — and the float ops, uniform and varying reads of
 /// its compiled fragment shader (`gpu::spirv_counts`), or the shares of its counted
 /// variants' ([`CountVariant`]).
@@ -352,7 +374,11 @@ fn cost_counts(
     let mut lookups = vec![(Kind::Trilinear2d, material)];
     for slot in layouts {
         let n = match (slot.kind, super::per_texel_lookups(technique)) {
-            (SlotKind::PerTexel, Some(n)) => n,
+            (SlotKind::PerTexel, Some(n)) => {
+                let fetches = super::per_texel_fetches(technique);
+                lookups.push((Kind::TexelFetch, fetches));
+                n - fetches
+            }
             (SlotKind::NormalTable, _) => slot.lookups() * super::table_fetches(technique),
             _ => slot.lookups(),
         };

@@ -99,6 +99,9 @@ pub struct TechniqueStats {
     /// Per-pixel operation counts by kind for the device cost model (`crate::probe`): the
     /// lookups from the bound images, the rest from the fragment shader's SPIR-V.
     pub cost: crate::probe::CostCounts,
+    /// The straight-line work of its branches where no lane of a batch takes them, which
+    /// some devices run masked (`crate::probe::CostModel::untaken_share`).
+    pub untaken_cost: crate::probe::CostCounts,
 }
 
 /// A fragment shader under `glsl/` and the `SHVIS_*` defines of one technique's variant
@@ -145,6 +148,15 @@ pub fn per_texel_lookups(technique: Technique) -> Option<u32> {
         | Technique::Rnm { .. }
         | Technique::Ndf { .. }
         | Technique::Nmprt { .. } => None,
+    }
+}
+
+/// Of [`per_texel_lookups`], the unfiltered texel fetches (0 where it is `None`).
+pub fn per_texel_fetches(technique: Technique) -> u32 {
+    match technique {
+        Technique::Vq { seams, .. } => cluster::per_texel_fetches(0, seams),
+        Technique::Cpca { m, seams, .. } => cluster::per_texel_fetches(m, seams),
+        _ => 0,
     }
 }
 

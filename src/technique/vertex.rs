@@ -198,6 +198,7 @@ pub(crate) fn finish(
             ],
             &gpu::spirv_counts::count(&fragment),
         ),
+        untaken_cost: crate::probe::CostCounts::default(),
     };
     super::finish::add_specular_stats(scene, path, &mut stats);
     let mut gpu = TechniqueGpu::new(ctx, technique, path, stats, Vec::new(), built);
