@@ -144,6 +144,14 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
                 // straight-line code — four reads of a mean block — is untaken work.
                 let untaken = tech.stats.untaken_cost.get(Kind::IndexedUniformRead);
                 let fetches = c.get(Kind::TexelFetch);
+                // The decode's loop over the vectors is kept where drawn: one entered per
+                // decode, none for VQ (no vectors).
+                let loops = c.get(Kind::Loop);
+                match (m, t.to_string().ends_with('n')) {
+                    (0, _) => assert_eq!(loops, 0.0, "{t}.{path}"),
+                    (_, true) => assert_eq!(loops, 1.0, "{t}.{path}"),
+                    (_, false) => assert!(loops > 1.0 && loops < 5.0, "{t}.{path}: {loops}"),
+                }
                 assert!(
                     reads >= inside && reads < 4.0 * inside,
                     "{t}.{path}: {reads} block reads, {inside} per decode"

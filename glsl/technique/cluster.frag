@@ -15,7 +15,8 @@
 // neither (the work before the branch, kept alive by a sum of it), 5 the decode across a
 // boundary with its loop cut (what a batch that no lane of takes it runs where the device
 // runs untaken branches masked and skips loops no lane enters), all with every loop
-// unrolled so that their SPIR-V counts are what one pixel runs; 3 measures, drawn once additively: red 1 where the
+// unrolled so that their SPIR-V counts are what one pixel runs (with SHVIS_COUNT_LOOPS the
+// drawn shader's loops kept, so that its SPIR-V counts the loops one pixel enters); 3 measures, drawn once additively: red 1 where the
 // fragment's subgroup takes the boundary path (SHVIS_SUBGROUP_VOTE: subgroupAny; else the
 // fragment's own), green 1 per fragment.
 #version 450
@@ -30,7 +31,13 @@
 #extension GL_KHR_shader_subgroup_vote : require
 #endif
 #extension GL_EXT_control_flow_attributes : require
-#if SHVIS_COUNT_PATH
+#ifndef SHVIS_COUNT_LOOPS
+#define SHVIS_COUNT_LOOPS 0
+#endif
+#if SHVIS_COUNT_PATH && SHVIS_COUNT_LOOPS
+#define UNROLL [[unroll]]
+#define KEEP_LOOP [[dont_unroll]]
+#elif SHVIS_COUNT_PATH
 #define UNROLL [[unroll]]
 #define KEEP_LOOP [[unroll]]
 #else

@@ -16,7 +16,9 @@
 //! - **varying reads**: float components loaded from `Input` variables (interpolants);
 //! - **samples**: image sample / fetch / gather instructions;
 //! - **loops**: loops left in the code (`OpLoopMerge`): where there are any, the other counts
-//!   are of the code as written, not as executed.
+//!   are of the code as written, not as executed; of them **kept loops**, those marked
+//!   `DontUnroll` (`[[dont_unroll]]`), which a driver keeps a loop where it may unroll others
+//!   (Mesa's NIR unrolls short ones in full).
 //!
 //! The counts are static: with every loop unrolled (shaderc's performance recipe unrolls
 //! loops marked `[[unroll]]`; most shaders here are unrolled by macros) they are what each
@@ -33,8 +35,11 @@ pub struct OpCounts {
     pub varying_reads: u32,
     pub samples: u32,
     pub loops: u32,
+    pub kept_loops: u32,
 }
 
+/// Loop Control mask bit (SPIR-V unified specification, §3.23).
+const LOOP_CONTROL_DONT_UNROLL: u32 = 0x2;
 // Opcodes (SPIR-V unified specification, §3.52).
 const OP_EXT_INST: u32 = 12;
 const OP_TYPE_FLOAT: u32 = 22;
@@ -210,7 +215,14 @@ pub fn count(spirv: &[u32]) -> OpCounts {
                     _ => {}
                 }
             }
-            OP_LOOP_MERGE => counts.loops += 1,
+            OP_LOOP_MERGE => {
+                counts.loops += 1;
+                if w.get(2)
+                    .is_some_and(|control| control & LOOP_CONTROL_DONT_UNROLL != 0)
+                {
+                    counts.kept_loops += 1;
+                }
+            }
             op if SAMPLE_OPS.contains(&op) => counts.samples += 1,
             op if FLOAT_ELEMENTWISE_OPS.contains(&op)
                 || op == OP_VECTOR_TIMES_SCALAR
@@ -333,12 +345,17 @@ mod tests {
             "vec4 s = vec4(0.0);\n[[unroll]] for (int i = 0; i < 8; ++i) { s += p.c[i]; }\no = s;",
         );
         assert_eq!(unrolled.loops, 0, "{unrolled:?}");
+        assert_eq!(unrolled.kept_loops, 0, "{unrolled:?}");
         assert_eq!(unrolled.uniform_reads, 8, "{unrolled:?}");
         assert_eq!(unrolled.indexed_uniform_reads, 0, "{unrolled:?}");
         let kept = counts_of(
             "vec4 s = vec4(0.0);\n[[dont_unroll]] for (int i = 0; i < 8; ++i) { s += p.c[i]; }\no = s;",
         );
         assert_eq!(kept.loops, 1, "{kept:?}");
+        assert_eq!(kept.kept_loops, 1, "{kept:?}");
+        let plain =
+            counts_of("vec4 s = vec4(0.0);\nfor (int i = 0; i < 8; ++i) { s += p.c[i]; }\no = s;");
+        assert_eq!((plain.loops, plain.kept_loops), (1, 0), "{plain:?}");
     }
 
     #[test]

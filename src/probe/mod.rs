@@ -52,6 +52,17 @@
 //! 2026-12-04) left 7.6–9.5 % on the same runs' points where this leaves 6.1–8.0 %; the
 //! costs move by a few per cent (the bilinear lookup 1.75 → 1.78 ns per lane).
 //!
+//! **How lavapipe runs the clustered decodes** (eighth sitting, each measured by taking one
+//! thing out of cluster.frag): an unfiltered texel fetch costs 0.70 ns per lane where a
+//! bilinear lookup costs 1.79 ([`Kind::TexelFetch`], the taps); a branch that no lane of a
+//! SIMD batch takes still costs its straight-line code, run with the lanes masked off, while
+//! a loop that no lane enters is skipped (vq256: 14.8 ms with the boundary branch taken out,
+//! 28.0 with it there and never taken) — [`CostModel::untaken_share`], fitted to points
+//! whose reads sit in a branch no lane takes (1.00 here; a GPU that jumps over coherent
+//! branches would give 0); and reads in a kept loop cost a loop set-up besides (≈ 4 ns per
+//! lane, [`Kind::Loop`]: the indexed-read points read in such a loop, as the decode does;
+//! straight-line they fitted 1.15× at 144 reads and 0.85× at 18).
+//!
 //! **Limits.** The per-triangle and per-edge costs are the probe's: screen-filling grids
 //! with the shared vertex shader (pcaMv's passes more weights on). On lavapipe a term in
 //! triangles alone could not hold the grids (from screen-sized triangles to 125-pixel ones
@@ -59,7 +70,9 @@
 //! does, and the fit puts nearly all of it there (4–8 ns per edge pixel, the per-triangle
 //! cost near zero — held at zero where the fit would put it below, as T and E of the grids
 //! grow together). Counts are static: branches count both sides unless a
-//! [`CountPlan`](crate::technique::finish::CountPlan) weights them. Uniform reads at a
+//! [`CountPlan`](crate::technique::finish::CountPlan) weights them; loops that a driver may
+//! unroll (no `[[dont_unroll]]`: the SH evaluations' in a few shaders) are counted once,
+//! as written. Uniform reads at a
 //! per-pixel index are their own kind; the probe's index is coherent over a band of the
 //! screen, as a cluster id over a chart. Caches: every probe lookup reads its own texture at
 //! neighbouring coordinates, as the techniques' texel and table fetches do, but a scene's
@@ -87,7 +100,7 @@ use crate::scene::{Mesh, Scene, Vertex};
 pub use states::{DeviceStates, Segmented};
 
 /// How many kinds the model prices.
-pub const KINDS: usize = 10;
+pub const KINDS: usize = 11;
 
 /// The operation kinds the model prices.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
@@ -114,6 +127,10 @@ pub enum Kind {
     /// Unfiltered 2D texel fetch (`texelFetch`), four per texture at the texels of a
     /// bilinear footprint (the clustered techniques' taps).
     TexelFetch,
+    /// A loop entered (set-up and exit of a loop the drawn shader keeps, `[[dont_unroll]]`,
+    /// its body counted per iteration apart); priced by the indexed-read points, which read
+    /// in such a loop.
+    Loop,
 }
 
 impl Kind {
@@ -128,6 +145,7 @@ impl Kind {
         Kind::UniformRead,
         Kind::IndexedUniformRead,
         Kind::TexelFetch,
+        Kind::Loop,
     ];
 
     pub fn name(self) -> &'static str {
@@ -142,6 +160,7 @@ impl Kind {
             Kind::UniformRead => "uniform vec4 read",
             Kind::IndexedUniformRead => "indexed uniform vec4 read",
             Kind::TexelFetch => "texel fetch",
+            Kind::Loop => "loop entered",
         }
     }
 
@@ -155,8 +174,11 @@ impl Kind {
         match self {
             Kind::FloatOp => &[64, 128, 256, 512],
             Kind::Varying => &[2, 5, 9, 14],
-            Kind::UniformRead | Kind::IndexedUniformRead => &[16, 32, 64, 128],
+            Kind::UniformRead => &[16, 32, 64, 128],
+            Kind::IndexedUniformRead => &[18, 36, 72, 144],
             Kind::TexelFetch => &[4, 8, 12, 16],
+            // No points of its own: the indexed reads' points enter one loop each.
+            Kind::Loop => &[],
             _ => &[1, 2, 4, 8, 12, 16],
         }
     }
@@ -177,6 +199,7 @@ impl CostCounts {
         c[Kind::Varying.index()] += f64::from(ops.varying_reads);
         c[Kind::UniformRead.index()] += f64::from(ops.uniform_reads);
         c[Kind::IndexedUniformRead.index()] += f64::from(ops.indexed_uniform_reads);
+        c[Kind::Loop.index()] += f64::from(ops.kept_loops);
         CostCounts(c)
     }
 
@@ -571,8 +594,9 @@ fn probe_scene(width: u32, height: u32, left_half: bool, grid: u32) -> Scene {
 }
 
 /// The GLSL of a probe point: `count` operations of `kind` (`None`: the empty shader), in
-/// a branch that no lane takes where `untaken`.
-fn probe_source(kind: Option<Kind>, count: u32, untaken: bool) -> String {
+/// a branch that no lane takes where `untaken`; `counted`: the build whose SPIR-V is
+/// counted (its loops unrolled, as the techniques' count builds), else the drawn one.
+fn probe_source(kind: Option<Kind>, count: u32, untaken: bool, counted: bool) -> String {
     let t0 = "SHVIS_BINDING_TECHNIQUE_TEXTURE0";
     let mut decl = String::new();
     let mut body = String::new();
@@ -581,7 +605,8 @@ fn probe_source(kind: Option<Kind>, count: u32, untaken: bool) -> String {
         // Every technique reads at least its lightmap coordinates; a shader that reads no
         // varying can skip lavapipe's interpolation set-up (5.4 against 8.0 ms per screen
         // over 2·32² triangles at 1280×800 in one run), a path no technique takes.
-        None => body += "    acc.xy = in_uv_lightmap;\n",
+        // (A loop's cost has no points of its own.)
+        None | Some(Kind::Loop) => body += "    acc.xy = in_uv_lightmap;\n",
         Some(k @ (Kind::Bilinear2d | Kind::Trilinear2d)) => {
             let uv = if k == Kind::Bilinear2d {
                 "in_uv_lightmap"
@@ -696,8 +721,25 @@ fn probe_source(kind: Option<Kind>, count: u32, untaken: bool) -> String {
             );
             // A base that varies across the screen, as a cluster id does between texels.
             body += "    int base = int(in_uv_lightmap.x * 8.0) & 7;\n";
-            for k in 0..count.min(UNIFORM_VEC4S - 8) {
-                body += &format!("    acc += probe.v[base + {k}];\n");
+            if untaken {
+                // Straight-line (a loop no lane enters is skipped, `CostModel::untaken_share`).
+                for k in 0..count.min(UNIFORM_VEC4S - 8) {
+                    body += &format!("    acc += probe.v[base + {k}];\n");
+                }
+            } else {
+                // As a cluster decode reads them: a loop over blocks of 9, each read's RGB
+                // scaled and summed (cluster.frag's `block_dot`), kept a loop where drawn and
+                // unrolled where counted.
+                let blocks = count.min(UNIFORM_VEC4S - 8) / 9;
+                let attribute = if counted { "unroll" } else { "dont_unroll" };
+                body += "    vec3 e = vec3(0.0);\n    float y = in_uv_lightmap.y;\n";
+                body += &format!(
+                    "    [[{attribute}]] for (int k = 0; k < {blocks}; ++k) {{\n        int at = base + 9 * k;\n"
+                );
+                for i in 0..9 {
+                    body += &format!("        e += probe.v[at + {i}].rgb * y;\n");
+                }
+                body += "    }\n    acc.rgb += e;\n";
             }
         }
     }
@@ -706,7 +748,8 @@ fn probe_source(kind: Option<Kind>, count: u32, untaken: bool) -> String {
         body = format!("    if (in_uv_lightmap.x < -1.0) {{\n{body}    }}\n");
     }
     format!(
-        "#version 450\n#extension GL_GOOGLE_include_directive : require\n#define SHVIS_FRAGMENT 1\n\
+        "#version 450\n#extension GL_GOOGLE_include_directive : require\n\
+         #extension GL_EXT_control_flow_attributes : require\n#define SHVIS_FRAGMENT 1\n\
          #include \"common.glsl\"\n{decl}layout(location = 0) out vec4 out_color;\n\
          void main() {{\n    vec4 acc = vec4(0.0);\n{body}    out_color = vec4(acc.rgb * 1e-3 + 0.5, 1.0);\n}}\n"
     )
@@ -907,16 +950,21 @@ pub fn run_with_monitor(
             kind.map_or("empty".to_string(), |k| format!("{k:?}").to_lowercase()),
             if untaken { ".untaken" } else { "" }
         );
-        let compile = |kind, count, untaken| {
+        let compile = |count, counted| {
             crate::gpu::shader::compile_source(
                 &format!("{name}.frag"),
-                &probe_source(kind, count, untaken),
+                &probe_source(kind, count, untaken, counted),
                 ShaderStage::Fragment,
                 &[],
             )
         };
-        let spirv = compile(kind, count, untaken)?;
-        let ops = spirv_counts::count(&spirv);
+        let spirv = compile(count, false)?;
+        // Operations per pixel from the build with every loop unrolled, loops entered from
+        // the drawn one.
+        let ops = OpCounts {
+            kept_loops: spirv_counts::count(&spirv).kept_loops,
+            ..spirv_counts::count(&compile(count, true)?)
+        };
         let mut resources = gpu.common_resources();
         resources.push((
             layout::BINDING_TECHNIQUE_PARAMS,
@@ -956,16 +1004,14 @@ pub fn run_with_monitor(
             }
             _ => vec![],
         };
-        // SPIR-V counts both sides of a branch: the untaken work is the operations' own
-        // (their shader without the branch, less the empty shader's).
+        // SPIR-V counts both sides of a branch: the untaken work is what the point counts
+        // beyond the same shader with none of the operations.
         let all = CostCounts::new(&lookups, &ops);
         let untaken_counts = if untaken {
-            let own = CostCounts::new(
-                &lookups,
-                &spirv_counts::count(&compile(kind, count, false)?),
-            );
-            let empty = CostCounts::new(&[], &spirv_counts::count(&compile(None, 0, false)?));
-            own.less(&empty)
+            all.less(&CostCounts::new(
+                &[],
+                &spirv_counts::count(&compile(0, true)?),
+            ))
         } else {
             CostCounts::default()
         };
@@ -1390,7 +1436,7 @@ mod tests {
             for &count in kind.probe_counts() {
                 let spirv = crate::gpu::shader::compile_source(
                     "probe.frag",
-                    &probe_source(Some(kind), count, false),
+                    &probe_source(Some(kind), count, false, true),
                     ShaderStage::Fragment,
                     &[],
                 )
@@ -1409,7 +1455,7 @@ mod tests {
             }
         }
         for &count in UNTAKEN_BRANCH_READS {
-            let source = probe_source(Some(Kind::IndexedUniformRead), count, true);
+            let source = probe_source(Some(Kind::IndexedUniformRead), count, true, true);
             let spirv = crate::gpu::shader::compile_source(
                 "probe.frag",
                 &source,
@@ -1522,7 +1568,7 @@ mod tests {
             depth_test_ms: 0.3,
             per_triangle_ms: 2e-4,
             per_edge_pixel_ms: 5e-6,
-            per_unit_ms: [2.0, 3.0, 2.5, 4.0, 2.2, 0.01, 0.05, 0.5, 1.5, 1.2],
+            per_unit_ms: [2.0, 3.0, 2.5, 4.0, 2.2, 0.01, 0.05, 0.5, 1.5, 1.2, 3.0],
             untaken_share: 0.6,
         };
         // Edges of a screen of 1000 × 600 pixels cut into 2·g² right triangles.
@@ -1591,6 +1637,9 @@ mod tests {
                 c.0[kind.index()] = f64::from(n);
                 c.0[Kind::Varying.index()] += 2.0;
                 c.0[Kind::FloatOp.index()] += 7.0;
+                if kind == Kind::IndexedUniformRead {
+                    c.0[Kind::Loop.index()] = 1.0;
+                }
                 push(Some(kind), c, 1.0, true, base);
             }
         }

@@ -127,7 +127,8 @@ pub fn stats(
 /// How the cost model counts a shader whose work per pixel depends on its data (the
 /// clustered techniques' decodes, `super::cluster::count_plan`): Σ (share +
 /// share_per_measured · s) · counts(variant), each variant the fragment shader compiled with
-/// its defines (never drawn), s the share of shaded fragments that the measuring build
+/// its defines (never drawn; its loops unrolled, and compiled once more with `COUNT_LOOPS`
+/// for the loops the drawn shader enters on that path), s the share of shaded fragments that the measuring build
 /// (`measure_defines`, drawn once over the scene, additively: red 1 where the fragment's
 /// subgroup — the SIMD batch it runs in — takes the costly path, green 1 per fragment)
 /// finds (0 without one). A batch with one fragment on the costly path runs both paths.
@@ -291,7 +292,7 @@ fn plan_counts(
         .iter()
         .map(|v| {
             let spirv = compile_fragment(technique, path, scene, &v.defines)?;
-            let counts = gpu::spirv_counts::count(&spirv);
+            let mut counts = gpu::spirv_counts::count(&spirv);
             if counts.loops > 0 {
                 log::warn!(
                     "{technique} on {path}: count build {:?} keeps {} loop(s), whose bodies are counted once",
@@ -299,6 +300,13 @@ fn plan_counts(
                     counts.loops
                 );
             }
+            // The loops one pixel enters on this path: the build with the drawn shader's
+            // loops kept (`COUNT_LOOPS`).
+            let mut kept = v.defines.clone();
+            kept.push(("COUNT_LOOPS", 1));
+            counts.kept_loops =
+                gpu::spirv_counts::count(&compile_fragment(technique, path, scene, &kept)?)
+                    .kept_loops;
             let share = v.share + v.share_per_measured * measured;
             log::debug!(
                 "{technique} on {path}: count build {:?}, share {share:.4}: {counts:?}",
