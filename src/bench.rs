@@ -7,8 +7,9 @@
 //! (`gpu::pass`: timestamps around the scene pass), taken in [`TIMING_ROUNDS`] rounds over
 //! every row — the row rebuilt for each, `warmup` untimed frames before the first and one
 //! before each later round — so that a slow spell of a shared device spreads over all rows;
-//! a row that ran in none of the speed states the probe has a model of gets up to
-//! [`MODEL_STATE_ROUNDS`] more (`probe::states`).
+//! a row that ran in none of the speed states the probe has a model of, or in one on fewer
+//! than [`MIN_MODEL_BUILDS`] builds, gets up to [`MODEL_STATE_ROUNDS`] more
+//! (`probe::states`).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -331,7 +332,11 @@ pub fn run(
     }
     // A row with no frames in a state the probe has a model of (the device sat in another
     // through all its rounds) is timed in up to MODEL_STATE_ROUNDS more until it has some:
-    // else its ×model would set frames of one state against the model of another. Not
+    // else its ×model would set frames of one state against the model of another. So is a
+    // row whose frames in its fastest modelled state came from fewer than MIN_MODEL_BUILDS
+    // builds: a build can run ≈ 25 % slow for as long as it lives (`probe::states`), and
+    // its time there is its fastest build's (one run: pca12v 1.33× on the one build it had
+    // in the modelled state, 56 ms frames on another in the other state). Not
     // with `--specular`: its rows differ by the specular term bound when they were
     // measured, and only the last one is bound now.
     if let Some((probe, monitor)) = cost_model.as_ref().filter(|_| settings.specular.is_none()) {
@@ -339,16 +344,19 @@ pub fn run(
         for _ in 0..MODEL_STATE_ROUNDS {
             let unmodelled: Vec<usize> = (0..rows.len())
                 .filter(|&i| {
-                    samples[i]
-                        .fastest_state(&monitor.states, modelled.iter().copied())
-                        .is_none()
+                    match samples[i].fastest_state(&monitor.states, modelled.iter().copied()) {
+                        Some((state, _, _)) => {
+                            samples[i].builds_in(&monitor.states, state) < MIN_MODEL_BUILDS
+                        }
+                        None => true,
+                    }
                 })
                 .collect();
             if unmodelled.is_empty() {
                 break;
             }
             log::info!(
-                "cost model: {} row(s) without frames in a modelled state, timed again",
+                "cost model: {} row(s) without frames of {MIN_MODEL_BUILDS} builds in a modelled state, timed again",
                 unmodelled.len()
             );
             for i in unmodelled {
@@ -635,8 +643,13 @@ const TIMING_ROUNDS: u32 = 3;
 /// Frames of a row timed between two monitor readings, at most ([`timed_segments`]).
 const CHUNK_FRAMES: u32 = 3;
 
-/// Rounds more, at most, for a row that has no frames in a state the probe has a model of.
+/// Rounds more, at most, for a row that has no frames in a state the probe has a model of,
+/// or frames there of fewer than [`MIN_MODEL_BUILDS`] builds.
 const MODEL_STATE_ROUNDS: usize = 2;
+
+/// Builds of a row with frames in the state it is compared in, below which it gets more
+/// rounds (each round builds it afresh).
+const MIN_MODEL_BUILDS: usize = 2;
 
 /// The file stem of the reference image `frame` was taken from (`reference_for`).
 fn reference_stem(name: &str, kind: RowReference) -> String {

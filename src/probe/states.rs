@@ -252,6 +252,19 @@ impl Segmented {
         self.fastest_build(|s| states.ran_in(s, state))
     }
 
+    /// How many builds have frames in `state`.
+    pub fn builds_in(&self, states: &DeviceStates, state: usize) -> usize {
+        let mut builds: Vec<usize> = self
+            .0
+            .iter()
+            .filter(|s| states.ran_in(s, state) && !s.ms.is_empty())
+            .map(|s| s.build)
+            .collect();
+        builds.sort_unstable();
+        builds.dedup();
+        builds.len()
+    }
+
     /// The median of every frame of its fastest build, whatever state it ran in.
     pub fn fastest_build_median(&self) -> Option<f64> {
         self.fastest_build(|_| true).0
@@ -354,6 +367,12 @@ mod tests {
         point.push(0, 1.0, vec![75.0], 1.0);
         point.push(1, 1.0, vec![59.0], 1.0);
         assert_eq!(point.median_in(&states, 0), (Some(59.0), 7));
+        assert_eq!(point.builds_in(&states, 0), 2);
+        let two = DeviceStates::from_monitor(&[1.0, 1.0, 2.0, 2.0]);
+        let mut row = Segmented::default();
+        row.push(0, 1.0, vec![60.0], 1.0);
+        row.push(1, 2.0, vec![70.0], 2.0);
+        assert_eq!((row.builds_in(&two, 0), row.builds_in(&two, 1)), (1, 1));
         assert_eq!(point.fastest_build_median(), Some(59.0));
         // One build: the median of all its frames, as before builds were told apart.
         let mut one = Segmented::default();
