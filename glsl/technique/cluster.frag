@@ -13,10 +13,11 @@
 // SHVIS_COUNT_PATH, only for the cost model (`technique::finish::CountPlan`, never drawn as
 // a technique): 1 keeps the decode inside a cluster, 2 the decode across a boundary, 4
 // neither (the work before the branch, kept alive by a sum of it), 5 the decode across a
-// boundary with its loop cut (what a batch that no lane of takes it runs where the device
-// runs untaken branches masked and skips loops no lane enters), all with every loop
-// unrolled so that their SPIR-V counts are what one pixel runs (with SHVIS_COUNT_LOOPS the
-// drawn shader's loops kept, so that its SPIR-V counts the loops one pixel enters); 3 measures, drawn once additively: red 1 where the
+// boundary with its loop cut (what a batch none of whose lanes takes the boundary path
+// runs of it, on a device that runs untaken branches masked and skips loops no lane
+// enters), all with every loop unrolled so that their SPIR-V counts are what one pixel
+// runs (with SHVIS_COUNT_LOOPS the drawn shader's loops kept, so that the SPIR-V counts
+// the loops one pixel enters); 3 measures, drawn once additively: red 1 where the
 // fragment's subgroup takes the boundary path (SHVIS_SUBGROUP_VOTE: subgroupAny; else the
 // fragment's own), green 1 per fragment.
 #version 450

@@ -128,10 +128,10 @@ pub fn stats(
 /// clustered techniques' decodes, `super::cluster::count_plan`): Σ (share +
 /// share_per_measured · s) · counts(variant), each variant the fragment shader compiled with
 /// its defines (never drawn; its loops unrolled, and compiled once more with `COUNT_LOOPS`
-/// for the loops the drawn shader enters on that path), s the share of shaded fragments that the measuring build
-/// (`measure_defines`, drawn once over the scene, additively: red 1 where the fragment's
-/// subgroup — the SIMD batch it runs in — takes the costly path, green 1 per fragment)
-/// finds (0 without one). A batch with one fragment on the costly path runs both paths.
+/// for the loops the drawn shader enters on that path), s the share of shaded fragments
+/// that the measuring build (`measure_defines`, drawn once over the scene, additively: red
+/// 1 where the fragment's subgroup — the SIMD batch it runs in — takes the costly path,
+/// green 1 per fragment) finds (0 without one). A batch with one fragment on the costly path runs both paths.
 /// Variants marked `untaken` count, the same way, the work of a branch in the batches that
 /// do not take it — which a device that runs untaken branches masked (lavapipe) pays in
 /// part: `TechniqueStats::untaken_cost`, priced by `probe::CostModel::untaken_share`.
@@ -244,16 +244,17 @@ pub fn finish(
                 Some(plan) => plan_counts(ctx, scene, technique, path, plan, &resources)?,
             };
         }
-        let counted = |untaken: bool| {
-            let of: Vec<_> = op_counts
+        // The work done, and apart the work of branches no lane takes.
+        let counts_of = |untaken: bool| {
+            let builds: Vec<_> = op_counts
                 .iter()
-                .filter(|c| c.2 == untaken)
+                .filter(|&&(_, _, is_untaken)| is_untaken == untaken)
                 .map(|&(share, ops, _)| (share, ops))
                 .collect();
-            cost_counts(technique, path, scene, &layouts, &of)
+            cost_counts(technique, path, scene, &layouts, &builds)
         };
-        stats.cost = counted(false);
-        stats.untaken_cost = counted(true);
+        stats.cost = counts_of(false);
+        stats.untaken_cost = counts_of(true);
         let pipeline =
             scene.mesh_pipeline(ctx, &format!("{label}{suffix}"), &fragment, &resources)?;
         drop(resources);
@@ -366,7 +367,8 @@ fn measure_costly_share(
 /// The cost model's counts of `technique` on `path` (`crate::probe`): its lookups by kind
 /// from the slots — material textures trilinear, per-texel data bilinear 2D (dx9) or 2D
 /// array (dx10) or, where a shader reads its taps one by one, texel fetches (priced as 2D
-/// fetches on both paths: the probe has no array fetch), normal-indexed tables dependent 2D (dx9) or cube array (dx10), the
+/// fetches on both paths: the probe has no array fetch), normal-indexed tables dependent
+/// 2D (dx9) or cube array (dx10), the
 /// specular term's moment maps trilinear — and the float ops, uniform and varying reads of
 /// its compiled fragment shader (`gpu::spirv_counts`), or the shares of its counted
 /// variants' ([`CountVariant`]).
