@@ -959,11 +959,19 @@ pub fn run_with_monitor(
             )
         };
         let spirv = compile(count, false)?;
-        // Operations per pixel from the build with every loop unrolled, loops entered from
-        // the drawn one.
+        // Operations per pixel from the build with every loop unrolled (the drawn one where
+        // it has no loop to unroll), loops entered from the drawn one.
+        let drawn = spirv_counts::count(&spirv);
+        let unrolled = if probe_source(kind, count, untaken, true)
+            == probe_source(kind, count, untaken, false)
+        {
+            drawn
+        } else {
+            spirv_counts::count(&compile(count, true)?)
+        };
         let ops = OpCounts {
-            kept_loops: spirv_counts::count(&spirv).kept_loops,
-            ..spirv_counts::count(&compile(count, true)?)
+            kept_loops: drawn.kept_loops,
+            ..unrolled
         };
         let mut resources = gpu.common_resources();
         resources.push((
@@ -1354,13 +1362,13 @@ fn fit(points: &[ProbePoint]) -> Option<CostModel> {
     // The share: the median over the untaken-branch points of (measured − the model without
     // the branch) / the branch's modelled work; none (a device without the points): 1, as
     // SPIR-V counts both sides of a branch.
+    let without = CostModel {
+        untaken_share: 0.0,
+        ..model.clone()
+    };
     let shares: Vec<f64> = branch_points
         .iter()
         .filter_map(|p| {
-            let without = CostModel {
-                untaken_share: 0.0,
-                ..model.clone()
-            };
             let base = predict_point(&without, p);
             let work = predict_point(&model, p) - base;
             (work > 0.0).then(|| (p.ms_median - base) / work)
