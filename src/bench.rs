@@ -8,8 +8,8 @@
 //! every row — the row rebuilt for each, `warmup` untimed frames before the first and one
 //! before each later round — so that a slow spell of a shared device spreads over all rows;
 //! a row that ran in none of the speed states the probe has a model of, or in one on fewer
-//! than [`MIN_MODEL_BUILDS`] builds, gets up to [`MODEL_STATE_ROUNDS`] more
-//! (`probe::states`).
+//! than two builds whose medians agree within [`BUILD_AGREEMENT`], gets up to
+//! [`MODEL_STATE_ROUNDS`] more (`probe::states`).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -333,10 +333,12 @@ pub fn run(
     // A row with no frames in a state the probe has a model of (the device sat in another
     // through all its rounds) is timed in up to MODEL_STATE_ROUNDS more until it has some:
     // else its ×model would set frames of one state against the model of another. So is a
-    // row whose frames in its fastest modelled state came from fewer than MIN_MODEL_BUILDS
-    // builds: a build can run ≈ 25 % slow for as long as it lives (`probe::states`), and
-    // its time there is its fastest build's (one run: pca12v 1.33× on the one build it had
-    // in the modelled state, 56 ms frames on another in the other state). Not
+    // row whose frames in its fastest modelled state came from fewer than two builds, or
+    // whose two fastest builds there differ by more than BUILD_AGREEMENT: a build can run
+    // ≈ 25 % slow for as long as it lives (`probe::states`), and its time there is its
+    // fastest build's (one run: pca12v 1.33× on the one build it had in the modelled
+    // state, 56 ms frames on another in the other state; pca12v25's builds ran 1.00×,
+    // 1.37×, 1.18× in another). Not
     // with `--specular`: its rows differ by the specular term bound when they were
     // measured, and only the last one is bound now.
     if let Some((probe, monitor)) = cost_model.as_ref().filter(|_| settings.specular.is_none()) {
@@ -346,7 +348,7 @@ pub fn run(
                 .filter(|&i| {
                     match samples[i].fastest_state(&monitor.states, modelled.iter().copied()) {
                         Some((state, _, _)) => {
-                            samples[i].builds_in(&monitor.states, state) < MIN_MODEL_BUILDS
+                            !samples[i].builds_agree_in(&monitor.states, state, BUILD_AGREEMENT)
                         }
                         None => true,
                     }
@@ -356,11 +358,27 @@ pub fn run(
                 break;
             }
             log::info!(
-                "cost model: {} row(s) without frames of {MIN_MODEL_BUILDS} builds in a modelled state, timed again",
-                unmodelled.len()
+                "cost model: {} row(s) without frames of two builds within {:.0} % of each other in a modelled state, timed again",
+                unmodelled.len(),
+                100.0 * BUILD_AGREEMENT
             );
             for i in unmodelled {
                 time_round(rows[i].technique, rows[i].path, &mut samples[i])?;
+            }
+        }
+    }
+    if log::log_enabled!(log::Level::Debug) {
+        for (row, times) in rows.iter().zip(&samples) {
+            for s in &times.0 {
+                log::debug!(
+                    "timed {} {:?}: build {}, monitor {:.2} ms, frames {:.1?} ms, monitor {:.2} ms",
+                    row.technique,
+                    row.path,
+                    s.build,
+                    s.monitor_before,
+                    s.ms,
+                    s.monitor_after
+                );
             }
         }
     }
@@ -644,12 +662,13 @@ const TIMING_ROUNDS: u32 = 3;
 const CHUNK_FRAMES: u32 = 3;
 
 /// Rounds more, at most, for a row that has no frames in a state the probe has a model of,
-/// or frames there of fewer than [`MIN_MODEL_BUILDS`] builds.
-const MODEL_STATE_ROUNDS: usize = 2;
+/// or not two builds there that agree within [`BUILD_AGREEMENT`].
+const MODEL_STATE_ROUNDS: usize = 3;
 
-/// Builds of a row with frames in the state it is compared in, below which it gets more
-/// rounds (each round builds it afresh).
-const MIN_MODEL_BUILDS: usize = 2;
+/// How far (relative) the second-fastest build of a row, in the state it is compared in,
+/// may run from the fastest before the row gets another round on a fresh build (most
+/// rows' builds agree within 5 %; an odd build runs 13–37 % slow).
+const BUILD_AGREEMENT: f64 = 0.1;
 
 /// The file stem of the reference image `frame` was taken from (`reference_for`).
 fn reference_stem(name: &str, kind: RowReference) -> String {
