@@ -25,10 +25,29 @@ fn the_probe_runs_every_microbenchmark_and_fits_a_model_to_them() {
     .expect("probe runs");
     eprintln!("{}", probe.to_markdown());
     // The empty frame, 3 empty-shader points, 4 finer triangle grids, the counts of each
-    // kind and the untaken-branch points.
+    // kind, every varying over some of the grids and the untaken-branch points.
     let counts: usize = Kind::ALL.iter().map(|k| k.probe_counts().len()).sum();
     let branches = shvis::probe::UNTAKEN_BRANCH_READS.len();
-    assert_eq!(probe.points.len(), 4 + 4 + counts + branches);
+    let varying_grids = shvis::probe::VARYING_GRIDS.len();
+    assert_eq!(
+        probe.points.len(),
+        4 + 4 + counts + varying_grids + branches
+    );
+    // The varying points over grids: as many triangles as the grids they are drawn over.
+    let grid_triangles = |p: &&shvis::probe::ProbePoint| p.triangles > 8 * probe.grid * probe.grid;
+    let over_grids: Vec<u32> = probe
+        .points
+        .iter()
+        .filter(|p| p.kind == Some(Kind::Varying))
+        .filter(grid_triangles)
+        .map(|p| p.triangles)
+        .collect();
+    let side = |t: u32| f64::from(t / 2).sqrt().round() as u32;
+    assert_eq!(
+        over_grids.iter().map(|&t| side(t)).collect::<Vec<_>>(),
+        shvis::probe::VARYING_GRIDS,
+        "{over_grids:?}"
+    );
     assert_eq!(
         probe.points.iter().filter(|p| p.in_untaken_branch).count(),
         branches
@@ -53,6 +72,7 @@ fn the_probe_runs_every_microbenchmark_and_fits_a_model_to_them() {
     assert!((0.0..=1.0).contains(&m.untaken_share), "{m:?}");
     assert!(m.fixed_ms.is_finite() && m.pixel_ms.is_finite() && m.depth_test_ms.is_finite());
     assert!(m.per_triangle_ms.is_finite(), "{m:?}");
+    assert!(m.per_triangle_varying_ms.is_finite() && m.per_triangle_varying_ms >= 0.0);
     // The screen-filling quad shades every pixel exactly once.
     assert_eq!(probe.screen_fragments, 320 * 200);
     // The states come from the monitor frames, and the kept monitor times again.

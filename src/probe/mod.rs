@@ -14,7 +14,8 @@
 //! read, and uniform vec4 reads at constant and at per-pixel indices; plus the empty shader
 //! (it writes its lightmap coordinates, which every technique reads) over the full screen,
 //! over half of it, with the depth test off, and over grids of 2·64², 2·96², 2·128², 2·256²
-//! triangles (the per-triangle cost), and a frame that shades nothing. The points' frames
+//! triangles (the per-triangle cost), the shader that reads all 14 varyings over the 2·96²
+//! and 2·256² grids (a varying's per-triangle cost), and a frame that shades nothing. The points' frames
 //! (`gpu::pass`) are taken in rounds over all points so that a slow drift of a shared
 //! device spreads over every point instead of landing on a few; cheap points get more
 //! frames. A shared device also switches between speed states every few seconds (on this
@@ -27,12 +28,15 @@
 //! pipelines, its frames pooled with the first and its time that of its fastest build (a
 //! build can run ≈ 25 % slow for as long as it lives, `states`).
 //!
-//! **Model.** t = fixed + T·c_T + E·c_E + f · (p + Σ_k n_k c_k), T the triangles drawn and
-//! c_T the cost of one (setup, vertex shading), E the length of their edges on the screen in
-//! pixels (`scene::screen_triangles`, clipped to the view, hidden ones included: the
-//! rasterizer walks them) and c_E the cost of a pixel of edge (the partly covered blocks
-//! along it), f the device lanes a frame of the mesh
-//! keeps busy per screen pixel (`SceneGpu::shading_load`: by additive blending each fragment
+//! **Model.** t = fixed + T·(c_T + n_V c_TV) + E·c_E + f · (p + Σ_k n_k c_k), T the
+//! triangles drawn and c_T the cost of one (setup, vertex shading), c_TV that of each of the
+//! n_V interpolated floats the fragment shader reads (the vertex stage writes it, the
+//! triangle's set-up computes its plane; on lavapipe 2.2 ns in the faster state, 6.3 in the
+//! slower, where pcaMv over 115k triangles ran 1.14× the model without it), E the length
+//! of their edges on the screen in pixels (`scene::screen_triangles`, clipped to the view,
+//! hidden ones included: the rasterizer walks them) and c_E the cost of a pixel of edge
+//! (the partly covered blocks along it), f the device lanes a frame of the mesh keeps busy
+//! per screen pixel (`SceneGpu::shading_load`: by additive blending each fragment
 //! adds its share of the subgroup it ran in, so overdraw — hidden surfaces drawn before
 //! their occluders — counts, and so do the idle lanes of SIMD batches that small triangles
 //! cover in part: on lavapipe 1.01 lanes per fragment over screen-sized triangles, 1.27,
@@ -64,7 +68,8 @@
 //! straight-line they fitted 1.15× at 144 reads and 0.85× at 18).
 //!
 //! **Limits.** The per-triangle and per-edge costs are the probe's: screen-filling grids
-//! with the shared vertex shader (pcaMv's passes more weights on). On lavapipe a term in
+//! with the shared vertex shader; a vertex shader's own work beyond the varyings it writes
+//! (pcaMv's copies its weights) is not priced. On lavapipe a term in
 //! triangles alone could not hold the grids (from screen-sized triangles to 125-pixel ones
 //! cost a step of ≈ 2.5 ms per screen, further steps less: ≈ T^0.4); with the edges it
 //! does, and the fit puts nearly all of it there (4–8 ns per edge pixel, the per-triangle
@@ -173,7 +178,7 @@ impl Kind {
     pub fn probe_counts(self) -> &'static [u32] {
         match self {
             Kind::FloatOp => &[64, 128, 256, 512],
-            Kind::Varying => &[2, 5, 9, 14],
+            Kind::Varying => &[2, 5, 9, MAX_PROBE_VARYINGS],
             Kind::UniformRead => &[16, 32, 64, 128],
             Kind::IndexedUniformRead => &[18, 36, 72, 144],
             Kind::TexelFetch => &[4, 8, 12, 16],
@@ -237,6 +242,9 @@ pub struct CostModel {
     pub per_triangle_ms: f64,
     /// Per pixel of triangle edge on the screen (the rasterizer's partly covered blocks), ms.
     pub per_edge_pixel_ms: f64,
+    /// Per triangle per interpolated float the fragment shader reads (the vertex stage's
+    /// output and the triangle's set-up of its plane equation), ms.
+    pub per_triangle_varying_ms: f64,
     /// ms per unit of each kind per pixel over the whole screen, in [`Kind::ALL`] order.
     pub per_unit_ms: [f64; KINDS],
     /// The share of a branch's work that the device runs where no lane of a SIMD batch
@@ -263,8 +271,10 @@ impl CostModel {
             .zip(&self.per_unit_ms)
             .map(|(n, c)| n * c)
             .sum();
+        let varyings = counts.0[Kind::Varying.index()];
         self.fixed_ms
-            + f64::from(triangles) * self.per_triangle_ms
+            + f64::from(triangles)
+                * (self.per_triangle_ms + varyings * self.per_triangle_varying_ms)
             + edge_pixels * self.per_edge_pixel_ms
             + coverage * (self.pixel_ms + per_pixel)
     }
@@ -424,7 +434,7 @@ impl Probe {
         let m = &self.model;
         let mut s = format!(
             "device: {} · {}×{} ({} fragments shaded by the screen grid of 2·{}² triangles, {:.0} pixels each) · at least {} timed frames per point (more for cheap ones), in interleaved rounds · {:.1} s\n\n\
-             fixed {:.3} ms per frame; {:.3} µs per triangle; {:.3} ns per pixel of triangle edge; empty shader {:.3} ms per screen of lanes, of which the depth test {:.3} ms\n\n\
+             fixed {:.3} ms per frame; {:.3} µs per triangle, {:.2} ns more per varying float it carries; {:.3} ns per pixel of triangle edge; empty shader {:.3} ms per screen of lanes, of which the depth test {:.3} ms\n\n\
              | kind | ms per unit per screen of lanes | ns per unit per lane |\n|---|---:|---:|\n",
             self.device,
             self.width,
@@ -437,6 +447,7 @@ impl Probe {
             self.seconds,
             m.fixed_ms,
             1e3 * m.per_triangle_ms,
+            1e6 * m.per_triangle_varying_ms,
             1e6 * m.per_edge_pixel_ms,
             m.pixel_ms,
             m.depth_test_ms
@@ -529,6 +540,11 @@ const TEXTURE_SIDE: u32 = 512;
 /// Grid sides of the per-triangle points: small triangles (125, 55, 31 and 8 pixels at
 /// 1280×800), as a scene's many small ones (pca12v25's 115k triangles are ≈ 7 pixels).
 const TRIANGLE_GRIDS: [u32; 4] = [64, 96, 128, 256];
+/// Grid sides (of [`TRIANGLE_GRIDS`]) over which the shader that reads every varying is
+/// drawn too: the per-triangle cost of a varying.
+pub const VARYING_GRIDS: [u32; 2] = [96, 256];
+/// The varyings the probe's shaders can read (the scene vertex's 14 floats).
+const MAX_PROBE_VARYINGS: u32 = 14;
 /// Points faster than this get proportionally more frames (up to 20×) after the first round.
 const CHEAP_POINT_MS: f64 = 40.0;
 /// Interleaved rounds the timed frames are split into.
@@ -687,7 +703,7 @@ fn probe_source(kind: Option<Kind>, count: u32, untaken: bool, counted: bool) ->
             body += "    acc = c0 + c1 + c2 + c3;\n";
         }
         Some(Kind::Varying) => {
-            let floats = [
+            let floats: [&str; MAX_PROBE_VARYINGS as usize] = [
                 "in_normal_world.x",
                 "in_normal_world.y",
                 "in_normal_world.z",
@@ -1053,6 +1069,13 @@ pub fn run_with_monitor(
             specs.push((Some(kind), count, false, true, &full_mesh.0));
         }
     }
+    for (g, _) in grids
+        .iter()
+        .zip(TRIANGLE_GRIDS)
+        .filter(|(_, side)| VARYING_GRIDS.contains(side))
+    {
+        specs.push((Some(Kind::Varying), MAX_PROBE_VARYINGS, false, true, &g.0));
+    }
     for &count in UNTAKEN_BRANCH_READS {
         specs.push((
             Some(Kind::IndexedUniformRead),
@@ -1322,9 +1345,11 @@ fn base_grid(width: u32, height: u32, triangle_pixels: f64) -> u32 {
 /// make the largest relative error over the points least.
 fn fit(points: &[ProbePoint]) -> Option<CostModel> {
     // Unknowns: fixed, the per-triangle and per-edge-pixel costs, p, the depth test's part
-    // d, then c_k; t = fixed + T·c_T + E·c_E + f·(p − d·[depth test off] + Σ n_k c_k), each
-    // row over its t so that errors are relative.
-    let n = 5 + Kind::ALL.len();
+    // d, the per-triangle cost of a varying c_TV, then c_k; t = fixed + T·(c_T + n_V c_TV)
+    // + E·c_E + f·(p − d·[depth test off] + Σ n_k c_k), each row over its t so that errors
+    // are relative.
+    const KIND0: usize = 6;
+    let n = KIND0 + Kind::ALL.len();
     let (branch_points, points): (Vec<&ProbePoint>, Vec<&ProbePoint>) =
         points.iter().partition(|p| p.in_untaken_branch);
     let rows: Vec<Vec<f64>> = points
@@ -1339,7 +1364,8 @@ fn fit(points: &[ProbePoint]) -> Option<CostModel> {
                         3 => p.coverage,
                         4 if p.depth_test => 0.0,
                         4 => -p.coverage,
-                        _ => p.coverage * p.counts.0[c - 5],
+                        5 => f64::from(p.triangles) * p.counts.0[Kind::Varying.index()],
+                        _ => p.coverage * p.counts.0[c - KIND0],
                     };
                     column / p.ms_median
                 })
@@ -1356,7 +1382,8 @@ fn fit(points: &[ProbePoint]) -> Option<CostModel> {
         depth_test_ms: x[4],
         per_triangle_ms: x[1],
         per_edge_pixel_ms: x[2],
-        per_unit_ms: std::array::from_fn(|k| x[k + 5]),
+        per_triangle_varying_ms: x[5],
+        per_unit_ms: std::array::from_fn(|k| x[k + KIND0]),
         untaken_share: 1.0,
     };
     // The share: the median over the untaken-branch points of (measured − the model without
@@ -1576,6 +1603,7 @@ mod tests {
             depth_test_ms: 0.3,
             per_triangle_ms: 2e-4,
             per_edge_pixel_ms: 5e-6,
+            per_triangle_varying_ms: 1.5e-6,
             per_unit_ms: [2.0, 3.0, 2.5, 4.0, 2.2, 0.01, 0.05, 0.5, 1.5, 1.2, 3.0],
             untaken_share: 0.6,
         };
@@ -1639,6 +1667,11 @@ mod tests {
         for g in TRIANGLE_GRIDS {
             push(None, CostCounts::default(), 1.0, true, 2 * g * g);
         }
+        for g in VARYING_GRIDS {
+            let mut c = CostCounts::default();
+            c.0[Kind::Varying.index()] = f64::from(MAX_PROBE_VARYINGS);
+            push(Some(Kind::Varying), c, 1.0, true, 2 * g * g);
+        }
         for kind in Kind::ALL {
             for &n in kind.probe_counts() {
                 let mut c = CostCounts::default();
@@ -1674,6 +1707,10 @@ mod tests {
         );
         assert!(
             (model.per_edge_pixel_ms - truth.per_edge_pixel_ms).abs() < 1e-11,
+            "{model:?}"
+        );
+        assert!(
+            (model.per_triangle_varying_ms - truth.per_triangle_varying_ms).abs() < 1e-11,
             "{model:?}"
         );
         for (m, t) in model.per_unit_ms.iter().zip(truth.per_unit_ms) {
