@@ -175,7 +175,7 @@ pub fn finish(
 ) -> Result<TechniqueGpu, TechniqueError> {
     let label = format!("{technique}.{path}");
     let shared_per_texel = TextureSlot::per_texel(per_texel);
-    let fragment = compile_fragment(technique, path, scene, &[])?;
+    let fragment = compile_fragment(technique, path, scene, &lighting.defines)?;
     check_uniform_size(ctx, lighting.params.len(), &label)?;
     let sampler = scene.lightmap_sampler();
     let mut built = Vec::with_capacity(sets);
@@ -266,6 +266,7 @@ pub fn finish(
                 .chain(own_per_texel)
                 .flat_map(|s| s.images)
                 .collect(),
+            defines: lighting.defines.clone(),
         });
     }
     let mut images = shared_per_texel.images;

@@ -38,6 +38,10 @@ pub struct LightingData {
     /// formed from each texel's transfer matrix), bound where other families bind their
     /// bake's per-texel data.
     pub texels: Option<TexelGroups>,
+    /// Defines the fragment shader is compiled with for this data's layout, where the
+    /// technique alone does not fix it (`nmprtsvdMp`: the RGBA groups of a matrix row,
+    /// from the transfer bake's lighting order, so that its loops unroll).
+    pub defines: Vec<(&'static str, u32)>,
 }
 
 impl LightingData {
@@ -47,6 +51,7 @@ impl LightingData {
             params,
             tables: None,
             texels: None,
+            defines: Vec::new(),
         }
     }
 
@@ -199,10 +204,12 @@ pub(crate) struct LightingSet {
     /// In upload order ([`LightingData::image_uploads`]): the tables, then the
     /// lighting-dependent per-texel images.
     pub images: Vec<Image>,
+    /// The defines its pipeline's shader was compiled with ([`LightingData::defines`]).
+    pub defines: Vec<(&'static str, u32)>,
 }
 
 impl LightingSet {
-    /// Checks `data` has this set's layout: same uniform size, same images.
+    /// Checks `data` has this set's layout: same uniform size, same images, same defines.
     pub fn check_layout(
         &self,
         data: &LightingData,
@@ -215,7 +222,10 @@ impl LightingSet {
                 .iter()
                 .zip(&self.images)
                 .all(|((desc, _), i)| desc == i.desc());
-        if data.params.len() as u64 != self.params.size() || !same_tables {
+        if data.params.len() as u64 != self.params.size()
+            || !same_tables
+            || data.defines != self.defines
+        {
             return Err(TechniqueError::Input {
                 label: label.into(),
                 detail: "a lighting update does not have the layout the technique was built with"

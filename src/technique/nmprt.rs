@@ -314,8 +314,8 @@ impl NmprtRecipe {
         Ok((groups, scale))
     }
 
-    /// `nmprtsvdMp`'s uniform block for lighting `l`: the matrices' unscale, the row
-    /// layout and l per colour.
+    /// `nmprtsvdMp`'s uniform block for lighting `l`: the matrices' unscale and l per
+    /// colour (the rows' layout is compiled in, `LightingData::defines`).
     fn pixel_params(&self, l: &[[f64; 3]]) -> NmprtPixelParams {
         let n = self.transfer.columns();
         let mut light = [[0.0f32; 4]; 3 * PIXEL_MAX_ROW_GROUPS];
@@ -326,7 +326,6 @@ impl NmprtRecipe {
         }
         NmprtPixelParams {
             unscale: [self.pixel_unscale, 0.0, 0.0, 0.0],
-            shape: [n.div_ceil(VALUES_PER_TEXEL) as f32, 0.0, 0.0, 0.0],
             light,
         }
     }
@@ -488,7 +487,13 @@ impl NmprtRecipe {
         if let NmprtVariant::SvdPixel { .. } = self.variant {
             // Nothing per texel depends on the lighting: the pixel shader multiplies.
             let params = self.pixel_params(radiance_sh);
-            return Ok(LightingData::params(bytemuck::bytes_of(&params).to_vec()));
+            return Ok(LightingData {
+                defines: vec![(
+                    "NMPRT_ROW_GROUPS",
+                    map.columns().div_ceil(VALUES_PER_TEXEL) as u32,
+                )],
+                ..LightingData::params(bytemuck::bytes_of(&params).to_vec())
+            });
         }
         let v = self.values_per_texel();
         let texels = (map.res * map.res) as usize;
@@ -508,6 +513,7 @@ impl NmprtRecipe {
                     &[ratio],
                     name,
                 )),
+                defines: Vec::new(),
             });
         }
         let largest = max_abs(values.iter().copied());
@@ -531,6 +537,7 @@ impl NmprtRecipe {
                 &groups,
                 name,
             )),
+            defines: Vec::new(),
         })
     }
 }
@@ -581,8 +588,6 @@ pub const PIXEL_MAX_ROW_GROUPS: usize = 16;
 pub struct NmprtPixelParams {
     /// x: factor undoing the matrices' f16 range scaling.
     pub unscale: [f32; 4],
-    /// x: RGBA groups per matrix row, ⌈O²/4⌉.
-    pub shape: [f32; 4],
     /// Colour c, group k at `c·16 + k`: lighting coefficients 4k … 4k+3.
     pub light: [[f32; 4]; 3 * PIXEL_MAX_ROW_GROUPS],
 }

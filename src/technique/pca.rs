@@ -139,6 +139,7 @@ pub fn lighting(
         params: bytemuck::bytes_of(&tables.params(table.map().res())).to_vec(),
         tables: Some(tables),
         texels: None,
+        defines: Vec::new(),
     })
 }
 

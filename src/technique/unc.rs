@@ -106,5 +106,6 @@ pub fn lighting(
         params: bytemuck::bytes_of(&tables.params(map.res())).to_vec(),
         tables: Some(tables),
         texels: None,
+        defines: Vec::new(),
     })
 }

@@ -155,7 +155,7 @@ pub(crate) fn finish(
             ("VERTEX_WEIGHT_GROUPS", groups),
         ],
     )?;
-    let fragment = super::finish::compile_fragment(technique, path, scene, &[])?;
+    let fragment = super::finish::compile_fragment(technique, path, scene, &lighting.defines)?;
     let mut built = Vec::with_capacity(sets);
     for set in 0..sets.max(1) {
         let suffix = super::finish::set_suffix(set);
@@ -179,6 +179,7 @@ pub(crate) fn finish(
             pipeline,
             params,
             images: Vec::new(),
+            defines: lighting.defines.clone(),
         });
     }
     let mut stats = TechniqueStats {
