@@ -537,6 +537,14 @@ mod tests {
             for &path in HwPath::ALL {
                 let mut defines = vec![path.shader_define()];
                 defines.extend_from_slice(&shader.defines);
+                // What the build adds from its data (the default lighting order's).
+                if let Technique::Nmprt {
+                    variant: NmprtVariant::SvdPixel { .. },
+                } = technique
+                {
+                    let order = crate::bake::transfer::DEFAULT_LIGHTING_ORDER;
+                    defines.push(nmprt::pixel_row_groups(order.coeff_count()));
+                }
                 compile_glsl(shader.path, ShaderStage::Fragment, &defines)
                     .unwrap_or_else(|e| panic!("{technique}.{path}: {e}"));
             }

@@ -488,10 +488,7 @@ impl NmprtRecipe {
             // Nothing per texel depends on the lighting: the pixel shader multiplies.
             let params = self.pixel_params(radiance_sh);
             return Ok(LightingData {
-                defines: vec![(
-                    "NMPRT_ROW_GROUPS",
-                    map.columns().div_ceil(VALUES_PER_TEXEL) as u32,
-                )],
+                defines: vec![pixel_row_groups(map.columns())],
                 ..LightingData::params(bytemuck::bytes_of(&params).to_vec())
             });
         }
@@ -576,6 +573,15 @@ pub fn fragment_shader(variant: NmprtVariant) -> ShaderVariant {
             ],
         },
     }
+}
+
+/// The define `nmprtsvdMp`'s shader is compiled with for lighting of `columns` SH
+/// coefficients ([`LightingData::defines`]): the RGBA groups of a matrix row.
+pub fn pixel_row_groups(columns: usize) -> (&'static str, u32) {
+    (
+        "NMPRT_ROW_GROUPS",
+        columns.div_ceil(VALUES_PER_TEXEL) as u32,
+    )
 }
 
 /// RGBA groups of one row of `nmprtsvdMp`'s per-texel matrices at most: lighting of order
