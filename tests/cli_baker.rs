@@ -3,6 +3,9 @@
 //! on, and the image stays close to the CPU-baked one (the two bakes differ by about the
 //! quadrature noise).
 
+mod scratch;
+
+use scratch::Scratch;
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
@@ -17,8 +20,7 @@ fn shvis(args: &[&str], cache: &PathBuf) -> Output {
 
 #[test]
 fn render_bakes_visibility_on_the_gpu_when_asked() {
-    let dir = std::env::temp_dir().join(format!("shvis-baker-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("baker", "gpu");
     let render = |baker: &str| {
         let out = dir.join(format!("{baker}.png"));
         let args = [

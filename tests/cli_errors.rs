@@ -1,7 +1,9 @@
 //! Bad input at the command line: each case exits non-zero with one `error:` line that
 //! names the input, and never panics (DESIGN §4).
 
-use std::path::PathBuf;
+mod scratch;
+
+use scratch::Scratch;
 use std::process::{Command, Output};
 
 fn shvis(args: &[&str], env: &[(&str, &str)]) -> Output {
@@ -26,10 +28,8 @@ fn assert_one_error_line(out: &Output, needles: &[&str]) {
     }
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("shvis-cli-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn scratch(name: &str) -> Scratch {
+    Scratch::new("cli", name)
 }
 
 /// A render command that would be quick if its input were good.

@@ -2,8 +2,10 @@
 //! CPU ray-cast baker, on lavapipe with validation on.
 
 mod common;
+mod scratch;
 
 use glam::{Vec2, Vec3};
+use scratch::Scratch;
 use shvis::normalmap::cpu::RayDirection;
 use shvis::normalmap::simplify::{sphere_high, sphere_low};
 use shvis::normalmap::{
@@ -309,8 +311,7 @@ fn written_gltf_and_tangent_map_give_back_the_object_normals_in_the_renderer_fra
     let low = sphere_low(1, 1.0, res).unwrap();
     let (image, _) = gpu::bake(&ctx, &high, &low, &NormalMapSettings::new(&low, res)).unwrap();
     let tangent = tangent_space(&image, &low_texels(&low, res));
-    let dir = std::env::temp_dir().join(format!("shvis-normalmap-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("normalmap", "low");
     output::write_map(&dir.join("map.png"), res, &tangent, [0.0, 0.0, 1.0]).unwrap();
     output::write_low_gltf(&dir.join("low.gltf"), &low, Some("map.png")).unwrap();
     let scene = shvis::scene::gltf::load(&dir.join("low.gltf"), res).unwrap();

@@ -8,6 +8,7 @@
 //! writes `.gltf` + `.bin`, `.gltf` with a base64 data URI, or `.glb`.
 
 mod common;
+mod scratch;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -16,6 +17,8 @@ use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 use serde_json::{Value, json};
 use shvis::scene::gltf::{LoadReport, load, load_from_slice, load_with_report};
 use shvis::scene::{Mesh, Scene, SceneError};
+
+use scratch::Scratch;
 
 /// f32 transforms of unit-sized data.
 const TOL: f32 = 1e-5;
@@ -161,13 +164,8 @@ fn base64(bytes: &[u8]) -> String {
 }
 
 /// A fresh temporary directory for one test.
-fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("shvis_scene_gltf_{}_{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    if let Err(e) = std::fs::create_dir_all(&dir) {
-        panic!("{}: {e}", dir.display());
-    }
-    dir
+fn temp_dir(test: &str) -> Scratch {
+    Scratch::new("scene-gltf", test)
 }
 
 /// A unit quad in the XY plane facing +Z: positions, normals, tangents (+X, w = +1), UVs

@@ -480,5 +480,6 @@ mod tests {
         }
         let e = load_height_map(&dir.join("missing.png"), 1.0).unwrap_err();
         assert!(e.to_string().contains("missing.png"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }
