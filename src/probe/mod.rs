@@ -1372,15 +1372,16 @@ fn fit(points: &[ProbePoint]) -> Option<CostModel> {
             })
             .collect()
     };
-    let any_branch = points.iter().any(|p| p.in_untaken_branch);
-    let shares = if any_branch { UNTAKEN_SHARE_STEPS } else { 0 };
+    let shares: Vec<f64> = if points.iter().any(|p| p.in_untaken_branch) {
+        (0..=UNTAKEN_SHARE_STEPS)
+            .rev()
+            .map(|step| step as f64 / UNTAKEN_SHARE_STEPS as f64)
+            .collect()
+    } else {
+        vec![1.0]
+    };
     let mut best: Option<(f64, f64, Vec<f64>)> = None;
-    for step in (0..=shares).rev() {
-        let share = if any_branch {
-            step as f64 / UNTAKEN_SHARE_STEPS as f64
-        } else {
-            1.0
-        };
+    for share in shares {
         let rows: Vec<Vec<f64>> = points.iter().map(|p| row(p, share)).collect();
         let Some(x) = chebyshev_fit(&rows) else {
             continue;
