@@ -117,6 +117,7 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
             let lookups: f64 = [
                 Kind::Bilinear2d,
                 Kind::Trilinear2d,
+                Kind::TrilinearWide,
                 Kind::Array2d,
                 Kind::CubeArray,
                 Kind::Dependent2d,
@@ -149,6 +150,16 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
                 c.get(Kind::FloatOp) > 0.0 && c.get(Kind::Varying) > 0.0,
                 "{t}.{path}"
             );
+            // RGBA32F lookups are the NDF moment maps': preconvndf reads all three, unc6ndf
+            // the first; no other technique binds RGBA32F (no specular term here).
+            let wide = match t {
+                Technique::Ndf {
+                    base: shvis::technique::NdfBase::Preconv,
+                } => 3.0,
+                Technique::Ndf { .. } => 1.0,
+                _ => 0.0,
+            };
+            assert_eq!(c.get(Kind::TrilinearWide), wide, "{t}.{path}: {c:?}");
             // The clustered decodes are counted as run, their loops unrolled: 9 reads of
             // the cluster's block per vector and mean inside a cluster, four decodes for
             // the measured share of fragments whose batch straddles a boundary.

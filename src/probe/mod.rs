@@ -7,7 +7,8 @@
 //! two screen-filling triangles and 3.6 ns over 125-pixel ones) is drawn with generated
 //! fragment shaders that each do N operations of one kind (straight-line code, no loops):
 //! bilinear 2D lookups (RGBA16F, the lightmap sampler, a texture each, as dx9 binds them),
-//! trilinear lookups (RGBA8 with MIP chains, the material sampler, ≈ 2.7 texels per pixel),
+//! trilinear lookups (RGBA8 with MIP chains, the material sampler, ≈ 2.7 texels per pixel;
+//! and the same in RGBA32F, as the NDF moment maps),
 //! 2D-array lookups, cube-array lookups (32² faces, as the tables), dependent lookups (each
 //! one's coordinates from the previous one's result, into textures the size of a dx9 table
 //! strip), scalar fused multiply-adds (four independent vec4 chains), interpolated varyings
@@ -105,7 +106,7 @@ use crate::scene::{Mesh, Scene, Vertex};
 pub use states::{DeviceStates, Segmented};
 
 /// How many kinds the model prices.
-pub const KINDS: usize = 11;
+pub const KINDS: usize = 12;
 
 /// The operation kinds the model prices.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
@@ -136,6 +137,10 @@ pub enum Kind {
     /// its body counted per iteration apart); priced by the indexed-read points, which read
     /// in such a loop.
     Loop,
+    /// Trilinear lookup through a MIP chain of RGBA32F texels (the NDF moment maps): four
+    /// times the bytes of [`Kind::Trilinear2d`]'s RGBA8 (lavapipe on a 2-vCPU Xeon: the
+    /// NDF rows ran 1.23× a model that priced them as RGBA8).
+    TrilinearWide,
 }
 
 impl Kind {
@@ -151,6 +156,7 @@ impl Kind {
         Kind::IndexedUniformRead,
         Kind::TexelFetch,
         Kind::Loop,
+        Kind::TrilinearWide,
     ];
 
     pub fn name(self) -> &'static str {
@@ -166,6 +172,7 @@ impl Kind {
             Kind::IndexedUniformRead => "indexed uniform vec4 read",
             Kind::TexelFetch => "texel fetch",
             Kind::Loop => "loop entered",
+            Kind::TrilinearWide => "trilinear RGBA32F lookup",
         }
     }
 
@@ -182,6 +189,7 @@ impl Kind {
             Kind::UniformRead => &[16, 32, 64, 128],
             Kind::IndexedUniformRead => &[18, 36, 72, 144],
             Kind::TexelFetch => &[4, 8, 12, 16],
+            Kind::TrilinearWide => &[1, 2, 4, 8],
             // No points of its own: the indexed reads' points enter one loop each.
             Kind::Loop => &[],
             _ => &[1, 2, 4, 8, 12, 16],
@@ -623,7 +631,7 @@ fn probe_source(kind: Option<Kind>, count: u32, untaken: bool, counted: bool) ->
         // over 2·32² triangles at 1280×800 in one run), a path no technique takes.
         // (A loop's cost has no points of its own.)
         None | Some(Kind::Loop) => body += "    acc.xy = in_uv_lightmap;\n",
-        Some(k @ (Kind::Bilinear2d | Kind::Trilinear2d)) => {
+        Some(k @ (Kind::Bilinear2d | Kind::Trilinear2d | Kind::TrilinearWide)) => {
             let uv = if k == Kind::Bilinear2d {
                 "in_uv_lightmap"
             } else {
@@ -777,6 +785,7 @@ struct ProbeResources {
     /// For the dependent lookups: the size of a dx9 table strip (9 spheres of 2 × 32²).
     tables: Vec<Image>,
     trilinear: Vec<Image>,
+    trilinear_wide: Vec<Image>,
     array: Image,
     cube_array: Image,
     uniforms: Buffer,
@@ -825,30 +834,43 @@ fn probe_resources(ctx: &Arc<Context>) -> Result<ProbeResources, GpuError> {
             )
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let trilinear = (0..TEXTURES)
-        .map(|i| {
-            let texels: Vec<[f32; 4]> = (0..side * side)
-                .map(|j| std::array::from_fn(|c| value(i, (j % side) * 4 + c as u32, j / side)))
-                .collect();
-            let levels = crate::render::box_mip_levels(side, side, texels);
-            let bytes: Vec<Vec<u8>> = levels
-                .iter()
-                .map(|(_, _, t)| {
-                    t.iter()
-                        .flat_map(|p| p.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
-                        .collect()
-                })
-                .collect();
-            let data: Vec<Vec<&[u8]>> = bytes.iter().map(|b| vec![b.as_slice()]).collect();
-            Image::with_data(
-                ctx,
-                &ImageDesc::texture_2d(vk::Format::R8G8B8A8_UNORM, side, side)
-                    .mip_levels(levels.len() as u32),
-                &data,
-                &format!("probe.trilinear{i}"),
-            )
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    // The same texels, as RGBA8 (material textures) and as RGBA32F (NDF moment maps).
+    let mip_chains = |wide: bool| {
+        (0..TEXTURES)
+            .map(|i| {
+                let texels: Vec<[f32; 4]> = (0..side * side)
+                    .map(|j| std::array::from_fn(|c| value(i, (j % side) * 4 + c as u32, j / side)))
+                    .collect();
+                let levels = crate::render::box_mip_levels(side, side, texels);
+                let bytes: Vec<Vec<u8>> = levels
+                    .iter()
+                    .map(|(_, _, t)| {
+                        if wide {
+                            bytemuck::cast_slice(t).to_vec()
+                        } else {
+                            t.iter()
+                                .flat_map(|p| p.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
+                                .collect()
+                        }
+                    })
+                    .collect();
+                let data: Vec<Vec<&[u8]>> = bytes.iter().map(|b| vec![b.as_slice()]).collect();
+                let (format, name) = if wide {
+                    (vk::Format::R32G32B32A32_SFLOAT, "trilinear_wide")
+                } else {
+                    (vk::Format::R8G8B8A8_UNORM, "trilinear")
+                };
+                Image::with_data(
+                    ctx,
+                    &ImageDesc::texture_2d(format, side, side).mip_levels(levels.len() as u32),
+                    &data,
+                    &format!("probe.{name}{i}"),
+                )
+            })
+            .collect::<Result<Vec<_>, _>>()
+    };
+    let trilinear = mip_chains(false)?;
+    let trilinear_wide = mip_chains(true)?;
     let layers: Vec<Vec<u8>> = (0..TEXTURES).map(|i| halves(i, side)).collect();
     let array = Image::with_data(
         ctx,
@@ -877,6 +899,7 @@ fn probe_resources(ctx: &Arc<Context>) -> Result<ProbeResources, GpuError> {
         bilinear,
         tables,
         trilinear,
+        trilinear_wide,
         array,
         cube_array,
         uniforms,
@@ -1008,6 +1031,10 @@ pub fn run_with_monitor(
                 t0,
                 Resource::TextureArray(res.trilinear.iter().map(|i| (i, material)).collect()),
             )),
+            Some(Kind::TrilinearWide) => resources.push((
+                t0,
+                Resource::TextureArray(res.trilinear_wide.iter().map(|i| (i, material)).collect()),
+            )),
             Some(Kind::Array2d) => resources.push((t0, Resource::Texture(&res.array, &linear))),
             Some(Kind::CubeArray) => {
                 resources.push((t0, Resource::Texture(&res.cube_array, &linear)));
@@ -1020,6 +1047,7 @@ pub fn run_with_monitor(
                 k @ (Kind::Bilinear2d
                 | Kind::TexelFetch
                 | Kind::Trilinear2d
+                | Kind::TrilinearWide
                 | Kind::Array2d
                 | Kind::CubeArray
                 | Kind::Dependent2d),
@@ -1607,7 +1635,7 @@ mod tests {
             per_triangle_ms: 2e-4,
             per_edge_pixel_ms: 5e-6,
             per_triangle_varying_ms: 1.5e-6,
-            per_unit_ms: [2.0, 3.0, 2.5, 4.0, 2.2, 0.01, 0.05, 0.5, 1.5, 1.2, 3.0],
+            per_unit_ms: [2.0, 3.0, 2.5, 4.0, 2.2, 0.01, 0.05, 0.5, 1.5, 1.2, 3.0, 4.5],
             untaken_share: 0.6,
         }
     }

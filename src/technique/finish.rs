@@ -366,12 +366,12 @@ fn measure_costly_share(
 }
 
 /// The cost model's counts of `technique` on `path` (`crate::probe`): its lookups by kind
-/// from the slots — material textures trilinear, per-texel data bilinear 2D (dx9) or 2D
-/// array (dx10) or, where a shader reads its taps one by one, texel fetches (priced as 2D
-/// fetches on both paths: the probe has no array fetch), normal-indexed tables dependent
-/// 2D (dx9) or cube array (dx10), the
-/// specular term's moment maps trilinear — and the float ops, uniform and varying reads of
-/// its compiled fragment shader (`gpu::spirv_counts`), or the shares of its counted
+/// from the slots — material textures trilinear (RGBA32F ones, the NDF moment maps, a kind
+/// of their own), per-texel data bilinear 2D (dx9) or 2D array (dx10) or, where a shader
+/// reads its taps one by one, texel fetches (priced as 2D fetches on both paths: the probe
+/// has no array fetch), normal-indexed tables dependent 2D (dx9) or cube array (dx10), the
+/// specular term's moment maps trilinear RGBA32F — and the float ops, uniform and varying
+/// reads of its compiled fragment shader (`gpu::spirv_counts`), or the shares of its counted
 /// variants' ([`CountVariant`]).
 fn cost_counts(
     technique: Technique,
@@ -394,7 +394,14 @@ fn cost_counts(
             _ => slot.lookups(),
         };
         let kind = match (slot.kind, path) {
-            (SlotKind::Material, _) => Kind::Trilinear2d,
+            (SlotKind::Material, _) => {
+                // RGBA32F (the NDF moment maps) priced apart from RGBA8 material textures.
+                let wide = |d: &&ImageDesc| d.format == vk::Format::R32G32B32A32_SFLOAT;
+                let wide_lookups: u32 = slot.images.iter().filter(wide).map(|d| d.layers).sum();
+                lookups.push((Kind::TrilinearWide, wide_lookups));
+                lookups.push((Kind::Trilinear2d, n - wide_lookups));
+                continue;
+            }
             (SlotKind::PerTexel, HwPath::Dx9) => Kind::Bilinear2d,
             (SlotKind::PerTexel, HwPath::Dx10) => Kind::Array2d,
             (SlotKind::NormalTable, HwPath::Dx9) => Kind::Dependent2d,
@@ -407,7 +414,8 @@ fn cost_counts(
         lookups.push((kind, n));
     }
     if let Some(specular) = scene.specular() {
-        lookups.push((Kind::Trilinear2d, specular.term.filter.extra_lookups()));
+        // The NDF moment maps, RGBA32F (`ndf::render`).
+        lookups.push((Kind::TrilinearWide, specular.term.filter.extra_lookups()));
     }
     crate::probe::CostCounts::shared(
         op_counts
