@@ -1092,7 +1092,13 @@ pub fn run_with_monitor(
         (None, 0, false, false, &full_mesh.0),
     ];
     specs.extend(grids.iter().map(|g| (None, 0, false, true, &g.0)));
-    for kind in Kind::ALL {
+    // A device that cannot filter RGBA32F (optional in Vulkan) gets no such points: its
+    // cost stays 0 (and the NDF rows, which need it, refuse to build there).
+    let wide_filters = ctx.supports_linear_filter(vk::Format::R32G32B32A32_SFLOAT);
+    for kind in Kind::ALL
+        .into_iter()
+        .filter(|&k| k != Kind::TrilinearWide || wide_filters)
+    {
         for &count in kind.probe_counts() {
             specs.push((Some(kind), count, false, true, &full_mesh.0));
         }
