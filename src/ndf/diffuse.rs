@@ -48,7 +48,6 @@
 
 use std::sync::Arc;
 
-use ash::vk;
 use glam::DVec3;
 
 use super::{Moments, NdfMaps};
@@ -130,7 +129,7 @@ pub fn upload(
     match base {
         NdfBase::Preconv => super::render::upload_maps(ctx, maps, path),
         NdfBase::Unc { .. } => {
-            let format = vk::Format::R32G32B32A32_SFLOAT;
+            let format = super::MOMENT_FORMAT;
             let (w, h) = (maps.levels[0].width, maps.levels[0].height);
             let data: Vec<Vec<&[u8]>> = maps
                 .levels

@@ -41,6 +41,10 @@ use rayon::prelude::*;
 
 use crate::scene::Texture8;
 
+/// The moment maps' texel format on the GPU (both paths; the cost model prices lookups
+/// into it as `probe::Kind::TrilinearWide`).
+pub const MOMENT_FORMAT: ash::vk::Format = ash::vk::Format::R32G32B32A32_SFLOAT;
+
 /// The Pearson type II exponent m (the paper's eight).
 pub const PEARSON_M: f64 = 8.0;
 /// Smallest base spread accepted (S must stay invertible in f32).

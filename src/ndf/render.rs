@@ -213,7 +213,7 @@ pub fn upload_maps(
     maps: &NdfMaps,
     path: HwPath,
 ) -> Result<Vec<Image>, GpuError> {
-    let format = vk::Format::R32G32B32A32_SFLOAT;
+    let format = super::MOMENT_FORMAT;
     if !ctx.supports_linear_filter(format) {
         return Err(GpuError::Invalid {
             what: "ndf maps".into(),

@@ -856,7 +856,7 @@ fn probe_resources(ctx: &Arc<Context>) -> Result<ProbeResources, GpuError> {
                     .collect();
                 let data: Vec<Vec<&[u8]>> = bytes.iter().map(|b| vec![b.as_slice()]).collect();
                 let (format, name) = if wide {
-                    (vk::Format::R32G32B32A32_SFLOAT, "trilinear_wide")
+                    (crate::ndf::MOMENT_FORMAT, "trilinear_wide")
                 } else {
                     (vk::Format::R8G8B8A8_UNORM, "trilinear")
                 };
@@ -1094,7 +1094,7 @@ pub fn run_with_monitor(
     specs.extend(grids.iter().map(|g| (None, 0, false, true, &g.0)));
     // A device that cannot filter RGBA32F (optional in Vulkan) gets no such points: its
     // cost stays 0 (and the NDF rows, which need it, refuse to build there).
-    let wide_filters = ctx.supports_linear_filter(vk::Format::R32G32B32A32_SFLOAT);
+    let wide_filters = ctx.supports_linear_filter(crate::ndf::MOMENT_FORMAT);
     for kind in Kind::ALL
         .into_iter()
         .filter(|&k| k != Kind::TrilinearWide || wide_filters)

@@ -396,7 +396,7 @@ fn cost_counts(
         let kind = match (slot.kind, path) {
             (SlotKind::Material, _) => {
                 // RGBA32F (the NDF moment maps) priced apart from RGBA8 material textures.
-                let wide = |d: &&ImageDesc| d.format == vk::Format::R32G32B32A32_SFLOAT;
+                let wide = |d: &&ImageDesc| d.format == crate::ndf::MOMENT_FORMAT;
                 let wide_lookups: u32 = slot.images.iter().filter(wide).map(|d| d.layers).sum();
                 lookups.push((Kind::TrilinearWide, wide_lookups));
                 lookups.push((Kind::Trilinear2d, n - wide_lookups));
