@@ -118,6 +118,7 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
                 Kind::Bilinear2d,
                 Kind::Trilinear2d,
                 Kind::TrilinearWide,
+                Kind::TrilinearSrgb,
                 Kind::Array2d,
                 Kind::CubeArray,
                 Kind::Dependent2d,
@@ -160,6 +161,12 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
                 _ => 0.0,
             };
             assert_eq!(c.get(Kind::TrilinearWide), wide, "{t}.{path}: {c:?}");
+            // Every technique reads the albedo, the one sRGB texture.
+            // (The clustered rows' counts are shares of their variants': 1 within rounding.)
+            assert!(
+                (c.get(Kind::TrilinearSrgb) - 1.0).abs() < 1e-9,
+                "{t}.{path}: {c:?}"
+            );
             // The clustered decodes are counted as run, their loops unrolled: 9 reads of
             // the cluster's block per vector and mean inside a cluster, four decodes for
             // the measured share of fragments whose batch straddles a boundary.

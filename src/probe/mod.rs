@@ -8,7 +8,7 @@
 //! fragment shaders that each do N operations of one kind (straight-line code, no loops):
 //! bilinear 2D lookups (RGBA16F, the lightmap sampler, a texture each, as dx9 binds them),
 //! trilinear lookups (RGBA8 with MIP chains, the material sampler, ≈ 2.7 texels per pixel;
-//! and the same in RGBA32F, as the NDF moment maps),
+//! the same in sRGB, as the albedo, and in RGBA32F, as the NDF moment maps),
 //! 2D-array lookups, cube-array lookups (32² faces, as the tables), dependent lookups (each
 //! one's coordinates from the previous one's result, into textures the size of a dx9 table
 //! strip), scalar fused multiply-adds (four independent vec4 chains), interpolated varyings
@@ -106,7 +106,7 @@ use crate::scene::{Mesh, Scene, Vertex};
 pub use states::{DeviceStates, Segmented};
 
 /// How many kinds the model prices.
-pub const KINDS: usize = 12;
+pub const KINDS: usize = 13;
 
 /// The operation kinds the model prices.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
@@ -141,6 +141,11 @@ pub enum Kind {
     /// times the bytes of [`Kind::Trilinear2d`]'s RGBA8 (lavapipe on a 2-vCPU Xeon: the
     /// NDF rows ran 1.23× a model that priced them as RGBA8).
     TrilinearWide,
+    /// Trilinear lookup through a MIP chain of sRGB RGBA8 texels (the albedo, which every
+    /// technique reads): each texel decoded to linear before it is filtered (lavapipe on a
+    /// 2-vCPU Xeon: the house's albedo lookup 7.5 ms a frame where its UNORM normal map's
+    /// took 5.9, and every row ran 1.05–1.20× a model that priced the albedo as UNORM).
+    TrilinearSrgb,
 }
 
 impl Kind {
@@ -157,6 +162,7 @@ impl Kind {
         Kind::TexelFetch,
         Kind::Loop,
         Kind::TrilinearWide,
+        Kind::TrilinearSrgb,
     ];
 
     pub fn name(self) -> &'static str {
@@ -173,6 +179,7 @@ impl Kind {
             Kind::TexelFetch => "texel fetch",
             Kind::Loop => "loop entered",
             Kind::TrilinearWide => "trilinear RGBA32F lookup",
+            Kind::TrilinearSrgb => "trilinear sRGB lookup",
         }
     }
 
@@ -186,10 +193,10 @@ impl Kind {
         match self {
             Kind::FloatOp => &[64, 128, 256, 512],
             Kind::Varying => &[2, 5, 9, MAX_PROBE_VARYINGS],
-            Kind::UniformRead => &[16, 32, 64, 128],
+            Kind::UniformRead => &[32, 64, 128, 256],
             Kind::IndexedUniformRead => &[18, 36, 72, 144],
             Kind::TexelFetch => &[4, 8, 12, 16],
-            Kind::TrilinearWide => &[1, 2, 4, 8],
+            Kind::TrilinearWide | Kind::TrilinearSrgb => &[1, 2, 4, 8],
             // No points of its own: the indexed reads' points enter one loop each.
             Kind::Loop => &[],
             _ => &[1, 2, 4, 8, 12, 16],
@@ -631,7 +638,9 @@ fn probe_source(kind: Option<Kind>, count: u32, untaken: bool, counted: bool) ->
         // over 2·32² triangles at 1280×800 in one run), a path no technique takes.
         // (A loop's cost has no points of its own.)
         None | Some(Kind::Loop) => body += "    acc.xy = in_uv_lightmap;\n",
-        Some(k @ (Kind::Bilinear2d | Kind::Trilinear2d | Kind::TrilinearWide)) => {
+        Some(
+            k @ (Kind::Bilinear2d | Kind::Trilinear2d | Kind::TrilinearWide | Kind::TrilinearSrgb),
+        ) => {
             let uv = if k == Kind::Bilinear2d {
                 "in_uv_lightmap"
             } else {
@@ -699,11 +708,11 @@ fn probe_source(kind: Option<Kind>, count: u32, untaken: bool, counted: bool) ->
             }
         }
         Some(Kind::FloatOp) => {
-            // Four independent vec4 chains of fma(v, m, b): 16 float ops per round.
-            decl = format!(
-                "layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform Probe {{ vec4 v[{UNIFORM_VEC4S}]; }} probe;\n"
-            );
-            body += "    vec4 m = probe.v[0], b = probe.v[1];\n";
+            // Four independent vec4 chains of fma(v, m, b): 16 float ops per round. m and b
+            // from the lightmap coordinates, which no compiler can fold: read from the
+            // uniform block they tied the uniform read's cost to these points (two reads
+            // here cost less than the ≈ 1.2 ms a screen that reads run in a row cost).
+            body += "    vec4 m = vec4(0.999) + in_uv_lightmap.xyxy * 1e-6, b = in_uv_lightmap.yxyx * 1e-3;\n";
             body += "    vec4 c0 = vec4(in_uv_lightmap, 0.0, 1.0), c1 = c0.yxzw, c2 = c0.xxyy, c3 = c0.yyxx;\n";
             for _ in 0..count.div_ceil(16) {
                 body += "    c0 = fma(c0, m, b); c1 = fma(c1, m, b); c2 = fma(c2, m, b); c3 = fma(c3, m, b);\n";
@@ -735,6 +744,11 @@ fn probe_source(kind: Option<Kind>, count: u32, untaken: bool, counted: bool) ->
             decl = format!(
                 "layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform Probe {{ vec4 v[{UNIFORM_VEC4S}]; }} probe;\n"
             );
+            // The lightmap coordinates read as every technique reads them: a shader that
+            // reads no varying skips lavapipe's interpolation set-up, and these points ran
+            // 1.7 ms under the empty shader's base (16–128 reads at 0.62 ms each, fitted
+            // at 0.52 with that base), which put pca24w at 1.20× its model.
+            body += "    acc.xy = in_uv_lightmap;\n";
             for k in 0..count.min(UNIFORM_VEC4S) {
                 body += &format!("    acc += probe.v[{k}];\n");
             }
@@ -786,6 +800,7 @@ struct ProbeResources {
     tables: Vec<Image>,
     trilinear: Vec<Image>,
     trilinear_wide: Vec<Image>,
+    trilinear_srgb: Vec<Image>,
     array: Image,
     cube_array: Image,
     uniforms: Buffer,
@@ -834,8 +849,10 @@ fn probe_resources(ctx: &Arc<Context>) -> Result<ProbeResources, GpuError> {
             )
         })
         .collect::<Result<Vec<_>, _>>()?;
-    // The same texels, as RGBA8 (material textures) and as RGBA32F (NDF moment maps).
-    let mip_chains = |wide: bool| {
+    // The same texels, as RGBA8 (material textures: the normal map's UNORM, the albedo's
+    // sRGB) and as RGBA32F (NDF moment maps).
+    let mip_chains = |format: vk::Format, name: &str| {
+        let wide = format == crate::ndf::MOMENT_FORMAT;
         (0..TEXTURES)
             .map(|i| {
                 let texels: Vec<[f32; 4]> = (0..side * side)
@@ -855,11 +872,6 @@ fn probe_resources(ctx: &Arc<Context>) -> Result<ProbeResources, GpuError> {
                     })
                     .collect();
                 let data: Vec<Vec<&[u8]>> = bytes.iter().map(|b| vec![b.as_slice()]).collect();
-                let (format, name) = if wide {
-                    (crate::ndf::MOMENT_FORMAT, "trilinear_wide")
-                } else {
-                    (vk::Format::R8G8B8A8_UNORM, "trilinear")
-                };
                 Image::with_data(
                     ctx,
                     &ImageDesc::texture_2d(format, side, side).mip_levels(levels.len() as u32),
@@ -869,8 +881,9 @@ fn probe_resources(ctx: &Arc<Context>) -> Result<ProbeResources, GpuError> {
             })
             .collect::<Result<Vec<_>, _>>()
     };
-    let trilinear = mip_chains(false)?;
-    let trilinear_wide = mip_chains(true)?;
+    let trilinear = mip_chains(vk::Format::R8G8B8A8_UNORM, "trilinear")?;
+    let trilinear_wide = mip_chains(crate::ndf::MOMENT_FORMAT, "trilinear_wide")?;
+    let trilinear_srgb = mip_chains(vk::Format::R8G8B8A8_SRGB, "trilinear_srgb")?;
     let layers: Vec<Vec<u8>> = (0..TEXTURES).map(|i| halves(i, side)).collect();
     let array = Image::with_data(
         ctx,
@@ -900,6 +913,7 @@ fn probe_resources(ctx: &Arc<Context>) -> Result<ProbeResources, GpuError> {
         tables,
         trilinear,
         trilinear_wide,
+        trilinear_srgb,
         array,
         cube_array,
         uniforms,
@@ -1035,6 +1049,10 @@ pub fn run_with_monitor(
                 t0,
                 Resource::TextureArray(res.trilinear_wide.iter().map(|i| (i, material)).collect()),
             )),
+            Some(Kind::TrilinearSrgb) => resources.push((
+                t0,
+                Resource::TextureArray(res.trilinear_srgb.iter().map(|i| (i, material)).collect()),
+            )),
             Some(Kind::Array2d) => resources.push((t0, Resource::Texture(&res.array, &linear))),
             Some(Kind::CubeArray) => {
                 resources.push((t0, Resource::Texture(&res.cube_array, &linear)));
@@ -1048,6 +1066,7 @@ pub fn run_with_monitor(
                 | Kind::TexelFetch
                 | Kind::Trilinear2d
                 | Kind::TrilinearWide
+                | Kind::TrilinearSrgb
                 | Kind::Array2d
                 | Kind::CubeArray
                 | Kind::Dependent2d),
@@ -1641,7 +1660,9 @@ mod tests {
             per_triangle_ms: 2e-4,
             per_edge_pixel_ms: 5e-6,
             per_triangle_varying_ms: 1.5e-6,
-            per_unit_ms: [2.0, 3.0, 2.5, 4.0, 2.2, 0.01, 0.05, 0.5, 1.5, 1.2, 3.0, 4.5],
+            per_unit_ms: [
+                2.0, 3.0, 2.5, 4.0, 2.2, 0.01, 0.05, 0.5, 1.5, 1.2, 3.0, 4.5, 3.6,
+            ],
             untaken_share: 0.6,
         }
     }

@@ -381,8 +381,9 @@ fn cost_counts(
     op_counts: &[(f64, gpu::spirv_counts::OpCounts)],
 ) -> crate::probe::CostCounts {
     use crate::probe::Kind;
-    let material = layout::MATERIAL_TEXTURES - u32::from(super::skips_normal_map(technique));
-    let mut lookups = vec![(Kind::Trilinear2d, material)];
+    // The albedo (sRGB) and, unless the technique skips it, the normal map (UNORM).
+    let normal_map = layout::MATERIAL_TEXTURES - 1 - u32::from(super::skips_normal_map(technique));
+    let mut lookups = vec![(Kind::TrilinearSrgb, 1), (Kind::Trilinear2d, normal_map)];
     for slot in layouts {
         let n = match (slot.kind, super::per_texel_lookups(technique)) {
             (SlotKind::PerTexel, Some(n)) => {

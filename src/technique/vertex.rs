@@ -189,9 +189,15 @@ pub(crate) fn finish(
         lookups_per_pixel: layout::MATERIAL_TEXTURES,
         cost: crate::probe::CostCounts::new(
             &[
-                (crate::probe::Kind::Trilinear2d, layout::MATERIAL_TEXTURES),
+                // The albedo (sRGB) and the normal map (UNORM); the specular term's moment
+                // maps (RGBA32F).
+                (crate::probe::Kind::TrilinearSrgb, 1),
                 (
                     crate::probe::Kind::Trilinear2d,
+                    layout::MATERIAL_TEXTURES - 1,
+                ),
+                (
+                    crate::probe::Kind::TrilinearWide,
                     scene
                         .specular()
                         .map_or(0, |s| s.term.filter.extra_lookups()),
