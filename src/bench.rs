@@ -391,6 +391,7 @@ pub fn run(
     }
     fill_ratios_to_preconv(&mut rows);
     let mut bench_state_shares = None;
+    let mut scene_checks = Vec::new();
     if let Some((probe, monitor)) = &cost_model {
         let monitor_frames: Vec<f64> = samples.iter().flat_map(Segmented::monitor_frames).collect();
         let shares = monitor.states.shares_of(&monitor_frames);
@@ -414,6 +415,18 @@ pub fn run(
                 " (no subgroup ballot in fragment shaders: lanes = fragments)"
             },
             load.edge_pixels
+        );
+        scene_checks = crate::probe::scene_check::run(
+            ctx,
+            &scene,
+            &probe.model,
+            &load,
+            pixels,
+            settings.frames,
+        )?;
+        log::info!(
+            "cost model, the probe's shaders over the scene: {}",
+            crate::probe::scene_check::summary(&scene_checks)
         );
         for (row, times) in rows.iter_mut().zip(&samples) {
             let load = row.own_mesh_load.unwrap_or(load);
@@ -451,6 +464,7 @@ pub fn run(
         vis_res: prepared.visibility.res,
         device_states: cost_model.as_ref().map(|(p, _)| p.states.clone()),
         bench_state_shares,
+        scene_checks,
         state_cost_models: cost_model
             .as_ref()
             .map(|(p, _)| p.state_models.clone())

@@ -234,5 +234,43 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
         shaded >= covered && covered > 1000,
         "{shaded} shaded, {covered} covered"
     );
+    // The probe's shaders over the scene: each counted as written (the albedo the one sRGB
+    // lookup, the normal map a UNORM one), timed, and priced by the model it is given.
+    let model = shvis::probe::CostModel {
+        fixed_ms: 0.5,
+        pixel_ms: 1.0,
+        depth_test_ms: 0.2,
+        per_triangle_ms: 1e-4,
+        per_edge_pixel_ms: 1e-6,
+        per_triangle_varying_ms: 1e-6,
+        per_unit_ms: [2.0; shvis::probe::KINDS],
+        untaken_share: 1.0,
+    };
+    let load = scene.shading_load(&ctx, None).unwrap();
+    let checks = shvis::probe::scene_check::run(&ctx, &scene, &model, &load, 160.0 * 100.0, 3)
+        .expect("the scene checks run");
+    let lookups = |c: &shvis::probe::scene_check::SceneCheck| {
+        [Kind::TrilinearSrgb, Kind::Trilinear2d].map(|k| c.counts.get(k))
+    };
+    assert_eq!(
+        checks.iter().map(lookups).collect::<Vec<_>>(),
+        [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+        "{checks:?}"
+    );
+    for c in &checks {
+        assert!(c.ms_median.is_finite() && c.ms_median > 0.0, "{c:?}");
+        let priced = model.predict(
+            &c.counts,
+            load.lanes / (160.0 * 100.0),
+            scene.triangle_count(),
+            load.edge_pixels,
+        );
+        assert_eq!(c.model_ms, priced, "{c:?}");
+        assert!(
+            c.counts.get(Kind::Varying) >= 2.0,
+            "reads its lightmap UV: {c:?}"
+        );
+    }
+    assert!(checks[1].model_ms > checks[0].model_ms, "{checks:?}");
     common::assert_validation_clean(&ctx, "technique cost counts");
 }

@@ -86,6 +86,7 @@
 //! pressure is not priced: the probe's chains keep little live, and a shader that keeps
 //! much (cluster.frag fully unrolled, 36 floats of SH sums live) ran 2–3× its model.
 
+pub mod scene_check;
 pub mod states;
 
 use std::sync::Arc;

@@ -232,6 +232,9 @@ pub struct BenchTable {
     /// the bench's monitor frames (read between every few frames of every row) in each.
     pub device_states: Option<crate::probe::DeviceStates>,
     pub bench_state_shares: Option<Vec<f64>>,
+    /// The probe's model checked on the scene (`probe::scene_check`): shaders of known
+    /// counts over the scene's mesh, each against the model.
+    pub scene_checks: Vec<crate::probe::scene_check::SceneCheck>,
     /// Wall time of the bench itself (probe, references, rows, files; the bake before it
     /// is not counted), s.
     pub seconds: f64,
@@ -313,6 +316,12 @@ impl BenchTable {
                 "; {}; the rows' monitor frames {} in each state; ×model compares a row's frames in the fastest modelled state it ran in (its fastest build's) with that state's model",
                 states.describe(),
                 crate::probe::DeviceStates::format_shares(shares)
+            );
+        }
+        if !self.scene_checks.is_empty() {
+            s += &format!(
+                "; the probe's shaders over the scene: {}",
+                crate::probe::scene_check::summary(&self.scene_checks)
             );
         }
         if self.reference_bounces > 0 {
@@ -519,6 +528,7 @@ mod tests {
             cost_model: None,
             device_states: None,
             bench_state_shares: None,
+            scene_checks: Vec::new(),
             state_cost_models: Vec::new(),
             seconds: 0.0,
             phases: BenchPhases::default(),
