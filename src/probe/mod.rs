@@ -710,9 +710,9 @@ fn probe_source(kind: Option<Kind>, count: u32, untaken: bool, counted: bool) ->
         }
         Some(Kind::FloatOp) => {
             // Four independent vec4 chains of fma(v, m, b): 16 float ops per round. m and b
-            // from the lightmap coordinates, which no compiler can fold: read from the
-            // uniform block they tied the uniform read's cost to these points (two reads
-            // here cost less than the ≈ 1.2 ms a screen that reads run in a row cost).
+            // come from the lightmap coordinates, which no compiler can fold; read from the
+            // uniform block, they tied the uniform read's cost to these points, where two
+            // reads cost far less than two of a long run of reads.
             body += "    vec4 m = vec4(0.999) + in_uv_lightmap.xyxy * 1e-6, b = in_uv_lightmap.yxyx * 1e-3;\n";
             body += "    vec4 c0 = vec4(in_uv_lightmap, 0.0, 1.0), c1 = c0.yxzw, c2 = c0.xxyy, c3 = c0.yyxx;\n";
             for _ in 0..count.div_ceil(16) {
@@ -746,9 +746,9 @@ fn probe_source(kind: Option<Kind>, count: u32, untaken: bool, counted: bool) ->
                 "layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform Probe {{ vec4 v[{UNIFORM_VEC4S}]; }} probe;\n"
             );
             // The lightmap coordinates read as every technique reads them: a shader that
-            // reads no varying skips lavapipe's interpolation set-up, and these points ran
-            // 1.7 ms under the empty shader's base (16–128 reads at 0.62 ms each, fitted
-            // at 0.52 with that base), which put pca24w at 1.20× its model.
+            // reads no varying skips lavapipe's interpolation set-up, and without them these
+            // points ran 1.7 ms under the empty shader's base (their reads, 0.62–0.66 ms
+            // each, were fitted at 0.52–0.56).
             body += "    acc.xy = in_uv_lightmap;\n";
             for k in 0..count.min(UNIFORM_VEC4S) {
                 body += &format!("    acc += probe.v[{k}];\n");
