@@ -786,6 +786,12 @@ fn probe_source(kind: Option<Kind>, count: u32, untaken: bool, counted: bool) ->
         // Lightmap coordinates are never below 0: no lane takes it, and no compiler knows.
         body = format!("    if (in_uv_lightmap.x < -1.0) {{\n{body}    }}\n");
     }
+    fragment_shader(&decl, &body)
+}
+
+/// A probe fragment shader: `decl` after the shared interface (`common.glsl`), `body` adding
+/// into `vec4 acc`, which it writes out scaled down (so nothing is dead code).
+fn fragment_shader(decl: &str, body: &str) -> String {
     format!(
         "#version 450\n#extension GL_GOOGLE_include_directive : require\n\
          #extension GL_EXT_control_flow_attributes : require\n#define SHVIS_FRAGMENT 1\n\

@@ -75,13 +75,8 @@ pub fn run(
     CHECKS
         .iter()
         .map(|&(name, body, lookups)| {
-            let source = format!(
-                "#version 450\n#extension GL_GOOGLE_include_directive : require\n\
-                 #define SHVIS_FRAGMENT 1\n#include \"common.glsl\"\n\
-                 layout(location = 0) out vec4 out_color;\n\
-                 void main() {{\n    vec4 acc = vec4(0.0);\n    acc.xy = in_uv_lightmap;\n    {body}\n    \
-                 out_color = vec4(acc.rgb * 1e-3 + 0.5, 1.0);\n}}\n"
-            );
+            let source =
+                super::fragment_shader("", &format!("    acc.xy = in_uv_lightmap;\n    {body}\n"));
             let spirv = crate::gpu::shader::compile_source(
                 "scene_check.frag",
                 &source,

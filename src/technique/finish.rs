@@ -366,8 +366,8 @@ fn measure_costly_share(
 }
 
 /// The cost model's counts of `technique` on `path` (`crate::probe`): its lookups by kind
-/// from the slots — material textures trilinear (RGBA32F ones, the NDF moment maps, a kind
-/// of their own), per-texel data bilinear 2D (dx9) or 2D array (dx10) or, where a shader
+/// from the slots — material textures trilinear (the albedo's sRGB and the NDF moment maps'
+/// RGBA32F each a kind of their own), per-texel data bilinear 2D (dx9) or 2D array (dx10) or, where a shader
 /// reads its taps one by one, texel fetches (priced as 2D fetches on both paths: the probe
 /// has no array fetch), normal-indexed tables dependent 2D (dx9) or cube array (dx10), the
 /// specular term's moment maps trilinear RGBA32F — and the float ops, uniform and varying
