@@ -20,7 +20,7 @@ OVERCAST ?= ../shared/assets/env/potsdamer_platz_1k.exr
 RNM_ENVS = sky:15$(if $(wildcard $(OVERCAST)),$(comma)$(OVERCAST))
 NDF_ENVS = sky$(if $(wildcard $(OVERCAST)),$(comma)$(OVERCAST))
 comma := ,
-# Issue 23: normal mapping for PRT against unc6 under the sun turned 90° after the bake.
+# Normal mapping for PRT against unc6 under the sun turned 90° after the bake.
 NMPRT_ROWS = unc6,preconv,shlmap,nmprt,nmprtsvd4,nmprtsvd6,nmprthl2,nmprtratio
 
 bench: build

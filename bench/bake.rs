@@ -1,4 +1,4 @@
-//! Criterion benches of the visibility bake (issue 4): traced rays per second of the
+//! Criterion benches of the visibility bake: traced rays per second of the
 //! full bake (raster done, trace + project + dilate timed) on the built-in house and on
 //! a generated 204,800-triangle displaced grid, the same rays traced one by one with
 //! `Tracer::occluded` for comparison, and the SH projection of one texel's visible set

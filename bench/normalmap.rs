@@ -1,4 +1,4 @@
-//! Criterion benches of normal-map generation (issue 18): the per-low-triangle culling
+//! Criterion benches of normal-map generation: the per-low-triangle culling
 //! (grid build + prism queries) and the CPU ray-cast baker, on a 81,920-triangle sphere
 //! for a 320-triangle low sphere at 512², and the GPU bake on the first Vulkan device
 //! (lavapipe in CI) when one is present. `shvis study normalmap` has the full tables.

@@ -1,4 +1,4 @@
-//! Criterion benches of the SH core (issue 3): basis evaluation at order 6 in f32 (per
+//! Criterion benches of the SH core: basis evaluation at order 6 in f32 (per
 //! direction), projection of a 512×256 environment to order 8, and the §3.3 product
 //! matrix for H order 3 × V order 6 (lighting at order 8 = O+2). Inputs are seeded.
 
@@ -62,8 +62,8 @@ fn product_matrix(c: &mut Criterion) {
 }
 
 /// L×H table build (§3.3): order-6 visibility, H order 3, 32² per hemisphere (dual
-/// paraboloid) and 6 × 32² (cube), one core. `direct`: every normal on its own (the build
-/// before issue 15); `symmetric`: the mirror-orbit build with its orbits found once, into
+/// paraboloid) and 6 × 32² (cube), one core. `direct`: every normal on its own (the
+/// baseline); `symmetric`: the mirror-orbit build with its orbits found once, into
 /// a new table; `symmetric_in_place`: the same into an existing table (the per-frame path);
 /// `rebuild`: product matrices for new lighting plus the in-place build.
 fn lxh_table(c: &mut Criterion) {
@@ -120,7 +120,7 @@ fn lxh_table(c: &mut Criterion) {
     g.finish();
 }
 
-/// One lighting update of a technique on the CPU (issue 15): `LightingRecipe::build` —
+/// One lighting update of a technique on the CPU: `LightingRecipe::build` —
 /// product matrices, the symmetric table build, the technique's own tables (T_k for pca),
 /// layout per path and f16 range scaling — for the paper's 32² tables. What `shvis
 /// relight` reports as "CPU build ms", here without the GPU competing for the cores.
@@ -187,7 +187,7 @@ fn lighting_update(c: &mut Criterion) {
     g.finish();
 }
 
-/// One lighting update of the `nmprt*` techniques (issue 23): per covered texel l' = M·l
+/// One lighting update of the `nmprt*` techniques: per covered texel l' = M·l
 /// from order-8 transfer matrices, the variant's projection, gutter dilation and f16
 /// packing — on a synthetic 256² lightmap (all texels covered, tangent frames turning with
 /// the texel), a quarter of the bench's 512² house (152 372 covered texels).

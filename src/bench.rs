@@ -98,7 +98,7 @@ impl BenchSettings {
     }
 }
 
-/// The lighting of a `--relight-rotate` bench (issue 23): the bake's environment turned
+/// The lighting of a `--relight-rotate` bench: the bake's environment turned
 /// about +Y (g(ω) = f(Rᵀω), the map resampled bilinearly) and its SH projections. The
 /// references are rendered under it; every technique with dynamic lighting is built for
 /// the bake's lighting and then relit to it through its lighting recipe and

@@ -24,7 +24,7 @@ const DEFAULT_EXPOSURE_EV: f32 = -1.0;
 const MAX_BOUNCES: u32 = 16;
 
 /// A finite f32 (clap value parser): NaN and ±inf are refused where they are typed, not
-/// turned into a black image later (issue 21).
+/// turned into a black image later.
 fn finite_f32(text: &str) -> Result<f32, String> {
     let v: f32 = text.trim().parse().map_err(|e| format!("{e}"))?;
     if v.is_finite() {
@@ -76,11 +76,11 @@ enum Command {
     Reference(ReferenceArgs),
     /// Time every technique × path and write table.md, table.json and images.
     Bench(BenchArgs),
-    /// Issue 20: microbenchmarks of the current device (lookups by kind, float ops,
+    /// Microbenchmarks of the current device (lookups by kind, float ops,
     /// varyings, uniform reads, depth test) and the cost model fitted to them → probe.md,
     /// probe.json (`shvis bench` runs it first).
     Probe(ProbeArgs),
-    /// A window (issue 22): the scene with any technique × path switched by keys, an orbit
+    /// A window: the scene with any technique × path switched by keys, an orbit
     /// camera, the sun turned or animated with the dynamic-lighting machinery, an overlay
     /// with GPU ms and frame rate. Needs a display (X11; `xvfb-run -a` without one).
     View(ViewArgs),
@@ -94,10 +94,10 @@ enum Command {
     /// Reproduce the paper's side studies.
     #[command(subcommand)]
     Study(StudyCommand),
-    /// Self-shadowed bump map from a height map (Green, Valve; issue 17): writes the SSBump
+    /// Self-shadowed bump map from a height map (Green, Valve): writes the SSBump
     /// (D · directional occlusion) as 16-bit PNG and EXR, the plain D encoding and scalar AO.
     Ssbump(SsbumpArgs),
-    /// Normal map of a high-polygon mesh for a low one, on the GPU (Gumbau et al.; issue 18):
+    /// Normal map of a high-polygon mesh for a low one, on the GPU (Gumbau et al.):
     /// tangent- and object-space 16-bit PNG + EXR, optionally the low mesh as glTF.
     Normalmap(NormalmapArgs),
 }
@@ -194,25 +194,25 @@ enum StudyCommand {
     /// Appendix A / Figure 8: MSE of SH basis functions stored in four sphere
     /// parameterizations against total samples (CPU emulation and real texture hardware).
     Params(StudyParamsArgs),
-    /// Issue 16: visibility reconstruction error against storage for global PCA, VQ and
+    /// Visibility reconstruction error against storage for global PCA, VQ and
     /// static / iterative CPCA fitted to the same bake.
     Compression(StudyCompressionArgs),
-    /// Issue 16: the screen-space discontinuity at cluster boundaries of a clustered
+    /// The screen-space discontinuity at cluster boundaries of a clustered
     /// technique (vqK, cpcaK_M) with the 4-tap seam blending and without it.
     Seams(StudySeamsArgs),
-    /// Issue 17: rnm, rnmao, ssbump, shlmap and unc6 against the displaced-geometry
+    /// rnm, rnmao, ssbump, shlmap and unc6 against the displaced-geometry
     /// reference and the flat normal-mapped one, per environment; the Fig. 1 composite.
     Rnm(StudyRnmArgs),
-    /// Issue 18: GPU normal-map generation timed against triangle counts and resolution
+    /// GPU normal-map generation timed against triangle counts and resolution
     /// (the paper's Tables 1 and 2) beside the CPU baker; GPU vs CPU maps of a real model
     /// simplified; the map rendered through unc6 against the high mesh's reference.
     Normalmap(StudyNormalmapArgs),
-    /// Issue 19: the specular term of a directional light on the receding bumpy plane and
+    /// The specular term of a directional light on the receding bumpy plane and
     /// the wavy sphere under naive MIP filtering and normal distribution mapping (partial /
     /// per-texel normalisation), against its footprint reference, with a composite per
     /// scene; the diffuse techniques and their NDF variants.
     Ndf(StudyNdfArgs),
-    /// Issue 23: energy captured by the first M = 1…9 singular values of normal mapping for
+    /// Energy captured by the first M = 1…9 singular values of normal mapping for
     /// PRT's normal basis (PRT course), uniform and cosine-weighted, beside the course's.
     NmprtSvd(StudyNmprtSvdArgs),
 }
@@ -464,7 +464,7 @@ enum ShCommand {
 
 #[derive(Args, Debug, Clone)]
 struct SceneArgs {
-    /// `house` (built-in), `patio` (built-in brick corner, issue 17) or a .gltf/.glb file.
+    /// `house` (built-in), `patio` (built-in brick corner) or a .gltf/.glb file.
     #[arg(long, default_value = "house")]
     scene: String,
     /// Lightmap texels per side.
@@ -499,7 +499,7 @@ struct SceneArgs {
     height_scale: f64,
 }
 
-/// The specular material term of `render` and `bench` (issue 19; `shvis::ndf::render`).
+/// The specular material term of `render` and `bench` (`shvis::ndf::render`).
 #[derive(Args, Debug, Clone)]
 struct SpecularArgs {
     /// Add a specular term (Blinn-style microfacet density at the half vector of the
@@ -730,7 +730,7 @@ struct RenderArgs {
 
 #[derive(Args, Debug)]
 struct ReferenceArgs {
-    /// `house` (built-in), `patio` (built-in brick corner, issue 17) or a .gltf/.glb file.
+    /// `house` (built-in), `patio` (built-in brick corner) or a .gltf/.glb file.
     #[arg(long, default_value = "house")]
     scene: String,
     #[arg(long, default_value = "sky")]
@@ -759,7 +759,7 @@ struct ReferenceArgs {
     point: bool,
     /// Render the scene's height-mapped surfaces as real displaced micro-geometry (a vertex
     /// per height texel; flat shading normals): the ground truth of self-shadowing
-    /// (issue 17; small scenes such as `patio`).
+    /// (small scenes such as `patio`).
     #[arg(long)]
     displaced: bool,
     #[command(flatten)]
@@ -844,8 +844,8 @@ struct BenchArgs {
     /// Leave out the device probe and the rows' model columns.
     #[arg(long)]
     no_probe: bool,
-    /// Measure under the environment turned DEG degrees about +Y after the bake (issue
-    /// 23): references under the turned map, techniques with dynamic lighting relit to it
+    /// Measure under the environment turned DEG degrees about +Y after the bake:
+    /// references under the turned map, techniques with dynamic lighting relit to it
     /// through their lighting update, baked ones (shlmap, rnm*) as baked. No error ladder.
     #[arg(long, value_name = "DEG", value_parser = finite_degrees)]
     relight_rotate: Option<f64>,

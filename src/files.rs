@@ -1,6 +1,5 @@
 //! How shvis reads and writes files: bounded reads, atomic writes, stale temporaries,
-//! early write checks and the manifest that marks a bake's output directory complete
-//! (issue 21).
+//! early write checks and the manifest that marks a bake's output directory complete.
 //!
 //! - **Reads** of inputs go through [`read_bounded`]: only regular files (a link to
 //!   `/dev/zero` or a FIFO would be read forever), at most a stated number of bytes.

@@ -1,4 +1,4 @@
-//! The resource budget (issue 21): every size that allocates is checked before the work
+//! The resource budget: every size that allocates is checked before the work
 //! starts, against a stated limit and against the memory the machine has, with one line
 //! naming the input, what it needs and the limit.
 //!

@@ -1,4 +1,4 @@
-//! CPU ground truth for the techniques (DESIGN §5 `reference`, issue 5).
+//! CPU ground truth for the techniques (DESIGN §5 `reference`).
 //!
 //! Per pixel, the same rasterization as the techniques gives world position, shading
 //! (normal-mapped) normal, linear albedo and the interpolated vertex normal — four

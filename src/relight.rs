@@ -1,4 +1,4 @@
-//! `shvis relight` (issue 15): the environment turns about +Y over the run
+//! `shvis relight`: the environment turns about +Y over the run
 //! ([`crate::env::schedule`]) and every technique with dynamic lighting follows it.
 //!
 //! With `--fade-to ENV` the environment also cross-fades to a second one over the run

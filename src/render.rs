@@ -450,7 +450,7 @@ pub struct Frame {
 
 impl Frame {
     /// Covered pixels (alpha > ½) with a channel that is not finite or at least the f16
-    /// target's largest value 65504 (issue 21: an f16 target saturates to Inf there). The
+    /// target's largest value 65504 (an f16 target saturates to Inf there). The
     /// same check for every technique: `render` warns, `bench` marks the row.
     pub fn clipped_pixels(&self) -> u64 {
         self.rgba

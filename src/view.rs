@@ -1,4 +1,4 @@
-//! `shvis view` (issue 22): a window that renders the scene with any technique × path,
+//! `shvis view`: a window that renders the scene with any technique × path,
 //! switched by keys, an orbit camera, and the sun — the environment turned about +Y — moved
 //! by keys or animated, with the dynamic-lighting machinery of `shvis relight`: the
 //! technique is built with two lighting sets (`technique::build_dynamic`), a worker thread
@@ -11,7 +11,7 @@
 //! read back, encoded to sRGB with the exposure (`report::image::to_srgb8`, the PNG
 //! writer's), the overlay drawn on the host (plotters' text on the bitmap, with the plots'
 //! font — no GUI toolkit: the frame is already on the host, and a text overlay is all the
-//! issue needs), and copied into the swapchain image (`gpu::swapchain`). Hence a screenshot
+//! viewer needs), and copied into the swapchain image (`gpu::swapchain`). Hence a screenshot
 //! outside the overlay equals `shvis render` of the same view byte for byte, which is what
 //! the viewer test checks.
 //!

@@ -1,4 +1,4 @@
-//! The error attribution ladder of the bench (issue 14, `shvis::attribution`): on the test
+//! The error attribution ladder of the bench (`shvis::attribution`): on the test
 //! house, every row's rungs go from the footprint reference to the technique's own bench
 //! image, every rung's image is written and is the image its error was measured on, the
 //! visibility-truncation rung falls towards order 6, and the last CPU rung meets the GPU

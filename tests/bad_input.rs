@@ -1,4 +1,4 @@
-//! Issue 21: bad input, limits and interruptions, as a hostile user meets them — through the
+//! Bad input, limits and interruptions, as a hostile user meets them — through the
 //! `shvis` binary, one process per case. Every case states what must happen:
 //!
 //! - [`Expect::Error`]: the exit code (2: the argument parser, 1: everything else), stderr's

@@ -1,4 +1,4 @@
-//! SH visibility bake (issue 4) against cases with known answers (DESIGN §6): an open
+//! SH visibility bake against cases with known answers (DESIGN §6): an open
 //! plane (the exact projection of the hemisphere indicator), the inner corner of a floor
 //! and a wall (the quarter sphere), the floor of a closed box (exactly 0), a one-sided
 //! ground lit only from below (dark to the SH truncation bound), a thin wall and a thick

@@ -1,4 +1,4 @@
-//! Issue 20, Build 4: `--baker gpu` reaches `render` and `bench` — the visibility the
+//! `--baker gpu` reaches `render` and `bench` — the visibility the
 //! techniques read is baked by the GPU simulator on the device that renders, validation
 //! on, and the image stays close to the CPU-baked one (the two bakes differ by about the
 //! quadrature noise).

@@ -1,4 +1,4 @@
-//! VQ and CPCA of the test house's visibility (issue 16, `bake::cluster`): at the storage
+//! VQ and CPCA of the test house's visibility (`bake::cluster`): at the storage
 //! stated, iterative CPCA reconstructs the visibility better than static CPCA, static CPCA
 //! better than a global PCA with more bytes per texel, and the fits are deterministic; on
 //! screen, the same ordering at 12 bytes per texel and the seam mitigation's effect.

@@ -1,4 +1,4 @@
-//! Dynamic lighting on the GPU (issue 15, `technique::lighting`): every technique built with
+//! Dynamic lighting on the GPU (`technique::lighting`): every technique built with
 //! two lighting sets takes new tables with validation clean, the frame right after the
 //! non-blocking update draws exactly the new data and the other set keeps the old; the
 //! tables of blended lighting are the

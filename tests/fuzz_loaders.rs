@@ -1,4 +1,4 @@
-//! Issue 21, fuzzing on stable Rust: mutated inputs through the environment-map loaders
+//! Fuzzing on stable Rust: mutated inputs through the environment-map loaders
 //! (OpenEXR in four compressions, Radiance HDR flat and run-length) and the bake cache
 //! readers, in process, deterministic and bounded (a few thousand cases, seconds). Every
 //! mutation must end in `Ok` or `Err` — never a panic — and whatever loads must hold what

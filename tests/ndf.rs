@@ -1,4 +1,4 @@
-//! Normal distribution mapping (Olano & North, issue 19) on lavapipe with validation on:
+//! Normal distribution mapping (Olano & North) on lavapipe with validation on:
 //! the specular term under naive MIP and NDF filtering against its footprint reference.
 
 mod common;

@@ -1,4 +1,4 @@
-//! Issue 23, Build 2 / Acceptance: the normal-mapping-for-PRT techniques (`technique::nmprt`)
+//! The normal-mapping-for-PRT techniques (`technique::nmprt`)
 //! against what they must equal — with the lighting fixed, `nmprt` renders `shlmap`'s
 //! image of the same bake (f16 on the GPU, both paths, validation on); with zero bounces
 //! its irradiance is unc6's direct lighting of the same rays (lighting band-limited so the

@@ -1,4 +1,4 @@
-//! GPU normal-map generation (Gumbau et al., issue 18) against analytic normals and the
+//! GPU normal-map generation (Gumbau et al.) against analytic normals and the
 //! CPU ray-cast baker, on lavapipe with validation on.
 
 mod common;

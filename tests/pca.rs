@@ -1,4 +1,4 @@
-//! PCA-compressed visibility (issue 6): error against the reference falls as the basis
+//! PCA-compressed visibility: error against the reference falls as the basis
 //! grows, and the weights-only variant matches the table variant.
 
 mod common;

@@ -1,5 +1,5 @@
-//! Measurable facts of a `preconv` image of the built-in house (the "look at it",
-//! made checkable): the ground under the porch roof is darker than open ground by a stated
+//! Measurable facts of a `preconv` image of the built-in house ("look at it", made
+//! checkable): the ground under the porch roof is darker than open ground by a stated
 //! margin, and the normal map gives the brick wall local contrast that a flat-normal
 //! render lacks.
 

@@ -1,4 +1,4 @@
-//! The device probe and cost model (issue 20) on lavapipe with validation on: every
+//! The device probe and cost model on lavapipe with validation on: every
 //! microbenchmark runs and is counted as generated, the fit is printed, and every
 //! technique's counts come from its own shader. No timing is asserted (timings go in
 //! `shvis probe` and the bench); what can fail here is structure.

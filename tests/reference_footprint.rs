@@ -1,4 +1,4 @@
-//! The footprint reference against an independent brute force (issue 14): a bumpy,
+//! The footprint reference against an independent brute force: a bumpy,
 //! normal-mapped plane seen at a grazing angle, where the normal map's MIP chain is deep.
 //!
 //! Brute force, on the CPU with no G-buffer: 16 × 16 primary rays per pixel from the camera

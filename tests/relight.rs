@@ -1,4 +1,4 @@
-//! `shvis relight` (issue 15, `shvis::relight`) on the test house: every dynamic technique
+//! `shvis relight` (`shvis::relight`) on the test house: every dynamic technique
 //! × path follows a rotating environment with validation clean across its table swaps
 //! (blocking and overlapped uploads), a blocking rebuild every frame has no lag error and
 //! one every other frame has, a frame whose data is current equals the static image,

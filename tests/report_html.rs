@@ -1,4 +1,4 @@
-//! Issue 22: the bench's `index.html` in a real browser. A small bench (3 techniques × 2
+//! The bench's `index.html` in a real browser. A small bench (3 techniques × 2
 //! paths at 96×60) writes its folder; headless Chromium (Debian's `chromium`, installed by
 //! `make deps`) loads the page from disk and must report no console message, every
 //! `<img>` decoded (naturalWidth > 0, read back from the attributes the page sets on

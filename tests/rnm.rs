@@ -1,4 +1,4 @@
-//! Radiosity normal mapping (issue 17): the `rnm` lightmaps of an open plane reproduce the
+//! Radiosity normal mapping: the `rnm` lightmaps of an open plane reproduce the
 //! flat irradiance and follow the light's side; Listing 2 with the unoccluded D encoding
 //! of a normal map draws what Listing 1 draws from the normal map itself, per pixel, to
 //! f16 precision, on both paths; `ssbump` under a grazing sun darkens the mortar joints

@@ -1,4 +1,4 @@
-//! Issue 23, Build 1: the transfer-matrix bake (`bake::transfer`). With the lighting fixed,
+//! The transfer-matrix bake (`bake::transfer`). With the lighting fixed,
 //! M·l must equal the SH lightmap's per-texel coefficients for the same bake (same rays,
 //! seed, bounces, lighting truncated to M's order) — with and without inter-reflection —
 //! and the bounces must change M.

@@ -1,4 +1,4 @@
-//! The paper's technique against the reference (issue 5): error falls with the visibility
+//! The paper's technique against the reference: error falls with the visibility
 //! order, the dx9 (dual paraboloid) and dx10 (cube array) paths agree within the measured
 //! parameterization error, and an HDR sun renders finite on both paths.
 
@@ -58,7 +58,7 @@ fn hdr_sun_renders_finite_on_both_paths() {
         height: 100,
         ..FrameSettings::default()
     };
-    // 1e5 is the issue's case; 1e9 (a physical sun's order of magnitude) drives the L×H
+    // 1e5 is a bright HDR sun; 1e9 (a physical sun's order of magnitude) drives the L×H
     // table far past f16's 65504 and exercises the range scaling.
     for sun in [1e5, 1e9] {
         let env = sky(

@@ -1,4 +1,4 @@
-//! Issue 22: `shvis view` through a real swapchain under Xvfb (installed by `make deps`):
+//! `shvis view` through a real swapchain under Xvfb (installed by `make deps`):
 //! N frames presented, one technique switch, the sun animating with lighting rebuilds
 //! swapped in, validation on; the last frame read back from the swapchain must not be
 //! blank and must equal `shvis render` of the same technique and view outside the

@@ -1,5 +1,5 @@
 // The specular material term of a directional light under three normal-map filterings
-// (Olano & North; issue 19; src/ndf/render.rs): L = k_s E · D(h) where n·l > 0 and n·v > 0
+// (Olano & North; src/ndf/render.rs): L = k_s E · D(h) where n·l > 0 and n·v > 0
 // (n the interpolated normal; no shadowing or masking, as in the paper).
 //   SHVIS_SPECULAR 1 (mip):  the MIP chain of averaged normals, renormalized, base lobe
 //                            D = κ₀ g(|h − n̄|²/σ²)/σ³;

@@ -1,5 +1,5 @@
 // nmprtsvdM: normal mapping for PRT with the course's normal basis (Sloan, PRT course;
-// issue 23; src/technique/nmprt.rs). Per texel c_m = V_Mᵀ R M l for m < M, RGB (value
+// src/technique/nmprt.rs). Per texel c_m = V_Mᵀ R M l for m < M, RGB (value
 // 3m + c, 4 per RGBA texel in SHVIS_NMPRT_GROUPS groups, formed when the lighting
 // changes); U(n)S on the disk of tangent-space normals (uv = n.xy·½ + ½, bilinear) in
 // SHVIS_NMPRT_BASIS_LAYERS RGBA layers. radiance = albedo/π · Σ_m (US)_m(n) c_m.

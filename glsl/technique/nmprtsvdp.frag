@@ -1,13 +1,13 @@
 // nmprtsvdMp: normal mapping for PRT with the course's pixel shader (Sloan, PRT course;
-// issue 23; src/technique/nmprt.rs). Per texel the matrices P = V_Mᵀ R M (M × O² per
+// src/technique/nmprt.rs). Per texel the matrices P = V_Mᵀ R M (M × O² per
 // colour; row (m, c) in SHVIS_NMPRT_ROW_GROUPS = ⌈O²/4⌉ RGBA groups at layer
 // (3m + c)·ROW_GROUPS + k) as bake data; the lighting l per colour in uniforms; per pixel
 // c_m = P_m l, then Σ_m (US)_m(n) c_m with US on the disk of tangent-space normals (as
 // nmprtsvd.frag). Nothing per texel changes with the lighting. dx10 only: the layers exceed
 // dx9's 16 textures (the path rules refuse it). The row length is compiled in (the build
 // sets it from the transfer bake's order) and every loop unrolled, so that each uniform
-// read has a constant index (issue 20: read at a loop-derived index, the 192 reads cost
-// lavapipe a loop each and were counted once).
+// read has a constant index (read at a loop-derived index, the 192 reads cost lavapipe a
+// loop each and are counted once).
 #version 450
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require

@@ -28,10 +28,10 @@ layout(location = 6) in vec4 in_vertex_weights[GROUPS];
 
 // Every uniform read has a constant index: the groups and coefficients are unrolled here,
 // not left to the driver (with loop-derived indices lavapipe gathers the block per pixel,
-// issue 20: pca24w 215 ms against pca24's 62 ms at 1280×800), and the sums are RGB only.
+// pca24w 215 ms against pca24's 62 ms at 1280×800), and the sums are RGB only.
 // y(n) is evaluated first and each basis vector dotted with it as it is read, so only y,
 // one dot and the RGB sum stay live (summing the 9 SH coefficients over the basis first
-// kept 27 floats live across every group — more than the 16 vector registers lavapipe
+// keeps 27 floats live across every group — more than the 16 vector registers lavapipe
 // has, as in cluster.frag): E = Σ_i (m_i + Σ_k w_k c_ki) y_i = m·y + Σ_k w_k (c_k·y).
 #define COEFF(k, i) params.coeffs[9 * (k) + (i)].rgb
 #define DOT_Y(k) (COEFF(k, 0) * y[0] + COEFF(k, 1) * y[1] + COEFF(k, 2) * y[2] \

@@ -1,5 +1,5 @@
 // rnm / rnmao / ssbump: radiosity normal mapping and self-shadowed bump maps (Green,
-// Valve; issue 17; src/technique/rnm.rs). Three lightmaps of irradiance around the HL2
+// Valve; src/technique/rnm.rs). Three lightmaps of irradiance around the HL2
 // basis directions (per-texel groups 0–2, .rgb), blended per pixel by
 //   SHVIS_RNM_VARIANT 0 (rnm):    Listing 1, saturate(N·B_i)² normalized, N from the normal map;
 //   SHVIS_RNM_VARIANT 1 (rnmao):  Listing 1 × the height field's AO (ssbump_ao_tex.a);

@@ -1,4 +1,4 @@
-//! The ladder's "exact lighting, exact clamped cosine" integrals (issue 14):
+//! The ladder's "exact lighting, exact clamped cosine" integrals:
 //!
 //! ```text
 //! G_j(n) = ∫ L(ω) max(0, n·ω) y_j(ω) dω,   j < O²   (so ∫ L V_O H_n dω = Σ_j V_j G_j(n))

@@ -1,4 +1,4 @@
-//! The error attribution ladder (issue 14): for a technique, a sequence of images from the
+//! The error attribution ladder: for a technique, a sequence of images from the
 //! footprint reference to its GPU output, each rung removing one idealisation, so that the
 //! cost table's error is explained step by step. The rungs between the point-sampled
 //! reference and the GPU image are evaluated here, on the CPU in f64, at every covered
@@ -711,7 +711,7 @@ pub fn cpu_rungs(
         // The NDF variants' rungs are their base technique's; their own step (the normal
         // map's filtering) is measured by `shvis study ndf`.
         // `nmprt*`: no ladder yet (its rungs would be the transfer bake's lighting order,
-        // the normal basis' truncation and the bounces; issue 23 reports its error only).
+        // the normal basis' truncation and the bounces; only its total error is reported).
         Technique::Rnm { .. } | Technique::Ndf { .. } => {}
         // `nmprt*`: the technique's own model per pixel, exact (f32 texel values, f64
         // evaluation, the SVD basis evaluated rather than looked up); what remains to the

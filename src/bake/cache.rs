@@ -48,7 +48,7 @@ use crate::scene::{Mesh, Vertex};
 use crate::sh::Order;
 
 /// Version of the cache layout and of the bake results it stores (2: rays with −0.0
-/// direction components no longer miss, `bake::trace::canonical_direction`).
+/// direction components are canonicalized, `bake::trace::canonical_direction`).
 pub const CACHE_FORMAT_VERSION: u32 = 2;
 /// First 8 bytes of every cache file.
 pub const CACHE_MAGIC: [u8; 8] = *b"SHVISBC\0";

@@ -1,5 +1,5 @@
-//! Vector quantization (VQ) and clustered PCA (CPCA) of the baked visibility (issue 16;
-//! Sloan's PRT course, "VQ", "PCA", "CPCA"; Iwanicki–Sloan §4 and its future work).
+//! Vector quantization (VQ) and clustered PCA (CPCA) of the baked visibility
+//! (Sloan's PRT course, "VQ", "PCA", "CPCA"; Iwanicki–Sloan §4 and its future work).
 //!
 //! Each covered texel holds an order-O visibility vector V(x) ∈ ℝⁿ (n = O²). The three
 //! models of the course, with C(x) the texel's cluster:

@@ -26,7 +26,7 @@
 //! of an occluder's silhouette (a floor texel at the foot of a wall) the depth test reads
 //! the floor beside the wall (a leak) or the wall where it does not cover o (a false
 //! shadow); the triangles around o settle it on the very ray the CPU traces. On the peers'
-//! house at 2048² the texels beyond the quadrature noise went from 1.81 % to 0.45 % with it
+//! house at 2048² the texels beyond the quadrature noise are 0.45 % with it, 1.81 % without
 //! (README). Then v_i = Σ_{escaping r} w·y_i(d_r), w = 4π/R, and the AO of the same rays,
 //! as on the CPU; gutters are dilated the same way.
 //!

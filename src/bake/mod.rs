@@ -11,7 +11,7 @@
 //! - [`surface`]: attributes of ray hit points (oriented normal, albedo, lightmap texel).
 //! - [`shlmap`]: order-3 SH of incident radiance with inter-reflection, the `shlmap` data.
 //! - [`transfer`]: per-texel transfer matrices M (lighting → order-3 transferred incident
-//!   radiance, inter-reflection included) of normal mapping for PRT (issue 23).
+//!   radiance, inter-reflection included) of normal mapping for PRT.
 //! - [`cache`]: versioned, checksummed bake cache files, and EXR dumps for inspection.
 //!
 //! Inputs a user controls (ray counts, resolutions) are validated here once, by

@@ -48,7 +48,7 @@ pub struct LightmapTexels {
     pub normal: Vec<Vec3>,
     /// The normal map's frame at the texel centre: the interpolated vertex normal and
     /// tangent (with handedness in w), as `glsl/include/common.glsl` builds it per pixel
-    /// — what tangent-space lightmaps (`rnm`, issue 17) are baked in. Zero where not
+    /// — what tangent-space lightmaps (`rnm`) are baked in. Zero where not
     /// covered.
     pub shading_normal: Vec<Vec3>,
     pub tangent: Vec<Vec4>,

@@ -28,7 +28,7 @@
 //! "shade by convolution at the normal". The coefficients of (1) include directions below
 //! the shading normal but above n_g's plane, so a bent normal sees what it should.
 //!
-//! # Radiosity-normal-mapping lightmaps (`rnm`, issue 17)
+//! # Radiosity-normal-mapping lightmaps (`rnm`)
 //!
 //! The same rays also gather, per texel, the three lightmaps of Green's radiosity normal
 //! mapping: the irradiance around each HL2 basis direction B_i ([`super::ssbump::hl2_basis`])
@@ -80,7 +80,7 @@ use crate::sh::{Order, basis::eval_basis, zonal};
 /// Coefficients per texel and colour (order 3).
 pub const SH_LIGHTMAP_COEFFS: usize = 9;
 
-/// Default number of bounces of inter-reflection (issue 7; the paper does not say).
+/// Default number of bounces of inter-reflection (the paper does not say).
 pub const DEFAULT_BOUNCES: u32 = 2;
 
 /// What an SH lightmap bake does.

@@ -1,5 +1,5 @@
 //! Self-shadowed bump maps (Green, "Efficient self-shadowed radiosity normal mapping",
-//! Valve; issue 17, part): the Half-Life 2 tangent-space basis, the D encoding of a normal
+//! Valve): the Half-Life 2 tangent-space basis, the D encoding of a normal
 //! (eq. (3)) and its directional occlusion from a height field.
 //!
 //! **Basis.** Eq. (1) as printed lists B₀ twice, and its third vector (−√(2/3), 0, 1/√3) is

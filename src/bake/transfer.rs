@@ -1,5 +1,5 @@
 //! Transfer matrices of normal mapping for PRT (Sloan, PRT course, "Normal Mapping for
-//! PRT"; issue 23, Build 1): per lightmap texel a matrix M that maps distant SH lighting l
+//! PRT"): per lightmap texel a matrix M that maps distant SH lighting l
 //! (order O, N = O² coefficients) to the order-3 SH of *transferred incident radiance* at
 //! the texel — shadows and inter-reflection baked in, the lighting left free:
 //!
@@ -56,8 +56,8 @@ pub const TRANSFER_ROWS: usize = 9;
 
 /// The lighting order the `nmprt*` techniques bake M for: the order of the lighting unc6's
 /// L×H product takes (`prepare::LIGHTING_ORDER`), so the two see the sun equally sharp. At
-/// order 6 the sun's truncation costs more than the inter-reflection gains (README,
-/// issue 23: 0.142 against unc6's 0.136 on the house, turned sun; 0.128 at order 8).
+/// order 6 the sun's truncation costs more than the inter-reflection gains (README:
+/// 0.142 against unc6's 0.136 on the house, turned sun; 0.128 at order 8).
 pub const DEFAULT_LIGHTING_ORDER: Order = Order::EIGHT;
 
 /// What a transfer bake does.

@@ -1,4 +1,4 @@
-//! Per-vertex PCA (`pcaMv`, issue 16): the order-6 visibility baked at the vertices of the
+//! Per-vertex PCA (`pcaMv`): the order-6 visibility baked at the vertices of the
 //! mesh, optionally subdivided to a target edge length (`scene::subdivide`), and expressed
 //! in the lightmap's global PCA basis quantized as `pcaMw` stores it — so `pcaMv` and
 //! `pcaMw` share one uniform block and differ only in where the weights live (a vertex

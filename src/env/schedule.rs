@@ -1,4 +1,4 @@
-//! Lighting that changes per frame (Iwanicki–Sloan §3.3, issue 15): the environment's SH
+//! Lighting that changes per frame (Iwanicki–Sloan §3.3): the environment's SH
 //! rotated about the up axis (+Y) by an angle per frame — the sun moving — and a
 //! cross-fade between two environments (time of day), both applied to the SH coefficients
 //! the techniques' lighting-dependent data is built from (order O + 2 for the L×H tables).

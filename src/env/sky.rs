@@ -68,7 +68,7 @@ impl Default for SkyParams {
 
 impl SkyParams {
     /// The default sky with the sun `degrees` above the horizon (`--env sky:DEG`; the
-    /// grazing "low sun" of issue 17 is `sky:15`), at the default azimuth: 40° from +Z
+    /// grazing "low sun" is `sky:15`), at the default azimuth: 40° from +Z
     /// towards −X (front-left).
     pub fn with_sun_elevation(degrees: f64) -> Self {
         let elevation = degrees.to_radians();

@@ -1,4 +1,4 @@
-//! What a compiled fragment shader does per invocation, read off its SPIR-V (issue 20): the
+//! What a compiled fragment shader does per invocation, read off its SPIR-V: the
 //! cost model's operation counts are derived from the shader itself, not typed beside it.
 //!
 //! One pass over the instruction stream (SPIR-V 1.x §2.3: each instruction is a word with

@@ -1,4 +1,4 @@
-//! A window's surface and swapchain for `shvis view` (issue 22): the frame the viewer has
+//! A window's surface and swapchain for `shvis view`: the frame the viewer has
 //! composed on the host (sRGB 8-bit, with its overlay) is copied into the acquired
 //! swapchain image and presented. One frame in flight: the image is acquired with a fence,
 //! the copy is submitted and waited for (`Context::one_shot`), then presented with no

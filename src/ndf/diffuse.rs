@@ -1,4 +1,4 @@
-//! Diffuse techniques under NDF filtering (issue 19, Build 3; `unc{O}ndf`, `preconvndf`;
+//! Diffuse techniques under NDF filtering (`unc{O}ndf`, `preconvndf`;
 //! shaders `glsl/include/ndf_diffuse.glsl` with `grouped.glsl` / `preconv.frag`).
 //!
 //! A minified pixel covers many normal-map texels; what it should shade with is the mean of

@@ -1,4 +1,4 @@
-//! Normal distribution mapping (Olano & North, UNC TR 97-041; issue 19): a normal map's
+//! Normal distribution mapping (Olano & North, UNC TR 97-041): a normal map's
 //! normals as a field of 3D Gaussians whose nine linear moments MIP-map exactly, and the
 //! specular lobe evaluated from them.
 //!

@@ -10,7 +10,7 @@
 //!
 //! This projects along the interpolated normal where the GPU method projects along T's
 //! face normal, so the two agree where the high surface is near the low one and differ by
-//! the parallax of the two directions elsewhere — what the comparison measures.
+//! the parallax of the two directions elsewhere — what the GPU vs CPU comparison measures.
 
 use std::time::Instant;
 

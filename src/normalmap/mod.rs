@@ -1,5 +1,5 @@
 //! Normal-map generation from a high-polygon mesh for a low one (Gumbau, González and
-//! Chover, *GPU-based normal map generation*; issue 18): `shvis normalmap`.
+//! Chover, *GPU-based normal map generation*): `shvis normalmap`.
 //!
 //! The product is the paper's GPU method ([`gpu`]): one render of the high mesh per low
 //! triangle T through T's view and pseudo-orthographic projection ([`projection`], eqs.

@@ -1,4 +1,4 @@
-//! The device probe and the cost model (issue 20; `shvis probe`, run first by `shvis bench`).
+//! The device probe and the cost model (`shvis probe`, run first by `shvis bench`).
 //!
 //! **Probe.** On the current Vulkan device, at the bench's target format and resolution, a
 //! screen-filling grid of triangles as large as the scene's (`ProbeSettings::triangle_pixels`,
@@ -53,12 +53,12 @@
 //! that draws one zero-area triangle (fixed), the empty shader over half the screen (half
 //! the triangles, half the fragments) and over the screen with the depth test off — by a
 //! **minimax** fit: the costs that make the largest relative error over the points least
-//! (a linear program, [`chebyshev_fit`]), as the model is judged by its worst point. A least-squares fit (weighted by 1/t, until
-//! 2026-12-04) left 7.6–9.5 % on the same runs' points where this leaves 6.1–8.0 %; the
-//! costs move by a few per cent (the bilinear lookup 1.75 → 1.78 ns per lane).
+//! (a linear program, [`chebyshev_fit`]), as the model is judged by its worst point. A
+//! least-squares fit (weighted by 1/t) leaves 7.6–9.5 % on the same points where this
+//! leaves 6.1–8.0 %.
 //!
-//! **How lavapipe runs the clustered decodes** (eighth sitting, each measured by taking one
-//! thing out of cluster.frag): an unfiltered texel fetch costs 0.70 ns per lane where a
+//! **How lavapipe runs the clustered decodes** (each measured by taking one thing out of
+//! cluster.frag): an unfiltered texel fetch costs 0.70 ns per lane where a
 //! bilinear lookup costs 1.79 ([`Kind::TexelFetch`], the taps); a branch that no lane of a
 //! SIMD batch takes still costs its straight-line code, run with the lanes masked off, while
 //! a loop that no lane enters is skipped (vq256: 14.8 ms with the boundary branch taken out,

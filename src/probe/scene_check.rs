@@ -1,13 +1,14 @@
-//! The probe's model checked on the scene (issue 20, tenth sitting): a few shaders of known
+//! The probe's model checked on the scene: a few shaders of known
 //! counts — the probe's empty shader, and the material lookups every technique makes —
 //! drawn over the bench's own mesh and camera, each against the model's time for it.
 //!
 //! The probe fits its costs over screen-filling grids of its own textures; a row's model
 //! adds them up over the scene. Where a row is off its model, these say which part does not
 //! carry over: the base (the empty shader: the scene's overdraw, triangles, edges) or one of
-//! the lookups. They found the albedo's sRGB decode: on lavapipe (2-vCPU Xeon, house,
-//! 1280×800) the albedo lookup ran 1.34× a model that priced it as the normal map's UNORM
-//! one (1.05×), 1.7 ms a frame that every row paid ([`Kind::TrilinearSrgb`] since).
+//! the lookups. They are why the albedo's sRGB decode is its own kind
+//! ([`Kind::TrilinearSrgb`]): on lavapipe (2-vCPU Xeon, house, 1280×800) the albedo lookup
+//! runs 1.34× a model that prices it as the normal map's UNORM one (1.05×), 1.7 ms a frame
+//! in every row.
 //!
 //! Each check is timed on two builds of its pipeline and keeps the faster median (builds
 //! differ, `states`), against the main model (the device's fastest state).

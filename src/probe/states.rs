@@ -1,12 +1,12 @@
-//! The device's speed states, and timings labelled by them (issue 20).
+//! The device's speed states, and timings labelled by them.
 //!
 //! A shared machine does not run at one speed. On this project's VM the probe's frames
 //! showed two states that the device switches between every few seconds: in one, the
 //! empty shader over the screen (clear, depth test, framebuffer writes: memory traffic)
 //! takes 1.5 ms, in the other 3.1 ms, while 16 bilinear lookups move by 10 % and the frame
 //! that shades nothing by 0.4 ms — a slowdown additive per frame and uneven across kinds of
-//! work, so no single scale factor corrects it (`shvis bench` tried one: it over-corrected
-//! the rows bound by ALU and uniform reads). Within a state the same frames repeat to ±3 %.
+//! work, so no single scale factor corrects it (one over-corrects the rows bound by ALU
+//! and uniform reads). Within a state the same frames repeat to ±3 %.
 //!
 //! So the probe and the bench time every point or row in segments of frames with one
 //! **monitor** frame (the empty shader over the screen, the most state-sensitive point)
@@ -387,7 +387,7 @@ mod tests {
         // One build in each state: none agrees with another, however loose the tolerance.
         assert!(!row.builds_agree_in(&two, 0, 1.0) && !row.builds_agree_in(&two, 1, 1.0));
         assert_eq!(point.fastest_build_median(), Some(59.0));
-        // One build: the median of all its frames, as before builds were told apart.
+        // One build: the median of all its frames.
         let mut one = Segmented::default();
         one.push(3, 1.0, vec![10.0, 30.0], 1.0);
         one.push(3, 1.0, vec![20.0], 1.0);

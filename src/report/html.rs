@@ -1,4 +1,4 @@
-//! `index.html` of a bench folder (issue 22): one self-contained page — relative links to
+//! `index.html` of a bench folder: one self-contained page — relative links to
 //! the images and plots beside it, no network, a few lines of inline script and no
 //! framework — with what a reader compares techniques by: the device and settings, the
 //! cost table (click a header to sort), the speed/error, storage/error and PCA plots, the

@@ -243,7 +243,7 @@ pub struct BenchTable {
     pub results: Vec<BenchRow>,
 }
 
-/// The bench's wall time by phase, seconds (issue 20 Build 5: what a `make bench` spends).
+/// The bench's wall time by phase, seconds (what a `make bench` spends).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct BenchPhases {
     /// `shvis probe`'s microbenchmarks.

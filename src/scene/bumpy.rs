@@ -1,4 +1,4 @@
-//! The built-in test scene `bumpy` (issue 19): a bumpy plane receding to the horizon, the
+//! The built-in test scene `bumpy`: a bumpy plane receding to the horizon, the
 //! setting of Olano & North's Fig. 1 in which normal-map filtering decides the look — near
 //! the camera the bumps are magnified, toward the horizon one pixel covers tens of them.
 //!

@@ -1,4 +1,4 @@
-//! Real micro-geometry from a material's height field (issue 17): the ground truth of
+//! Real micro-geometry from a material's height field: the ground truth of
 //! self-shadowing techniques. The flat, normal-mapped scene is what `rnm`, `ssbump`,
 //! `shlmap`… shade; this is the surface their maps describe.
 //!

@@ -28,7 +28,7 @@
 //!   −Z, up +Y, `yfov`, `znear`, `zfar` or [`DEFAULT_Z_FAR_SCALE`] × the scene size);
 //!   else [`super::framing_camera`].
 //!
-//! URI policy (issue 21): buffers and images come from the `.glb` BIN chunk, base64 `data:`
+//! URI policy: buffers and images come from the `.glb` BIN chunk, base64 `data:`
 //! URIs, or relative paths (percent-decoded) that stay inside the glTF file's folder. An
 //! absolute path, a `file:` URI, any other scheme (`http:` …) or a relative path that climbs
 //! out of the folder (`../`) is refused with one error naming the URI: a scene file must not

@@ -555,7 +555,7 @@ pub(super) fn brick_albedo() -> Texture8 {
 }
 
 /// The brick height field the normal map is derived from (heights in texels, the texture's
-/// resolution): the surface `shvis ssbump --height house` shadows (issue 17).
+/// resolution): the surface `shvis ssbump --height house` shadows.
 pub fn brick_height_field() -> crate::bake::ssbump::HeightField {
     let n = TEXTURE_SIZE;
     crate::bake::ssbump::HeightField {

@@ -104,7 +104,7 @@ pub struct Material {
     pub normal_scale: f32,
     /// Height field of the surface the normal map describes, tiled like it (heights in
     /// texels of its own grid): what `ssbump`/`rnmao` shadow with and what
-    /// [`displace`] builds the micro-geometry from (issue 17). The house's bricks have
+    /// [`displace`] builds the micro-geometry from. The house's bricks have
     /// one; a glTF scene takes one from `--height-map`.
     pub height: Option<crate::bake::ssbump::HeightField>,
 }
@@ -345,7 +345,7 @@ pub enum SceneError {
 pub const MAX_HEIGHT_MAP_TEXELS: usize = 16384 * 16384;
 
 /// Reads a height map (PNG, EXR…: its luminance, 8/16-bit images as [0, 1]) as heights
-/// in texels: `scale` × value (`--height-map FILE --height-scale S`; issue 17). The map tiles
+/// in texels: `scale` × value (`--height-map FILE --height-scale S`). The map tiles
 /// by the material UVs like the normal map, and should describe the same surface.
 ///
 /// # Errors

@@ -1,4 +1,4 @@
-//! The built-in test scene `patio` (issue 17): a 1 m × 1 m brick floor in the corner of
+//! The built-in test scene `patio`: a 1 m × 1 m brick floor in the corner of
 //! two 0.5 m brick walls, seen from close by — small enough that [`super::displace`] can
 //! build its bricks as real geometry (a vertex at every height-texel corner, 0.26 M triangles), so
 //! self-shadowing techniques (`ssbump`, `rnmao`) meet a ground truth with the bricks'

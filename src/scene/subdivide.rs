@@ -1,5 +1,5 @@
-//! Conforming subdivision of a mesh to a target edge length (issue 16: the vertex density
-//! of per-vertex PCA, `pcaMv`).
+//! Conforming subdivision of a mesh to a target edge length (the vertex density of
+//! per-vertex PCA, `pcaMv`).
 //!
 //! Each round splits every edge longer than the target at its midpoint — the decision is
 //! the edge's, so both triangles sharing it split it alike and no T-junction appears — and

@@ -1,4 +1,4 @@
-//! The built-in test scene `wavy` (issue 19): Olano & North's wavy sphere (their Figs. 1–2),
+//! The built-in test scene `wavy`: Olano & North's wavy sphere (their Figs. 1–2),
 //! a smooth sphere whose normal map carries parallel ripples, so that a minified pixel
 //! covers normals spread along one axis only — the highlight must blur and *elongate*
 //! across the ripples, which an averaged normal cannot do (the NDF's covariance can).

@@ -1,7 +1,7 @@
-//! Compression of the baked visibility against storage (issue 16, `shvis study
-//! compression`): global PCA (`bake::pca`), VQ and static / iterative CPCA
-//! (`bake::cluster`) fitted to the same order-6 visibility, each with the bytes it would
-//! take on the GPU and its reconstruction error.
+//! Compression of the baked visibility against storage (`shvis study compression`): global
+//! PCA (`bake::pca`), VQ and static / iterative CPCA (`bake::cluster`) fitted to the same
+//! order-6 visibility, each with the bytes it would take on the GPU and its reconstruction
+//! error.
 //!
 //! Storage, as the `pca*` techniques lay it out (`technique::pca`, `technique::tables`):
 //!

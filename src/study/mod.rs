@@ -5,18 +5,18 @@
 //!   of [`crate::sphere`] reconstructs SH basis functions under hardware bilinear
 //!   filtering, as MSE against total texel count (`shvis study params`).
 
-//! - [`compression`]: issue 16 — visibility error against storage for PCA, VQ and CPCA
+//! - [`compression`]: visibility error against storage for PCA, VQ and CPCA
 //!   (`shvis study compression`).
-//! - [`seams`]: issue 16 — the screen-space discontinuity at cluster boundaries of the
+//! - [`seams`]: the screen-space discontinuity at cluster boundaries of the
 //!   clustered techniques, with and without the seam mitigation (`shvis study seams`).
-//! - [`rnm`]: issue 17 — radiosity normal mapping and SSBump against the displaced-geometry
+//! - [`rnm`]: radiosity normal mapping and SSBump against the displaced-geometry
 //!   reference under a low sun and an overcast probe (`shvis study rnm`).
-//! - [`normalmap`]: issue 18 — GPU normal-map generation timed against triangle counts and
+//! - [`normalmap`]: GPU normal-map generation timed against triangle counts and
 //!   resolution beside the CPU baker, checked on a real model, rendered through `unc6`
 //!   (`shvis study normalmap`).
-//! - [`nmprt_svd`]: issue 23 — the energy of normal mapping for PRT's "normal basis" (the
+//! - [`nmprt_svd`]: the energy of normal mapping for PRT's "normal basis" (the
 //!   SVD of the hemisphere-clamped quadratic SH over normals), `shvis study nmprt-svd`.
-//! - [`ndf`]: issue 19 — the specular term under naive MIP and normal-distribution filtering
+//! - [`ndf`]: the specular term under naive MIP and normal-distribution filtering
 //!   on the receding bumpy plane against its footprint reference (`shvis study ndf`).
 
 pub mod compression;

@@ -1,4 +1,4 @@
-//! Normal distribution mapping against naive MIP filtering (issue 19, `shvis study ndf`).
+//! Normal distribution mapping against naive MIP filtering (`shvis study ndf`).
 //!
 //! On each specular scene — the built-in receding bumpy plane ([`crate::scene::bumpy`],
 //! isotropic bumps, the paper's Fig. 1 setting of a surface receding to the horizon) and
@@ -311,7 +311,7 @@ pub fn write_report(
     diffuse: Option<&(Vec<DiffuseScene>, Vec<DiffuseRow>)>,
     dir: &Path,
 ) -> Result<Vec<PathBuf>, ReportError> {
-    let mut md = "# Normal distribution mapping (issue 19)\n".to_string();
+    let mut md = "# Normal distribution mapping\n".to_string();
     let mut written = Vec::new();
     for (study, composite) in studies {
         let scene = study.scene.name();

@@ -1,5 +1,5 @@
-//! Diffuse techniques under NDF filtering against the footprint reference (issue 19,
-//! Build 3; part of `shvis study ndf`).
+//! Diffuse techniques under NDF filtering against the footprint reference (part of
+//! `shvis study ndf`).
 //!
 //! Per scene (the receding bumpy plane, the house): `unc6` / `preconv` and their NDF
 //! variants (`crate::ndf::diffuse`) on each path, the footprint reference of the direct

@@ -1,6 +1,6 @@
-//! Issue 23, Build 3 (in part): the "normal basis" of normal mapping for PRT (Sloan, PRT
-//! course): how much of the outgoing radiance as a function of the tangent-space normal the
-//! first M singular vectors of the course's matrix A capture (`shvis study nmprt-svd`).
+//! The "normal basis" of normal mapping for PRT (Sloan, PRT course): how much of the
+//! outgoing radiance as a function of the tangent-space normal the first M singular
+//! vectors of the course's matrix A capture (`shvis study nmprt-svd`).
 //!
 //! A has one row per normal n_k of the hemisphere, sampled on the unit disk by a `side`²
 //! grid of bilinear nodes mapped to the hemisphere orthographically (n = (x, y, √(1−x²−y²)),

@@ -1,4 +1,4 @@
-//! GPU normal-map generation measured (issue 18, `shvis study normalmap`).
+//! GPU normal-map generation measured (`shvis study normalmap`).
 //!
 //! 1. **Timings like the paper's Tables 1 and 2**: generation time of the GPU method
 //!    ([`crate::normalmap::gpu`]) and of the CPU ray caster ([`crate::normalmap::cpu`])
@@ -393,7 +393,7 @@ fn stats_cell(s: &Option<AngleStats>) -> String {
 /// Writes `normalmap.md` and `normalmap.json` into `dir`; returns their paths.
 pub fn write_report(study: &NormalMapStudy, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
     let mut md = format!(
-        "# GPU normal-map generation (issue 18)\n\nDevice: {}. Times are medians; \"GPU total\" is the whole bake \
+        "# GPU normal-map generation\n\nDevice: {}. Times are medians; \"GPU total\" is the whole bake \
          (culling, uploads, shader compiles, pipelines, the one command buffer, readback), \
          \"execute\" the command buffer alone, \"project\" its projection pass by timestamps.\n",
         study.device

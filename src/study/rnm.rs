@@ -1,4 +1,4 @@
-//! Radiosity normal mapping against real micro-geometry (issue 17, `shvis study rnm`).
+//! Radiosity normal mapping against real micro-geometry (`shvis study rnm`).
 //!
 //! For one scene with a height-mapped material (default `patio`) and each environment:
 //!
@@ -220,7 +220,7 @@ pub fn write_report(
 ) -> Result<Vec<PathBuf>, ReportError> {
     let mut written = Vec::new();
     let mut md = format!(
-        "# Radiosity normal mapping against real micro-geometry (issue 17)\n\n\
+        "# Radiosity normal mapping against real micro-geometry\n\n\
          Scene `{}` ({}² lightmap, {} rays, {} bounces), {}×{}, references {} spp \
          (footprint), device {device}. Relative RMSE of each technique against the \
          displaced-geometry reference (the truth) and against the flat normal-mapped \

@@ -1,4 +1,4 @@
-//! Cluster-boundary seams in screen space (issue 16, `shvis study seams`): how much a
+//! Cluster-boundary seams in screen space (`shvis study seams`): how much a
 //! clustered technique (`vqK`, `cpcaK_M`) jumps where neighbouring pixels read texels of
 //! different clusters, with the seam mitigation ([`SeamMode::Blended`]) and without
 //! ([`SeamMode::Naive`]).

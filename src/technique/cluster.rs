@@ -1,5 +1,5 @@
 //! `vqK` and `cpcaK_M`: VQ and iterative CPCA of the order-6 visibility (`bake::cluster`,
-//! after the PRT course; issue 16) on both paths.
+//! after the PRT course) on both paths.
 //!
 //! Per texel: M 8-bit UNORM weights in the cluster's quantized basis, then the cluster index
 //! as UNORM8 (K ≤ 256), packed 4 values per RGBA8 texel (`super::texels`; VQ, M = 0, is

@@ -1,4 +1,4 @@
-//! The lighting-dependent half of a technique (Iwanicki–Sloan §3.3; issue 15): what has to
+//! The lighting-dependent half of a technique (Iwanicki–Sloan §3.3): what has to
 //! be recomputed and uploaded when the environment changes, kept apart from the per-texel
 //! bake data, which never changes.
 //!

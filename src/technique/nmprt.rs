@@ -1,5 +1,5 @@
 //! `nmprt`, `nmprtsvdM`, `nmprtsvdMp`, `nmprthl2`, `nmprtratio`: normal mapping for PRT (Sloan, PRT
-//! course, "Normal Mapping for PRT"; issue 23). Per lightmap texel a transfer matrix M
+//! course, "Normal Mapping for PRT"). Per lightmap texel a transfer matrix M
 //! (`bake::transfer`: order-3 transferred incident radiance from order-O lighting, shadows
 //! and inter-reflection baked in) turns the distant lighting l into l' = M·l; the pixel
 //! evaluates the clamped-cosine convolution of l' at the normal-mapped normal:

@@ -1,5 +1,5 @@
 //! Radiosity normal mapping and self-shadowed bump maps (Green, "Efficient self-shadowed
-//! radiosity normal mapping", Valve; issue 17): `rnm`, `rnmao`, `ssbump`.
+//! radiosity normal mapping", Valve): `rnm`, `rnmao`, `ssbump`.
 //!
 //! Per lightmap texel three RGB irradiances E_i around the HL2 basis directions B_i in the
 //! texel's tangent frame ([`crate::bake::shlmap`], eq. (3) there: the clamped-cosine lobe

@@ -46,18 +46,18 @@ pub enum Technique {
     /// vertices of the mesh (subdivided so no edge exceeds E cm; none: as authored), in a
     /// vertex stream, interpolated and shaded as `pcaMw`.
     PcaVertex { m: u32, max_edge_cm: Option<u32> },
-    /// Radiosity normal mapping (Green, Valve; issue 17): three lightmaps of irradiance
+    /// Radiosity normal mapping (Green, Valve): three lightmaps of irradiance
     /// around the HL2 tangent-space basis, blended per pixel — `rnm` (Listing 1, weights from
     /// the normal map), `rnmao` (× scalar AO of the height field), `ssbump` (Listing 2,
     /// the self-shadowed bump map's texels are the weights).
     Rnm { variant: RnmVariant },
     /// `uncOndf`, `preconvndf`: the base technique with its normal map filtered as a
-    /// distribution (Olano & North; issue 19; `crate::ndf::diffuse`): the clamped-cosine
+    /// distribution (Olano & North; `crate::ndf::diffuse`): the clamped-cosine
     /// bands attenuated at lookup time by the zonal coefficients of the pixel's filtered
     /// normals — isotropic from the mean length for `unc`, exact from all nine moments for
     /// `preconv`.
     Ndf { base: NdfBase },
-    /// Normal mapping for PRT (Sloan, PRT course; issue 23; `super::nmprt`): per texel a
+    /// Normal mapping for PRT (Sloan, PRT course; `super::nmprt`): per texel a
     /// transfer matrix M (`bake::transfer`: shadows and inter-reflection baked, lighting
     /// free) gives transferred incident radiance l' = M·l, formed on the CPU when the
     /// lighting changes and evaluated per pixel at the normal-mapped normal in one of four

@@ -1,4 +1,4 @@
-//! `pcaMv` / `pcaMvE`: per-vertex PCA weights (issue 16; `bake::vertex_pca`). The weights
+//! `pcaMv` / `pcaMvE`: per-vertex PCA weights (`bake::vertex_pca`). The weights
 //! ride in the vertex buffer after the scene's attributes — ⌈M/4⌉ RGBA8 UNORM groups at
 //! locations 6… (glsl/scene/mesh.vert) — and the rasterizer interpolates them; the fragment
 //! shader is `pcaMw`'s (glsl/technique/pcaw.frag with SHVIS_VERTEX_WEIGHTS) over the same

@@ -28,17 +28,18 @@
 //! the rays go in blocks of 4 lanes, each block costing one 4-ray slab test per occupied
 //! child ([`lanes`]). On big (507k triangles) a node is reached by 5.7 rays in 1.9 blocks of
 //! 8 on average, so a test per ray beats a test per child and block. The entered slots are
-//! then walked as bit sets, not a branch per slot. With both, big's queries went from 8.8 to
-//! 13.1–14.5 Mrays/s on 2 threads (README, the tracer against Embree). In a leaf, the ray-independent part of Möller–Trumbore
+//! then walked as bit sets, not a branch per slot. With both, big's queries run at
+//! 13.1–14.5 Mrays/s on 2 threads against 8.8 without (README, the tracer against Embree).
+//! In a leaf, the ray-independent part of Möller–Trumbore
 //! (edges and normal, precomputed per triangle at build; 1/(n·d) per triangle and
 //! direction) is shared and the rest runs W rays per vector. A ray found occluded leaves
 //! every mask. The children a packet enters are prefetched before any is read: on big
 //! scenes the walk waits on cache misses (node and triangle loads) more than it computes.
 //!
-//! Tried and not kept: a packet-level test of each child box and triangle against the
-//! box of the packet's origins (all rays enter / none does, exact by monotonicity of the
-//! f32 slab operations): on the house 58 % of child tests and 96 % of triangle tests were
-//! undecided at 64 texels per packet, and the walk got slower.
+//! No packet-level test of each child box and triangle against the box of the packet's
+//! origins (all rays enter / none does, exact by monotonicity of the f32 slab operations):
+//! on the house 58 % of child tests and 96 % of triangle tests are undecided at 64 texels
+//! per packet, and the walk is slower with it.
 //!
 //! Bit-identity: every per-ray operation is the very IEEE operation, in the very order
 //! and with the same min/max operand order (NaN handling), that obvhs's single-ray
