@@ -16,24 +16,25 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::attribution::{LadderPixels, cpu_rungs};
+use crate::gpu::TimingStats;
 use crate::gpu::{Context, GpuError};
-use crate::ndf::render::{NormalFilter, SpecularLight, SpecularTerm};
 use crate::prepare::Prepared;
 use crate::probe::states::Segment;
 use crate::probe::{Monitor, Segmented};
 use crate::reference::{ReferenceImage, ReferenceSettings, render_reference};
+use crate::render::specular::{NormalFilter, SpecularLight, SpecularTerm};
 use crate::render::{Frame, FrameSettings, SceneGpu};
-use crate::report::ReportError;
 use crate::report::figures::{
     DIFFERENCE_SCALE, FIGURES, difference, write_figures, write_ladder_sheet,
 };
 use crate::report::image::{write_exr, write_exr_half, write_png};
-use crate::report::metrics::{TimingStats, image_error};
+use crate::report::metrics::image_error;
 use crate::report::plot::{CostAxis, write_error_plot, write_pca_error_plot};
 use crate::report::table::{
     AttributionKind, AttributionStep, BenchPhases, BenchRow, BenchTable, RowReference,
     fill_ratios_to_preconv,
 };
+use crate::report::{LADDER_DIR, ReportError};
 use crate::technique::{self, HwPath, ReferenceModel, Technique, TechniqueError};
 
 /// What a bench run does.
@@ -59,7 +60,7 @@ pub struct BenchSettings {
     pub seed: u64,
     /// The specular material term (`--specular`): every technique × path is measured once
     /// per filtering with the term added, against references with the term's own footprint
-    /// reference (`ndf::render::render_reference`, the same for every filtering) summed in.
+    /// reference (`reference::specular::render_reference`, the same for every filtering) summed in.
     pub specular: Option<SpecularSettings>,
     /// Output directory (must exist).
     pub out: PathBuf,
@@ -179,7 +180,7 @@ pub fn run(
             100.0 * probe.worst_relative_error(),
             probe.states.describe()
         );
-        probe.write(&settings.out)?;
+        crate::report::write_probe(&probe, &settings.out)?;
         Some((probe, monitor))
     } else {
         None
@@ -575,7 +576,7 @@ fn render_references(
 }
 
 /// The footprint (or, without `settings.footprint`, point) reference of the specular term
-/// alone: the same BRDF from the full-resolution normals (`ndf::render::render_reference`).
+/// alone: the same BRDF from the full-resolution normals (`reference::specular::render_reference`).
 fn specular_reference(
     ctx: &Arc<Context>,
     prepared: &Prepared,
@@ -598,7 +599,7 @@ fn specular_reference(
         term.sigma,
     );
     let started = Instant::now();
-    let frame = crate::ndf::render::render_reference(
+    let frame = crate::reference::specular::render_reference(
         ctx,
         &mut gpu,
         prepared.scene.camera.position,
@@ -663,9 +664,6 @@ fn ladder_pixels(
     })?;
     Ok(pixels)
 }
-
-/// Folder of the ladder's CPU rung images, inside the bench's output.
-pub const LADDER_DIR: &str = "ladder";
 
 /// Rounds a row's timed frames are split into, each round over every row (the main bench;
 /// with `--specular` one): a slow spell of a shared device then lands on a share of every
@@ -874,6 +872,7 @@ fn measure_row(
 ) -> Result<(BenchRow, Frame, Vec<Segment>), BenchError> {
     let (scene, prepared) = (rows_of.scene, rows_of.prepared);
     let tech = rows_of.build(technique, path)?;
+    let costs = technique::cost::counts(rows_of.ctx, scene, &tech)?;
     lap.split(&mut phases.build);
     let segments = timed_segments(monitor, 0, settings.warmup, frames, |w, n| {
         tech.time(scene, w, n)
@@ -933,8 +932,8 @@ fn measure_row(
         technique,
         path,
         specular,
-        cost: tech.stats.cost,
-        untaken_cost: tech.stats.untaken_cost,
+        cost: costs.done,
+        untaken_cost: costs.untaken,
         coverage: covered as f64 / frame.rgba.len().max(1) as f64,
         own_mesh_load: if settings.probe {
             technique::vertex::own_mesh_load(rows_of.ctx, scene, technique, &prepared.inputs())?

@@ -508,7 +508,7 @@ struct SpecularArgs {
     /// normalisation: the paper's choice) or `ndfn` (the per-texel normalisation map).
     /// `bench` takes a comma-separated list and measures every row once per filtering.
     #[arg(long, value_delimiter = ',')]
-    specular: Vec<shvis::ndf::render::NormalFilter>,
+    specular: Vec<shvis::render::specular::NormalFilter>,
     /// Base spread σ of a full-resolution texel's normals (the surface's roughness).
     #[arg(long, default_value_t = 0.1, value_parser = finite_f32)]
     specular_sigma: f32,
@@ -523,7 +523,10 @@ struct SpecularArgs {
 
 impl SpecularArgs {
     /// The one filtering `render` takes, and its term for `env`.
-    fn term(&self, env: &shvis::env::EnvMap) -> Result<Option<shvis::ndf::render::SpecularTerm>> {
+    fn term(
+        &self,
+        env: &shvis::env::EnvMap,
+    ) -> Result<Option<shvis::render::specular::SpecularTerm>> {
         let [filter] = self.specular.as_slice() else {
             if self.specular.len() > 1 {
                 bail!("--specular: render takes one filtering (mip, ndf or ndfn)");
@@ -533,7 +536,7 @@ impl SpecularArgs {
         let Some(s) = self.settings(env)? else {
             return Ok(None);
         };
-        Ok(Some(shvis::ndf::render::SpecularTerm {
+        Ok(Some(shvis::render::specular::SpecularTerm {
             filter: *filter,
             light: s.light,
             sigma: s.sigma,
@@ -591,7 +594,7 @@ impl SpecularArgs {
         filters.dedup();
         Ok(Some(shvis::bench::SpecularSettings {
             filters,
-            light: shvis::ndf::render::SpecularLight {
+            light: shvis::render::specular::SpecularLight {
                 direction,
                 radiance,
             },
@@ -2107,7 +2110,7 @@ fn run_probe(a: ProbeArgs) -> Result<()> {
         },
     )?;
     println!("{}", probe.to_markdown());
-    for p in probe.write(&a.out)? {
+    for p in shvis::report::write_probe(&probe, &a.out)? {
         println!("wrote {}", p.display());
     }
     check_validation(&ctx, a.gpu.validate)?;

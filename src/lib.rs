@@ -2,14 +2,22 @@
 //! Visibility* (Iwanicki & Sloan) and the techniques around it.
 //!
 //! Data flows one way (DESIGN §5): scene + env → bake → lighting prep → GPU upload per
-//! technique and path → frames with timestamps → readback → metrics → report.
-//! `sh`, `env`, `scene` and `bake` know nothing of Vulkan; `gpu` knows nothing of SH;
-//! `technique` is where they meet. Unsafe code lives in `gpu` only.
+//! technique and path → frames with timestamps → readback → metrics → report. The modules
+//! stand in [`LAYERS`], lowest first: a module uses only modules of lower layers, or of its
+//! own layer without closing a cycle (tests/layering.rs reads every `crate::` path of
+//! `src/` against it). `sh`, `sphere`, `env`, `scene` and `bake` know nothing of Vulkan;
+//! `gpu` knows nothing of SH; `technique` is where they meet; the cost model (`cost`) is a
+//! client of techniques, asked by the bench and the probe, never part of building one.
+//!
+//! Unsafe code is denied everywhere but in [`UNSAFE_MODULES`]: `gpu` (Vulkan), the bake's
+//! SIMD ray traversal (`bake::trace`) and `files` (a test hook that kills the process
+//! mid-write); each block says why it is sound (`// SAFETY:`).
 #![deny(unsafe_code)]
 
 pub mod attribution;
 pub mod bake;
 pub mod bench;
+pub mod cost;
 pub mod env;
 pub mod files;
 #[allow(unsafe_code)]
@@ -30,3 +38,30 @@ pub mod study;
 pub mod technique;
 pub mod tools;
 pub mod view;
+
+/// The crate's layers, lowest first. The command line (`src/cli`, in the binary) stands
+/// above them all.
+pub const LAYERS: &[&[&str]] = &[
+    // Foundations: Vulkan, SH and sphere maths, the resource budget.
+    &["gpu", "sh", "sphere", "limits"],
+    // Files: atomic writes, hashes, output folders.
+    &["files"],
+    &["env"],
+    &["scene"],
+    // CPU bakes, the normal distribution's moments, the cost model's vocabulary.
+    &["bake", "ndf", "cost"],
+    // The scene on the GPU and its frames.
+    &["render"],
+    &["technique"],
+    &["reference"],
+    &["probe"],
+    &["report"],
+    &["prepare"],
+    &["attribution", "normalmap"],
+    // The commands' work.
+    &["bench", "study", "relight", "view", "tools"],
+];
+
+/// The modules (paths from the crate root) where `unsafe` is allowed; nowhere else does
+/// `#[allow(unsafe_code)]` appear.
+pub const UNSAFE_MODULES: &[&str] = &["gpu", "bake::trace", "files"];

@@ -34,13 +34,14 @@ use serde::Serialize;
 
 use crate::env::EnvMap;
 use crate::env::schedule::{LightingSchedule, rotation_about_y};
+use crate::gpu::TimingStats;
 use crate::gpu::{Context, GpuError};
 use crate::prepare::Prepared;
 use crate::reference::{ReferenceSettings, render_reference};
 use crate::render::{Frame, FrameSettings, SceneGpu};
 use crate::report::ReportError;
 use crate::report::image::{to_srgb8, write_png};
-use crate::report::metrics::{TimingStats, image_error};
+use crate::report::metrics::image_error;
 use crate::sh::Order;
 use crate::sh::zonal::irradiance_from_radiance;
 use crate::technique::{self, HwPath, Inputs, LightingData, Technique, TechniqueError};

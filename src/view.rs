@@ -33,12 +33,12 @@ use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use winit::window::{Window, WindowId};
 
 use crate::env::schedule::LightingSchedule;
+use crate::gpu::TimingStats;
 use crate::gpu::swapchain::{Presenter, surface_extensions};
 use crate::gpu::{Context, ContextDesc};
 use crate::prepare::Prepared;
 use crate::render::{FrameSettings, SceneGpu};
 use crate::report::image::to_srgb8;
-use crate::report::metrics::TimingStats;
 use crate::scene::Camera;
 use crate::sh::Order;
 use crate::sh::zonal::irradiance_from_radiance;

@@ -8,7 +8,8 @@ mod common;
 
 use std::path::Path;
 
-use shvis::bench::{BenchSettings, LADDER_DIR, run};
+use shvis::bench::{BenchSettings, run};
+use shvis::report::LADDER_DIR;
 use shvis::report::table::{AttributionKind, BenchRow};
 use shvis::technique::{HwPath, Technique};
 

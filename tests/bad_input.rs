@@ -1953,7 +1953,7 @@ fn cache_cases(suite: &mut Suite) {
     const HEADER: usize = 40;
     // Payload: res u32, order u32, rays u64, seconds f64, then coefficients (f32) …
     let resealed = |mut bytes: Vec<u8>| {
-        let h = shvis::bake::cache::hash64(&bytes[HEADER..]);
+        let h = shvis::files::hash64(&bytes[HEADER..]);
         bytes[32..40].copy_from_slice(&h.to_le_bytes());
         bytes
     };

@@ -13,10 +13,11 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use common::Rng;
 
 use shvis::bake::BakeStats;
-use shvis::bake::cache::{HEADER_BYTES, decode_visibility, encode_visibility, hash64};
+use shvis::bake::cache::{HEADER_BYTES, decode_visibility, encode_visibility};
 use shvis::bake::visibility::VisibilityMap;
 use shvis::env::EnvMap;
 use shvis::env::equirect::{MAX_ENV_RADIANCE, load_from_slice};
+use shvis::files::hash64;
 use shvis::sh::Order;
 
 /// One mutation of `seed`: bit flips, a truncation, a byte run overwritten with an edge

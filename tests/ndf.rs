@@ -4,7 +4,7 @@
 mod common;
 
 use glam::Vec3;
-use shvis::ndf::render::{NormalFilter, SpecularLight, render_specular, upload_maps};
+use shvis::render::specular::{NormalFilter, SpecularLight, render_specular, upload_maps};
 use shvis::render::{FrameSettings, SceneGpu};
 use shvis::scene::{Texture8, bumpy};
 use shvis::study::ndf::{NdfStudySettings, SpecularScene, run};
@@ -145,7 +145,7 @@ fn ndf_filtering_halves_the_minified_specular_error_and_keeps_its_energy() {
 /// isotropic vMF fit).
 #[test]
 fn diffuse_ndf_variants_change_nothing_magnified_and_follow_the_footprint_minified() {
-    use shvis::ndf::render::normal_map_lod;
+    use shvis::render::specular::normal_map_lod;
     use shvis::study::ndf_diffuse::own_footprint;
     use shvis::technique::{self, NdfBase, Technique};
 
@@ -246,7 +246,7 @@ fn diffuse_ndf_variants_change_nothing_magnified_and_follow_the_footprint_minifi
 /// one (pca12v, its own vertex stage).
 #[test]
 fn the_specular_term_adds_the_standalone_pass_to_every_technique() {
-    use shvis::ndf::render::SpecularTerm;
+    use shvis::render::specular::SpecularTerm;
     use shvis::technique::{self, Technique, TechniqueError};
 
     let ctx = common::validated_context();

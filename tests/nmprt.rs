@@ -236,3 +236,21 @@ fn the_pixel_shader_form_renders_the_per_texel_form() {
     }
     common::assert_validation_clean(&ctx, "nmprtsvd4p");
 }
+
+/// The normal basis `nmprtsvdM` binds captures, vector by vector, the energy the
+/// `nmprt-svd` study finds for the course's cosine-weighted A over the sphere.
+#[test]
+fn the_normal_basis_captures_the_energy_the_study_finds() {
+    use shvis::study::nmprt_svd::{NormalWeighting, energy_captured, normal_matrix_over};
+    let basis = shvis::technique::nmprt::NormalBasis::new(16);
+    let a = normal_matrix_over(16, 96, NormalWeighting::Cosine, false);
+    let study = energy_captured(&a);
+    for m in 1..=9 {
+        assert!(
+            (basis.energy(m) - study[m - 1]).abs() < 2e-3,
+            "M = {m}: {} against the study's {}",
+            basis.energy(m),
+            study[m - 1]
+        );
+    }
+}

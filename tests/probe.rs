@@ -5,7 +5,8 @@
 
 mod common;
 
-use shvis::probe::{Kind, ProbeSettings, run_with_monitor};
+use shvis::cost::Kind;
+use shvis::probe::{ProbeSettings, run_with_monitor};
 use shvis::render::FrameSettings;
 use shvis::technique::{self, HwPath, Technique};
 
@@ -26,7 +27,10 @@ fn the_probe_runs_every_microbenchmark_and_fits_a_model_to_them() {
     eprintln!("{}", probe.to_markdown());
     // The empty frame, 3 empty-shader points, 4 finer triangle grids, the counts of each
     // kind, every varying over some of the grids and the untaken-branch points.
-    let counts: usize = Kind::ALL.iter().map(|k| k.probe_counts().len()).sum();
+    let counts: usize = Kind::ALL
+        .iter()
+        .map(|&k| shvis::probe::probe_counts(k).len())
+        .sum();
     let branches = shvis::probe::UNTAKEN_BRANCH_READS.len();
     let varying_grids = shvis::probe::VARYING_GRIDS.len();
     assert_eq!(
@@ -113,7 +117,8 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
     for &t in Technique::ALL {
         for &path in HwPath::ALL.iter().filter(|&&p| t.runs_on(p)) {
             let tech = technique::build(&ctx, &scene, t, path, &inputs).unwrap();
-            let c = tech.stats.cost;
+            let costs = technique::cost::counts(&ctx, &scene, &tech).unwrap();
+            let c = costs.done;
             let lookups: f64 = [
                 Kind::Bilinear2d,
                 Kind::Trilinear2d,
@@ -180,7 +185,7 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
                 let reads = c.get(Kind::IndexedUniformRead);
                 // Where no lane of a batch straddles a boundary, the boundary path's
                 // straight-line code — four reads of a mean block — is untaken work.
-                let untaken = tech.stats.untaken_cost.get(Kind::IndexedUniformRead);
+                let untaken = costs.untaken.get(Kind::IndexedUniformRead);
                 let fetches = c.get(Kind::TexelFetch);
                 // The decode's loop over the vectors is kept where drawn: one entered per
                 // decode, none for VQ (no vectors).
@@ -215,7 +220,8 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
                 // Built for changing lighting (two copies of the block), counted the same.
                 let (dynamic, _) =
                     technique::build_dynamic(&ctx, &scene, t, path, &inputs).unwrap();
-                assert_eq!(dynamic.stats.cost, c, "{t}.{path}: double-buffered counts");
+                let dynamic = technique::cost::counts(&ctx, &scene, &dynamic).unwrap();
+                assert_eq!(dynamic.done, c, "{t}.{path}: double-buffered counts");
             }
         }
     }
@@ -236,14 +242,14 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
     );
     // The probe's shaders over the scene: each counted as written (the albedo the one sRGB
     // lookup, the normal map a UNORM one), timed, and priced by the model it is given.
-    let model = shvis::probe::CostModel {
+    let model = shvis::cost::CostModel {
         fixed_ms: 0.5,
         pixel_ms: 1.0,
         depth_test_ms: 0.2,
         per_triangle_ms: 1e-4,
         per_edge_pixel_ms: 1e-6,
         per_triangle_varying_ms: 1e-6,
-        per_unit_ms: [2.0; shvis::probe::KINDS],
+        per_unit_ms: [2.0; shvis::cost::KINDS],
         untaken_share: 1.0,
     };
     let load = scene.shading_load(&ctx, None).unwrap();

@@ -9,229 +9,32 @@
 // where all four share a cluster that is one decode of the blended weights; 0
 // filters the weights bilinearly across the boundary and decodes them in the nearest
 // texel's cluster (the known artifact).
-//
-// SHVIS_COUNT_PATH, only for the cost model (`technique::finish::CountPlan`, never drawn as
-// a technique): 1 keeps the decode inside a cluster, 2 the decode across a boundary, 4
-// neither (the work before the branch, kept alive by a sum of it), 5 the decode across a
-// boundary with its loop cut (what a batch none of whose lanes takes the boundary path
-// runs of it, on a device that runs untaken branches masked and skips loops no lane
-// enters), all with every loop unrolled so that their SPIR-V counts are what one pixel
-// runs (with SHVIS_COUNT_LOOPS the drawn shader's loops kept, so that the SPIR-V counts
-// the loops one pixel enters); 3 measures, drawn once additively: red 1 where the
-// fragment's subgroup takes the boundary path (SHVIS_SUBGROUP_VOTE: subgroupAny; else the
-// fragment's own), green 1 per fragment.
 #version 450
 #extension GL_GOOGLE_include_directive : require
-#ifndef SHVIS_COUNT_PATH
-#define SHVIS_COUNT_PATH 0
-#endif
-#ifndef SHVIS_SUBGROUP_VOTE
-#define SHVIS_SUBGROUP_VOTE 0
-#endif
-#if SHVIS_COUNT_PATH == 3 && SHVIS_SUBGROUP_VOTE
-#extension GL_KHR_shader_subgroup_vote : require
-#endif
 #extension GL_EXT_control_flow_attributes : require
-#ifndef SHVIS_COUNT_LOOPS
-#define SHVIS_COUNT_LOOPS 0
-#endif
-#if SHVIS_COUNT_PATH && SHVIS_COUNT_LOOPS
-#define UNROLL [[unroll]]
-#define KEEP_LOOP [[dont_unroll]]
-#elif SHVIS_COUNT_PATH
-#define UNROLL [[unroll]]
-#define KEEP_LOOP [[unroll]]
-#else
 #define UNROLL
 #define KEEP_LOOP [[dont_unroll]]
-#endif
 #define SHVIS_FRAGMENT 1
 #include "common.glsl"
 #include "sh.glsl"
-
-#define K SHVIS_CLUSTERS
-#define M SHVIS_CLUSTER_VECTORS
-#define GROUPS ((M + 4) / 4)
-#define BLOCK ((M + 1) * 9)
-
-layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform ClusterParams {
-    // Cluster c, vector k (k = M: the mean), coefficient i at [BLOCK·c + 9k + i], RGB in .xyz.
-    layout(offset = 0) vec4 coeffs[K * BLOCK];
-} params;
-
-#define SHVIS_PER_TEXEL_GROUPS GROUPS
-#include "per_texel.glsl"
-#include "diffuse_out.glsl"
-
-#if GROUPS > 4
-#error "at most 4 groups (15 vectors and the index)"
-#endif
-
-// Group g of texel ij, unfiltered (on dx9 each branch indexes the sampler array by a
-// constant).
-vec4 fetch_group(int g, ivec2 ij) {
-#if SHVIS_PATH_DX9
-    if (g == 0) return FETCH_PER_TEXEL(0, ij);
-#if GROUPS > 1
-    if (g == 1) return FETCH_PER_TEXEL(1, ij);
-#endif
-#if GROUPS > 2
-    if (g == 2) return FETCH_PER_TEXEL(2, ij);
-#endif
-#if GROUPS > 3
-    if (g == 3) return FETCH_PER_TEXEL(3, ij);
-#endif
-    return vec4(0.0);
-#else
-    return FETCH_PER_TEXEL(g, ij);
-#endif
-}
-
-// Group g at the fragment, bilinearly filtered.
-vec4 sample_group(int g) {
-#if SHVIS_PATH_DX9
-    if (g == 0) return SAMPLE_PER_TEXEL(0);
-#if GROUPS > 1
-    if (g == 1) return SAMPLE_PER_TEXEL(1);
-#endif
-#if GROUPS > 2
-    if (g == 2) return SAMPLE_PER_TEXEL(2);
-#endif
-#if GROUPS > 3
-    if (g == 3) return SAMPLE_PER_TEXEL(3);
-#endif
-    return vec4(0.0);
-#else
-    return SAMPLE_PER_TEXEL(g);
-#endif
-}
-
-int cluster_index(vec4 index_group) {
-    return min(int(index_group[M % 4] * 255.0 + 0.5), K - 1);
-}
-
-// The block's vector at `at` (9 coefficients) dotted with the basis values y(n), RGB.
-vec3 block_dot(int at, float y[9]) {
-    vec3 sum = vec3(0.0);
-    UNROLL for (int i = 0; i < 9; ++i) {
-        sum += params.coeffs[at + i].rgb * y[i];
-    }
-    return sum;
-}
-
-// tap · (mean_c + Σ_k w_k B_c,k) · y(n): the cluster's share of the irradiance at n. Each
-// vector is dotted with y(n) as it is read, so that only y and a running RGB sum stay live
-// (accumulating the 9 SH coefficients first and evaluating them once holds 36 floats per
-// pixel, and measured slower on lavapipe).
-vec3 cluster_irradiance(float tap, vec4 v[GROUPS], int c, float y[9]) {
-    int base = c * BLOCK;
-    vec3 e = tap * block_dot(base + 9 * M, y);
-#if M > 0 && SHVIS_COUNT_PATH != 5
-    // Kept a loop when drawn: Mesa's NIR unrolls short loops in full, and unrolled the
-    // decode measured 2× slower on lavapipe (cpca8_7 183 against 90 ms).
-    // The weights shift down one place per vector, so that weight k is always lane 0 of
-    // the first group: `v[k / 4][k % 4]` in a kept loop indexes a local array, which
-    // lavapipe spills to memory and gathers from at every vector (cpca8_11 144 against
-    // 103 ms with the weight read taken out), while a shift is register moves. Groups as
-    // plain variables (no array), so that the count builds unroll the loop.
-    vec4 w0 = v[0];
-#if GROUPS > 1
-    vec4 w1 = v[1];
-#endif
-#if GROUPS > 2
-    vec4 w2 = v[2];
-#endif
-#if GROUPS > 3
-    vec4 w3 = v[3];
-#endif
-    KEEP_LOOP for (int k = 0; k < M; ++k) {
-        float weight = w0.x;
-#if GROUPS == 1
-        w0 = w0.yzwx;
-#elif GROUPS == 2
-        w0 = vec4(w0.yzw, w1.x);
-        w1 = w1.yzwx;
-#elif GROUPS == 3
-        w0 = vec4(w0.yzw, w1.x);
-        w1 = vec4(w1.yzw, w2.x);
-        w2 = w2.yzwx;
-#else
-        w0 = vec4(w0.yzw, w1.x);
-        w1 = vec4(w1.yzw, w2.x);
-        w2 = vec4(w2.yzw, w3.x);
-        w3 = w3.yzwx;
-#endif
-        e += (tap * weight) * block_dot(base + 9 * k, y);
-    }
-#endif
-    return e;
-}
+#include "cluster_decode.glsl"
 
 void main() {
     float y[9];
     sh_eval_order3(shading_normal(), y);
-    vec3 e;
-    ivec2 res = PER_TEXEL_SIZE;
 #if SHVIS_SEAM_BLEND
-    // The sampler's own bilinear footprint: texel centres at (i + 0.5) / res, clamped.
-    vec2 st = in_uv_lightmap * vec2(res) - 0.5;
-    vec2 base = floor(st);
-    vec2 f = st - base;
     vec4 v[4][GROUPS];
     float w[4];
     int c[4];
-    UNROLL for (int tap = 0; tap < 4; ++tap) {
-        ivec2 offset = ivec2(tap & 1, tap >> 1);
-        ivec2 ij = clamp(ivec2(base) + offset, ivec2(0), res - 1);
-        vec2 w2 = mix(1.0 - f, f, vec2(offset));
-        UNROLL for (int g = 0; g < GROUPS; ++g) {
-            v[tap][g] = fetch_group(g, ij);
-        }
-        w[tap] = w2.x * w2.y;
-        c[tap] = cluster_index(v[tap][M / 4]);
-    }
-#if SHVIS_COUNT_PATH == 1 || SHVIS_COUNT_PATH == 2 || SHVIS_COUNT_PATH == 5
-    bool inside = SHVIS_COUNT_PATH == 1;
-#else
-    bool inside = c[0] == c[1] && c[0] == c[2] && c[0] == c[3];
-#endif
-#if SHVIS_COUNT_PATH == 3
-    bool across = !inside;
-#if SHVIS_SUBGROUP_VOTE
-    across = subgroupAny(across);
-#endif
-    out_radiance = vec4(across ? 1.0 : 0.0, 1.0, 0.0, 1.0);
-    return;
-#elif SHVIS_COUNT_PATH == 4
-    float before = float(c[0] + c[1] + c[2] + c[3]) + w[0] + w[1] + w[2] + w[3];
-    UNROLL for (int i = 0; i < 9; ++i) {
-        before += y[i];
-    }
-    e = vec3(before);
-#else
-    if (inside) {
-        // Inside a cluster the decode is linear: blend the weights, decode once (the
-        // same sum, a quarter of the cluster block's reads).
-        vec4 blended[GROUPS];
-        UNROLL for (int g = 0; g < GROUPS; ++g) {
-            blended[g] = w[0] * v[0][g] + w[1] * v[1][g] + w[2] * v[2][g] + w[3] * v[3][g];
-        }
-        e = cluster_irradiance(1.0, blended, c[0], y);
+    cluster_taps(v, w, c);
+    vec3 e;
+    if (c[0] == c[1] && c[0] == c[2] && c[0] == c[3]) {
+        e = cluster_decode_inside(v, w, c, y);
     } else {
-        e = vec3(0.0);
-        UNROLL for (int tap = 0; tap < 4; ++tap) {
-            e += cluster_irradiance(w[tap], v[tap], c[tap], y);
-        }
+        e = cluster_decode_across(v, w, c, y);
     }
-#endif
 #else
-    ivec2 nearest = clamp(ivec2(floor(in_uv_lightmap * vec2(res))), ivec2(0), res - 1);
-    vec4 v[GROUPS];
-    UNROLL for (int g = 0; g < GROUPS; ++g) {
-        v[g] = sample_group(g);
-    }
-    e = cluster_irradiance(1.0, v, cluster_index(fetch_group(M / 4, nearest)), y);
+    vec3 e = cluster_decode_naive(y);
 #endif
-    vec3 irradiance = max(e, vec3(0.0));
-    write_diffuse(irradiance);
+    write_diffuse(max(e, vec3(0.0)));
 }

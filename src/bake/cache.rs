@@ -15,7 +15,7 @@
 //!               res²·order² coefficients f32, res² covered u8 (0/1), res² AO f32
 //! ```
 //!
-//! The key is [`hash64`] of the format version, the kind, the vertex and index bytes of
+//! The key is [`hash64`](crate::files::hash64) of the format version, the kind, the vertex and index bytes of
 //! the mesh (every attribute, as laid out in [`Vertex`]) and the settings (order, rays,
 //! seed, res); the file is `visibility-{key:016x}.bin` in the cache directory. A file is
 //! used only when magic, version, kind, key, length and checksum all match and the
@@ -29,10 +29,6 @@
 //!
 //! Bump [`CACHE_FORMAT_VERSION`] whenever the layout *or the bake's results* change.
 //!
-//! [`hash64`] is FNV-1a over little-endian 64-bit words (odd 64-bit FNV prime), bytes of
-//! a short tail folded one by one, and a SplitMix64 finalizer: every step is a bijection
-//! of the state for a given input, so any change confined to one word (a flipped byte)
-//! always changes the hash. It is a checksum and a cache key, not a cryptographic hash.
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -41,9 +37,8 @@ use rayon::prelude::*;
 
 use super::BakeError;
 use super::cluster::{self, ClusteredModel, Clustering};
-use super::directions::splitmix64;
 use super::visibility::{VisibilityMap, VisibilitySettings};
-use crate::files;
+use crate::files::{self, Hasher64, hash64};
 use crate::scene::{Mesh, Vertex};
 use crate::sh::Order;
 
@@ -62,59 +57,6 @@ pub const CACHE_DIR_ENV: &str = "SHVIS_CACHE_DIR";
 const KIND_VISIBILITY: u32 = 1;
 /// Kind tag of VQ / CPCA fit caches.
 const KIND_CLUSTERS: u32 = 2;
-
-/// 64-bit FNV prime.
-const FNV_PRIME: u64 = 0x0000_0100_0000_01b3;
-/// 64-bit FNV offset basis.
-const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
-
-/// Incremental [`hash64`].
-#[derive(Clone, Copy, Debug)]
-pub struct Hasher64 {
-    state: u64,
-    len: u64,
-}
-
-impl Default for Hasher64 {
-    fn default() -> Self {
-        Hasher64 {
-            state: FNV_OFFSET,
-            len: 0,
-        }
-    }
-}
-
-impl Hasher64 {
-    /// Folds `bytes` in (whole 64-bit words, then the tail byte by byte).
-    pub fn write(&mut self, bytes: &[u8]) {
-        let mut words = bytes.chunks_exact(8);
-        for w in &mut words {
-            let word = u64::from_le_bytes([w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]]);
-            self.state = (self.state ^ word).wrapping_mul(FNV_PRIME);
-        }
-        for &b in words.remainder() {
-            self.state = (self.state ^ u64::from(b)).wrapping_mul(FNV_PRIME);
-        }
-        self.len = self.len.wrapping_add(bytes.len() as u64);
-    }
-
-    /// Folds a u64 in (little-endian).
-    pub fn write_u64(&mut self, v: u64) {
-        self.write(&v.to_le_bytes());
-    }
-
-    /// The hash of everything written.
-    pub fn finish(&self) -> u64 {
-        splitmix64(self.state ^ self.len)
-    }
-}
-
-/// Hash of `bytes` (module doc).
-pub fn hash64(bytes: &[u8]) -> u64 {
-    let mut h = Hasher64::default();
-    h.write(bytes);
-    h.finish()
-}
 
 /// The cache directory: `$SHVIS_CACHE_DIR` when set and not empty, else `.shvis-cache`
 /// in the current directory.
@@ -670,7 +612,7 @@ mod tests {
             order,
             // Incompressible-looking values, so RLE blocks differ in size.
             coeffs: (0..texels * n)
-                .map(|i| (splitmix64(i as u64) >> 40) as f32 * 1e-7)
+                .map(|i| (crate::files::splitmix64(i as u64) >> 40) as f32 * 1e-7)
                 .collect(),
             covered: vec![true; texels],
             ao: (0..texels).map(|i| (i % 97) as f32 / 97.0).collect(),
@@ -707,21 +649,6 @@ mod tests {
             assert_eq!(a.0, b.0);
             assert!(a.1 == b.1, "{} differs between 1 and 3 threads", a.0);
         }
-    }
-
-    #[test]
-    fn one_flipped_byte_changes_the_hash() {
-        let data: Vec<u8> = (0..1000u32).map(|i| (i * 7 % 251) as u8).collect();
-        let h = hash64(&data);
-        for i in [0, 7, 8, 500, 995, 999] {
-            for bit in 0..8 {
-                let mut d = data.clone();
-                d[i] ^= 1 << bit;
-                assert_ne!(hash64(&d), h, "byte {i} bit {bit}");
-            }
-        }
-        assert_ne!(hash64(&data[..999]), h);
-        assert_ne!(hash64(&[]), hash64(&[0]));
     }
 
     #[test]

@@ -52,13 +52,7 @@ use crate::sh::basis::eval_basis;
 /// Most bytes a projection table may take before [`ShProjector`] uses narrower chunks.
 pub const TABLE_BUDGET_BYTES: usize = 32 << 20;
 
-/// SplitMix64 finalizer (Steele et al. 2014): a well-mixed 64-bit hash.
-pub(crate) fn splitmix64(mut x: u64) -> u64 {
-    x = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    x ^ (x >> 31)
-}
+pub(crate) use crate::files::splitmix64;
 
 /// Uniform in [0, 1) from the top 53 bits of `h`.
 pub(crate) fn unit_f64(h: u64) -> f64 {

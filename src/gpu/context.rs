@@ -376,7 +376,7 @@ impl Context {
     }
 
     /// Whether fragment shaders may use subgroup votes (`subgroupAny`; the cost model's
-    /// divergence measure, `technique::finish::CountPlan`).
+    /// divergence measure, `cost::CountPlan`).
     pub fn supports_fragment_subgroup_vote(&self) -> bool {
         self.fragment_subgroup_ops
             .contains(vk::SubgroupFeatureFlags::VOTE)

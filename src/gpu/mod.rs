@@ -6,7 +6,8 @@
 //! shader to run, this layer turns that into Vulkan objects. Every object is owned by one
 //! value holding `Arc<Context>` that destroys it in `Drop`, and carries a debug name
 //! (VK_EXT_debug_utils) so a RenderDoc capture reads like the code.
-//! This is the only module allowed `unsafe`; each block says why it is sound.
+//! The hardware paths ([`HwPath`]) are named here, below everything that binds by them.
+//! `unsafe` is allowed here (`crate::UNSAFE_MODULES`); each block says why it is sound.
 
 pub mod buffer;
 pub mod compute;
@@ -18,10 +19,11 @@ pub mod layout;
 pub mod normal_bake;
 pub mod pass;
 mod pass_objects;
+pub mod path;
 pub mod shader;
-pub mod spirv_counts;
 pub mod swapchain;
 pub mod target;
+pub mod timing;
 pub mod upload;
 pub mod visibility_sim;
 
@@ -31,8 +33,10 @@ pub use context::{Context, ContextDesc, MessageCounts};
 pub use descriptors::Resource;
 pub use image::{Image, ImageDesc, Sampler, SamplerKind};
 pub use pass::{MeshBuffers, MeshPipeline, MeshPipelineDesc, VertexLayout};
+pub use path::{HwPath, UnknownPath};
 pub use shader::{ShaderStage, compile_glsl};
 pub use target::RenderTarget;
+pub use timing::TimingStats;
 pub use upload::PendingUpload;
 
 use ash::vk;

@@ -33,16 +33,13 @@
 //! level ([`normalization`]) and interpolated by the hardware (the paper's "MIP-map of
 //! normalization factors", an approximation between texels).
 
-pub mod diffuse;
-pub mod render;
-
-use glam::{DMat3, DVec3, Vec3};
+use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 
-use crate::scene::Texture8;
+use crate::scene::{HeightField, Texture8, decode_normal};
 
 /// The moment maps' texel format on the GPU (both paths; the cost model prices lookups
-/// into it as `probe::Kind::TrilinearWide`).
+/// into it as `cost::Kind::TrilinearWide`).
 pub const MOMENT_FORMAT: ash::vk::Format = ash::vk::Format::R32G32B32A32_SFLOAT;
 
 /// The Pearson type II exponent m (the paper's eight).
@@ -195,17 +192,9 @@ impl NdfLevel {
     }
 }
 
-/// The tangent-space normal of a normal-map texel as `common.glsl::tangent_space_normal`
-/// decodes it (x, y scaled by `scale`, unit; flat for a zero vector).
-pub fn decode_normal(texel: [u8; 4], scale: f32) -> Vec3 {
-    let c = |v: u8| f32::from(v) / 255.0 * 2.0 - 1.0;
-    let m = Vec3::new(c(texel[0]) * scale, c(texel[1]) * scale, c(texel[2]));
-    m.try_normalize().unwrap_or(Vec3::Z)
-}
-
 /// Builds the NDF maps of `normal_map` with base spread `sigma` (module doc): level 0 from
 /// the decoded normals, each further level the 2×2 box average of the moments (the
-/// material textures' chain, [`crate::render::box_mip_levels`]), then 1/N per texel.
+/// material textures' chain, [`crate::scene::mip::box_mip_levels`]), then 1/N per texel.
 pub fn build(normal_map: &Texture8, normal_scale: f32, sigma: f32) -> NdfMaps {
     let s = f64::from(sigma);
     let mut levels = moment_levels(normal_map, normal_scale, s);
@@ -246,8 +235,8 @@ pub fn moment_maps(normal_map: &Texture8, normal_scale: f32) -> NdfMaps {
 
 /// The moments of a height field's own normals (σ = 0, as [`moment_maps`]): the surface a
 /// normal map is derived from, without its 8-bit quantization (the house's bricks;
-/// `crate::bake::ssbump::HeightField::normal`, the same central differences).
-pub fn moment_maps_from_height(field: &crate::bake::ssbump::HeightField) -> NdfMaps {
+/// `HeightField::normal`, the same central differences).
+pub fn moment_maps_from_height(field: &HeightField) -> NdfMaps {
     let normals = (0..field.width * field.height)
         .map(|i| field.normal(i % field.width, i / field.width))
         .collect();
@@ -276,7 +265,7 @@ fn levels_of_normals(w: u32, h: u32, normals: Vec<DVec3>, sigma: f64) -> Vec<Ndf
         .collect();
     type Chain = Vec<(u32, u32, Vec<[f32; 4]>)>;
     let chains: Vec<Chain> = (0..3)
-        .map(|k| crate::render::box_mip_levels(w, h, level0.iter().map(|t| t[k]).collect()))
+        .map(|k| crate::scene::mip::box_mip_levels(w, h, level0.iter().map(|t| t[k]).collect()))
         .collect();
     (0..chains[0].len())
         .map(|l| NdfLevel {

@@ -18,7 +18,8 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use super::{CostCounts, CostModel, Kind};
-use crate::gpu::{Context, GpuError, ShaderStage, spirv_counts};
+use crate::cost::spirv;
+use crate::gpu::{Context, GpuError, ShaderStage};
 use crate::render::{SceneGpu, ShadingLoad};
 
 /// One shader of known counts over the scene.
@@ -84,7 +85,7 @@ pub fn run(
                 ShaderStage::Fragment,
                 &[],
             )?;
-            let counts = CostCounts::new(lookups, &spirv_counts::count(&spirv));
+            let counts = CostCounts::new(lookups, &spirv::count(&spirv));
             let resources = scene.common_resources();
             let mut ms_median = f64::INFINITY;
             for build in 0..BUILDS {

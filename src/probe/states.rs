@@ -33,7 +33,7 @@
 
 use serde::Serialize;
 
-use crate::report::metrics::TimingStats;
+use crate::gpu::TimingStats;
 
 /// Monitor clusters closer than this ratio of their centres are one state.
 pub const STATE_RATIO: f64 = 1.25;

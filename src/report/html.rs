@@ -320,14 +320,7 @@ fn figures(t: &BenchTable, dir: &Path) -> String {
     let sheets: Vec<String> = t
         .results
         .iter()
-        .map(|r| {
-            format!(
-                "{}/{}.{}.sheet.png",
-                crate::bench::LADDER_DIR,
-                r.technique,
-                r.path
-            )
-        })
+        .map(|r| format!("{}/{}.{}.sheet.png", super::LADDER_DIR, r.technique, r.path))
         .filter(|f| dir.join(f).is_file())
         .collect();
     if !sheets.is_empty() {

@@ -119,15 +119,15 @@ pub struct BenchRow {
     pub technique: Technique,
     pub path: HwPath,
     /// The specular term's normal-map filtering, for a row with one (`--specular`).
-    pub specular: Option<crate::ndf::render::NormalFilter>,
+    pub specular: Option<crate::render::specular::NormalFilter>,
     /// Per-pixel operation counts by kind (`crate::probe`), and the share of the screen
     /// shaded: with the probe, the device lanes kept busy per screen pixel (fragments,
     /// overdraw included, and the idle lanes of partly covered SIMD batches;
     /// `SceneGpu::shading_load` over the row's mesh); else the covered pixels' share.
-    pub cost: crate::probe::CostCounts,
+    pub cost: crate::cost::CostCounts,
     /// The straight-line work of its branches where no lane takes them
-    /// (`technique::TechniqueStats::untaken_cost`).
-    pub untaken_cost: crate::probe::CostCounts,
+    /// (`technique::cost::ShaderCosts::untaken`).
+    pub untaken_cost: crate::cost::CostCounts,
     pub coverage: f64,
     /// What a frame of the row's own mesh shades (`pcaMv`), for the probe's columns.
     #[serde(skip)]
@@ -224,7 +224,7 @@ pub struct BenchTable {
     /// the one baked (techniques with dynamic lighting relit to it, baked ones as baked).
     pub relit: Option<String>,
     /// The probe's main cost model (`probe.md`).
-    pub cost_model: Option<crate::probe::CostModel>,
+    pub cost_model: Option<crate::cost::CostModel>,
     /// Its model per speed state (`probe::states`), the rows' `model_ms` come from the one
     /// of their `model_state`.
     pub state_cost_models: Vec<crate::probe::StateModel>,
@@ -457,8 +457,8 @@ mod tests {
             technique,
             path: HwPath::Dx10,
             specular: None,
-            cost: crate::probe::CostCounts::default(),
-            untaken_cost: crate::probe::CostCounts::default(),
+            cost: crate::cost::CostCounts::default(),
+            untaken_cost: crate::cost::CostCounts::default(),
             coverage: 1.0,
             own_mesh_load: None,
             triangles: 2,

@@ -102,7 +102,7 @@ mod tests {
         let mean: Vec3 = map
             .texels
             .iter()
-            .map(|t| crate::ndf::decode_normal(*t, 1.0))
+            .map(|t| crate::scene::decode_normal(*t, 1.0))
             .sum::<Vec3>()
             / map.texels.len() as f32;
         // Symmetric bumps: the mean normal is +z, shortened by the spread.

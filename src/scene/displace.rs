@@ -22,8 +22,8 @@
 
 use glam::{Vec3, Vec4};
 
+use super::HeightField;
 use super::{Material, Scene, Texture8};
-use crate::bake::ssbump::HeightField;
 
 /// Most triangles a displaced scene may have (BVH and G-buffer stay tractable).
 pub const MAX_DISPLACED_TRIANGLES: usize = 4_000_000;

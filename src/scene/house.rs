@@ -556,9 +556,9 @@ pub(super) fn brick_albedo() -> Texture8 {
 
 /// The brick height field the normal map is derived from (heights in texels, the texture's
 /// resolution): the surface `shvis ssbump --height house` shadows.
-pub fn brick_height_field() -> crate::bake::ssbump::HeightField {
+pub fn brick_height_field() -> super::HeightField {
     let n = TEXTURE_SIZE;
-    crate::bake::ssbump::HeightField {
+    super::HeightField {
         width: n as usize,
         height: n as usize,
         h: (0..n * n)

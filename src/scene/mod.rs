@@ -9,12 +9,16 @@
 pub mod bumpy;
 pub mod displace;
 pub mod gltf;
+pub mod height_field;
 pub mod house;
 pub mod lightmap_uv;
+pub mod mip;
 pub mod patio;
 pub mod subdivide;
 pub mod tangent;
 pub mod wavy;
+
+pub use height_field::HeightField;
 
 use glam::{Mat4, Vec3, Vec4};
 
@@ -67,6 +71,14 @@ impl Mesh {
     }
 }
 
+/// The tangent-space normal of a normal-map texel as `common.glsl::tangent_space_normal`
+/// decodes it (x, y scaled by `scale`, unit; flat for a zero vector).
+pub fn decode_normal(texel: [u8; 4], scale: f32) -> Vec3 {
+    let c = |v: u8| f32::from(v) / 255.0 * 2.0 - 1.0;
+    let m = Vec3::new(c(texel[0]) * scale, c(texel[1]) * scale, c(texel[2]));
+    m.try_normalize().unwrap_or(Vec3::Z)
+}
+
 /// An RGBA8 texture in row-major order, row 0 at the top (v = 0).
 #[derive(Clone, Debug)]
 pub struct Texture8 {
@@ -106,7 +118,7 @@ pub struct Material {
     /// texels of its own grid): what `ssbump`/`rnmao` shadow with and what
     /// [`displace`] builds the micro-geometry from. The house's bricks have
     /// one; a glTF scene takes one from `--height-map`.
-    pub height: Option<crate::bake::ssbump::HeightField>,
+    pub height: Option<HeightField>,
 }
 
 /// A pinhole camera (right-handed, looking down −Z in view space).
@@ -351,10 +363,7 @@ pub const MAX_HEIGHT_MAP_TEXELS: usize = 16384 * 16384;
 /// # Errors
 /// [`SceneError::HeightMap`] for an unreadable file, an empty or huge image, non-finite
 /// texels, or a scale that is not positive and finite.
-pub fn load_height_map(
-    path: &std::path::Path,
-    scale: f64,
-) -> Result<crate::bake::ssbump::HeightField, SceneError> {
+pub fn load_height_map(path: &std::path::Path, scale: f64) -> Result<HeightField, SceneError> {
     let err = |message: String| SceneError::HeightMap {
         path: path.display().to_string(),
         message,
@@ -402,7 +411,7 @@ pub fn load_height_map(
     if h.iter().any(|v| !v.is_finite()) {
         return Err(err("the height map has non-finite texels".into()));
     }
-    Ok(crate::bake::ssbump::HeightField { width, height, h })
+    Ok(HeightField { width, height, h })
 }
 
 #[cfg(test)]

@@ -178,7 +178,7 @@ mod tests {
         let normals: Vec<Vec3> = map
             .texels
             .iter()
-            .map(|t| crate::ndf::decode_normal(*t, 1.0))
+            .map(|t| crate::scene::decode_normal(*t, 1.0))
             .collect();
         let mean = normals.iter().sum::<Vec3>() / normals.len() as f32;
         let var = |f: fn(Vec3) -> f32| {

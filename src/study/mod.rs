@@ -29,10 +29,7 @@ pub mod params_gpu;
 pub mod rnm;
 pub mod seams;
 
-use std::path::{Path, PathBuf};
-
 use crate::render::Frame;
-use crate::report::ReportError;
 
 /// Frames of one size tiled left to right (the studies' composites).
 pub(crate) fn side_by_side(frames: &[&Frame]) -> Frame {
@@ -52,27 +49,4 @@ pub(crate) fn side_by_side(frames: &[&Frame]) -> Frame {
         rgba,
         ms: Vec::new(),
     }
-}
-
-/// Writes `text` as `dir/name`; returns the path.
-pub(crate) fn write_text(dir: &Path, name: &str, text: &str) -> Result<PathBuf, ReportError> {
-    let path = dir.join(name);
-    crate::files::write(&path, text).map_err(|e| ReportError::Write {
-        path: path.clone(),
-        detail: e.to_string(),
-    })?;
-    Ok(path)
-}
-
-/// Writes `value` as pretty JSON `dir/name`; returns the path.
-pub(crate) fn write_json(
-    dir: &Path,
-    name: &str,
-    value: &impl serde::Serialize,
-) -> Result<PathBuf, ReportError> {
-    let json = serde_json::to_string_pretty(value).map_err(|e| ReportError::Write {
-        path: dir.join(name),
-        detail: e.to_string(),
-    })?;
-    write_text(dir, name, &json)
 }

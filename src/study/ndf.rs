@@ -4,12 +4,12 @@
 //! isotropic bumps, the paper's Fig. 1 setting of a surface receding to the horizon) and
 //! the wavy sphere ([`crate::scene::wavy`], parallel ripples: the highlight must elongate,
 //! the paper's Figs. 1–2) — the specular term of a directional light
-//! ([`crate::ndf::render`]) is rendered with the three filterings on each path and compared
+//! ([`crate::render::specular`]) is rendered with the three filterings on each path and compared
 //! with its footprint reference: relative RMSE and the highlight's energy (the sum over
 //! the surface's pixels) against the reference's, over the pixels where the normal map is
 //! minified at least [`MIN_MINIFICATION`]× and over the whole surface. Minification is the
 //! texels per pixel along the larger footprint axis: analytic on the plane, from the
-//! hardware's level of detail (`ndf::render::normal_map_lod`) on the sphere. Writes
+//! hardware's level of detail (`render::specular::normal_map_lod`) on the sphere. Writes
 //! `ndf.md`, `ndf.json` and a composite `fig1_ndf_{scene}.png` per scene (reference · mip ·
 //! ndf · ndfn).
 
@@ -20,15 +20,14 @@ use glam::{Vec3, Vec4};
 use serde::Serialize;
 
 use super::ndf_diffuse::{DiffuseRow, DiffuseScene};
+use crate::gpu::TimingStats;
 use crate::gpu::{Context, GpuError};
-use crate::ndf::render::{
-    NormalFilter, SpecularLight, render_reference, render_specular, upload_maps,
-};
 use crate::ndf::{self, NdfMaps};
 use crate::reference::ReferenceSettings;
+use crate::reference::specular::render_reference;
+use crate::render::specular::{NormalFilter, SpecularLight, render_specular, upload_maps};
 use crate::render::{Frame, FrameSettings, SceneGpu};
 use crate::report::ReportError;
-use crate::report::metrics::TimingStats;
 use crate::scene::{Scene, bumpy, wavy};
 use crate::technique::HwPath;
 
@@ -237,7 +236,7 @@ pub fn run(ctx: &Arc<Context>, s: &NdfStudySettings) -> Result<(NdfStudy, Frame)
     )?;
     let texels: Vec<f32> = match s.scene {
         SpecularScene::Bumpy => minification(&scene, s.width, s.height),
-        SpecularScene::Wavy => crate::ndf::render::normal_map_lod(ctx, &gpu)?
+        SpecularScene::Wavy => crate::render::specular::normal_map_lod(ctx, &gpu)?
             .into_iter()
             .map(|lod| lod.map_or(0.0, f32::exp2))
             .collect(),
@@ -290,7 +289,7 @@ pub fn run(ctx: &Arc<Context>, s: &NdfStudySettings) -> Result<(NdfStudy, Frame)
             height: s.height,
             strata: {
                 let side = ((s.spp.max(1) as f64).sqrt().ceil() as u32)
-                    .min(crate::ndf::render::MAX_REFERENCE_SIDE);
+                    .min(crate::reference::specular::MAX_REFERENCE_SIDE);
                 side * side
             },
             reference_self_error,
@@ -369,8 +368,8 @@ pub fn write_report(
         md.push_str(&super::ndf_diffuse::markdown(scenes, rows));
     }
     let specular: Vec<&NdfStudy> = studies.iter().map(|(s, _)| s).collect();
-    written.push(super::write_text(dir, "ndf.md", &md)?);
-    written.push(super::write_json(
+    written.push(crate::report::write_text(dir, "ndf.md", &md)?);
+    written.push(crate::report::write_json(
         dir,
         "ndf.json",
         &serde_json::json!({

@@ -2,9 +2,9 @@
 //! `shvis study ndf`).
 //!
 //! Per scene (the receding bumpy plane, the house): `unc6` / `preconv` and their NDF
-//! variants (`crate::ndf::diffuse`) on each path, the footprint reference of the direct
+//! variants (`technique::ndf_diffuse`) on each path, the footprint reference of the direct
 //! light (`crate::reference`), and the normal map's level of detail per pixel
-//! (`ndf::render::normal_map_lod`). Errors are relative RMSE over the pixels where the map
+//! (`render::specular::normal_map_lod`). Errors are relative RMSE over the pixels where the map
 //! is minified at least 4× (λ ≥ 2), over the magnified ones (λ ≤ 0), and over all; on the
 //! magnified pixels the largest difference between a technique and its NDF variant is
 //! reported too (the filter must change nothing there).
@@ -164,7 +164,7 @@ pub fn own_footprint(
     let count = side * side;
     let mut sum: Vec<[f64; 4]> = Vec::new();
     for j in 0..count {
-        scene.set_jitter(crate::ndf::render::stratum_jitter(7, j, side))?;
+        scene.set_jitter(crate::reference::specular::stratum_jitter(7, j, side))?;
         let frame = tech.render(scene, 0, 1)?;
         sum.resize(frame.rgba.len(), [0.0; 4]);
         for (acc, p) in sum.iter_mut().zip(&frame.rgba) {
@@ -260,7 +260,7 @@ pub fn run(
                 ..FrameSettings::default()
             },
         )?;
-        let lod = crate::ndf::render::normal_map_lod(ctx, &gpu)?;
+        let lod = crate::render::specular::normal_map_lod(ctx, &gpu)?;
         let covered: Vec<bool> = lod
             .iter()
             .zip(&reference.frame.rgba)

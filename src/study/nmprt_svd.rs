@@ -29,6 +29,7 @@ use glam::DVec3;
 use nalgebra::DMatrix;
 
 use crate::sh::{Order, basis::eval_basis};
+use crate::technique::nmprt::disk_normals;
 
 /// Rows weighted for a least-squares fit over the hemisphere of normals (module doc).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -39,23 +40,6 @@ pub enum NormalWeighting {
 
 /// The course's figures for M = 4 and 6 (uniform, cosine-weighted), "SE" in percent.
 pub const COURSE_ENERGY: [(usize, f64, f64); 2] = [(4, 93.9, 96.4), (6, 98.7, 99.3)];
-
-/// The normals of a `side`² disk grid inside the unit disk, with their disk-area weight.
-pub fn disk_normals(side: usize) -> Vec<(DVec3, f64)> {
-    let h = 2.0 / side as f64;
-    let mut out = Vec::new();
-    for j in 0..side {
-        for i in 0..side {
-            let x = -1.0 + (i as f64 + 0.5) * h;
-            let y = -1.0 + (j as f64 + 0.5) * h;
-            let r2 = x * x + y * y;
-            if r2 < 1.0 {
-                out.push((DVec3::new(x, y, (1.0 - r2).sqrt()), h * h));
-            }
-        }
-    }
-    out
-}
 
 /// A (rows: the normals of [`disk_normals`], columns: the 9 quadratic SH functions), by a
 /// `quadrature`² midpoint rule over the upper hemisphere in (cos θ, φ) (equal solid angle

@@ -463,7 +463,7 @@ pub fn write_report(study: &NormalMapStudy, dir: &Path) -> Result<Vec<PathBuf>, 
         }
     }
     Ok(vec![
-        super::write_text(dir, "normalmap.md", &md)?,
-        super::write_json(dir, "normalmap.json", study)?,
+        crate::report::write_text(dir, "normalmap.md", &md)?,
+        crate::report::write_json(dir, "normalmap.json", study)?,
     ])
 }

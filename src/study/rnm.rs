@@ -256,8 +256,8 @@ pub fn write_report(
             written.push(path);
         }
     }
-    written.push(super::write_text(dir, "rnm.md", &md)?);
-    written.push(super::write_json(dir, "rnm.json", &results)?);
+    written.push(crate::report::write_text(dir, "rnm.md", &md)?);
+    written.push(crate::report::write_json(dir, "rnm.json", &results)?);
     Ok(written)
 }
 

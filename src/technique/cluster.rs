@@ -19,12 +19,13 @@
 
 use ash::vk;
 
-use super::finish::{CountPlan, CountVariant};
 use super::lighting::{LightingData, Recipe};
 use super::spec::{ClusterNeed, SeamMode, clusters_fit_uniforms};
 use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
 use super::{Inputs, ShaderVariant, TechniqueError};
+use super::{PerTexelTaps, ShaderReads};
 use crate::bake::cluster::{ClusteredModel, QuantizedClusters};
+use crate::cost::{CountPlan, CountVariant};
 use crate::sh::Order;
 
 /// The fragment shader of `vqK` / `cpcaK_M`.
@@ -64,10 +65,23 @@ pub fn per_texel_fetches(m: u32, seams: SeamMode) -> u32 {
     }
 }
 
+/// What the shader of `vqK` / `cpcaK_M` (M = 0 for VQ) reads: its taps, counted by
+/// [`count_plan`].
+pub fn reads(m: u32, seams: SeamMode) -> ShaderReads {
+    ShaderReads {
+        per_texel_taps: Some(PerTexelTaps {
+            lookups: per_texel_lookups(m, seams),
+            fetches: per_texel_fetches(m, seams),
+        }),
+        count_plan: Some(count_plan(seams)),
+        ..ShaderReads::PLAIN
+    }
+}
+
 /// How the cost model counts the shader ([`CountPlan`]): its decode runs once where the
 /// bilinear footprint lies inside one cluster and four times where it straddles clusters
-/// (blended seams), so its counts are the inside path's (glsl/technique/cluster.frag,
-/// `SHVIS_COUNT_PATH` 1, loops unrolled) plus, for the measured share of fragments whose
+/// (blended seams), so its counts are the inside path's (the count shader
+/// glsl/cost/cluster.frag, `SHVIS_COUNT_PATH` 1, loops unrolled) plus, for the measured share of fragments whose
 /// subgroup takes the boundary path, the boundary path's (2) less the work before the
 /// branch (4), counted once already; the naive shader runs one path. Where no lane of a
 /// batch takes the boundary path, its straight-line code — the boundary path with its
@@ -75,6 +89,7 @@ pub fn per_texel_fetches(m: u32, seams: SeamMode) -> u32 {
 /// runs it masked and skips a loop no lane enters, measured: vq256 14.8 ms with the branch
 /// taken out, 28.0 with it there and never taken; cpca8_7 39.8 and 53.5).
 pub fn count_plan(seams: SeamMode) -> CountPlan {
+    const COUNT_SHADER: &str = "cost/cluster.frag";
     let variant = |path, share, share_per_measured| CountVariant {
         defines: vec![("COUNT_PATH", path)],
         share,
@@ -87,10 +102,12 @@ pub fn count_plan(seams: SeamMode) -> CountPlan {
     };
     match seams {
         SeamMode::Naive => CountPlan {
+            shader: COUNT_SHADER,
             measure_defines: None,
             variants: vec![variant(1, 1.0, 0.0)],
         },
         SeamMode::Blended => CountPlan {
+            shader: COUNT_SHADER,
             measure_defines: Some(vec![("COUNT_PATH", 3)]),
             variants: vec![
                 variant(1, 1.0, 0.0),
@@ -208,18 +225,33 @@ mod tests {
                     super::super::spec::HwPath::Dx9,
                     super::super::spec::HwPath::Dx10,
                 ] {
-                    for variant in count_plan(seams).variants {
+                    let plan = count_plan(seams);
+                    // The measuring build compiles too (with and without subgroup votes).
+                    for vote in plan.measure_defines.iter().flat_map(|_| [0, 1]) {
+                        let mut defines = fragment_shader(8, m, seams).defines;
+                        defines.push(path.shader_define());
+                        defines.push(("MATERIAL_LEVEL0", 0));
+                        defines.push(("SUBGROUP_VOTE", vote));
+                        defines.extend(plan.measure_defines.iter().flatten().copied());
+                        crate::gpu::compile_glsl(
+                            plan.shader,
+                            crate::gpu::ShaderStage::Fragment,
+                            &defines,
+                        )
+                        .unwrap_or_else(|e| panic!("measuring build {defines:?}: {e}"));
+                    }
+                    for variant in plan.variants {
                         let mut defines = fragment_shader(8, m, seams).defines;
                         defines.push(path.shader_define());
                         defines.push(("MATERIAL_LEVEL0", 0));
                         defines.extend_from_slice(&variant.defines);
                         let spirv = crate::gpu::compile_glsl(
-                            "technique/cluster.frag",
+                            plan.shader,
                             crate::gpu::ShaderStage::Fragment,
                             &defines,
                         )
                         .unwrap();
-                        let counts = crate::gpu::spirv_counts::count(&spirv);
+                        let counts = crate::cost::spirv::count(&spirv);
                         assert_eq!(counts.loops, 0, "M = {m}, {seams:?}, {path:?}, {defines:?}");
                     }
                 }

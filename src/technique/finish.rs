@@ -6,7 +6,7 @@
 //! and normal map; the technique's uniform block at `BINDING_TECHNIQUE_PARAMS`; slot i at
 //! `BINDING_TECHNIQUE_TEXTURE0 + i`, one image as a texture, several as a texture array
 //! (dx9's `sampler2D t[N]`). A scene with a specular material term (`--specular`,
-//! `crate::ndf::render::SceneSpecular`) adds its block and moment maps at
+//! `crate::render::specular::SceneSpecular`) adds its block and moment maps at
 //! `BINDING_SPECULAR_*`, counted in the path rules and the lookup columns like the
 //! technique's own.
 
@@ -119,37 +119,7 @@ pub fn stats(
         textures_bound: layout::MATERIAL_TEXTURES
             + slots.iter().map(|s| s.images.len() as u32).sum::<u32>(),
         lookups_per_pixel: layout::MATERIAL_TEXTURES + slots.iter().map(slot_lookups).sum::<u32>(),
-        cost: crate::probe::CostCounts::default(),
-        untaken_cost: crate::probe::CostCounts::default(),
     }
-}
-
-/// How the cost model counts a shader whose work per pixel depends on its data (the
-/// clustered techniques' decodes, `super::cluster::count_plan`): Σ (share +
-/// share_per_measured · s) · counts(variant), each variant the fragment shader compiled with
-/// its defines (never drawn; its loops unrolled, and compiled once more with `COUNT_LOOPS`
-/// for the loops the drawn shader enters on that path), s the share of shaded fragments
-/// that the measuring build (`measure_defines`, drawn once over the scene, additively: red
-/// 1 where the fragment's subgroup — the SIMD batch it runs in — takes the costly path,
-/// green 1 per fragment) finds (0 without one). A batch with one fragment on the costly path runs both paths.
-/// Variants marked `untaken` count, the same way, the work of a branch in the batches that
-/// do not take it — which a device that runs untaken branches masked (lavapipe) pays in
-/// part: `TechniqueStats::untaken_cost`, priced by `probe::CostModel::untaken_share`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct CountPlan {
-    pub measure_defines: Option<Vec<(&'static str, u32)>>,
-    pub variants: Vec<CountVariant>,
-}
-
-/// One build of a [`CountPlan`].
-#[derive(Clone, Debug, PartialEq)]
-pub struct CountVariant {
-    pub defines: Vec<(&'static str, u32)>,
-    pub share: f64,
-    pub share_per_measured: f64,
-    /// Counted as work of a branch that no lane of a batch takes
-    /// (`TechniqueStats::untaken_cost`), not as work done.
-    pub untaken: bool,
 }
 
 /// Makes `technique` on `path` drawable with `sets` copies of its lighting data (1, or 2
@@ -159,8 +129,7 @@ pub struct CountVariant {
 /// images (binding TEXTURE0: the bake's, shared by the copies, or — when the lighting data
 /// has per-texel images — that copy's), the technique's extra slot if it has one (material
 /// textures, a normal basis; the next binding) and that copy's tables (the bindings after
-/// those). `counted`: how the cost model counts the shader, `None` for the drawn shader's
-/// own counts.
+/// those).
 #[allow(clippy::too_many_arguments)]
 pub fn finish(
     ctx: &Arc<Context>,
@@ -168,22 +137,20 @@ pub fn finish(
     technique: Technique,
     path: HwPath,
     per_texel: Vec<Image>,
-    material: Option<TextureSlot>,
+    extra: Option<TextureSlot>,
     lighting: &LightingData,
     sets: usize,
-    counted: Option<&CountPlan>,
 ) -> Result<TechniqueGpu, TechniqueError> {
     let label = format!("{technique}.{path}");
     let shared_per_texel = TextureSlot::per_texel(per_texel);
     let fragment = compile_fragment(technique, path, scene, &lighting.defines)?;
     check_uniform_size(ctx, lighting.params.len(), &label)?;
-    let sampler = scene.lightmap_sampler();
+    let reads = technique.reads();
     let mut built = Vec::with_capacity(sets);
     let mut stats = TechniqueStats::default();
-    let mut op_counts = Vec::new();
     for set in 0..sets.max(1) {
         let suffix = set_suffix(set);
-        let table_slots = match &lighting.tables {
+        let tables = match &lighting.tables {
             Some(tables) => tables.upload(ctx, &suffix)?,
             None => Vec::new(),
         };
@@ -195,11 +162,7 @@ pub fn finish(
             }
             None => None,
         };
-        let per_texel = own_per_texel.as_ref().unwrap_or(&shared_per_texel);
-        let slots: Vec<&TextureSlot> = std::iter::once(per_texel)
-            .chain(&material)
-            .chain(&table_slots)
-            .collect();
+        let slots = bound_slots(&shared_per_texel, extra.as_ref(), &own_per_texel, &tables);
         let mut images: Vec<&Image> = slots.iter().flat_map(|s| &s.images).collect();
         images.extend(scene.specular().into_iter().flat_map(|s| s.images(path)));
         check_path_rules(&label, path, &images)?;
@@ -207,9 +170,9 @@ pub fn finish(
         stats = self::stats(
             lighting.params.len(),
             &layouts,
-            super::per_texel_lookups(technique),
+            reads.per_texel_taps.map(|t| t.lookups),
         );
-        if super::skips_normal_map(technique) {
+        if !reads.reads_normal_map {
             stats.lookups_per_pixel -= 1;
         }
         let table_lookups: u32 = layouts
@@ -217,212 +180,77 @@ pub fn finish(
             .filter(|l| l.kind == SlotKind::NormalTable)
             .map(SlotLayout::lookups)
             .sum();
-        stats.lookups_per_pixel += (super::table_fetches(technique) - 1) * table_lookups;
+        stats.lookups_per_pixel += (reads.table_fetches - 1) * table_lookups;
         add_specular_stats(scene, path, &mut stats);
         let params = params_buffer(ctx, &lighting.params, &label, &suffix)?;
-        let mut resources = base_resources(scene, &params, path);
-        assert!(
-            layout::BINDING_TECHNIQUE_TEXTURE0 + (slots.len() as u32)
-                <= layout::BINDING_SPECULAR_PARAMS,
-            "{label}: technique bindings reach the specular term's"
-        );
-        for (binding, slot) in (layout::BINDING_TECHNIQUE_TEXTURE0..).zip(&slots) {
-            let sampler = match slot.kind {
-                SlotKind::Material => scene.material_sampler(),
-                SlotKind::PerTexel | SlotKind::NormalTable | SlotKind::NormalBasis => sampler,
-            };
-            let resource = match slot.images.as_slice() {
-                [one] => gpu::Resource::Texture(one, sampler),
-                many => gpu::Resource::TextureArray(many.iter().map(|i| (i, sampler)).collect()),
-            };
-            resources.push((binding, resource));
-        }
-        // The plan's measure needs a set's resources; every set has the same counts.
-        if op_counts.is_empty() {
-            op_counts = match counted {
-                None => vec![(1.0, gpu::spirv_counts::count(&fragment), false)],
-                Some(plan) => plan_counts(ctx, scene, technique, path, plan, &resources)?,
-            };
-        }
-        // The work done, and apart the work of branches no lane takes.
-        let counts_of = |untaken: bool| {
-            let builds: Vec<_> = op_counts
-                .iter()
-                .filter(|&&(_, _, is_untaken)| is_untaken == untaken)
-                .map(|&(share, ops, _)| (share, ops))
-                .collect();
-            cost_counts(technique, path, scene, &layouts, &builds)
-        };
-        stats.cost = counts_of(false);
-        stats.untaken_cost = counts_of(true);
+        let resources = resources(scene, &params, path, &slots);
         let pipeline =
             scene.mesh_pipeline(ctx, &format!("{label}{suffix}"), &fragment, &resources)?;
         drop(resources);
         built.push(LightingSet {
             pipeline,
             params,
-            images: table_slots
-                .into_iter()
-                .chain(own_per_texel)
-                .flat_map(|s| s.images)
-                .collect(),
+            tables,
+            own_per_texel,
             defines: lighting.defines.clone(),
         });
     }
-    let mut images = shared_per_texel.images;
-    images.extend(material.into_iter().flat_map(|s| s.images));
     Ok(TechniqueGpu::new(
-        ctx, technique, path, stats, images, built,
+        ctx,
+        technique,
+        path,
+        stats,
+        shared_per_texel,
+        extra,
+        fragment,
+        built,
     ))
 }
 
-/// The shares and SPIR-V counts of `plan`'s variants, its measuring build drawn once over
-/// the scene with the technique's `resources`.
-fn plan_counts(
-    ctx: &Arc<Context>,
-    scene: &SceneGpu,
-    technique: Technique,
-    path: HwPath,
-    plan: &CountPlan,
-    resources: &[(u32, gpu::Resource<'_>)],
-) -> Result<Vec<(f64, gpu::spirv_counts::OpCounts, bool)>, TechniqueError> {
-    let measured = match &plan.measure_defines {
-        Some(defines) => measure_costly_share(ctx, scene, technique, path, defines, resources)?,
-        None => 0.0,
-    };
-    plan.variants
-        .iter()
-        .map(|v| {
-            let spirv = compile_fragment(technique, path, scene, &v.defines)?;
-            let mut counts = gpu::spirv_counts::count(&spirv);
-            if counts.loops > 0 {
-                log::warn!(
-                    "{technique} on {path}: count build {:?} keeps {} loop(s), whose bodies are counted once",
-                    v.defines,
-                    counts.loops
-                );
-            }
-            // The loops one pixel enters on this path: the build with the drawn shader's
-            // loops kept (`COUNT_LOOPS`).
-            let mut kept = v.defines.clone();
-            kept.push(("COUNT_LOOPS", 1));
-            counts.kept_loops =
-                gpu::spirv_counts::count(&compile_fragment(technique, path, scene, &kept)?)
-                    .kept_loops;
-            let share = v.share + v.share_per_measured * measured;
-            log::debug!(
-                "{technique} on {path}: count build {:?}, share {share:.4}: {counts:?}",
-                v.defines
-            );
-            Ok((share, counts, v.untaken))
-        })
+/// The slots a lighting set's pipeline binds, in binding order from
+/// `BINDING_TECHNIQUE_TEXTURE0`: its own per-texel images or else the bake's, the
+/// technique's extra slot, its tables.
+pub(crate) fn bound_slots<'a>(
+    shared_per_texel: &'a TextureSlot,
+    extra: Option<&'a TextureSlot>,
+    own_per_texel: &'a Option<TextureSlot>,
+    tables: &'a [TextureSlot],
+) -> Vec<&'a TextureSlot> {
+    std::iter::once(own_per_texel.as_ref().unwrap_or(shared_per_texel))
+        .chain(extra)
+        .chain(tables)
         .collect()
 }
 
-/// The share s of [`CountPlan`]: its measuring build (`defines`) drawn once over the scene.
-fn measure_costly_share(
-    ctx: &Arc<Context>,
-    scene: &SceneGpu,
-    technique: Technique,
+/// Everything a technique's pipeline binds: [`base_resources`] and `slots` from
+/// `BINDING_TECHNIQUE_TEXTURE0` on (one image as a texture, several as a texture array;
+/// material textures with the material sampler, the rest with the lightmap's).
+pub(crate) fn resources<'a>(
+    scene: &'a SceneGpu,
+    params: &'a gpu::Buffer,
     path: HwPath,
-    defines: &[(&'static str, u32)],
-    resources: &[(u32, gpu::Resource<'_>)],
-) -> Result<f64, TechniqueError> {
-    let label = format!("{technique}.{path}");
-    let mut defines = defines.to_vec();
-    defines.push((
-        "SUBGROUP_VOTE",
-        u32::from(ctx.supports_fragment_subgroup_vote()),
-    ));
-    let measure = compile_fragment(technique, path, scene, &defines)?;
-    let pipeline = gpu::MeshPipeline::new(
-        ctx,
-        scene.target(),
-        &gpu::MeshPipelineDesc {
-            name: &format!("{label}.count_paths"),
-            vertex_spirv: scene.vertex_spirv(),
-            fragment_spirv: &measure,
-            vertex_layout: scene.vertex_layout(),
-            resources,
-            depth_test: true,
-            additive: true,
-        },
-    )?;
-    let frame = scene.render_pipeline(&pipeline, 0, 1)?;
-    let (costly, fragments) = frame.rgba.iter().fold((0.0, 0.0), |(r, g), p| {
-        (r + f64::from(p[0]), g + f64::from(p[1]))
-    });
-    let measured = if fragments > 0.0 {
-        costly / fragments
-    } else {
-        0.0
-    };
-    log::debug!(
-        "{label}: {:.1} % of the shaded fragments run the costly path (subgroup vote: {})",
-        100.0 * measured,
-        ctx.supports_fragment_subgroup_vote()
+    slots: &[&'a TextureSlot],
+) -> Vec<(u32, gpu::Resource<'a>)> {
+    let mut resources = base_resources(scene, params, path);
+    assert!(
+        layout::BINDING_TECHNIQUE_TEXTURE0 + (slots.len() as u32)
+            <= layout::BINDING_SPECULAR_PARAMS,
+        "technique bindings reach the specular term's"
     );
-    Ok(measured)
-}
-
-/// The cost model's counts of `technique` on `path` (`crate::probe`): its lookups by kind
-/// from the slots — material textures trilinear (the albedo's sRGB and the NDF moment maps'
-/// RGBA32F each a kind of their own), per-texel data bilinear 2D (dx9) or 2D array (dx10) or, where a shader
-/// reads its taps one by one, texel fetches (priced as 2D fetches on both paths: the probe
-/// has no array fetch), normal-indexed tables dependent 2D (dx9) or cube array (dx10), the
-/// specular term's moment maps trilinear RGBA32F — and the float ops, uniform and varying
-/// reads of its compiled fragment shader (`gpu::spirv_counts`), or the shares of its counted
-/// variants' ([`CountVariant`]).
-fn cost_counts(
-    technique: Technique,
-    path: HwPath,
-    scene: &SceneGpu,
-    layouts: &[SlotLayout],
-    op_counts: &[(f64, gpu::spirv_counts::OpCounts)],
-) -> crate::probe::CostCounts {
-    use crate::probe::Kind;
-    // The albedo (sRGB) and, unless the technique skips it, the normal map (UNORM).
-    let normal_map = layout::MATERIAL_TEXTURES - 1 - u32::from(super::skips_normal_map(technique));
-    let mut lookups = vec![(Kind::TrilinearSrgb, 1), (Kind::Trilinear2d, normal_map)];
-    for slot in layouts {
-        let n = match (slot.kind, super::per_texel_lookups(technique)) {
-            (SlotKind::PerTexel, Some(n)) => {
-                let fetches = super::per_texel_fetches(technique);
-                lookups.push((Kind::TexelFetch, fetches));
-                n - fetches
+    for (binding, slot) in (layout::BINDING_TECHNIQUE_TEXTURE0..).zip(slots) {
+        let sampler = match slot.kind {
+            SlotKind::Material => scene.material_sampler(),
+            SlotKind::PerTexel | SlotKind::NormalTable | SlotKind::NormalBasis => {
+                scene.lightmap_sampler()
             }
-            (SlotKind::NormalTable, _) => slot.lookups() * super::table_fetches(technique),
-            _ => slot.lookups(),
         };
-        let kind = match (slot.kind, path) {
-            (SlotKind::Material, _) => {
-                // RGBA32F (the NDF moment maps) priced apart from RGBA8 material textures.
-                let wide = |d: &&ImageDesc| d.format == crate::ndf::MOMENT_FORMAT;
-                let wide_lookups: u32 = slot.images.iter().filter(wide).map(|d| d.layers).sum();
-                lookups.push((Kind::TrilinearWide, wide_lookups));
-                lookups.push((Kind::Trilinear2d, n - wide_lookups));
-                continue;
-            }
-            (SlotKind::PerTexel, HwPath::Dx9) => Kind::Bilinear2d,
-            (SlotKind::PerTexel, HwPath::Dx10) => Kind::Array2d,
-            (SlotKind::NormalTable, HwPath::Dx9) => Kind::Dependent2d,
-            (SlotKind::NormalTable, HwPath::Dx10) => Kind::CubeArray,
-            // The disk texture is read at the normal map's coordinates: dependent, a 2D
-            // array layer on dx10.
-            (SlotKind::NormalBasis, HwPath::Dx9) => Kind::Dependent2d,
-            (SlotKind::NormalBasis, HwPath::Dx10) => Kind::Array2d,
+        let resource = match slot.images.as_slice() {
+            [one] => gpu::Resource::Texture(one, sampler),
+            many => gpu::Resource::TextureArray(many.iter().map(|i| (i, sampler)).collect()),
         };
-        lookups.push((kind, n));
+        resources.push((binding, resource));
     }
-    if let Some(specular) = scene.specular() {
-        // The NDF moment maps, RGBA32F (`ndf::render`).
-        lookups.push((Kind::TrilinearWide, specular.term.filter.extra_lookups()));
-    }
-    crate::probe::CostCounts::shared(
-        op_counts
-            .iter()
-            .map(|(share, ops)| (*share, crate::probe::CostCounts::new(&lookups, ops))),
-    )
+    resources
 }
 
 /// What the scene's specular term (if any) adds to a technique's columns on `path`: its
@@ -444,7 +272,23 @@ pub(crate) fn compile_fragment(
     scene: &SceneGpu,
     extra_defines: &[(&'static str, u32)],
 ) -> Result<Vec<u32>, TechniqueError> {
-    let shader = super::fragment_shader(technique);
+    compile_fragment_source(technique, None, path, scene, extra_defines)
+}
+
+/// [`compile_fragment`] with another source under `glsl/` in place of the technique's
+/// (`Some`: a cost model count shader, `crate::cost::CountPlan::shader`), given the
+/// technique's defines all the same.
+pub(crate) fn compile_fragment_source(
+    technique: Technique,
+    source: Option<&'static str>,
+    path: HwPath,
+    scene: &SceneGpu,
+    extra_defines: &[(&'static str, u32)],
+) -> Result<Vec<u32>, TechniqueError> {
+    let mut shader = super::fragment_shader(technique);
+    if let Some(source) = source {
+        shader.path = source;
+    }
     let mut defines = vec![
         path.shader_define(),
         ("MATERIAL_LEVEL0", scene.material_level0() as u32),

@@ -20,6 +20,7 @@
 
 use std::sync::Arc;
 
+use super::finish::TextureSlot;
 use super::tables::NormalTableData;
 use super::texels::TexelGroups;
 use super::{HwPath, Technique, TechniqueError};
@@ -100,7 +101,7 @@ pub(crate) enum Recipe {
     /// `nmprt*`: the transfer matrices and what the variant evaluates them with.
     Nmprt(Arc<super::nmprt::NmprtRecipe>),
     /// `uncOndf` / `preconvndf`: the base technique's data; for `unc` (`order`) its uniform
-    /// block followed by the L×H table's band-0 constants (`crate::ndf::diffuse`).
+    /// block followed by the L×H table's band-0 constants (`technique::ndf_diffuse`).
     Ndf {
         base: Box<Recipe>,
         order: Option<Order>,
@@ -187,7 +188,7 @@ impl LightingRecipe {
                         "lighting",
                         &label,
                     )?;
-                    let ambient = crate::ndf::diffuse::ambient_block(radiance_sh, *order);
+                    let ambient = super::ndf_diffuse::ambient_block(radiance_sh, *order);
                     data.params
                         .extend_from_slice(bytemuck::cast_slice(&ambient));
                 }
@@ -201,14 +202,24 @@ impl LightingRecipe {
 pub(crate) struct LightingSet {
     pub pipeline: MeshPipeline,
     pub params: gpu::Buffer,
-    /// In upload order ([`LightingData::image_uploads`]): the tables, then the
-    /// lighting-dependent per-texel images.
-    pub images: Vec<Image>,
+    /// Its normal-indexed tables, one slot per binding.
+    pub tables: Vec<TextureSlot>,
+    /// Its lighting-dependent per-texel images (`nmprt*`), bound instead of the bake's.
+    pub own_per_texel: Option<TextureSlot>,
     /// The defines its pipeline's shader was compiled with ([`LightingData::defines`]).
     pub defines: Vec<(&'static str, u32)>,
 }
 
 impl LightingSet {
+    /// Its images in upload order ([`LightingData::image_uploads`]): the tables, then the
+    /// lighting-dependent per-texel images.
+    pub fn images(&self) -> impl Iterator<Item = &Image> {
+        self.tables
+            .iter()
+            .chain(&self.own_per_texel)
+            .flat_map(|slot| &slot.images)
+    }
+
     /// Checks `data` has this set's layout: same uniform size, same images, same defines.
     pub fn check_layout(
         &self,
@@ -217,10 +228,10 @@ impl LightingSet {
         label: &str,
     ) -> Result<(), TechniqueError> {
         let uploads = data.image_uploads(path);
-        let same_tables = uploads.len() == self.images.len()
+        let same_tables = uploads.len() == self.images().count()
             && uploads
                 .iter()
-                .zip(&self.images)
+                .zip(self.images())
                 .all(|((desc, _), i)| desc == i.desc());
         if data.params.len() as u64 != self.params.size()
             || !same_tables

@@ -18,8 +18,10 @@
 //! "How to add a technique" lists the places a new family touches.
 
 pub mod cluster;
+pub mod cost;
 pub mod finish;
 pub mod lighting;
+pub mod ndf_diffuse;
 pub mod nmprt;
 pub mod pca;
 pub mod preconv;
@@ -96,12 +98,6 @@ pub struct TechniqueStats {
     pub textures_bound: u32,
     /// Texture fetches per pixel, albedo and normal map included.
     pub lookups_per_pixel: u32,
-    /// Per-pixel operation counts by kind for the device cost model (`crate::probe`): the
-    /// lookups from the bound images, the rest from the fragment shader's SPIR-V.
-    pub cost: crate::probe::CostCounts,
-    /// The straight-line work of its branches where no lane of a batch takes them, which
-    /// some devices run masked (`crate::probe::CostModel::untaken_share`).
-    pub untaken_cost: crate::probe::CostCounts,
 }
 
 /// A fragment shader under `glsl/` and the `SHVIS_*` defines of one technique's variant
@@ -133,53 +129,71 @@ pub fn fragment_shader(technique: Technique) -> ShaderVariant {
     }
 }
 
-/// Per-texel fetches per pixel where a family's shader does not read each per-texel layer
-/// once (`finish::stats`).
-pub fn per_texel_lookups(technique: Technique) -> Option<u32> {
-    match technique {
-        Technique::Vq { seams, .. } => Some(cluster::per_texel_lookups(0, seams)),
-        Technique::Cpca { m, seams, .. } => Some(cluster::per_texel_lookups(m, seams)),
-        Technique::Unc { .. }
-        | Technique::Pca { .. }
-        | Technique::Shlmap
-        | Technique::Preconv
-        | Technique::Sh2
-        | Technique::PcaVertex { .. }
-        | Technique::Rnm { .. }
-        | Technique::Ndf { .. }
-        | Technique::Nmprt { .. } => None,
-    }
+/// What a family's fragment shader reads per pixel beyond one fetch of each layer it binds:
+/// the cost table's lookup columns ([`finish::stats`]) and the cost model's counts
+/// ([`cost::counts`]) follow it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShaderReads {
+    /// Where the shader reads its per-texel data otherwise than each layer once (the
+    /// clustered techniques' taps).
+    pub per_texel_taps: Option<PerTexelTaps>,
+    /// How often it fetches each normal-indexed table: twice for `uncOndf` (at ±μ,
+    /// `ndf_diffuse`), once otherwise.
+    pub table_fetches: u32,
+    /// Whether it reads the normal map (`ssbump`: its texel replaces it).
+    pub reads_normal_map: bool,
+    /// How the cost model counts a shader whose work per pixel depends on its data; `None`:
+    /// the drawn shader's own SPIR-V.
+    pub count_plan: Option<crate::cost::CountPlan>,
 }
 
-/// Of [`per_texel_lookups`], the unfiltered texel fetches (0 where it is `None`).
-pub fn per_texel_fetches(technique: Technique) -> u32 {
-    match technique {
-        Technique::Vq { seams, .. } => cluster::per_texel_fetches(0, seams),
-        Technique::Cpca { m, seams, .. } => cluster::per_texel_fetches(m, seams),
-        _ => 0,
-    }
+/// Per-texel fetches per pixel of a shader that reads its lightmap tap by tap.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PerTexelTaps {
+    pub lookups: u32,
+    /// Of `lookups`, the unfiltered texel fetches (`texelFetch`).
+    pub fetches: u32,
 }
 
-/// How often a family's shader fetches each normal-indexed table: twice for `uncOndf`
-/// (at ±μ, `crate::ndf::diffuse`), once otherwise.
-pub fn table_fetches(technique: Technique) -> u32 {
-    match technique {
-        Technique::Ndf {
-            base: spec::NdfBase::Unc { .. },
-        } => 2,
-        _ => 1,
-    }
+impl ShaderReads {
+    /// Each per-texel layer and table once, the normal map read, counted as drawn.
+    pub const PLAIN: ShaderReads = ShaderReads {
+        per_texel_taps: None,
+        table_fetches: 1,
+        reads_normal_map: true,
+        count_plan: None,
+    };
 }
 
-/// Whether a family's shader leaves the normal map unread (`ssbump`: its texel replaces
-/// it), so the cost table does not count that fetch.
-pub fn skips_normal_map(technique: Technique) -> bool {
-    matches!(
-        technique,
-        Technique::Rnm {
-            variant: RnmVariant::SelfShadowed
+impl Technique {
+    /// What its fragment shader reads ([`ShaderReads`]).
+    pub fn reads(self) -> ShaderReads {
+        match self {
+            Technique::Unc { .. }
+            | Technique::Pca { .. }
+            | Technique::Shlmap
+            | Technique::Preconv
+            | Technique::Sh2
+            | Technique::PcaVertex { .. }
+            | Technique::Nmprt { .. } => ShaderReads::PLAIN,
+            Technique::Vq { seams, .. } => cluster::reads(0, seams),
+            Technique::Cpca { m, seams, .. } => cluster::reads(m, seams),
+            Technique::Rnm { variant } => ShaderReads {
+                reads_normal_map: match variant {
+                    RnmVariant::NormalMap | RnmVariant::NormalMapAo => true,
+                    RnmVariant::SelfShadowed => false,
+                },
+                ..ShaderReads::PLAIN
+            },
+            Technique::Ndf { base } => ShaderReads {
+                table_fetches: match base {
+                    NdfBase::Unc { .. } => 2,
+                    NdfBase::Preconv => 1,
+                },
+                ..base.technique().reads()
+            },
         }
-    )
+    }
 }
 
 /// An input error unless `coeffs` has at least `need` SH coefficients (`what`: "lighting",
@@ -223,7 +237,12 @@ pub struct TechniqueGpu {
     upload: Option<gpu::PendingUpload>,
     sets: Vec<LightingSet>,
     front: usize,
-    _per_texel: Vec<Image>,
+    /// The bake's per-texel images (binding TEXTURE0 where a set has none of its own).
+    per_texel: finish::TextureSlot,
+    /// The technique's material textures or normal basis (the next binding).
+    extra: Option<finish::TextureSlot>,
+    /// The fragment shader its pipelines run (SPIR-V), for the cost model's counts.
+    fragment: Vec<u32>,
     /// The technique's own mesh (`pcaMv`: the scene's surface with weights per vertex);
     /// `None` draws the scene's.
     mesh: Option<gpu::MeshBuffers>,
@@ -231,12 +250,15 @@ pub struct TechniqueGpu {
 }
 
 impl TechniqueGpu {
+    #[allow(clippy::too_many_arguments)]
     fn new(
         ctx: &Arc<Context>,
         technique: Technique,
         path: HwPath,
         stats: TechniqueStats,
-        per_texel: Vec<Image>,
+        per_texel: finish::TextureSlot,
+        extra: Option<finish::TextureSlot>,
+        fragment: Vec<u32>,
         sets: Vec<LightingSet>,
     ) -> Self {
         TechniqueGpu {
@@ -246,7 +268,9 @@ impl TechniqueGpu {
             upload: None,
             sets,
             front: 0,
-            _per_texel: per_texel,
+            per_texel,
+            extra,
+            fragment,
             mesh: None,
             ctx: ctx.clone(),
         }
@@ -288,12 +312,7 @@ impl TechniqueGpu {
     /// and per-texel data formed from the lighting, `nmprt*`).
     pub fn update_bytes(&self) -> u64 {
         let set = &self.sets[self.front];
-        set.params.size()
-            + set
-                .images
-                .iter()
-                .map(|i| i.desc().level0_bytes())
-                .sum::<u64>()
+        set.params.size() + set.images().map(|i| i.desc().level0_bytes()).sum::<u64>()
     }
 
     /// Copies of the lighting data (2 when built with [`build_dynamic`]).
@@ -328,8 +347,7 @@ impl TechniqueGpu {
         let levels = data.image_uploads(self.path);
         if !levels.is_empty() {
             let uploads: Vec<(&Image, &[Vec<&[u8]>])> = set
-                .images
-                .iter()
+                .images()
                 .zip(&levels)
                 .map(|(image, (_, l))| (image, l.as_slice()))
                 .collect();
@@ -451,53 +469,52 @@ fn build_sets(
     }
     let per_texel = texels.upload(ctx, path)?;
     let label = format!("{technique}.{path}");
-    let material: Vec<Image> = match technique {
-        Technique::Rnm { variant } => rnm::material_texture(ctx, variant, inputs, &label)?
-            .into_iter()
-            .collect(),
-        Technique::Nmprt { variant } => {
-            let basis = nmprt::basis_images(ctx, variant, path, &label)?;
-            let slot = (!basis.is_empty()).then(|| finish::TextureSlot {
-                kind: finish::SlotKind::NormalBasis,
-                images: basis,
-            });
-            let gpu = finish::finish(
-                ctx, scene, technique, path, per_texel, slot, &data, sets, None,
-            )?;
-            return Ok((gpu, recipe));
-        }
+    let extra = extra_slot(ctx, technique, path, inputs, &label)?;
+    let gpu = finish::finish(ctx, scene, technique, path, per_texel, extra, &data, sets)?;
+    Ok((gpu, recipe))
+}
+
+/// A technique's own slot besides its per-texel data and tables: material textures (`rnm`'s
+/// and `ssbump`'s AO or SSBump, the NDF moments) or a normal basis (`nmprtsvdM`'s U(n)).
+fn extra_slot(
+    ctx: &Arc<Context>,
+    technique: Technique,
+    path: HwPath,
+    inputs: &Inputs<'_>,
+    label: &str,
+) -> Result<Option<finish::TextureSlot>, TechniqueError> {
+    let (kind, images) = match technique {
+        Technique::Unc { .. }
+        | Technique::Pca { .. }
+        | Technique::Shlmap
+        | Technique::Preconv
+        | Technique::Sh2
+        | Technique::Vq { .. }
+        | Technique::Cpca { .. }
+        | Technique::PcaVertex { .. } => return Ok(None),
+        Technique::Rnm { variant } => (
+            finish::SlotKind::Material,
+            rnm::material_texture(ctx, variant, inputs, label)?
+                .into_iter()
+                .collect(),
+        ),
+        Technique::Nmprt { variant } => (
+            finish::SlotKind::NormalBasis,
+            nmprt::basis_images(ctx, variant, path, label)?,
+        ),
         Technique::Ndf { base } => {
             let maps = inputs.ndf_moments.ok_or_else(|| TechniqueError::Input {
-                label: label.clone(),
+                label: label.into(),
                 detail: "needs the moments of the material's normal map (prepare builds them)"
                     .into(),
             })?;
-            crate::ndf::diffuse::upload(ctx, maps, base, path, &label)?
+            (
+                finish::SlotKind::Material,
+                ndf_diffuse::upload(ctx, maps, base, path, label)?,
+            )
         }
-        _ => Vec::new(),
     };
-    let material = (!material.is_empty()).then(|| finish::TextureSlot {
-        kind: finish::SlotKind::Material,
-        images: material,
-    });
-    let counted = match technique {
-        Technique::Vq { seams, .. } | Technique::Cpca { seams, .. } => {
-            Some(cluster::count_plan(seams))
-        }
-        _ => None,
-    };
-    let gpu = finish::finish(
-        ctx,
-        scene,
-        technique,
-        path,
-        per_texel,
-        material,
-        &data,
-        sets,
-        counted.as_ref(),
-    )?;
-    Ok((gpu, recipe))
+    Ok((!images.is_empty()).then_some(finish::TextureSlot { kind, images }))
 }
 
 /// Errors of building a technique.

@@ -119,7 +119,7 @@ pub(crate) fn material_texture(
 
 /// The image of `maps` in its storage format with its box-filtered MIP chain.
 fn upload_maps(ctx: &Arc<Context>, maps: &SsBumpMaps, name: &str) -> Result<Image, TechniqueError> {
-    let levels = crate::render::box_mip_levels(maps.width, maps.height, maps.texels.clone());
+    let levels = crate::scene::mip::box_mip_levels(maps.width, maps.height, maps.texels.clone());
     let (format, bytes): (vk::Format, Vec<Vec<u8>>) = match maps.storage {
         SsBumpStorage::Unorm8 => (
             vk::Format::R8G8B8A8_UNORM,

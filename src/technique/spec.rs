@@ -11,6 +11,7 @@
 use std::fmt;
 use std::str::FromStr;
 
+pub use crate::gpu::HwPath;
 use crate::sh::Order;
 
 /// A technique of the cost table: a family and its parameters.
@@ -52,7 +53,7 @@ pub enum Technique {
     /// the self-shadowed bump map's texels are the weights).
     Rnm { variant: RnmVariant },
     /// `uncOndf`, `preconvndf`: the base technique with its normal map filtered as a
-    /// distribution (Olano & North; `crate::ndf::diffuse`): the clamped-cosine
+    /// distribution (Olano & North; `technique::ndf_diffuse`): the clamped-cosine
     /// bands attenuated at lookup time by the zonal coefficients of the pixel's filtered
     /// normals — isotropic from the mean length for `unc`, exact from all nine moments for
     /// `preconv`.
@@ -400,7 +401,16 @@ impl Technique {
     pub fn unfiltered(self) -> Technique {
         match self {
             Technique::Ndf { base } => base.technique(),
-            _ => self,
+            Technique::Unc { .. }
+            | Technique::Pca { .. }
+            | Technique::Shlmap
+            | Technique::Preconv
+            | Technique::Sh2
+            | Technique::Vq { .. }
+            | Technique::Cpca { .. }
+            | Technique::PcaVertex { .. }
+            | Technique::Rnm { .. }
+            | Technique::Nmprt { .. } => self,
         }
     }
 
@@ -414,7 +424,14 @@ impl Technique {
                 base: NdfBase::Preconv,
             }),
             Technique::Ndf { .. } => Some(self),
-            _ => None,
+            Technique::Pca { .. }
+            | Technique::Shlmap
+            | Technique::Sh2
+            | Technique::Vq { .. }
+            | Technique::Cpca { .. }
+            | Technique::PcaVertex { .. }
+            | Technique::Rnm { .. }
+            | Technique::Nmprt { .. } => None,
         }
     }
 
@@ -704,57 +721,6 @@ impl serde::Serialize for Technique {
     }
 }
 
-/// The hardware paths of DESIGN §2.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum HwPath {
-    /// DX9-class: 2D textures only, ≤ 16 textures per draw, 4 values per RGBA texel.
-    Dx9,
-    /// DX10-class: texture arrays for per-texel data, seamless cube (array) tables.
-    Dx10,
-}
-
-impl HwPath {
-    pub const ALL: &'static [HwPath] = &[HwPath::Dx9, HwPath::Dx10];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            HwPath::Dx9 => "dx9",
-            HwPath::Dx10 => "dx10",
-        }
-    }
-
-    /// The value of the shader macro `SHVIS_PATH_DX9`.
-    pub fn shader_define(self) -> (&'static str, u32) {
-        ("PATH_DX9", (self == HwPath::Dx9) as u32)
-    }
-}
-
-impl fmt::Display for HwPath {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for HwPath {
-    type Err = ParseError;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        HwPath::ALL
-            .iter()
-            .copied()
-            .find(|p| p.name() == s)
-            .ok_or_else(|| ParseError::UnknownPath {
-                name: s.to_string(),
-                known: join_names(HwPath::ALL.iter().map(|p| p.name().to_string())),
-            })
-    }
-}
-
-impl serde::Serialize for HwPath {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(self.name())
-    }
-}
-
 fn join_names(names: impl Iterator<Item = String>) -> String {
     names.collect::<Vec<_>>().join(", ")
 }
@@ -764,8 +730,8 @@ fn join_names(names: impl Iterator<Item = String>) -> String {
 pub enum ParseError {
     #[error("unknown technique '{name}'; known: {known}")]
     UnknownTechnique { name: String, known: String },
-    #[error("unknown path '{name}'; known: {known}")]
-    UnknownPath { name: String, known: String },
+    #[error(transparent)]
+    UnknownPath(#[from] crate::gpu::UnknownPath),
 }
 
 #[cfg(test)]

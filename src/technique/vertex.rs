@@ -178,7 +178,8 @@ pub(crate) fn finish(
         built.push(LightingSet {
             pipeline,
             params,
-            images: Vec::new(),
+            tables: Vec::new(),
+            own_per_texel: None,
             defines: lighting.defines.clone(),
         });
     }
@@ -187,28 +188,18 @@ pub(crate) fn finish(
         table_bytes: lighting.params.len() as u64,
         textures_bound: layout::MATERIAL_TEXTURES,
         lookups_per_pixel: layout::MATERIAL_TEXTURES,
-        cost: crate::probe::CostCounts::new(
-            &[
-                // The albedo (sRGB) and the normal map (UNORM); the specular term's moment
-                // maps (RGBA32F).
-                (crate::probe::Kind::TrilinearSrgb, 1),
-                (
-                    crate::probe::Kind::Trilinear2d,
-                    layout::MATERIAL_TEXTURES - 1,
-                ),
-                (
-                    crate::probe::Kind::TrilinearWide,
-                    scene
-                        .specular()
-                        .map_or(0, |s| s.term.filter.extra_lookups()),
-                ),
-            ],
-            &gpu::spirv_counts::count(&fragment),
-        ),
-        untaken_cost: crate::probe::CostCounts::default(),
     };
     super::finish::add_specular_stats(scene, path, &mut stats);
-    let mut gpu = TechniqueGpu::new(ctx, technique, path, stats, Vec::new(), built);
+    let mut gpu = TechniqueGpu::new(
+        ctx,
+        technique,
+        path,
+        stats,
+        super::finish::TextureSlot::per_texel(Vec::new()),
+        None,
+        fragment,
+        built,
+    );
     gpu.mesh = Some(mesh);
     Ok(gpu)
 }

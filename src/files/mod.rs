@@ -11,13 +11,17 @@
 //! - [`check_writable_dir`] creates a directory and a probe file in it before any work, so
 //!   an unwritable `--out` or cache is reported before a bake, not after.
 //! - A [`Manifest`] (`manifest.json`, written last) lists a directory's files with their
-//!   sizes and [`hash64`](crate::bake::cache::hash64): a directory without one, or whose
+//!   sizes and [`hash64`]: a directory without one, or whose
 //!   files do not match it, is incomplete ([`Manifest::verify`]).
 //!
 //! OpenEXR: the `exr` crate's default encoding writes tiles in whatever order its worker
 //! threads finish (`LineOrder::Unspecified`), so two runs with identical pixels give
 //! different files. [`EXR_ENCODING`] keeps its compression and tiling but asks for
 //! increasing line order, which the writer sorts into, whatever the thread count.
+
+pub mod hash;
+
+pub use hash::{Hasher64, hash64, splitmix64};
 
 use std::fs::{self, File};
 use std::io::{self, Read, Write};
@@ -363,7 +367,7 @@ impl Manifest {
                 .map(|(name, bytes)| ManifestEntry {
                     name,
                     bytes: bytes.len() as u64,
-                    hash: format!("{:016x}", crate::bake::cache::hash64(bytes)),
+                    hash: format!("{:016x}", hash64(bytes)),
                 })
                 .collect(),
         }
@@ -412,7 +416,7 @@ impl Manifest {
             let file = dir.join(&f.name);
             let content = read_bounded(&file, f.bytes, "a listed file")
                 .map_err(|e| format!("{}: does not match {MANIFEST_NAME} ({e})", file.display()))?;
-            let hash = format!("{:016x}", crate::bake::cache::hash64(&content));
+            let hash = format!("{:016x}", hash64(&content));
             if content.len() as u64 != f.bytes || hash != f.hash {
                 return Err(format!(
                     "{}: does not match {MANIFEST_NAME} ({} bytes, hash {hash}; listed {} bytes, hash {})",

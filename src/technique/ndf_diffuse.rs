@@ -3,8 +3,8 @@
 //!
 //! A minified pixel covers many normal-map texels; what it should shade with is the mean of
 //! the shading f(n) over their normals, ∫ p(n) f(n) dn with p the normals' distribution
-//! (the NDF), not f at their renormalised mean. The NDF maps' moments ([`super`]; built
-//! here with σ = 0, [`super::moment_maps`]) give that integral at lookup time:
+//! (the NDF), not f at their renormalised mean. The NDF maps' moments (`crate::ndf`; built
+//! here with σ = 0, `crate::ndf::moment_maps`) give that integral at lookup time:
 //!
 //! **preconv — exact, anisotropic.** f(n) = AO · Σ_{l<3,m} E_lm y_lm(n), and every
 //! y_lm with l ≤ 2 is a polynomial of degree ≤ 2 in the components of unit n (1; x, y, z;
@@ -50,11 +50,11 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::{Moments, NdfMaps};
+use super::spec::NdfBase;
+use super::{HwPath, texels::VALUES_PER_TEXEL};
 use crate::gpu::{Context, GpuError, Image, ImageDesc};
+use crate::ndf::{Moments, NdfMaps};
 use crate::sh::Order;
-use crate::technique::spec::NdfBase;
-use crate::technique::{HwPath, texels::VALUES_PER_TEXEL};
 
 /// (a_1, a_2): the attenuation of SH bands 1 and 2 by the von Mises–Fisher distribution of
 /// mean length `r` (module doc).
@@ -127,9 +127,9 @@ pub fn upload(
     label: &str,
 ) -> Result<Vec<Image>, GpuError> {
     match base {
-        NdfBase::Preconv => super::render::upload_maps(ctx, maps, path),
+        NdfBase::Preconv => crate::render::specular::upload_maps(ctx, maps, path),
         NdfBase::Unc { .. } => {
-            let format = super::MOMENT_FORMAT;
+            let format = crate::ndf::MOMENT_FORMAT;
             let (w, h) = (maps.levels[0].width, maps.levels[0].height);
             let data: Vec<Vec<&[u8]>> = maps
                 .levels

@@ -38,6 +38,8 @@
 //! the image converges to the N-bounce solution; the direct image comes from the same
 //! samples at no extra cost.
 
+pub mod specular;
+
 use std::sync::Arc;
 use std::time::Instant;
 

@@ -1,0 +1,69 @@
+//! The hardware paths (DESIGN §2): what a technique's GPU data may be on each — `dx9`
+//! packed 2D textures, `dx10` arrays and seamless cube maps. Techniques (`technique`), the
+//! scene's specular term (`render`) and the reports name them.
+
+use std::fmt;
+use std::str::FromStr;
+
+/// The hardware paths of DESIGN §2.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum HwPath {
+    /// DX9-class: 2D textures only, ≤ 16 textures per draw, 4 values per RGBA texel.
+    Dx9,
+    /// DX10-class: texture arrays for per-texel data, seamless cube (array) tables.
+    Dx10,
+}
+
+impl HwPath {
+    pub const ALL: &'static [HwPath] = &[HwPath::Dx9, HwPath::Dx10];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            HwPath::Dx9 => "dx9",
+            HwPath::Dx10 => "dx10",
+        }
+    }
+
+    /// The value of the shader macro `SHVIS_PATH_DX9`.
+    pub fn shader_define(self) -> (&'static str, u32) {
+        ("PATH_DX9", (self == HwPath::Dx9) as u32)
+    }
+}
+
+impl fmt::Display for HwPath {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for HwPath {
+    type Err = UnknownPath;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        HwPath::ALL
+            .iter()
+            .copied()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| UnknownPath {
+                name: s.to_string(),
+                known: HwPath::ALL
+                    .iter()
+                    .map(|p| p.name())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            })
+    }
+}
+
+impl serde::Serialize for HwPath {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+/// A path name that does not parse.
+#[derive(Debug, thiserror::Error)]
+#[error("unknown path '{name}'; known: {known}")]
+pub struct UnknownPath {
+    pub name: String,
+    pub known: String,
+}
