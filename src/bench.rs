@@ -11,6 +11,8 @@
 //! than two builds whose medians agree within [`BUILD_AGREEMENT`], gets up to
 //! [`MODEL_STATE_ROUNDS`] more (`probe::states`).
 
+pub mod rows;
+
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;

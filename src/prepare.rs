@@ -2,6 +2,10 @@
 //! the scene and the environment by name or path, bake the lightmap data, and prepare the
 //! lighting (SH projection, clamped-cosine convolution).
 
+pub mod bake_layers;
+pub mod reference_image;
+pub mod single_frame;
+
 use std::cell::OnceCell;
 use std::path::PathBuf;
 use std::sync::Arc;

@@ -2,6 +2,8 @@
 //! printed for checking the math from outside, one line per item, 17 significant digits
 //! (enough to round-trip an f64).
 
+pub mod ssbump;
+
 use std::io::{BufRead, Write};
 
 use glam::DVec3;

@@ -20,6 +20,8 @@
 //! quit. Drag with the left button to orbit the camera, with the right one to turn the sun;
 //! wheel to move closer.
 
+pub mod summary;
+
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;

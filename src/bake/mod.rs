@@ -21,6 +21,7 @@ pub mod ao;
 pub mod cache;
 pub mod cluster;
 pub mod directions;
+pub mod gpu_check;
 pub mod gpu_visibility;
 pub mod lxh;
 pub mod pca;

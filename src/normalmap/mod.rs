@@ -22,6 +22,7 @@
 pub mod cpu;
 pub mod cull;
 pub mod gpu;
+pub mod job;
 pub mod output;
 pub mod projection;
 pub mod simplify;

@@ -98,7 +98,7 @@ impl Texture8 {
     }
 
     /// A unit tangent-space normal as an RGBA8 normal-map texel (glTF convention: c ↦
-    /// (c + 1)/2 rounded to the nearest 8-bit code; `ndf::decode_normal` inverts it).
+    /// (c + 1)/2 rounded to the nearest 8-bit code; [`decode_normal`] inverts it).
     pub fn encode_normal(n: Vec3) -> [u8; 4] {
         let e = |c: f32| ((c * 0.5 + 0.5) * 255.0).round() as u8;
         [e(n.x), e(n.y), e(n.z), 255]

@@ -22,12 +22,17 @@
 pub mod compression;
 pub mod ndf;
 pub mod ndf_diffuse;
+pub mod ndf_report;
 pub mod nmprt_svd;
+pub mod nmprt_svd_report;
 pub mod normalmap;
+pub mod normalmap_report;
 pub mod params;
 pub mod params_gpu;
 pub mod rnm;
+pub mod rnm_report;
 pub mod seams;
+pub mod tables;
 
 use crate::render::Frame;
 

@@ -1,0 +1,191 @@
+//! `shvis bench` and `shvis probe`: the cost table and the device's microbenchmarks.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Result, bail};
+use clap::Args;
+
+use shvis::bench::BenchSettings;
+use shvis::prepare::prepare_with;
+use shvis::technique::{HwPath, Technique};
+
+use super::args::{
+    BakerArgs, GpuArgs, NormalFilterArg, SceneArgs, SpecularArgs, at_least_one_f64, finite_degrees,
+    finite_f32, with_normal_filter,
+};
+use super::{
+    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, check_frame_memory, create_dir, parse_list,
+    prepare_settings, print_table, print_written, with_gpu,
+};
+
+#[derive(Args, Debug)]
+pub(super) struct ProbeArgs {
+    #[command(flatten)]
+    gpu: GpuArgs,
+    #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Timed frames per microbenchmark (the median is used).
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    frames: u32,
+    /// Untimed frames before them.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=10_000))]
+    warmup: u32,
+    /// Screen area of the probe's triangles, pixels (default: the built-in house's
+    /// pixel-weighted triangle area at this size, as `shvis bench` sizes them for its scene).
+    #[arg(long, value_parser = at_least_one_f64)]
+    triangle_pixels: Option<f64>,
+    /// Output directory (probe.md, probe.json).
+    #[arg(long, default_value = "probe-out")]
+    out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub(super) struct BenchArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    baker: BakerArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    #[arg(long, default_value = "sky")]
+    env: String,
+    /// `all` or a comma-separated list of technique names.
+    #[arg(long, default_value = "all")]
+    techniques: String,
+    /// Comma-separated hardware paths.
+    #[arg(long, default_value = "dx9,dx10")]
+    paths: String,
+    /// How unc* and preconv read the normal map: `mip` (its MIP chain of averaged normals)
+    /// or `ndf` (filtered as a distribution, Olano & North: the techniques' `…ndf`
+    /// variants; the other techniques have none and stay as they are).
+    #[arg(long, value_enum, default_value_t = NormalFilterArg::Mip)]
+    normal_filter: NormalFilterArg,
+    #[command(flatten)]
+    specular: SpecularArgs,
+    /// Timed frames per technique × path (after the warm-up).
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    frames: u32,
+    /// Untimed warm-up frames per technique × path.
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(0..=10_000))]
+    warmup: u32,
+    #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Exposure in EV of the PNG images.
+    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
+    exposure: f32,
+    /// Samples per pixel of the reference the errors are measured against (0: no errors);
+    /// at most `reference --spp`'s limit.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(0..=1_000_000))]
+    ref_spp: u32,
+    /// Measure against the point-sampled reference (the techniques' own pixel sampling)
+    /// instead of the footprint reference.
+    #[arg(long)]
+    point_reference: bool,
+    /// Bounces of inter-reflection in shlmap's and the nmprt* transfer bakes and in the
+    /// reference they are measured against (the other techniques model direct light and
+    /// meet the direct reference).
+    #[arg(long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
+    bounces: u32,
+    /// Leave out the device probe and the rows' model columns.
+    #[arg(long)]
+    no_probe: bool,
+    /// Measure under the environment turned DEG degrees about +Y after the bake:
+    /// references under the turned map, techniques with dynamic lighting relit to it
+    /// through their lighting update, baked ones (shlmap, rnm*) as baked. No error ladder.
+    #[arg(long, value_name = "DEG", value_parser = finite_degrees)]
+    relight_rotate: Option<f64>,
+    /// Output directory.
+    #[arg(long, default_value = "bench-out")]
+    out: PathBuf,
+}
+
+pub(super) fn run_probe(a: ProbeArgs) -> Result<()> {
+    check_frame_memory(a.width, a.height, 48)?;
+    create_dir(&a.out)?;
+    with_gpu(&a.gpu, |ctx| {
+        let probe = shvis::probe::run(
+            ctx,
+            &shvis::probe::ProbeSettings {
+                width: a.width,
+                height: a.height,
+                triangle_pixels: match a.triangle_pixels {
+                    Some(px) => px,
+                    None => shvis::scene::house::build(shvis::scene::house::MIN_LIGHTMAP_RES)?
+                        .pixel_weighted_triangle_area(a.width, a.height),
+                },
+                warmup: a.warmup,
+                frames: a.frames,
+            },
+        )?;
+        println!("{}", probe.to_markdown());
+        print_written(&shvis::report::write_probe(&probe, &a.out)?);
+        Ok(())
+    })
+}
+
+pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
+    check_frame_memory(a.width, a.height, 320)?;
+    let mut settings = BenchSettings {
+        techniques: with_normal_filter(parse_list(&a.techniques, Technique::ALL)?, a.normal_filter),
+        paths: parse_list(&a.paths, HwPath::ALL)?,
+        frames: a.frames,
+        warmup: a.warmup,
+        width: a.width,
+        height: a.height,
+        exposure: a.exposure,
+        ref_spp: a.ref_spp,
+        bounces: a.bounces,
+        footprint_reference: !a.point_reference,
+        seed: a.scene.seed,
+        specular: None,
+        out: a.out.clone(),
+        probe: !a.no_probe,
+        relight_degrees: a.relight_rotate,
+    };
+    if a.relight_rotate.is_some() && !a.specular.specular.is_empty() {
+        bail!("--relight-rotate: not with --specular (its light is the bake's sun)");
+    }
+    create_dir(&a.out)?;
+    // A table from an earlier run must not sit beside this run's images if it stops early.
+    for stale in ["table.md", "table.json"] {
+        let _ = std::fs::remove_file(a.out.join(stale));
+    }
+    let started = Instant::now();
+    let prepare_settings = prepare_settings(&a.scene, &a.env, &settings.techniques, a.bounces)?;
+    // The device before the bake: a missing GPU should not cost one, and `--baker gpu`
+    // bakes on it.
+    with_gpu(&a.gpu, |ctx| {
+        let mut prepared = prepare_with(&prepare_settings, &a.baker.visibility_baker(ctx))?;
+        prepared.prepare_techniques(&settings.techniques)?;
+        settings.specular = a.specular.settings(&prepared.env)?;
+        if a.techniques == "all" {
+            // The whole table on a scene without a height map: the rows that need one are
+            // left out (named explicitly they fail with the reason).
+            let dropped = shvis::bench::rows::drop_rows_without_height_map(
+                &mut settings.techniques,
+                &prepared,
+            );
+            if !dropped.is_empty() {
+                let names: Vec<String> = dropped.iter().map(|t| t.name()).collect();
+                eprintln!(
+                    "note: scene '{}' has no height map (--height-map): leaving out {}",
+                    prepared.scene.name,
+                    names.join(", ")
+                );
+            }
+        }
+        let table = shvis::bench::run(ctx, &prepared, &settings)?;
+        print_table(
+            &table.to_markdown(),
+            &a.out,
+            "table.md, table.json",
+            started,
+        );
+        Ok(())
+    })
+}

@@ -1,0 +1,222 @@
+//! The command line (DESIGN §4), a thin shell: clap types grouped by command, each
+//! command's run turning its arguments into the library's settings and calling the
+//! library. `anyhow` lives here and in main.rs only; every failure becomes one `error: …`
+//! line and a non-zero exit.
+
+mod args;
+mod bake;
+mod bench;
+mod render;
+mod study;
+mod tools;
+mod view;
+
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{Context as _, Result, bail};
+use clap::{Parser, Subcommand};
+
+use shvis::gpu::{Context, ContextDesc};
+use shvis::prepare::PrepareSettings;
+use shvis::technique::Technique;
+
+use args::{GpuArgs, SceneArgs};
+
+/// Largest frame side accepted before asking the device (which may allow less).
+const MAX_FRAME_SIDE: u32 = 16384;
+/// PNG exposure unless `--exposure` says otherwise.
+const DEFAULT_EXPOSURE_EV: f32 = -1.0;
+/// Most bounces of inter-reflection accepted (each adds a pass over the lightmap).
+const MAX_BOUNCES: u32 = 16;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "shvis",
+    version,
+    about = "Normal mapping with low-frequency precomputed visibility (Iwanicki & Sloan): bake, render, measure"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Bake SH visibility and ambient occlusion and write them as EXR layers for inspection.
+    Bake(bake::BakeArgs),
+    /// Render one technique on one hardware path to a PNG or EXR.
+    Render(render::RenderArgs),
+    /// Ground truth: G-buffer on the GPU, ray-cast visibility and importance-sampled
+    /// environment integration on the CPU; prints its noise level.
+    Reference(render::ReferenceArgs),
+    /// Time every technique × path and write table.md, table.json and images.
+    Bench(bench::BenchArgs),
+    /// Microbenchmarks of the current device (lookups by kind, float ops, varyings,
+    /// uniform reads, depth test) and the cost model fitted to them → probe.md, probe.json
+    /// (`shvis bench` runs it first).
+    Probe(bench::ProbeArgs),
+    /// A window: the scene with any technique × path switched by keys, an orbit camera,
+    /// the sun turned or animated with the dynamic-lighting machinery, an overlay with GPU
+    /// ms and frame rate. Needs a display (X11; `xvfb-run -a` without one).
+    View(view::ViewArgs),
+    /// Dynamic lighting (§3.3): turn the environment about +Y over a run of frames, rebuild
+    /// each technique's lighting data every K frames, and report rebuild and GPU times and
+    /// the errors at sampled frames (static and lag).
+    Relight(view::RelightArgs),
+    /// SH utilities for checking the math from outside (17 significant digits).
+    #[command(subcommand)]
+    Sh(tools::ShCommand),
+    /// Reproduce the paper's side studies.
+    #[command(subcommand)]
+    Study(study::StudyCommand),
+    /// Self-shadowed bump map from a height map (Green, Valve): writes the SSBump
+    /// (D · directional occlusion) as 16-bit PNG and EXR, the plain D encoding and scalar AO.
+    Ssbump(tools::SsbumpArgs),
+    /// Normal map of a high-polygon mesh for a low one, on the GPU (Gumbau et al.):
+    /// tangent- and object-space 16-bit PNG + EXR, optionally the low mesh as glTF.
+    Normalmap(tools::NormalmapArgs),
+}
+
+/// Parses the arguments and runs the command.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Bake(a) => bake::run_bake(a).context("bake"),
+        Command::Render(a) => render::run_render(a).context("render"),
+        Command::Reference(a) => render::run_reference(a).context("reference"),
+        Command::Bench(a) => bench::run_bench(a).context("bench"),
+        Command::Probe(a) => bench::run_probe(a).context("probe"),
+        Command::Relight(a) => view::run_relight(a).context("relight"),
+        Command::View(a) => view::run_view(a).context("view"),
+        Command::Sh(c) => tools::run_sh(c).context("sh"),
+        Command::Study(c) => study::run_study(c),
+        Command::Ssbump(a) => tools::run_ssbump(a).context("ssbump"),
+        Command::Normalmap(a) => tools::run_normalmap(a).context("normalmap"),
+    }
+}
+
+/// Opens the device `gpu` names, runs `work` on it, then — with `--validate` — fails the
+/// command if validation reported any error or warning. Every command that opens a device
+/// goes through here; an error of `work` comes first and skips the check.
+fn with_gpu<T>(gpu: &GpuArgs, work: impl FnOnce(&Arc<Context>) -> Result<T>) -> Result<T> {
+    let ctx = Context::new(&ContextDesc {
+        validate: gpu.validate,
+        device: gpu.device.clone(),
+        ..ContextDesc::default()
+    })?;
+    log::info!("device: {}", ctx.device_name());
+    let value = work(&ctx)?;
+    let (errors, warnings) = ctx.message_counts();
+    check_validation(gpu.validate, errors, warnings)?;
+    Ok(value)
+}
+
+/// With `--validate`, any validation error or warning fails the command.
+fn check_validation(validate: bool, errors: u32, warnings: u32) -> Result<()> {
+    if validate && (errors > 0 || warnings > 0) {
+        bail!("validation reported {errors} errors and {warnings} warnings (see the log above)");
+    }
+    Ok(())
+}
+
+/// Prints a library progress line on stdout.
+fn say(line: &str) {
+    println!("{line}");
+}
+
+/// The frames' memory on the host, checked before any work: `bytes_per_pixel` covers the
+/// readbacks (RGBA32F) and the images a command keeps (render 48, reference's G-buffers and
+/// sums 160, the bench's reference, row and ladder images 320).
+fn check_frame_memory(width: u32, height: u32, bytes_per_pixel: u64) -> Result<()> {
+    Ok(shvis::limits::check_memory(
+        format_args!("--width {width} × --height {height}: the frames"),
+        shvis::limits::image_bytes(u64::from(width), u64::from(height), bytes_per_pixel),
+        "lower --width or --height",
+    )?)
+}
+
+/// Prints a run's markdown table and where its files went.
+fn print_table(markdown: &str, out: &Path, tables: &str, started: Instant) {
+    println!("{markdown}");
+    println!(
+        "wrote {}/{tables} and images in {:.1} s",
+        out.display(),
+        started.elapsed().as_secs_f64()
+    );
+}
+
+/// Prints the files a run wrote, one `wrote PATH` line each.
+fn print_written(paths: &[std::path::PathBuf]) {
+    for p in paths {
+        println!("wrote {}", p.display());
+    }
+}
+
+/// Creates the `--out` directory and checks it takes files, before any work.
+fn create_dir(dir: &Path) -> Result<()> {
+    Ok(shvis::files::check_writable_dir(dir, "--out")?)
+}
+
+/// `all` or a comma-separated list of names.
+fn parse_list<T>(list: &str, all: &[T]) -> Result<Vec<T>>
+where
+    T: std::str::FromStr + Copy,
+    T::Err: std::error::Error + Send + Sync + 'static,
+{
+    if list == "all" {
+        return Ok(all.to_vec());
+    }
+    list.split(',')
+        .map(|s| s.trim().parse::<T>().map_err(anyhow::Error::from))
+        .collect()
+}
+
+/// The bake settings of `scene` under `env` for `techniques`: the inter-reflected bakes
+/// (SH lightmap, transfer matrices) with `bounces` where a technique needs them.
+fn prepare_settings(
+    scene: &SceneArgs,
+    env: &str,
+    techniques: &[Technique],
+    bounces: u32,
+) -> Result<PrepareSettings> {
+    let needs = |f: fn(&shvis::technique::BakeNeeds) -> bool| {
+        techniques.iter().any(|t| f(&t.needs())).then_some(bounces)
+    };
+    let settings = PrepareSettings {
+        scene: scene.scene.clone(),
+        env: env.to_string(),
+        vis_res: scene.vis_res,
+        rays: scene.rays,
+        seed: scene.seed,
+        progress: true,
+        order: shvis::sh::Order::new(scene.order).context("--order")?,
+        table_res: scene.table_res,
+        h_order: shvis::sh::Order::new(scene.h_order).context("--h-order")?,
+        cache_dir: None,
+        sh_lightmap_bounces: needs(|n| n.sh_lightmap),
+        transfer_bounces: needs(|n| n.transfer),
+        transfer_order: shvis::sh::Order::new(scene.transfer_order).context("--transfer-order")?,
+        height_map: scene
+            .height_map
+            .clone()
+            .map(|path| (path, scene.height_scale)),
+    };
+    // Every range and the bake's memory, before a device is opened or a file read.
+    shvis::prepare::check_settings(&settings)?;
+    Ok(settings)
+}
+
+/// The scene of `scene` under `env` prepared for `techniques` (inter-reflected bakes with
+/// the default bounces), on the CPU baker.
+fn prepare_for(
+    scene: &SceneArgs,
+    env: &str,
+    techniques: &[Technique],
+    bounces: u32,
+) -> Result<shvis::prepare::Prepared> {
+    let mut prepared =
+        shvis::prepare::prepare(&prepare_settings(scene, env, techniques, bounces)?)?;
+    prepared.prepare_techniques(techniques)?;
+    Ok(prepared)
+}

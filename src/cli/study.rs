@@ -1,0 +1,464 @@
+//! `shvis study …`: the paper's side studies.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context as _, Result, bail};
+use clap::{Args, Subcommand};
+
+use shvis::technique::{HwPath, Technique};
+
+use super::args::{GpuArgs, SceneArgs, finite_f32};
+use super::{
+    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, create_dir, prepare_settings, print_table,
+    print_written, say, with_gpu,
+};
+
+#[derive(Subcommand, Debug)]
+pub(super) enum StudyCommand {
+    /// Appendix A / Figure 8: MSE of SH basis functions stored in four sphere
+    /// parameterizations against total samples (CPU emulation and real texture hardware).
+    Params(StudyParamsArgs),
+    /// Visibility reconstruction error against storage for global PCA, VQ and static /
+    /// iterative CPCA fitted to the same bake.
+    Compression(StudyCompressionArgs),
+    /// The screen-space discontinuity at cluster boundaries of a clustered technique
+    /// (vqK, cpcaK_M) with the 4-tap seam blending and without it.
+    Seams(StudySeamsArgs),
+    /// rnm, rnmao, ssbump, shlmap and unc6 against the displaced-geometry reference and the
+    /// flat normal-mapped one, per environment; the Fig. 1 composite.
+    Rnm(StudyRnmArgs),
+    /// GPU normal-map generation timed against triangle counts and resolution (the paper's
+    /// Tables 1 and 2) beside the CPU baker; GPU vs CPU maps of a real model simplified;
+    /// the map rendered through unc6 against the high mesh's reference.
+    Normalmap(StudyNormalmapArgs),
+    /// The specular term of a directional light on the receding bumpy plane and the wavy
+    /// sphere under naive MIP filtering and normal distribution mapping (partial /
+    /// per-texel normalisation), against its footprint reference, with a composite per
+    /// scene; the diffuse techniques and their NDF variants.
+    Ndf(StudyNdfArgs),
+    /// Energy captured by the first M = 1…9 singular values of normal mapping for PRT's
+    /// normal basis (PRT course), uniform and cosine-weighted, beside the course's.
+    NmprtSvd(StudyNmprtSvdArgs),
+}
+
+#[derive(Args, Debug)]
+pub(super) struct StudyNmprtSvdArgs {
+    /// Disk grid of normals per side (the U textures' resolution).
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    side: u32,
+    /// Hemisphere quadrature cells per side (in cos θ and φ).
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(4..=4096))]
+    quadrature: u32,
+    /// Output directory (nmprt_svd.md).
+    #[arg(long, default_value = "study-out")]
+    out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub(super) struct StudyNdfArgs {
+    /// Scenes of the specular part: `bumpy` (the receding plane) and `wavy` (the sphere).
+    #[arg(long, value_delimiter = ',', default_value = "bumpy,wavy")]
+    scenes: Vec<shvis::study::ndf::SpecularScene>,
+    /// Base spread σ of a full-resolution texel's normals (the surface's own roughness).
+    #[arg(long, default_value_t = 0.1, value_parser = finite_f32)]
+    sigma: f32,
+    /// Direction toward the light on the plane (x,y,z; normalized); the sphere's is fixed
+    /// (`scene::wavy::light_dir`).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "0,0.3,-1",
+        allow_hyphen_values = true,
+        value_parser = finite_f32
+    )]
+    light_dir: Vec<f32>,
+    #[arg(long, default_value_t = 480, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 270, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Reference sub-pixel samples (⌈√spp⌉² strata, at most 1024).
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    spp: u32,
+    #[arg(long, value_delimiter = ',', default_value = "dx9,dx10")]
+    paths: Vec<HwPath>,
+    /// Timed frames per row.
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    frames: u32,
+    /// Scenes of the diffuse part (unc6 / preconv and their NDF variants against the
+    /// footprint reference); empty to skip it.
+    #[arg(long, value_delimiter = ',', default_value = "bumpy,house")]
+    diffuse_scenes: Vec<String>,
+    /// Environments of the diffuse part, comma-separated (`sky`, `sky:DEG` or .exr/.hdr
+    /// maps): each scene is measured under each.
+    #[arg(long, value_delimiter = ',', default_value = "sky")]
+    diffuse_envs: Vec<String>,
+    /// Reference samples per pixel of the diffuse part.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    diffuse_spp: u32,
+    /// Lightmap resolution of the diffuse part's bakes.
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=4096))]
+    vis_res: u32,
+    /// Output directory: ndf.md, ndf.json, fig1_ndf_{scene}.png.
+    #[arg(long, default_value = "study-out/ndf")]
+    out: PathBuf,
+    #[command(flatten)]
+    gpu: GpuArgs,
+}
+
+#[derive(Args, Debug)]
+pub(super) struct StudyNormalmapArgs {
+    /// Runs per timing (medians are reported).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
+    repeats: u32,
+    /// Map side of the triangle-count and strategy tables.
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(16..=8192))]
+    res: u32,
+    /// The real model (skipped with a note when the file is missing).
+    #[arg(
+        long,
+        default_value = "../shared/assets/models/NormalTangentMirrorTest/NormalTangentMirrorTest.gltf"
+    )]
+    model: PathBuf,
+    /// Fractions of the model's triangles to keep, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "0.05,0.02", value_parser = finite_f32)]
+    ratios: Vec<f32>,
+    /// Map side for the model.
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(16..=8192))]
+    model_res: u32,
+    #[arg(long, default_value = "sky")]
+    env: String,
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=8192))]
+    vis_res: u32,
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    rays: u32,
+    #[arg(long, value_delimiter = ',', default_value = "dx9,dx10")]
+    paths: Vec<HwPath>,
+    #[arg(long, default_value_t = 480, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 360, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Samples per pixel of the reference.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    spp: u32,
+    /// Output directory: normalmap.md, normalmap.json, the model's maps, glTFs and renders.
+    #[arg(long, default_value = "study-out/normalmap")]
+    out: PathBuf,
+    #[command(flatten)]
+    gpu: GpuArgs,
+}
+
+#[derive(Args, Debug)]
+pub(super) struct StudyRnmArgs {
+    /// A scene with a height-mapped material small enough to displace.
+    #[arg(long, default_value = "patio")]
+    scene: String,
+    /// Environments, comma-separated (`sky:15`: the grazing low sun; the overcast probe).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "sky:15,../shared/assets/env/potsdamer_platz_1k.exr"
+    )]
+    envs: Vec<String>,
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=8192))]
+    vis_res: u32,
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    rays: u32,
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Inter-reflection of the lightmap bakes and the references.
+    #[arg(long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
+    bounces: u32,
+    #[arg(long, value_delimiter = ',', default_value = "dx9,dx10")]
+    paths: Vec<HwPath>,
+    #[arg(long, default_value_t = 480, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 300, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Samples per pixel of each reference.
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    spp: u32,
+    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
+    exposure: f32,
+    /// Output directory: rnm.md, rnm.json, fig1_<env>.png.
+    #[arg(long, default_value = "study-out")]
+    out: PathBuf,
+    #[command(flatten)]
+    gpu: GpuArgs,
+}
+
+#[derive(Args, Debug)]
+pub(super) struct StudySeamsArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Environment (as for `render`).
+    #[arg(long, default_value = "sky")]
+    env: String,
+    /// Clustered technique(s), comma-separated; each is measured with both seam modes.
+    #[arg(long, value_delimiter = ',', default_value = "cpca8_11,vq256")]
+    techniques: Vec<Technique>,
+    /// Hardware paths, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "dx9,dx10")]
+    paths: Vec<HwPath>,
+    #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Output directory: seams.md, seams.json.
+    #[arg(long, default_value = "study-out")]
+    out: PathBuf,
+    #[command(flatten)]
+    gpu: GpuArgs,
+}
+
+#[derive(Args, Debug)]
+pub(super) struct StudyCompressionArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Environment of the on-screen comparison (as for `render`).
+    #[arg(long, default_value = "sky")]
+    env: String,
+    /// Techniques rendered against unc6 (comma-separated).
+    #[arg(long, value_delimiter = ',', default_values_t = shvis::study::compression::SCREEN_TECHNIQUES.iter().map(|t| t.parse::<Technique>().expect("valid")).collect::<Vec<_>>())]
+    techniques: Vec<Technique>,
+    /// Hardware paths of the on-screen comparison.
+    #[arg(long, value_delimiter = ',', default_value = "dx9,dx10")]
+    paths: Vec<HwPath>,
+    #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Only the visibility error (no GPU).
+    #[arg(long)]
+    no_gpu: bool,
+    /// Output directory: compression.md, compression.json, screen.md, screen.json.
+    #[arg(long, default_value = "study-out")]
+    out: PathBuf,
+    #[command(flatten)]
+    gpu: GpuArgs,
+}
+
+#[derive(Args, Debug)]
+pub(super) struct StudyParamsArgs {
+    /// Output directory: params.csv, params.json, params.md, params_mse.svg/png, gpu.csv.
+    #[arg(long, default_value = "study-out")]
+    out: PathBuf,
+    /// Random directions for the CPU reconstruction.
+    #[arg(long, default_value_t = shvis::study::params::DEFAULT_DIRECTIONS, value_parser = clap::value_parser!(usize))]
+    directions: usize,
+    /// Directions for the GPU reconstruction (a subset of the same set).
+    #[arg(long, default_value_t = 65536)]
+    gpu_directions: usize,
+    /// Skip the GPU reconstruction.
+    #[arg(long)]
+    no_gpu: bool,
+    #[arg(long, default_value_t = shvis::study::params::DEFAULT_SEED)]
+    seed: u64,
+    #[command(flatten)]
+    gpu: GpuArgs,
+}
+
+/// Runs a study, its errors prefixed with its command.
+pub(super) fn run_study(c: StudyCommand) -> Result<()> {
+    match c {
+        StudyCommand::Params(a) => run_params(a).context("study params"),
+        StudyCommand::Compression(a) => run_compression(a).context("study compression"),
+        StudyCommand::Seams(a) => run_seams(a).context("study seams"),
+        StudyCommand::Rnm(a) => run_rnm(a).context("study rnm"),
+        StudyCommand::Ndf(a) => run_ndf(a).context("study ndf"),
+        StudyCommand::NmprtSvd(a) => run_nmprt_svd(a).context("study nmprt-svd"),
+        StudyCommand::Normalmap(a) => run_normalmap(a).context("study normalmap"),
+    }
+}
+
+fn run_compression(a: StudyCompressionArgs) -> Result<()> {
+    use shvis::study::tables;
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    let mut prepared = shvis::prepare::prepare(&prepare_settings(&a.scene, &a.env, &[], 0)?)?;
+    let markdown = tables::compression_tables(&prepared, a.scene.table_res, a.scene.seed, &a.out)?;
+    if a.no_gpu {
+        let files = "compression.md, compression.json";
+        print_table(&markdown, &a.out, files, started);
+        return Ok(());
+    }
+    with_gpu(&a.gpu, |ctx| {
+        prepared.prepare_techniques(&a.techniques)?;
+        let size = (a.width, a.height);
+        let screen_md = tables::compression_screen(
+            ctx,
+            &prepared,
+            &a.techniques,
+            &a.paths,
+            &a.env,
+            size,
+            &a.out,
+        )?;
+        print_table(
+            &format!("{markdown}\n{screen_md}"),
+            &a.out,
+            "compression.md, compression.json, screen.md, screen.json",
+            started,
+        );
+        Ok(())
+    })
+}
+
+fn run_nmprt_svd(a: StudyNmprtSvdArgs) -> Result<()> {
+    create_dir(&a.out)?;
+    let markdown = shvis::study::nmprt_svd_report::report(a.side as usize, a.quadrature as usize);
+    println!("{markdown}");
+    let path = a.out.join("nmprt_svd.md");
+    shvis::files::write(&path, &markdown)
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
+fn run_ndf(a: StudyNdfArgs) -> Result<()> {
+    let [x, y, z] = <[f32; 3]>::try_from(a.light_dir.as_slice())
+        .map_err(|_| anyhow::anyhow!("--light-dir needs three numbers x,y,z"))?;
+    let light_dir = glam::Vec3::new(x, y, z);
+    if !(light_dir.is_finite() && light_dir.length() > 1e-6) {
+        bail!("--light-dir {x},{y},{z} is not a direction");
+    }
+    if !(shvis::ndf::MIN_SIGMA..=shvis::ndf::MAX_SIGMA).contains(&a.sigma) {
+        bail!(
+            "--sigma {} is outside {}..={}",
+            a.sigma,
+            shvis::ndf::MIN_SIGMA,
+            shvis::ndf::MAX_SIGMA
+        );
+    }
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    let settings = shvis::study::ndf_report::NdfRunSettings {
+        scenes: a.scenes,
+        sigma: a.sigma,
+        light_dir,
+        width: a.width,
+        height: a.height,
+        spp: a.spp,
+        paths: a.paths,
+        frames: a.frames,
+        diffuse_scenes: a.diffuse_scenes,
+        diffuse_envs: a.diffuse_envs,
+        diffuse_spp: a.diffuse_spp,
+        vis_res: a.vis_res,
+        out: a.out,
+    };
+    with_gpu(&a.gpu, |ctx| {
+        print_written(&shvis::study::ndf_report::run(ctx, &settings, &mut say)?);
+        Ok(())
+    })?;
+    println!("study ndf: {:.1} s", started.elapsed().as_secs_f64());
+    Ok(())
+}
+
+fn run_normalmap(a: StudyNormalmapArgs) -> Result<()> {
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    with_gpu(&a.gpu, |ctx| {
+        let model = a.model.exists().then(|| a.model.clone());
+        if model.is_none() {
+            println!(
+                "note: {} not found: the real-model part is skipped",
+                a.model.display()
+            );
+        }
+        let settings = shvis::study::normalmap::NormalMapStudySettings {
+            repeats: a.repeats,
+            res: a.res,
+            model,
+            ratios: a.ratios.clone(),
+            model_res: a.model_res,
+            env: a.env.clone(),
+            vis_res: a.vis_res,
+            rays: a.rays,
+            width: a.width,
+            height: a.height,
+            spp: a.spp,
+            paths: a.paths.clone(),
+        };
+        let written = shvis::study::normalmap_report::run(ctx, &settings, &a.out, &mut say)?;
+        print_written(&written);
+        Ok(())
+    })?;
+    println!("study normalmap: {:.1} s", started.elapsed().as_secs_f64());
+    Ok(())
+}
+
+fn run_rnm(a: StudyRnmArgs) -> Result<()> {
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    let settings = shvis::study::rnm::RnmStudySettings {
+        scene: a.scene.clone(),
+        vis_res: a.vis_res,
+        rays: a.rays,
+        seed: a.seed,
+        bounces: a.bounces,
+        width: a.width,
+        height: a.height,
+        spp: a.spp,
+        paths: a.paths.clone(),
+        cache_dir: None,
+    };
+    with_gpu(&a.gpu, |ctx| {
+        let written =
+            shvis::study::rnm_report::run(ctx, &a.envs, &settings, &a.out, a.exposure, &mut say)?;
+        print_written(&written);
+        Ok(())
+    })?;
+    println!("study rnm: {:.1} s", started.elapsed().as_secs_f64());
+    Ok(())
+}
+
+fn run_seams(a: StudySeamsArgs) -> Result<()> {
+    use shvis::study::tables;
+    tables::check_clustered(&a.techniques)?;
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    with_gpu(&a.gpu, |ctx| {
+        let mut prepared = shvis::prepare::prepare(&prepare_settings(&a.scene, &a.env, &[], 0)?)?;
+        prepared.prepare_techniques(&a.techniques)?;
+        let size = (a.width, a.height);
+        let markdown = tables::seams_table(ctx, &prepared, &a.techniques, &a.paths, size, &a.out)?;
+        print_table(&markdown, &a.out, "seams.md, seams.json", started);
+        Ok(())
+    })
+}
+
+fn run_params(a: StudyParamsArgs) -> Result<()> {
+    use shvis::study::{params, params_gpu};
+    if a.directions == 0 || a.directions > 100_000_000 {
+        bail!(
+            "--directions {} is out of range 1..=100000000",
+            a.directions
+        );
+    }
+    if a.gpu_directions == 0 || a.gpu_directions > 100_000_000 {
+        bail!(
+            "--gpu-directions {} is out of range 1..=100000000",
+            a.gpu_directions
+        );
+    }
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    let points = params::run_study(a.directions, a.seed);
+    let mut written = params::write_report(&points, &a.out)?;
+    if !a.no_gpu {
+        written.push(with_gpu(&a.gpu, |ctx| {
+            let (dir, n, seed) = (&a.out, a.directions, a.seed);
+            Ok(params_gpu::run_and_write(
+                ctx,
+                dir,
+                n,
+                a.gpu_directions,
+                seed,
+            )?)
+        })?);
+    }
+    print_written(&written);
+    println!("study params: {:.1} s", started.elapsed().as_secs_f64());
+    Ok(())
+}

@@ -1,0 +1,192 @@
+//! `shvis view` and `shvis relight`: the scene under moving light.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Result, bail};
+use clap::Args;
+
+use shvis::report::image::frame_format;
+use shvis::technique::{HwPath, Technique};
+
+use super::args::{GpuArgs, SceneArgs, finite_f32, finite_f64};
+use super::{
+    DEFAULT_EXPOSURE_EV, MAX_FRAME_SIDE, check_frame_memory, check_validation, create_dir,
+    parse_list, prepare_for, print_table, with_gpu,
+};
+
+#[derive(Args, Debug)]
+pub(super) struct ViewArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    #[arg(long, default_value = "sky")]
+    env: String,
+    /// Comma-separated techniques Tab cycles through (`all`: the cost table's).
+    #[arg(long, default_value = "preconv,unc6,pca8,sh2,shlmap")]
+    techniques: String,
+    /// Hardware path shown first (P switches).
+    #[arg(long, default_value = "dx10")]
+    path: HwPath,
+    #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
+    exposure: f32,
+    /// Quit after this many frames (else when the window closes).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10_000_000))]
+    frames: Option<u32>,
+    /// Switch to the next technique at this frame.
+    #[arg(long)]
+    switch_at: Option<u32>,
+    /// Write the last frame, read back from the swapchain, as PNG (with --frames).
+    #[arg(long, requires = "frames")]
+    screenshot: Option<PathBuf>,
+    /// Rebuild the lighting data at most every this many frames while the sun moves.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    every: u32,
+    /// Start with the sun turning this many degrees per frame.
+    #[arg(long, allow_hyphen_values = true, value_parser = finite_f64)]
+    animate: Option<f64>,
+    /// No overlay.
+    #[arg(long)]
+    no_overlay: bool,
+}
+
+#[derive(Args, Debug)]
+pub(super) struct RelightArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    #[arg(long, default_value = "sky")]
+    env: String,
+    /// `all` or a comma-separated list of technique names (shlmap's lighting is baked in:
+    /// it is reported, not run).
+    #[arg(long, default_value = "unc3,unc4,unc6,pca4,pca16,pca16w,sh2,preconv")]
+    techniques: String,
+    #[arg(long, default_value = "dx9,dx10")]
+    paths: String,
+    /// Frames of the run.
+    #[arg(long, default_value_t = 48, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    frames: u32,
+    /// Rebuild the lighting-dependent data every this many frames.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    every: u32,
+    /// Build and upload between two frames, waiting for the copy (the stalling baseline),
+    /// instead of building on a worker thread and swapping the double-buffered tables in
+    /// when their copy has landed.
+    #[arg(long)]
+    blocking_upload: bool,
+    /// Full turns of the environment over the run.
+    #[arg(long, default_value_t = 1.0, value_parser = finite_f64)]
+    turns: f64,
+    /// Cross-fade from --env to this environment over the run (time of day).
+    #[arg(long)]
+    fade_to: Option<String>,
+    /// Frames at which errors are measured.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    samples: u32,
+    #[arg(long, default_value_t = 320, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(long, default_value_t = 200, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
+    exposure: f32,
+    /// Samples per pixel of each sampled frame's reference.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=65_536))]
+    ref_spp: u32,
+    #[arg(long, default_value = "relight-out")]
+    out: PathBuf,
+}
+
+/// `shvis view`: the window opens its own presenting device (`shvis::view::run`), which
+/// reports its validation counts.
+pub(super) fn run_view(a: ViewArgs) -> Result<()> {
+    check_frame_memory(a.width, a.height, 48)?;
+    if let Some(shot) = &a.screenshot {
+        frame_format(shot)?;
+        shvis::files::check_writable_file(shot, "--screenshot")?;
+    }
+    let set = |name: &str| std::env::var_os(name).is_some_and(|v| !v.is_empty());
+    if !set("DISPLAY") && !set("WAYLAND_DISPLAY") {
+        bail!(
+            "no display to open a window on (DISPLAY is not set): run under `xvfb-run -a shvis view …`, or use `shvis render` / `shvis bench`"
+        );
+    }
+    let techniques: Vec<Technique> = parse_list(&a.techniques, Technique::ALL)?;
+    let prepared = prepare_for(
+        &a.scene,
+        &a.env,
+        &techniques,
+        shvis::bake::shlmap::DEFAULT_BOUNCES,
+    )?;
+    let report = shvis::view::run(
+        &prepared,
+        &shvis::view::ViewSettings {
+            techniques,
+            path: a.path,
+            width: a.width,
+            height: a.height,
+            exposure: a.exposure,
+            frames: a.frames,
+            switch_at: a.switch_at,
+            screenshot: a.screenshot.clone(),
+            every: a.every,
+            animate: a.animate,
+            overlay: !a.no_overlay,
+            validate: a.gpu.validate,
+            device: a.gpu.device.clone(),
+        },
+    )?;
+    print!("{}", report.summary());
+    let (errors, warnings) = report.validation;
+    check_validation(a.gpu.validate, errors, warnings)
+}
+
+pub(super) fn run_relight(a: RelightArgs) -> Result<()> {
+    check_frame_memory(a.width, a.height, 320)?;
+    if !a.turns.is_finite() {
+        bail!("--turns {} is not a finite number", a.turns);
+    }
+    let settings = shvis::relight::RelightSettings {
+        techniques: parse_list(&a.techniques, Technique::ALL)?,
+        paths: parse_list(&a.paths, HwPath::ALL)?,
+        frames: a.frames,
+        every: a.every,
+        upload: if a.blocking_upload {
+            shvis::relight::UploadMode::Blocking
+        } else {
+            shvis::relight::UploadMode::Overlapped
+        },
+        turns: a.turns,
+        fade_to: a.fade_to.as_deref().map(shvis::env::resolve).transpose()?,
+        samples: a.samples,
+        width: a.width,
+        height: a.height,
+        ref_spp: a.ref_spp,
+        seed: a.scene.seed,
+        exposure: a.exposure,
+        out: a.out.clone(),
+    };
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    let prepared = prepare_for(
+        &a.scene,
+        &a.env,
+        &settings.techniques,
+        shvis::bake::shlmap::DEFAULT_BOUNCES,
+    )?;
+    with_gpu(&a.gpu, |ctx| {
+        let table = shvis::relight::run(ctx, &prepared, &settings)?;
+        print_table(
+            &table.to_markdown(),
+            &a.out,
+            "relight.md, relight.json",
+            started,
+        );
+        Ok(())
+    })
+}
