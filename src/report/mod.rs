@@ -1,6 +1,7 @@
 //! Reports: image files (EXR linear, PNG sRGB), frame-time statistics, and the cost table
 //! (`table.md`, `table.json`, DESIGN §4).
 
+pub mod bench_output;
 pub mod figures;
 pub mod html;
 pub mod image;

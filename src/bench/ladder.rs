@@ -1,0 +1,129 @@
+//! The error ladder of a bench's rows (`crate::attribution`): footprint → point reference,
+//! the technique's CPU rungs, then the GPU image, each step's relative RMSE a column of the
+//! row and each rung an image under `ladder/`.
+
+use std::sync::Arc;
+
+use super::references::{References, reference_for, reference_stem};
+use super::{BenchError, BenchSettings};
+use crate::attribution::{LadderPixels, cpu_rungs};
+use crate::gpu::Context;
+use crate::prepare::Prepared;
+use crate::render::Frame;
+use crate::report::bench_output::BenchOutput;
+use crate::report::metrics::image_error;
+use crate::report::table::{AttributionKind, AttributionStep};
+use crate::technique::{HwPath, Technique};
+
+/// The error ladder's per-pixel data of the CPU rungs, where the bench has a ladder.
+pub(super) struct Ladder {
+    pixels: Option<LadderPixels>,
+}
+
+impl Ladder {
+    /// The ladder of a bench: none without a point reference, when relit (its CPU rungs use
+    /// the bake's lighting) or with `--specular` (its CPU rungs are diffuse).
+    pub(super) fn new(
+        ctx: &Arc<Context>,
+        prepared: &Prepared,
+        settings: &BenchSettings,
+        references: Option<&References>,
+        relit: bool,
+        out: &BenchOutput,
+    ) -> Result<Ladder, BenchError> {
+        let pixels = match references.and_then(|r| r.point.as_ref()) {
+            Some(_) if relit => {
+                log::info!(
+                    "error ladder: left out when relit (its CPU rungs use the bake's lighting)"
+                );
+                None
+            }
+            Some(_) if settings.specular.is_some() => {
+                log::info!("error ladder: left out with --specular (its CPU rungs are diffuse)");
+                None
+            }
+            Some(_) => Some(ladder_pixels(ctx, prepared, settings, out)?),
+            None => None,
+        };
+        Ok(Ladder { pixels })
+    }
+}
+
+/// Renders the point G-buffer and traces the per-pixel visibility of the ladder.
+fn ladder_pixels(
+    ctx: &Arc<Context>,
+    prepared: &Prepared,
+    settings: &BenchSettings,
+    out: &BenchOutput,
+) -> Result<LadderPixels, BenchError> {
+    let pixels = LadderPixels::new(ctx, prepared, settings.width, settings.height)?;
+    log::info!(
+        "error ladder: {} pixels, visibility traced per pixel ({} rays) and exact lighting tabulated in {:.1} s",
+        pixels.len(),
+        pixels.rays_traced(),
+        pixels.seconds
+    );
+    out.ladder_folder()?;
+    Ok(pixels)
+}
+
+/// The attribution ladder of a row (`crate::attribution`): footprint → point reference,
+/// the technique's CPU rungs (written to `ladder/`), then the GPU image `frame`; without
+/// CPU rungs it steps from the point reference to the image.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn attribution(
+    prepared: &Prepared,
+    technique: Technique,
+    path: HwPath,
+    frame: &Frame,
+    references: Option<&References>,
+    ladder: &Ladder,
+    settings: &BenchSettings,
+    out: &mut BenchOutput,
+) -> Result<Vec<AttributionStep>, BenchError> {
+    let Some((r, Some(point))) = references.map(|r| (r, r.point.as_ref())) else {
+        return Ok(vec![]);
+    };
+    if settings.specular.is_some() {
+        return Ok(vec![]);
+    }
+    let (footprint, _) = reference_for(technique, &r.main);
+    let (point, kind) = reference_for(technique, point);
+    let rel = |a: &Frame, b: &Frame| image_error(a, b).map(|e| e.rel_rmse);
+    let mut steps = vec![AttributionStep {
+        step: AttributionKind::PixelFootprint,
+        rel_rmse: rel(point, footprint),
+        image: format!("{}.exr", reference_stem("reference_point", kind)),
+    }];
+    let rungs = match &ladder.pixels {
+        Some(pixels) => cpu_rungs(pixels, prepared, technique, path)?,
+        None => vec![],
+    };
+    let mut previous = point;
+    for rung in &rungs {
+        let image = out.rung(&rung.stem, &rung.frame)?;
+        steps.push(AttributionStep {
+            step: rung.step,
+            rel_rmse: rel(&rung.frame, previous),
+            image,
+        });
+        previous = &rung.frame;
+    }
+    let mut sheet: Vec<(String, &Frame)> = vec![
+        ("reference".into(), footprint),
+        ("point reference".into(), point),
+    ];
+    sheet.extend(rungs.iter().map(|r| (r.step.name().to_string(), &r.frame)));
+    sheet.push(("GPU".into(), frame));
+    out.ladder_sheet(technique, path, &sheet);
+    steps.push(AttributionStep {
+        step: if rungs.is_empty() {
+            AttributionKind::Technique
+        } else {
+            AttributionKind::Gpu
+        },
+        rel_rmse: rel(frame, previous),
+        image: format!("{technique}.{path}.exr"),
+    });
+    Ok(steps)
+}

@@ -1,0 +1,213 @@
+//! A bench's frame times: each row's frames timed in chunks between readings of the
+//! probe's monitor frame (`probe::states`), in [`TIMING_ROUNDS`] rounds over every row, and
+//! up to [`MODEL_STATE_ROUNDS`] more rounds for a row without frames of two agreeing builds
+//! in a state the probe has a model of.
+
+use super::rows::RowTechniques;
+use super::{BenchError, BenchSettings, Clock};
+use crate::gpu::{GpuError, TimingStats};
+use crate::probe::states::Segment;
+use crate::probe::{Monitor, Probe, Segmented};
+use crate::report::table::BenchRow;
+use crate::technique::{HwPath, Technique};
+
+/// Rounds a row's timed frames are split into, each round over every row (the main bench;
+/// with `--specular` one): a slow spell of a shared device then lands on a share of every
+/// row's frames instead of on all of a few rows'.
+pub(super) const TIMING_ROUNDS: u32 = 3;
+
+/// Frames of a row timed between two monitor readings, at most ([`timed_segments`]).
+const CHUNK_FRAMES: u32 = 3;
+
+/// Rounds more, at most, for a row that has no frames in a state the probe has a model of,
+/// or not two builds there that agree within [`BUILD_AGREEMENT`].
+const MODEL_STATE_ROUNDS: usize = 3;
+
+/// How far (relative) the second-fastest build of a row, in the state it is compared in,
+/// may run from the fastest before the row gets another round on a fresh build (most
+/// rows' builds agree within 5 %; an odd build runs 13–37 % slow).
+const BUILD_AGREEMENT: f64 = 0.1;
+
+/// How the rounds after the first time a row: on a build of its own each, `per_round`
+/// frames after one warm-up frame, between monitor readings.
+pub(super) struct Rounds<'a> {
+    pub rows_of: RowTechniques<'a>,
+    pub monitor: Option<&'a Monitor>,
+    pub per_round: u32,
+    pub settings: &'a BenchSettings,
+}
+
+impl Rounds<'_> {
+    /// One more round of a row, on a build of its own (`probe::states`: builds differ).
+    fn time_round(
+        &self,
+        technique: Technique,
+        path: HwPath,
+        times: &mut Segmented,
+        clock: &mut Clock,
+    ) -> Result<(), BenchError> {
+        let tech = self.rows_of.build(technique, path)?;
+        clock.split(|p| &mut p.build);
+        let build = times.0.last().map_or(0, |s| s.build + 1);
+        let scene = self.rows_of.scene;
+        times.0.extend(timed_segments(
+            self.monitor,
+            build,
+            self.settings.warmup.min(1),
+            self.per_round,
+            |w, n| tech.time(scene, w, n),
+        )?);
+        clock.split(|p| &mut p.render);
+        Ok(())
+    }
+
+    /// Rounds 2 … `rounds` over every row.
+    pub(super) fn later_rounds(
+        &self,
+        rounds: u32,
+        rows: &[BenchRow],
+        samples: &mut [Segmented],
+        clock: &mut Clock,
+    ) -> Result<(), BenchError> {
+        for _ in 1..rounds {
+            for (row, times) in rows.iter().zip(samples.iter_mut()) {
+                self.time_round(row.technique, row.path, times, clock)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// A row with no frames in a state the probe has a model of (the device sat in another
+    /// through all its rounds) is timed in up to MODEL_STATE_ROUNDS more until it has some:
+    /// else its ×model would set frames of one state against the model of another. So is a
+    /// row whose frames in its fastest modelled state came from fewer than two builds, or
+    /// whose two fastest builds there differ by more than BUILD_AGREEMENT: a build can run
+    /// ≈ 25 % slow for as long as it lives (`probe::states`), and its time there is its
+    /// fastest build's. Not with `--specular`: its rows differ by the specular term bound
+    /// when they were measured, and only the last one is bound now.
+    pub(super) fn until_modelled(
+        &self,
+        probe: &Probe,
+        monitor: &Monitor,
+        rows: &[BenchRow],
+        samples: &mut [Segmented],
+        clock: &mut Clock,
+    ) -> Result<(), BenchError> {
+        let modelled: Vec<usize> = probe.state_models.iter().map(|m| m.state).collect();
+        for _ in 0..MODEL_STATE_ROUNDS {
+            let unmodelled: Vec<usize> = (0..rows.len())
+                .filter(|&i| {
+                    match samples[i].fastest_state(&monitor.states, modelled.iter().copied()) {
+                        Some((state, _, _)) => {
+                            !samples[i].builds_agree_in(&monitor.states, state, BUILD_AGREEMENT)
+                        }
+                        None => true,
+                    }
+                })
+                .collect();
+            if unmodelled.is_empty() {
+                break;
+            }
+            log::info!(
+                "cost model: {} row(s) without frames of two builds within {:.0} % of each other in a modelled state, timed again",
+                unmodelled.len(),
+                100.0 * BUILD_AGREEMENT
+            );
+            for i in unmodelled {
+                self.time_round(rows[i].technique, rows[i].path, &mut samples[i], clock)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Each row's time columns from all its frames (every segment logged at debug level).
+pub(super) fn fill_times(rows: &mut [BenchRow], samples: &[Segmented]) {
+    if log::log_enabled!(log::Level::Debug) {
+        for (row, times) in rows.iter().zip(samples) {
+            for s in &times.0 {
+                log::debug!(
+                    "timed {} {:?}: build {}, monitor {:.2} ms, frames {:.1?} ms, monitor {:.2} ms",
+                    row.technique,
+                    row.path,
+                    s.build,
+                    s.monitor_before,
+                    s.ms,
+                    s.monitor_after
+                );
+            }
+        }
+    }
+    for (row, times) in rows.iter_mut().zip(samples) {
+        let timing = TimingStats::from_ms(&times.all());
+        row.ms_median = timing.map(|t| t.ms_median);
+        row.ms_min = timing.map(|t| t.ms_min);
+        row.ms_max = timing.map(|t| t.ms_max);
+        row.frames = times.all().len();
+    }
+}
+
+/// Times `frames` frames (after `warmup` untimed ones) with `time` (warm-up, frames → ms),
+/// on pipeline build `build`, in chunks of at most [`CHUNK_FRAMES`] with a monitor reading
+/// before each and after the last (NaN without a monitor): the states (`probe::states`) are
+/// told apart per chunk, not per round (one round of a row can span a second, as long as
+/// the device's stay in a state).
+pub(super) fn timed_segments(
+    monitor: Option<&Monitor>,
+    build: usize,
+    warmup: u32,
+    frames: u32,
+    time: impl Fn(u32, u32) -> Result<Vec<f64>, GpuError>,
+) -> Result<Vec<Segment>, BenchError> {
+    let read = || -> Result<f64, BenchError> {
+        Ok(monitor.map(Monitor::read).transpose()?.unwrap_or(f64::NAN))
+    };
+    let chunks = frames.div_ceil(CHUNK_FRAMES).max(1);
+    let mut before = read()?;
+    let mut segments = Vec::new();
+    for c in 0..chunks {
+        // Even chunks: 7 frames are 3 + 2 + 2.
+        let n = frames / chunks + u32::from(c < frames % chunks);
+        let ms = time(if c == 0 { warmup } else { 0 }, n)?;
+        let after = read()?;
+        segments.push(Segment {
+            build,
+            monitor_before: before,
+            ms,
+            monitor_after: after,
+        });
+        before = after;
+    }
+    Ok(segments)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_round_is_timed_in_even_chunks_of_at_most_chunk_frames_with_one_warm_up() {
+        for frames in [0, 1, 3, 7, 34] {
+            let calls = std::cell::RefCell::new(Vec::new());
+            let segments = timed_segments(None, 2, 5, frames, |warmup, n| {
+                calls.borrow_mut().push((warmup, n));
+                Ok(vec![1.0; n as usize])
+            })
+            .unwrap();
+            let calls = calls.into_inner();
+            let sizes: Vec<u32> = calls.iter().map(|&(_, n)| n).collect();
+            assert_eq!(sizes.iter().sum::<u32>(), frames, "{sizes:?}");
+            assert!(sizes.iter().all(|&n| n <= CHUNK_FRAMES), "{sizes:?}");
+            let (min, max) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
+            assert!(max - min <= 1, "uneven chunks {sizes:?}");
+            assert_eq!(calls[0].0, 5, "the warm-up goes before the first chunk");
+            assert!(calls[1..].iter().all(|&(w, _)| w == 0), "{calls:?}");
+            assert_eq!(segments.len(), calls.len());
+            assert!(
+                segments
+                    .iter()
+                    .all(|s| s.build == 2 && s.monitor_after.is_nan())
+            );
+        }
+    }
+}
