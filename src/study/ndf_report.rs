@@ -107,13 +107,16 @@ pub fn run(
     Ok(ndf::write_report(&studies, diffuse.as_ref(), &s.out)?)
 }
 
+/// The diffuse part's scenes and rows.
+type DiffusePart = (Vec<DiffuseScene>, Vec<DiffuseRow>);
+
 /// The diffuse part under every environment, said scene by scene and row by row; `None`
 /// without diffuse scenes.
 fn diffuse_part(
     ctx: &Arc<Context>,
     s: &NdfRunSettings,
     say: &mut dyn FnMut(&str),
-) -> Result<Option<(Vec<DiffuseScene>, Vec<DiffuseRow>)>, NdfRunError> {
+) -> Result<Option<DiffusePart>, NdfRunError> {
     let diffuse_scenes: Vec<String> = s
         .diffuse_scenes
         .iter()
