@@ -47,6 +47,7 @@ use half::f16;
 use rayon::prelude::*;
 
 use crate::bake::lxh::{LxhMatrices, build_table};
+use crate::bake::pca::QuantizedPca;
 use crate::bake::raster::texel_index_of;
 use crate::bake::shlmap::{ShLightmapSettings, radiance_at_points};
 use crate::bake::visibility::{PointVisibility, bake_points};
@@ -61,7 +62,7 @@ use crate::sh::zonal::clamped_cosine_convolution;
 use crate::sphere::SphereMap;
 use crate::technique::pca::{quantized_prefix, weights_only_block};
 use crate::technique::tables::{f16_range_scale, max_abs, table_map};
-use crate::technique::{HwPath, SeamMode, Technique, TechniqueError};
+use crate::technique::{HwPath, NmprtVariant, SeamMode, Technique, TechniqueError};
 use exact_light::ExactLightTable;
 
 /// What every rung needs at each covered pixel, computed once per bench.
@@ -391,321 +392,22 @@ pub fn cpu_rungs(
     technique: Technique,
     path: HwPath,
 ) -> Result<Vec<Rung>, TechniqueError> {
-    let radiance = &prepared.radiance_sh;
-    let label = format!("{technique}.{path}");
-    // Rungs are made through the cache (`LadderPixels::rung`): by `push`, or already by
-    // `visibility_rung` and `compression_rungs`, whose frames `push_made` takes as they are.
-    let rungs = std::cell::RefCell::new(Vec::new());
-    let push_made = |step: AttributionKind, stem: String, frame: Frame| {
-        rungs.borrow_mut().push(Rung { step, stem, frame });
+    let row = RowLadder {
+        px,
+        prepared,
+        technique,
+        path,
+        label: format!("{technique}.{path}"),
     };
-    let push = |step: AttributionKind, stem: String, make: &dyn Fn() -> Frame| {
-        push_made(step, stem.clone(), px.rung(&stem, make));
-    };
-    let exact = |k: usize| {
-        let mut g = [[0.0; 3]; 36];
-        px.exact.eval(px.normal[k], &mut g);
-        g
-    };
-    let vis_res = prepared.visibility.res;
-    let bake_n2 = prepared.visibility.order.coeff_count();
-    let lightmap_v = |k: usize, n2: usize| {
-        lightmap_bilinear(vis_res, px.uv[k], n2, |t, j| {
-            f16_round(prepared.visibility.coeffs[t * bake_n2 + j])
-        })
-    };
-    let visibility_rung = |order: Order| {
-        let n2 = order.coeff_count();
-        let stem = format!("visibility_order{order}");
-        let frame = px.rung(&stem, &|| {
-            px.image(|k| dot_rgb(&px.visibility(k, n2), &exact(k), n2))
-        });
-        (stem, frame)
-    };
+    let mut rungs = Vec::new();
     match technique {
-        Technique::Unc { order } => {
-            let n2 = order.coeff_count();
-            let (stem, frame) = visibility_rung(order);
-            push_made(AttributionKind::VisibilityOrder, stem, frame);
-            let lighting = exact_cosine(radiance, order.get() + 2, order);
-            push(
-                AttributionKind::LightingOrder,
-                format!("{technique}.lighting_order"),
-                &|| px.image(|k| shade(&lighting, px.normal[k], &px.visibility(k, n2))),
-            );
-            let lxh = LxhMatrices::new(radiance, order, prepared.h_order);
-            push(
-                AttributionKind::CosineOrder,
-                format!("{technique}.cosine_order"),
-                &|| px.image(|k| shade(&lxh, px.normal[k], &px.visibility(k, n2))),
-            );
-            let map = table_map(path, prepared.table_res, &label)?;
-            let table = build_table(&lxh, map);
-            let stored = StoredTable::new(map, n2, |t, j| table.values[t * n2 + j]);
-            let table_dot = |v: &[f64], k: usize| {
-                dot_rgb(v, &stored.eval(px.normal[k]), n2).map(|x| x * stored.unscale)
-            };
-            push(
-                AttributionKind::NormalTable,
-                format!("{label}.normal_table"),
-                &|| px.image(|k| table_dot(&px.visibility(k, n2), k)),
-            );
-            push(
-                AttributionKind::LightmapTexels,
-                format!("{label}.lightmap"),
-                &|| px.image(|k| table_dot(&lightmap_v(k, n2), k)),
-            );
-        }
-        Technique::Pca { m, weights_only } => {
-            let model = &prepared.pca;
-            let order = model.order;
-            let n2 = order.coeff_count();
-            if n2 > 36 {
-                log::warn!(
-                    "{label}: the error ladder handles PCA of visibility up to order 6, the bake has order {order}; no CPU rungs"
-                );
-                return Ok(rungs.into_inner());
-            }
-            let m = (m as usize).min(model.basis.len());
-            let (stem, frame) = visibility_rung(order);
-            push_made(AttributionKind::VisibilityOrder, stem, frame);
-            // V_e + Σ_k (V_k·(V − V_e)) V_k over the first m (orthonormal) vectors.
-            let compressed = |k: usize| {
-                let v = px.visibility(k, n2);
-                let mut out = [0.0; 36];
-                out[..n2].copy_from_slice(&model.mean[..n2]);
-                for b in &model.basis[..m] {
-                    let w: f64 = (0..n2).map(|j| b[j] * (v[j] - model.mean[j])).sum();
-                    for j in 0..n2 {
-                        out[j] += w * b[j];
-                    }
-                }
-                out
-            };
-            let base = format!("pca{m}");
-            let (shared, lxh) = compression_rungs(
-                px,
-                prepared,
-                order,
-                (
-                    AttributionKind::PcaCompression,
-                    format!("{base}.pca_compression"),
-                ),
-                &base,
-                &compressed,
-            );
-            shared
-                .into_iter()
-                .for_each(|(k, stem, f)| push_made(k, stem, f));
-            let q = quantized_prefix(model, m);
-            // The stored weights, bilinear: UNORM8 reads as q / 255.
-            let unorm = f64::from((1u32 << q.bits) - 1);
-            let lightmap_u = |k: usize| {
-                lightmap_bilinear(q.res, px.uv[k], q.m, |t, i| {
-                    f64::from(q.weights_unorm[t * q.m + i]) / unorm
-                })
-            };
-            if weights_only {
-                let block = weights_only_block(&q.basis, &q.mean, order, radiance);
-                push(
-                    AttributionKind::LightmapTexels,
-                    format!("{technique}.lightmap"),
-                    &|| {
-                        px.image(|k| {
-                            let u = lightmap_u(k);
-                            let mut y = [0.0; 9];
-                            eval_basis(Order::THREE, px.normal[k], &mut y);
-                            let mut e = [0.0; 3];
-                            for (i, yi) in y.iter().enumerate() {
-                                for c in 0..3 {
-                                    let mut coeff = f64::from(block[9 * q.m + i][c]);
-                                    for (b, ub) in u[..q.m].iter().enumerate() {
-                                        coeff += ub * f64::from(block[9 * b + i][c]);
-                                    }
-                                    e[c] += coeff * yi;
-                                }
-                            }
-                            e
-                        })
-                    },
-                );
-            } else {
-                // Basis tables T_k = Σ_j V_kj (L×H)_j and the mean's, as pca.rs builds them.
-                let map = table_map(path, prepared.table_res, &label)?;
-                let table = build_table(&lxh, map);
-                let project = |t: usize, v: &[f64]| -> [f32; 3] {
-                    let mut s = [0.0f64; 3];
-                    for (j, vj) in v.iter().enumerate().take(n2) {
-                        let e = table.values[t * n2 + j];
-                        for c in 0..3 {
-                            s[c] += vj * e[c] as f64;
-                        }
-                    }
-                    s.map(|x| x as f32)
-                };
-                let stored = StoredTable::new(map, q.m + 1, |t, i| {
-                    project(t, if i < q.m { &q.basis[i] } else { &q.mean })
-                });
-                let tables_dot = |u: &[f64], k: usize| {
-                    let t = stored.eval(px.normal[k]);
-                    let mut s = t[q.m];
-                    for (ui, ti) in u[..q.m].iter().zip(&t) {
-                        for c in 0..3 {
-                            s[c] += ui * ti[c];
-                        }
-                    }
-                    s.map(|x| x * stored.unscale)
-                };
-                // The compressed V in the quantized basis's coordinates, unrounded.
-                let continuous_u = |k: usize| {
-                    let v = compressed(k);
-                    let mut u = [0.0; 36];
-                    for (ui, b) in u.iter_mut().zip(&q.basis) {
-                        let norm2: f64 = b.iter().map(|x| x * x).sum();
-                        if norm2 > 0.0 {
-                            *ui = (0..n2).map(|j| b[j] * (v[j] - q.mean[j])).sum::<f64>() / norm2;
-                        }
-                    }
-                    u
-                };
-                push(
-                    AttributionKind::NormalTable,
-                    format!("{label}.normal_table"),
-                    &|| px.image(|k| tables_dot(&continuous_u(k), k)),
-                );
-                push(
-                    AttributionKind::LightmapTexels,
-                    format!("{label}.lightmap"),
-                    &|| px.image(|k| tables_dot(&lightmap_u(k), k)),
-                );
-            }
-        }
-        Technique::Vq { .. } | Technique::Cpca { .. } => {
-            let need = technique.cluster_need().expect("a clustered technique");
-            let model = crate::technique::cluster::find(&prepared.inputs(), need, &label)?;
-            let order = model.order;
-            let n2 = order.coeff_count();
-            let (stem, frame) = visibility_rung(order);
-            push_made(AttributionKind::VisibilityOrder, stem, frame);
-            let compressed = |k: usize| {
-                let mut out = [0.0; 36];
-                out[..n2].copy_from_slice(&model.compress(&px.visibility(k, n2)[..n2]));
-                out
-            };
-            let base = technique.name();
-            let (shared, lxh) = compression_rungs(
-                px,
-                prepared,
-                order,
-                (
-                    AttributionKind::ClusterCompression,
-                    format!("{base}.compression"),
-                ),
-                &base,
-                &compressed,
-            );
-            shared
-                .into_iter()
-                .for_each(|(k, stem, f)| push_made(k, stem, f));
-            // The stored lightmap as the shader reads it (glsl/technique/cluster.frag).
-            let q = model.quantize();
-            let blended = matches!(
-                technique,
-                Technique::Vq {
-                    seams: SeamMode::Blended,
-                    ..
-                } | Technique::Cpca {
-                    seams: SeamMode::Blended,
-                    ..
-                }
-            );
-            let stored = |k: usize| -> [f64; 36] {
-                let mut out = [0.0; 36];
-                if blended {
-                    let (index, weight) = lightmap_taps(q.res, px.uv[k]);
-                    for (&t, &w) in index.iter().zip(&weight) {
-                        for (o, v) in out.iter_mut().zip(q.reconstruct(t)) {
-                            *o += w * v;
-                        }
-                    }
-                } else {
-                    let c = q.cluster_of[texel_index_of(q.res, px.uv[k])] as usize;
-                    let u = lightmap_bilinear(q.res, px.uv[k], q.m, |t, i| {
-                        f64::from(q.weights_unorm[t * q.m + i]) / 255.0
-                    });
-                    out[..n2].copy_from_slice(&q.means[c][..n2]);
-                    for (b, ub) in q.bases[c].iter().zip(&u) {
-                        for (o, bj) in out.iter_mut().zip(b) {
-                            *o += ub * bj;
-                        }
-                    }
-                }
-                out
-            };
-            push(
-                AttributionKind::LightmapTexels,
-                format!("{label}.lightmap"),
-                &|| px.image(|k| shade(&lxh, px.normal[k], &stored(k))),
-            );
-        }
+        Technique::Unc { order } => row.unc(&mut rungs, order)?,
+        Technique::Pca { m, weights_only } => row.pca(&mut rungs, m, weights_only)?,
+        Technique::Vq { .. } | Technique::Cpca { .. } => row.clustered(&mut rungs)?,
         // The CPU ladder walks lightmap texels; per-vertex weights have none.
         Technique::PcaVertex { .. } => {}
-        Technique::Preconv => {
-            let y00 = 0.5 / std::f64::consts::PI.sqrt();
-            let ao = |k: usize| f64::from(px.vis.ao[k]);
-            push(
-                AttributionKind::AmbientOcclusion,
-                "preconv.ambient_occlusion".into(),
-                // ∫ L H_n = G_0 / y_00.
-                &|| px.image(|k| exact(k)[0].map(|g| ao(k) * g / y00)),
-            );
-            let e3 = |k: usize| {
-                crate::sh::zonal::eval_rgb(&prepared.irradiance_sh, Order::THREE, px.normal[k])
-                    .map(|e| e.max(0.0))
-            };
-            push(
-                AttributionKind::IrradianceOrder,
-                "preconv.irradiance_order".into(),
-                &|| px.image(|k| e3(k).map(|e| ao(k) * e)),
-            );
-            let ao_map = &prepared.ao;
-            push(
-                AttributionKind::LightmapTexels,
-                "preconv.lightmap".into(),
-                &|| {
-                    px.image(|k| {
-                        let a = lightmap_bilinear(ao_map.res, px.uv[k], 1, |t, _| {
-                            f16_round(ao_map.values[t])
-                        })[0];
-                        e3(k).map(|e| a * e)
-                    })
-                },
-            );
-        }
-        Technique::Sh2 => {
-            let order = Order::TWO;
-            let n2 = order.coeff_count();
-            let (stem, frame) = visibility_rung(order);
-            push_made(AttributionKind::VisibilityOrder, stem, frame);
-            let lighting = exact_cosine(radiance, 3, order);
-            push(
-                AttributionKind::LightingOrder,
-                "sh2.lighting_order".into(),
-                &|| px.image(|k| shade(&lighting, px.normal[k], &px.visibility(k, n2))),
-            );
-            let product =
-                LxhMatrices::with_lighting_order(radiance, Order::THREE, order, Order::THREE);
-            push(
-                AttributionKind::ProductOrder,
-                "sh2.product_order".into(),
-                &|| px.image(|k| shade(&product, px.normal[k], &px.visibility(k, n2))),
-            );
-            push(
-                AttributionKind::LightmapTexels,
-                "sh2.lightmap".into(),
-                &|| px.image(|k| shade(&product, px.normal[k], &lightmap_v(k, n2))),
-            );
-        }
+        Technique::Preconv => row.preconv(&mut rungs),
+        Technique::Sh2 => row.sh2(&mut rungs),
         // No ladder for the radiosity-normal-mapping family yet: its error is measured
         // against the displaced-geometry reference (`study rnm`), not split into rungs.
         // The NDF variants' rungs are their base technique's; their own step (the normal
@@ -717,102 +419,531 @@ pub fn cpu_rungs(
         // evaluation, the SVD basis evaluated rather than looked up); what remains to the
         // GPU image is f16 storage and the basis texture. No rungs before it yet (the
         // transfer's lighting order, the order-3 transferred radiance, the bounces).
-        Technique::Nmprt { variant } => {
-            let Some(transfer) = prepared.transfer.as_ref() else {
-                return Ok(rungs.into_inner());
-            };
-            let recipe = crate::technique::nmprt::NmprtRecipe::new(variant, transfer.clone());
-            let irradiance = &prepared.irradiance_sh;
-            push(
-                AttributionKind::Technique,
-                format!("{technique}.model"),
-                &|| {
-                    let values = recipe.texel_values_all(radiance, irradiance);
-                    let v = recipe.values_per_texel();
-                    px.image(|k| {
-                        let x = lightmap_bilinear(transfer.res, px.uv[k], v, |t, j| {
-                            f64::from(values[t * v + j])
-                        });
-                        // The frame of the nearest covered tap.
-                        let (taps, weights) = lightmap_taps(transfer.res, px.uv[k]);
-                        let frame = taps
-                            .iter()
-                            .zip(weights)
-                            .filter(|(t, _)| transfer.covered[**t])
-                            .max_by(|a, b| a.1.total_cmp(&b.1))
-                            .map_or([Vec3::ZERO; 3], |(t, _)| transfer.frames[*t]);
-                        recipe.eval(&x[..v], px.normal[k], &frame, irradiance)
-                    })
-                },
+        Technique::Nmprt { variant } => row.nmprt(&mut rungs, variant),
+        Technique::Shlmap => row.shlmap(&mut rungs),
+    }
+    Ok(rungs)
+}
+
+/// What the rungs of one bench row share: the ladder's pixels, the prepared scene, the
+/// row's technique and path, and its label (`technique.path`, the stem of the rungs that
+/// depend on the path).
+struct RowLadder<'a> {
+    px: &'a LadderPixels,
+    prepared: &'a Prepared,
+    technique: Technique,
+    path: HwPath,
+    label: String,
+}
+
+impl RowLadder<'_> {
+    /// Appends the rung `stem`, made through the cache (`LadderPixels::rung`) by `make`.
+    fn push(
+        &self,
+        rungs: &mut Vec<Rung>,
+        step: AttributionKind,
+        stem: String,
+        make: &dyn Fn() -> Frame,
+    ) {
+        let frame = self.px.rung(&stem, make);
+        rungs.push(Rung { step, stem, frame });
+    }
+
+    /// G_j at covered pixel `k`: the exact-lighting integrals at its shading normal.
+    fn exact(&self, k: usize) -> [[f64; 3]; 36] {
+        let mut g = [[0.0; 3]; 36];
+        self.px.exact.eval(self.px.normal[k], &mut g);
+        g
+    }
+
+    /// The first `n2` visibility coefficients at pixel `k` as the bake's f16 lightmap holds
+    /// them, bilinear at the pixel's lightmap UV.
+    fn lightmap_v(&self, k: usize, n2: usize) -> [f64; 36] {
+        let visibility = &self.prepared.visibility;
+        let bake_n2 = visibility.order.coeff_count();
+        lightmap_bilinear(visibility.res, self.px.uv[k], n2, |t, j| {
+            f16_round(visibility.coeffs[t * bake_n2 + j])
+        })
+    }
+
+    /// Appends the first rung: the pixel's visibility truncated to `order` under exact
+    /// light (shared by every technique of that order, so not named after the row).
+    fn push_visibility(&self, rungs: &mut Vec<Rung>, order: Order) {
+        let px = self.px;
+        let n2 = order.coeff_count();
+        self.push(
+            rungs,
+            AttributionKind::VisibilityOrder,
+            format!("visibility_order{order}"),
+            &|| px.image(|k| dot_rgb(&px.visibility(k, n2), &self.exact(k), n2)),
+        );
+    }
+
+    /// Appends [`compression_rungs`] of `compressed` and returns the L×H matrices the
+    /// later rungs use.
+    fn push_compression(
+        &self,
+        rungs: &mut Vec<Rung>,
+        order: Order,
+        compression: (AttributionKind, String),
+        base: &str,
+        compressed: &(dyn Fn(usize) -> [f64; 36] + Sync),
+    ) -> LxhMatrices {
+        let (shared, lxh) =
+            compression_rungs(self.px, self.prepared, order, compression, base, compressed);
+        rungs.extend(
+            shared
+                .into_iter()
+                .map(|(step, stem, frame)| Rung { step, stem, frame }),
+        );
+        lxh
+    }
+
+    /// `unc`'s rungs: visibility, lighting and cosine orders, the normal table, the
+    /// lightmap texels.
+    fn unc(&self, rungs: &mut Vec<Rung>, order: Order) -> Result<(), TechniqueError> {
+        let (px, prepared, technique, label) =
+            (self.px, self.prepared, self.technique, &self.label);
+        let radiance = &prepared.radiance_sh;
+        let n2 = order.coeff_count();
+        self.push_visibility(rungs, order);
+        let lighting = exact_cosine(radiance, order.get() + 2, order);
+        self.push(
+            rungs,
+            AttributionKind::LightingOrder,
+            format!("{technique}.lighting_order"),
+            &|| px.image(|k| shade(&lighting, px.normal[k], &px.visibility(k, n2))),
+        );
+        let lxh = LxhMatrices::new(radiance, order, prepared.h_order);
+        self.push(
+            rungs,
+            AttributionKind::CosineOrder,
+            format!("{technique}.cosine_order"),
+            &|| px.image(|k| shade(&lxh, px.normal[k], &px.visibility(k, n2))),
+        );
+        let map = table_map(self.path, prepared.table_res, label)?;
+        let table = build_table(&lxh, map);
+        let stored = StoredTable::new(map, n2, |t, j| table.values[t * n2 + j]);
+        let table_dot = |v: &[f64], k: usize| {
+            dot_rgb(v, &stored.eval(px.normal[k]), n2).map(|x| x * stored.unscale)
+        };
+        self.push(
+            rungs,
+            AttributionKind::NormalTable,
+            format!("{label}.normal_table"),
+            &|| px.image(|k| table_dot(&px.visibility(k, n2), k)),
+        );
+        self.push(
+            rungs,
+            AttributionKind::LightmapTexels,
+            format!("{label}.lightmap"),
+            &|| px.image(|k| table_dot(&self.lightmap_v(k, n2), k)),
+        );
+        Ok(())
+    }
+
+    /// `pcaM` and `pcaMw`'s rungs: visibility order, the PCA compression and the rungs of
+    /// [`compression_rungs`], then the stored form (tables, or the weights-only block).
+    fn pca(&self, rungs: &mut Vec<Rung>, m: u32, weights_only: bool) -> Result<(), TechniqueError> {
+        let (px, label) = (self.px, &self.label);
+        let model = &self.prepared.pca;
+        let order = model.order;
+        let n2 = order.coeff_count();
+        if n2 > 36 {
+            log::warn!(
+                "{label}: the error ladder handles PCA of visibility up to order 6, the bake has order {order}; no CPU rungs"
             );
+            return Ok(());
         }
-        Technique::Shlmap => {
-            let Some(map) = prepared.sh_lightmap.as_ref() else {
-                return Ok(rungs.into_inner());
-            };
-            let settings = ShLightmapSettings {
-                rays: prepared.visibility_settings.rays,
-                seed: prepared.visibility_settings.seed,
-                bounces: map.bounces,
-                progress: false,
-            };
-            let gathered = px.sh_radiance.get_or_init(|| {
-                let tracer = crate::bake::trace::Tracer::new(&prepared.scene.mesh);
-                radiance_at_points(
-                    &prepared.scene,
-                    &tracer,
-                    map,
-                    radiance,
-                    &settings,
-                    &px.position,
-                    &px.normal_g,
-                )
-            });
-            // Σ_k A_l(k) c_k y_k(n): eq. (2) at the shading normal.
-            let convolve = |c: &[[f64; 3]], n: DVec3| {
-                let mut y = [0.0; 9];
-                eval_basis(Order::THREE, n, &mut y);
-                let mut e = [0.0; 3];
-                for (k, (ck, yk)) in c.iter().zip(&y).enumerate() {
-                    let a = clamped_cosine_convolution(if k == 0 {
-                        0
-                    } else if k < 4 {
-                        1
-                    } else {
-                        2
-                    });
-                    for ch in 0..3 {
-                        e[ch] += a * ck[ch] * yk;
+        let m = (m as usize).min(model.basis.len());
+        self.push_visibility(rungs, order);
+        // V_e + Σ_k (V_k·(V − V_e)) V_k over the first m (orthonormal) vectors.
+        let compressed = |k: usize| {
+            let v = px.visibility(k, n2);
+            let mut out = [0.0; 36];
+            out[..n2].copy_from_slice(&model.mean[..n2]);
+            for b in &model.basis[..m] {
+                let w: f64 = (0..n2).map(|j| b[j] * (v[j] - model.mean[j])).sum();
+                for j in 0..n2 {
+                    out[j] += w * b[j];
+                }
+            }
+            out
+        };
+        let base = format!("pca{m}");
+        let lxh = self.push_compression(
+            rungs,
+            order,
+            (
+                AttributionKind::PcaCompression,
+                format!("{base}.pca_compression"),
+            ),
+            &base,
+            &compressed,
+        );
+        let q = quantized_prefix(model, m);
+        // The stored weights, bilinear: UNORM8 reads as q / 255.
+        let unorm = f64::from((1u32 << q.bits) - 1);
+        let lightmap_u = |k: usize| {
+            lightmap_bilinear(q.res, px.uv[k], q.m, |t, i| {
+                f64::from(q.weights_unorm[t * q.m + i]) / unorm
+            })
+        };
+        if weights_only {
+            self.push_pca_weights_only_lightmap(rungs, order, &q, &lightmap_u);
+        } else {
+            self.push_pca_table_rungs(rungs, &lxh, &q, &compressed, &lightmap_u)?;
+        }
+        Ok(())
+    }
+
+    /// `pcaMw`'s lightmap rung: the stored weights `lightmap_u` applied to the uniform
+    /// block of order-3 SH (`weights_only_block`), evaluated at the shading normal.
+    fn push_pca_weights_only_lightmap(
+        &self,
+        rungs: &mut Vec<Rung>,
+        order: Order,
+        q: &QuantizedPca,
+        lightmap_u: &(dyn Fn(usize) -> [f64; 36] + Sync),
+    ) {
+        let (px, technique) = (self.px, self.technique);
+        let block = weights_only_block(&q.basis, &q.mean, order, &self.prepared.radiance_sh);
+        self.push(
+            rungs,
+            AttributionKind::LightmapTexels,
+            format!("{technique}.lightmap"),
+            &|| {
+                px.image(|k| {
+                    let u = lightmap_u(k);
+                    let mut y = [0.0; 9];
+                    eval_basis(Order::THREE, px.normal[k], &mut y);
+                    let mut e = [0.0; 3];
+                    for (i, yi) in y.iter().enumerate() {
+                        for c in 0..3 {
+                            let mut coeff = f64::from(block[9 * q.m + i][c]);
+                            for (b, ub) in u[..q.m].iter().enumerate() {
+                                coeff += ub * f64::from(block[9 * b + i][c]);
+                            }
+                            e[c] += coeff * yi;
+                        }
+                    }
+                    e
+                })
+            },
+        );
+    }
+
+    /// `pcaM`'s last rungs: the quantized basis's and mean's normal tables read with the
+    /// compressed V's continuous weights (normal table), then with the stored weights
+    /// `lightmap_u` (lightmap texels).
+    fn push_pca_table_rungs(
+        &self,
+        rungs: &mut Vec<Rung>,
+        lxh: &LxhMatrices,
+        q: &QuantizedPca,
+        compressed: &(dyn Fn(usize) -> [f64; 36] + Sync),
+        lightmap_u: &(dyn Fn(usize) -> [f64; 36] + Sync),
+    ) -> Result<(), TechniqueError> {
+        let (px, label) = (self.px, &self.label);
+        let n2 = self.prepared.pca.order.coeff_count();
+        // Basis tables T_k = Σ_j V_kj (L×H)_j and the mean's, as pca.rs builds them.
+        let map = table_map(self.path, self.prepared.table_res, label)?;
+        let table = build_table(lxh, map);
+        let project = |t: usize, v: &[f64]| -> [f32; 3] {
+            let mut s = [0.0f64; 3];
+            for (j, vj) in v.iter().enumerate().take(n2) {
+                let e = table.values[t * n2 + j];
+                for c in 0..3 {
+                    s[c] += vj * e[c] as f64;
+                }
+            }
+            s.map(|x| x as f32)
+        };
+        let stored = StoredTable::new(map, q.m + 1, |t, i| {
+            project(t, if i < q.m { &q.basis[i] } else { &q.mean })
+        });
+        let tables_dot = |u: &[f64], k: usize| {
+            let t = stored.eval(px.normal[k]);
+            let mut s = t[q.m];
+            for (ui, ti) in u[..q.m].iter().zip(&t) {
+                for c in 0..3 {
+                    s[c] += ui * ti[c];
+                }
+            }
+            s.map(|x| x * stored.unscale)
+        };
+        // The compressed V in the quantized basis's coordinates, unrounded.
+        let continuous_u = |k: usize| {
+            let v = compressed(k);
+            let mut u = [0.0; 36];
+            for (ui, b) in u.iter_mut().zip(&q.basis) {
+                let norm2: f64 = b.iter().map(|x| x * x).sum();
+                if norm2 > 0.0 {
+                    *ui = (0..n2).map(|j| b[j] * (v[j] - q.mean[j])).sum::<f64>() / norm2;
+                }
+            }
+            u
+        };
+        self.push(
+            rungs,
+            AttributionKind::NormalTable,
+            format!("{label}.normal_table"),
+            &|| px.image(|k| tables_dot(&continuous_u(k), k)),
+        );
+        self.push(
+            rungs,
+            AttributionKind::LightmapTexels,
+            format!("{label}.lightmap"),
+            &|| px.image(|k| tables_dot(&lightmap_u(k), k)),
+        );
+        Ok(())
+    }
+
+    /// `vq*` and `cpca*`'s rungs: visibility order, the cluster compression and the rungs
+    /// of [`compression_rungs`], then the stored lightmap as the shader reads it.
+    fn clustered(&self, rungs: &mut Vec<Rung>) -> Result<(), TechniqueError> {
+        let (px, technique, label) = (self.px, self.technique, &self.label);
+        let need = technique.cluster_need().expect("a clustered technique");
+        let model = crate::technique::cluster::find(&self.prepared.inputs(), need, label)?;
+        let order = model.order;
+        let n2 = order.coeff_count();
+        self.push_visibility(rungs, order);
+        let compressed = |k: usize| {
+            let mut out = [0.0; 36];
+            out[..n2].copy_from_slice(&model.compress(&px.visibility(k, n2)[..n2]));
+            out
+        };
+        let base = technique.name();
+        let lxh = self.push_compression(
+            rungs,
+            order,
+            (
+                AttributionKind::ClusterCompression,
+                format!("{base}.compression"),
+            ),
+            &base,
+            &compressed,
+        );
+        // The stored lightmap as the shader reads it (glsl/technique/cluster.frag).
+        let q = model.quantize();
+        let blended = matches!(
+            technique,
+            Technique::Vq {
+                seams: SeamMode::Blended,
+                ..
+            } | Technique::Cpca {
+                seams: SeamMode::Blended,
+                ..
+            }
+        );
+        let stored = |k: usize| -> [f64; 36] {
+            let mut out = [0.0; 36];
+            if blended {
+                let (index, weight) = lightmap_taps(q.res, px.uv[k]);
+                for (&t, &w) in index.iter().zip(&weight) {
+                    for (o, v) in out.iter_mut().zip(q.reconstruct(t)) {
+                        *o += w * v;
                     }
                 }
-                e
-            };
-            push(
-                AttributionKind::RadianceOrder,
-                "shlmap.radiance_order".into(),
-                &|| px.image(|k| convolve(&gathered[k], px.normal[k])),
-            );
-            // As the technique stores it (finite: the bench built it first).
-            let scale = crate::technique::shlmap::stored_scale(map).unwrap_or(1.0);
-            let unscale = f64::from(1.0 / scale);
-            push(
-                AttributionKind::LightmapTexels,
-                "shlmap.lightmap".into(),
-                &|| {
-                    px.image(|k| {
-                        let v = lightmap_bilinear(map.res, px.uv[k], 27, |t, j| {
-                            f16_round(map.texel(t)[j / 3][j % 3] * scale)
-                        });
-                        let c: Vec<[f64; 3]> = (0..9)
-                            .map(|i| std::array::from_fn(|ch| v[3 * i + ch] * unscale))
-                            .collect();
-                        convolve(&c, px.normal[k])
-                    })
-                },
-            );
-        }
+            } else {
+                let c = q.cluster_of[texel_index_of(q.res, px.uv[k])] as usize;
+                let u = lightmap_bilinear(q.res, px.uv[k], q.m, |t, i| {
+                    f64::from(q.weights_unorm[t * q.m + i]) / 255.0
+                });
+                out[..n2].copy_from_slice(&q.means[c][..n2]);
+                for (b, ub) in q.bases[c].iter().zip(&u) {
+                    for (o, bj) in out.iter_mut().zip(b) {
+                        *o += ub * bj;
+                    }
+                }
+            }
+            out
+        };
+        self.push(
+            rungs,
+            AttributionKind::LightmapTexels,
+            format!("{label}.lightmap"),
+            &|| px.image(|k| shade(&lxh, px.normal[k], &stored(k))),
+        );
+        Ok(())
     }
-    Ok(rungs.into_inner())
+
+    /// `preconv`'s rungs: V replaced by the pixel's AO, irradiance truncated to order 3,
+    /// the AO lightmap's texels.
+    fn preconv(&self, rungs: &mut Vec<Rung>) {
+        let (px, prepared) = (self.px, self.prepared);
+        let y00 = 0.5 / std::f64::consts::PI.sqrt();
+        let ao = |k: usize| f64::from(px.vis.ao[k]);
+        self.push(
+            rungs,
+            AttributionKind::AmbientOcclusion,
+            "preconv.ambient_occlusion".into(),
+            // ∫ L H_n = G_0 / y_00.
+            &|| px.image(|k| self.exact(k)[0].map(|g| ao(k) * g / y00)),
+        );
+        let e3 = |k: usize| {
+            crate::sh::zonal::eval_rgb(&prepared.irradiance_sh, Order::THREE, px.normal[k])
+                .map(|e| e.max(0.0))
+        };
+        self.push(
+            rungs,
+            AttributionKind::IrradianceOrder,
+            "preconv.irradiance_order".into(),
+            &|| px.image(|k| e3(k).map(|e| ao(k) * e)),
+        );
+        let ao_map = &prepared.ao;
+        self.push(
+            rungs,
+            AttributionKind::LightmapTexels,
+            "preconv.lightmap".into(),
+            &|| {
+                px.image(|k| {
+                    let a = lightmap_bilinear(ao_map.res, px.uv[k], 1, |t, _| {
+                        f16_round(ao_map.values[t])
+                    })[0];
+                    e3(k).map(|e| a * e)
+                })
+            },
+        );
+    }
+
+    /// `sh2`'s rungs: V truncated to order 2, lighting to order 3, then the product and
+    /// the cosine to order 3, then the lightmap texels.
+    fn sh2(&self, rungs: &mut Vec<Rung>) {
+        let px = self.px;
+        let radiance = &self.prepared.radiance_sh;
+        let order = Order::TWO;
+        let n2 = order.coeff_count();
+        self.push_visibility(rungs, order);
+        let lighting = exact_cosine(radiance, 3, order);
+        self.push(
+            rungs,
+            AttributionKind::LightingOrder,
+            "sh2.lighting_order".into(),
+            &|| px.image(|k| shade(&lighting, px.normal[k], &px.visibility(k, n2))),
+        );
+        let product = LxhMatrices::with_lighting_order(radiance, Order::THREE, order, Order::THREE);
+        self.push(
+            rungs,
+            AttributionKind::ProductOrder,
+            "sh2.product_order".into(),
+            &|| px.image(|k| shade(&product, px.normal[k], &px.visibility(k, n2))),
+        );
+        self.push(
+            rungs,
+            AttributionKind::LightmapTexels,
+            "sh2.lightmap".into(),
+            &|| px.image(|k| shade(&product, px.normal[k], &self.lightmap_v(k, n2))),
+        );
+    }
+
+    /// `nmprt*`'s one rung: the technique's own model at each pixel (none without a
+    /// transfer bake).
+    fn nmprt(&self, rungs: &mut Vec<Rung>, variant: NmprtVariant) {
+        let (px, prepared, technique) = (self.px, self.prepared, self.technique);
+        let Some(transfer) = prepared.transfer.as_ref() else {
+            return;
+        };
+        let recipe = crate::technique::nmprt::NmprtRecipe::new(variant, transfer.clone());
+        let radiance = &prepared.radiance_sh;
+        let irradiance = &prepared.irradiance_sh;
+        self.push(
+            rungs,
+            AttributionKind::Technique,
+            format!("{technique}.model"),
+            &|| {
+                let values = recipe.texel_values_all(radiance, irradiance);
+                let v = recipe.values_per_texel();
+                px.image(|k| {
+                    let x = lightmap_bilinear(transfer.res, px.uv[k], v, |t, j| {
+                        f64::from(values[t * v + j])
+                    });
+                    // The frame of the nearest covered tap.
+                    let (taps, weights) = lightmap_taps(transfer.res, px.uv[k]);
+                    let frame = taps
+                        .iter()
+                        .zip(weights)
+                        .filter(|(t, _)| transfer.covered[**t])
+                        .max_by(|a, b| a.1.total_cmp(&b.1))
+                        .map_or([Vec3::ZERO; 3], |(t, _)| transfer.frames[*t]);
+                    recipe.eval(&x[..v], px.normal[k], &frame, irradiance)
+                })
+            },
+        );
+    }
+
+    /// `shlmap`'s rungs: the inter-reflected radiance gathered at each pixel (order 3,
+    /// convolved with the clamped cosine), then the SH lightmap's f16 texels (none without
+    /// an SH lightmap bake).
+    fn shlmap(&self, rungs: &mut Vec<Rung>) {
+        let (px, prepared) = (self.px, self.prepared);
+        let radiance = &prepared.radiance_sh;
+        let Some(map) = prepared.sh_lightmap.as_ref() else {
+            return;
+        };
+        let settings = ShLightmapSettings {
+            rays: prepared.visibility_settings.rays,
+            seed: prepared.visibility_settings.seed,
+            bounces: map.bounces,
+            progress: false,
+        };
+        let gathered = px.sh_radiance.get_or_init(|| {
+            let tracer = crate::bake::trace::Tracer::new(&prepared.scene.mesh);
+            radiance_at_points(
+                &prepared.scene,
+                &tracer,
+                map,
+                radiance,
+                &settings,
+                &px.position,
+                &px.normal_g,
+            )
+        });
+        // Σ_k A_l(k) c_k y_k(n): eq. (2) at the shading normal.
+        let convolve = |c: &[[f64; 3]], n: DVec3| {
+            let mut y = [0.0; 9];
+            eval_basis(Order::THREE, n, &mut y);
+            let mut e = [0.0; 3];
+            for (k, (ck, yk)) in c.iter().zip(&y).enumerate() {
+                let a = clamped_cosine_convolution(if k == 0 {
+                    0
+                } else if k < 4 {
+                    1
+                } else {
+                    2
+                });
+                for ch in 0..3 {
+                    e[ch] += a * ck[ch] * yk;
+                }
+            }
+            e
+        };
+        self.push(
+            rungs,
+            AttributionKind::RadianceOrder,
+            "shlmap.radiance_order".into(),
+            &|| px.image(|k| convolve(&gathered[k], px.normal[k])),
+        );
+        // As the technique stores it (finite: the bench built it first).
+        let scale = crate::technique::shlmap::stored_scale(map).unwrap_or(1.0);
+        let unscale = f64::from(1.0 / scale);
+        self.push(
+            rungs,
+            AttributionKind::LightmapTexels,
+            "shlmap.lightmap".into(),
+            &|| {
+                px.image(|k| {
+                    let v = lightmap_bilinear(map.res, px.uv[k], 27, |t, j| {
+                        f16_round(map.texel(t)[j / 3][j % 3] * scale)
+                    });
+                    let c: Vec<[f64; 3]> = (0..9)
+                        .map(|i| std::array::from_fn(|ch| v[3 * i + ch] * unscale))
+                        .collect();
+                    convolve(&c, px.normal[k])
+                })
+            },
+        );
+    }
 }
 
 #[cfg(test)]

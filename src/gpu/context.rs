@@ -63,101 +63,12 @@ impl Context {
         // SAFETY: loading the system loader runs its initialisers; we hold the entry for the
         // context's lifetime.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| GpuError::Loader(e.to_string()))?;
-        // SAFETY: plain queries on a loaded entry.
-        let layers = unsafe { entry.enumerate_instance_layer_properties() }
-            .map_err(|e| GpuError::vulkan("vkEnumerateInstanceLayerProperties", "loader", e))?;
-        let has_layer = |name: &CStr| {
-            layers
-                .iter()
-                .any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == name))
-        };
-        if desc.validate && !has_layer(VALIDATION_LAYER) {
-            return Err(GpuError::NoValidationLayer);
-        }
-        // SAFETY: as above.
-        let extensions = unsafe { entry.enumerate_instance_extension_properties(None) }
-            .map_err(|e| GpuError::vulkan("vkEnumerateInstanceExtensionProperties", "loader", e))?;
-        let has_debug_utils = extensions.iter().any(|e| {
-            e.extension_name_as_c_str()
-                .is_ok_and(|n| n == ash::ext::debug_utils::NAME)
-        }) || desc.validate;
-
-        let app_name = c"shvis";
-        let app_info = vk::ApplicationInfo::default()
-            .application_name(app_name)
-            .engine_name(app_name)
-            .api_version(vk::API_VERSION_1_2);
-        let layer_names: Vec<*const c_char> = if desc.validate {
-            vec![VALIDATION_LAYER.as_ptr()]
-        } else {
-            vec![]
-        };
-        let mut ext_names: Vec<*const c_char> = if has_debug_utils {
-            vec![ash::ext::debug_utils::NAME.as_ptr()]
-        } else {
-            vec![]
-        };
-        for wanted in &desc.surface_extensions {
-            let present = extensions
-                .iter()
-                .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == *wanted));
-            if !present {
-                return Err(GpuError::MissingFeature {
-                    device: "the Vulkan loader".into(),
-                    feature: format!("{} (needed to open a window)", wanted.to_string_lossy()),
-                });
-            }
-            ext_names.push(wanted.as_ptr());
-        }
+        let names = InstanceNames::new(&entry, desc)?;
         let messages = std::sync::Arc::<MessageCounts>::default();
-        let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
-            .message_severity(
-                vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
-                    | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
-                    | vk::DebugUtilsMessageSeverityFlagsEXT::INFO,
-            )
-            .message_type(
-                vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
-                    | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
-                    | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
-            )
-            .pfn_user_callback(Some(debug::messenger_callback))
-            .user_data(std::sync::Arc::as_ptr(&messages) as *mut c_void);
-        let mut instance_info = vk::InstanceCreateInfo::default()
-            .application_info(&app_info)
-            .enabled_layer_names(&layer_names)
-            .enabled_extension_names(&ext_names);
-        if has_debug_utils {
-            // Also catches messages from vkCreateInstance/vkDestroyInstance themselves.
-            instance_info = instance_info.push_next(&mut messenger_info);
-        }
-        // SAFETY: every pointer in the create-info borrows locals alive for the call.
-        let instance = unsafe { entry.create_instance(&instance_info, None) }.map_err(|e| {
-            if e == vk::Result::ERROR_INCOMPATIBLE_DRIVER {
-                GpuError::NoDevice
-            } else {
-                GpuError::vulkan("vkCreateInstance", "shvis", e)
-            }
-        })?;
-        let (debug_instance, messenger) = if has_debug_utils {
-            let di = ash::ext::debug_utils::Instance::new(&entry, &instance);
-            // SAFETY: the user-data box outlives the messenger (see Drop).
-            let m = unsafe { di.create_debug_utils_messenger(&messenger_info, None) };
-            match m {
-                Ok(m) => (Some(di), m),
-                Err(e) => {
-                    // SAFETY: nothing was created from the instance yet.
-                    unsafe { instance.destroy_instance(None) };
-                    return Err(GpuError::vulkan(
-                        "vkCreateDebugUtilsMessengerEXT",
-                        "shvis",
-                        e,
-                    ));
-                }
-            }
-        } else {
-            (None, vk::DebugUtilsMessengerEXT::null())
-        };
+        let mut messenger_info = messenger_create_info(&messages);
+        let instance = create_instance(&entry, &names, &mut messenger_info)?;
+        let (debug_instance, messenger) =
+            create_messenger(&entry, &instance, names.has_debug_utils, &messenger_info)?;
 
         // From here on a failure must destroy what exists: build a partial context whose
         // Drop tolerates null handles.
@@ -175,142 +86,25 @@ impl Context {
                 return Err(e);
             }
         };
-        // SAFETY: `physical` came from this instance.
-        let (props, features, families) = unsafe {
-            (
-                instance.get_physical_device_properties(physical),
-                instance.get_physical_device_features(physical),
-                instance.get_physical_device_queue_family_properties(physical),
-            )
-        };
-        let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
-        // SAFETY: as above; Vulkan 1.1 core, the instance asks for 1.2.
-        unsafe {
-            let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
-            instance.get_physical_device_properties2(physical, &mut props2);
-        }
-        let fragment_subgroup_ops = if subgroup
-            .supported_stages
-            .contains(vk::ShaderStageFlags::FRAGMENT)
-        {
-            subgroup.supported_operations
-        } else {
-            vk::SubgroupFeatureFlags::empty()
-        };
-        let priorities = [1.0f32];
-        let queue_info = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(queue_family)
-            .queue_priorities(&priorities)];
-        let multi_draw_indirect =
-            features.multi_draw_indirect != 0 && features.draw_indirect_first_instance != 0;
-        // Cube arrays (dx10 tables) and dynamically uniform indexing of sampler arrays (the
-        // dx9 techniques' texture lists) where the device has them; techniques check.
-        let enabled_features = vk::PhysicalDeviceFeatures::default()
-            .image_cube_array(features.image_cube_array != 0)
-            .shader_sampled_image_array_dynamic_indexing(
-                features.shader_sampled_image_array_dynamic_indexing != 0,
-            )
-            // Normal-map generation draws one indirect command per low triangle.
-            .multi_draw_indirect(multi_draw_indirect)
-            .draw_indirect_first_instance(multi_draw_indirect);
-        // VK_KHR_maintenance4 relaxes vertex-output/fragment-input matching, so a pass may
-        // read a subset of the shared mesh.vert outputs (the reference's G-buffer passes).
-        // SAFETY: a plain query on this instance's physical device.
-        let device_extensions =
-            unsafe { instance.enumerate_device_extension_properties(physical) }.unwrap_or_default();
-        let has_maintenance4 = device_extensions.iter().any(|e| {
-            e.extension_name_as_c_str()
-                .is_ok_and(|n| n == ash::khr::maintenance4::NAME)
-        });
-        let mut device_ext_names: Vec<*const c_char> = if has_maintenance4 {
-            vec![ash::khr::maintenance4::NAME.as_ptr()]
-        } else {
-            vec![]
-        };
-        if !desc.surface_extensions.is_empty() {
-            let has_swapchain = device_extensions.iter().any(|e| {
-                e.extension_name_as_c_str()
-                    .is_ok_and(|n| n == ash::khr::swapchain::NAME)
-            });
-            if !has_swapchain {
-                return Err(GpuError::MissingFeature {
-                    device: device_name.clone(),
-                    feature: "VK_KHR_swapchain (needed to present to a window)".into(),
-                });
-            }
-            device_ext_names.push(ash::khr::swapchain::NAME.as_ptr());
-        }
-        let mut maintenance4 = vk::PhysicalDeviceMaintenance4Features::default().maintenance4(true);
-        let mut device_info = vk::DeviceCreateInfo::default()
-            .queue_create_infos(&queue_info)
-            .enabled_features(&enabled_features)
-            .enabled_extension_names(&device_ext_names);
-        if has_maintenance4 {
-            device_info = device_info.push_next(&mut maintenance4);
-        }
-        // SAFETY: create-info borrows locals alive for the call.
-        let device = match unsafe { instance.create_device(physical, &device_info, None) } {
-            Ok(d) => d,
-            Err(e) => {
-                // SAFETY: as above.
-                unsafe {
-                    if let Some(di) = &debug_instance {
-                        di.destroy_debug_utils_messenger(messenger, None);
-                    }
-                    instance.destroy_instance(None);
-                }
-                return Err(GpuError::vulkan("vkCreateDevice", &device_name, e));
-            }
-        };
-        // SAFETY: the family/index pair was requested in `device_info`.
+        let info = PhysicalInfo::query(&instance, physical);
+        let multi_draw_indirect = info.multi_draw_indirect();
+        let debug = (debug_instance.as_ref(), messenger);
+        let device = open_device(
+            &instance,
+            physical,
+            queue_family,
+            &device_name,
+            &info,
+            desc,
+            debug,
+        )?;
+        // SAFETY: the family/index pair was requested in `device_info` (`open_device`).
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
-        let debug_device =
-            has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
-        let allocator = Allocator::new(&AllocatorCreateDesc {
-            instance: instance.clone(),
-            device: device.clone(),
-            physical_device: physical,
-            debug_settings: Default::default(),
-            buffer_device_address: false,
-            allocation_sizes: Default::default(),
-        });
-        let pool_info = vk::CommandPoolCreateInfo::default()
-            .queue_family_index(queue_family)
-            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
-        // SAFETY: valid device and family.
-        let pool = unsafe { device.create_command_pool(&pool_info, None) };
-        let (allocator, pool) = match (allocator, pool) {
-            (Ok(a), Ok(p)) => (a, p),
-            (a, p) => {
-                let pool_error = match p {
-                    // SAFETY: an unused pool of this device.
-                    Ok(p) => unsafe {
-                        device.destroy_command_pool(p, None);
-                        None
-                    },
-                    Err(e) => Some(GpuError::vulkan("vkCreateCommandPool", "shvis.pool", e)),
-                };
-                let error = match a {
-                    Ok(allocator) => {
-                        drop(allocator); // frees its memory blocks before the device goes
-                        pool_error.unwrap_or(GpuError::NoDevice)
-                    }
-                    Err(source) => GpuError::Alloc {
-                        what: "allocator".into(),
-                        source,
-                    },
-                };
-                // SAFETY: nothing created from the device or instance is alive any more.
-                unsafe {
-                    device.destroy_device(None);
-                    if let Some(di) = &debug_instance {
-                        di.destroy_debug_utils_messenger(messenger, None);
-                    }
-                    instance.destroy_instance(None);
-                }
-                return Err(error);
-            }
-        };
+        let debug_device = names
+            .has_debug_utils
+            .then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+        let (allocator, pool) =
+            create_allocator_and_pool(&instance, &device, physical, queue_family, debug)?;
         let ctx = Context {
             entry,
             instance,
@@ -324,11 +118,11 @@ impl Context {
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             command_pool: Mutex::new(pool),
             device_name: device_name.clone(),
-            limits: props.limits,
-            timestamp_valid_bits: families[queue_family as usize].timestamp_valid_bits,
-            image_cube_array: features.image_cube_array != 0,
+            limits: info.props.limits,
+            timestamp_valid_bits: info.families[queue_family as usize].timestamp_valid_bits,
+            image_cube_array: info.features.image_cube_array != 0,
             multi_draw_indirect,
-            fragment_subgroup_ops,
+            fragment_subgroup_ops: info.fragment_subgroup_ops,
             messages,
         };
         ctx.set_name(pool, "shvis.command_pool");
@@ -583,6 +377,341 @@ impl Drop for Context {
                 di.destroy_debug_utils_messenger(self.messenger, None);
             }
             self.instance.destroy_instance(None);
+        }
+    }
+}
+
+/// The layers and extensions the instance is created with; checks that the validation
+/// layer (when asked for) and `desc.surface_extensions` are there.
+struct InstanceNames {
+    layers: Vec<*const c_char>,
+    extensions: Vec<*const c_char>,
+    /// VK_EXT_debug_utils is on (it is there, or validation is asked for).
+    has_debug_utils: bool,
+}
+
+impl InstanceNames {
+    fn new(entry: &ash::Entry, desc: &ContextDesc) -> Result<Self, GpuError> {
+        // SAFETY: plain queries on a loaded entry.
+        let layers = unsafe { entry.enumerate_instance_layer_properties() }
+            .map_err(|e| GpuError::vulkan("vkEnumerateInstanceLayerProperties", "loader", e))?;
+        let has_layer = |name: &CStr| {
+            layers
+                .iter()
+                .any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == name))
+        };
+        if desc.validate && !has_layer(VALIDATION_LAYER) {
+            return Err(GpuError::NoValidationLayer);
+        }
+        // SAFETY: as above.
+        let extensions = unsafe { entry.enumerate_instance_extension_properties(None) }
+            .map_err(|e| GpuError::vulkan("vkEnumerateInstanceExtensionProperties", "loader", e))?;
+        let has_debug_utils = extensions.iter().any(|e| {
+            e.extension_name_as_c_str()
+                .is_ok_and(|n| n == ash::ext::debug_utils::NAME)
+        }) || desc.validate;
+
+        let layer_names: Vec<*const c_char> = if desc.validate {
+            vec![VALIDATION_LAYER.as_ptr()]
+        } else {
+            vec![]
+        };
+        let mut ext_names: Vec<*const c_char> = if has_debug_utils {
+            vec![ash::ext::debug_utils::NAME.as_ptr()]
+        } else {
+            vec![]
+        };
+        for wanted in &desc.surface_extensions {
+            let present = extensions
+                .iter()
+                .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == *wanted));
+            if !present {
+                return Err(GpuError::MissingFeature {
+                    device: "the Vulkan loader".into(),
+                    feature: format!("{} (needed to open a window)", wanted.to_string_lossy()),
+                });
+            }
+            ext_names.push(wanted.as_ptr());
+        }
+        Ok(InstanceNames {
+            layers: layer_names,
+            extensions: ext_names,
+            has_debug_utils,
+        })
+    }
+}
+
+/// The debug messenger's create-info: errors, warnings and infos of every type, counted
+/// into `messages` by `debug::messenger_callback`.
+fn messenger_create_info(
+    messages: &std::sync::Arc<MessageCounts>,
+) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
+    vk::DebugUtilsMessengerCreateInfoEXT::default()
+        .message_severity(
+            vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+                | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                | vk::DebugUtilsMessageSeverityFlagsEXT::INFO,
+        )
+        .message_type(
+            vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+        )
+        .pfn_user_callback(Some(debug::messenger_callback))
+        .user_data(std::sync::Arc::as_ptr(messages) as *mut c_void)
+}
+
+/// Creates the Vulkan 1.2 instance with `names`, chaining `messenger_info` where debug
+/// utils are on.
+fn create_instance(
+    entry: &ash::Entry,
+    names: &InstanceNames,
+    messenger_info: &mut vk::DebugUtilsMessengerCreateInfoEXT<'_>,
+) -> Result<ash::Instance, GpuError> {
+    let app_name = c"shvis";
+    let app_info = vk::ApplicationInfo::default()
+        .application_name(app_name)
+        .engine_name(app_name)
+        .api_version(vk::API_VERSION_1_2);
+    let mut instance_info = vk::InstanceCreateInfo::default()
+        .application_info(&app_info)
+        .enabled_layer_names(&names.layers)
+        .enabled_extension_names(&names.extensions);
+    if names.has_debug_utils {
+        // Also catches messages from vkCreateInstance/vkDestroyInstance themselves.
+        instance_info = instance_info.push_next(messenger_info);
+    }
+    // SAFETY: every pointer in the create-info borrows locals alive for the call.
+    unsafe { entry.create_instance(&instance_info, None) }.map_err(|e| {
+        if e == vk::Result::ERROR_INCOMPATIBLE_DRIVER {
+            GpuError::NoDevice
+        } else {
+            GpuError::vulkan("vkCreateInstance", "shvis", e)
+        }
+    })
+}
+
+/// The debug-utils instance functions and the messenger, where debug utils are on (else
+/// none and a null messenger); destroys `instance` on failure.
+fn create_messenger(
+    entry: &ash::Entry,
+    instance: &ash::Instance,
+    has_debug_utils: bool,
+    messenger_info: &vk::DebugUtilsMessengerCreateInfoEXT<'_>,
+) -> Result<
+    (
+        Option<ash::ext::debug_utils::Instance>,
+        vk::DebugUtilsMessengerEXT,
+    ),
+    GpuError,
+> {
+    if !has_debug_utils {
+        return Ok((None, vk::DebugUtilsMessengerEXT::null()));
+    }
+    let di = ash::ext::debug_utils::Instance::new(entry, instance);
+    // SAFETY: the user-data box outlives the messenger (see Drop).
+    let m = unsafe { di.create_debug_utils_messenger(messenger_info, None) };
+    match m {
+        Ok(m) => Ok((Some(di), m)),
+        Err(e) => {
+            // SAFETY: nothing was created from the instance yet.
+            unsafe { instance.destroy_instance(None) };
+            Err(GpuError::vulkan(
+                "vkCreateDebugUtilsMessengerEXT",
+                "shvis",
+                e,
+            ))
+        }
+    }
+}
+
+/// What the context keeps of the chosen physical device's properties.
+struct PhysicalInfo {
+    props: vk::PhysicalDeviceProperties,
+    features: vk::PhysicalDeviceFeatures,
+    families: Vec<vk::QueueFamilyProperties>,
+    /// The subgroup operations fragment shaders may use (none where the fragment stage
+    /// has no subgroups).
+    fragment_subgroup_ops: vk::SubgroupFeatureFlags,
+}
+
+impl PhysicalInfo {
+    fn query(instance: &ash::Instance, physical: vk::PhysicalDevice) -> Self {
+        // SAFETY: `physical` came from this instance.
+        let (props, features, families) = unsafe {
+            (
+                instance.get_physical_device_properties(physical),
+                instance.get_physical_device_features(physical),
+                instance.get_physical_device_queue_family_properties(physical),
+            )
+        };
+        let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+        // SAFETY: as above; Vulkan 1.1 core, the instance asks for 1.2.
+        unsafe {
+            let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
+            instance.get_physical_device_properties2(physical, &mut props2);
+        }
+        let fragment_subgroup_ops = if subgroup
+            .supported_stages
+            .contains(vk::ShaderStageFlags::FRAGMENT)
+        {
+            subgroup.supported_operations
+        } else {
+            vk::SubgroupFeatureFlags::empty()
+        };
+        PhysicalInfo {
+            props,
+            features,
+            families,
+            fragment_subgroup_ops,
+        }
+    }
+
+    /// Whether `multiDrawIndirect` and `drawIndirectFirstInstance` are both there (the
+    /// context enables them together).
+    fn multi_draw_indirect(&self) -> bool {
+        self.features.multi_draw_indirect != 0 && self.features.draw_indirect_first_instance != 0
+    }
+}
+
+/// The instance-level debug objects a failure must destroy with the instance: the
+/// debug-utils functions (where on) and the messenger.
+type DebugObjects<'a> = (
+    Option<&'a ash::ext::debug_utils::Instance>,
+    vk::DebugUtilsMessengerEXT,
+);
+
+/// Creates the logical device of `physical` (its graphics queue family and name) with one
+/// queue, the features the techniques use where the device has them, VK_KHR_maintenance4
+/// where there, and VK_KHR_swapchain when the context presents; destroys the messenger
+/// and the instance when vkCreateDevice fails.
+fn open_device(
+    instance: &ash::Instance,
+    physical: vk::PhysicalDevice,
+    queue_family: u32,
+    device_name: &str,
+    info: &PhysicalInfo,
+    desc: &ContextDesc,
+    (debug_instance, messenger): DebugObjects<'_>,
+) -> Result<ash::Device, GpuError> {
+    let priorities = [1.0f32];
+    let queue_info = [vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(queue_family)
+        .queue_priorities(&priorities)];
+    let (features, multi_draw_indirect) = (&info.features, info.multi_draw_indirect());
+    // Cube arrays (dx10 tables) and dynamically uniform indexing of sampler arrays (the
+    // dx9 techniques' texture lists) where the device has them; techniques check.
+    let enabled_features = vk::PhysicalDeviceFeatures::default()
+        .image_cube_array(features.image_cube_array != 0)
+        .shader_sampled_image_array_dynamic_indexing(
+            features.shader_sampled_image_array_dynamic_indexing != 0,
+        )
+        // Normal-map generation draws one indirect command per low triangle.
+        .multi_draw_indirect(multi_draw_indirect)
+        .draw_indirect_first_instance(multi_draw_indirect);
+    // VK_KHR_maintenance4 relaxes vertex-output/fragment-input matching, so a pass may
+    // read a subset of the shared mesh.vert outputs (the reference's G-buffer passes).
+    // SAFETY: a plain query on this instance's physical device.
+    let device_extensions =
+        unsafe { instance.enumerate_device_extension_properties(physical) }.unwrap_or_default();
+    let has_maintenance4 = device_extensions.iter().any(|e| {
+        e.extension_name_as_c_str()
+            .is_ok_and(|n| n == ash::khr::maintenance4::NAME)
+    });
+    let mut device_ext_names: Vec<*const c_char> = if has_maintenance4 {
+        vec![ash::khr::maintenance4::NAME.as_ptr()]
+    } else {
+        vec![]
+    };
+    if !desc.surface_extensions.is_empty() {
+        let has_swapchain = device_extensions.iter().any(|e| {
+            e.extension_name_as_c_str()
+                .is_ok_and(|n| n == ash::khr::swapchain::NAME)
+        });
+        if !has_swapchain {
+            return Err(GpuError::MissingFeature {
+                device: device_name.to_string(),
+                feature: "VK_KHR_swapchain (needed to present to a window)".into(),
+            });
+        }
+        device_ext_names.push(ash::khr::swapchain::NAME.as_ptr());
+    }
+    let mut maintenance4 = vk::PhysicalDeviceMaintenance4Features::default().maintenance4(true);
+    let mut device_info = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queue_info)
+        .enabled_features(&enabled_features)
+        .enabled_extension_names(&device_ext_names);
+    if has_maintenance4 {
+        device_info = device_info.push_next(&mut maintenance4);
+    }
+    // SAFETY: create-info borrows locals alive for the call.
+    match unsafe { instance.create_device(physical, &device_info, None) } {
+        Ok(d) => Ok(d),
+        Err(e) => {
+            // SAFETY: the messenger and instance are the caller's and unused elsewhere.
+            unsafe {
+                if let Some(di) = debug_instance {
+                    di.destroy_debug_utils_messenger(messenger, None);
+                }
+                instance.destroy_instance(None);
+            }
+            Err(GpuError::vulkan("vkCreateDevice", device_name, e))
+        }
+    }
+}
+
+/// The gpu-allocator and the command pool for one-shot work (on the graphics queue
+/// family); destroys what exists, down to the instance, when either fails.
+fn create_allocator_and_pool(
+    instance: &ash::Instance,
+    device: &ash::Device,
+    physical: vk::PhysicalDevice,
+    queue_family: u32,
+    (debug_instance, messenger): DebugObjects<'_>,
+) -> Result<(Allocator, vk::CommandPool), GpuError> {
+    let allocator = Allocator::new(&AllocatorCreateDesc {
+        instance: instance.clone(),
+        device: device.clone(),
+        physical_device: physical,
+        debug_settings: Default::default(),
+        buffer_device_address: false,
+        allocation_sizes: Default::default(),
+    });
+    let pool_info = vk::CommandPoolCreateInfo::default()
+        .queue_family_index(queue_family)
+        .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+    // SAFETY: valid device and family.
+    let pool = unsafe { device.create_command_pool(&pool_info, None) };
+    match (allocator, pool) {
+        (Ok(a), Ok(p)) => Ok((a, p)),
+        (a, p) => {
+            let pool_error = match p {
+                // SAFETY: an unused pool of this device.
+                Ok(p) => unsafe {
+                    device.destroy_command_pool(p, None);
+                    None
+                },
+                Err(e) => Some(GpuError::vulkan("vkCreateCommandPool", "shvis.pool", e)),
+            };
+            let error = match a {
+                Ok(allocator) => {
+                    drop(allocator); // frees its memory blocks before the device goes
+                    pool_error.unwrap_or(GpuError::NoDevice)
+                }
+                Err(source) => GpuError::Alloc {
+                    what: "allocator".into(),
+                    source,
+                },
+            };
+            // SAFETY: nothing created from the device or instance is alive any more.
+            unsafe {
+                device.destroy_device(None);
+                if let Some(di) = debug_instance {
+                    di.destroy_debug_utils_messenger(messenger, None);
+                }
+                instance.destroy_instance(None);
+            }
+            Err(error)
         }
     }
 }

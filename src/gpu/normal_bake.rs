@@ -82,6 +82,8 @@ const MASK_VERTEX_BYTES: u32 = 12;
 const HIGH_VERTEX_BYTES: u32 = 24;
 const INDIRECT_COMMAND_BYTES: u32 = 20;
 const TIMESTAMPS: u32 = 4;
+/// Bytes of an RGBA32F texel, in the target and the buffers.
+const TEXEL_BYTES: u64 = 16;
 
 /// Runs one bake (module doc).
 ///
@@ -90,23 +92,10 @@ const TIMESTAMPS: u32 = 4;
 /// failing Vulkan call.
 pub fn run(ctx: &Arc<Context>, job: &ProjectionJob<'_>) -> Result<ProjectionResult, GpuError> {
     let setup = Instant::now();
-    let name = "normalmap";
-    let invalid = |detail: String| GpuError::Invalid {
-        what: name.into(),
-        detail,
-    };
-    if job.indirect && !ctx.supports_multi_draw_indirect() {
-        return Err(invalid(
-            "this device lacks multiDrawIndirect / drawIndirectFirstInstance: use direct draws"
-                .into(),
-        ));
-    }
-    if job.draws.is_empty() || job.high_indices.is_empty() || job.mask_vertices.is_empty() {
-        return Err(invalid("nothing to draw".into()));
-    }
+    let name = NAME;
+    check_job(ctx, job)?;
     let res = job.res;
     let texels = res as u64 * res as u64;
-    let texel_bytes = 16u64;
     let target = RenderTarget::with_format(ctx, res, res, COLOR_FORMAT_F32)?;
     let mask_vb = device_local_buffer(
         ctx,
@@ -132,31 +121,17 @@ pub fn run(ctx: &Arc<Context>, job: &ProjectionJob<'_>) -> Result<ProjectionResu
         vk::BufferUsageFlags::STORAGE_BUFFER,
         "normalmap.views",
     )?;
-    let indirect = if job.indirect {
-        let commands: Vec<u32> = job
-            .draws
-            .iter()
-            .flat_map(|d| [d.index_count, 1, d.first_index, 0, d.triangle])
-            .collect();
-        Some(device_local_buffer(
-            ctx,
-            bytemuck::cast_slice(&commands),
-            vk::BufferUsageFlags::INDIRECT_BUFFER,
-            "normalmap.draws",
-        )?)
-    } else {
-        None
-    };
+    let indirect = indirect_commands(ctx, job)?;
     let mask = Buffer::new(
         ctx,
-        texels * texel_bytes,
+        texels * TEXEL_BYTES,
         vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
         MemoryLocation::GpuOnly,
         "normalmap.mask",
     )?;
     let expand = Buffer::new(
         ctx,
-        2 * texels * texel_bytes,
+        2 * texels * TEXEL_BYTES,
         vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC,
@@ -165,7 +140,7 @@ pub fn run(ctx: &Arc<Context>, job: &ProjectionJob<'_>) -> Result<ProjectionResu
     )?;
     let readback = Buffer::new(
         ctx,
-        texels * texel_bytes,
+        texels * TEXEL_BYTES,
         vk::BufferUsageFlags::TRANSFER_DST,
         MemoryLocation::GpuToCpu,
         "normalmap.readback",
@@ -190,6 +165,111 @@ pub fn run(ctx: &Arc<Context>, job: &ProjectionJob<'_>) -> Result<ProjectionResu
     )?;
 
     let mut objects = PassObjects::new(ctx);
+    let draw = draw_pipelines(&mut objects, &target, &projection_set)?;
+    let timed = objects.timestamps(TIMESTAMPS, "normalmap.timestamps")?;
+    objects.cmd = ctx.allocate_command_buffer(name)?;
+    let cmd = objects.cmd;
+    let setup_s = setup.elapsed().as_secs_f64();
+
+    BakeCommands {
+        ctx,
+        job,
+        texels,
+        cmd,
+        objects: &objects,
+        timed,
+        target: &target,
+        draw,
+        mask_vb: &mask_vb,
+        high_vb: &high_vb,
+        high_ib: &high_ib,
+        indirect: indirect.as_ref(),
+        projection_set: &projection_set,
+        expand_pipeline: &expand_pipeline,
+        mask: &mask,
+        expand: &expand,
+        readback: &readback,
+    }
+    .record()?;
+    let execute = Instant::now();
+    ctx.submit_and_wait(cmd, name)?;
+    let gpu_ms = objects
+        .timestamp_ms(TIMESTAMPS as usize - 1, name)?
+        .map(|ms| PhaseMs {
+            mask: ms[0],
+            project: ms[1],
+            expand: ms[2],
+        });
+    let texels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(readback.read()?);
+    Ok(ProjectionResult {
+        texels,
+        gpu_ms,
+        setup_s,
+        execute_s: execute.elapsed().as_secs_f64(),
+    })
+}
+
+/// The bake's name: its command buffer's label and the `what` of its errors.
+const NAME: &str = "normalmap";
+
+/// Refuses a job this device cannot run (indirect draws without `multiDrawIndirect`) or
+/// that draws nothing.
+fn check_job(ctx: &Context, job: &ProjectionJob<'_>) -> Result<(), GpuError> {
+    let invalid = |detail: String| GpuError::Invalid {
+        what: NAME.into(),
+        detail,
+    };
+    if job.indirect && !ctx.supports_multi_draw_indirect() {
+        return Err(invalid(
+            "this device lacks multiDrawIndirect / drawIndirectFirstInstance: use direct draws"
+                .into(),
+        ));
+    }
+    if job.draws.is_empty() || job.high_indices.is_empty() || job.mask_vertices.is_empty() {
+        return Err(invalid("nothing to draw".into()));
+    }
+    Ok(())
+}
+
+/// The indirect buffer of one draw command per low triangle, where the job draws
+/// indirectly.
+fn indirect_commands(
+    ctx: &Arc<Context>,
+    job: &ProjectionJob<'_>,
+) -> Result<Option<Buffer>, GpuError> {
+    if !job.indirect {
+        return Ok(None);
+    }
+    let commands: Vec<u32> = job
+        .draws
+        .iter()
+        .flat_map(|d| [d.index_count, 1, d.first_index, 0, d.triangle])
+        .collect();
+    Ok(Some(device_local_buffer(
+        ctx,
+        bytemuck::cast_slice(&commands),
+        vk::BufferUsageFlags::INDIRECT_BUFFER,
+        "normalmap.draws",
+    )?))
+}
+
+/// The graphics pipelines of the mask and project phases and their layouts (owned by the
+/// `PassObjects` that made them).
+#[derive(Clone, Copy)]
+struct DrawPipelines {
+    mask_layout: vk::PipelineLayout,
+    mask: vk::Pipeline,
+    project_layout: vk::PipelineLayout,
+    project: vk::Pipeline,
+}
+
+/// Builds the mask and project phases' shader modules, layouts and pipelines into
+/// `objects`.
+fn draw_pipelines(
+    objects: &mut PassObjects,
+    target: &RenderTarget,
+    projection_set: &DescriptorSet,
+) -> Result<DrawPipelines, GpuError> {
     let mask_vs = objects.module(
         "normalmap/mask.vert",
         ShaderStage::Vertex,
@@ -229,7 +309,7 @@ pub fn run(ctx: &Arc<Context>, job: &ProjectionJob<'_>) -> Result<ProjectionResu
         "normalmap.project",
     )?;
     let mask_pipeline = objects.pipeline(
-        &target,
+        target,
         mask_layout,
         mask_vs,
         mask_fs,
@@ -241,7 +321,7 @@ pub fn run(ctx: &Arc<Context>, job: &ProjectionJob<'_>) -> Result<ProjectionResu
         "normalmap.mask",
     )?;
     let project_pipeline = objects.pipeline(
-        &target,
+        target,
         project_layout,
         project_vs,
         project_fs,
@@ -252,162 +332,230 @@ pub fn run(ctx: &Arc<Context>, job: &ProjectionJob<'_>) -> Result<ProjectionResu
         ],
         "normalmap.project",
     )?;
-    let timed = objects.timestamps(TIMESTAMPS, "normalmap.timestamps")?;
-    let device = ctx.device();
-    objects.cmd = ctx.allocate_command_buffer(name)?;
-    let cmd = objects.cmd;
-    let setup_s = setup.elapsed().as_secs_f64();
+    Ok(DrawPipelines {
+        mask_layout,
+        mask: mask_pipeline,
+        project_layout,
+        project: project_pipeline,
+    })
+}
 
-    let full = vk::Rect2D {
-        offset: vk::Offset2D { x: 0, y: 0 },
-        extent: vk::Extent2D {
-            width: res,
-            height: res,
-        },
-    };
-    let clears = [
-        vk::ClearValue {
-            color: vk::ClearColorValue { float32: [0.0; 4] },
-        },
-        vk::ClearValue {
-            depth_stencil: vk::ClearDepthStencilValue {
-                depth: 1.0,
-                stencil: 0,
+/// Everything the bake's one command buffer records (module doc), all alive until its
+/// waited submission in [`run`] completes.
+struct BakeCommands<'a> {
+    ctx: &'a Context,
+    job: &'a ProjectionJob<'a>,
+    /// res².
+    texels: u64,
+    /// Freshly allocated, owned by `objects`.
+    cmd: vk::CommandBuffer,
+    objects: &'a PassObjects,
+    /// Whether `objects` has timestamp queries.
+    timed: bool,
+    target: &'a RenderTarget,
+    draw: DrawPipelines,
+    mask_vb: &'a Buffer,
+    high_vb: &'a Buffer,
+    high_ib: &'a Buffer,
+    indirect: Option<&'a Buffer>,
+    projection_set: &'a DescriptorSet,
+    expand_pipeline: &'a ComputePipeline,
+    mask: &'a Buffer,
+    expand: &'a Buffer,
+    readback: &'a Buffer,
+}
+
+impl BakeCommands<'_> {
+    /// Records the three phases and the readback copy into `cmd`.
+    fn record(&self) -> Result<(), GpuError> {
+        let (ctx, cmd, res) = (self.ctx, self.cmd, self.job.res);
+        let device = ctx.device();
+        let full = vk::Rect2D {
+            offset: vk::Offset2D { x: 0, y: 0 },
+            extent: vk::Extent2D {
+                width: res,
+                height: res,
             },
-        },
-    ];
-    let begin_pass = vk::RenderPassBeginInfo::default()
-        .render_pass(target.render_pass())
-        .framebuffer(target.framebuffer())
-        .render_area(full)
-        .clear_values(&clears);
-    // The render passes leave the image in TRANSFER_SRC_OPTIMAL; each `dst` holds res²
-    // texels from `offset`.
-    let image_to_buffer =
-        |dst: &Buffer, offset: u64| target.record_copy_to_buffer(cmd, dst, offset);
-    let barrier = |src_stage, dst_stage, src_access, dst_access| {
-        objects.barrier(cmd, (src_stage, dst_stage), (src_access, dst_access))
-    };
-    let timestamp = |stage, query| objects.timestamp(cmd, stage, query);
-    let project_push: Vec<u8> = [job.max_distance.to_bits(), u32::from(job.mirror), res]
-        .iter()
-        .flat_map(|v| v.to_ne_bytes())
-        .collect();
-    // SAFETY (this block): `cmd` is freshly allocated; every object recorded lives until
-    // the waited submission below completes (locals of this function and `objects`).
-    unsafe {
-        device
-            .begin_command_buffer(
-                cmd,
-                &vk::CommandBufferBeginInfo::default()
-                    .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-            )
-            .map_err(|e| GpuError::vulkan("vkBeginCommandBuffer", name, e))?;
-        ctx.begin_label(cmd, "normalmap");
-        if timed {
-            device.cmd_reset_query_pool(cmd, objects.query_pool, 0, TIMESTAMPS);
+        };
+        let clears = [
+            vk::ClearValue {
+                color: vk::ClearColorValue { float32: [0.0; 4] },
+            },
+            vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: 1.0,
+                    stencil: 0,
+                },
+            },
+        ];
+        let begin_pass = vk::RenderPassBeginInfo::default()
+            .render_pass(self.target.render_pass())
+            .framebuffer(self.target.framebuffer())
+            .render_area(full)
+            .clear_values(&clears);
+        // SAFETY (this block): `cmd` is freshly allocated; every object recorded lives until
+        // the waited submission in `run` completes (its locals and `objects`).
+        unsafe {
+            device
+                .begin_command_buffer(
+                    cmd,
+                    &vk::CommandBufferBeginInfo::default()
+                        .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                )
+                .map_err(|e| GpuError::vulkan("vkBeginCommandBuffer", NAME, e))?;
+            ctx.begin_label(cmd, "normalmap");
+            if self.timed {
+                device.cmd_reset_query_pool(cmd, self.objects.query_pool, 0, TIMESTAMPS);
+            }
         }
-        timestamp(vk::PipelineStageFlags::TOP_OF_PIPE, 0);
+        self.timestamp(vk::PipelineStageFlags::TOP_OF_PIPE, 0);
+        self.record_mask(&begin_pass, full);
+        self.record_project(&begin_pass, full);
+        let src = self.record_expand();
+        let region = vk::BufferCopy::default()
+            .src_offset(u64::from(src) * TEXEL_BYTES)
+            .size(self.texels * TEXEL_BYTES);
+        // SAFETY (this block): as above.
+        unsafe {
+            device.cmd_copy_buffer(cmd, self.expand.raw(), self.readback.raw(), &[region]);
+            self.barrier(
+                vk::PipelineStageFlags::TRANSFER,
+                vk::PipelineStageFlags::HOST,
+                vk::AccessFlags::TRANSFER_WRITE,
+                vk::AccessFlags::HOST_READ,
+            );
+            ctx.end_label(cmd);
+            device
+                .end_command_buffer(cmd)
+                .map_err(|e| GpuError::vulkan("vkEndCommandBuffer", NAME, e))?;
+        }
+        Ok(())
+    }
 
-        // 1. Mask.
-        ctx.begin_label(cmd, "normalmap.mask");
-        device.cmd_begin_render_pass(cmd, &begin_pass, vk::SubpassContents::INLINE);
-        device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, mask_pipeline);
-        device.cmd_set_scissor(cmd, 0, &[full]);
-        device.cmd_push_constants(
-            cmd,
-            mask_layout,
-            vk::ShaderStageFlags::VERTEX,
-            0,
-            &job.low_triangles.to_ne_bytes(),
-        );
-        device.cmd_bind_vertex_buffers(cmd, 0, &[mask_vb.raw()], &[0]);
-        device.cmd_draw(cmd, 3 * job.low_triangles, 1, 0, 0);
-        device.cmd_end_render_pass(cmd);
-        image_to_buffer(&mask, 0);
-        barrier(
+    /// Phase 1: the low mesh drawn in texture space, each texel recording its triangle,
+    /// copied to `mask`.
+    fn record_mask(&self, begin_pass: &vk::RenderPassBeginInfo<'_>, full: vk::Rect2D) {
+        let (ctx, cmd, job) = (self.ctx, self.cmd, self.job);
+        let device = ctx.device();
+        // SAFETY (this block): `cmd` is recording (`record`); every object recorded lives
+        // until the waited submission in `run` completes.
+        unsafe {
+            ctx.begin_label(cmd, "normalmap.mask");
+            device.cmd_begin_render_pass(cmd, begin_pass, vk::SubpassContents::INLINE);
+            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.draw.mask);
+            device.cmd_set_scissor(cmd, 0, &[full]);
+            device.cmd_push_constants(
+                cmd,
+                self.draw.mask_layout,
+                vk::ShaderStageFlags::VERTEX,
+                0,
+                &job.low_triangles.to_ne_bytes(),
+            );
+            device.cmd_bind_vertex_buffers(cmd, 0, &[self.mask_vb.raw()], &[0]);
+            device.cmd_draw(cmd, 3 * job.low_triangles, 1, 0, 0);
+            device.cmd_end_render_pass(cmd);
+        }
+        self.image_to_buffer(self.mask, 0);
+        self.barrier(
             vk::PipelineStageFlags::TRANSFER,
             vk::PipelineStageFlags::FRAGMENT_SHADER,
             vk::AccessFlags::TRANSFER_WRITE,
             vk::AccessFlags::SHADER_READ,
         );
         ctx.end_label(cmd);
-        timestamp(vk::PipelineStageFlags::BOTTOM_OF_PIPE, 1);
+        self.timestamp(vk::PipelineStageFlags::BOTTOM_OF_PIPE, 1);
+    }
 
-        // 2. One render of the high mesh per low triangle.
-        ctx.begin_label(cmd, "normalmap.project");
-        device.cmd_begin_render_pass(cmd, &begin_pass, vk::SubpassContents::INLINE);
-        device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, project_pipeline);
-        device.cmd_bind_descriptor_sets(
-            cmd,
-            vk::PipelineBindPoint::GRAPHICS,
-            project_layout,
-            0,
-            &[projection_set.set],
-            &[],
-        );
-        device.cmd_push_constants(
-            cmd,
-            project_layout,
-            vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
-            0,
-            &project_push,
-        );
-        device.cmd_bind_vertex_buffers(cmd, 0, &[high_vb.raw()], &[0]);
-        device.cmd_bind_index_buffer(cmd, high_ib.raw(), 0, vk::IndexType::UINT32);
-        if let Some(commands) = &indirect {
-            device.cmd_set_scissor(cmd, 0, &[full]);
-            let per_call = ctx.limits().max_draw_indirect_count.max(1) as usize;
-            for (k, chunk) in job.draws.chunks(per_call).enumerate() {
-                device.cmd_draw_indexed_indirect(
-                    cmd,
-                    commands.raw(),
-                    (k * per_call) as u64 * u64::from(INDIRECT_COMMAND_BYTES),
-                    chunk.len() as u32,
-                    INDIRECT_COMMAND_BYTES,
-                );
+    /// Phase 2: one render of the high mesh per low triangle (indirect, or direct under
+    /// each triangle's scissor), copied to the first half of `expand`.
+    fn record_project(&self, begin_pass: &vk::RenderPassBeginInfo<'_>, full: vk::Rect2D) {
+        let (ctx, cmd, job, res) = (self.ctx, self.cmd, self.job, self.job.res);
+        let device = ctx.device();
+        let project_push: Vec<u8> = [job.max_distance.to_bits(), u32::from(job.mirror), res]
+            .iter()
+            .flat_map(|v| v.to_ne_bytes())
+            .collect();
+        // SAFETY (this block): `cmd` is recording (`record`); every object recorded lives
+        // until the waited submission in `run` completes.
+        unsafe {
+            ctx.begin_label(cmd, "normalmap.project");
+            device.cmd_begin_render_pass(cmd, begin_pass, vk::SubpassContents::INLINE);
+            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.draw.project);
+            device.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.draw.project_layout,
+                0,
+                &[self.projection_set.set],
+                &[],
+            );
+            device.cmd_push_constants(
+                cmd,
+                self.draw.project_layout,
+                vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+                0,
+                &project_push,
+            );
+            device.cmd_bind_vertex_buffers(cmd, 0, &[self.high_vb.raw()], &[0]);
+            device.cmd_bind_index_buffer(cmd, self.high_ib.raw(), 0, vk::IndexType::UINT32);
+            if let Some(commands) = self.indirect {
+                device.cmd_set_scissor(cmd, 0, &[full]);
+                let per_call = ctx.limits().max_draw_indirect_count.max(1) as usize;
+                for (k, chunk) in job.draws.chunks(per_call).enumerate() {
+                    device.cmd_draw_indexed_indirect(
+                        cmd,
+                        commands.raw(),
+                        (k * per_call) as u64 * u64::from(INDIRECT_COMMAND_BYTES),
+                        chunk.len() as u32,
+                        INDIRECT_COMMAND_BYTES,
+                    );
+                }
+            } else {
+                for d in job.draws {
+                    let [x0, y0, x1, y1] = d.scissor.map(|c| c.min(res));
+                    let scissor = vk::Rect2D {
+                        offset: vk::Offset2D {
+                            x: x0 as i32,
+                            y: y0 as i32,
+                        },
+                        extent: vk::Extent2D {
+                            width: x1.saturating_sub(x0),
+                            height: y1.saturating_sub(y0),
+                        },
+                    };
+                    device.cmd_set_scissor(cmd, 0, &[scissor]);
+                    device.cmd_draw_indexed(cmd, d.index_count, 1, d.first_index, 0, d.triangle);
+                }
             }
-        } else {
-            for d in job.draws {
-                let [x0, y0, x1, y1] = d.scissor.map(|c| c.min(res));
-                let scissor = vk::Rect2D {
-                    offset: vk::Offset2D {
-                        x: x0 as i32,
-                        y: y0 as i32,
-                    },
-                    extent: vk::Extent2D {
-                        width: x1.saturating_sub(x0),
-                        height: y1.saturating_sub(y0),
-                    },
-                };
-                device.cmd_set_scissor(cmd, 0, &[scissor]);
-                device.cmd_draw_indexed(cmd, d.index_count, 1, d.first_index, 0, d.triangle);
-            }
+            device.cmd_end_render_pass(cmd);
         }
-        device.cmd_end_render_pass(cmd);
-        image_to_buffer(&expand, 0);
-        barrier(
+        self.image_to_buffer(self.expand, 0);
+        self.barrier(
             vk::PipelineStageFlags::TRANSFER,
             vk::PipelineStageFlags::COMPUTE_SHADER,
             vk::AccessFlags::TRANSFER_WRITE,
             vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
         );
         ctx.end_label(cmd);
-        timestamp(vk::PipelineStageFlags::BOTTOM_OF_PIPE, 2);
+        self.timestamp(vk::PipelineStageFlags::BOTTOM_OF_PIPE, 2);
+    }
 
-        // 3. Border expansion, ping-pong between the halves.
+    /// Phase 3: the border-expansion passes, ping-pong between the halves of `expand`;
+    /// returns the offset, in texels, of the half the last one wrote.
+    fn record_expand(&self) -> u32 {
+        let (ctx, cmd, res) = (self.ctx, self.cmd, self.job.res);
         ctx.begin_label(cmd, "normalmap.expand");
-        let half = (texels as u32, 0u32);
+        let half = (self.texels as u32, 0u32);
         let groups = res.div_ceil(8);
         let mut src = 0u32;
-        for _ in 0..job.expand_passes {
+        for _ in 0..self.job.expand_passes {
             let dst = if src == 0 { half.0 } else { 0 };
             let push: Vec<u8> = [res, src, dst]
                 .iter()
                 .flat_map(|v| v.to_ne_bytes())
                 .collect();
-            expand_pipeline.record(cmd, [groups, groups, 1], &push);
-            barrier(
+            self.expand_pipeline.record(cmd, [groups, groups, 1], &push);
+            self.barrier(
                 vk::PipelineStageFlags::COMPUTE_SHADER,
                 vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
                 vk::AccessFlags::SHADER_WRITE,
@@ -418,36 +566,30 @@ pub fn run(ctx: &Arc<Context>, job: &ProjectionJob<'_>) -> Result<ProjectionResu
             src = dst;
         }
         ctx.end_label(cmd);
-        timestamp(vk::PipelineStageFlags::BOTTOM_OF_PIPE, 3);
-        let region = vk::BufferCopy::default()
-            .src_offset(u64::from(src) * texel_bytes)
-            .size(texels * texel_bytes);
-        device.cmd_copy_buffer(cmd, expand.raw(), readback.raw(), &[region]);
-        barrier(
-            vk::PipelineStageFlags::TRANSFER,
-            vk::PipelineStageFlags::HOST,
-            vk::AccessFlags::TRANSFER_WRITE,
-            vk::AccessFlags::HOST_READ,
-        );
-        ctx.end_label(cmd);
-        device
-            .end_command_buffer(cmd)
-            .map_err(|e| GpuError::vulkan("vkEndCommandBuffer", name, e))?;
+        self.timestamp(vk::PipelineStageFlags::BOTTOM_OF_PIPE, 3);
+        src
     }
-    let execute = Instant::now();
-    ctx.submit_and_wait(cmd, name)?;
-    let gpu_ms = objects
-        .timestamp_ms(TIMESTAMPS as usize - 1, name)?
-        .map(|ms| PhaseMs {
-            mask: ms[0],
-            project: ms[1],
-            expand: ms[2],
-        });
-    let texels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(readback.read()?);
-    Ok(ProjectionResult {
-        texels,
-        gpu_ms,
-        setup_s,
-        execute_s: execute.elapsed().as_secs_f64(),
-    })
+
+    /// Copies the target (left in TRANSFER_SRC_OPTIMAL by the render passes) into `dst`,
+    /// res² texels from `offset`.
+    fn image_to_buffer(&self, dst: &Buffer, offset: u64) {
+        self.target.record_copy_to_buffer(self.cmd, dst, offset);
+    }
+
+    /// Records a global memory barrier into `cmd`.
+    fn barrier(
+        &self,
+        src_stage: vk::PipelineStageFlags,
+        dst_stage: vk::PipelineStageFlags,
+        src_access: vk::AccessFlags,
+        dst_access: vk::AccessFlags,
+    ) {
+        self.objects
+            .barrier(self.cmd, (src_stage, dst_stage), (src_access, dst_access));
+    }
+
+    /// Writes timestamp `query` at `stage` (nothing where the queue has no timestamps).
+    fn timestamp(&self, stage: vk::PipelineStageFlags, query: u32) {
+        self.objects.timestamp(self.cmd, stage, query);
+    }
 }

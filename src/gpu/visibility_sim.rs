@@ -113,7 +113,7 @@ fn storage_buffer(ctx: &Arc<Context>, bytes: u64, name: &str) -> Result<Buffer, 
 /// call.
 pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResult, GpuError> {
     let setup = Instant::now();
-    let name = "bake.gpu-visibility";
+    let name = NAME;
     if job.positions.len() < 3 || job.points.is_empty() || job.views.is_empty() {
         return Err(GpuError::Invalid {
             what: name.into(),
@@ -121,9 +121,9 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
         });
     }
     let res = job.res;
-    let point_count = job.points.len() as u64;
-    let mask_words = job.views.len().div_ceil(32) as u64;
-    let coeff_count = u64::from(job.coeff_count);
+    let sizes = Sizes::of(job);
+    let (point_count, mask_words, coeff_count) =
+        (sizes.point_count, sizes.mask_words, sizes.coeff_count);
     let target = RenderTarget::with_format(ctx, res, res, DEPTH_MAP_FORMAT)?;
     if !job.positions.len().is_multiple_of(3) || job.positions.len() / 3 >= 1 << 24 {
         return Err(GpuError::Invalid {
@@ -185,37 +185,132 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
         MemoryLocation::GpuToCpu,
         "bake.gpu-visibility.readback",
     )?;
-    let mark = ComputePipeline::new(
+    let mark = mark_pipeline(ctx, &depth, &points, &masks, &triangles)?;
+    let project = project_pipeline(ctx, &points, &masks, &basis, &directions, &coeffs, &ao)?;
+    let mut objects = PassObjects::new(ctx);
+    let depth_pass = depth_pipeline(&mut objects, &target)?;
+    let timed = objects.timestamps(TIMESTAMPS, "bake.gpu-visibility.timestamps")?;
+    let setup_s = setup.elapsed().as_secs_f64();
+    let execute = Instant::now();
+
+    SimulationCommands {
+        ctx,
+        job,
+        sizes,
+        objects: &objects,
+        timed,
+        target: &target,
+        depth_pass,
+        triangles: &triangles,
+        depth: &depth,
+        masks: &masks,
+        coeffs: &coeffs,
+        ao: &ao,
+        readback: &readback,
+        mark: &mark,
+        project: &project,
+    }
+    .submit_all()?;
+    let gpu_ms = objects
+        .timestamp_ms(TIMESTAMPS as usize - 1, name)?
+        .map(|ms| (ms[0], ms[1]));
+    let words: &[u32] = bytemuck::cast_slice(readback.read()?);
+    let (m, rest) = words.split_at((point_count * mask_words) as usize);
+    let (c, a) = rest.split_at((point_count * coeff_count) as usize);
+    Ok(SimulationResult {
+        masks: m.to_vec(),
+        coeffs: bytemuck::cast_slice(c).to_vec(),
+        ao: bytemuck::cast_slice(a).to_vec(),
+        gpu_ms,
+        setup_s,
+        execute_s: execute.elapsed().as_secs_f64(),
+    })
+}
+
+/// The simulator's name: its command buffers' label and the `what` of its errors.
+const NAME: &str = "bake.gpu-visibility";
+
+/// A simulation's sizes: points, u32 words of a point's visibility mask, coefficients per
+/// point.
+#[derive(Clone, Copy)]
+struct Sizes {
+    point_count: u64,
+    mask_words: u64,
+    coeff_count: u64,
+}
+
+impl Sizes {
+    fn of(job: &SimulationJob<'_>) -> Self {
+        Sizes {
+            point_count: job.points.len() as u64,
+            mask_words: job.views.len().div_ceil(32) as u64,
+            coeff_count: u64::from(job.coeff_count),
+        }
+    }
+}
+
+/// The mark pass (module doc): per point, bit d of its mask from the depth map and the
+/// triangles.
+fn mark_pipeline(
+    ctx: &Arc<Context>,
+    depth: &Buffer,
+    points: &Buffer,
+    masks: &Buffer,
+    triangles: &Buffer,
+) -> Result<ComputePipeline, GpuError> {
+    ComputePipeline::new(
         ctx,
         &ComputePipelineDesc {
             name: "bake.gpu-visibility.mark",
             spirv: &compile_glsl("bake/mark.comp", ShaderStage::Compute, &[])?,
             resources: &[
-                (0, Resource::Storage(&depth)),
-                (1, Resource::Storage(&points)),
-                (2, Resource::Storage(&masks)),
-                (3, Resource::Storage(&triangles)),
+                (0, Resource::Storage(depth)),
+                (1, Resource::Storage(points)),
+                (2, Resource::Storage(masks)),
+                (3, Resource::Storage(triangles)),
             ],
             push_constant_bytes: size_of::<DirectionView>() as u32,
         },
-    )?;
-    let project = ComputePipeline::new(
+    )
+}
+
+/// The projection pass (module doc): each point's masks into its coefficients and AO.
+fn project_pipeline(
+    ctx: &Arc<Context>,
+    points: &Buffer,
+    masks: &Buffer,
+    basis: &Buffer,
+    directions: &Buffer,
+    coeffs: &Buffer,
+    ao: &Buffer,
+) -> Result<ComputePipeline, GpuError> {
+    ComputePipeline::new(
         ctx,
         &ComputePipelineDesc {
             name: "bake.gpu-visibility.project",
             spirv: &compile_glsl("bake/project.comp", ShaderStage::Compute, &[])?,
             resources: &[
-                (0, Resource::Storage(&points)),
-                (1, Resource::Storage(&masks)),
-                (2, Resource::Storage(&basis)),
-                (3, Resource::Storage(&directions)),
-                (4, Resource::Storage(&coeffs)),
-                (5, Resource::Storage(&ao)),
+                (0, Resource::Storage(points)),
+                (1, Resource::Storage(masks)),
+                (2, Resource::Storage(basis)),
+                (3, Resource::Storage(directions)),
+                (4, Resource::Storage(coeffs)),
+                (5, Resource::Storage(ao)),
             ],
             push_constant_bytes: 16,
         },
-    )?;
-    let mut objects = PassObjects::new(ctx);
+    )
+}
+
+/// The depth pass's pipeline and its layout (owned by `objects`).
+#[derive(Clone, Copy)]
+struct DepthPass {
+    layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
+}
+
+/// Builds the depth pass's shader modules, layout and pipeline into `objects`.
+fn depth_pipeline(objects: &mut PassObjects, target: &RenderTarget) -> Result<DepthPass, GpuError> {
     let vs = objects.module(
         "bake/depth.vert",
         ShaderStage::Vertex,
@@ -236,7 +331,7 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
         "bake.gpu-visibility.depth",
     )?;
     let pipeline = objects.pipeline(
-        &target,
+        target,
         layout,
         vs,
         fs,
@@ -244,153 +339,223 @@ pub fn run(ctx: &Arc<Context>, job: &SimulationJob<'_>) -> Result<SimulationResu
         &[(0, vk::Format::R32G32B32_SFLOAT, 0)],
         "bake.gpu-visibility.depth",
     )?;
-    let timed = objects.timestamps(TIMESTAMPS, "bake.gpu-visibility.timestamps")?;
-    let device = ctx.device();
-    let setup_s = setup.elapsed().as_secs_f64();
-    let execute = Instant::now();
+    Ok(DepthPass { layout, pipeline })
+}
 
-    let full = vk::Rect2D {
-        offset: vk::Offset2D { x: 0, y: 0 },
-        extent: vk::Extent2D {
-            width: res,
-            height: res,
-        },
-    };
-    let clears = [
-        vk::ClearValue {
-            color: vk::ClearColorValue {
-                // No surface: nothing nearer the sky, no triangle.
-                float32: [EMPTY_SKY, 0.0, 0.0, 0.0],
+/// Everything the simulation's command buffers record (module doc), all alive until the
+/// last of their waited submissions completes.
+struct SimulationCommands<'a> {
+    ctx: &'a Context,
+    job: &'a SimulationJob<'a>,
+    sizes: Sizes,
+    objects: &'a PassObjects,
+    /// Whether `objects` has timestamp queries.
+    timed: bool,
+    target: &'a RenderTarget,
+    depth_pass: DepthPass,
+    triangles: &'a Buffer,
+    depth: &'a Buffer,
+    masks: &'a Buffer,
+    coeffs: &'a Buffer,
+    ao: &'a Buffer,
+    readback: &'a Buffer,
+    mark: &'a ComputePipeline,
+    project: &'a ComputePipeline,
+}
+
+impl SimulationCommands<'_> {
+    /// Records and submits the directions, [`DIRECTIONS_PER_SUBMIT`] to a command buffer
+    /// (the first also clears the masks, the last also projects and reads back), reporting
+    /// progress after each.
+    fn submit_all(&self) -> Result<(), GpuError> {
+        let (ctx, job, res) = (self.ctx, self.job, self.job.res);
+        let full = vk::Rect2D {
+            offset: vk::Offset2D { x: 0, y: 0 },
+            extent: vk::Extent2D {
+                width: res,
+                height: res,
             },
-        },
-        vk::ClearValue {
-            depth_stencil: vk::ClearDepthStencilValue {
-                depth: 1.0,
-                stencil: 0,
+        };
+        let clears = [
+            vk::ClearValue {
+                color: vk::ClearColorValue {
+                    // No surface: nothing nearer the sky, no triangle.
+                    float32: [EMPTY_SKY, 0.0, 0.0, 0.0],
+                },
             },
-        },
-    ];
-    let begin_pass = vk::RenderPassBeginInfo::default()
-        .render_pass(target.render_pass())
-        .framebuffer(target.framebuffer())
-        .render_area(full)
-        .clear_values(&clears);
-    let barrier = |cmd, src_stage, dst_stage, src_access, dst_access| {
-        objects.barrier(cmd, (src_stage, dst_stage), (src_access, dst_access))
-    };
-    let timestamp = |cmd, stage, query| objects.timestamp(cmd, stage, query);
-    let groups = point_count.div_ceil(64) as u32;
-    let chunks: Vec<&[DirectionView]> = job.views.chunks(DIRECTIONS_PER_SUBMIT).collect();
-    let last = chunks.len() - 1;
-    let mut done = 0;
-    for (k, chunk) in chunks.iter().enumerate() {
-        ctx.one_shot(name, |cmd| {
-            // SAFETY (this block): `cmd` is recording; every object recorded lives until
-            // one_shot's waited submission completes (locals of this function).
-            unsafe {
+            vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: 1.0,
+                    stencil: 0,
+                },
+            },
+        ];
+        let begin_pass = vk::RenderPassBeginInfo::default()
+            .render_pass(self.target.render_pass())
+            .framebuffer(self.target.framebuffer())
+            .render_area(full)
+            .clear_values(&clears);
+        let chunks: Vec<&[DirectionView]> = job.views.chunks(DIRECTIONS_PER_SUBMIT).collect();
+        let last = chunks.len() - 1;
+        let mut done = 0;
+        for (k, chunk) in chunks.iter().enumerate() {
+            ctx.one_shot(NAME, |cmd| {
                 if k == 0 {
-                    if timed {
-                        device.cmd_reset_query_pool(cmd, objects.query_pool, 0, TIMESTAMPS);
-                    }
-                    device.cmd_fill_buffer(cmd, masks.raw(), 0, vk::WHOLE_SIZE, 0);
-                    barrier(
-                        cmd,
-                        vk::PipelineStageFlags::TRANSFER,
-                        vk::PipelineStageFlags::COMPUTE_SHADER,
-                        vk::AccessFlags::TRANSFER_WRITE,
-                        vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
-                    );
-                    timestamp(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, 0);
+                    self.record_start(cmd);
                 }
                 for view in chunk.iter() {
-                    let push = bytemuck::bytes_of(view);
-                    ctx.begin_label(cmd, "bake.gpu-visibility.depth");
-                    device.cmd_begin_render_pass(cmd, &begin_pass, vk::SubpassContents::INLINE);
-                    device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
-                    device.cmd_set_scissor(cmd, 0, &[full]);
-                    device.cmd_push_constants(cmd, layout, vk::ShaderStageFlags::VERTEX, 0, push);
-                    device.cmd_bind_vertex_buffers(cmd, 0, &[triangles.raw()], &[0]);
-                    device.cmd_draw(cmd, job.positions.len() as u32, 1, 0, 0);
-                    device.cmd_end_render_pass(cmd);
-                    target.record_copy_to_buffer(cmd, &depth, 0);
-                    ctx.end_label(cmd);
-                    barrier(
-                        cmd,
-                        vk::PipelineStageFlags::TRANSFER,
-                        vk::PipelineStageFlags::COMPUTE_SHADER,
-                        vk::AccessFlags::TRANSFER_WRITE,
-                        vk::AccessFlags::SHADER_READ,
-                    );
-                    mark.record(cmd, [groups, 1, 1], push);
-                    // The next copy overwrites the map the mark pass read; the next mark
-                    // reads the masks this one wrote.
-                    barrier(
-                        cmd,
-                        vk::PipelineStageFlags::COMPUTE_SHADER,
-                        vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::COMPUTE_SHADER,
-                        vk::AccessFlags::SHADER_WRITE,
-                        vk::AccessFlags::TRANSFER_WRITE
-                            | vk::AccessFlags::SHADER_READ
-                            | vk::AccessFlags::SHADER_WRITE,
-                    );
+                    self.record_direction(cmd, &begin_pass, full, view);
                 }
                 if k == last {
-                    timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, 1);
-                    let push: Vec<u8> = [
-                        point_count as u32,
-                        job.coeff_count,
-                        mask_words as u32,
-                        job.views.len() as u32,
-                    ]
-                    .iter()
-                    .flat_map(|v| v.to_ne_bytes())
-                    .collect();
-                    project.record(cmd, [groups, 1, 1], &push);
-                    barrier(
-                        cmd,
-                        vk::PipelineStageFlags::COMPUTE_SHADER,
-                        vk::PipelineStageFlags::TRANSFER,
-                        vk::AccessFlags::SHADER_WRITE,
-                        vk::AccessFlags::TRANSFER_READ,
-                    );
-                    timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, 2);
-                    let mut offset = 0;
-                    for (src, bytes) in [
-                        (&masks, point_count * mask_words * 4),
-                        (&coeffs, point_count * coeff_count * 4),
-                        (&ao, point_count * 4),
-                    ] {
-                        if bytes > 0 {
-                            let copy = vk::BufferCopy::default().dst_offset(offset).size(bytes);
-                            device.cmd_copy_buffer(cmd, src.raw(), readback.raw(), &[copy]);
-                        }
-                        offset += bytes;
-                    }
-                    barrier(
-                        cmd,
-                        vk::PipelineStageFlags::TRANSFER,
-                        vk::PipelineStageFlags::HOST,
-                        vk::AccessFlags::TRANSFER_WRITE,
-                        vk::AccessFlags::HOST_READ,
-                    );
+                    self.record_projection(cmd);
                 }
-            }
-        })?;
-        done += chunk.len();
-        (job.progress)(done);
+            })?;
+            done += chunk.len();
+            (job.progress)(done);
+        }
+        Ok(())
     }
-    let gpu_ms = objects
-        .timestamp_ms(TIMESTAMPS as usize - 1, name)?
-        .map(|ms| (ms[0], ms[1]));
-    let words: &[u32] = bytemuck::cast_slice(readback.read()?);
-    let (m, rest) = words.split_at((point_count * mask_words) as usize);
-    let (c, a) = rest.split_at((point_count * coeff_count) as usize);
-    Ok(SimulationResult {
-        masks: m.to_vec(),
-        coeffs: bytemuck::cast_slice(c).to_vec(),
-        ao: bytemuck::cast_slice(a).to_vec(),
-        gpu_ms,
-        setup_s,
-        execute_s: execute.elapsed().as_secs_f64(),
-    })
+
+    /// Workgroups of the compute passes: 64 points each.
+    fn groups(&self) -> u32 {
+        self.sizes.point_count.div_ceil(64) as u32
+    }
+
+    /// Before the first direction: resets the timestamps, clears the masks, writes the
+    /// first timestamp.
+    fn record_start(&self, cmd: vk::CommandBuffer) {
+        let device = self.ctx.device();
+        // SAFETY (this block): `cmd` is recording; every object recorded lives until
+        // one_shot's waited submission completes (locals of `run`).
+        unsafe {
+            if self.timed {
+                device.cmd_reset_query_pool(cmd, self.objects.query_pool, 0, TIMESTAMPS);
+            }
+            device.cmd_fill_buffer(cmd, self.masks.raw(), 0, vk::WHOLE_SIZE, 0);
+        }
+        self.barrier(
+            cmd,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::AccessFlags::TRANSFER_WRITE,
+            vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
+        );
+        self.timestamp(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, 0);
+    }
+
+    /// One direction: the depth pass along it, copied to `depth`, then the mark pass.
+    fn record_direction(
+        &self,
+        cmd: vk::CommandBuffer,
+        begin_pass: &vk::RenderPassBeginInfo<'_>,
+        full: vk::Rect2D,
+        view: &DirectionView,
+    ) {
+        let (ctx, DepthPass { layout, pipeline }) = (self.ctx, self.depth_pass);
+        let device = ctx.device();
+        let push = bytemuck::bytes_of(view);
+        ctx.begin_label(cmd, "bake.gpu-visibility.depth");
+        // SAFETY (this block): `cmd` is recording; every object recorded lives until
+        // one_shot's waited submission completes (locals of `run`).
+        unsafe {
+            device.cmd_begin_render_pass(cmd, begin_pass, vk::SubpassContents::INLINE);
+            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+            device.cmd_set_scissor(cmd, 0, &[full]);
+            device.cmd_push_constants(cmd, layout, vk::ShaderStageFlags::VERTEX, 0, push);
+            device.cmd_bind_vertex_buffers(cmd, 0, &[self.triangles.raw()], &[0]);
+            device.cmd_draw(cmd, self.job.positions.len() as u32, 1, 0, 0);
+            device.cmd_end_render_pass(cmd);
+        }
+        self.target.record_copy_to_buffer(cmd, self.depth, 0);
+        ctx.end_label(cmd);
+        self.barrier(
+            cmd,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::AccessFlags::TRANSFER_WRITE,
+            vk::AccessFlags::SHADER_READ,
+        );
+        self.mark.record(cmd, [self.groups(), 1, 1], push);
+        // The next copy overwrites the map the mark pass read; the next mark
+        // reads the masks this one wrote.
+        self.barrier(
+            cmd,
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::AccessFlags::SHADER_WRITE,
+            vk::AccessFlags::TRANSFER_WRITE
+                | vk::AccessFlags::SHADER_READ
+                | vk::AccessFlags::SHADER_WRITE,
+        );
+    }
+
+    /// After the last direction: the projection pass, then the masks, coefficients and AO
+    /// copied into `readback`, one after another.
+    fn record_projection(&self, cmd: vk::CommandBuffer) {
+        let device = self.ctx.device();
+        let job = self.job;
+        let Sizes {
+            point_count,
+            mask_words,
+            coeff_count,
+        } = self.sizes;
+        self.timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, 1);
+        let push: Vec<u8> = [
+            point_count as u32,
+            job.coeff_count,
+            mask_words as u32,
+            job.views.len() as u32,
+        ]
+        .iter()
+        .flat_map(|v| v.to_ne_bytes())
+        .collect();
+        self.project.record(cmd, [self.groups(), 1, 1], &push);
+        self.barrier(
+            cmd,
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::AccessFlags::SHADER_WRITE,
+            vk::AccessFlags::TRANSFER_READ,
+        );
+        self.timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, 2);
+        let mut offset = 0;
+        for (src, bytes) in [
+            (self.masks, point_count * mask_words * 4),
+            (self.coeffs, point_count * coeff_count * 4),
+            (self.ao, point_count * 4),
+        ] {
+            if bytes > 0 {
+                let copy = vk::BufferCopy::default().dst_offset(offset).size(bytes);
+                // SAFETY: `cmd` is recording; both buffers live until one_shot's waited
+                // submission completes (locals of `run`).
+                unsafe { device.cmd_copy_buffer(cmd, src.raw(), self.readback.raw(), &[copy]) };
+            }
+            offset += bytes;
+        }
+        self.barrier(
+            cmd,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::HOST,
+            vk::AccessFlags::TRANSFER_WRITE,
+            vk::AccessFlags::HOST_READ,
+        );
+    }
+
+    /// Records a global memory barrier into `cmd`.
+    fn barrier(
+        &self,
+        cmd: vk::CommandBuffer,
+        src_stage: vk::PipelineStageFlags,
+        dst_stage: vk::PipelineStageFlags,
+        src_access: vk::AccessFlags,
+        dst_access: vk::AccessFlags,
+    ) {
+        self.objects
+            .barrier(cmd, (src_stage, dst_stage), (src_access, dst_access));
+    }
+
+    /// Writes timestamp `query` at `stage` (nothing where the queue has no timestamps).
+    fn timestamp(&self, cmd: vk::CommandBuffer, stage: vk::PipelineStageFlags, query: u32) {
+        self.objects.timestamp(cmd, stage, query);
+    }
 }

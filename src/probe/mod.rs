@@ -51,7 +51,7 @@ use crate::gpu::{
     Buffer, Context, GpuError, Image, ImageDesc, MeshBuffers, Resource, Sampler, SamplerKind,
     ShaderStage, layout,
 };
-use crate::render::{FrameSettings, SceneGpu};
+use crate::render::{FrameSettings, SceneGpu, ShadingLoad};
 use crate::scene::{Mesh, Scene, Vertex};
 
 pub use states::{DeviceStates, Segmented};
@@ -708,58 +708,226 @@ pub fn run_with_monitor(
             ..FrameSettings::default()
         },
     )?;
-    let upload = |left_half: bool, grid: u32| -> Result<(MeshBuffers, Mesh), GpuError> {
-        let m = probe_scene(s.width, s.height, left_half, grid).mesh;
-        let buffers = MeshBuffers::new(
-            ctx,
-            bytemuck::cast_slice(&m.vertices),
-            &m.indices,
-            &format!("probe.mesh{}{grid}", if left_half { ".half" } else { "" }),
-        )?;
-        Ok((buffers, m))
-    };
-    let nothing_mesh = upload(false, 0)?;
-    let full_mesh = upload(false, base)?;
-    let half_mesh = upload(true, base)?;
+    let nothing_mesh = upload_probe_mesh(ctx, s, false, 0)?;
+    let full_mesh = upload_probe_mesh(ctx, s, false, base)?;
+    let half_mesh = upload_probe_mesh(ctx, s, true, base)?;
     let grids = TRIANGLE_GRIDS
         .iter()
-        .map(|&g| upload(false, g))
+        .map(|&g| upload_probe_mesh(ctx, s, false, g))
         .collect::<Result<Vec<_>, _>>()?;
     let res = probe_resources(ctx)?;
     let linear = Sampler::new(ctx, SamplerKind::LinearClamp, "probe.linear")?;
-    let material = gpu.material_sampler();
-    // Lanes per screen pixel of each mesh: the coverage the model's per-pixel costs multiply.
-    let pixels = f64::from(s.width) * f64::from(s.height);
-    let mut loads = Vec::new();
-    for (buffers, m) in [&nothing_mesh, &full_mesh, &half_mesh]
+    let planner = PointPlanner {
+        ctx,
+        gpu: &gpu,
+        res: &res,
+        linear: &linear,
+        pixels: f64::from(s.width) * f64::from(s.height),
+        loads: shading_loads(
+            ctx,
+            &gpu,
+            [&nothing_mesh, &full_mesh, &half_mesh]
+                .into_iter()
+                .chain(&grids),
+        )?,
+    };
+    let screen_fragments = planner.load_of(&full_mesh.0).map_or(0, |l| l.fragments);
+
+    // Every point's pipeline first, then the timed frames in interleaved rounds.
+    let specs = point_specs(ctx, &nothing_mesh.0, &full_mesh.0, &half_mesh.0, &grids);
+    let mut planned = specs
         .into_iter()
-        .chain(&grids)
-    {
+        .map(|(kind, count, untaken, depth_test, mesh)| {
+            let (point, pipeline) = planner.plan(kind, count, untaken, depth_test, mesh)?;
+            Ok(Planned {
+                point,
+                pipeline,
+                build: 0,
+                mesh,
+            })
+        })
+        .collect::<Result<Vec<_>, GpuError>>()?;
+    let batches = Batches::new(&gpu, s, &planned, &full_mesh.0)?;
+    let all: Vec<usize> = (0..planned.len()).collect();
+    let (mut timed, mut monitor) =
+        batches.time_batch(&planned, &all, &vec![f64::NAN; planned.len()])?;
+    let mut states = DeviceStates::from_monitor(&monitor);
+    let mut points: Vec<ProbePoint> = planned.iter().map(|p| p.point.clone()).collect();
+    measure(&mut points, &timed, &states, states.main_state);
+    let mut model = fit_points(ctx, &points)?;
+    // A point the fit misses by more than RETIME_ERROR, or with fewer than MIN_STATE_FRAMES
+    // frames in a state that held at least STATE_MODEL_SHARE of the monitor frames, is
+    // timed in RETIME_BATCHES more batches, each on a pipeline built afresh (a build can run
+    // a shader ≈ 25 % slower than another for as long as it lives, `states`); its segments
+    // join the first ones, each point's time is its fastest build's, and the states are
+    // told apart again over every monitor frame.
+    let missed = missed_points(&model, &points, &timed, &states);
+    if !missed.is_empty() {
+        retime(
+            &planner,
+            &batches,
+            &mut planned,
+            &missed,
+            &points,
+            &mut timed,
+            &mut monitor,
+        )?;
+        states = DeviceStates::from_monitor(&monitor);
+        measure(&mut points, &timed, &states, states.main_state);
+        for &i in &missed {
+            points[i].batches = 1 + RETIME_BATCHES as u32;
+        }
+        model = fit_points(ctx, &points)?;
+    }
+    let model = main_model(ctx, &mut states, &mut points, &timed, model)?;
+    for p in &mut points {
+        p.model_ms = predict_point(&model, p);
+    }
+    let state_models = state_models(ctx, &model, &points, &timed, &states)?;
+    let monitor_pipeline = planned.swap_remove(batches.monitor_index).pipeline;
+    drop(planned);
+    let probe = Probe {
+        device: ctx.device_name().to_string(),
+        width: s.width,
+        height: s.height,
+        frames: batches.rounds * batches.per_round,
+        screen_fragments,
+        triangle_pixels: s.triangle_pixels,
+        grid: base,
+        model,
+        states: states.clone(),
+        state_models,
+        points,
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    let monitor = Monitor {
+        pipeline: monitor_pipeline,
+        mesh: full_mesh.0,
+        _resources: res,
+        _linear: linear,
+        gpu,
+        states,
+    };
+    Ok((probe, monitor))
+}
+
+/// Uploads the probe's mesh over the screen (or its left half) with a `grid`² grid of
+/// triangle pairs (0: the mesh that shades nothing).
+fn upload_probe_mesh(
+    ctx: &Arc<Context>,
+    s: &ProbeSettings,
+    left_half: bool,
+    grid: u32,
+) -> Result<(MeshBuffers, Mesh), GpuError> {
+    let m = probe_scene(s.width, s.height, left_half, grid).mesh;
+    let buffers = MeshBuffers::new(
+        ctx,
+        bytemuck::cast_slice(&m.vertices),
+        &m.indices,
+        &format!("probe.mesh{}{grid}", if left_half { ".half" } else { "" }),
+    )?;
+    Ok((buffers, m))
+}
+
+/// The shading load of each of `meshes`, keyed by its buffers' address.
+fn shading_loads<'m>(
+    ctx: &Arc<Context>,
+    gpu: &SceneGpu,
+    meshes: impl Iterator<Item = &'m (MeshBuffers, Mesh)>,
+) -> Result<Vec<(*const MeshBuffers, ShadingLoad)>, GpuError> {
+    let mut loads = Vec::new();
+    for (buffers, m) in meshes {
         let load = gpu.shading_load(ctx, Some((buffers, m)))?;
         loads.push((buffers as *const MeshBuffers, load));
     }
-    let load_of = |mesh: &MeshBuffers| {
-        loads
+    Ok(loads)
+}
+
+/// What a probe point is drawn as: its kind (`None`: the empty shader), operation count,
+/// whether they sit in an untaken branch, whether the depth test is on, and its mesh.
+type PointSpec<'m> = (Option<Kind>, u32, bool, bool, &'m MeshBuffers);
+
+/// Every probe point (module doc), in the order they are built and timed.
+fn point_specs<'m>(
+    ctx: &Arc<Context>,
+    nothing_mesh: &'m MeshBuffers,
+    full_mesh: &'m MeshBuffers,
+    half_mesh: &'m MeshBuffers,
+    grids: &'m [(MeshBuffers, Mesh)],
+) -> Vec<PointSpec<'m>> {
+    let mut specs: Vec<PointSpec<'m>> = vec![
+        (None, 0, false, true, nothing_mesh),
+        (None, 0, false, true, full_mesh),
+        (None, 0, false, true, half_mesh),
+        (None, 0, false, false, full_mesh),
+    ];
+    specs.extend(grids.iter().map(|g| (None, 0, false, true, &g.0)));
+    // A device that cannot filter RGBA32F (optional in Vulkan) gets no such points: its
+    // cost stays 0 (and the NDF rows, which need it, refuse to build there).
+    let wide_filters = ctx.supports_linear_filter(crate::ndf::MOMENT_FORMAT);
+    for kind in Kind::ALL
+        .into_iter()
+        .filter(|&k| k != Kind::TrilinearWide || wide_filters)
+    {
+        for &count in probe_counts(kind) {
+            specs.push((Some(kind), count, false, true, full_mesh));
+        }
+    }
+    for (g, _) in grids
+        .iter()
+        .zip(TRIANGLE_GRIDS)
+        .filter(|(_, side)| VARYING_GRIDS.contains(side))
+    {
+        specs.push((Some(Kind::Varying), MAX_PROBE_VARYINGS, false, true, &g.0));
+    }
+    for &count in UNTAKEN_BRANCH_READS {
+        specs.push((Some(Kind::IndexedUniformRead), count, true, true, full_mesh));
+    }
+    specs
+}
+
+/// A probe point with its pipeline, ready to time.
+struct Planned<'m> {
+    point: ProbePoint,
+    pipeline: crate::gpu::MeshPipeline,
+    /// How many times `pipeline` was rebuilt (`states`: builds differ).
+    build: usize,
+    mesh: &'m MeshBuffers,
+}
+
+/// What building a probe point's pipeline needs: the probe scene's GPU state, the textures
+/// and samplers the points read, and the shading load of each mesh.
+struct PointPlanner<'a> {
+    ctx: &'a Arc<Context>,
+    gpu: &'a SceneGpu,
+    res: &'a ProbeResources,
+    linear: &'a Sampler,
+    /// Screen pixels, what a mesh's busy lanes are divided by.
+    pixels: f64,
+    /// Lanes per screen pixel of each mesh: the coverage the model's per-pixel costs
+    /// multiply ([`shading_loads`]).
+    loads: Vec<(*const MeshBuffers, ShadingLoad)>,
+}
+
+impl<'a> PointPlanner<'a> {
+    /// The shading load of `mesh` (one of those the planner was given).
+    fn load_of(&self, mesh: &MeshBuffers) -> Option<ShadingLoad> {
+        self.loads
             .iter()
             .find(|(m, _)| std::ptr::eq(*m, mesh))
             .map(|(_, l)| *l)
-    };
-    let screen_fragments = load_of(&full_mesh.0).map_or(0, |l| l.fragments);
-
-    // Every point's pipeline first, then the timed frames in interleaved rounds.
-    struct Planned<'m> {
-        point: ProbePoint,
-        pipeline: crate::gpu::MeshPipeline,
-        /// How many times `pipeline` was rebuilt (`states`: builds differ).
-        build: usize,
-        mesh: &'m MeshBuffers,
     }
-    let plan = |kind: Option<Kind>,
-                count: u32,
-                untaken: bool,
-                depth_test: bool,
-                mesh: &MeshBuffers|
-     -> Result<(ProbePoint, crate::gpu::MeshPipeline), GpuError> {
+
+    /// Compiles a probe point's shader, counts its operations and builds its pipeline
+    /// over `mesh`; the point's timings are still to be taken.
+    fn plan(
+        &self,
+        kind: Option<Kind>,
+        count: u32,
+        untaken: bool,
+        depth_test: bool,
+        mesh: &MeshBuffers,
+    ) -> Result<(ProbePoint, crate::gpu::MeshPipeline), GpuError> {
         let name = format!(
             "probe.{}{count}{}",
             kind.map_or("empty".to_string(), |k| format!("{k:?}").to_lowercase()),
@@ -788,7 +956,42 @@ pub fn run_with_monitor(
             kept_loops: drawn.kept_loops,
             ..unrolled
         };
-        let mut resources = gpu.common_resources();
+        let resources = self.point_resources(kind);
+        let pipeline = self
+            .gpu
+            .mesh_pipeline_with_depth(self.ctx, &name, &spirv, &resources, depth_test)?;
+        // SPIR-V counts both sides of a branch: the untaken work is what the point counts
+        // beyond the same shader with none of the operations.
+        let all = CostCounts::new(&lookups_of(kind, count), &ops);
+        let untaken_counts = if untaken {
+            all.less(&CostCounts::new(&[], &spirv::count(&compile(0, true)?)))
+        } else {
+            CostCounts::default()
+        };
+        let point = ProbePoint {
+            kind,
+            count,
+            coverage: self.load_of(mesh).map_or(0.0, |l| l.lanes / self.pixels),
+            triangles: mesh.triangle_count(),
+            edge_pixels: self.load_of(mesh).map_or(0.0, |l| l.edge_pixels),
+            depth_test,
+            in_untaken_branch: untaken,
+            counts: all.less(&untaken_counts),
+            untaken: untaken_counts,
+            ms_median: f64::NAN,
+            batches: 1,
+            frames: 0,
+            state_frames: 0,
+            model_ms: f64::NAN,
+        };
+        Ok((point, pipeline))
+    }
+
+    /// What a point of `kind` binds: the scene's common resources, the uniform block and
+    /// the textures its lookups read.
+    fn point_resources(&self, kind: Option<Kind>) -> Vec<(u32, Resource<'a>)> {
+        let (res, linear, material) = (self.res, self.linear, self.gpu.material_sampler());
+        let mut resources = self.gpu.common_resources();
         resources.push((
             layout::BINDING_TECHNIQUE_PARAMS,
             Resource::Uniform(&res.uniforms),
@@ -797,11 +1000,11 @@ pub fn run_with_monitor(
         match kind {
             Some(Kind::Bilinear2d | Kind::TexelFetch) => resources.push((
                 t0,
-                Resource::TextureArray(res.bilinear.iter().map(|i| (i, &linear)).collect()),
+                Resource::TextureArray(res.bilinear.iter().map(|i| (i, linear)).collect()),
             )),
             Some(Kind::Dependent2d) => resources.push((
                 t0,
-                Resource::TextureArray(res.tables.iter().map(|i| (i, &linear)).collect()),
+                Resource::TextureArray(res.tables.iter().map(|i| (i, linear)).collect()),
             )),
             Some(Kind::Trilinear2d) => resources.push((
                 t0,
@@ -815,134 +1018,105 @@ pub fn run_with_monitor(
                 t0,
                 Resource::TextureArray(res.trilinear_srgb.iter().map(|i| (i, material)).collect()),
             )),
-            Some(Kind::Array2d) => resources.push((t0, Resource::Texture(&res.array, &linear))),
+            Some(Kind::Array2d) => resources.push((t0, Resource::Texture(&res.array, linear))),
             Some(Kind::CubeArray) => {
-                resources.push((t0, Resource::Texture(&res.cube_array, &linear)));
+                resources.push((t0, Resource::Texture(&res.cube_array, linear)));
             }
             _ => {}
         }
-        let pipeline = gpu.mesh_pipeline_with_depth(ctx, &name, &spirv, &resources, depth_test)?;
-        let lookups: Vec<(Kind, u32)> = match kind {
-            Some(
-                k @ (Kind::Bilinear2d
-                | Kind::TexelFetch
-                | Kind::Trilinear2d
-                | Kind::TrilinearWide
-                | Kind::TrilinearSrgb
-                | Kind::Array2d
-                | Kind::CubeArray
-                | Kind::Dependent2d),
-            ) => {
-                vec![(k, count)]
-            }
-            _ => vec![],
-        };
-        // SPIR-V counts both sides of a branch: the untaken work is what the point counts
-        // beyond the same shader with none of the operations.
-        let all = CostCounts::new(&lookups, &ops);
-        let untaken_counts = if untaken {
-            all.less(&CostCounts::new(&[], &spirv::count(&compile(0, true)?)))
-        } else {
-            CostCounts::default()
-        };
-        let point = ProbePoint {
-            kind,
-            count,
-            coverage: load_of(mesh).map_or(0.0, |l| l.lanes / pixels),
-            triangles: mesh.triangle_count(),
-            edge_pixels: load_of(mesh).map_or(0.0, |l| l.edge_pixels),
-            depth_test,
-            in_untaken_branch: untaken,
-            counts: all.less(&untaken_counts),
-            untaken: untaken_counts,
-            ms_median: f64::NAN,
-            batches: 1,
-            frames: 0,
-            state_frames: 0,
-            model_ms: f64::NAN,
-        };
-        Ok((point, pipeline))
-    };
-    let mut specs: Vec<(Option<Kind>, u32, bool, bool, &MeshBuffers)> = vec![
-        (None, 0, false, true, &nothing_mesh.0),
-        (None, 0, false, true, &full_mesh.0),
-        (None, 0, false, true, &half_mesh.0),
-        (None, 0, false, false, &full_mesh.0),
-    ];
-    specs.extend(grids.iter().map(|g| (None, 0, false, true, &g.0)));
-    // A device that cannot filter RGBA32F (optional in Vulkan) gets no such points: its
-    // cost stays 0 (and the NDF rows, which need it, refuse to build there).
-    let wide_filters = ctx.supports_linear_filter(crate::ndf::MOMENT_FORMAT);
-    for kind in Kind::ALL
-        .into_iter()
-        .filter(|&k| k != Kind::TrilinearWide || wide_filters)
-    {
-        for &count in probe_counts(kind) {
-            specs.push((Some(kind), count, false, true, &full_mesh.0));
+        resources
+    }
+}
+
+/// The texture lookups a point of `kind` makes: `count` of its kind where it is a lookup.
+fn lookups_of(kind: Option<Kind>, count: u32) -> Vec<(Kind, u32)> {
+    match kind {
+        Some(
+            k @ (Kind::Bilinear2d
+            | Kind::TexelFetch
+            | Kind::Trilinear2d
+            | Kind::TrilinearWide
+            | Kind::TrilinearSrgb
+            | Kind::Array2d
+            | Kind::CubeArray
+            | Kind::Dependent2d),
+        ) => {
+            vec![(k, count)]
         }
+        _ => vec![],
     }
-    for (g, _) in grids
-        .iter()
-        .zip(TRIANGLE_GRIDS)
-        .filter(|(_, side)| VARYING_GRIDS.contains(side))
-    {
-        specs.push((Some(Kind::Varying), MAX_PROBE_VARYINGS, false, true, &g.0));
-    }
-    for &count in UNTAKEN_BRANCH_READS {
-        specs.push((
-            Some(Kind::IndexedUniformRead),
-            count,
-            true,
-            true,
-            &full_mesh.0,
-        ));
-    }
-    let mut planned = specs
-        .into_iter()
-        .map(|(kind, count, untaken, depth_test, mesh)| {
-            let (point, pipeline) = plan(kind, count, untaken, depth_test, mesh)?;
-            Ok(Planned {
-                point,
-                pipeline,
-                build: 0,
-                mesh,
+}
+
+/// How the points' frames are taken: in `rounds` interleaved rounds of `per_round` frames
+/// each (module doc), with a frame of the monitor point after each point's frames.
+struct Batches<'a> {
+    gpu: &'a SceneGpu,
+    warmup: u32,
+    rounds: u32,
+    per_round: u32,
+    /// The planned point that monitors the device: the empty shader over the screen.
+    monitor_index: usize,
+}
+
+impl<'a> Batches<'a> {
+    /// The rounds for `s`'s frames, and the monitor among `planned` (its mesh `screen`).
+    ///
+    /// # Errors
+    /// No empty-shader point over the screen among `planned`.
+    fn new(
+        gpu: &'a SceneGpu,
+        s: &ProbeSettings,
+        planned: &[Planned],
+        screen: &MeshBuffers,
+    ) -> Result<Self, GpuError> {
+        // A slow drift of the device (another tenant, clocks) would otherwise land on
+        // whichever points ran during it; in rounds it spreads over all of them and the
+        // median drops it. The faster switches between speed states are told apart by the
+        // monitor (`states`).
+        let rounds = s.frames.clamp(1, PROBE_ROUNDS);
+        let per_round = s.frames.div_ceil(rounds);
+        let monitor_index = planned
+            .iter()
+            .position(|p| {
+                p.point.kind.is_none() && p.point.depth_test && std::ptr::eq(p.mesh, screen)
             })
+            .ok_or_else(|| GpuError::Invalid {
+                what: "probe".into(),
+                detail: "no empty-shader point over the screen to monitor the device with".into(),
+            })?;
+        Ok(Batches {
+            gpu,
+            warmup: s.warmup,
+            rounds,
+            per_round,
+            monitor_index,
         })
-        .collect::<Result<Vec<_>, GpuError>>()?;
-    // A slow drift of the device (another tenant, clocks) would otherwise land on whichever
-    // points ran during it; in rounds it spreads over all of them and the median drops it.
-    // The faster switches between speed states are told apart by the monitor (`states`).
-    let rounds = s.frames.clamp(1, PROBE_ROUNDS);
-    let per_round = s.frames.div_ceil(rounds);
-    let monitor_index = planned
-        .iter()
-        .position(|p| {
-            p.point.kind.is_none() && p.point.depth_test && std::ptr::eq(p.mesh, &full_mesh.0)
-        })
-        .ok_or_else(|| GpuError::Invalid {
-            what: "probe".into(),
-            detail: "no empty-shader point over the screen to monitor the device with".into(),
-        })?;
-    let read_monitor = |planned: &[Planned]| {
-        let m = &planned[monitor_index];
-        monitor_frame(&gpu, &m.pipeline, m.mesh)
-    };
-    // One batch: the timed frames of the points `which`, in interleaved rounds, a monitor
-    // frame after each point's frames; returns their segments and the monitor frames.
-    // Cheap points get more frames (a millisecond of jitter is 10 % of them), scaled by a
-    // known median or, failing that, by the batch's first round.
-    let time_batch = |planned: &[Planned],
-                      which: &[usize],
-                      known_ms: &[f64]|
-     -> Result<(Vec<Segmented>, Vec<f64>), GpuError> {
+    }
+
+    /// One monitor frame (`monitor_frame`) of the monitor point, ms.
+    fn read_monitor(&self, planned: &[Planned]) -> Result<f64, GpuError> {
+        let m = &planned[self.monitor_index];
+        monitor_frame(self.gpu, &m.pipeline, m.mesh)
+    }
+
+    /// One batch: the timed frames of the points `which`, in interleaved rounds, a monitor
+    /// frame after each point's frames; returns their segments and the monitor frames.
+    /// Cheap points get more frames (a millisecond of jitter is 10 % of them), scaled by a
+    /// known median or, failing that, by the batch's first round.
+    fn time_batch(
+        &self,
+        planned: &[Planned],
+        which: &[usize],
+        known_ms: &[f64],
+    ) -> Result<(Vec<Segmented>, Vec<f64>), GpuError> {
         let mut timed = vec![Segmented::default(); which.len()];
-        let mut before = read_monitor(planned)?;
+        let mut before = self.read_monitor(planned)?;
         let mut monitor = vec![before];
-        for round in 0..rounds {
+        for round in 0..self.rounds {
             let warmup = if round == 0 {
-                s.warmup
+                self.warmup
             } else {
-                s.warmup.min(1)
+                self.warmup.min(1)
             };
             for (&i, t) in which.iter().zip(&mut timed) {
                 let ms = if known_ms[i].is_finite() {
@@ -955,151 +1129,153 @@ pub fn run_with_monitor(
                 let frames = match ms {
                     Some(ms) => {
                         let scale = (CHEAP_POINT_MS / ms).clamp(1.0, 20.0);
-                        (f64::from(per_round) * scale).round() as u32
+                        (f64::from(self.per_round) * scale).round() as u32
                     }
-                    None => per_round,
+                    None => self.per_round,
                 };
                 let p = &planned[i];
-                let got = gpu.time_pipeline_on(&p.pipeline, p.mesh, warmup, frames)?;
-                let after = read_monitor(planned)?;
+                let got = self
+                    .gpu
+                    .time_pipeline_on(&p.pipeline, p.mesh, warmup, frames)?;
+                let after = self.read_monitor(planned)?;
                 t.push(p.build, before, got, after);
                 monitor.push(after);
                 before = after;
             }
         }
         Ok((timed, monitor))
-    };
-    // Each point at the median of its frames in `state`, of its fastest build there (of all
-    // its frames where none ran in it: `state_frames` 0).
-    let measure =
-        |points: &mut [ProbePoint], timed: &[Segmented], states: &DeviceStates, state: usize| {
-            for (p, t) in points.iter_mut().zip(timed) {
-                let (median, in_state) = t.median_in(states, state);
-                p.ms_median = median
-                    .or_else(|| t.fastest_build_median())
-                    .unwrap_or(f64::NAN);
-                p.frames = t.all().len();
-                p.state_frames = in_state;
-            }
-        };
-    let all: Vec<usize> = (0..planned.len()).collect();
-    let (mut timed, mut monitor) = time_batch(&planned, &all, &vec![f64::NAN; planned.len()])?;
-    let mut states = DeviceStates::from_monitor(&monitor);
-    let mut points: Vec<ProbePoint> = planned.iter().map(|p| p.point.clone()).collect();
-    measure(&mut points, &timed, &states, states.main_state);
-    let fit_points = |points: &[ProbePoint]| {
-        fit(points).ok_or_else(|| GpuError::Invalid {
-            what: "probe".into(),
-            detail: format!("{}: the timings do not fit a cost model", ctx.device_name()),
-        })
-    };
-    let mut model = fit_points(&points)?;
-    // A point the fit misses by more than RETIME_ERROR, or with fewer than MIN_STATE_FRAMES
-    // frames in a state that held at least STATE_MODEL_SHARE of the monitor frames, is
-    // timed in RETIME_BATCHES more batches, each on a pipeline built afresh (a build can run
-    // a shader ≈ 25 % slower than another for as long as it lives, `states`); its segments
-    // join the first ones, each point's time is its fastest build's, and the states are
-    // told apart again over every monitor frame.
-    let missed: Vec<usize> = all
-        .iter()
-        .copied()
+    }
+}
+
+/// Each point at the median of its frames in `state`, of its fastest build there (of all
+/// its frames where none ran in it: `state_frames` 0).
+fn measure(points: &mut [ProbePoint], timed: &[Segmented], states: &DeviceStates, state: usize) {
+    for (p, t) in points.iter_mut().zip(timed) {
+        let (median, in_state) = t.median_in(states, state);
+        p.ms_median = median
+            .or_else(|| t.fastest_build_median())
+            .unwrap_or(f64::NAN);
+        p.frames = t.all().len();
+        p.state_frames = in_state;
+    }
+}
+
+/// [`fit`], an error where the timings fit no model.
+fn fit_points(ctx: &Context, points: &[ProbePoint]) -> Result<CostModel, GpuError> {
+    fit(points).ok_or_else(|| GpuError::Invalid {
+        what: "probe".into(),
+        detail: format!("{}: the timings do not fit a cost model", ctx.device_name()),
+    })
+}
+
+/// The points to time again (`run_with_monitor`): those `model` misses, and those with
+/// too few frames in a state that held a good share of the monitor frames.
+fn missed_points(
+    model: &CostModel,
+    points: &[ProbePoint],
+    timed: &[Segmented],
+    states: &DeviceStates,
+) -> Vec<usize> {
+    (0..points.len())
         .filter(|&i| {
             let p = &points[i];
-            let predicted = predict_point(&model, p);
+            let predicted = predict_point(model, p);
             let unseen = (0..states.count()).any(|state| {
                 states.shares[state] >= STATE_MODEL_SHARE
-                    && timed[i].ran_in(&states, state).len() < MIN_STATE_FRAMES
+                    && timed[i].ran_in(states, state).len() < MIN_STATE_FRAMES
             });
             unseen || (predicted - p.ms_median).abs() > RETIME_ERROR * p.ms_median
         })
-        .collect();
-    if !missed.is_empty() {
-        let known: Vec<f64> = points.iter().map(|p| p.ms_median).collect();
-        for _ in 0..RETIME_BATCHES {
-            for &i in &missed {
-                let p = &planned[i];
-                let (_, pipeline) = plan(
-                    p.point.kind,
-                    p.point.count,
-                    p.point.in_untaken_branch,
-                    p.point.depth_test,
-                    p.mesh,
-                )?;
-                planned[i].pipeline = pipeline;
-                planned[i].build += 1;
-            }
-            let (batch, batch_monitor) = time_batch(&planned, &missed, &known)?;
-            for (&i, t) in missed.iter().zip(batch) {
-                timed[i].0.extend(t.0);
-            }
-            monitor.extend(batch_monitor);
+        .collect()
+}
+
+/// Times the `missed` points in RETIME_BATCHES more batches, each on pipelines built
+/// afresh; their segments join theirs in `timed`, the batches' monitor frames `monitor`.
+fn retime(
+    planner: &PointPlanner,
+    batches: &Batches,
+    planned: &mut [Planned],
+    missed: &[usize],
+    points: &[ProbePoint],
+    timed: &mut [Segmented],
+    monitor: &mut Vec<f64>,
+) -> Result<(), GpuError> {
+    let known: Vec<f64> = points.iter().map(|p| p.ms_median).collect();
+    for _ in 0..RETIME_BATCHES {
+        for &i in missed {
+            let p = &planned[i];
+            let (_, pipeline) = planner.plan(
+                p.point.kind,
+                p.point.count,
+                p.point.in_untaken_branch,
+                p.point.depth_test,
+                p.mesh,
+            )?;
+            planned[i].pipeline = pipeline;
+            planned[i].build += 1;
         }
-        states = DeviceStates::from_monitor(&monitor);
-        measure(&mut points, &timed, &states, states.main_state);
-        for &i in &missed {
-            points[i].batches = 1 + RETIME_BATCHES as u32;
+        let (batch, batch_monitor) = batches.time_batch(planned, missed, &known)?;
+        for (&i, t) in missed.iter().zip(batch) {
+            timed[i].0.extend(t.0);
         }
-        model = fit_points(&points)?;
+        monitor.extend(batch_monitor);
     }
-    // The main model: the fastest state that every point has frames in — the device least
-    // disturbed by its neighbours (in the slower state of this VM texture lookups cost
-    // more the more a shader makes: 16 bilinear lookups 0.90× the model where 4 are 1.10×,
-    // a shared memory bus by the look of it) — else the state most monitor frames fell in.
-    let every_point_ran_in = |states: &DeviceStates, state: usize| {
-        timed
-            .iter()
-            .all(|t| t.0.iter().any(|s| states.ran_in(s, state)))
-    };
-    let fastest_seen = (0..states.count()).find(|&state| every_point_ran_in(&states, state));
+    Ok(())
+}
+
+/// The main model: the fastest state that every point has frames in — the device least
+/// disturbed by its neighbours (in the slower state of this VM texture lookups cost
+/// more the more a shader makes: 16 bilinear lookups 0.90× the model where 4 are 1.10×,
+/// a shared memory bus by the look of it) — else the state most monitor frames fell in.
+/// Makes that state `states.main_state` and measures and fits `points` there where it is
+/// not already; else returns `model`.
+fn main_model(
+    ctx: &Context,
+    states: &mut DeviceStates,
+    points: &mut [ProbePoint],
+    timed: &[Segmented],
+    model: CostModel,
+) -> Result<CostModel, GpuError> {
+    let fastest_seen = (0..states.count()).find(|&state| every_point_ran_in(timed, states, state));
     if let Some(fastest) = fastest_seen.filter(|&f| f != states.main_state) {
         states.main_state = fastest;
-        measure(&mut points, &timed, &states, fastest);
-        model = fit_points(&points)?;
+        measure(points, timed, states, fastest);
+        return fit_points(ctx, points);
     }
-    for p in &mut points {
-        p.model_ms = predict_point(&model, p);
-    }
-    // A model per state that every point has frames in: the bench compares a row's frames
-    // in a state with that state's model.
+    Ok(model)
+}
+
+/// Whether every point has frames in `state`.
+fn every_point_ran_in(timed: &[Segmented], states: &DeviceStates, state: usize) -> bool {
+    timed
+        .iter()
+        .all(|t| t.0.iter().any(|s| states.ran_in(s, state)))
+}
+
+/// A model per state that every point has frames in (`model` for the main state): the
+/// bench compares a row's frames in a state with that state's model.
+fn state_models(
+    ctx: &Context,
+    model: &CostModel,
+    points: &[ProbePoint],
+    timed: &[Segmented],
+    states: &DeviceStates,
+) -> Result<Vec<StateModel>, GpuError> {
     let mut state_models = Vec::new();
     for state in 0..states.count() {
         if state == states.main_state {
-            state_models.push(StateModel::new(state, model.clone(), &points));
-        } else if every_point_ran_in(&states, state) {
-            let mut in_state = points.clone();
-            measure(&mut in_state, &timed, &states, state);
-            let state_model = fit_points(&in_state)?;
+            state_models.push(StateModel::new(state, model.clone(), points));
+        } else if every_point_ran_in(timed, states, state) {
+            let mut in_state = points.to_vec();
+            measure(&mut in_state, timed, states, state);
+            let state_model = fit_points(ctx, &in_state)?;
             for p in &mut in_state {
                 p.model_ms = predict_point(&state_model, p);
             }
             state_models.push(StateModel::new(state, state_model, &in_state));
         }
     }
-    let monitor_pipeline = planned.swap_remove(monitor_index).pipeline;
-    drop(planned);
-    let probe = Probe {
-        device: ctx.device_name().to_string(),
-        width: s.width,
-        height: s.height,
-        frames: rounds * per_round,
-        screen_fragments,
-        triangle_pixels: s.triangle_pixels,
-        grid: base,
-        model,
-        states: states.clone(),
-        state_models,
-        points,
-        seconds: started.elapsed().as_secs_f64(),
-    };
-    let monitor = Monitor {
-        pipeline: monitor_pipeline,
-        mesh: full_mesh.0,
-        _resources: res,
-        _linear: linear,
-        gpu,
-        states,
-    };
-    Ok((probe, monitor))
+    Ok(state_models)
 }
 
 /// The probe's monitor point (the empty shader over the screen), kept past the probe for
