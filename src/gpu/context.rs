@@ -76,13 +76,7 @@ impl Context {
         let (physical, queue_family, device_name) = match picked {
             Ok(p) => p,
             Err(e) => {
-                // SAFETY: the messenger and instance are ours and unused elsewhere.
-                unsafe {
-                    if let Some(di) = &debug_instance {
-                        di.destroy_debug_utils_messenger(messenger, None);
-                    }
-                    instance.destroy_instance(None);
-                }
+                destroy_instance(&instance, (debug_instance.as_ref(), messenger));
                 return Err(e);
             }
         };
@@ -584,7 +578,7 @@ type DebugObjects<'a> = (
 /// Creates the logical device of `physical` (its graphics queue family and name) with one
 /// queue, the features the techniques use where the device has them, VK_KHR_maintenance4
 /// where there, and VK_KHR_swapchain when the context presents; destroys the messenger
-/// and the instance when vkCreateDevice fails.
+/// and the instance when it fails.
 fn open_device(
     instance: &ash::Instance,
     physical: vk::PhysicalDevice,
@@ -629,6 +623,7 @@ fn open_device(
                 .is_ok_and(|n| n == ash::khr::swapchain::NAME)
         });
         if !has_swapchain {
+            destroy_instance(instance, (debug_instance, messenger));
             return Err(GpuError::MissingFeature {
                 device: device_name.to_string(),
                 feature: "VK_KHR_swapchain (needed to present to a window)".into(),
@@ -648,15 +643,21 @@ fn open_device(
     match unsafe { instance.create_device(physical, &device_info, None) } {
         Ok(d) => Ok(d),
         Err(e) => {
-            // SAFETY: the messenger and instance are the caller's and unused elsewhere.
-            unsafe {
-                if let Some(di) = debug_instance {
-                    di.destroy_debug_utils_messenger(messenger, None);
-                }
-                instance.destroy_instance(None);
-            }
+            destroy_instance(instance, (debug_instance, messenger));
             Err(GpuError::vulkan("vkCreateDevice", device_name, e))
         }
+    }
+}
+
+/// Destroys the messenger and the instance of a context that failed to open.
+fn destroy_instance(instance: &ash::Instance, (debug_instance, messenger): DebugObjects<'_>) {
+    // SAFETY: the messenger and instance are the caller's, no device was created from the
+    // instance (or it is destroyed already), and neither is used after this.
+    unsafe {
+        if let Some(di) = debug_instance {
+            di.destroy_debug_utils_messenger(messenger, None);
+        }
+        instance.destroy_instance(None);
     }
 }
 
@@ -703,14 +704,9 @@ fn create_allocator_and_pool(
                     source,
                 },
             };
-            // SAFETY: nothing created from the device or instance is alive any more.
-            unsafe {
-                device.destroy_device(None);
-                if let Some(di) = debug_instance {
-                    di.destroy_debug_utils_messenger(messenger, None);
-                }
-                instance.destroy_instance(None);
-            }
+            // SAFETY: nothing created from the device is alive any more.
+            unsafe { device.destroy_device(None) };
+            destroy_instance(instance, (debug_instance, messenger));
             Err(error)
         }
     }
