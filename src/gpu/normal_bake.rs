@@ -368,31 +368,11 @@ struct BakeCommands<'a> {
 impl BakeCommands<'_> {
     /// Records the three phases and the readback copy into `cmd`.
     fn record(&self) -> Result<(), GpuError> {
-        let (ctx, cmd, res) = (self.ctx, self.cmd, self.job.res);
+        let (ctx, cmd) = (self.ctx, self.cmd);
         let device = ctx.device();
-        let full = vk::Rect2D {
-            offset: vk::Offset2D { x: 0, y: 0 },
-            extent: vk::Extent2D {
-                width: res,
-                height: res,
-            },
-        };
-        let clears = [
-            vk::ClearValue {
-                color: vk::ClearColorValue { float32: [0.0; 4] },
-            },
-            vk::ClearValue {
-                depth_stencil: vk::ClearDepthStencilValue {
-                    depth: 1.0,
-                    stencil: 0,
-                },
-            },
-        ];
-        let begin_pass = vk::RenderPassBeginInfo::default()
-            .render_pass(self.target.render_pass())
-            .framebuffer(self.target.framebuffer())
-            .render_area(full)
-            .clear_values(&clears);
+        let full = self.target.area();
+        let clears = RenderTarget::clears([0.0; 4]);
+        let begin_pass = self.target.begin_info(&clears);
         // SAFETY (this block): `cmd` is freshly allocated; every object recorded lives until
         // the waited submission in `run` completes (its locals and `objects`).
         unsafe {

@@ -341,30 +341,8 @@ impl MeshPipeline {
         let device = ctx.device();
         let name = self.name.as_str();
         let timed = pool != vk::QueryPool::null();
-        let clears = [
-            vk::ClearValue {
-                color: vk::ClearColorValue {
-                    float32: [0.0, 0.0, 0.0, 0.0],
-                },
-            },
-            vk::ClearValue {
-                depth_stencil: vk::ClearDepthStencilValue {
-                    depth: 1.0,
-                    stencil: 0,
-                },
-            },
-        ];
-        let begin_pass = vk::RenderPassBeginInfo::default()
-            .render_pass(target.render_pass())
-            .framebuffer(target.framebuffer())
-            .render_area(vk::Rect2D {
-                offset: vk::Offset2D { x: 0, y: 0 },
-                extent: vk::Extent2D {
-                    width: target.width(),
-                    height: target.height(),
-                },
-            })
-            .clear_values(&clears);
+        let clears = RenderTarget::clears([0.0; 4]);
+        let begin_pass = target.begin_info(&clears);
         // SAFETY: `cmd` is freshly allocated; every object recorded is owned by `self`,
         // `target` or `mesh`, all alive until the waited submissions below complete.
         unsafe {

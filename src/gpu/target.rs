@@ -184,8 +184,43 @@ impl RenderTarget {
     pub(crate) fn render_pass(&self) -> vk::RenderPass {
         self.render_pass
     }
-    pub(crate) fn framebuffer(&self) -> vk::Framebuffer {
-        self.framebuffer
+    /// The whole target, as a render area or scissor.
+    pub fn area(&self) -> vk::Rect2D {
+        vk::Rect2D {
+            offset: vk::Offset2D { x: 0, y: 0 },
+            extent: vk::Extent2D {
+                width: self.width,
+                height: self.height,
+            },
+        }
+    }
+
+    /// The clear values of a pass over a target: colour `color`, depth 1 (the far plane).
+    pub fn clears(color: [f32; 4]) -> [vk::ClearValue; 2] {
+        [
+            vk::ClearValue {
+                color: vk::ClearColorValue { float32: color },
+            },
+            vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: 1.0,
+                    stencil: 0,
+                },
+            },
+        ]
+    }
+
+    /// The begin info of a render pass over the whole target, cleared to `clears`
+    /// ([`Self::clears`]).
+    pub(crate) fn begin_info<'a>(
+        &self,
+        clears: &'a [vk::ClearValue; 2],
+    ) -> vk::RenderPassBeginInfo<'a> {
+        vk::RenderPassBeginInfo::default()
+            .render_pass(self.render_pass)
+            .framebuffer(self.framebuffer)
+            .render_area(self.area())
+            .clear_values(clears)
     }
 
     /// Records a copy of the whole colour image (TRANSFER_SRC_OPTIMAL after a render pass)

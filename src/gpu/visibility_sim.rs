@@ -368,33 +368,10 @@ impl SimulationCommands<'_> {
     /// (the first also clears the masks, the last also projects and reads back), reporting
     /// progress after each.
     fn submit_all(&self) -> Result<(), GpuError> {
-        let (ctx, job, res) = (self.ctx, self.job, self.job.res);
-        let full = vk::Rect2D {
-            offset: vk::Offset2D { x: 0, y: 0 },
-            extent: vk::Extent2D {
-                width: res,
-                height: res,
-            },
-        };
-        let clears = [
-            vk::ClearValue {
-                color: vk::ClearColorValue {
-                    // No surface: nothing nearer the sky, no triangle.
-                    float32: [EMPTY_SKY, 0.0, 0.0, 0.0],
-                },
-            },
-            vk::ClearValue {
-                depth_stencil: vk::ClearDepthStencilValue {
-                    depth: 1.0,
-                    stencil: 0,
-                },
-            },
-        ];
-        let begin_pass = vk::RenderPassBeginInfo::default()
-            .render_pass(self.target.render_pass())
-            .framebuffer(self.target.framebuffer())
-            .render_area(full)
-            .clear_values(&clears);
+        let (ctx, job) = (self.ctx, self.job);
+        // No surface: nothing nearer the sky, no triangle.
+        let clears = RenderTarget::clears([EMPTY_SKY, 0.0, 0.0, 0.0]);
+        let begin_pass = self.target.begin_info(&clears);
         let chunks: Vec<&[DirectionView]> = job.views.chunks(DIRECTIONS_PER_SUBMIT).collect();
         let last = chunks.len() - 1;
         let mut done = 0;
@@ -404,7 +381,7 @@ impl SimulationCommands<'_> {
                     self.record_start(cmd);
                 }
                 for view in chunk.iter() {
-                    self.record_direction(cmd, &begin_pass, full, view);
+                    self.record_direction(cmd, &begin_pass, self.target.area(), view);
                 }
                 if k == last {
                     self.record_projection(cmd);
