@@ -48,3 +48,38 @@ fn teardown_and_context_creation_are_clean() {
     assert!(!ctx.device_name().is_empty());
     common::assert_validation_clean(&ctx, "context");
 }
+
+/// Frames timed several to a query (as on a fast GPU, `gpu::frame_timing`), forced here by a
+/// span no lavapipe frame reaches: validation stays clean, every timed frame is reported,
+/// and a frame's time is the query's span over its draws — of the order of a frame timed
+/// alone, not of 64 of them.
+#[test]
+fn frames_timed_several_to_a_query_are_per_frame_times() {
+    let ctx = common::validated_context();
+    let prepared = common::house();
+    let settings = FrameSettings {
+        width: 64,
+        height: 40,
+        ..FrameSettings::default()
+    };
+    let mut scene = shvis::render::SceneGpu::new(&ctx, &prepared.scene, &settings).unwrap();
+    let technique: Technique = "preconv".parse().unwrap();
+    let tech =
+        shvis::technique::build(&ctx, &scene, technique, HwPath::Dx10, &prepared.inputs()).unwrap();
+    let alone = tech.time(&scene, 2, 5).unwrap();
+    scene.set_min_query_span(1e6);
+    let batched = tech.time(&scene, 2, 5).unwrap();
+    assert_eq!(batched.len(), 5, "{batched:?}");
+    let median = |v: &[f64]| {
+        let mut v = v.to_vec();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (a, b) = (median(&alone), median(&batched));
+    // 64 frames a query: a query's span undivided would be ≈ 64× a frame.
+    assert!(
+        b > a / 8.0 && b < a * 8.0,
+        "a frame alone {a} ms, in queries of many {b} ms"
+    );
+    common::assert_validation_clean(&ctx, "batched timing");
+}

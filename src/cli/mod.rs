@@ -77,6 +77,9 @@ enum Command {
     /// Normal map of a high-polygon mesh for a low one, on the GPU (Gumbau et al.):
     /// tangent- and object-space 16-bit PNG + EXR, optionally the low mesh as glTF.
     Normalmap(tools::NormalmapArgs),
+    /// List the Vulkan devices: name, kind, driver, Vulkan version, timer, subgroup size;
+    /// `*` marks the one shvis picks (the first discrete GPU, or `--device`'s).
+    Devices(tools::DevicesArgs),
 }
 
 /// Parses the arguments and runs the command.
@@ -93,6 +96,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Study(c) => study::run_study(c),
         Command::Ssbump(a) => tools::run_ssbump(a).context("ssbump"),
         Command::Normalmap(a) => tools::run_normalmap(a).context("normalmap"),
+        Command::Devices(a) => tools::run_devices(a).context("devices"),
     }
 }
 

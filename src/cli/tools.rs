@@ -14,6 +14,40 @@ use shvis::tools::ssbump::{self, SsbumpJob};
 use super::args::{GpuArgs, finite_f32, finite_f64};
 use super::{say, with_gpu};
 
+#[derive(Args, Debug)]
+pub(super) struct DevicesArgs {
+    #[command(flatten)]
+    pub(super) gpu: GpuArgs,
+    /// Print the list as JSON (one array) instead of lines.
+    #[arg(long)]
+    pub(super) json: bool,
+}
+
+/// Lists the Vulkan devices, the one shvis picks first (marked `*`).
+pub(super) fn run_devices(a: DevicesArgs) -> Result<()> {
+    with_gpu(&a.gpu, |ctx| {
+        let devices = ctx.devices();
+        if a.json {
+            println!("{}", serde_json::to_string_pretty(&devices)?);
+            return Ok(());
+        }
+        for d in &devices {
+            println!(
+                "{} {} ({}) · driver {} · Vulkan {} · timestamps {} bits × {} ns · subgroup {}",
+                if d.in_use { "*" } else { " " },
+                d.name,
+                d.kind,
+                d.driver,
+                d.api_version,
+                d.timestamp_valid_bits,
+                d.timestamp_period_ns,
+                d.subgroup_size
+            );
+        }
+        Ok(())
+    })
+}
+
 #[derive(Subcommand, Debug)]
 pub(super) enum ShCommand {
     /// Reads directions "x y z" per line on stdin, prints the order² basis values per line.

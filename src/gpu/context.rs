@@ -148,6 +148,21 @@ impl Context {
     pub fn device_name(&self) -> &str {
         &self.device_name
     }
+
+    /// Every Vulkan device of this instance (`shvis devices`), the one in use marked.
+    pub fn devices(&self) -> Vec<DeviceSummary> {
+        // SAFETY: a plain query on the live instance.
+        let physicals = unsafe { self.instance.enumerate_physical_devices() }.unwrap_or_default();
+        physicals
+            .into_iter()
+            .map(|pd| DeviceSummary::query(&self.instance, pd, pd == self.physical))
+            .collect()
+    }
+
+    /// The device in use, as [`Self::devices`] lists it.
+    pub fn device_summary(&self) -> DeviceSummary {
+        DeviceSummary::query(&self.instance, self.physical, true)
+    }
     pub fn limits(&self) -> &vk::PhysicalDeviceLimits {
         &self.limits
     }
@@ -515,6 +530,81 @@ fn create_messenger(
                 "shvis",
                 e,
             ))
+        }
+    }
+}
+
+/// What `shvis devices` says of a Vulkan device: enough to name it in results and to judge
+/// its timer (`gpu::frame_timing`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct DeviceSummary {
+    pub name: String,
+    /// "discrete GPU", "integrated GPU", "virtual GPU", "CPU" or "other".
+    pub kind: &'static str,
+    /// The driver's name and version string (VK_KHR_driver_properties, Vulkan 1.2).
+    pub driver: String,
+    /// Vulkan version the device supports, "major.minor.patch".
+    pub api_version: String,
+    /// ns per timestamp tick.
+    pub timestamp_period_ns: f32,
+    /// Valid bits of the graphics queue's timestamps (0: none).
+    pub timestamp_valid_bits: u32,
+    /// Lanes of a subgroup.
+    pub subgroup_size: u32,
+    /// Whether shvis picked it (the first discrete GPU, or the one `--device` names).
+    pub in_use: bool,
+}
+
+impl DeviceSummary {
+    fn query(instance: &ash::Instance, physical: vk::PhysicalDevice, in_use: bool) -> Self {
+        let mut driver = vk::PhysicalDeviceDriverProperties::default();
+        let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+        // SAFETY: `physical` came from this instance; Vulkan 1.2 core queries (the instance
+        // asks for 1.2).
+        let (props, families) = unsafe {
+            let mut props2 = vk::PhysicalDeviceProperties2::default()
+                .push_next(&mut driver)
+                .push_next(&mut subgroup);
+            instance.get_physical_device_properties2(physical, &mut props2);
+            (
+                props2.properties,
+                instance.get_physical_device_queue_family_properties(physical),
+            )
+        };
+        let text = |r: Result<&std::ffi::CStr, _>| {
+            r.map(|c: &std::ffi::CStr| c.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        };
+        let v = props.api_version;
+        DeviceSummary {
+            name: text(props.device_name_as_c_str()),
+            kind: match props.device_type {
+                vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
+                vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
+                vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual GPU",
+                vk::PhysicalDeviceType::CPU => "CPU",
+                _ => "other",
+            },
+            driver: format!(
+                "{} {}",
+                text(driver.driver_name_as_c_str()),
+                text(driver.driver_info_as_c_str())
+            )
+            .trim()
+            .to_string(),
+            api_version: format!(
+                "{}.{}.{}",
+                vk::api_version_major(v),
+                vk::api_version_minor(v),
+                vk::api_version_patch(v)
+            ),
+            timestamp_period_ns: props.limits.timestamp_period,
+            timestamp_valid_bits: families
+                .iter()
+                .find(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS))
+                .map_or(0, |f| f.timestamp_valid_bits),
+            subgroup_size: subgroup.subgroup_size,
+            in_use,
         }
     }
 }

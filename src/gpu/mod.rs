@@ -14,6 +14,7 @@ pub mod compute;
 pub mod context;
 mod debug;
 mod descriptors;
+pub mod frame_timing;
 pub mod image;
 pub mod layout;
 pub mod normal_bake;
@@ -29,7 +30,7 @@ pub mod visibility_sim;
 
 pub use buffer::Buffer;
 pub use compute::{ComputePipeline, ComputePipelineDesc};
-pub use context::{Context, ContextDesc, MessageCounts};
+pub use context::{Context, ContextDesc, DeviceSummary, MessageCounts};
 pub use descriptors::Resource;
 pub use image::{Image, ImageDesc, Sampler, SamplerKind};
 pub use pass::{MeshBuffers, MeshPipeline, MeshPipelineDesc, VertexLayout};

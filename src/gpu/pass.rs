@@ -2,11 +2,12 @@
 //! [`RenderTarget`], one descriptor set (set 0) with the technique's resources, and the
 //! timed frame loop.
 //!
-//! Timing (DESIGN §4, `shvis bench`): one command buffer is recorded once; per frame it
+//! Timing (DESIGN §4, `shvis bench`): one command buffer is recorded per run; per query it
 //! resets a 2-query pool, writes a TOP_OF_PIPE timestamp, runs the render pass (clear of
-//! colour and depth, one indexed draw of the whole mesh), writes a BOTTOM_OF_PIPE
-//! timestamp. Each submission is waited for, so frames never overlap. `warmup` frames are
-//! run and discarded before `frames` timed ones; ticks become ms with `timestampPeriod`.
+//! colour and depth, one indexed draw of the whole mesh) once or, for frames shorter than
+//! half a millisecond, several times (`frame_timing`), writes a BOTTOM_OF_PIPE timestamp.
+//! Each submission is waited for, so queries never overlap. `warmup` frames are run before
+//! the timed ones; ticks become ms with `timestampPeriod`.
 
 use std::sync::Arc;
 
@@ -14,7 +15,7 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use super::descriptors::{DescriptorSet, Resource};
-use super::{Buffer, Context, GpuError, RenderTarget};
+use super::{Buffer, Context, GpuError, RenderTarget, frame_timing};
 
 /// Vertex buffer layout: stride and (location, format, offset) per attribute.
 #[derive(Clone, Debug)]
@@ -289,13 +290,15 @@ impl MeshPipeline {
     }
 
     /// Runs `warmup` untimed and `frames` timed frames; returns the timed frames' GPU
-    /// times in ms (empty when the queue has no timestamps). See the module doc.
+    /// times in ms (empty when the queue has no timestamps). Frames shorter than
+    /// `min_span_ms` are timed several to a query (`frame_timing`). See the module doc.
     pub fn render_frames(
         &self,
         target: &RenderTarget,
         mesh: &MeshBuffers,
         warmup: u32,
         frames: u32,
+        min_span_ms: f64,
     ) -> Result<Vec<f64>, GpuError> {
         let ctx = &self.ctx;
         let device = ctx.device();
@@ -321,30 +324,77 @@ impl MeshPipeline {
                 return Err(e);
             }
         };
-        let result = self.record_and_run(target, mesh, cmd, pool, warmup, frames);
+        let result = self.time_queries(target, mesh, cmd, pool, (warmup, frames), min_span_ms);
         ctx.free_command_buffer(cmd);
         // SAFETY: every submission was waited for.
         unsafe { device.destroy_query_pool(pool, None) };
         result
     }
 
-    fn record_and_run(
+    /// The frames of [`Self::render_frames`] on `cmd` and `pool`: `warmup` frames one per
+    /// query, then — where the last of them was shorter than half a millisecond — queries of
+    /// several frames until the clocks settle, then `frames` timed queries (module doc).
+    fn time_queries(
         &self,
         target: &RenderTarget,
         mesh: &MeshBuffers,
         cmd: vk::CommandBuffer,
         pool: vk::QueryPool,
-        warmup: u32,
-        frames: u32,
+        (warmup, frames): (u32, u32),
+        min_span_ms: f64,
     ) -> Result<Vec<f64>, GpuError> {
+        let timed = pool != vk::QueryPool::null();
+        self.record(target, mesh, cmd, pool, 1)?;
+        let warm = self.run_queries(cmd, pool, warmup)?;
+        let ns_per_tick = f64::from(self.ctx.limits().timestamp_period);
+        let draws = match warm.last() {
+            Some(&ms) if timed => frame_timing::draws_per_query(ms, ns_per_tick, min_span_ms),
+            _ => 1,
+        };
+        if draws == 1 {
+            let ms = self.run_queries(cmd, pool, frames.max(1))?;
+            return Ok(if timed { ms } else { Vec::new() });
+        }
+        // SAFETY: every submission of `cmd` was waited for; it is re-recorded from the start.
+        unsafe {
+            self.ctx
+                .device()
+                .reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())
+        }
+        .map_err(|e| GpuError::vulkan("vkResetCommandBuffer", &self.name, e))?;
+        self.record(target, mesh, cmd, pool, draws)?;
+        let mut settling = Vec::new();
+        while settling.len() < frame_timing::MAX_SETTLE_QUERIES && !frame_timing::settled(&settling)
+        {
+            settling.extend(self.run_queries(cmd, pool, 1)?);
+        }
+        log::debug!(
+            "{}: {draws} frames a query, clocks settled after {} queries",
+            self.name,
+            settling.len()
+        );
+        let ms = self.run_queries(cmd, pool, frames.max(1))?;
+        Ok(ms.into_iter().map(|q| q / f64::from(draws)).collect())
+    }
+
+    /// Records into `cmd`: the pool's reset and a timestamp (when there is a pool), `draws`
+    /// render passes of the mesh, a timestamp.
+    fn record(
+        &self,
+        target: &RenderTarget,
+        mesh: &MeshBuffers,
+        cmd: vk::CommandBuffer,
+        pool: vk::QueryPool,
+        draws: u32,
+    ) -> Result<(), GpuError> {
         let ctx = &self.ctx;
         let device = ctx.device();
         let name = self.name.as_str();
         let timed = pool != vk::QueryPool::null();
         let clears = RenderTarget::clears([0.0; 4]);
         let begin_pass = target.begin_info(&clears);
-        // SAFETY: `cmd` is freshly allocated; every object recorded is owned by `self`,
-        // `target` or `mesh`, all alive until the waited submissions below complete.
+        // SAFETY: `cmd` is freshly allocated or reset; every object recorded is owned by
+        // `self`, `target` or `mesh`, all alive until the waited submissions complete.
         unsafe {
             device
                 .begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())
@@ -354,20 +404,22 @@ impl MeshPipeline {
                 device.cmd_reset_query_pool(cmd, pool, 0, 2);
                 device.cmd_write_timestamp(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, pool, 0);
             }
-            device.cmd_begin_render_pass(cmd, &begin_pass, vk::SubpassContents::INLINE);
-            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
-            device.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::GRAPHICS,
-                self.pipeline_layout,
-                0,
-                &[self.descriptors.set],
-                &[],
-            );
-            device.cmd_bind_vertex_buffers(cmd, 0, &[mesh.vertex.raw()], &[0]);
-            device.cmd_bind_index_buffer(cmd, mesh.index.raw(), 0, vk::IndexType::UINT32);
-            device.cmd_draw_indexed(cmd, mesh.index_count, 1, 0, 0, 0);
-            device.cmd_end_render_pass(cmd);
+            for _ in 0..draws {
+                device.cmd_begin_render_pass(cmd, &begin_pass, vk::SubpassContents::INLINE);
+                device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
+                device.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::GRAPHICS,
+                    self.pipeline_layout,
+                    0,
+                    &[self.descriptors.set],
+                    &[],
+                );
+                device.cmd_bind_vertex_buffers(cmd, 0, &[mesh.vertex.raw()], &[0]);
+                device.cmd_bind_index_buffer(cmd, mesh.index.raw(), 0, vk::IndexType::UINT32);
+                device.cmd_draw_indexed(cmd, mesh.index_count, 1, 0, 0, 0);
+                device.cmd_end_render_pass(cmd);
+            }
             if timed {
                 device.cmd_write_timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, pool, 1);
             }
@@ -376,19 +428,29 @@ impl MeshPipeline {
                 .end_command_buffer(cmd)
                 .map_err(|e| GpuError::vulkan("vkEndCommandBuffer", name, e))?;
         }
-        let mask = match ctx.timestamp_valid_bits() {
-            64.. => u64::MAX,
-            bits => (1u64 << bits) - 1,
-        };
-        let ns_per_tick = ctx.limits().timestamp_period as f64;
-        let mut ms = Vec::with_capacity(frames as usize);
-        for frame in 0..warmup + frames.max(1) {
+        Ok(())
+    }
+
+    /// Submits `cmd` `queries` times, each waited for; returns each query's span in ms
+    /// (nothing without a pool).
+    fn run_queries(
+        &self,
+        cmd: vk::CommandBuffer,
+        pool: vk::QueryPool,
+        queries: u32,
+    ) -> Result<Vec<f64>, GpuError> {
+        let ctx = &self.ctx;
+        let name = self.name.as_str();
+        let mask = frame_timing::tick_mask(ctx.timestamp_valid_bits());
+        let ns_per_tick = f64::from(ctx.limits().timestamp_period);
+        let mut ms = Vec::with_capacity(queries as usize);
+        for _ in 0..queries {
             ctx.submit_and_wait(cmd, name)?;
-            if timed && frame >= warmup {
+            if pool != vk::QueryPool::null() {
                 let mut ticks = [0u64; 2];
                 // SAFETY: both queries were written by the completed submission.
                 unsafe {
-                    device.get_query_pool_results(
+                    ctx.device().get_query_pool_results(
                         pool,
                         0,
                         &mut ticks,
@@ -396,16 +458,16 @@ impl MeshPipeline {
                     )
                 }
                 .map_err(|e| GpuError::vulkan("vkGetQueryPoolResults", name, e))?;
-                ms.push(ticks_to_ms(ticks[0], ticks[1], mask, ns_per_tick));
+                ms.push(frame_timing::ticks_to_ms(
+                    ticks[0],
+                    ticks[1],
+                    mask,
+                    ns_per_tick,
+                ));
             }
         }
         Ok(ms)
     }
-}
-
-/// Elapsed ms between two timestamps, tolerating one wrap of a `mask`-bit counter.
-pub fn ticks_to_ms(start: u64, end: u64, mask: u64, ns_per_tick: f64) -> f64 {
-    ((end & mask).wrapping_sub(start & mask) & mask) as f64 * ns_per_tick * 1e-6
 }
 
 impl Drop for MeshPipeline {
@@ -420,18 +482,5 @@ impl Drop for MeshPipeline {
             }
             device.destroy_pipeline_layout(self.pipeline_layout, None);
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::ticks_to_ms;
-
-    #[test]
-    fn ticks_wrap_once_within_valid_bits() {
-        let mask = (1u64 << 36) - 1;
-        // 100 ticks across the wrap of a 36-bit counter, 1 ns each.
-        let ms = ticks_to_ms(mask - 49, 50, mask, 1.0);
-        assert!((ms - 100e-6).abs() < 1e-12, "{ms}");
     }
 }

@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use ash::vk;
 
-use super::pass::ticks_to_ms;
+use super::frame_timing::{tick_mask, ticks_to_ms};
 use super::shader::{ShaderStage, compile_glsl};
 use super::{Context, GpuError, RenderTarget};
 
@@ -57,10 +57,7 @@ impl PassObjects {
             )
         }
         .map_err(|e| GpuError::vulkan("vkGetQueryPoolResults", what, e))?;
-        let mask = match self.ctx.timestamp_valid_bits() {
-            64.. => u64::MAX,
-            bits => (1u64 << bits) - 1,
-        };
+        let mask = tick_mask(self.ctx.timestamp_valid_bits());
         let period = f64::from(self.ctx.limits().timestamp_period);
         Ok(Some(
             ticks

@@ -59,6 +59,8 @@ pub struct SceneGpu {
     vertex_layout: VertexLayout,
     material_level0: bool,
     specular: Option<crate::render::specular::SceneSpecular>,
+    /// Frames shorter than this are timed several to a query (`gpu::frame_timing`).
+    min_query_span_ms: f64,
 }
 
 impl SceneGpu {
@@ -173,6 +175,7 @@ impl SceneGpu {
             vertex_layout,
             material_level0: settings.material_level0,
             specular: None,
+            min_query_span_ms: crate::gpu::frame_timing::MIN_QUERY_SPAN_MS,
         })
     }
 
@@ -198,6 +201,12 @@ impl SceneGpu {
     /// The specular material term techniques add, if any ([`Self::add_specular`]).
     pub fn specular(&self) -> Option<&crate::render::specular::SceneSpecular> {
         self.specular.as_ref()
+    }
+
+    /// Times frames shorter than `ms` several to a query (`gpu::frame_timing`; default
+    /// `MIN_QUERY_SPAN_MS`): a test forces several draws per query on a slow device.
+    pub fn set_min_query_span(&mut self, ms: f64) {
+        self.min_query_span_ms = ms;
     }
 
     /// The bindings every technique shares: frame block, albedo, normal map.
@@ -379,7 +388,8 @@ impl SceneGpu {
         warmup: u32,
         frames: u32,
     ) -> Result<Frame, GpuError> {
-        let ms = pipeline.render_frames(&self.target, mesh, warmup, frames)?;
+        let ms =
+            pipeline.render_frames(&self.target, mesh, warmup, frames, self.min_query_span_ms)?;
         Ok(Frame {
             width: self.target.width(),
             height: self.target.height(),
@@ -397,7 +407,7 @@ impl SceneGpu {
         warmup: u32,
         frames: u32,
     ) -> Result<Vec<f64>, GpuError> {
-        pipeline.render_frames(&self.target, mesh, warmup, frames)
+        pipeline.render_frames(&self.target, mesh, warmup, frames, self.min_query_span_ms)
     }
 
     /// Times `pipeline` over the scene's mesh, as [`Self::render_pipeline`] without reading
@@ -408,7 +418,13 @@ impl SceneGpu {
         warmup: u32,
         frames: u32,
     ) -> Result<Vec<f64>, GpuError> {
-        pipeline.render_frames(&self.target, &self.mesh, warmup, frames)
+        pipeline.render_frames(
+            &self.target,
+            &self.mesh,
+            warmup,
+            frames,
+            self.min_query_span_ms,
+        )
     }
 
     /// Renders with any mesh pipeline built for this scene's target (e.g. G-buffer passes).
@@ -418,7 +434,13 @@ impl SceneGpu {
         warmup: u32,
         frames: u32,
     ) -> Result<Frame, GpuError> {
-        let ms = pipeline.render_frames(&self.target, &self.mesh, warmup, frames)?;
+        let ms = pipeline.render_frames(
+            &self.target,
+            &self.mesh,
+            warmup,
+            frames,
+            self.min_query_span_ms,
+        )?;
         Ok(Frame {
             width: self.target.width(),
             height: self.target.height(),
