@@ -1,5 +1,5 @@
 # The two commands of the README. Each installs what is missing first (scripts/install-deps.sh).
-.PHONY: deps test bench build clean
+.PHONY: deps test bench build clean device-kit
 
 # Tests run on lavapipe with the validation layer; keep tests single-binary-parallel
 # but not one Vulkan instance per core more than the machine has.
@@ -36,3 +36,8 @@ bench: build
 
 clean:
 	cargo clean
+
+# device-kit/: the release binary, the Vulkan loader's package and run.sh, for a bare
+# machine with a Vulkan GPU (device-kit/run.sh OUT; docs/device-kit.md).
+device-kit: deps
+	scripts/device-kit/build.sh

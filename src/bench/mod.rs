@@ -308,6 +308,7 @@ fn assemble_table(
         reference_bounces: bounced.map_or(0, |b| b.bounces),
         reference_bounced_rel_noise: bounced.map(|b| b.rel_noise),
         device: ctx.device_name().to_string(),
+        driver: ctx.device_summary().driver,
         width: settings.width,
         height: settings.height,
         vis_res: prepared.visibility.res,

@@ -80,6 +80,9 @@ enum Command {
     /// List the Vulkan devices: name, kind, driver, Vulkan version, timer, subgroup size;
     /// `*` marks the one shvis picks (the first discrete GPU, or `--device`'s).
     Devices(tools::DevicesArgs),
+    /// A results page: bench tables (`table.json`) side by side per technique and path,
+    /// ms and ×preconv beside the paper's GTX 295 column, as markdown (docs/results/).
+    Report(tools::ReportArgs),
 }
 
 /// Parses the arguments and runs the command.
@@ -97,6 +100,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Ssbump(a) => tools::run_ssbump(a).context("ssbump"),
         Command::Normalmap(a) => tools::run_normalmap(a).context("normalmap"),
         Command::Devices(a) => tools::run_devices(a).context("devices"),
+        Command::Report(a) => tools::run_report(a).context("report"),
     }
 }
 

@@ -3,16 +3,52 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{Result, bail};
+use anyhow::{Context as _, Result, bail};
 use clap::{Args, Subcommand};
 
 use shvis::normalmap::DrawMode;
 use shvis::normalmap::cpu::RayDirection;
 use shvis::normalmap::job::{self, Bakers, LowMesh, NormalMapJob};
+use shvis::report::results::{self, ResultTable};
 use shvis::tools::ssbump::{self, SsbumpJob};
 
 use super::args::{GpuArgs, finite_f32, finite_f64};
 use super::{say, with_gpu};
+
+#[derive(Args, Debug)]
+pub(super) struct ReportArgs {
+    /// Bench tables (`table.json`) to set side by side, in column order.
+    #[arg(required = true)]
+    pub(super) tables: Vec<PathBuf>,
+    /// A label per table, comma-separated (default: "device W×H").
+    #[arg(long, value_delimiter = ',')]
+    pub(super) labels: Vec<String>,
+    /// The page to write (markdown), e.g. docs/results/<device>.md.
+    #[arg(long)]
+    pub(super) out: PathBuf,
+}
+
+/// Writes the comparison page of the tables.
+pub(super) fn run_report(a: ReportArgs) -> Result<()> {
+    if !a.labels.is_empty() && a.labels.len() != a.tables.len() {
+        bail!(
+            "--labels names {} tables, {} are given",
+            a.labels.len(),
+            a.tables.len()
+        );
+    }
+    let tables = a
+        .tables
+        .iter()
+        .enumerate()
+        .map(|(i, path)| ResultTable::read(path, a.labels.get(i).map(String::as_str)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let page = results::comparison_page(&tables, &results::utc_date_today());
+    shvis::files::write(&a.out, page)
+        .with_context(|| format!("{}: cannot write", a.out.display()))?;
+    println!("wrote {}", a.out.display());
+    Ok(())
+}
 
 #[derive(Args, Debug)]
 pub(super) struct DevicesArgs {

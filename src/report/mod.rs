@@ -7,6 +7,7 @@ pub mod html;
 pub mod image;
 pub mod metrics;
 pub mod plot;
+pub mod results;
 pub mod table;
 
 use std::path::{Path, PathBuf};

@@ -206,6 +206,8 @@ impl BenchRow {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct BenchTable {
     pub device: String,
+    /// The device's driver, name and version (`gpu::DeviceSummary::driver`).
+    pub driver: String,
     pub width: u32,
     pub height: u32,
     pub vis_res: u32,
@@ -515,6 +517,7 @@ mod tests {
             },
         ];
         let table = BenchTable {
+            driver: String::new(),
             device: "test".into(),
             width: 4,
             height: 4,
