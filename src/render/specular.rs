@@ -201,13 +201,10 @@ impl SceneSpecular {
     }
 }
 
-/// The NDF images for `path`: three 2D textures (dx9) or one 3-layer array (dx10), each
-/// with the full MIP chain.
-pub fn upload_maps(
-    ctx: &Arc<Context>,
-    maps: &NdfMaps,
-    path: HwPath,
-) -> Result<Vec<Image>, GpuError> {
+/// The NDF moment maps' format ([`crate::ndf::MOMENT_FORMAT`]), or an error where the
+/// device cannot filter it linearly (optional for RGBA32F in Vulkan): the maps are read
+/// trilinearly, so no fallback would be the same filter.
+pub fn check_moment_filtering(ctx: &Context) -> Result<ash::vk::Format, GpuError> {
     let format = crate::ndf::MOMENT_FORMAT;
     if !ctx.supports_linear_filter(format) {
         return Err(GpuError::Invalid {
@@ -218,6 +215,17 @@ pub fn upload_maps(
             ),
         });
     }
+    Ok(format)
+}
+
+/// The NDF images for `path`: three 2D textures (dx9) or one 3-layer array (dx10), each
+/// with the full MIP chain.
+pub fn upload_maps(
+    ctx: &Arc<Context>,
+    maps: &NdfMaps,
+    path: HwPath,
+) -> Result<Vec<Image>, GpuError> {
+    let format = check_moment_filtering(ctx)?;
     let (w, h) = (maps.levels[0].width, maps.levels[0].height);
     let levels = maps.levels.len() as u32;
     let bytes = |k: usize, l: usize| -> &[u8] { bytemuck::cast_slice(&maps.levels[l].textures[k]) };

@@ -129,7 +129,7 @@ pub fn upload(
     match base {
         NdfBase::Preconv => crate::render::specular::upload_maps(ctx, maps, path),
         NdfBase::Unc { .. } => {
-            let format = crate::ndf::MOMENT_FORMAT;
+            let format = crate::render::specular::check_moment_filtering(ctx)?;
             let (w, h) = (maps.levels[0].width, maps.levels[0].height);
             let data: Vec<Vec<&[u8]>> = maps
                 .levels
