@@ -15,7 +15,7 @@ use crate::render::specular::NormalFilter;
 use crate::render::{Frame, SceneGpu};
 use crate::report::bench_output::BenchOutput;
 use crate::report::figures::FIGURES;
-use crate::report::metrics::image_error;
+use crate::report::metrics::{image_error, suspect_reason};
 use crate::report::table::{BenchRow, RowReference};
 use crate::technique::{self, HwPath, Technique, TechniqueError};
 
@@ -251,7 +251,11 @@ fn measure_row(
         reference: reference_kind,
         attribution,
         clipped_pixels: frame.clipped_pixels(),
+        suspect: suspect_reason(&frame, reference_frame, error.map(|e| e.rel_rmse)),
     };
+    if let Some(why) = &row.suspect {
+        log::warn!("{label}: suspect row: {why}");
+    }
     if row.clipped_pixels > 0 {
         log::warn!(
             "{label}: {} pixels clipped at the f16 target's 65504 (or not finite); the row is marked",

@@ -94,6 +94,10 @@ pub(super) struct BenchArgs {
     /// Leave out the device probe and the rows' model columns.
     #[arg(long)]
     no_probe: bool,
+    /// Exit non-zero when a row is suspect (non-finite pixels, an error above 1, or a mean
+    /// 25 % off its reference's); the table and images are written first either way.
+    #[arg(long)]
+    strict: bool,
     /// Measure under the environment turned DEG degrees about +Y after the bake:
     /// references under the turned map, techniques with dynamic lighting relit to it
     /// through their lighting update, baked ones (shlmap, rnm*) as baked. No error ladder.
@@ -186,6 +190,18 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
             "table.md, table.json",
             started,
         );
+        let suspect: Vec<String> = table
+            .results
+            .iter()
+            .filter_map(|r| Some(format!("{}.{} ({})", r.name(), r.path, r.suspect.as_ref()?)))
+            .collect();
+        if a.strict && !suspect.is_empty() {
+            bail!(
+                "--strict: {} suspect row(s): {}",
+                suspect.len(),
+                suspect.join(", ")
+            );
+        }
         Ok(())
     })
 }

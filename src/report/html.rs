@@ -48,7 +48,8 @@ table.cost { border-collapse: collapse; font-variant-numeric: tabular-nums; }
 table.cost th, table.cost td { border: 1px solid #ccc; padding: .2em .5em; text-align: right; }
 table.cost th { background: #eee; cursor: pointer; position: sticky; top: 0; }
 table.cost td:first-child, table.cost td:nth-child(2) { text-align: left; }
-tr.clipped td:first-child::after { content: ' ⚠'; color: #b00; }
+tr.clipped td:first-child::after, tr.suspect td:first-child::after { content: ' ⚠'; color: #b00; }
+tr.suspect td { background: #fee; }
 .scroll { overflow-x: auto; }
 .plots { display: grid; grid-template-columns: repeat(auto-fill, minmax(480px, 1fr)); gap: 1em; }
 .plots figure, .figures figure { margin: 0; }
@@ -233,18 +234,21 @@ fn cost_table(t: &BenchTable) -> String {
     }
     s += "</tr></thead>\n<tbody>\n";
     for r in &t.results {
-        let class = if r.clipped_pixels > 0 {
-            "row clipped"
-        } else {
-            "row"
+        let class = match (r.suspect.is_some(), r.clipped_pixels > 0) {
+            (true, _) => "row suspect",
+            (false, true) => "row clipped",
+            (false, false) => "row",
         };
+        let title = r.suspect.as_ref().map_or(String::new(), |why| {
+            format!(" title=\"suspect: {}\"", esc(why))
+        });
         let against = match r.reference {
             RowReference::None => "—".to_string(),
             other => other.to_string(),
         };
         let _ = writeln!(
             s,
-            "<tr class=\"{class}\" id=\"row-{}\"><td><a href=\"#img-{}\">{}</a></td><td>{}</td>{}{}{}{}{}{}{}{}{}<td>{}</td>{}{}{}{}{}{}</tr>",
+            "<tr class=\"{class}\" id=\"row-{}\"{title}><td><a href=\"#img-{}\">{}</a></td><td>{}</td>{}{}{}{}{}{}{}{}{}<td>{}</td>{}{}{}{}{}{}</tr>",
             esc(&stem(r)),
             esc(&stem(r)),
             esc(&r.name()),

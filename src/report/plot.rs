@@ -312,11 +312,16 @@ pub fn write_error_plot(
         .filter_map(|r| {
             let starred = r.reference != RowReference::Direct;
             Some(SpeedErrorPoint {
-                label: if starred {
-                    format!("{}*", r.name())
-                } else {
-                    r.name()
-                },
+                label: format!(
+                    "{}{}{}",
+                    r.name(),
+                    if starred { "*" } else { "" },
+                    if r.suspect.is_some() {
+                        " (suspect)"
+                    } else {
+                        ""
+                    }
+                ),
                 path: r.path.to_string(),
                 ms: axis.of(r)?,
                 error: r.rel_rmse?,

@@ -173,6 +173,10 @@ pub struct BenchRow {
     /// Covered pixels whose value the f16 target could not hold (`Frame::clipped_pixels`);
     /// a row with any is marked in `table.md`.
     pub clipped_pixels: u64,
+    /// Why the row's image cannot be right, if it cannot (`metrics::suspect_reason`):
+    /// marked in every output, and `bench --strict` fails on it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub suspect: Option<String>,
 }
 
 /// Fills `ratio_to_preconv` of every row from the `preconv` row of its path.
@@ -343,10 +347,13 @@ impl BenchTable {
                     opt(e, 4)
                 }
             };
-            let name = match r.clipped_pixels {
+            let mut name = match r.clipped_pixels {
                 0 => r.name(),
                 n => format!("{} (⚠ {n} px clipped)", r.name()),
             };
+            if let Some(why) = &r.suspect {
+                name += &format!(" (⚠ suspect: {why})");
+            }
             s += &format!(
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
                 name,
@@ -486,6 +493,7 @@ mod tests {
             reference: RowReference::Direct,
             attribution,
             clipped_pixels: 0,
+            suspect: None,
         }
     }
 
