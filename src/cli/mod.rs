@@ -228,3 +228,126 @@ fn prepare_for(
     prepared.prepare_techniques(techniques)?;
     Ok(prepared)
 }
+
+#[cfg(test)]
+mod tests {
+    use std::collections::{BTreeMap, BTreeSet};
+
+    use clap::CommandFactory;
+
+    use super::Cli;
+
+    /// Every leaf command ("bench", "study rnm") and its long options, from clap's tree.
+    fn commands() -> BTreeMap<String, BTreeSet<String>> {
+        fn walk(cmd: &clap::Command, prefix: &str, out: &mut BTreeMap<String, BTreeSet<String>>) {
+            for sub in cmd.get_subcommands().filter(|s| s.get_name() != "help") {
+                let name = format!("{prefix}{}", sub.get_name());
+                if sub.has_subcommands() {
+                    walk(sub, &format!("{name} "), out);
+                } else {
+                    let options = sub
+                        .get_arguments()
+                        .filter_map(|a| a.get_long())
+                        .filter(|l| !matches!(*l, "help" | "version"))
+                        .map(|l| format!("--{l}"))
+                        .collect();
+                    out.insert(name, options);
+                }
+            }
+        }
+        let mut out = BTreeMap::new();
+        walk(&Cli::command(), "", &mut out);
+        out
+    }
+
+    /// The `--options` of the table rows in `text` ("| `--name …` | …").
+    fn table_options(text: &str) -> BTreeSet<String> {
+        text.lines()
+            .filter_map(|l| l.strip_prefix("| `--"))
+            .map(|rest| {
+                let name: String = rest
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '-')
+                    .collect();
+                format!("--{name}")
+            })
+            .collect()
+    }
+
+    /// docs/guide.md's sections: heading → text, for "shvis …" headings and the shared
+    /// option groups (by their anchors).
+    fn guide_sections(guide: &str) -> BTreeMap<String, String> {
+        let mut sections = BTreeMap::new();
+        let mut current: Option<String> = None;
+        for line in guide.lines() {
+            if let Some(heading) = line
+                .strip_prefix("## ")
+                .or_else(|| line.strip_prefix("### "))
+            {
+                let key = match heading.strip_prefix("shvis ") {
+                    Some(command) => command.trim().to_string(),
+                    None => format!("#{}", heading.trim().to_lowercase().replace(' ', "-")),
+                };
+                current = Some(key.clone());
+                sections.insert(key, String::new());
+            } else if let Some(key) = &current {
+                let text = sections.get_mut(key).expect("inserted with the heading");
+                text.push_str(line);
+                text.push('\n');
+            }
+        }
+        sections
+    }
+
+    /// Each command's section in docs/guide.md names exactly its options: its own table's,
+    /// plus the shared groups it links (`(#device-options)`, …).
+    fn guide_mismatches(guide: &str) -> Vec<String> {
+        let sections = guide_sections(guide);
+        let mut problems = Vec::new();
+        for (command, options) in commands() {
+            let Some(text) = sections.get(&command) else {
+                problems.push(format!("`shvis {command}` has no section in docs/guide.md"));
+                continue;
+            };
+            let own = table_options(text);
+            let mut documented = own.clone();
+            for (anchor, shared) in sections.iter().filter(|(k, _)| k.starts_with('#')) {
+                if text.contains(&format!("({anchor})")) {
+                    documented.extend(table_options(shared));
+                }
+            }
+            for missing in options.difference(&documented) {
+                problems.push(format!(
+                    "`shvis {command} {missing}` is not in docs/guide.md"
+                ));
+            }
+            for stray in own.difference(&options) {
+                problems.push(format!(
+                    "docs/guide.md names `shvis {command} {stray}`, which does not exist"
+                ));
+            }
+        }
+        problems
+    }
+
+    #[test]
+    fn the_guide_names_every_option_and_no_other() {
+        let guide = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/guide.md"))
+            .expect("docs/guide.md");
+        let problems = guide_mismatches(&guide);
+        assert!(problems.is_empty(), "\n{}", problems.join("\n"));
+        // The check itself: a removed option and an invented one are both found.
+        let removed = guide.replace("| `--strict` |", "| strict |");
+        assert!(
+            guide_mismatches(&removed)
+                .iter()
+                .any(|p| p.contains("shvis bench --strict` is not in"))
+        );
+        let invented = guide.replace("| `--strict` |", "| `--strictest` |");
+        assert!(
+            guide_mismatches(&invented)
+                .iter()
+                .any(|p| p.contains("`shvis bench --strictest`, which does not exist"))
+        );
+    }
+}
