@@ -1,5 +1,5 @@
-//! Two jobs: the link fix for Debian's shaderc (see README "Set-up"), and the registry of
-//! embedded GLSL sources (`embed_glsl_sources`).
+//! Three jobs: the link fix for Debian's shaderc (see README "Set-up"), the registry of
+//! embedded GLSL sources (`embed_glsl_sources`), and the commit `shvis --version` names.
 //!
 //! Debian's `libshaderc.so` is under-linked and its `libshaderc_combined.a` does not contain
 //! glslang or SPIRV-Tools, so shaderc-sys (feature `prefer-static-linking`, with
@@ -9,6 +9,28 @@
 fn main() {
     link_shaderc();
     embed_glsl_sources();
+    embed_git_commit();
+}
+
+/// Sets `SHVIS_GIT_COMMIT` (the checkout's commit; "unknown" outside git) for
+/// `shvis --version`.
+fn embed_git_commit() {
+    let git = |args: &[&str]| {
+        std::process::Command::new("git")
+            .args(args)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    let commit = git(&["rev-parse", "--short=12", "HEAD"]).unwrap_or_else(|| "unknown".into());
+    println!("cargo:rustc-env=SHVIS_GIT_COMMIT={commit}");
+    if let Some(dir) = git(&["rev-parse", "--git-dir"]) {
+        println!("cargo:rerun-if-changed={dir}/HEAD");
+        if let Some(head) = git(&["symbolic-ref", "-q", "HEAD"]) {
+            println!("cargo:rerun-if-changed={dir}/{head}");
+        }
+    }
 }
 
 /// Writes `$OUT_DIR/glsl_sources.rs`: every file under `glsl/` as `(path under glsl/,

@@ -32,7 +32,7 @@ pub(super) struct BakeArgs {
     #[command(flatten)]
     gpu: GpuArgs,
     /// Output directory (ao.exr).
-    #[arg(long)]
+    #[arg(short, long)]
     out: PathBuf,
 }
 

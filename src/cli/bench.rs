@@ -38,7 +38,7 @@ pub(super) struct ProbeArgs {
     #[arg(long, value_parser = at_least_one_f64)]
     triangle_pixels: Option<f64>,
     /// Output directory (probe.md, probe.json).
-    #[arg(long, default_value = "probe-out")]
+    #[arg(short, long, default_value = "probe-out")]
     out: PathBuf,
 }
 
@@ -104,7 +104,7 @@ pub(super) struct BenchArgs {
     #[arg(long, value_name = "DEG", value_parser = finite_degrees)]
     relight_rotate: Option<f64>,
     /// Output directory.
-    #[arg(long, default_value = "bench-out")]
+    #[arg(short, long, default_value = "bench-out")]
     out: PathBuf,
 }
 

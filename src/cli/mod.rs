@@ -34,7 +34,7 @@ const MAX_BOUNCES: u32 = 16;
 #[derive(Parser, Debug)]
 #[command(
     name = "shvis",
-    version,
+    version = concat!(env!("CARGO_PKG_VERSION"), " (", env!("SHVIS_GIT_COMMIT"), ")"),
     about = "Normal mapping with low-frequency precomputed visibility (Iwanicki & Sloan): bake, render, measure"
 )]
 pub struct Cli {
@@ -80,6 +80,8 @@ enum Command {
     /// List the Vulkan devices: name, kind, driver, Vulkan version, timer, subgroup size;
     /// `*` marks the one shvis picks (the first discrete GPU, or `--device`'s).
     Devices(tools::DevicesArgs),
+    /// Every technique family: its names, what it is, its paper, its paths, what it bakes.
+    Techniques(tools::TechniquesArgs),
     /// A results page: bench tables (`table.json`) side by side per technique and path,
     /// ms and ×preconv beside the paper's GTX 295 column, as markdown (docs/results/).
     Report(tools::ReportArgs),
@@ -101,6 +103,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Normalmap(a) => tools::run_normalmap(a).context("normalmap"),
         Command::Devices(a) => tools::run_devices(a).context("devices"),
         Command::Report(a) => tools::run_report(a).context("report"),
+        Command::Techniques(a) => tools::run_techniques(a).context("techniques"),
     }
 }
 

@@ -62,7 +62,7 @@ pub(super) struct RenderArgs {
     #[arg(long)]
     flat_normals: bool,
     /// Output image: .png (sRGB) or .exr (linear).
-    #[arg(long)]
+    #[arg(short, long)]
     out: PathBuf,
 }
 
@@ -103,7 +103,7 @@ pub(super) struct ReferenceArgs {
     #[command(flatten)]
     gpu: GpuArgs,
     /// Output image: .exr (linear) or .png (sRGB).
-    #[arg(long)]
+    #[arg(short, long)]
     out: PathBuf,
 }
 

@@ -51,7 +51,7 @@ pub(super) struct StudyNmprtSvdArgs {
     #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(4..=4096))]
     quadrature: u32,
     /// Output directory (nmprt_svd.md).
-    #[arg(long, default_value = "study-out")]
+    #[arg(short, long, default_value = "study-out")]
     out: PathBuf,
 }
 
@@ -100,7 +100,7 @@ pub(super) struct StudyNdfArgs {
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=4096))]
     vis_res: u32,
     /// Output directory: ndf.md, ndf.json, fig1_ndf_{scene}.png.
-    #[arg(long, default_value = "study-out/ndf")]
+    #[arg(short, long, default_value = "study-out/ndf")]
     out: PathBuf,
     #[command(flatten)]
     gpu: GpuArgs,
@@ -142,7 +142,7 @@ pub(super) struct StudyNormalmapArgs {
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     spp: u32,
     /// Output directory: normalmap.md, normalmap.json, the model's maps, glTFs and renders.
-    #[arg(long, default_value = "study-out/normalmap")]
+    #[arg(short, long, default_value = "study-out/normalmap")]
     out: PathBuf,
     #[command(flatten)]
     gpu: GpuArgs,
@@ -181,7 +181,7 @@ pub(super) struct StudyRnmArgs {
     #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
     exposure: f32,
     /// Output directory: rnm.md, rnm.json, fig1_<env>.png.
-    #[arg(long, default_value = "study-out")]
+    #[arg(short, long, default_value = "study-out")]
     out: PathBuf,
     #[command(flatten)]
     gpu: GpuArgs,
@@ -205,7 +205,7 @@ pub(super) struct StudySeamsArgs {
     #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
     height: u32,
     /// Output directory: seams.md, seams.json.
-    #[arg(long, default_value = "study-out")]
+    #[arg(short, long, default_value = "study-out")]
     out: PathBuf,
     #[command(flatten)]
     gpu: GpuArgs,
@@ -232,7 +232,7 @@ pub(super) struct StudyCompressionArgs {
     #[arg(long)]
     no_gpu: bool,
     /// Output directory: compression.md, compression.json, screen.md, screen.json.
-    #[arg(long, default_value = "study-out")]
+    #[arg(short, long, default_value = "study-out")]
     out: PathBuf,
     #[command(flatten)]
     gpu: GpuArgs,
@@ -241,7 +241,7 @@ pub(super) struct StudyCompressionArgs {
 #[derive(Args, Debug)]
 pub(super) struct StudyParamsArgs {
     /// Output directory: params.csv, params.json, params.md, params_mse.svg/png, gpu.csv.
-    #[arg(long, default_value = "study-out")]
+    #[arg(short, long, default_value = "study-out")]
     out: PathBuf,
     /// Random directions for the CPU reconstruction.
     #[arg(long, default_value_t = shvis::study::params::DEFAULT_DIRECTIONS, value_parser = clap::value_parser!(usize))]

@@ -24,7 +24,7 @@ pub(super) struct ReportArgs {
     #[arg(long, value_delimiter = ',')]
     pub(super) labels: Vec<String>,
     /// The page to write (markdown), e.g. docs/results/<device>.md.
-    #[arg(long)]
+    #[arg(short, long)]
     pub(super) out: PathBuf,
 }
 
@@ -47,6 +47,34 @@ pub(super) fn run_report(a: ReportArgs) -> Result<()> {
     shvis::files::write(&a.out, page)
         .with_context(|| format!("{}: cannot write", a.out.display()))?;
     println!("wrote {}", a.out.display());
+    Ok(())
+}
+
+#[derive(Args, Debug)]
+pub(super) struct TechniquesArgs {
+    /// Print the catalog as JSON (with every member's name) instead of lines.
+    #[arg(long)]
+    pub(super) json: bool,
+}
+
+/// Lists every technique family: names, paths, bake, paper, what it is.
+pub(super) fn run_techniques(a: TechniquesArgs) -> Result<()> {
+    let families = shvis::technique::catalog::families();
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&families)?);
+        return Ok(());
+    }
+    for f in &families {
+        let paths: Vec<String> = f.paths.iter().map(|p| p.to_string()).collect();
+        println!("{} — {}", f.names, f.what);
+        println!(
+            "    {} · paths {} · bakes {} · names: {}",
+            f.paper,
+            paths.join(", "),
+            f.bakes,
+            f.members.len()
+        );
+    }
     Ok(())
 }
 
@@ -132,7 +160,7 @@ pub(super) struct SsbumpArgs {
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Output .png: also writes .exr beside it, and `*_d.png` (plain D), `*_ao.png` (AO).
-    #[arg(long)]
+    #[arg(short, long)]
     out: PathBuf,
 }
 
@@ -191,7 +219,7 @@ pub(super) struct NormalmapArgs {
     cpu_face_rays: bool,
     /// Output .png or .exr: the tangent-space map; the other format and `*_object` (object
     /// space) are written beside it.
-    #[arg(long)]
+    #[arg(short, long)]
     out: PathBuf,
     /// Also write the low mesh as this .gltf (+ .bin), its normal texture the PNG.
     #[arg(long)]

@@ -98,7 +98,7 @@ pub(super) struct RelightArgs {
     /// Samples per pixel of each sampled frame's reference.
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=65_536))]
     ref_spp: u32,
-    #[arg(long, default_value = "relight-out")]
+    #[arg(short, long, default_value = "relight-out")]
     out: PathBuf,
 }
 

@@ -17,6 +17,7 @@
 //! matches; README
 //! "How to add a technique" lists the places a new family touches.
 
+pub mod catalog;
 pub mod cluster;
 pub mod cost;
 pub mod finish;

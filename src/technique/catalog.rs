@@ -1,0 +1,196 @@
+//! Every technique family as `shvis techniques` lists it: the name grammar, what it is, its
+//! paper, the paths it runs on and what it bakes. One entry per family, found by an
+//! exhaustive match, so a new family does not compile until it is described here.
+
+use super::spec::{BakeNeeds, HwPath, NdfBase, NmprtVariant, RnmVariant, Technique};
+
+/// One family's line.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct Family {
+    /// The names it takes: "uncO", "pcaM / pcaMw", …
+    pub names: &'static str,
+    /// Its members, as names (the valid parameters).
+    pub members: Vec<String>,
+    /// What it is, in one line.
+    pub what: &'static str,
+    /// Where it comes from.
+    pub paper: &'static str,
+    /// The hardware paths some member runs on.
+    pub paths: Vec<HwPath>,
+    /// What it bakes, in words.
+    pub bakes: String,
+}
+
+/// One representative technique per family, in the cost table's order.
+const REPRESENTATIVES: &[Technique] = &[
+    Technique::Unc {
+        order: crate::sh::Order::SIX,
+    },
+    Technique::Pca {
+        m: 8,
+        weights_only: false,
+    },
+    Technique::Shlmap,
+    Technique::Preconv,
+    Technique::Sh2,
+    Technique::Vq {
+        k: 256,
+        seams: super::spec::SeamMode::Blended,
+    },
+    Technique::Cpca {
+        k: 8,
+        m: 11,
+        iterative: true,
+        seams: super::spec::SeamMode::Blended,
+    },
+    Technique::PcaVertex {
+        m: 12,
+        max_edge_cm: None,
+    },
+    Technique::Rnm {
+        variant: RnmVariant::NormalMap,
+    },
+    Technique::Ndf {
+        base: NdfBase::Preconv,
+    },
+    Technique::Nmprt {
+        variant: NmprtVariant::Full,
+    },
+];
+
+/// Every family, in the cost table's order.
+pub fn families() -> Vec<Family> {
+    REPRESENTATIVES.iter().map(|&t| family(t)).collect()
+}
+
+fn family(t: Technique) -> Family {
+    let (names, what, paper) = describe(t);
+    let members = t.family_members();
+    let paths = HwPath::ALL
+        .iter()
+        .copied()
+        .filter(|&p| members.iter().any(|m| m.runs_on(p)))
+        .collect();
+    Family {
+        names,
+        members: members.iter().map(|m| m.name()).collect(),
+        what,
+        paper,
+        paths,
+        bakes: bakes(&t.needs()),
+    }
+}
+
+/// (names, what, paper) of `t`'s family.
+fn describe(t: Technique) -> (&'static str, &'static str, &'static str) {
+    match t {
+        Technique::Unc { .. } => (
+            "uncO",
+            "SH visibility of order O per texel, an L×H table looked up by the normal",
+            "Iwanicki & Sloan §3",
+        ),
+        Technique::Pca { .. } => (
+            "pcaM, pcaMw",
+            "M PCA weights of the visibility per texel; per-vector tables (w: SH of V_k·L in uniforms)",
+            "Iwanicki & Sloan §3–4",
+        ),
+        Technique::Shlmap => (
+            "shlmap",
+            "order-3 SH of incident radiance with inter-reflection per texel (static light)",
+            "Iwanicki & Sloan §5",
+        ),
+        Technique::Preconv => (
+            "preconv",
+            "ambient occlusion × pre-convolved irradiance at the normal",
+            "Iwanicki & Sloan §5",
+        ),
+        Technique::Sh2 => (
+            "sh2",
+            "order-2 visibility per texel, the SH product with the lighting in the shader",
+            "Iwanicki & Sloan §5",
+        ),
+        Technique::Vq { .. } => (
+            "vqK, vqKn",
+            "k-means cluster of the visibility per texel, per-cluster lighting in uniforms (n: naive seams)",
+            "Sloan et al., PRT course (CPCA)",
+        ),
+        Technique::Cpca { .. } => (
+            "cpcaK_M, cpcaK_Ms, …n",
+            "clustered PCA: a cluster and M weights per texel (s: static clusters; n: naive seams)",
+            "Sloan et al., CPCA for PRT (SIGGRAPH 2003)",
+        ),
+        Technique::PcaVertex { .. } => (
+            "pcaMv, pcaMvE",
+            "PCA weights baked at mesh vertices (edges ≤ E cm), interpolated, shaded as pcaMw",
+            "Iwanicki & Sloan §4 (per-vertex)",
+        ),
+        Technique::Rnm { .. } => (
+            "rnm, rnmao, ssbump",
+            "radiosity normal mapping: three lightmaps in the HL2 basis; ao: × height-field AO; ssbump: self-shadowed bump map",
+            "Green, Valve (SIGGRAPH 2007 course)",
+        ),
+        Technique::Ndf { .. } => (
+            "uncOndf, preconvndf",
+            "the base technique with its normal map filtered as a distribution (moment maps)",
+            "Olano & North, Normal Distribution Mapping",
+        ),
+        Technique::Nmprt { .. } => (
+            "nmprt, nmprtsvdM, nmprtsvdMp, nmprthl2, nmprtratio",
+            "normal mapping for PRT: transfer matrices per texel, evaluated at the normal",
+            "Sloan, PRT course (normal mapping)",
+        ),
+    }
+}
+
+/// What `needs` bakes, in words.
+fn bakes(needs: &BakeNeeds) -> String {
+    let mut parts = Vec::new();
+    if let Some(order) = needs.visibility {
+        parts.push(format!("SH visibility (order {})", order.get()));
+    }
+    if needs.pca_vectors.is_some() {
+        parts.push("PCA of the visibility".into());
+    }
+    if needs.clusters.is_some() {
+        parts.push("clusters of the visibility".into());
+    }
+    if needs.sh_lightmap {
+        parts.push("SH lightmap with inter-reflection".into());
+    }
+    if needs.transfer {
+        parts.push("transfer matrices".into());
+    }
+    if needs.ao {
+        parts.push("ambient occlusion".into());
+    }
+    if needs.ssbump {
+        parts.push("SSBump from the height field".into());
+    }
+    if needs.ndf_moments {
+        parts.push("normal-map moments".into());
+    }
+    if parts.is_empty() {
+        "nothing".into()
+    } else {
+        parts.join(", ")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_technique_belongs_to_a_listed_family() {
+        let listed: Vec<String> = families().into_iter().flat_map(|f| f.members).collect();
+        for t in Technique::nameable() {
+            assert!(
+                listed.contains(&t.name()),
+                "{t} is in no family of the catalog"
+            );
+        }
+        for t in Technique::ALL {
+            assert!(listed.contains(&t.name()), "{t}");
+        }
+    }
+}
