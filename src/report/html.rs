@@ -60,6 +60,21 @@ tr.suspect td { background: #fee; }
 .grid img { width: 100%; display: block; image-rendering: auto; }
 figcaption { font-size: 12px; margin-top: .3em; }
 figcaption a { margin-right: .6em; }
+details.family summary, details.glossary summary { cursor: pointer; font-weight: bold; margin: .6em 0; }
+ul.headline li.warn { color: #b00; }
+";
+
+/// What each column of the cost table means.
+const GLOSSARY: &str = "<details class=\"glossary\"><summary>Columns</summary><dl>
+<dt>ms median, min, max</dt><dd>GPU time of a frame from timestamp queries, over the timed frames (several frames per query on a fast GPU, after the clocks settle).</dd>
+<dt>frames</dt><dd>Timed frames, over three rounds on fresh builds.</dd>
+<dt>×preconv, paper ×preconv</dt><dd>The row's median over preconv's on the same path; the paper's ratio on a GeForce GTX 295.</dd>
+<dt>model ms, ×model</dt><dd>The device cost model's time for the row (lookups, float ops, reads priced by the probe) and measured over modelled.</dd>
+<dt>rel. RMSE, against, PSNR dB</dt><dd>Error of the image against the reference (direct light, or the inter-reflected one for techniques that bake inter-reflection).</dd>
+<dt>texel bytes, table bytes</dt><dd>GPU memory of the per-texel data and of the lighting tables and uniforms.</dd>
+<dt>textures, lookups/px</dt><dd>Textures bound for the draw and fetches per pixel, albedo and normal map included.</dd>
+<dt>clipped px</dt><dd>Pixels the f16 target could not hold; ⚠ marks them, and suspect rows (non-finite pixels, an error above 1, or a mean 25 % off the reference's).</dd>
+</dl></details>
 ";
 
 /// Sorts the cost table by the clicked column (numbers by `data-v`, text otherwise) and
@@ -145,8 +160,11 @@ pub fn to_html(table: &BenchTable, dir: &Path) -> String {
         h,
         "<h1>shvis bench</h1>\n<p>Normal mapping with low-frequency precomputed visibility (Iwanicki &amp; Sloan) and the techniques around it: every technique × hardware path, its GPU time and its error against the ray-traced reference.</p>\n"
     );
+    h += &headline(table);
+    h += &more_links(dir);
     h += &settings_list(table);
     h += &cost_table(table);
+    h += GLOSSARY;
     h += &plots(dir);
     h += &figures(table, dir);
     let paths: Vec<HwPath> = HwPath::ALL
@@ -159,6 +177,113 @@ pub fn to_html(table: &BenchTable, dir: &Path) -> String {
     }
     let _ = write!(h, "<script>{SCRIPT}</script>\n</body>\n</html>\n");
     h
+}
+
+/// The rows of `path` on the speed/error front: timed and measured, and no other row both
+/// faster and more accurate (ties count as neither), fastest first.
+pub fn front(rows: &[BenchRow], path: HwPath) -> Vec<&BenchRow> {
+    let measured: Vec<(&BenchRow, f64, f64)> = rows
+        .iter()
+        .filter(|r| r.path == path && r.suspect.is_none() && r.specular.is_none())
+        .filter_map(|r| Some((r, r.ms_median?, r.rel_rmse?)))
+        .collect();
+    let mut front: Vec<(&BenchRow, f64, f64)> = measured
+        .iter()
+        .copied()
+        .filter(|&(_, ms, e)| {
+            !measured
+                .iter()
+                .any(|&(_, ms2, e2)| ms2 <= ms && e2 <= e && (ms2 < ms || e2 < e))
+        })
+        .collect();
+    front.sort_by(|a, b| a.1.total_cmp(&b.1));
+    front.into_iter().map(|(r, _, _)| r).collect()
+}
+
+/// The best error on `path` and the fastest row within [`NEAR_BEST_ERROR`] of it.
+fn near_best(rows: &[BenchRow], path: HwPath) -> Option<(&BenchRow, f64)> {
+    let on_path = || {
+        rows.iter()
+            .filter(|r| r.path == path && r.suspect.is_none())
+    };
+    let best = on_path()
+        .filter_map(|r| r.rel_rmse)
+        .min_by(f64::total_cmp)?;
+    on_path()
+        .filter(|r| {
+            r.rel_rmse
+                .is_some_and(|e| e <= best * (1.0 + NEAR_BEST_ERROR))
+        })
+        .filter(|r| r.ms_median.is_some())
+        .min_by(|a, b| {
+            a.ms_median
+                .unwrap_or(f64::MAX)
+                .total_cmp(&b.ms_median.unwrap_or(f64::MAX))
+        })
+        .map(|r| (r, best))
+}
+
+/// How close to the best error a row counts as "as good" in the headline.
+const NEAR_BEST_ERROR: f64 = 0.05;
+
+/// The headline: where the page's numbers come from, and per path the speed/error front in
+/// words; links to the probe's page and the studies' outputs beside the bench.
+fn headline(t: &BenchTable) -> String {
+    let mut s = String::from("<h2 id=\"headline\">Headline</h2>\n<ul class=\"headline\">\n");
+    let _ = writeln!(
+        s,
+        "<li>{} rows on <b>{}</b>{}, {}×{} frames, a {}² lightmap; errors against a {}-sample reference.</li>",
+        t.results.len(),
+        esc(&t.device),
+        if t.driver.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", esc(&t.driver))
+        },
+        t.width,
+        t.height,
+        t.vis_res,
+        t.reference_spp
+    );
+    for path in HwPath::ALL {
+        let names: Vec<String> = front(&t.results, *path)
+            .iter()
+            .map(|r| {
+                format!(
+                    "{} ({:.3} ms, {:.4})",
+                    r.name(),
+                    r.ms_median.unwrap_or(0.0),
+                    r.rel_rmse.unwrap_or(0.0)
+                )
+            })
+            .collect();
+        if names.is_empty() {
+            continue;
+        }
+        let _ = write!(
+            s,
+            "<li><b>{path}</b>: the speed/error front, fastest first — {}.",
+            esc(&names.join(", "))
+        );
+        if let Some((r, best)) = near_best(&t.results, *path) {
+            let _ = write!(
+                s,
+                " Fastest within {:.0} % of the best error ({best:.4}): <b>{}</b>.",
+                100.0 * NEAR_BEST_ERROR,
+                esc(&r.name())
+            );
+        }
+        s += "</li>\n";
+    }
+    let suspect = t.results.iter().filter(|r| r.suspect.is_some()).count();
+    if suspect > 0 {
+        let _ = writeln!(
+            s,
+            "<li class=\"warn\">{suspect} suspect row(s), marked ⚠ in the table: their images cannot be right (hover the row for why).</li>"
+        );
+    }
+    s += "</ul>\n";
+    s
 }
 
 fn settings_list(t: &BenchTable) -> String {
@@ -204,6 +329,29 @@ fn settings_list(t: &BenchTable) -> String {
         "</dl>\n<p>Data: <a href=\"table.json\">table.json</a> · <a href=\"table.md\">table.md</a>";
     s += "</p>\n";
     s
+}
+
+/// Links to what else the bench's folder holds: the probe's page, the studies of
+/// `make bench` (each in a subfolder), where they exist.
+fn more_links(dir: &Path) -> String {
+    let candidates = [
+        ("device probe", "probe.md"),
+        ("rnm study", "rnm/rnm.md"),
+        ("normal-map generation study", "normalmap/normalmap.md"),
+        ("NDF study", "ndf/ndf.md"),
+        ("nmprt SVD study", "nmprt/nmprt_svd.md"),
+        ("relit bench", "relit90/index.html"),
+        ("specular bench", "specular/index.html"),
+    ];
+    let found: Vec<String> = candidates
+        .iter()
+        .filter(|(_, f)| dir.join(f).is_file())
+        .map(|(label, f)| format!("<a href=\"{}\">{label}</a>", esc(f)))
+        .collect();
+    if found.is_empty() {
+        return String::new();
+    }
+    format!("<p class=\"more\">Also here: {}</p>\n", found.join(" · "))
 }
 
 fn cost_table(t: &BenchTable) -> String {
@@ -363,7 +511,34 @@ fn image_grid(t: &BenchTable, dir: &Path, path: HwPath) -> String {
             );
         }
     }
+    // Rows grouped by family (`technique::catalog`), each group collapsible.
+    let mut families: Vec<&str> = Vec::new();
     for r in t.results.iter().filter(|r| r.path == path) {
+        let family = crate::technique::catalog::family_of(r.technique);
+        if !families.contains(&family) {
+            families.push(family);
+        }
+    }
+    for family in families {
+        let _ = writeln!(
+            s,
+            "</div>\n<details open class=\"family\"><summary>{}</summary>\n<div class=\"grid\">",
+            esc(family)
+        );
+        let rows = t.results.iter().filter(|r| {
+            r.path == path && crate::technique::catalog::family_of(r.technique) == family
+        });
+        s += &row_figures(rows, dir);
+        s += "</div>\n</details>\n<div class=\"grid\">\n";
+    }
+    s += "</div>\n";
+    s
+}
+
+/// Each row's image and ×4 difference side by side, with its caption.
+fn row_figures<'a>(rows: impl Iterator<Item = &'a BenchRow>, dir: &Path) -> String {
+    let mut s = String::new();
+    for r in rows {
         let stem = stem(r);
         let image = picture(dir, &format!("{stem}.png"), &stem).unwrap_or_default();
         let diff_file = format!(
@@ -393,13 +568,41 @@ fn image_grid(t: &BenchTable, dir: &Path, path: HwPath) -> String {
             ) + &format!("<a href=\"#row-{}\">cost row</a>", esc(&stem))
         );
     }
-    s += "</div>\n";
     s
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_front_keeps_rows_no_other_beats_on_both_and_names_the_near_best() {
+        use crate::report::table::tests::row;
+        let t = |name: &str| name.parse().unwrap();
+        let with = |name: &str, ms: f64, e: f64| {
+            let mut r = row(t(name), ms, vec![]);
+            r.rel_rmse = Some(e);
+            r
+        };
+        let mut absurd = with("ssbump", 0.1, 0.001);
+        absurd.suspect = Some("relative RMSE 99 > 1".into());
+        let rows = vec![
+            with("preconv", 1.0, 0.30),
+            with("sh2", 1.2, 0.35), // slower and worse than preconv: off the front
+            with("pca8", 2.0, 0.20),
+            with("unc6", 8.0, 0.10),
+            with("pca16", 3.0, 0.104), // within 5 % of unc6's error, far faster
+            absurd,                    // suspect rows are never on the front
+        ];
+        let names: Vec<String> = front(&rows, HwPath::Dx10)
+            .iter()
+            .map(|r| r.name())
+            .collect();
+        assert_eq!(names, ["preconv", "pca8", "pca16", "unc6"]);
+        let (near, best) = near_best(&rows, HwPath::Dx10).unwrap();
+        assert_eq!((near.name(), best), ("pca16".to_string(), 0.10));
+        assert!(front(&rows, HwPath::Dx9).is_empty());
+    }
 
     #[test]
     fn escapes_markup() {

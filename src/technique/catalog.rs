@@ -81,6 +81,11 @@ fn family(t: Technique) -> Family {
     }
 }
 
+/// The names of `t`'s family ("pcaM, pcaMw"): its group on the report page.
+pub fn family_of(t: Technique) -> &'static str {
+    describe(t).0
+}
+
 /// (names, what, paper) of `t`'s family.
 fn describe(t: Technique) -> (&'static str, &'static str, &'static str) {
     match t {
