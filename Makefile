@@ -17,6 +17,8 @@ test: deps
 
 # The overcast probe of the rnm study, when the shared assets are present.
 OVERCAST ?= ../shared/assets/env/potsdamer_platz_1k.exr
+# The real model of the normal-map study, when the shared assets are present.
+MODEL ?= ../shared/assets/models/NormalTangentMirrorTest/NormalTangentMirrorTest.gltf
 RNM_ENVS = sky:15$(if $(wildcard $(OVERCAST)),$(comma)$(OVERCAST))
 NDF_ENVS = sky$(if $(wildcard $(OVERCAST)),$(comma)$(OVERCAST))
 comma := ,
@@ -27,7 +29,7 @@ bench: build
 	start=$$(date +%s); \
 	target/release/shvis bench --out $(BENCH_OUT) && \
 	target/release/shvis study rnm --envs $(RNM_ENVS) --out $(BENCH_OUT)/rnm && \
-	target/release/shvis study normalmap --out $(BENCH_OUT)/normalmap && \
+	target/release/shvis study normalmap $(if $(wildcard $(MODEL)),--model $(MODEL)) --out $(BENCH_OUT)/normalmap && \
 	target/release/shvis study ndf --diffuse-envs $(NDF_ENVS) --out $(BENCH_OUT)/ndf && \
 	target/release/shvis study nmprt-svd --out $(BENCH_OUT)/nmprt && \
 	target/release/shvis bench --techniques $(NMPRT_ROWS) --relight-rotate 90 --point-reference --ref-spp 256 --no-probe --frames 3 --warmup 1 --out $(BENCH_OUT)/relit90 && \

@@ -114,12 +114,11 @@ pub(super) struct StudyNormalmapArgs {
     /// Map side of the triangle-count and strategy tables.
     #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(16..=8192))]
     res: u32,
-    /// The real model (skipped with a note when the file is missing).
-    #[arg(
-        long,
-        default_value = "../shared/assets/models/NormalTangentMirrorTest/NormalTangentMirrorTest.gltf"
-    )]
-    model: PathBuf,
+    /// A real model (.gltf/.glb) for the simplification part; without one that part is
+    /// skipped with a note (`make bench` passes the shared assets' NormalTangentMirrorTest
+    /// when they are there).
+    #[arg(long)]
+    model: Option<PathBuf>,
     /// Fractions of the model's triangles to keep, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "0.05,0.02", value_parser = finite_f32)]
     ratios: Vec<f32>,
@@ -153,12 +152,9 @@ pub(super) struct StudyRnmArgs {
     /// A scene with a height-mapped material small enough to displace.
     #[arg(long, default_value = "patio")]
     scene: String,
-    /// Environments, comma-separated (`sky:15`: the grazing low sun; the overcast probe).
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "sky:15,../shared/assets/env/potsdamer_platz_1k.exr"
-    )]
+    /// Environments, comma-separated (`sky`, `sky:DEG`, .exr/.hdr maps); `sky:15` is the
+    /// grazing low sun (`make bench` adds the shared assets' overcast probe when it is there).
+    #[arg(long, value_delimiter = ',', default_value = "sky:15")]
     envs: Vec<String>,
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=8192))]
     vis_res: u32,
@@ -359,12 +355,9 @@ fn run_normalmap(a: StudyNormalmapArgs) -> Result<()> {
     create_dir(&a.out)?;
     let started = Instant::now();
     with_gpu(&a.gpu, |ctx| {
-        let model = a.model.exists().then(|| a.model.clone());
+        let model = a.model.clone();
         if model.is_none() {
-            println!(
-                "note: {} not found: the real-model part is skipped",
-                a.model.display()
-            );
+            println!("note: no --model: the real-model part is skipped");
         }
         let settings = shvis::study::normalmap::NormalMapStudySettings {
             repeats: a.repeats,
