@@ -53,6 +53,7 @@ pub(super) fn finite_degrees(s: &str) -> Result<f64, String> {
 }
 
 #[derive(Args, Debug, Clone)]
+#[command(next_help_heading = "Scene and bake")]
 pub(super) struct SceneArgs {
     /// `house` (built-in), `patio` (built-in brick corner) or a .gltf/.glb file.
     #[arg(long, default_value = "house")]
@@ -90,6 +91,7 @@ pub(super) struct SceneArgs {
 }
 
 #[derive(Args, Debug, Clone)]
+#[command(next_help_heading = "Device")]
 pub(super) struct GpuArgs {
     /// Pick the first Vulkan device whose name contains this.
     #[arg(long)]
@@ -101,6 +103,7 @@ pub(super) struct GpuArgs {
 
 /// Who bakes the visibility (`bake`, `render`, `bench`).
 #[derive(Args, Debug)]
+#[command(next_help_heading = "GPU baker")]
 pub(super) struct BakerArgs {
     /// Who bakes the visibility: `cpu` (ray tracing, cached) or `gpu` (the PRT course's
     /// GPU simulator: a depth map per direction, not cached).
@@ -180,6 +183,7 @@ pub(super) fn with_normal_filter(
 
 /// The specular material term of `render` and `bench` (`shvis::render::specular`).
 #[derive(Args, Debug, Clone)]
+#[command(next_help_heading = "Specular term")]
 pub(super) struct SpecularArgs {
     /// Add a specular term (Blinn-style microfacet density at the half vector of the
     /// environment's sun, or of `--light-dir`) to every technique, its normal map filtered

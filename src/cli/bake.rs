@@ -13,8 +13,6 @@ use super::{create_dir, prepare_settings, say, with_gpu};
 
 #[derive(Args, Debug)]
 pub(super) struct BakeArgs {
-    #[command(flatten)]
-    scene: SceneArgs,
     /// Bake nothing: check that --out holds a complete bake (its manifest.json lists every
     /// file with the size and hash it has) and print its settings; exit 1 if not.
     #[arg(long)]
@@ -23,17 +21,19 @@ pub(super) struct BakeArgs {
     /// the AO layer written is the visibility bake's, as the techniques use.
     #[arg(long)]
     separate_ao: bool,
-    #[command(flatten)]
-    baker: BakerArgs,
     /// `--baker gpu`: also run the CPU bake (and one with the next seed, for the
     /// quadrature noise) and print how far the GPU's coefficients are from it.
     #[arg(long)]
     compare_cpu: bool,
-    #[command(flatten)]
-    gpu: GpuArgs,
     /// Output directory (ao.exr).
     #[arg(short, long)]
     out: PathBuf,
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    baker: BakerArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 pub(super) fn run_bake(a: BakeArgs) -> Result<()> {

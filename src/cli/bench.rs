@@ -21,8 +21,6 @@ use super::{
 
 #[derive(Args, Debug)]
 pub(super) struct ProbeArgs {
-    #[command(flatten)]
-    gpu: GpuArgs,
     #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
     width: u32,
     #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
@@ -40,72 +38,74 @@ pub(super) struct ProbeArgs {
     /// Output directory (probe.md, probe.json).
     #[arg(short, long, default_value = "probe-out")]
     out: PathBuf,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 #[derive(Args, Debug)]
 pub(super) struct BenchArgs {
+    #[arg(help_heading = "Rows", long, default_value = "sky")]
+    env: String,
+    /// `all` or a comma-separated list of technique names.
+    #[arg(help_heading = "Rows", long, default_value = "all")]
+    techniques: String,
+    /// Comma-separated hardware paths.
+    #[arg(help_heading = "Rows", long, default_value = "dx9,dx10")]
+    paths: String,
+    /// How unc* and preconv read the normal map: `mip` (its MIP chain of averaged normals)
+    /// or `ndf` (filtered as a distribution, Olano & North: the techniques' `…ndf`
+    /// variants; the other techniques have none and stay as they are).
+    #[arg(help_heading = "Rows", long, value_enum, default_value_t = NormalFilterArg::Mip)]
+    normal_filter: NormalFilterArg,
+    /// Timed frames per technique × path (after the warm-up).
+    #[arg(help_heading = "Frames and timing", long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    frames: u32,
+    /// Untimed warm-up frames per technique × path.
+    #[arg(help_heading = "Frames and timing", long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(0..=10_000))]
+    warmup: u32,
+    #[arg(help_heading = "Frames and timing", long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    width: u32,
+    #[arg(help_heading = "Frames and timing", long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
+    height: u32,
+    /// Exposure in EV of the PNG images.
+    #[arg(help_heading = "Output", long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
+    exposure: f32,
+    /// Samples per pixel of the reference the errors are measured against (0: no errors);
+    /// at most `reference --spp`'s limit.
+    #[arg(help_heading = "Reference and errors", long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(0..=1_000_000))]
+    ref_spp: u32,
+    /// Measure against the point-sampled reference (the techniques' own pixel sampling)
+    /// instead of the footprint reference.
+    #[arg(help_heading = "Reference and errors", long)]
+    point_reference: bool,
+    /// Bounces of inter-reflection in shlmap's and the nmprt* transfer bakes and in the
+    /// reference they are measured against (the other techniques model direct light and
+    /// meet the direct reference).
+    #[arg(help_heading = "Reference and errors", long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
+    bounces: u32,
+    /// Leave out the device probe and the rows' model columns.
+    #[arg(help_heading = "Frames and timing", long)]
+    no_probe: bool,
+    /// Exit non-zero when a row is suspect (non-finite pixels, an error above 1, or a mean
+    /// 25 % off its reference's); the table and images are written first either way.
+    #[arg(help_heading = "Reference and errors", long)]
+    strict: bool,
+    /// Measure under the environment turned DEG degrees about +Y after the bake:
+    /// references under the turned map, techniques with dynamic lighting relit to it
+    /// through their lighting update, baked ones (shlmap, rnm*) as baked. No error ladder.
+    #[arg(help_heading = "Frames and timing", long, value_name = "DEG", value_parser = finite_degrees)]
+    relight_rotate: Option<f64>,
+    /// Output directory.
+    #[arg(help_heading = "Output", short, long, default_value = "bench-out")]
+    out: PathBuf,
     #[command(flatten)]
     scene: SceneArgs,
     #[command(flatten)]
     baker: BakerArgs,
     #[command(flatten)]
     gpu: GpuArgs,
-    #[arg(long, default_value = "sky")]
-    env: String,
-    /// `all` or a comma-separated list of technique names.
-    #[arg(long, default_value = "all")]
-    techniques: String,
-    /// Comma-separated hardware paths.
-    #[arg(long, default_value = "dx9,dx10")]
-    paths: String,
-    /// How unc* and preconv read the normal map: `mip` (its MIP chain of averaged normals)
-    /// or `ndf` (filtered as a distribution, Olano & North: the techniques' `…ndf`
-    /// variants; the other techniques have none and stay as they are).
-    #[arg(long, value_enum, default_value_t = NormalFilterArg::Mip)]
-    normal_filter: NormalFilterArg,
     #[command(flatten)]
     specular: SpecularArgs,
-    /// Timed frames per technique × path (after the warm-up).
-    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..=100_000))]
-    frames: u32,
-    /// Untimed warm-up frames per technique × path.
-    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(0..=10_000))]
-    warmup: u32,
-    #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
-    width: u32,
-    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
-    height: u32,
-    /// Exposure in EV of the PNG images.
-    #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
-    exposure: f32,
-    /// Samples per pixel of the reference the errors are measured against (0: no errors);
-    /// at most `reference --spp`'s limit.
-    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(0..=1_000_000))]
-    ref_spp: u32,
-    /// Measure against the point-sampled reference (the techniques' own pixel sampling)
-    /// instead of the footprint reference.
-    #[arg(long)]
-    point_reference: bool,
-    /// Bounces of inter-reflection in shlmap's and the nmprt* transfer bakes and in the
-    /// reference they are measured against (the other techniques model direct light and
-    /// meet the direct reference).
-    #[arg(long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
-    bounces: u32,
-    /// Leave out the device probe and the rows' model columns.
-    #[arg(long)]
-    no_probe: bool,
-    /// Exit non-zero when a row is suspect (non-finite pixels, an error above 1, or a mean
-    /// 25 % off its reference's); the table and images are written first either way.
-    #[arg(long)]
-    strict: bool,
-    /// Measure under the environment turned DEG degrees about +Y after the bake:
-    /// references under the turned map, techniques with dynamic lighting relit to it
-    /// through their lighting update, baked ones (shlmap, rnm*) as baked. No error ladder.
-    #[arg(long, value_name = "DEG", value_parser = finite_degrees)]
-    relight_rotate: Option<f64>,
-    /// Output directory.
-    #[arg(short, long, default_value = "bench-out")]
-    out: PathBuf,
 }
 
 pub(super) fn run_probe(a: ProbeArgs) -> Result<()> {

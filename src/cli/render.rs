@@ -23,12 +23,6 @@ use super::{
 
 #[derive(Args, Debug)]
 pub(super) struct RenderArgs {
-    #[command(flatten)]
-    scene: SceneArgs,
-    #[command(flatten)]
-    baker: BakerArgs,
-    #[command(flatten)]
-    gpu: GpuArgs,
     /// `sky` (built-in), an .exr/.hdr equirectangular map (2:1) or angular probe (1:1,
     /// detected by content; `angular:PATH` forces it).
     #[arg(long, default_value = "sky")]
@@ -56,14 +50,20 @@ pub(super) struct RenderArgs {
     /// variants; the other techniques have none and stay as they are).
     #[arg(long, value_enum, default_value_t = NormalFilterArg::Mip)]
     normal_filter: NormalFilterArg,
-    #[command(flatten)]
-    specular: SpecularArgs,
     /// Ignore the normal map (shade with interpolated normals).
     #[arg(long)]
     flat_normals: bool,
     /// Output image: .png (sRGB) or .exr (linear).
     #[arg(short, long)]
     out: PathBuf,
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    baker: BakerArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    #[command(flatten)]
+    specular: SpecularArgs,
 }
 
 #[derive(Args, Debug)]
@@ -100,11 +100,11 @@ pub(super) struct ReferenceArgs {
     /// scenes such as `patio`).
     #[arg(long)]
     displaced: bool,
-    #[command(flatten)]
-    gpu: GpuArgs,
     /// Output image: .exr (linear) or .png (sRGB).
     #[arg(short, long)]
     out: PathBuf,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 pub(super) fn run_render(a: RenderArgs) -> Result<()> {

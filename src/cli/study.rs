@@ -185,8 +185,6 @@ pub(super) struct StudyRnmArgs {
 
 #[derive(Args, Debug)]
 pub(super) struct StudySeamsArgs {
-    #[command(flatten)]
-    scene: SceneArgs,
     /// Environment (as for `render`).
     #[arg(long, default_value = "sky")]
     env: String,
@@ -204,13 +202,13 @@ pub(super) struct StudySeamsArgs {
     #[arg(short, long, default_value = "study-out")]
     out: PathBuf,
     #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
     gpu: GpuArgs,
 }
 
 #[derive(Args, Debug)]
 pub(super) struct StudyCompressionArgs {
-    #[command(flatten)]
-    scene: SceneArgs,
     /// Environment of the on-screen comparison (as for `render`).
     #[arg(long, default_value = "sky")]
     env: String,
@@ -230,6 +228,8 @@ pub(super) struct StudyCompressionArgs {
     /// Output directory: compression.md, compression.json, screen.md, screen.json.
     #[arg(short, long, default_value = "study-out")]
     out: PathBuf,
+    #[command(flatten)]
+    scene: SceneArgs,
     #[command(flatten)]
     gpu: GpuArgs,
 }

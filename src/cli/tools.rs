@@ -80,11 +80,11 @@ pub(super) fn run_techniques(a: TechniquesArgs) -> Result<()> {
 
 #[derive(Args, Debug)]
 pub(super) struct DevicesArgs {
-    #[command(flatten)]
-    pub(super) gpu: GpuArgs,
     /// Print the list as JSON (one array) instead of lines.
     #[arg(long)]
     pub(super) json: bool,
+    #[command(flatten)]
+    pub(super) gpu: GpuArgs,
 }
 
 /// Lists the Vulkan devices, the one shvis picks first (marked `*`).

@@ -17,10 +17,6 @@ use super::{
 
 #[derive(Args, Debug)]
 pub(super) struct ViewArgs {
-    #[command(flatten)]
-    scene: SceneArgs,
-    #[command(flatten)]
-    gpu: GpuArgs,
     #[arg(long, default_value = "sky")]
     env: String,
     /// Comma-separated techniques Tab cycles through (`all`: the cost table's).
@@ -53,14 +49,14 @@ pub(super) struct ViewArgs {
     /// No overlay.
     #[arg(long)]
     no_overlay: bool,
-}
-
-#[derive(Args, Debug)]
-pub(super) struct RelightArgs {
     #[command(flatten)]
     scene: SceneArgs,
     #[command(flatten)]
     gpu: GpuArgs,
+}
+
+#[derive(Args, Debug)]
+pub(super) struct RelightArgs {
     #[arg(long, default_value = "sky")]
     env: String,
     /// `all` or a comma-separated list of technique names (shlmap's lighting is baked in:
@@ -100,6 +96,10 @@ pub(super) struct RelightArgs {
     ref_spp: u32,
     #[arg(short, long, default_value = "relight-out")]
     out: PathBuf,
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 /// `shvis view`: the window opens its own presenting device (`shvis::view::run`), which
