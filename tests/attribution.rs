@@ -86,6 +86,7 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
             specular: None,
             out: out_dir.clone(),
             probe: false,
+            probe_fresh: false,
             relight_degrees: None,
         },
     )

@@ -280,3 +280,41 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
     assert!(checks[1].model_ms > checks[0].model_ms, "{checks:?}");
     common::assert_validation_clean(&ctx, "technique cost counts");
 }
+
+/// A probe measured once is reused by the next run with the same settings on the same
+/// device and build (its model and speed states read back, the monitor rebuilt and
+/// working); `fresh` measures again; other settings are another probe.
+#[test]
+fn a_cached_probe_is_reused_and_fresh_measures_again() {
+    let ctx = common::validated_context();
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("probe-cache");
+    let _ = std::fs::remove_dir_all(&dir);
+    let settings = ProbeSettings {
+        width: 48,
+        height: 32,
+        triangle_pixels: 200.0,
+        warmup: 0,
+        frames: 5,
+    };
+    let (first, _) = shvis::probe::cache::run_cached(&ctx, &settings, &dir, false).unwrap();
+    assert!(first.reused_from.is_none());
+    let (again, monitor) = shvis::probe::cache::run_cached(&ctx, &settings, &dir, false).unwrap();
+    assert!(again.reused_from.is_some(), "not reused");
+    assert_eq!(again.model, first.model);
+    assert_eq!(again.measured_at, first.measured_at);
+    assert!(
+        monitor.read().unwrap() > 0.0,
+        "the rebuilt monitor times frames"
+    );
+    let other = ProbeSettings {
+        frames: 6,
+        ..settings
+    };
+    assert_ne!(
+        shvis::probe::cache::path(&dir, &ctx, &settings),
+        shvis::probe::cache::path(&dir, &ctx, &other)
+    );
+    let (fresh, _) = shvis::probe::cache::run_cached(&ctx, &settings, &dir, true).unwrap();
+    assert!(fresh.reused_from.is_none(), "fresh reused the cache");
+    common::assert_validation_clean(&ctx, "probe cache");
+}

@@ -69,6 +69,9 @@ pub struct BenchSettings {
     /// Run the device probe first (`crate::probe`, at the bench's size) and give every row
     /// the model's time (`model_ms`, `x_model`); `probe.md`/`probe.json` beside the table.
     pub probe: bool,
+    /// Measure the probe again even where one measured before on this device, driver and
+    /// build is cached (`probe::cache`).
+    pub probe_fresh: bool,
 }
 
 /// The specular term of a bench: its light and base spread, and the normal-map filterings
@@ -265,7 +268,7 @@ fn run_probe(
     if !settings.probe {
         return Ok(None);
     }
-    let (probe, monitor) = crate::probe::run_with_monitor(
+    let (probe, monitor) = crate::probe::cache::run_cached(
         ctx,
         &crate::probe::ProbeSettings {
             width: settings.width,
@@ -276,6 +279,8 @@ fn run_probe(
             warmup: settings.warmup.min(5),
             frames: settings.frames.clamp(5, 30),
         },
+        &crate::bake::cache::default_cache_dir(),
+        settings.probe_fresh,
     )?;
     log::info!(
         "probe: {:.1} s, model within {:.1} % of its microbenchmarks; {}",
@@ -319,6 +324,10 @@ fn assemble_table(
             .as_ref()
             .map(|(p, _)| p.state_models.clone())
             .unwrap_or_default(),
+        probe_measured: probe.as_ref().map(|(p, _)| match &p.reused_from {
+            Some(file) => format!("{} UTC (reused from {file})", p.measured_at),
+            None => format!("{} UTC (this run)", p.measured_at),
+        }),
         cost_model: probe.map(|(p, _)| p.model),
         relit: relit.as_ref().map(|r| {
             format!(

@@ -86,6 +86,10 @@ pub(super) struct BenchArgs {
     /// Leave out the device probe and the rows' model columns.
     #[arg(help_heading = "Frames and timing", long)]
     no_probe: bool,
+    /// The device probe: `cached` reuses one measured before on this device, driver and
+    /// build with the same settings (in the bake cache's folder), `fresh` measures again.
+    #[arg(help_heading = "Frames and timing", long, value_enum, default_value_t = ProbeMode::Cached)]
+    probe: ProbeMode,
     /// Exit non-zero when a row is suspect (non-finite pixels, an error above 1, or a mean
     /// 25 % off its reference's); the table and images are written first either way.
     #[arg(help_heading = "Reference and errors", long)]
@@ -132,6 +136,15 @@ pub(super) fn run_probe(a: ProbeArgs) -> Result<()> {
     })
 }
 
+/// Whether a bench reuses a cached device probe.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(super) enum ProbeMode {
+    /// Reuse the probe measured before on this device, driver and build, if there is one.
+    Cached,
+    /// Measure it again.
+    Fresh,
+}
+
 pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
     check_frame_memory(a.width, a.height, 320)?;
     let mut settings = BenchSettings {
@@ -149,6 +162,7 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
         specular: None,
         out: a.out.clone(),
         probe: !a.no_probe,
+        probe_fresh: a.probe == ProbeMode::Fresh,
         relight_degrees: a.relight_rotate,
     };
     if a.relight_rotate.is_some() && !a.specular.specular.is_empty() {

@@ -43,7 +43,7 @@ pub(super) fn run_report(a: ReportArgs) -> Result<()> {
         .enumerate()
         .map(|(i, path)| ResultTable::read(path, a.labels.get(i).map(String::as_str)))
         .collect::<Result<Vec<_>, _>>()?;
-    let page = results::comparison_page(&tables, &results::utc_date_today());
+    let page = results::comparison_page(&tables, &shvis::files::clock::utc_date_today());
     shvis::files::write(&a.out, page)
         .with_context(|| format!("{}: cannot write", a.out.display()))?;
     println!("wrote {}", a.out.display());

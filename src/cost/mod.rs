@@ -65,7 +65,7 @@
 pub mod plan;
 pub mod spirv;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 pub use plan::{CountPlan, CountVariant};
 use spirv::OpCounts;
@@ -74,7 +74,7 @@ use spirv::OpCounts;
 pub const KINDS: usize = 13;
 
 /// The operation kinds the model prices.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Kind {
     /// Bilinear 2D lookup, no MIP chain (dx9's per-texel data).
@@ -154,7 +154,7 @@ impl Kind {
 }
 
 /// Per-pixel counts of a shader, by [`Kind`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct CostCounts(pub [f64; KINDS]);
 
 impl CostCounts {
@@ -194,7 +194,7 @@ impl CostCounts {
 }
 
 /// The fitted model (module doc).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CostModel {
     /// Per frame, whatever is drawn (clear, submission, timestamps), ms.
     pub fixed_ms: f64,

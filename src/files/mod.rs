@@ -19,6 +19,7 @@
 //! different files. [`EXR_ENCODING`] keeps its compression and tiling but asks for
 //! increasing line order, which the writer sorts into, whatever the thread count.
 
+pub mod clock;
 pub mod hash;
 
 pub use hash::{Hasher64, hash64, splitmix64};

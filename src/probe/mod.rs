@@ -35,6 +35,7 @@
 //! least-squares fit (weighted by 1/t) leaves 7.6–9.5 % on the same points where this
 //! leaves 6.1–8.0 %.
 
+pub mod cache;
 pub mod scene_check;
 pub mod states;
 
@@ -42,7 +43,7 @@ use std::sync::Arc;
 
 use ash::vk;
 use glam::Vec2;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::cost::spirv::{self, OpCounts};
 use crate::cost::{CostCounts, CostModel, Kind};
@@ -57,7 +58,7 @@ use crate::scene::{Mesh, Scene, Vertex};
 pub use states::{DeviceStates, Segmented};
 
 /// One microbenchmark.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct ProbePoint {
     /// `None` for the empty shader.
     pub kind: Option<Kind>,
@@ -90,7 +91,7 @@ pub struct ProbePoint {
 }
 
 /// The model fitted to the points' frames in one speed state ([`states`]).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StateModel {
     pub state: usize,
     pub model: CostModel,
@@ -146,7 +147,7 @@ fn worst_relative_error(points: &[ProbePoint]) -> f64 {
 }
 
 /// The probe's result.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Probe {
     pub device: String,
     pub width: u32,
@@ -167,6 +168,12 @@ pub struct Probe {
     pub state_models: Vec<StateModel>,
     pub points: Vec<ProbePoint>,
     pub seconds: f64,
+    /// When it was measured, UTC ("YYYY-MM-DD HH:MM").
+    #[serde(default)]
+    pub measured_at: String,
+    /// The cache file it was read from, when a bench reused it (`cache`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reused_from: Option<String>,
 }
 
 impl Probe {
@@ -187,7 +194,7 @@ impl Probe {
     pub fn to_markdown(&self) -> String {
         let m = &self.model;
         let mut s = format!(
-            "device: {} · {}×{} ({} fragments shaded by the screen grid of 2·{}² triangles, {:.0} pixels each) · at least {} timed frames per point (more for cheap ones), in interleaved rounds · {:.1} s\n\n\
+            "device: {} · {}×{} ({} fragments shaded by the screen grid of 2·{}² triangles, {:.0} pixels each) · at least {} timed frames per point (more for cheap ones), in interleaved rounds · {:.1} s, measured {} UTC{}\n\n\
              fixed {:.3} ms per frame; {:.3} µs per triangle, {:.2} ns more per varying float it carries; {:.3} ns per pixel of triangle edge; empty shader {:.3} ms per screen of lanes, of which the depth test {:.3} ms\n\n\
              | kind | ms per unit per screen of lanes | ns per unit per lane |\n|---|---:|---:|\n",
             self.device,
@@ -199,6 +206,10 @@ impl Probe {
                 / f64::from(self.grid * self.grid),
             self.frames,
             self.seconds,
+            self.measured_at,
+            self.reused_from
+                .as_ref()
+                .map_or(String::new(), |f| format!(" (reused from {f})")),
             m.fixed_ms,
             1e3 * m.per_triangle_ms,
             1e6 * m.per_triangle_varying_ms,
@@ -799,6 +810,8 @@ pub fn run_with_monitor(
         state_models,
         points,
         seconds: started.elapsed().as_secs_f64(),
+        measured_at: cache::utc_now(),
+        reused_from: None,
     };
     let monitor = Monitor {
         pipeline: monitor_pipeline,
@@ -809,6 +822,45 @@ pub fn run_with_monitor(
         states,
     };
     Ok((probe, monitor))
+}
+
+/// The monitor of a probe measured before (`states` its speed states), built alone: the
+/// empty shader over the screen of `s`'s grid, as [`run_with_monitor`] builds it.
+pub fn monitor(
+    ctx: &Arc<Context>,
+    s: &ProbeSettings,
+    states: DeviceStates,
+) -> Result<Monitor, GpuError> {
+    let base = base_grid(s.width, s.height, s.triangle_pixels);
+    let gpu = SceneGpu::new(
+        ctx,
+        &probe_scene(s.width, s.height, false, base),
+        &FrameSettings {
+            width: s.width,
+            height: s.height,
+            ..FrameSettings::default()
+        },
+    )?;
+    let full_mesh = upload_probe_mesh(ctx, s, false, base)?;
+    let res = probe_resources(ctx)?;
+    let linear = Sampler::new(ctx, SamplerKind::LinearClamp, "probe.linear")?;
+    let planner = PointPlanner {
+        ctx,
+        gpu: &gpu,
+        res: &res,
+        linear: &linear,
+        pixels: f64::from(s.width) * f64::from(s.height),
+        loads: shading_loads(ctx, &gpu, std::iter::once(&full_mesh))?,
+    };
+    let (_, pipeline) = planner.plan(None, 0, false, true, &full_mesh.0)?;
+    Ok(Monitor {
+        pipeline,
+        mesh: full_mesh.0,
+        _resources: res,
+        _linear: linear,
+        gpu,
+        states,
+    })
 }
 
 /// Uploads the probe's mesh over the screen (or its left half) with a `grid`² grid of

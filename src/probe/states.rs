@@ -31,7 +31,7 @@
 //! cost. So every segment says which build it timed, and a point's or row's time in a state
 //! is the median of its fastest build there ([`Segmented::median_in`]).
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::gpu::TimingStats;
 
@@ -39,7 +39,7 @@ use crate::gpu::TimingStats;
 pub const STATE_RATIO: f64 = 1.25;
 
 /// The speed states the probe's monitor frames fell into.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DeviceStates {
     /// Each state's median monitor frame, ms, fastest first (one entry: one state).
     pub monitor_ms: Vec<f64>,

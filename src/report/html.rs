@@ -320,6 +320,9 @@ fn settings_list(t: &BenchTable) -> String {
     if let Some(relit) = &t.relit {
         item("relit", relit.clone());
     }
+    if let Some(measured) = &t.probe_measured {
+        item("device probe", format!("measured {measured}"));
+    }
     item(
         "bench wall time",
         format!("{:.1} s: {}", t.seconds, t.phases.summary()),

@@ -144,28 +144,6 @@ pub fn comparison_page(tables: &[ResultTable], date: &str) -> String {
     md
 }
 
-/// Today's date in UTC, "YYYY-MM-DD" (the page's date).
-pub fn utc_date_today() -> String {
-    let secs = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs());
-    utc_date(secs / 86_400)
-}
-
-/// The civil date of day `days` after 1970-01-01 (Hinnant's `civil_from_days`).
-fn utc_date(days: u64) -> String {
-    let z = days as i64 + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let day = doy - (153 * mp + 2) / 5 + 1;
-    let month = if mp < 10 { mp + 3 } else { mp - 9 };
-    let year = yoe + era * 400 + i64::from(month <= 2);
-    format!("{year:04}-{month:02}-{day:02}")
-}
-
 /// Every (technique, path) of the tables, in the first table's order, then the others'.
 fn row_keys(tables: &[ResultTable]) -> Vec<(String, String)> {
     let mut keys: Vec<(String, String)> = Vec::new();
@@ -196,13 +174,6 @@ mod tests {
             height: 800,
             rows: rows.as_array().unwrap().clone(),
         }
-    }
-
-    #[test]
-    fn civil_dates_of_known_days() {
-        assert_eq!(utc_date(0), "1970-01-01");
-        assert_eq!(utc_date(11_016), "2000-02-29");
-        assert_eq!(utc_date(20_791), "2026-12-04");
     }
 
     #[test]

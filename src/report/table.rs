@@ -231,6 +231,9 @@ pub struct BenchTable {
     pub relit: Option<String>,
     /// The probe's main cost model (`probe.md`).
     pub cost_model: Option<crate::cost::CostModel>,
+    /// When the probe behind `cost_model` was measured, and the cache file a reused one
+    /// came from.
+    pub probe_measured: Option<String>,
     /// Its model per speed state (`probe::states`), the rows' `model_ms` come from the one
     /// of their `model_state`.
     pub state_cost_models: Vec<crate::probe::StateModel>,
@@ -316,6 +319,9 @@ impl BenchTable {
         }
         if let Some(relit) = &self.relit {
             s += &format!("; relit: {relit}");
+        }
+        if let Some(measured) = &self.probe_measured {
+            s += &format!("; device probe measured {measured}");
         }
         if let (Some(states), Some(shares)) = (&self.device_states, &self.bench_state_shares) {
             s += &format!(
@@ -542,6 +548,7 @@ pub(crate) mod tests {
             specular: None,
             relit: None,
             cost_model: None,
+            probe_measured: None,
             device_states: None,
             bench_state_shares: None,
             scene_checks: Vec::new(),
