@@ -709,16 +709,7 @@ pub fn run_with_monitor(
 ) -> Result<(Probe, Monitor), GpuError> {
     let started = std::time::Instant::now();
     let base = base_grid(s.width, s.height, s.triangle_pixels);
-    let scene = probe_scene(s.width, s.height, false, base);
-    let gpu = SceneGpu::new(
-        ctx,
-        &scene,
-        &FrameSettings {
-            width: s.width,
-            height: s.height,
-            ..FrameSettings::default()
-        },
-    )?;
+    let gpu = probe_target(ctx, s, base)?;
     let nothing_mesh = upload_probe_mesh(ctx, s, false, 0)?;
     let full_mesh = upload_probe_mesh(ctx, s, false, base)?;
     let half_mesh = upload_probe_mesh(ctx, s, true, base)?;
@@ -726,8 +717,7 @@ pub fn run_with_monitor(
         .iter()
         .map(|&g| upload_probe_mesh(ctx, s, false, g))
         .collect::<Result<Vec<_>, _>>()?;
-    let res = probe_resources(ctx)?;
-    let linear = Sampler::new(ctx, SamplerKind::LinearClamp, "probe.linear")?;
+    let (res, linear) = point_resources(ctx)?;
     let planner = PointPlanner {
         ctx,
         gpu: &gpu,
@@ -832,18 +822,9 @@ pub fn monitor(
     states: DeviceStates,
 ) -> Result<Monitor, GpuError> {
     let base = base_grid(s.width, s.height, s.triangle_pixels);
-    let gpu = SceneGpu::new(
-        ctx,
-        &probe_scene(s.width, s.height, false, base),
-        &FrameSettings {
-            width: s.width,
-            height: s.height,
-            ..FrameSettings::default()
-        },
-    )?;
+    let gpu = probe_target(ctx, s, base)?;
     let full_mesh = upload_probe_mesh(ctx, s, false, base)?;
-    let res = probe_resources(ctx)?;
-    let linear = Sampler::new(ctx, SamplerKind::LinearClamp, "probe.linear")?;
+    let (res, linear) = point_resources(ctx)?;
     let planner = PointPlanner {
         ctx,
         gpu: &gpu,
@@ -861,6 +842,27 @@ pub fn monitor(
         gpu,
         states,
     })
+}
+
+/// The probe's scene on the GPU at `s`'s size, over a `base`² grid of triangle pairs.
+fn probe_target(ctx: &Arc<Context>, s: &ProbeSettings, base: u32) -> Result<SceneGpu, GpuError> {
+    SceneGpu::new(
+        ctx,
+        &probe_scene(s.width, s.height, false, base),
+        &FrameSettings {
+            width: s.width,
+            height: s.height,
+            ..FrameSettings::default()
+        },
+    )
+}
+
+/// The textures and uniforms every probe point binds, and the lightmap-like sampler.
+fn point_resources(ctx: &Arc<Context>) -> Result<(ProbeResources, Sampler), GpuError> {
+    Ok((
+        probe_resources(ctx)?,
+        Sampler::new(ctx, SamplerKind::LinearClamp, "probe.linear")?,
+    ))
 }
 
 /// Uploads the probe's mesh over the screen (or its left half) with a `grid`² grid of
