@@ -464,7 +464,7 @@ where
             .draw_series(LineSeries::new(stairs, colour.stroke_width(2)))
             .map_err(e)?
             .label(format!(
-                "{path}: Pareto front (filled: on it, hollow: dominated)"
+                "{path}: Pareto front (filled and named: on it; hollow: dominated, see the table)"
             ))
             .legend(move |(x, y)| {
                 PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
@@ -475,13 +475,18 @@ where
             } else {
                 colour.stroke_width(1)
             };
-            // Labels above the first path's points and below the second's keep the two
-            // paths' labels of one technique apart.
+            // Only the front is labelled (the table names every row): labels above the
+            // first path's points and below the second's keep one technique's apart.
             let dy = if k % 2 == 1 { 5 } else { -17 };
+            let label = if p.on_front {
+                p.label.clone()
+            } else {
+                String::new()
+            };
             let marker = EmptyElement::at((p.ms.ln(), p.error))
                 + Circle::new((0, 0), 5, style)
                 + Text::new(
-                    p.label.clone(),
+                    label,
                     (6, dy),
                     ("sans-serif", 13).into_font().color(&colour),
                 );
