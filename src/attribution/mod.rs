@@ -649,16 +649,7 @@ impl RowLadder<'_> {
         // Basis tables T_k = Σ_j V_kj (L×H)_j and the mean's, as pca.rs builds them.
         let map = table_map(self.path, self.prepared.table_res, label)?;
         let table = build_table(lxh, map);
-        let project = |t: usize, v: &[f64]| -> [f32; 3] {
-            let mut s = [0.0f64; 3];
-            for (j, vj) in v.iter().enumerate().take(n2) {
-                let e = table.values[t * n2 + j];
-                for c in 0..3 {
-                    s[c] += vj * e[c] as f64;
-                }
-            }
-            s.map(|x| x as f32)
-        };
+        let project = |t: usize, v: &[f64]| table.project(t, v);
         let stored = StoredTable::new(map, q.m + 1, |t, i| {
             project(t, if i < q.m { &q.basis[i] } else { &q.mean })
         });

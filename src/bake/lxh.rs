@@ -160,6 +160,23 @@ pub struct LxhTable {
     pub values: Vec<[f32; 3]>,
 }
 
+impl LxhTable {
+    /// Σ_j v_j · (L×H)_j at texel `t` (RGB): the table of a vector `v` of SH coefficients
+    /// (its first O² used) — a PCA basis vector's or mean's table T_k (Iwanicki–Sloan
+    /// eq. (6)).
+    pub fn project(&self, t: usize, v: &[f64]) -> [f32; 3] {
+        let n = self.v_order.coeff_count();
+        let mut s = [0.0f64; 3];
+        for (j, vj) in v.iter().enumerate().take(n) {
+            let e = self.values[t * n + j];
+            for c in 0..3 {
+                s[c] += vj * e[c] as f64;
+            }
+        }
+        s.map(|x| x as f32)
+    }
+}
+
 /// Fills an L×H table for every texel centre of `map` by the symmetric build
 /// ([`SymmetricBuild`], §3.3); equal to [`build_table_direct`] to rounding.
 pub fn build_table(m: &LxhMatrices, map: SphereMap) -> LxhTable {

@@ -199,20 +199,10 @@ fn tables_data(
     radiance_sh: &[[f64; 3]],
     label: &str,
 ) -> Result<NormalTableData, TechniqueError> {
-    let n = order.coeff_count();
     let m = basis.len();
     let map = table.map();
     let lxh = lxh_table(table, radiance_sh, order, h_order, label)?;
-    let project = |t: usize, v: &[f64]| -> [f32; 3] {
-        let mut s = [0.0f64; 3];
-        for (j, vj) in v.iter().enumerate().take(n) {
-            let e = lxh.values[t * n + j];
-            for c in 0..3 {
-                s[c] += vj * e[c] as f64;
-            }
-        }
-        s.map(|x| x as f32)
-    };
+    let project = |t: usize, v: &[f64]| lxh.project(t, v);
     let samples = map.sample_count();
     let basis_tables: Vec<[f32; 3]> = (0..samples)
         .flat_map(|t| basis.iter().map(move |b| (t, b)))
