@@ -26,9 +26,9 @@
 //! bounce irradiance to 0, which a linear operator cannot do (smooth skies never reach
 //! it; `tests/transfer.rs` holds the two equal).
 //!
-//! Storage: per texel, per channel, 9 rows of N f32 (texel-major), accumulated in f64 per
-//! texel, summed in a fixed ray order (bit-identical for any thread count), dilated like
-//! every other lightmap bake.
+//! Storage: per texel, per channel, 9 rows of N f32 (texel-major); (1) and (2) summed in
+//! f64, the hits of (3) in f32 (2× the SIMD width), each per texel in a fixed ray order
+//! (bit-identical for any thread count); dilated like every other lightmap bake.
 //!
 //! Compression ([`TransferMap::compress`]): the course's "can be compressed just like
 //! diffuse transfer" — PCA of the 3·9·N-vectors of the covered texels with the visibility
@@ -286,6 +286,21 @@ impl TransferMap {
     }
 }
 
+/// Channel `c` of covered texel `k`'s matrix: of `current` (three channels per texel), or
+/// with none of `direct` (one for every channel).
+fn channel_of<'a>(
+    current: Option<&'a [f32]>,
+    direct: &'a [f32],
+    k: usize,
+    c: usize,
+    per_channel: usize,
+) -> &'a [f32] {
+    match current {
+        Some(m) => &m[(k * 3 + c) * per_channel..][..per_channel],
+        None => &direct[k * per_channel..][..per_channel],
+    }
+}
+
 /// Bakes the transfer matrices of `scene` over `texels` (module doc).
 pub fn bake_transfer(
     scene: &Scene,
@@ -322,10 +337,12 @@ pub fn bake_transfer(
 
     // Eq. (1): the unbounced matrix, one for the three channels.
     let bar = progress_bar(settings.progress, covered.len(), "transfer direct");
-    let direct: Vec<Vec<f64>> = covered
-        .par_iter()
+    let mut direct = vec![0.0f32; covered.len() * per_channel];
+    direct
+        .par_chunks_mut(per_channel)
+        .zip(covered.par_iter())
         .with_min_len(16)
-        .map(|&i| {
+        .for_each(|(out, &i)| {
             let i = i as usize;
             let normal = texels.normal[i];
             let origin = tracer.offset_origin(texels.position[i], normal);
@@ -345,53 +362,73 @@ pub fn bake_transfer(
                     }
                 }
             }
-            m.iter_mut().for_each(|v| *v *= weight);
+            for (o, v) in out.iter_mut().zip(&m) {
+                *o = (v * weight) as f32;
+            }
             rays_done.fetch_add(rays, Ordering::Relaxed);
             bar.inc(1);
-            m
-        })
-        .collect();
+        });
     bar.finish_and_clear();
 
-    let expand = |m: &[f64]| -> Vec<f64> { [m, m, m].concat() };
-    let mut current: Vec<Vec<f64>> = direct.iter().map(|m| expand(m)).collect();
+    // The bounces' gathers read the rows' basis in f32.
+    let rows_f32: Vec<[f32; TRANSFER_ROWS]> = basis
+        .iter()
+        .map(|(rows, _)| std::array::from_fn(|i| rows[i] as f32))
+        .collect();
     let dilation = DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES);
     let a: Vec<f64> = (0..TRANSFER_ROWS)
         .map(|i| zonal::clamped_cosine_convolution((i as f64).sqrt() as u32))
         .collect();
+    // M^k per covered texel, three channels; `None`: M⁰, the same for every channel.
+    let mut current: Option<Vec<f32>> = None;
     for bounce in 1..=settings.bounces {
         // Eq. (2) at every texel: 3 × N irradiance row vectors, dilated into the gutters.
+        let mut gathered = vec![0.0f32; covered.len() * 3 * n];
+        gathered
+            .par_chunks_mut(3 * n)
+            .enumerate()
+            .with_min_len(64)
+            .for_each(|(k, out)| {
+                let nd = texels.normal[covered[k] as usize].as_dvec3().normalize();
+                let mut y = [0.0f64; TRANSFER_ROWS];
+                eval_basis(Order::THREE, nd, &mut y);
+                let mut e = vec![0.0f64; n];
+                for c in 0..3 {
+                    let m = channel_of(current.as_deref(), &direct, k, c, per_channel);
+                    e.iter_mut().for_each(|v| *v = 0.0);
+                    for row in 0..TRANSFER_ROWS {
+                        let ay = a[row] * y[row];
+                        for (ej, &mij) in e.iter_mut().zip(&m[row * n..(row + 1) * n]) {
+                            *ej += ay * f64::from(mij);
+                        }
+                    }
+                    for (o, &v) in out[c * n..(c + 1) * n].iter_mut().zip(&e) {
+                        *o = v as f32;
+                    }
+                }
+            });
         let mut irradiance = vec![0.0f32; res * res * 3 * n];
         for (k, &i) in covered.iter().enumerate() {
             let i = i as usize;
-            let nd = texels.normal[i].as_dvec3().normalize();
-            let mut y = [0.0f64; TRANSFER_ROWS];
-            eval_basis(Order::THREE, nd, &mut y);
-            let m = &current[k];
-            for c in 0..3 {
-                for j in 0..n {
-                    let e: f64 = (0..TRANSFER_ROWS)
-                        .map(|row| a[row] * y[row] * m[(c * TRANSFER_ROWS + row) * n + j])
-                        .sum();
-                    irradiance[(i * 3 + c) * n + j] = e as f32;
-                }
-            }
+            irradiance[i * 3 * n..(i + 1) * 3 * n].copy_from_slice(&gathered[k * 3 * n..][..3 * n]);
         }
+        drop(gathered);
         dilation.apply_vectors(&mut irradiance, 3 * n);
         let bar = progress_bar(
             settings.progress,
             covered.len(),
             &format!("transfer bounce {bounce}"),
         );
-        current = covered
-            .par_iter()
+        // Eq. (3), the hits' sums in f32 per texel (in ray order).
+        let mut next = vec![0.0f32; covered.len() * per_texel];
+        next.par_chunks_mut(per_texel)
+            .enumerate()
             .with_min_len(16)
-            .zip(direct.par_iter())
-            .map(|(&i, direct)| {
-                let i = i as usize;
+            .for_each(|(k, out)| {
+                let i = covered[k] as usize;
                 let normal = texels.normal[i];
                 let origin = tracer.offset_origin(texels.position[i], normal);
-                let mut m = vec![0.0f64; per_texel];
+                let mut m = vec![0.0f32; per_texel];
                 let rays = for_each_front_hit(
                     tracer,
                     &surfaces,
@@ -400,38 +437,50 @@ pub fn bake_transfer(
                     origin,
                     |r, _, surface| {
                         let t = texels.texel_index(surface.uv_lightmap.into());
-                        let rows = &basis[r].0;
+                        let rows = &rows_f32[r];
                         for c in 0..3 {
-                            let albedo = f64::from(surface.albedo[c]) / std::f64::consts::PI;
+                            let albedo = surface.albedo[c] / std::f32::consts::PI;
                             let e = &irradiance[(t * 3 + c) * n..(t * 3 + c + 1) * n];
                             for (row, &yi) in rows.iter().enumerate() {
                                 let s = yi * albedo;
-                                let out = &mut m[(c * TRANSFER_ROWS + row) * n..][..n];
-                                for (o, &ej) in out.iter_mut().zip(e) {
-                                    *o += s * f64::from(ej);
+                                let acc = &mut m[(c * TRANSFER_ROWS + row) * n..][..n];
+                                for (o, &ej) in acc.iter_mut().zip(e) {
+                                    *o += s * ej;
                                 }
                             }
                         }
                     },
                 );
-                for chunk in m.chunks_exact_mut(per_channel) {
-                    for (v, &d0) in chunk.iter_mut().zip(direct) {
-                        *v = d0 + weight * *v;
+                let weight = weight as f32;
+                for c in 0..3 {
+                    let d0 = &direct[k * per_channel..][..per_channel];
+                    let bounced = &m[c * per_channel..][..per_channel];
+                    for ((o, &d), &v) in out[c * per_channel..][..per_channel]
+                        .iter_mut()
+                        .zip(d0)
+                        .zip(bounced)
+                    {
+                        *o = d + weight * v;
                     }
                 }
                 rays_done.fetch_add(rays, Ordering::Relaxed);
                 bar.inc(1);
-                m
-            })
-            .collect();
+            });
         bar.finish_and_clear();
+        current = Some(next);
     }
 
     let mut matrices = vec![0.0f32; res * res * per_texel];
     for (k, &i) in covered.iter().enumerate() {
-        let out = &mut matrices[i as usize * per_texel..(i as usize + 1) * per_texel];
-        for (o, &v) in out.iter_mut().zip(&current[k]) {
-            *o = v as f32;
+        let out = &mut matrices[i as usize * per_texel..][..per_texel];
+        for c in 0..3 {
+            out[c * per_channel..][..per_channel].copy_from_slice(channel_of(
+                current.as_deref(),
+                &direct,
+                k,
+                c,
+                per_channel,
+            ));
         }
     }
     dilation.apply_vectors(&mut matrices, per_texel);
