@@ -1,5 +1,5 @@
 # The two commands of the README. Each installs what is missing first (scripts/install-deps.sh).
-.PHONY: deps test bench build clean device-kit
+.PHONY: deps test bench bench-full build clean device-kit
 
 # Tests run on lavapipe with the validation layer; keep tests single-binary-parallel
 # but not one Vulkan instance per core more than the machine has.
@@ -25,16 +25,17 @@ comma := ,
 # Normal mapping for PRT against unc6 under the sun turned 90° after the bake.
 NMPRT_ROWS = unc6,preconv,shlmap,nmprt,nmprtsvd4,nmprtsvd6,nmprthl2,nmprtratio
 
+# The main job: the paper's cost table and one row of each later family at 1280×800 with the
+# references, errors, attribution ladder, figures and index.html (the bench prints its plan
+# and estimate first, then the time left). Frames are few to fit five minutes on 2 cores.
 bench: build
-	start=$$(date +%s); \
-	target/release/shvis bench --out $(BENCH_OUT) && \
-	target/release/shvis study rnm --envs $(RNM_ENVS) --out $(BENCH_OUT)/rnm && \
-	target/release/shvis study normalmap $(if $(wildcard $(MODEL)),--model $(MODEL)) --out $(BENCH_OUT)/normalmap && \
-	target/release/shvis study ndf --diffuse-envs $(NDF_ENVS) --out $(BENCH_OUT)/ndf && \
-	target/release/shvis study nmprt-svd --out $(BENCH_OUT)/nmprt && \
-	target/release/shvis bench --techniques $(NMPRT_ROWS) --relight-rotate 90 --point-reference --ref-spp 256 --no-probe --frames 3 --warmup 1 --out $(BENCH_OUT)/relit90 && \
-	target/release/shvis bench --scene bumpy --techniques unc6,preconv,unc6ndf,preconvndf --specular mip,ndf,ndfn --light-dir 0,0.3,-1 --vis-res 256 --rays 256 --width 640 --height 360 --out $(BENCH_OUT)/specular && \
-	echo "make bench: $$(( $$(date +%s) - start )) s after the build"
+	target/release/shvis bench --techniques headline --frames 9 --warmup 1 --probe-frames 4 --out $(BENCH_OUT)
+
+# Everything: every row, every study, the relit and specular benches.
+bench-full: build
+	SHVIS=target/release/shvis OUT=$(BENCH_OUT) RNM_ENVS='$(RNM_ENVS)' NDF_ENVS='$(NDF_ENVS)' \
+	MODEL_ARG='$(if $(wildcard $(MODEL)),--model $(MODEL))' NMPRT_ROWS='$(NMPRT_ROWS)' \
+	scripts/bench-full.sh
 
 clean:
 	cargo clean

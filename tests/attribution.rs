@@ -87,6 +87,7 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
             out: out_dir.clone(),
             probe: false,
             probe_fresh: false,
+            probe_frames: 5,
             relight_degrees: None,
         },
     )

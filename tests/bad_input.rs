@@ -623,8 +623,8 @@ fn argument_cases(suite: &mut Suite) {
         vec!["dx11"],
     ));
     for (flag, v) in [
-        ("--spp", "0"),
-        ("--spp", "1000001"),
+        ("--ref-spp", "0"),
+        ("--ref-spp", "1000001"),
         ("--width", "0"),
         ("--bounces", "17"),
         ("--exposure", "nan"),
@@ -661,7 +661,7 @@ fn argument_cases(suite: &mut Suite) {
     for (flag, v) in [
         ("--frames", "0"),
         ("--every", "0"),
-        ("--samples", "65"),
+        ("--error-frames", "65"),
         ("--turns", "nan"),
         ("--ref-spp", "0"),
     ] {
@@ -672,7 +672,7 @@ fn argument_cases(suite: &mut Suite) {
     }
     for (args, flag) in [
         (vec!["study", "normalmap", "--rays", "0"], "--rays"),
-        (vec!["study", "normalmap", "--res", "9000"], "--res"),
+        (vec!["study", "normalmap", "--map-res", "9000"], "--map-res"),
         (vec!["study", "rnm", "--vis-res", "9000"], "--vis-res"),
         (
             vec![
@@ -1209,7 +1209,7 @@ fn value_cases(suite: &mut Suite) {
             "16",
             "--height",
             "16",
-            "--spp",
+            "--ref-spp",
             "16",
             "--vis-res",
             "64",

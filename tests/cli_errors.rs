@@ -216,9 +216,9 @@ fn ssbump_bad_height_map_and_scale() {
     let out = shvis(
         &[
             "ssbump",
-            "--height",
+            "--height-map",
             "/no/such/h.png",
-            "--scale",
+            "--height-scale",
             "2",
             "--out",
             "x.png",
@@ -228,11 +228,17 @@ fn ssbump_bad_height_map_and_scale() {
     assert_one_error_line(&out, &["/no/such/h.png", "cannot read"]);
     let out = shvis(
         &[
-            "ssbump", "--height", "h.png", "--scale", "0", "--out", "x.png",
+            "ssbump",
+            "--height-map",
+            "h.png",
+            "--height-scale",
+            "0",
+            "--out",
+            "x.png",
         ],
         &[],
     );
-    assert_one_error_line(&out, &["--scale"]);
+    assert_one_error_line(&out, &["--height-scale"]);
 }
 
 #[test]
@@ -282,7 +288,7 @@ fn normalmap_bad_meshes_sizes_and_outputs() {
     let out = dir.join("n.png");
     let out = out.to_str().unwrap();
     let run = |extra: &[&str]| {
-        let mut args = vec!["normalmap", "--res", "64"];
+        let mut args = vec!["normalmap", "--map-res", "64"];
         args.extend_from_slice(extra);
         shvis(&args, &[])
     };
@@ -302,7 +308,7 @@ fn normalmap_bad_meshes_sizes_and_outputs() {
         &shvis(
             &[
                 "normalmap",
-                "--res",
+                "--map-res",
                 "100000",
                 "--high",
                 "sphere:3",
@@ -313,7 +319,7 @@ fn normalmap_bad_meshes_sizes_and_outputs() {
             ],
             &[],
         ),
-        &["--res 100000"],
+        &["--map-res 100000"],
     );
     assert_one_error_line(
         &run(&["--high", "sphere:3", "--simplify", "1.5", "--out", out]),

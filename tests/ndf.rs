@@ -368,6 +368,7 @@ fn the_bench_measures_the_specular_filterings_side_by_side() {
             out: out.clone(),
             probe: false,
             probe_fresh: false,
+            probe_frames: 5,
             relight_degrees: None,
         },
     )

@@ -1,9 +1,11 @@
 //! The bench's `index.html` in a real browser. A small bench (3 techniques × 2
 //! paths at 96×60) writes its folder; headless Chromium (Debian's `chromium`, installed by
-//! `make deps`) loads the page from disk and must report no console message, every
-//! `<img>` decoded (naturalWidth > 0, read back from the attributes the page sets on
-//! load), no script error, and one cost-table row per technique × path. A screenshot goes
-//! to `target/tmp/report_html/index.png`.
+//! `make deps`) loads the page from disk and must report no console message, no fetched
+//! `<img>` that failed to decode (naturalWidth 0, read back from the attributes the page
+//! sets on load; images are lazy, so those far below are not fetched), no script error,
+//! and one cost-table row per technique × path; every `src` and `href` of the page names a
+//! file in the folder, and every PNG among them decodes. A screenshot goes to
+//! `target/tmp/report_html/index.png`.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -139,6 +141,10 @@ fn bench_report_loads_in_headless_chromium() {
     );
     assert_eq!(broken.as_deref(), Some("0"), "images that did not decode");
     assert_eq!(script_errors.as_deref(), Some("0"), "script errors");
+    let linked = check_links(
+        &out,
+        &std::fs::read_to_string(&page).expect("index.html reads"),
+    );
     let rows = dom.matches("<tr class=\"row").count();
     assert_eq!(rows, techniques.len() * paths.len(), "cost-table rows");
     for t in techniques {
@@ -176,7 +182,35 @@ fn bench_report_loads_in_headless_chromium() {
         distinct.len()
     );
     println!(
-        "{images} images decoded, {rows} rows; screenshot {}",
+        "{images} images, none broken; {linked} links resolve; {rows} rows; screenshot {}",
         shot.display()
     );
+}
+
+/// Every `src="…"` and `href="…"` of `html` that is not a fragment or a URL names a file
+/// under `dir`, and every PNG among them decodes. Returns how many were checked.
+fn check_links(dir: &Path, html: &str) -> usize {
+    let mut checked = 0;
+    for attribute in ["src=\"", "href=\""] {
+        for (at, _) in html.match_indices(attribute) {
+            let rest = &html[at + attribute.len()..];
+            let target = &rest[..rest.find('"').expect("a closed attribute")];
+            if target.starts_with('#') || target.contains("://") || target.starts_with("data:") {
+                continue;
+            }
+            let target = target.replace("&amp;", "&");
+            let file = dir.join(&target);
+            assert!(
+                file.is_file(),
+                "the page links {target}, which is not in {}",
+                dir.display()
+            );
+            if target.ends_with(".png") {
+                image::open(&file).unwrap_or_else(|e| panic!("{target} does not decode: {e}"));
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked > 0, "the page links nothing");
+    checked
 }

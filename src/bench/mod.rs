@@ -13,6 +13,7 @@
 
 mod ladder;
 mod model;
+pub mod plan;
 mod references;
 pub mod rows;
 mod timing;
@@ -72,6 +73,8 @@ pub struct BenchSettings {
     /// Measure the probe again even where one measured before on this device, driver and
     /// build is cached (`probe::cache`).
     pub probe_fresh: bool,
+    /// Timed frames per microbenchmark of the probe.
+    pub probe_frames: u32,
 }
 
 /// The specular term of a bench: its light and base spread, and the normal-map filterings
@@ -196,6 +199,14 @@ pub fn run(
         TIMING_ROUNDS.min(settings.frames.max(1))
     };
     let per_round = settings.frames.div_ceil(rounds);
+    let filters = settings.specular.as_ref().map_or(1, |s| s.filters.len());
+    let rows_planned = settings
+        .techniques
+        .iter()
+        .map(|t| settings.paths.iter().filter(|&&p| t.runs_on(p)).count())
+        .sum::<usize>()
+        * filters;
+    clock.progress = plan::Progress::new(rows_planned * rounds as usize);
     let (mut rows, mut samples) = measure_rows(
         ctx,
         &mut scene,
@@ -270,15 +281,7 @@ fn run_probe(
     }
     let (probe, monitor) = crate::probe::cache::run_cached(
         ctx,
-        &crate::probe::ProbeSettings {
-            width: settings.width,
-            height: settings.height,
-            triangle_pixels: prepared
-                .scene
-                .pixel_weighted_triangle_area(settings.width, settings.height),
-            warmup: settings.warmup.min(5),
-            frames: settings.frames.clamp(5, 30),
-        },
+        &probe_settings(settings, &prepared.scene),
         &crate::bake::cache::default_cache_dir(),
         settings.probe_fresh,
     )?;
@@ -290,6 +293,37 @@ fn run_probe(
     );
     out.probe(&probe)?;
     Ok(Some((probe, monitor)))
+}
+
+/// The device probe a bench of `settings` on `scene` runs (or reuses).
+pub fn probe_settings(
+    settings: &BenchSettings,
+    scene: &crate::scene::Scene,
+) -> crate::probe::ProbeSettings {
+    crate::probe::ProbeSettings {
+        width: settings.width,
+        height: settings.height,
+        triangle_pixels: scene.pixel_weighted_triangle_area(settings.width, settings.height),
+        warmup: settings.warmup.min(5),
+        frames: settings.probe_frames,
+    }
+}
+
+/// When the cached probe a bench of `settings` on `scene` would reuse was measured, if
+/// there is one and `--probe fresh` is not asked for.
+pub fn cached_probe(
+    ctx: &Context,
+    settings: &BenchSettings,
+    scene: &crate::scene::Scene,
+) -> Option<String> {
+    if !settings.probe || settings.probe_fresh {
+        return None;
+    }
+    crate::probe::cache::measured_at(
+        &crate::bake::cache::default_cache_dir(),
+        ctx,
+        &probe_settings(settings, scene),
+    )
 }
 
 /// The table's header fields (its rows and timings are filled by [`run`]).
@@ -355,6 +389,8 @@ pub(crate) struct Clock {
     started: Instant,
     lap: Instant,
     phases: BenchPhases,
+    /// The rows' timing rounds, with the time left.
+    pub(crate) progress: plan::Progress,
 }
 
 impl Clock {
@@ -363,6 +399,7 @@ impl Clock {
             started: Instant::now(),
             lap: Instant::now(),
             phases: BenchPhases::default(),
+            progress: plan::Progress::new(0),
         }
     }
 

@@ -82,6 +82,9 @@ pub(super) fn measure_rows(
                     }
                     continue;
                 }
+                clock
+                    .progress
+                    .step(&format!("{technique}.{path}: built, timed, measured"));
                 let measured = measure_row(
                     &rows_of, technique, path, references, ladder, settings, per_round, monitor,
                     clock, out,

@@ -69,8 +69,14 @@ impl Rounds<'_> {
         samples: &mut [Segmented],
         clock: &mut Clock,
     ) -> Result<(), BenchError> {
-        for _ in 1..rounds {
+        for round in 1..rounds {
             for (row, times) in rows.iter().zip(samples.iter_mut()) {
+                clock.progress.step(&format!(
+                    "{}.{}: timing round {} of {rounds}",
+                    row.technique,
+                    row.path,
+                    round + 1
+                ));
                 self.time_round(row.technique, row.path, times, clock)?;
             }
         }
@@ -113,7 +119,12 @@ impl Rounds<'_> {
                 unmodelled.len(),
                 100.0 * BUILD_AGREEMENT
             );
+            clock.progress.add(unmodelled.len());
             for i in unmodelled {
+                clock.progress.step(&format!(
+                    "{}.{}: timed again",
+                    rows[i].technique, rows[i].path
+                ));
                 self.time_round(rows[i].technique, rows[i].path, &mut samples[i], clock)?;
             }
         }

@@ -7,8 +7,9 @@ use anyhow::{Result, bail};
 use clap::Args;
 
 use shvis::bench::BenchSettings;
+use shvis::bench::plan::{Plan, duration};
 use shvis::prepare::prepare_with;
-use shvis::technique::{HwPath, Technique};
+use shvis::technique::HwPath;
 
 use super::args::{
     BakerArgs, GpuArgs, NormalFilterArg, SceneArgs, SpecularArgs, at_least_one_f64, finite_degrees,
@@ -16,7 +17,7 @@ use super::args::{
 };
 use super::{
     DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, check_frame_memory, create_dir, parse_list,
-    prepare_settings, print_table, print_written, with_gpu,
+    parse_techniques, prepare_settings, print_table, print_written, with_gpu,
 };
 
 #[derive(Args, Debug)]
@@ -46,8 +47,10 @@ pub(super) struct ProbeArgs {
 pub(super) struct BenchArgs {
     #[arg(help_heading = "Rows", long, default_value = "sky")]
     env: String,
-    /// `all` or a comma-separated list of technique names.
-    #[arg(help_heading = "Rows", long, default_value = "all")]
+    /// A named set — `headline` (the paper's table and one row of each later family),
+    /// `paper` (the paper's table), `all` (every row) — or a comma-separated list of names
+    /// (`shvis techniques`).
+    #[arg(help_heading = "Rows", long, default_value = "headline")]
     techniques: String,
     /// Comma-separated hardware paths.
     #[arg(help_heading = "Rows", long, default_value = "dx9,dx10")]
@@ -71,7 +74,7 @@ pub(super) struct BenchArgs {
     #[arg(help_heading = "Output", long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
     exposure: f32,
     /// Samples per pixel of the reference the errors are measured against (0: no errors);
-    /// at most `reference --spp`'s limit.
+    /// at most `reference --ref-spp`'s limit.
     #[arg(help_heading = "Reference and errors", long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(0..=1_000_000))]
     ref_spp: u32,
     /// Measure against the point-sampled reference (the techniques' own pixel sampling)
@@ -86,6 +89,10 @@ pub(super) struct BenchArgs {
     /// Leave out the device probe and the rows' model columns.
     #[arg(help_heading = "Frames and timing", long)]
     no_probe: bool,
+    /// Timed frames per microbenchmark of the device probe (default: `--frames`, within
+    /// 5–30); fewer measure faster and fit the model less closely.
+    #[arg(help_heading = "Frames and timing", long, value_parser = clap::value_parser!(u32).range(1..=1_000))]
+    probe_frames: Option<u32>,
     /// The device probe: `cached` reuses one measured before on this device, driver and
     /// build with the same settings (in the bake cache's folder), `fresh` measures again.
     #[arg(help_heading = "Frames and timing", long, value_enum, default_value_t = ProbeMode::Cached)]
@@ -148,7 +155,7 @@ pub(super) enum ProbeMode {
 pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
     check_frame_memory(a.width, a.height, 320)?;
     let mut settings = BenchSettings {
-        techniques: with_normal_filter(parse_list(&a.techniques, Technique::ALL)?, a.normal_filter),
+        techniques: with_normal_filter(parse_techniques(&a.techniques)?, a.normal_filter),
         paths: parse_list(&a.paths, HwPath::ALL)?,
         frames: a.frames,
         warmup: a.warmup,
@@ -163,6 +170,7 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
         out: a.out.clone(),
         probe: !a.no_probe,
         probe_fresh: a.probe == ProbeMode::Fresh,
+        probe_frames: a.probe_frames.unwrap_or(a.frames.clamp(5, 30)),
         relight_degrees: a.relight_rotate,
     };
     if a.relight_rotate.is_some() && !a.specular.specular.is_empty() {
@@ -178,10 +186,18 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
     // The device before the bake: a missing GPU should not cost one, and `--baker gpu`
     // bakes on it.
     with_gpu(&a.gpu, |ctx| {
+        let scene =
+            shvis::prepare::resolve_scene(&prepare_settings.scene, prepare_settings.vis_res)?;
+        let cached_probe = shvis::bench::cached_probe(ctx, &settings, &scene);
+        drop(scene);
+        let plan = Plan::new(ctx, &settings, &prepare_settings, cached_probe);
+        eprintln!("{}", plan.describe(&settings));
+        let bakes_started = Instant::now();
         let mut prepared = prepare_with(&prepare_settings, &a.baker.visibility_baker(ctx))?;
         prepared.prepare_techniques(&settings.techniques)?;
+        let bake_seconds = bakes_started.elapsed().as_secs_f64();
         settings.specular = a.specular.settings(&prepared.env)?;
-        if a.techniques == "all" {
+        if shvis::technique::catalog::named_set(a.techniques.trim()).is_some() {
             // The whole table on a scene without a height map: the rows that need one are
             // left out (named explicitly they fail with the reason).
             let dropped = shvis::bench::rows::drop_rows_without_height_map(
@@ -198,6 +214,12 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
             }
         }
         let table = shvis::bench::run(ctx, &prepared, &settings)?;
+        plan.record(&table, bake_seconds);
+        eprintln!(
+            "bench: {} in all (the plan said about {})",
+            duration(started.elapsed().as_secs_f64()),
+            duration(plan.estimate_seconds())
+        );
         print_table(
             &table.to_markdown(),
             &a.out,

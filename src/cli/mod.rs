@@ -172,15 +172,38 @@ fn create_dir(dir: &Path) -> Result<()> {
 /// `all` or a comma-separated list of names.
 fn parse_list<T>(list: &str, all: &[T]) -> Result<Vec<T>>
 where
-    T: std::str::FromStr + Copy,
+    T: std::str::FromStr + Copy + PartialEq + std::fmt::Display,
     T::Err: std::error::Error + Send + Sync + 'static,
 {
     if list == "all" {
         return Ok(all.to_vec());
     }
-    list.split(',')
-        .map(|s| s.trim().parse::<T>().map_err(anyhow::Error::from))
-        .collect()
+    let mut items: Vec<T> = Vec::new();
+    for s in list.split(',') {
+        let item: T = s.trim().parse()?;
+        if items.contains(&item) {
+            bail!("'{list}': {item} is named twice");
+        }
+        items.push(item);
+    }
+    Ok(items)
+}
+
+/// A `--techniques` value: a named set (`all`, `paper`, `headline`:
+/// `technique::catalog::named_set`) or a comma-separated list of names, each once.
+fn parse_techniques(list: &str) -> Result<Vec<Technique>> {
+    if let Some(set) = shvis::technique::catalog::named_set(list.trim()) {
+        return Ok(set);
+    }
+    let mut techniques: Vec<Technique> = Vec::new();
+    for name in list.split(',') {
+        let t: Technique = name.trim().parse()?;
+        if techniques.contains(&t) {
+            bail!("--techniques '{list}': {t} is named twice");
+        }
+        techniques.push(t);
+    }
+    Ok(techniques)
 }
 
 /// The bake settings of `scene` under `env` for `techniques`: the inter-reflected bakes

@@ -78,7 +78,7 @@ pub(super) struct ReferenceArgs {
     #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
     height: u32,
     /// Environment samples per pixel.
-    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    #[arg(long = "ref-spp", default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     spp: u32,
     #[arg(long, default_value_t = 0)]
     seed: u64,

@@ -45,7 +45,7 @@ pub(super) enum StudyCommand {
 #[derive(Args, Debug)]
 pub(super) struct StudyNmprtSvdArgs {
     /// Disk grid of normals per side (the U textures' resolution).
-    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    #[arg(long = "disk-res", default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=1024))]
     side: u32,
     /// Hemisphere quadrature cells per side (in cos θ and φ).
     #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(4..=4096))]
@@ -78,7 +78,7 @@ pub(super) struct StudyNdfArgs {
     #[arg(long, default_value_t = 270, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
     height: u32,
     /// Reference sub-pixel samples (⌈√spp⌉² strata, at most 1024).
-    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    #[arg(long = "ref-spp", default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1024))]
     spp: u32,
     #[arg(long, value_delimiter = ',', default_value = "dx9,dx10")]
     paths: Vec<HwPath>,
@@ -94,7 +94,7 @@ pub(super) struct StudyNdfArgs {
     #[arg(long, value_delimiter = ',', default_value = "sky")]
     diffuse_envs: Vec<String>,
     /// Reference samples per pixel of the diffuse part.
-    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    #[arg(long = "diffuse-ref-spp", default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     diffuse_spp: u32,
     /// Lightmap resolution of the diffuse part's bakes.
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=4096))]
@@ -112,10 +112,10 @@ pub(super) struct StudyNormalmapArgs {
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
     repeats: u32,
     /// Map side of the triangle-count and strategy tables.
-    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(16..=8192))]
+    #[arg(long = "map-res", default_value_t = 512, value_parser = clap::value_parser!(u32).range(16..=8192))]
     res: u32,
     /// A real model (.gltf/.glb) for the simplification part; without one that part is
-    /// skipped with a note (`make bench` passes the shared assets' NormalTangentMirrorTest
+    /// skipped with a note (`make bench-full` passes the shared assets' NormalTangentMirrorTest
     /// when they are there).
     #[arg(long)]
     model: Option<PathBuf>,
@@ -123,7 +123,7 @@ pub(super) struct StudyNormalmapArgs {
     #[arg(long, value_delimiter = ',', default_value = "0.05,0.02", value_parser = finite_f32)]
     ratios: Vec<f32>,
     /// Map side for the model.
-    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(16..=8192))]
+    #[arg(long = "model-map-res", default_value_t = 1024, value_parser = clap::value_parser!(u32).range(16..=8192))]
     model_res: u32,
     #[arg(long, default_value = "sky")]
     env: String,
@@ -138,7 +138,7 @@ pub(super) struct StudyNormalmapArgs {
     #[arg(long, default_value_t = 360, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
     height: u32,
     /// Samples per pixel of the reference.
-    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    #[arg(long = "ref-spp", default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     spp: u32,
     /// Output directory: normalmap.md, normalmap.json, the model's maps, glTFs and renders.
     #[arg(short, long, default_value = "study-out/normalmap")]
@@ -153,7 +153,7 @@ pub(super) struct StudyRnmArgs {
     #[arg(long, default_value = "patio")]
     scene: String,
     /// Environments, comma-separated (`sky`, `sky:DEG`, .exr/.hdr maps); `sky:15` is the
-    /// grazing low sun (`make bench` adds the shared assets' overcast probe when it is there).
+    /// grazing low sun (`make bench-full` adds the shared assets' overcast probe when it is there).
     #[arg(long, value_delimiter = ',', default_value = "sky:15")]
     envs: Vec<String>,
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=8192))]
@@ -172,7 +172,7 @@ pub(super) struct StudyRnmArgs {
     #[arg(long, default_value_t = 300, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
     height: u32,
     /// Samples per pixel of each reference.
-    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    #[arg(long = "ref-spp", default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     spp: u32,
     #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
     exposure: f32,

@@ -145,10 +145,10 @@ pub(super) enum ShCommand {
 pub(super) struct SsbumpArgs {
     /// Height map (a PNG or EXR; luminance in [0, 1]), or `house`: the built-in bricks'
     /// height field in texels, the one their normal map is derived from.
-    #[arg(long)]
+    #[arg(long = "height-map")]
     height: PathBuf,
     /// Height of a white texel, in texels (with `house`: a factor on its heights).
-    #[arg(long, value_parser = finite_f64)]
+    #[arg(long = "height-scale", value_parser = finite_f64)]
     scale: f64,
     /// Rays per texel.
     #[arg(long, default_value_t = 300, value_parser = clap::value_parser!(u32).range(1..=65536))]
@@ -170,8 +170,6 @@ enum BakerArg {
     Gpu,
     /// Ray casting along the low mesh's interpolated normal (the check).
     Cpu,
-    /// Both: --out from the GPU, `*_cpu` beside it, and their angular difference.
-    Both,
 }
 
 #[derive(Args, Debug)]
@@ -193,7 +191,7 @@ pub(super) struct NormalmapArgs {
     #[arg(long, value_parser = finite_f32)]
     simplify: Option<f32>,
     /// Map texels per side.
-    #[arg(long, default_value_t = 1024)]
+    #[arg(long = "map-res", default_value_t = 1024)]
     res: u32,
     /// Border-expansion passes (texels filled around each chart).
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=1024))]
@@ -211,8 +209,13 @@ pub(super) struct NormalmapArgs {
     /// One draw call per low triangle (with a scissor) instead of one multi-draw indirect.
     #[arg(long)]
     direct_draws: bool,
+    /// Who makes the map: `gpu` (the paper's method) or `cpu` (ray casting, the check).
     #[arg(long, value_enum, default_value = "gpu")]
     baker: BakerArg,
+    /// With `--baker gpu`: also ray-cast the map on the CPU (`*_cpu` beside `--out`) and
+    /// print their angular difference.
+    #[arg(long)]
+    compare_cpu: bool,
     /// CPU rays along each low triangle's face normal (the GPU's projection direction)
     /// instead of the interpolated normal.
     #[arg(long)]
@@ -290,10 +293,11 @@ pub(super) fn run_normalmap(a: NormalmapArgs) -> Result<()> {
         } else {
             DrawMode::Indirect
         },
-        bakers: match a.baker {
-            BakerArg::Gpu => Bakers::Gpu,
-            BakerArg::Cpu => Bakers::Cpu,
-            BakerArg::Both => Bakers::Both,
+        bakers: match (a.baker, a.compare_cpu) {
+            (BakerArg::Gpu, false) => Bakers::Gpu,
+            (BakerArg::Gpu, true) => Bakers::Both,
+            (BakerArg::Cpu, false) => Bakers::Cpu,
+            (BakerArg::Cpu, true) => bail!("--compare-cpu: only with --baker gpu"),
         },
         cpu_rays: if a.cpu_face_rays {
             RayDirection::Face

@@ -12,7 +12,7 @@ use shvis::technique::{HwPath, Technique};
 use super::args::{GpuArgs, SceneArgs, finite_f32, finite_f64};
 use super::{
     DEFAULT_EXPOSURE_EV, MAX_FRAME_SIDE, check_frame_memory, check_validation, create_dir,
-    parse_list, prepare_for, print_table, with_gpu,
+    parse_list, parse_techniques, prepare_for, print_table, with_gpu,
 };
 
 #[derive(Args, Debug)]
@@ -83,7 +83,7 @@ pub(super) struct RelightArgs {
     #[arg(long)]
     fade_to: Option<String>,
     /// Frames at which errors are measured.
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    #[arg(long = "error-frames", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
     samples: u32,
     #[arg(long, default_value_t = 320, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]
     width: u32,
@@ -116,7 +116,7 @@ pub(super) fn run_view(a: ViewArgs) -> Result<()> {
             "no display to open a window on (DISPLAY is not set): run under `xvfb-run -a shvis view …`, or use `shvis render` / `shvis bench`"
         );
     }
-    let techniques: Vec<Technique> = parse_list(&a.techniques, Technique::ALL)?;
+    let techniques: Vec<Technique> = parse_techniques(&a.techniques)?;
     let prepared = prepare_for(
         &a.scene,
         &a.env,
@@ -152,7 +152,7 @@ pub(super) fn run_relight(a: RelightArgs) -> Result<()> {
         bail!("--turns {} is not a finite number", a.turns);
     }
     let settings = shvis::relight::RelightSettings {
-        techniques: parse_list(&a.techniques, Technique::ALL)?,
+        techniques: parse_techniques(&a.techniques)?,
         paths: parse_list(&a.paths, HwPath::ALL)?,
         frames: a.frames,
         every: a.every,

@@ -39,8 +39,40 @@ pub fn compile_glsl(
     compile_source(&format!("glsl/{path}"), text, stage, defines)
 }
 
-/// Compiles GLSL `text` reported as `name` in diagnostics; see [`compile_glsl`].
+/// SPIR-V compiled in this process, by (name, text, stage, defines): a bench builds each
+/// row once per timing round, a probe each point once per batch, from the same source.
+type CompiledKey = (String, String, u8, Vec<(String, u32)>);
+static COMPILED: std::sync::LazyLock<
+    std::sync::Mutex<std::collections::HashMap<CompiledKey, Vec<u32>>>,
+> = std::sync::LazyLock::new(Default::default);
+
+/// Compiles GLSL `text` reported as `name` in diagnostics; see [`compile_glsl`]. A source
+/// compiled before in this process with the same defines is not compiled again.
 pub fn compile_source(
+    name: &str,
+    text: &str,
+    stage: ShaderStage,
+    defines: &[(&str, u32)],
+) -> Result<Vec<u32>, GpuError> {
+    let key: CompiledKey = (
+        name.to_string(),
+        text.to_string(),
+        stage as u8,
+        defines.iter().map(|&(n, v)| (n.to_string(), v)).collect(),
+    );
+    let compiled =
+        |cache: &std::collections::HashMap<CompiledKey, Vec<u32>>| cache.get(&key).cloned();
+    if let Some(spirv) = COMPILED.lock().ok().and_then(|c| compiled(&c)) {
+        return Ok(spirv);
+    }
+    let spirv = compile_uncached(name, text, stage, defines)?;
+    if let Ok(mut cache) = COMPILED.lock() {
+        cache.insert(key, spirv.clone());
+    }
+    Ok(spirv)
+}
+
+fn compile_uncached(
     name: &str,
     text: &str,
     stage: ShaderStage,

@@ -83,7 +83,7 @@ impl NormalMapJob {
         }
         if !(super::MIN_RES..=super::MAX_RES).contains(&self.res) {
             return invalid(format!(
-                "--res {} is outside {}..={}",
+                "--map-res {} is outside {}..={}",
                 self.res,
                 super::MIN_RES,
                 super::MAX_RES

@@ -75,6 +75,11 @@ pub fn run_cached(
     Ok((probe, monitor))
 }
 
+/// When the cached probe of `s` on `ctx`'s device in `dir` was measured, if there is one.
+pub fn measured_at(dir: &Path, ctx: &Context, s: &ProbeSettings) -> Option<String> {
+    read(&path(dir, ctx, s), ctx.device_name()).map(|p| format!("{} UTC", p.measured_at))
+}
+
 /// The probe in `file`, if it is one of `device`.
 fn read(file: &Path, device: &str) -> Option<Probe> {
     let bytes = crate::files::read_bounded(file, MAX_PROBE_BYTES, "cached probe").ok()?;

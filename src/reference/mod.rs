@@ -233,7 +233,7 @@ pub fn render_reference(
     if settings.spp == 0 {
         return Err(GpuError::Invalid {
             what: "reference".into(),
-            detail: "--spp must be at least 1".into(),
+            detail: "--ref-spp must be at least 1".into(),
         });
     }
     let start = Instant::now();

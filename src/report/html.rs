@@ -5,8 +5,10 @@
 //! paper's figures, and per hardware path a grid of the reference, every technique and
 //! its ×4 difference image, PNG for looking with the EXR linked for data.
 //!
-//! On load the page records in its `<html>` element how many images it has and how many
-//! failed to decode (`data-images`, `data-broken-images`) and any script error
+//! Images load lazily (grouped by family in collapsible sections). On load the page records
+//! in its `<html>` element how many images it has, how many of those fetched failed to
+//! decode and how many are not fetched yet (`data-images`, `data-broken-images`,
+//! `data-deferred-images`) and any script error
 //! (`data-script-errors`): what `tests/report_html.rs` reads back from headless Chromium.
 
 use std::fmt::Write as _;
@@ -107,7 +109,10 @@ window.addEventListener('load', () => {
   const images = Array.from(document.images);
   const e = document.documentElement;
   e.dataset.images = String(images.length);
-  e.dataset.brokenImages = String(images.filter(i => !i.complete || i.naturalWidth === 0).length);
+  // Lazy images far from the viewport are not fetched yet: deferred, not broken.
+  const fetched = images.filter(i => i.complete);
+  e.dataset.brokenImages = String(fetched.filter(i => i.naturalWidth === 0).length);
+  e.dataset.deferredImages = String(images.length - fetched.length);
   e.dataset.scriptErrors = e.dataset.scriptErrors || '0';
 });
 ";
@@ -121,11 +126,15 @@ fn stem(row: &BenchRow) -> String {
     }
 }
 
-/// `<img>` of `file` in `dir` when it exists.
+/// `<img>` of `file` in `dir` when it exists, loaded when it nears the viewport.
 fn picture(dir: &Path, file: &str, alt: &str) -> Option<String> {
-    dir.join(file)
-        .is_file()
-        .then(|| format!("<img src=\"{}\" alt=\"{}\">", esc(file), esc(alt)))
+    dir.join(file).is_file().then(|| {
+        format!(
+            "<img src=\"{}\" alt=\"{}\" loading=\"lazy\">",
+            esc(file),
+            esc(alt)
+        )
+    })
 }
 
 fn links(dir: &Path, files: &[(&str, String)]) -> String {
@@ -335,7 +344,7 @@ fn settings_list(t: &BenchTable) -> String {
 }
 
 /// Links to what else the bench's folder holds: the probe's page, the studies of
-/// `make bench` (each in a subfolder), where they exist.
+/// `make bench-full` (each in a subfolder), where they exist.
 fn more_links(dir: &Path) -> String {
     let candidates = [
         ("device probe", "probe.md"),

@@ -555,7 +555,7 @@ pub(super) fn brick_albedo() -> Texture8 {
 }
 
 /// The brick height field the normal map is derived from (heights in texels, the texture's
-/// resolution): the surface `shvis ssbump --height house` shadows.
+/// resolution): the surface `shvis ssbump --height-map house` shadows.
 pub fn brick_height_field() -> super::HeightField {
     let n = TEXTURE_SIZE;
     super::HeightField {

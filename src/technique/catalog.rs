@@ -58,6 +58,70 @@ const REPRESENTATIVES: &[Technique] = &[
     },
 ];
 
+/// The paper's cost table (Iwanicki & Sloan, Table 1): unc3/4/6, pca4–24, pca4w–24w,
+/// shlmap, preconv, sh2 — the first rows of [`Technique::ALL`].
+pub fn paper_table() -> Vec<Technique> {
+    Technique::ALL
+        .iter()
+        .copied()
+        .take_while(|t| PAPER_FAMILIES.contains(&family_of(*t)))
+        .collect()
+}
+
+/// The families of the paper's table (their names as [`family_of`] gives them).
+const PAPER_FAMILIES: &[&str] = &["uncO", "pcaM, pcaMw", "shlmap", "preconv", "sh2"];
+
+/// One row of each family after the paper's: the member that stands for it in the
+/// headline set (the cheapest bake that shows what the family does).
+const LATER_HEADLINES: &[Technique] = &[
+    Technique::Vq {
+        k: 64,
+        seams: super::spec::SeamMode::Blended,
+    },
+    Technique::Cpca {
+        k: 8,
+        m: 11,
+        iterative: true,
+        seams: super::spec::SeamMode::Blended,
+    },
+    Technique::PcaVertex {
+        m: 12,
+        max_edge_cm: Some(25),
+    },
+    Technique::Rnm {
+        variant: RnmVariant::NormalMap,
+    },
+    Technique::Ndf {
+        base: NdfBase::Unc {
+            order: crate::sh::Order::SIX,
+        },
+    },
+    Technique::Nmprt {
+        variant: NmprtVariant::Svd { m: 4 },
+    },
+];
+
+/// The headline set (`--techniques headline`, what `make bench` measures): the paper's
+/// table and one row of each later family.
+pub fn headline() -> Vec<Technique> {
+    let mut set = paper_table();
+    set.extend_from_slice(LATER_HEADLINES);
+    set
+}
+
+/// A named set of techniques (`all`, `paper`, `headline`), if `name` is one.
+pub fn named_set(name: &str) -> Option<Vec<Technique>> {
+    match name {
+        "all" => Some(Technique::ALL.to_vec()),
+        "paper" => Some(paper_table()),
+        "headline" => Some(headline()),
+        _ => None,
+    }
+}
+
+/// The names [`named_set`] knows.
+pub const SET_NAMES: &[&str] = &["all", "paper", "headline"];
+
 /// Every family, in the cost table's order.
 pub fn families() -> Vec<Family> {
     REPRESENTATIVES.iter().map(|&t| family(t)).collect()
@@ -184,6 +248,30 @@ fn bakes(needs: &BakeNeeds) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_headline_set_is_the_paper_table_and_one_row_per_later_family() {
+        let paper = paper_table();
+        let names: Vec<String> = paper.iter().map(|t| t.name()).collect();
+        assert_eq!(
+            names.join(","),
+            "unc3,unc4,unc6,pca4,pca8,pca12,pca16,pca24,pca4w,pca8w,pca12w,pca16w,pca24w,shlmap,preconv,sh2"
+        );
+        let headline = headline();
+        let later: Vec<&str> = headline[paper.len()..]
+            .iter()
+            .map(|&t| family_of(t))
+            .collect();
+        let expected: Vec<&str> = families()
+            .iter()
+            .map(|f| f.names)
+            .filter(|n| !PAPER_FAMILIES.contains(n))
+            .collect();
+        assert_eq!(later, expected);
+        for set in SET_NAMES {
+            assert!(named_set(set).is_some_and(|s| !s.is_empty()), "{set}");
+        }
+    }
 
     #[test]
     fn every_technique_belongs_to_a_listed_family() {

@@ -64,7 +64,7 @@ impl SsbumpJob {
     pub fn check(&self) -> Result<(), SsbumpError> {
         if !(self.scale.is_finite() && self.scale > 0.0) {
             return Err(SsbumpError::Invalid(format!(
-                "--scale {} must be positive and finite",
+                "--height-scale {} must be positive and finite",
                 self.scale
             )));
         }

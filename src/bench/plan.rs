@@ -1,0 +1,461 @@
+//! What a bench will do and about how long it will take, said before it starts, and its
+//! progress with an ETA while it measures rows.
+//!
+//! The estimate is, per phase, its work times a rate: the probe (frames + 1) per
+//! megapixel, the references samples per pixel per megapixel (footprint and point), every
+//! row's builds (rows × rounds), its frames per megapixel, its ladder per megapixel, its
+//! images per row; the bakes in seconds. The rates are this device's from its last bench
+//! (`bench-rates-<key>.json` in the bake cache's folder, rewritten after every bench) or,
+//! with none, those of a 2-core lavapipe machine ([`Rates::LAVAPIPE`]); the plan says
+//! which. The bakes are those of the last bench with the same bakes on this machine
+//! (cached ones then cost nothing), else the lavapipe machine's scaled by texels × rays.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use super::BenchSettings;
+use super::timing::TIMING_ROUNDS;
+use crate::files::Hasher64;
+use crate::gpu::Context;
+use crate::prepare::PrepareSettings;
+use crate::report::table::{BenchPhases, BenchTable};
+use crate::technique::Technique;
+
+/// Bump when the meaning of a rates file changes.
+const RATES_VERSION: u64 = 1;
+
+/// Seconds per unit of work of each phase (module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Rates {
+    /// Per (probe frame + 1) per megapixel.
+    pub probe: f64,
+    /// Per reference sample per pixel per megapixel.
+    pub reference: f64,
+    /// Per row build.
+    pub build: f64,
+    /// Per frame (warm-up or timed) per megapixel.
+    pub frame: f64,
+    /// Per row's ladder per megapixel.
+    pub ladder: f64,
+    /// Per row's images, and the figures.
+    pub images: f64,
+}
+
+impl Rates {
+    /// A 2-core AMD EPYC VM with lavapipe (llvmpipe, LLVM 15), from its benches of the
+    /// headline set at 1280×800.
+    pub const LAVAPIPE: Rates = Rates {
+        probe: 9.6,
+        reference: 0.185,
+        build: 0.19,
+        frame: 0.068,
+        ladder: 1.15,
+        images: 0.13,
+    };
+
+    fn from_run(work: &Work, phases: &BenchPhases) -> Rates {
+        let per = |seconds: f64, units: f64, default: f64| {
+            if units > 0.0 && seconds > 0.0 {
+                seconds / units
+            } else {
+                default
+            }
+        };
+        let d = Rates::LAVAPIPE;
+        Rates {
+            probe: per(phases.probe, work.probe, d.probe),
+            reference: per(
+                phases.references + phases.ladder_setup,
+                work.reference,
+                d.reference,
+            ),
+            build: per(phases.build, work.builds, d.build),
+            frame: per(phases.render, work.frames, d.frame),
+            ladder: per(phases.ladder, work.ladder, d.ladder),
+            images: per(phases.row_images + phases.figures, work.images, d.images),
+        }
+    }
+}
+
+/// The work of a bench, in the units of [`Rates`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Work {
+    probe: f64,
+    reference: f64,
+    builds: f64,
+    frames: f64,
+    ladder: f64,
+    images: f64,
+}
+
+/// What a bench will do (rows, frames, references, probe, bakes) and its estimate.
+pub struct Plan {
+    rows: usize,
+    techniques: usize,
+    rounds: u32,
+    work: Work,
+    probe_cached: Option<String>,
+    rates: Rates,
+    rates_from: String,
+    bake_seconds: f64,
+    bakes_from: String,
+    bake_key: u64,
+    rates_file: PathBuf,
+    bake_names: Vec<&'static str>,
+}
+
+impl Plan {
+    /// The plan of a bench of `settings` (its rows before any is left out for lack of a
+    /// height map) after bakes of `prepare`; `probe_cached`: when the cached probe it
+    /// will reuse was measured, if there is one.
+    pub fn new(
+        ctx: &Context,
+        settings: &BenchSettings,
+        prepare: &PrepareSettings,
+        probe_cached: Option<String>,
+    ) -> Plan {
+        let rows_per_filter = settings
+            .techniques
+            .iter()
+            .map(|t| settings.paths.iter().filter(|&&p| t.runs_on(p)).count())
+            .sum::<usize>();
+        let filters = settings.specular.as_ref().map_or(1, |s| s.filters.len());
+        let rows = rows_per_filter * filters;
+        let rounds = if settings.specular.is_some() {
+            1
+        } else {
+            TIMING_ROUNDS.min(settings.frames.max(1))
+        };
+        let mpx = f64::from(settings.width) * f64::from(settings.height) / 1e6;
+        let references = if settings.ref_spp == 0 {
+            0.0
+        } else if settings.footprint_reference {
+            2.0
+        } else {
+            1.0
+        };
+        let ladder = settings.ref_spp > 0
+            && settings.specular.is_none()
+            && settings.relight_degrees.is_none();
+        let work = Work {
+            probe: if settings.probe && probe_cached.is_none() {
+                f64::from(settings.probe_frames + 1) * mpx
+            } else {
+                0.0
+            },
+            reference: references * f64::from(settings.ref_spp) * mpx,
+            builds: (rows as u32 * rounds) as f64,
+            frames: rows as f64 * f64::from(settings.frames + settings.warmup + rounds) * mpx,
+            ladder: if ladder { rows as f64 * mpx } else { 0.0 },
+            images: rows as f64,
+        };
+        let rates_file = rates_file(ctx);
+        let history = read_history(&rates_file);
+        let bake_key = bake_key(prepare, &settings.techniques);
+        let (rates, rates_from) = match &history {
+            Some(h) => (h.rates, format!("this device's last bench, {}", h.measured)),
+            None => (
+                Rates::LAVAPIPE,
+                "a 2-core lavapipe machine's rates: no bench on this device yet".into(),
+            ),
+        };
+        let (bake_seconds, bakes_from) = match history.as_ref().filter(|h| h.bake_key == bake_key) {
+            Some(h) => (h.bake_seconds, "as the last run's".to_string()),
+            None => (
+                default_bake_seconds(prepare, &settings.techniques),
+                "from a 2-core machine's rates".to_string(),
+            ),
+        };
+        Plan {
+            rows,
+            techniques: settings.techniques.len(),
+            rounds,
+            work,
+            probe_cached,
+            rates,
+            rates_from,
+            bake_seconds,
+            bakes_from,
+            bake_key,
+            rates_file,
+            bake_names: bake_names(prepare, &settings.techniques),
+        }
+    }
+
+    /// Seconds the bench is expected to take after its bakes, per phase in order.
+    fn phase_seconds(&self) -> [f64; 6] {
+        let (w, r) = (&self.work, &self.rates);
+        [
+            w.probe * r.probe,
+            w.reference * r.reference,
+            w.builds * r.build,
+            w.frames * r.frame,
+            w.ladder * r.ladder,
+            w.images * r.images,
+        ]
+    }
+
+    /// Seconds of the whole run, bakes included.
+    pub fn estimate_seconds(&self) -> f64 {
+        self.bake_seconds + self.phase_seconds().iter().sum::<f64>()
+    }
+
+    /// The plan in a few lines, for the terminal.
+    pub fn describe(&self, settings: &BenchSettings) -> String {
+        let [probe, references, builds, frames, ladder, images] = self.phase_seconds();
+        let paths: Vec<String> = settings.paths.iter().map(|p| p.to_string()).collect();
+        let probe_line = match (&self.probe_cached, settings.probe) {
+            (_, false) => "no device probe (--no-probe)".to_string(),
+            (Some(when), true) => format!("the device probe measured {when}, reused"),
+            (None, true) => format!(
+                "the device probe ({} frames per microbenchmark) ≈ {}",
+                settings.probe_frames,
+                duration(probe)
+            ),
+        };
+        format!(
+            "plan: {} rows ({} techniques × {}) at {}×{}, {} timed frames each after {} warm-up, in {} rounds ≈ {} (builds {}, frames {}, images {})\n\
+             plan: bakes ({}) ≈ {} ({}); {}; references at {} spp ≈ {}; error ladder ≈ {}\n\
+             plan: about {} in all ({})",
+            self.rows,
+            self.techniques,
+            paths.join(", "),
+            settings.width,
+            settings.height,
+            settings.frames,
+            settings.warmup,
+            self.rounds,
+            duration(builds + frames + images),
+            duration(builds),
+            duration(frames),
+            duration(images),
+            self.bake_names.join(", "),
+            duration(self.bake_seconds),
+            self.bakes_from,
+            probe_line,
+            settings.ref_spp,
+            duration(references),
+            duration(ladder),
+            duration(self.estimate_seconds()),
+            self.rates_from,
+        )
+    }
+
+    /// Rewrites this device's rates file from the finished `table` and its bakes' seconds.
+    pub fn record(&self, table: &BenchTable, bake_seconds: f64) {
+        let mut work = self.work;
+        // The probe ran only when none was reused.
+        if table.phases.probe <= 0.0 {
+            work.probe = 0.0;
+        }
+        // Rows left out (no height map) did no work.
+        let scale = if self.rows > 0 {
+            table.results.len() as f64 / self.rows as f64
+        } else {
+            0.0
+        };
+        work.builds *= scale;
+        work.frames *= scale;
+        work.ladder *= scale;
+        work.images *= scale;
+        let mut rates = Rates::from_run(&work, &table.phases);
+        if work.probe == 0.0 {
+            rates.probe =
+                read_history(&self.rates_file).map_or(self.rates.probe, |h| h.rates.probe);
+        }
+        let history = History {
+            version: RATES_VERSION,
+            measured: crate::files::clock::utc_now(),
+            rates,
+            bake_key: self.bake_key,
+            bake_seconds,
+        };
+        let written = serde_json::to_vec_pretty(&history)
+            .map_err(|e| e.to_string())
+            .and_then(|json| {
+                crate::files::write(&self.rates_file, json).map_err(|e| e.to_string())
+            });
+        if let Err(e) = written {
+            log::warn!("{}: rates not kept: {e}", self.rates_file.display());
+        }
+    }
+}
+
+/// A device's rates file.
+#[derive(Serialize, Deserialize)]
+struct History {
+    version: u64,
+    /// When (UTC).
+    measured: String,
+    rates: Rates,
+    /// The bakes of that run ([`bake_key`]) and their seconds.
+    bake_key: u64,
+    bake_seconds: f64,
+}
+
+fn rates_file(ctx: &Context) -> PathBuf {
+    let device = ctx.device_summary();
+    let mut h = Hasher64::default();
+    for text in [device.name.as_str(), device.driver.as_str()] {
+        h.write(text.as_bytes());
+        h.write_u64(text.len() as u64);
+    }
+    crate::bake::cache::default_cache_dir().join(format!("bench-rates-{:016x}.json", h.finish()))
+}
+
+fn read_history(file: &Path) -> Option<History> {
+    let bytes = crate::files::read_bounded(file, 1 << 20, "bench rates").ok()?;
+    serde_json::from_slice::<History>(&bytes)
+        .ok()
+        .filter(|h| h.version == RATES_VERSION)
+}
+
+/// What changes the bakes of a run: the prepare settings and the techniques' needs.
+fn bake_key(prepare: &PrepareSettings, techniques: &[Technique]) -> u64 {
+    let mut h = Hasher64::default();
+    h.write(format!("{prepare:?}").as_bytes());
+    for t in techniques {
+        h.write(t.name().as_bytes());
+        h.write_u64(0);
+    }
+    h.finish()
+}
+
+/// The bakes a run does, in words.
+fn bake_names(prepare: &PrepareSettings, techniques: &[Technique]) -> Vec<&'static str> {
+    let any =
+        |f: fn(&crate::technique::BakeNeeds) -> bool| techniques.iter().any(|t| f(&t.needs()));
+    let mut names = vec!["visibility"];
+    if prepare.sh_lightmap_bounces.is_some() {
+        names.push("SH lightmap");
+    }
+    if prepare.transfer_bounces.is_some() {
+        names.push("transfer matrices");
+    }
+    if any(|n| n.clusters.is_some()) {
+        names.push("clusters");
+    }
+    if any(|n| n.pca_vectors.is_some()) {
+        names.push("PCA");
+    }
+    if any(|n| n.ao) {
+        names.push("AO");
+    }
+    names
+}
+
+/// The bakes' seconds on a 2-core machine (the house at 512² texels × 1024 rays: visibility
+/// 0.5 s, the SH lightmap 11 s and the transfer matrices 44 s with 2 bounces, k-means
+/// 0.13 s per cluster, a CPCA fit 5 s), scaled by texels × rays.
+fn default_bake_seconds(prepare: &PrepareSettings, techniques: &[Technique]) -> f64 {
+    let scale =
+        f64::from(prepare.vis_res).powi(2) * f64::from(prepare.rays) / (512.0 * 512.0 * 1024.0);
+    let passes = |bounces: Option<u32>| bounces.map_or(0.0, |b| f64::from(1 + b) / 3.0);
+    let mut seconds =
+        0.5 + 11.0 * passes(prepare.sh_lightmap_bounces) + 44.0 * passes(prepare.transfer_bounces);
+    for t in techniques {
+        if let Some(c) = t.needs().clusters {
+            seconds += if c.m == 0 { 0.13 * f64::from(c.k) } else { 5.0 };
+        }
+    }
+    seconds * scale
+}
+
+/// Progress over the rows' timing rounds with an ETA from the pace so far.
+pub(crate) struct Progress {
+    total: usize,
+    done: usize,
+    started: Option<Instant>,
+}
+
+impl Progress {
+    pub(crate) fn new(steps: usize) -> Progress {
+        Progress {
+            total: steps,
+            done: 0,
+            started: None,
+        }
+    }
+
+    /// `steps` more steps than planned.
+    pub(crate) fn add(&mut self, steps: usize) {
+        self.total += steps;
+    }
+
+    /// One more step of `total` is about to start (`what`): logged with the time left.
+    pub(crate) fn step(&mut self, what: &str) {
+        let started = *self.started.get_or_insert_with(Instant::now);
+        if self.done > 0 && self.total > self.done {
+            let left = started.elapsed().as_secs_f64() / self.done as f64
+                * (self.total - self.done) as f64;
+            log::info!(
+                "[{}/{}] {what} — about {} left",
+                self.done + 1,
+                self.total,
+                duration(left)
+            );
+        } else {
+            log::info!(
+                "[{}/{}] {what}",
+                self.done + 1,
+                self.total.max(self.done + 1)
+            );
+        }
+        self.done += 1;
+        self.total = self.total.max(self.done);
+    }
+}
+
+/// "3 min 20 s", "45 s".
+pub fn duration(seconds: f64) -> String {
+    let s = seconds.max(0.0).round() as u64;
+    if s >= 60 {
+        format!("{} min {:02} s", s / 60, s % 60)
+    } else {
+        format!("{s} s")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn durations_read_as_minutes_and_seconds() {
+        assert_eq!(duration(0.4), "0 s");
+        assert_eq!(duration(59.6), "1 min 00 s");
+        assert_eq!(duration(275.8), "4 min 36 s");
+    }
+
+    #[test]
+    fn rates_from_a_run_divide_its_seconds_by_its_work() {
+        let work = Work {
+            probe: 2.0,
+            reference: 10.0,
+            builds: 4.0,
+            frames: 100.0,
+            ladder: 0.0,
+            images: 4.0,
+        };
+        let phases = BenchPhases {
+            probe: 20.0,
+            references: 1.5,
+            ladder_setup: 0.5,
+            build: 2.0,
+            render: 7.0,
+            row_images: 1.0,
+            ladder: 3.0,
+            figures: 1.0,
+        };
+        let r = Rates::from_run(&work, &phases);
+        assert_eq!(r.probe, 10.0);
+        assert_eq!(r.reference, 0.2);
+        assert_eq!(r.build, 0.5);
+        assert_eq!(r.frame, 0.07);
+        // No ladder work: the default rate stays.
+        assert_eq!(r.ladder, Rates::LAVAPIPE.ladder);
+        assert_eq!(r.images, 0.5);
+    }
+}
