@@ -184,3 +184,43 @@ fn listing_2_with_the_unoccluded_d_encoding_equals_listing_1_per_pixel() {
         common::assert_validation_clean(&ctx, "rnm / ssbump");
     }
 }
+
+/// The built-in house at 128² texels × 256 rays with 2 bounces under the built-in sky: the
+/// settings at which the sky's SH, ringing below zero around the sun, let a channel's three
+/// signed lobes cancel to almost nothing and eq. (4) of `bake::shlmap` scale single texels
+/// to 10⁴ (covered, (77, 104)) and 10⁷ (a gutter, (108, 82)) — fireflies of rnm, rnmao and
+/// ssbump. With the factor taken from the positive parts (at most 3√3) the largest value is
+/// the sunlit lobe's irradiance (≈ 43).
+#[test]
+fn rnm_lightmaps_stay_bounded_where_the_sky_rings() {
+    let scene = shvis::scene::house::build(128).expect("the house builds");
+    let env = shvis::env::resolve("sky").expect("the built-in sky");
+    let radiance = shvis::env::project::project_sh(&env, Order::new(8).unwrap());
+    let map = bake_sh_lightmap(
+        &scene,
+        &Tracer::new(&scene.mesh),
+        &rasterize(&scene.mesh, 128),
+        &radiance,
+        &ShLightmapSettings {
+            rays: 256,
+            seed: 0,
+            bounces: 2,
+            progress: false,
+        },
+    );
+    let largest = map
+        .basis_irradiance
+        .iter()
+        .flat_map(|lobes| lobes.iter().flat_map(|v| v.to_array()))
+        .fold(0.0f32, |m, v| {
+            if v.is_finite() {
+                m.max(v.abs())
+            } else {
+                f32::INFINITY
+            }
+        });
+    assert!(
+        largest < 100.0,
+        "an rnm value of {largest}: the normalization blew up"
+    );
+}

@@ -1,13 +1,14 @@
 //! A bench row whose image cannot be right is marked suspect with its reason in table.md
 //! and table.json, and `bench --strict` exits non-zero on it (`report::metrics::
-//! suspect_reason`; the planted case — a technique's image ×100 — is a unit test there).
+//! suspect_reason`). The absurd row is planted: `SHVIS_PLANT_ABSURD_ROW=ssbump.dx9` scales
+//! that row's image ×100 before it is measured.
 
 use std::path::PathBuf;
 use std::process::Command;
 
-/// The radiosity-normal-mapping rows at a 128² lightmap of 256 rays on the built-in house
-/// come out absurd (relative RMSE ≈ 20 and 100 from a few pixels of thousands against a
-/// reference whose largest value is ≈ 3): they are marked, and --strict fails on them.
+/// The settings at which the radiosity-normal-mapping rows once came out absurd on their
+/// own (a 128² lightmap of 256 rays on the built-in house: `tests/rnm.rs`), with ssbump's
+/// image planted ×100: that row is marked, the others are not, and --strict fails on it.
 #[test]
 fn absurd_rows_are_marked_and_strict_fails() {
     let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("suspect");
@@ -41,6 +42,7 @@ fn absurd_rows_are_marked_and_strict_fails() {
         ])
         .arg(&out)
         .env("SHVIS_CACHE_DIR", root.join("cache"))
+        .env("SHVIS_PLANT_ABSURD_ROW", "ssbump.dx9")
         .env("RUST_LOG", "warn");
         if strict {
             cmd.arg("--strict");
@@ -68,6 +70,7 @@ fn absurd_rows_are_marked_and_strict_fails() {
     };
     assert!(suspect("ssbump").contains("relative RMSE"), "{table}");
     assert_eq!(suspect("preconv"), "", "a plausible row is not marked");
+    assert_eq!(suspect("rnm"), "", "rnm is plausible at these settings");
     let markdown = std::fs::read_to_string(out.join("table.md")).unwrap();
     assert!(markdown.contains("ssbump (⚠ suspect:"), "{markdown}");
     // Without --strict the same run succeeds, the rows marked all the same.

@@ -47,14 +47,27 @@
 //! lightmap), each texel's three values are scaled per channel by
 //!
 //! ```text
-//! k = E_flat / (⅓ Σ_i E_i),   E_flat = Σ_r w · L_in(x, ω_r) · max(0, ω_r · n_s)          (4)
+//! k⁺ = E⁺_flat / (⅓ Σ_i E⁺_i),   E⁺ = (3) with L_in⁺ = max(0, L_in),
+//! E⁺_flat = Σ_r w · L_in⁺(x, ω_r) · max(0, ω_r · n_s)                                    (4)
 //! ```
 //!
 //! with the normalization matched to Listing 1 (Σ D_i = 1, D = ⅓ for the unperturbed
-//! normal): the unperturbed normal then shades exactly with the irradiance about n_s, and
+//! normal): the unperturbed normal then shades with the irradiance about n_s (exactly where
+//! the radiance is non-negative), and
 //! the lobes keep their ratios — the direction of the light. L_in is (1)'s, so the maps
 //! carry the same visibility and inter-reflection as the SH lightmap and the two compare
 //! like for like.
+//!
+//! k⁺ is the lobes' geometry — how much of the light about n_s the three tilted lobes
+//! catch — measured on the positive part of the radiance, where it is well posed: every
+//! direction of the n_s hemisphere lies in some lobe with max_i ω·B_i ≥ (1/√3) ω·n_s, so
+//! ⅓ Σ E⁺_i ≥ E⁺_flat / (3√3) and k⁺ ≤ 3√3 ≈ 5.2. The signed L_in cannot give it: the
+//! environment's order-8 SH rings below zero around a small sun, a channel's three signed
+//! lobes can cancel to almost nothing while the flat one does not, and the plain ratio
+//! E_flat / ⅓ Σ E_i reached 10⁴ (a covered texel) and 10⁷ (a gutter) on the house at
+//! 128² × 256 rays. Nor can the gathers themselves drop the negative part: the ringing,
+//! which cancels in the signed sums, would add its positive half (rnm 1.7× too bright on
+//! the same house).
 //!
 //! Texels are independent within a pass and sum their rays in a fixed order, so a bake is
 //! bit-identical for any thread count. Results are dilated [`DILATION_PASSES`] texels
@@ -153,11 +166,15 @@ pub fn world_basis(texels: &LightmapTexels, i: usize) -> [DVec3; RNM_LOBES] {
 /// Lobes gathered per texel: three basis directions and the flat normal (eqs. (3)–(4)).
 pub const RNM_LOBES: usize = 4;
 
-/// Eq. (4): the three basis irradiances scaled per channel so that their mean is the flat
-/// irradiance `lobes[3]` (zero where the three gathered nothing).
-fn normalized_to_flat(lobes: &[Vec3; RNM_LOBES]) -> [Vec3; 3] {
-    let mean = (lobes[0] + lobes[1] + lobes[2]) / 3.0;
-    let k = Vec3::select(mean.cmpgt(Vec3::ZERO), lobes[3] / mean, Vec3::ZERO);
+/// The lobes gathered per texel: [`RNM_LOBES`] of L_in, then the same of L_in⁺ (eq. (4)).
+const GATHERED_LOBES: usize = 2 * RNM_LOBES;
+
+/// Eq. (4): the three basis irradiances scaled per channel by k⁺, the flat lobe's ratio to
+/// their mean in the positive parts (zero where those gathered nothing); k⁺ ≤ 3√3.
+fn normalized_to_flat(lobes: &[Vec3; GATHERED_LOBES]) -> [Vec3; 3] {
+    let positive = &lobes[RNM_LOBES..];
+    let mean = (positive[0] + positive[1] + positive[2]) / 3.0;
+    let k = Vec3::select(mean.cmpgt(Vec3::ZERO), positive[3] / mean, Vec3::ZERO);
     [lobes[0] * k, lobes[1] * k, lobes[2] * k]
 }
 
@@ -195,7 +212,7 @@ pub fn bake_sh_lightmap(
             );
             let lobes = world_basis(texels, i);
             let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
-            let mut rnm = [DVec3::ZERO; RNM_LOBES];
+            let mut rnm = [DVec3::ZERO; GATHERED_LOBES];
             let mut rays = 0u64;
             for (r, &d) in dirs.dirs().iter().enumerate() {
                 if !above_horizon(n, d) {
@@ -243,7 +260,7 @@ pub fn bake_sh_lightmap(
                 let origin = tracer.offset_origin(texels.position[i], n);
                 let lobes = world_basis(texels, i);
                 let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
-                let mut rnm = [DVec3::ZERO; RNM_LOBES];
+                let mut rnm = [DVec3::ZERO; GATHERED_LOBES];
                 let rays =
                     for_each_front_hit(tracer, &surfaces, &dirs, n, origin, |r, d, surface| {
                         let e = irradiance[texels.texel_index(surface.uv_lightmap.into())];
@@ -383,14 +400,18 @@ fn accumulate(
 
 /// Eqs. (3)–(4)'s sums: `radiance` (RGB) arriving along `d` into each lobe max(0, d·axis).
 fn accumulate_lobes(
-    sum: &mut [DVec3; RNM_LOBES],
+    sum: &mut [DVec3; GATHERED_LOBES],
     lobes: &[DVec3; RNM_LOBES],
     d: Vec3,
     radiance: [f64; 3],
 ) {
     let d = d.as_dvec3();
-    for (s, b) in sum.iter_mut().zip(lobes) {
-        *s += DVec3::from(radiance) * d.dot(*b).max(0.0);
+    let radiance = DVec3::from(radiance);
+    let positive = radiance.max(DVec3::ZERO);
+    for (k, b) in lobes.iter().enumerate() {
+        let lobe = d.dot(*b).max(0.0);
+        sum[k] += radiance * lobe;
+        sum[RNM_LOBES + k] += positive * lobe;
     }
 }
 
@@ -416,10 +437,10 @@ impl Sh9Rgb {
 
 /// Eqs. (3)–(4)'s RGB lobe irradiances of a texel, as one value [`dilate`] can average.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct BasisIrradiance([Vec3; RNM_LOBES]);
+struct BasisIrradiance([Vec3; GATHERED_LOBES]);
 
 impl BasisIrradiance {
-    fn from_sums(sum: &[DVec3; RNM_LOBES], weight: f64) -> Self {
+    fn from_sums(sum: &[DVec3; GATHERED_LOBES], weight: f64) -> Self {
         BasisIrradiance(sum.map(|s| (s * weight).as_vec3()))
     }
 }
