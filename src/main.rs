@@ -46,13 +46,20 @@ fn main() -> ExitCode {
                 eprintln!("{line}");
                 return ExitCode::from(2);
             }
-            // clap adds usage hints on further lines; the first line says what is wrong.
+            // clap says what is wrong in its first paragraph (a missing argument's name on the
+            // lines after "…were not provided:") and adds usage hints after a blank line.
             let text = e.to_string();
-            let first = text
+            let what: Vec<&str> = text
                 .lines()
-                .find(|l| !l.trim().is_empty())
-                .unwrap_or("error: invalid arguments");
-            eprintln!("{first}");
+                .skip_while(|l| l.trim().is_empty())
+                .take_while(|l| !l.trim().is_empty())
+                .map(str::trim)
+                .collect();
+            if what.is_empty() {
+                eprintln!("error: invalid arguments");
+            } else {
+                eprintln!("{}", what.join(" "));
+            }
             return ExitCode::from(2);
         }
     };

@@ -616,6 +616,8 @@ fn bake_visibility_cached(
         progress: settings.progress,
     };
     let cache_dir = settings.cache_dir.clone().unwrap_or_else(default_cache_dir);
+    // A lightmap no texel of which is covered bakes nothing worth caching or measuring.
+    geometry.texels().require_covered()?;
     load_or_bake_visibility(
         &cache_dir,
         geometry.mesh,

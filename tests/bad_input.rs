@@ -698,7 +698,7 @@ fn argument_cases(suite: &mut Suite) {
     table.push((
         vec!["study", "params", "--gpu-directions", "0", "--out", &out],
         1,
-        vec!["--gpu-directions 0", "1..=100000000"],
+        vec!["--gpu-directions 0", "1..=10000000"],
     ));
     table.push((vec!["sh", "eval", "--order", "0"], 1, vec!["order"]));
     table.push((vec!["sh", "eval", "--order", "31"], 1, vec!["order"]));

@@ -90,6 +90,17 @@ fn cross2(a: DVec2, b: DVec2) -> f64 {
 
 /// Rasterizes the mesh's `uv_lightmap` into a `res`² texel grid (see the module doc).
 pub fn rasterize(mesh: &Mesh, res: u32) -> LightmapTexels {
+    rasterize_uvs(
+        mesh,
+        res,
+        "lightmap UVs overlap",
+        "each gets the first triangle's bake, so the others are lit wrongly (give non-overlapping TEXCOORD_1 charts, or remove them to have shvis generate some)",
+    )
+}
+
+/// [`rasterize`], its overlap warning starting `overlap` and ending `consequence`, for
+/// the UVs of other roles (the normal-map baker rasterizes material UVs).
+pub fn rasterize_uvs(mesh: &Mesh, res: u32, overlap: &str, consequence: &str) -> LightmapTexels {
     let n = (res as usize) * (res as usize);
     let mut out = LightmapTexels {
         res,
@@ -100,7 +111,8 @@ pub fn rasterize(mesh: &Mesh, res: u32) -> LightmapTexels {
         tangent: vec![Vec4::ZERO; n],
     };
     let mut degenerate = 0usize;
-    let mut overlapping = 0usize;
+    // Texels whose centre lies well inside more than one triangle.
+    let mut overlapped = vec![false; n];
     for t in 0..mesh.triangle_count() {
         let idx = &mesh.indices[3 * t..3 * t + 3];
         let Some(v) = idx
@@ -148,7 +160,7 @@ pub fn rasterize(mesh: &Mesh, res: u32) -> LightmapTexels {
                 if out.covered[i] {
                     // First writer wins; a centre well inside a second triangle (not on a
                     // shared edge) means the charts overlap.
-                    overlapping += usize::from(w0.min(w1).min(w2) > OVERLAP_MARGIN);
+                    overlapped[i] |= w0.min(w1).min(w2) > OVERLAP_MARGIN;
                     continue;
                 }
                 out.covered[i] = true;
@@ -168,10 +180,11 @@ pub fn rasterize(mesh: &Mesh, res: u32) -> LightmapTexels {
             "lightmap raster: skipped {degenerate} degenerate triangles (zero area in 3D or in lightmap UV)"
         );
     }
+    let overlapping = overlapped.iter().filter(|&&o| o).count();
     if overlapping > 0 {
         let covered = out.covered.iter().filter(|&&c| c).count();
         log::warn!(
-            "lightmap UVs overlap: {overlapping} of {covered} covered texels ({:.2} %) lie inside more than one triangle; each gets the first triangle's bake, so the others are lit wrongly (give non-overlapping TEXCOORD_1 charts, or remove them to have shvis generate some)",
+            "{overlap}: {overlapping} of {covered} covered texels ({:.2} %) lie inside more than one triangle; {consequence}",
             100.0 * overlapping as f64 / covered.max(1) as f64
         );
     }

@@ -78,26 +78,33 @@ pub fn hemisphere_directions(rays: usize, seed: u64) -> Vec<DVec3> {
 }
 
 /// Whether the ray from the surface at texel (x, y) along `d` leaves the field unblocked:
-/// marched in half-texel steps until it rises above the field's highest point.
+/// marched in half-texel steps until it rises above the field's highest point — at most
+/// ⌈(top − start) / rise per step⌉ steps, counted, so that no height makes it stall
+/// (`scene::height_field::MAX_HEIGHT_SCALE` keeps the count modest).
 fn escapes(field: &HeightField, top: f64, x: usize, y: usize, d: DVec3) -> bool {
     let start = field.h[y * field.width + x];
     let horizontal = d.truncate().length();
     if horizontal < 1e-12 {
         return true;
     }
+    if d.z <= 0.0 {
+        // Never rises: the hemisphere's directions have z > 0.
+        return false;
+    }
     // Image rows grow downward: +Y tangent is −row.
     let step = 0.5 / horizontal;
-    let mut t = step;
-    loop {
-        let p = DVec3::new(x as f64, y as f64, start) + d * t;
+    let steps = ((top - start) / (d.z * step)).ceil().max(0.0) as u64 + 1;
+    let origin = DVec3::new(x as f64, y as f64, start);
+    for k in 1..=steps {
+        let p = origin + d * (k as f64 * step);
         if p.z > top {
             return true;
         }
         if field.sample(p.x, 2.0 * y as f64 - p.y) > p.z {
             return false;
         }
-        t += step;
     }
+    true
 }
 
 /// Directional occlusion and AO of every texel of `field` with `rays` rays (module doc).

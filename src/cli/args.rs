@@ -85,7 +85,7 @@ pub(super) struct SceneArgs {
     /// normal map: what `ssbump` and `rnmao` shadow with (replaces the built-in bricks').
     #[arg(long)]
     pub(super) height_map: Option<PathBuf>,
-    /// Height of a white `--height-map` texel, in texels of the map.
+    /// Height of a white `--height-map` texel, in texels of the map (at most 100).
     #[arg(long, default_value_t = 1.0, requires = "height_map", value_parser = finite_f64)]
     pub(super) height_scale: f64,
 }
@@ -109,8 +109,8 @@ pub(super) struct BakerArgs {
     /// GPU simulator: a depth map per direction, not cached).
     #[arg(long, value_enum, default_value_t = VisibilityBakerArg::Cpu)]
     pub(super) baker: VisibilityBakerArg,
-    /// `--baker gpu`: depth-map texels per side.
-    #[arg(long, default_value_t = GpuVisibilitySettings::default().depth_res, value_parser = clap::value_parser!(u32).range(16..=16384))]
+    /// `--baker gpu`: depth-map texels per side (16–8192).
+    #[arg(long, default_value_t = GpuVisibilitySettings::default().depth_res, value_parser = clap::value_parser!(u32).range(16..=shvis::bake::gpu_visibility::MAX_DEPTH_RES as i64))]
     depth_res: u32,
     /// `--baker gpu`: constant depth bias, depth-map texels.
     #[arg(long, default_value_t = GpuVisibilitySettings::default().bias_texels, value_parser = finite_f32)]
@@ -199,8 +199,8 @@ pub(super) struct SpecularArgs {
     #[arg(long, default_value_t = 0.04, value_parser = finite_f32)]
     specular_ks: f32,
     /// Direction toward the specular light (x,y,z) instead of the sun's; its irradiance
-    /// stays the sun's.
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_parser = finite_f32)]
+    /// stays the sun's. Only with `--specular`.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_parser = finite_f32, requires = "specular")]
     light_dir: Option<Vec<f32>>,
 }
 

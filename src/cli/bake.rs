@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use clap::Args;
 
 use shvis::prepare::VisibilityBaker;
@@ -46,6 +46,9 @@ pub(super) fn run_bake(a: BakeArgs) -> Result<()> {
             manifest.settings
         );
         return Ok(());
+    }
+    if a.compare_cpu && a.baker.baker != VisibilityBakerArg::Gpu {
+        bail!("--compare-cpu compares the GPU bake with the CPU one: only with --baker gpu");
     }
     let settings = prepare_settings(&a.scene, "sky", &[], 0)?;
     let job = BakeLayersJob {

@@ -16,8 +16,8 @@ use super::args::{
     finite_f32, with_normal_filter,
 };
 use super::{
-    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, check_frame_memory, create_dir, parse_list,
-    parse_techniques, prepare_settings, print_table, print_written, with_gpu,
+    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, check_frame_memory, check_rows, create_dir,
+    parse_list, parse_techniques, prepare_settings, print_table, print_written, with_gpu,
 };
 
 #[derive(Args, Debug)]
@@ -32,7 +32,7 @@ pub(super) struct ProbeArgs {
     /// Untimed frames before them.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=10_000))]
     warmup: u32,
-    /// Screen area of the probe's triangles, pixels (default: the built-in house's
+    /// Screen area of the probe's triangles, pixels, at most half the screen (default: the built-in house's
     /// pixel-weighted triangle area at this size, as `shvis bench` sizes them for its scene).
     #[arg(long, value_parser = at_least_one_f64)]
     triangle_pixels: Option<f64>,
@@ -97,6 +97,10 @@ pub(super) struct BenchArgs {
     /// build with the same settings (in the bake cache's folder), `fresh` measures again.
     #[arg(help_heading = "Frames and timing", long, value_enum, default_value_t = ProbeMode::Cached)]
     probe: ProbeMode,
+    /// Leave out, with a note, technique × path pairs that cannot run (`nmprtsvdMp` on dx9)
+    /// instead of failing.
+    #[arg(help_heading = "Rows", long)]
+    skip_unsupported: bool,
     /// Exit non-zero when a row is suspect (non-finite pixels, an error above 1, or a mean
     /// 25 % off its reference's); the table and images are written first either way.
     #[arg(help_heading = "Reference and errors", long)]
@@ -121,6 +125,14 @@ pub(super) struct BenchArgs {
 
 pub(super) fn run_probe(a: ProbeArgs) -> Result<()> {
     check_frame_memory(a.width, a.height, 48)?;
+    let half_screen = f64::from(a.width) * f64::from(a.height) / 2.0;
+    if let Some(px) = a.triangle_pixels.filter(|&px| px > half_screen) {
+        bail!(
+            "--triangle-pixels {px}: at most {half_screen} at {}×{} (two triangles fill the screen)",
+            a.width,
+            a.height
+        );
+    }
     create_dir(&a.out)?;
     with_gpu(&a.gpu, |ctx| {
         let probe = shvis::probe::run(
@@ -173,12 +185,26 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
         probe_frames: a.probe_frames.unwrap_or(a.frames.clamp(5, 30)),
         relight_degrees: a.relight_rotate,
     };
+    check_rows(
+        &a.techniques,
+        &settings.techniques,
+        &settings.paths,
+        a.skip_unsupported,
+    )?;
     if a.relight_rotate.is_some() && !a.specular.specular.is_empty() {
         bail!("--relight-rotate: not with --specular (its light is the bake's sun)");
     }
     create_dir(&a.out)?;
-    // A table from an earlier run must not sit beside this run's images if it stops early.
-    for stale in ["table.md", "table.json"] {
+    // Temporaries of a killed run into this folder go first.
+    shvis::files::remove_stale_temps(&a.out);
+    // The report of an earlier run must not sit beside this run's images if it stops early.
+    for stale in [
+        "table.md",
+        "table.json",
+        shvis::report::html::INDEX_NAME,
+        "probe.md",
+        "probe.json",
+    ] {
         let _ = std::fs::remove_file(a.out.join(stale));
     }
     let started = Instant::now();
@@ -191,7 +217,9 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
         let cached_probe = shvis::bench::cached_probe(ctx, &settings, &scene);
         drop(scene);
         let plan = Plan::new(ctx, &settings, &prepare_settings, cached_probe);
-        eprintln!("{}", plan.describe(&settings));
+        for line in plan.describe(&settings).lines() {
+            log::info!("{line}");
+        }
         let bakes_started = Instant::now();
         let mut prepared = prepare_with(&prepare_settings, &a.baker.visibility_baker(ctx))?;
         prepared.prepare_techniques(&settings.techniques)?;

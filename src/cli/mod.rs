@@ -20,7 +20,7 @@ use clap::{Parser, Subcommand};
 
 use shvis::gpu::{Context, ContextDesc};
 use shvis::prepare::PrepareSettings;
-use shvis::technique::Technique;
+use shvis::technique::{HwPath, Technique};
 
 use args::{GpuArgs, SceneArgs};
 
@@ -204,6 +204,50 @@ fn parse_techniques(list: &str) -> Result<Vec<Technique>> {
         techniques.push(t);
     }
     Ok(techniques)
+}
+
+/// The technique × path pairs a run measures are those that fit the path's rules
+/// (`Technique::runs_on`). One that does not fails the run with the reason, unless
+/// `techniques` came from a named set or `skip_unsupported` is given — then each is named on
+/// stderr; a run left with no pair fails either way.
+fn check_rows(
+    list: &str,
+    techniques: &[Technique],
+    paths: &[HwPath],
+    skip_unsupported: bool,
+) -> Result<()> {
+    let unsupported: Vec<String> = techniques
+        .iter()
+        .flat_map(|&t| {
+            paths
+                .iter()
+                .filter(move |&&p| !t.runs_on(p))
+                .map(move |p| format!("{t}.{p}"))
+        })
+        .collect();
+    let runnable = techniques.len() * paths.len() - unsupported.len();
+    let reason = "(its per-texel matrices need more textures than dx9 binds)";
+    if runnable == 0 {
+        bail!(
+            "no row to measure: {} {reason}; add --paths dx10",
+            unsupported.join(", ")
+        );
+    }
+    if unsupported.is_empty() {
+        return Ok(());
+    }
+    let named_set = shvis::technique::catalog::named_set(list.trim()).is_some();
+    if !named_set && !skip_unsupported {
+        bail!(
+            "{} cannot run {reason}; leave it out, or pass --skip-unsupported to measure the rest",
+            unsupported.join(", ")
+        );
+    }
+    eprintln!(
+        "note: left out, as they cannot run {reason}: {}",
+        unsupported.join(", ")
+    );
+    Ok(())
 }
 
 /// The bake settings of `scene` under `env` for `techniques`: the inter-reflected bakes

@@ -111,6 +111,13 @@ pub(super) fn run_render(a: RenderArgs) -> Result<()> {
     frame_format(&a.out)?;
     check_frame_memory(a.width, a.height, 48)?;
     shvis::files::check_writable_file(&a.out, "--out")?;
+    let env = PathBuf::from(a.env.strip_prefix("angular:").unwrap_or(&a.env));
+    let scene = PathBuf::from(&a.scene.scene);
+    let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--env", &env), ("--scene", &scene)];
+    if let Some(h) = &a.scene.height_map {
+        inputs.push(("--height-map", h));
+    }
+    shvis::files::check_outputs_spare_inputs(&[("--out".to_string(), a.out.clone())], &inputs)?;
     let technique = with_normal_filter(vec![a.technique], a.normal_filter)[0];
     let settings = prepare_settings(&a.scene, &a.env, &[technique], a.bounces)?;
     // The device next: a missing GPU should not cost a bake.

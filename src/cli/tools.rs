@@ -143,11 +143,12 @@ pub(super) enum ShCommand {
 
 #[derive(Args, Debug)]
 pub(super) struct SsbumpArgs {
-    /// Height map (a PNG or EXR; luminance in [0, 1]), or `house`: the built-in bricks'
+    /// Height map (a PNG or an RGB EXR; luminance in [0, 1]), or `house`: the built-in bricks'
     /// height field in texels, the one their normal map is derived from.
     #[arg(long = "height-map")]
     height: PathBuf,
-    /// Height of a white texel, in texels (with `house`: a factor on its heights).
+    /// Height of a white texel, in texels (with `house`: a factor on its heights); at most
+    /// 100.
     #[arg(long = "height-scale", value_parser = finite_f64)]
     scale: f64,
     /// Rays per texel.
@@ -275,6 +276,11 @@ pub(super) fn run_ssbump(a: SsbumpArgs) -> Result<()> {
 }
 
 pub(super) fn run_normalmap(a: NormalmapArgs) -> Result<()> {
+    if a.cpu_face_rays && a.baker == BakerArg::Gpu && !a.compare_cpu {
+        bail!(
+            "--cpu-face-rays steers the CPU baker's rays: only with --baker cpu or --compare-cpu"
+        );
+    }
     let low = match (a.low, a.simplify) {
         (Some(low), _) => LowMesh::Load(low),
         (None, Some(ratio)) => LowMesh::Simplify(ratio),

@@ -6,13 +6,12 @@ use std::time::Instant;
 use anyhow::{Result, bail};
 use clap::Args;
 
-use shvis::report::image::frame_format;
 use shvis::technique::{HwPath, Technique};
 
 use super::args::{GpuArgs, SceneArgs, finite_f32, finite_f64};
 use super::{
-    DEFAULT_EXPOSURE_EV, MAX_FRAME_SIDE, check_frame_memory, check_validation, create_dir,
-    parse_list, parse_techniques, prepare_for, print_table, with_gpu,
+    DEFAULT_EXPOSURE_EV, MAX_FRAME_SIDE, check_frame_memory, check_rows, check_validation,
+    create_dir, parse_list, parse_techniques, prepare_for, print_table, with_gpu,
 };
 
 #[derive(Args, Debug)]
@@ -59,12 +58,16 @@ pub(super) struct ViewArgs {
 pub(super) struct RelightArgs {
     #[arg(long, default_value = "sky")]
     env: String,
-    /// `all` or a comma-separated list of technique names (shlmap's lighting is baked in:
-    /// it is reported, not run).
+    /// A named set (`headline`, `paper`, `all`) or a comma-separated list of technique
+    /// names (shlmap's lighting is baked in: it is reported, not run).
     #[arg(long, default_value = "unc3,unc4,unc6,pca4,pca16,pca16w,sh2,preconv")]
     techniques: String,
     #[arg(long, default_value = "dx9,dx10")]
     paths: String,
+    /// Leave out, with a note, technique × path pairs that cannot run (`nmprtsvdMp` on dx9)
+    /// instead of failing.
+    #[arg(long)]
+    skip_unsupported: bool,
     /// Frames of the run.
     #[arg(long, default_value_t = 48, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     frames: u32,
@@ -102,12 +105,20 @@ pub(super) struct RelightArgs {
     gpu: GpuArgs,
 }
 
+/// The most full turns `relight --turns` takes (more only repeats the same lighting).
+const MAX_TURNS: f64 = 1000.0;
+
 /// `shvis view`: the window opens its own presenting device (`shvis::view::run`), which
 /// reports its validation counts.
 pub(super) fn run_view(a: ViewArgs) -> Result<()> {
     check_frame_memory(a.width, a.height, 48)?;
     if let Some(shot) = &a.screenshot {
-        frame_format(shot)?;
+        if shot.extension().and_then(|e| e.to_str()) != Some("png") {
+            bail!(
+                "{}: --screenshot writes PNG; name a .png file",
+                shot.display()
+            );
+        }
         shvis::files::check_writable_file(shot, "--screenshot")?;
     }
     let set = |name: &str| std::env::var_os(name).is_some_and(|v| !v.is_empty());
@@ -148,8 +159,8 @@ pub(super) fn run_view(a: ViewArgs) -> Result<()> {
 
 pub(super) fn run_relight(a: RelightArgs) -> Result<()> {
     check_frame_memory(a.width, a.height, 320)?;
-    if !a.turns.is_finite() {
-        bail!("--turns {} is not a finite number", a.turns);
+    if !(a.turns.is_finite() && a.turns.abs() <= MAX_TURNS) {
+        bail!("--turns {:?} must be a number within ±{MAX_TURNS}", a.turns);
     }
     let settings = shvis::relight::RelightSettings {
         techniques: parse_techniques(&a.techniques)?,
@@ -171,7 +182,19 @@ pub(super) fn run_relight(a: RelightArgs) -> Result<()> {
         exposure: a.exposure,
         out: a.out.clone(),
     };
+    check_rows(
+        &a.techniques,
+        &settings.techniques,
+        &settings.paths,
+        a.skip_unsupported,
+    )?;
     create_dir(&a.out)?;
+    // Temporaries of a killed run into this folder go first.
+    shvis::files::remove_stale_temps(&a.out);
+    // The report of an earlier run must not sit beside this run's images if it stops early.
+    for stale in ["relight.md", "relight.json"] {
+        let _ = std::fs::remove_file(a.out.join(stale));
+    }
     let started = Instant::now();
     let prepared = prepare_for(
         &a.scene,

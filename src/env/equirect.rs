@@ -146,6 +146,16 @@ fn check_env_size(path: &Path, width: u64, height: u64) -> Result<(), EnvError> 
     .map_err(limit_err)
 }
 
+/// The first RGB layer of an OpenEXR file (its header's sizes checked first), for inputs
+/// other than environments (height maps); the error in words.
+pub(crate) fn decode_exr_rgb(bytes: &[u8], path: &Path) -> Result<EnvMap, EnvError> {
+    check_exr_header(bytes, path)?;
+    decode_exr(bytes).map_err(|e| EnvError::Format {
+        path: path.to_owned(),
+        detail: format!("not an OpenEXR image with R, G and B channels: {e}"),
+    })
+}
+
 fn decode_exr(bytes: &[u8]) -> Result<EnvMap, exr::error::Error> {
     use exr::prelude::*;
     let image = read()
@@ -193,6 +203,12 @@ fn validate(mut map: EnvMap, path: &Path, square: SquareLayout) -> Result<EnvMap
             path: path.to_owned(),
             width,
             height,
+        });
+    }
+    if square == SquareLayout::Angular && width != height {
+        return Err(EnvError::Format {
+            path: path.to_owned(),
+            detail: format!("angular: names a 1:1 angular probe, this map is {width}×{height}"),
         });
     }
     if width != 2 * height && width != height {
@@ -243,6 +259,12 @@ fn validate(mut map: EnvMap, path: &Path, square: SquareLayout) -> Result<EnvMap
                 path: path.to_owned(),
                 width,
                 outside,
+            });
+        }
+        if square == SquareLayout::Angular && outside > 0.999 {
+            return Err(EnvError::Format {
+                path: path.to_owned(),
+                detail: "read as an angular probe (angular:) it is black: over 99.9 % of its light lies outside the probe's disk".into(),
             });
         }
         log::info!(

@@ -307,6 +307,12 @@ pub fn resolve(name_or_path: &str) -> Result<EnvMap, EnvError> {
             &sky::SkyParams::with_sun_elevation(elevation),
         ))
     } else if let Some(path) = name_or_path.strip_prefix(ANGULAR_PREFIX) {
+        if path.is_empty() {
+            return Err(EnvError::Format {
+                path: PathBuf::from(name_or_path),
+                detail: "angular:PATH needs the path of a 1:1 angular probe".into(),
+            });
+        }
         equirect::load_as(Path::new(path), equirect::SquareLayout::Angular)
     } else {
         equirect::load(Path::new(name_or_path))

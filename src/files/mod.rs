@@ -76,6 +76,16 @@ pub enum FileError {
         /// Why.
         cause: io::Error,
     },
+    /// An output of a run is one of its inputs.
+    #[error("{}: {output} would overwrite {input} of this run; choose another name", .path.display())]
+    OutputIsInput {
+        /// The file.
+        path: PathBuf,
+        /// The option that writes it (`--out`, `--gltf`, or a side file of `--out`).
+        output: String,
+        /// The option it is read by.
+        input: String,
+    },
     /// Larger than the reader accepts.
     #[error("{}: {bytes} bytes is more than the {limit} bytes accepted for {what}", .path.display())]
     TooLarge {
@@ -88,6 +98,51 @@ pub enum FileError {
         /// What kind of file it was read as.
         what: &'static str,
     },
+}
+
+/// The file `path` names once symbolic links and `.`/`..` are resolved: a path that does not
+/// exist yet by its folder's resolved path and its name.
+fn resolved(path: &Path) -> PathBuf {
+    if let Ok(p) = fs::canonicalize(path) {
+        return p;
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    match (fs::canonicalize(dir), path.file_name()) {
+        (Ok(d), Some(name)) => d.join(name),
+        _ => path.to_path_buf(),
+    }
+}
+
+/// Refuses a run whose outputs include one of its inputs — the same file once links are
+/// followed (an output written through a symbolic link lands on the link's target, so a link
+/// to an input is caught too). `outputs` and `inputs` pair each path with the option that
+/// names it.
+///
+/// # Errors
+/// [`FileError::OutputIsInput`] for the first output that is an input.
+pub fn check_outputs_spare_inputs(
+    outputs: &[(String, PathBuf)],
+    inputs: &[(&str, &Path)],
+) -> Result<(), FileError> {
+    let inputs: Vec<(&str, PathBuf)> = inputs
+        .iter()
+        .filter(|(_, p)| p.exists())
+        .map(|&(option, p)| (option, resolved(p)))
+        .collect();
+    for (output, path) in outputs {
+        let target = resolved(path);
+        if let Some((input, _)) = inputs.iter().find(|(_, p)| *p == target) {
+            return Err(FileError::OutputIsInput {
+                path: path.clone(),
+                output: output.clone(),
+                input: format!("the {input} input"),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// The bytes of the regular file at `path` (links followed), if it holds at most `limit`
@@ -164,12 +219,32 @@ fn special_kind(_: &fs::Metadata) -> &'static str {
 }
 
 /// Writes `bytes` to `path` atomically (module doc): temporary file in the same directory,
-/// fsync, rename, best-effort fsync of the directory. The directory must exist.
+/// fsync, rename, best-effort fsync of the directory. The directory must exist. Through a
+/// symbolic link to a regular file, that file is written and the link kept; a device,
+/// FIFO or socket at `path` is refused.
 ///
 /// # Errors
 /// [`FileError::Io`] naming `path` when any step fails (the temporary file is removed).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
+    // A symbolic link to a regular file is written through: that file is replaced and the
+    // link stays. A link to anything else (a device, a dangling name) is replaced itself.
+    let through_link = fs::symlink_metadata(path)
+        .is_ok_and(|m| m.file_type().is_symlink())
+        .then(|| fs::canonicalize(path).ok())
+        .flatten()
+        .filter(|target| fs::metadata(target).is_ok_and(|m| m.is_file()));
+    let path = through_link.as_deref().unwrap_or(path);
+    // Never rename over a device, FIFO or socket (as root that would replace /dev/zero).
+    if let Ok(m) = fs::symlink_metadata(path) {
+        let t = m.file_type();
+        if !(t.is_file() || t.is_symlink() || t.is_dir()) {
+            return Err(FileError::NotRegular {
+                path: path.to_path_buf(),
+                kind: special_kind(&m),
+            });
+        }
+    }
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -476,6 +551,37 @@ mod tests {
         }
         assert_eq!(remove_stale_temps(&dir), 1);
         assert!(!dead.exists() && live.exists() && other.exists());
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn writes_go_through_links_to_files_and_never_over_special_files() {
+        let dir = scratch("links");
+        let target = dir.join("target.txt");
+        fs::write(&target, b"old").unwrap();
+        let link = dir.join("link.txt");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        write_atomic(&link, b"new").unwrap();
+        assert!(
+            fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        assert_eq!(fs::read(&target).unwrap(), b"new");
+        // A FIFO: refused directly; a link to it is replaced, the FIFO left alone.
+        let fifo = dir.join("fifo");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if made.is_ok_and(|s| s.success()) {
+            let e = write_atomic(&fifo, b"x").unwrap_err();
+            assert!(e.to_string().contains("not a regular file"), "{e}");
+            let to_fifo = dir.join("to-fifo");
+            std::os::unix::fs::symlink(&fifo, &to_fifo).unwrap();
+            write_atomic(&to_fifo, b"x").unwrap();
+            assert_eq!(fs::read(&to_fifo).unwrap(), b"x");
+            use std::os::unix::fs::FileTypeExt;
+            assert!(fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+        }
         let _ = fs::remove_dir_all(&dir);
     }
 

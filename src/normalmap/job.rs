@@ -89,7 +89,47 @@ impl NormalMapJob {
                 super::MAX_RES
             ));
         }
-        Ok(())
+        let files = |option: &'static str, name: &str| -> Vec<(&'static str, PathBuf)> {
+            if name.starts_with("sphere:") {
+                return Vec::new();
+            }
+            // A glTF's buffer beside it is read too.
+            let path = PathBuf::from(name);
+            vec![(option, path.with_extension("bin")), (option, path)]
+        };
+        let mut inputs = files("--high", &self.high);
+        if let LowMesh::Load(low) = &self.low {
+            inputs.extend(files("--low", low));
+        }
+        let inputs: Vec<(&str, &std::path::Path)> =
+            inputs.iter().map(|(o, p)| (*o, p.as_path())).collect();
+        crate::files::check_outputs_spare_inputs(&self.outputs(), &inputs)
+            .map_err(|e| NormalMapError::Invalid(e.to_string()))
+    }
+
+    /// Every file the job may write, with the option that names it.
+    fn outputs(&self) -> Vec<(String, PathBuf)> {
+        let stem = self.out.with_extension("").display().to_string();
+        let mut outputs = Vec::new();
+        for side in ["", "_object", "_cpu", "_cpu_object"] {
+            for ext in ["png", "exr"] {
+                let option = if side.is_empty() {
+                    "--out".to_string()
+                } else {
+                    format!("--out's {side} file")
+                };
+                outputs.push((option, PathBuf::from(format!("{stem}{side}.{ext}"))));
+            }
+        }
+        outputs.push((
+            "--out's _diff file".into(),
+            PathBuf::from(format!("{stem}_diff.png")),
+        ));
+        if let Some(g) = &self.gltf {
+            outputs.push(("--gltf".into(), g.clone()));
+            outputs.push(("--gltf's buffer".into(), g.with_extension("bin")));
+        }
+        outputs
     }
 
     /// Whether the job bakes on a device.

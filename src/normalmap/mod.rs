@@ -256,7 +256,12 @@ pub fn low_texels(low: &Mesh, res: u32) -> LightmapTexels {
     for v in &mut by_material.vertices {
         v.uv_lightmap = v.uv_material;
     }
-    raster::rasterize(&by_material, res)
+    raster::rasterize_uvs(
+        &by_material,
+        res,
+        "the low mesh's material UVs (TEXCOORD_0) overlap",
+        "each such texel gets the first triangle's normal (give the low mesh unique material UVs)",
+    )
 }
 
 /// `image` unless no texel found a high surface within `max_distance`.

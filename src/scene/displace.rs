@@ -32,7 +32,7 @@ pub const MAX_DISPLACED_TRIANGLES: usize = 4_000_000;
 #[derive(Debug, thiserror::Error)]
 pub enum DisplaceError {
     #[error(
-        "scene '{0}' has no height map to displace (use --scene patio or house, or --height-map)"
+        "scene '{0}' has no height map to displace: use --scene patio (the built-in bricks at a size that displaces)"
     )]
     NoHeightMap(String),
     #[error(

@@ -5,6 +5,11 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
+/// The largest height scale (texels of height of a white texel, or the factor on the
+/// built-in bricks' heights): relief of 100 texels is far beyond a bump map's, and it keeps
+/// the SSBump bake's ray marches short (`bake::ssbump`).
+pub const MAX_HEIGHT_SCALE: f64 = 100.0;
+
 /// A height field: `width` × `height` heights in texel units, row 0 at the top (image up).
 #[derive(Clone, Debug, PartialEq)]
 pub struct HeightField {

@@ -356,21 +356,25 @@ pub enum SceneError {
 /// Largest height map accepted (texels), as for material textures.
 pub const MAX_HEIGHT_MAP_TEXELS: usize = 16384 * 16384;
 
+/// The first bytes of an OpenEXR file.
+const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+
 /// Reads a height map (PNG, EXR…: its luminance, 8/16-bit images as [0, 1]) as heights
 /// in texels: `scale` × value (`--height-map FILE --height-scale S`). The map tiles
 /// by the material UVs like the normal map, and should describe the same surface.
 ///
 /// # Errors
 /// [`SceneError::HeightMap`] for an unreadable file, an empty or huge image, non-finite
-/// texels, or a scale that is not positive and finite.
+/// texels, or a scale outside (0, [`height_field::MAX_HEIGHT_SCALE`]].
 pub fn load_height_map(path: &std::path::Path, scale: f64) -> Result<HeightField, SceneError> {
     let err = |message: String| SceneError::HeightMap {
         path: path.display().to_string(),
         message,
     };
-    if !(scale.is_finite() && scale > 0.0) {
+    if !(scale.is_finite() && scale > 0.0 && scale <= height_field::MAX_HEIGHT_SCALE) {
         return Err(err(format!(
-            "height scale {scale} must be positive and finite"
+            "height scale {scale:?} must be in (0, {}]",
+            height_field::MAX_HEIGHT_SCALE
         )));
     }
     // Regular files only (a FIFO would block, /dev/zero never end); sized from the header.
@@ -384,6 +388,30 @@ pub fn load_height_map(path: &std::path::Path, scale: f64) -> Result<HeightField
                 .replacen(&format!("{}: ", path.display()), "", 1),
         })
     })?;
+    if bytes.starts_with(&EXR_MAGIC) {
+        let map = crate::env::equirect::decode_exr_rgb(&bytes, path).map_err(|e| {
+            err(e
+                .to_string()
+                .replacen(&format!("{}: ", path.display()), "", 1))
+        })?;
+        let (width, height) = (map.width as usize, map.height as usize);
+        if width * height == 0 || width * height > MAX_HEIGHT_MAP_TEXELS {
+            return Err(err(format!("{width}×{height} is not a usable height map")));
+        }
+        // Luminance, as `to_luma32f` weighs a PNG's channels (Rec. 709).
+        let h: Vec<f64> = map
+            .texels
+            .iter()
+            .map(|t| {
+                (0.2126 * f64::from(t[0]) + 0.7152 * f64::from(t[1]) + 0.0722 * f64::from(t[2]))
+                    * scale
+            })
+            .collect();
+        if h.iter().any(|v| !v.is_finite()) {
+            return Err(err("the height map has non-finite texels".into()));
+        }
+        return Ok(HeightField { width, height, h });
+    }
     let reader = || {
         image::ImageReader::new(std::io::Cursor::new(&bytes))
             .with_guessed_format()

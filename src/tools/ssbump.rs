@@ -62,9 +62,10 @@ pub enum SsbumpError {
 impl SsbumpJob {
     /// Checks the settings, before any work.
     pub fn check(&self) -> Result<(), SsbumpError> {
-        if !(self.scale.is_finite() && self.scale > 0.0) {
+        let max = crate::scene::height_field::MAX_HEIGHT_SCALE;
+        if !(self.scale.is_finite() && self.scale > 0.0 && self.scale <= max) {
             return Err(SsbumpError::Invalid(format!(
-                "--height-scale {} must be positive and finite",
+                "--height-scale {:?} must be in (0, {max}]",
                 self.scale
             )));
         }
@@ -73,6 +74,24 @@ impl SsbumpJob {
                 "--bilateral {} must be in 0..=64 texels",
                 self.bilateral
             )));
+        }
+        if self.height.as_os_str() != HOUSE {
+            let stem = self.out.with_extension("").display().to_string();
+            let outputs: Vec<(String, PathBuf)> = ["", "_d", "_ao"]
+                .iter()
+                .flat_map(|side| {
+                    ["png", "exr"].map(|ext| {
+                        let option = if side.is_empty() {
+                            "--out".to_string()
+                        } else {
+                            format!("--out's {side} file")
+                        };
+                        (option, PathBuf::from(format!("{stem}{side}.{ext}")))
+                    })
+                })
+                .collect();
+            crate::files::check_outputs_spare_inputs(&outputs, &[("--height-map", &self.height)])
+                .map_err(|e| SsbumpError::Invalid(e.to_string()))?;
         }
         if self.out.extension().and_then(|e| e.to_str()) != Some("png") {
             return Err(SsbumpError::Invalid(format!(

@@ -1,0 +1,442 @@
+//! One test per class of the failures a hostile user found: a value that would make a loop
+//! run without end, a run left with no row, an output over an input, a rerun into a folder
+//! of an earlier (or killed) run, an option that does nothing in its combination. Each
+//! case exits non-zero with the reason, or does what it says — never hangs, never writes
+//! over what it reads, never reports an empty or stale result as a success.
+
+mod scratch;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use scratch::Scratch;
+
+fn shvis(args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_shvis"));
+    cmd.args(args).env("RUST_LOG", "off");
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    cmd.output().expect("shvis runs")
+}
+
+/// Asserts failure with exactly one `error…` line on stderr containing every `needle`.
+fn assert_one_error_line(out: &Output, needles: &[&str]) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "exit status 0; stderr: {stderr}");
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "expected one line, got: {stderr}");
+    assert!(lines[0].starts_with("error"), "{}", lines[0]);
+    for n in needles {
+        assert!(lines[0].contains(n), "'{n}' missing from: {}", lines[0]);
+    }
+}
+
+/// A 16×16 8-bit height map with one bump.
+fn height_map(path: &Path) {
+    let img = image::GrayImage::from_fn(16, 16, |x, y| {
+        let d = (x as f32 - 8.0).hypot(y as f32 - 8.0);
+        image::Luma([(255.0 * (1.0 - d / 8.0).max(0.0)) as u8])
+    });
+    img.save(path).expect("the height map is written");
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("a UTF-8 path")
+}
+
+/// Heights that once stalled the SSBump march (1e25: t + step == t) are refused at parse
+/// time, and the largest accepted height finishes.
+#[test]
+fn every_ray_march_is_bounded() {
+    let dir = Scratch::new("reliability", "march");
+    let h = dir.join("h.png");
+    height_map(&h);
+    let out = dir.join("ss.png");
+    for scale in ["1e25", "1e30", "101"] {
+        let run = shvis(
+            &[
+                "ssbump",
+                "--height-map",
+                s(&h),
+                "--height-scale",
+                scale,
+                "--rays",
+                "16",
+                "--out",
+                s(&out),
+            ],
+            &[],
+        );
+        assert_one_error_line(&run, &["--height-scale", scale, "(0, 100]"]);
+    }
+    let run = shvis(
+        &[
+            "ssbump",
+            "--height-map",
+            s(&h),
+            "--height-scale",
+            "100",
+            "--rays",
+            "16",
+            "--out",
+            s(&out),
+        ],
+        &[],
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(out.is_file());
+}
+
+/// A bench or relight whose every row breaks the path's rules fails, naming them; one that
+/// names some such rows fails unless --skip-unsupported, which names them on stderr.
+#[test]
+fn a_run_without_rows_fails_with_the_reason() {
+    let dir = Scratch::new("reliability", "rows");
+    let out = dir.join("out");
+    for cmd in ["bench", "relight"] {
+        let run = shvis(
+            &[
+                cmd,
+                "--techniques",
+                "nmprtsvd4p",
+                "--paths",
+                "dx9",
+                "--out",
+                s(&out),
+            ],
+            &[],
+        );
+        assert_one_error_line(
+            &run,
+            &["no row to measure", "nmprtsvd4p.dx9", "--paths dx10"],
+        );
+        let run = shvis(
+            &[
+                cmd,
+                "--techniques",
+                "nmprtsvd4p,preconv",
+                "--paths",
+                "dx9",
+                "--out",
+                s(&out),
+            ],
+            &[],
+        );
+        assert_one_error_line(&run, &["nmprtsvd4p.dx9", "--skip-unsupported"]);
+    }
+    // Named twice: an error, not two identical rows.
+    let run = shvis(
+        &[
+            "bench",
+            "--techniques",
+            "preconv",
+            "--paths",
+            "dx10,dx10",
+            "--out",
+            s(&out),
+        ],
+        &[],
+    );
+    assert_one_error_line(&run, &["dx10 is named twice"]);
+    assert!(!out.exists(), "a refused run wrote its folder");
+}
+
+/// No output may be one of the run's inputs, side files and links included.
+#[test]
+fn no_output_overwrites_an_input() {
+    let dir = Scratch::new("reliability", "over");
+    let h = dir.join("x.png");
+    height_map(&h);
+    let before = std::fs::read(&h).unwrap();
+    let run = shvis(
+        &[
+            "ssbump",
+            "--height-map",
+            s(&h),
+            "--height-scale",
+            "2",
+            "--out",
+            s(&h),
+        ],
+        &[],
+    );
+    assert_one_error_line(
+        &run,
+        &["x.png", "--out would overwrite the --height-map input"],
+    );
+    // The input is a side file (`*_d.png`) of --out.
+    let d = dir.join("y_d.png");
+    height_map(&d);
+    let run = shvis(
+        &[
+            "ssbump",
+            "--height-map",
+            s(&d),
+            "--height-scale",
+            "2",
+            "--out",
+            s(&dir.join("y.png")),
+        ],
+        &[],
+    );
+    assert_one_error_line(
+        &run,
+        &["y_d.png", "_d file would overwrite the --height-map input"],
+    );
+    // Through a symbolic link.
+    let link = dir.join("link.png");
+    std::os::unix::fs::symlink(&h, &link).unwrap();
+    let run = shvis(
+        &[
+            "ssbump",
+            "--height-map",
+            s(&h),
+            "--height-scale",
+            "2",
+            "--out",
+            s(&link),
+        ],
+        &[],
+    );
+    assert_one_error_line(
+        &run,
+        &["link.png", "would overwrite the --height-map input"],
+    );
+    // render's environment, normalmap's low mesh.
+    let env = dir.join("e.exr");
+    std::fs::write(&env, b"not read").unwrap();
+    let run = shvis(
+        &[
+            "render",
+            "--technique",
+            "preconv",
+            "--env",
+            s(&env),
+            "--out",
+            s(&env),
+        ],
+        &[],
+    );
+    assert_one_error_line(&run, &["e.exr", "--out would overwrite the --env input"]);
+    let low = dir.join("low.gltf");
+    std::fs::write(&low, b"{}").unwrap();
+    let run = shvis(
+        &[
+            "normalmap",
+            "--high",
+            "sphere:2",
+            "--low",
+            s(&low),
+            "--gltf",
+            s(&low),
+            "--out",
+            s(&dir.join("n.png")),
+        ],
+        &[],
+    );
+    assert_one_error_line(
+        &run,
+        &["low.gltf", "--gltf would overwrite the --low input"],
+    );
+    assert_eq!(std::fs::read(&h).unwrap(), before, "the input was written");
+}
+
+/// A rerun into the folder of an earlier run removes that run's report and a killed run's
+/// temporaries before it does anything else, so a run that stops early never leaves a
+/// report that describes other images.
+#[test]
+fn a_rerun_clears_the_earlier_report_and_stale_temporaries() {
+    let dir = Scratch::new("reliability", "rerun");
+    let out = dir.join("bench");
+    std::fs::create_dir_all(&out).unwrap();
+    for f in ["index.html", "table.md", "table.json", "probe.md"] {
+        std::fs::write(out.join(f), b"an earlier run").unwrap();
+    }
+    // PID 4194304 is above Linux's largest: no process owns it.
+    let stale = out.join(".unc6.dx9.png.tmp-4194304-0");
+    std::fs::write(&stale, b"half a PNG").unwrap();
+    let run = shvis(
+        &["bench", "--env", "/no/such/env.exr", "--out", s(&out)],
+        &[],
+    );
+    assert_one_error_line(&run, &["/no/such/env.exr"]);
+    for f in ["index.html", "table.md", "table.json", "probe.md"] {
+        assert!(
+            !out.join(f).exists(),
+            "{f} of the earlier run is still there"
+        );
+    }
+    assert!(!stale.exists(), "the killed run's temporary is still there");
+}
+
+/// Options that would do nothing in the combination given are errors naming both.
+#[test]
+fn an_option_that_does_nothing_is_an_error() {
+    let dir = Scratch::new("reliability", "ignored");
+    let png = dir.join("x.png");
+    // clap's own messages, on one line with the arguments' names.
+    let run = shvis(
+        &[
+            "render",
+            "--technique",
+            "preconv",
+            "--light-dir",
+            "0,1,0",
+            "--out",
+            s(&png),
+        ],
+        &[],
+    );
+    assert_eq!(run.status.code(), Some(2));
+    assert_one_error_line(&run, &["not provided", "--specular"]);
+    assert_one_error_line(
+        &shvis(&["render", "--out", s(&png)], &[]),
+        &["not provided", "--technique"],
+    );
+    assert_one_error_line(
+        &shvis(
+            &["bake", "--compare-cpu", "--out", s(&dir.join("bake"))],
+            &[],
+        ),
+        &["--compare-cpu", "--baker gpu"],
+    );
+    assert_one_error_line(
+        &shvis(
+            &[
+                "normalmap",
+                "--high",
+                "sphere:2",
+                "--low",
+                "sphere:1",
+                "--cpu-face-rays",
+                "--out",
+                s(&png),
+            ],
+            &[],
+        ),
+        &["--cpu-face-rays", "--baker cpu"],
+    );
+    assert_one_error_line(
+        &shvis(
+            &[
+                "view",
+                "--frames",
+                "2",
+                "--screenshot",
+                s(&dir.join("x.exr")),
+            ],
+            &[],
+        ),
+        &["x.exr", "--screenshot writes PNG"],
+    );
+    assert_one_error_line(
+        &shvis(
+            &["relight", "--turns", "1e30", "--out", s(&dir.join("r"))],
+            &[],
+        ),
+        &["--turns 1e30"],
+    );
+    assert_one_error_line(
+        &shvis(
+            &[
+                "probe",
+                "--triangle-pixels",
+                "1e12",
+                "--out",
+                s(&dir.join("p")),
+            ],
+            &[],
+        ),
+        &["--triangle-pixels 1000000000000", "at most 512000"],
+    );
+}
+
+/// Errors say what is wrong in the user's terms, and inputs the help promises are read.
+#[test]
+fn errors_name_the_input_and_what_is_wrong() {
+    let dir = Scratch::new("reliability", "wording");
+    let png = dir.join("x.png");
+    assert_one_error_line(
+        &shvis(
+            &[
+                "render",
+                "--technique",
+                "preconv",
+                "--env",
+                "angular:",
+                "--out",
+                s(&png),
+            ],
+            &[],
+        ),
+        &["angular:", "needs the path of a 1:1 angular probe"],
+    );
+    // A 2:1 map forced to be an angular probe.
+    let wide = dir.join("wide.exr");
+    exr::prelude::write_rgb_file(&wide, 8, 4, |_, _| (1.0f32, 1.0f32, 1.0f32)).unwrap();
+    assert_one_error_line(
+        &shvis(
+            &[
+                "render",
+                "--technique",
+                "preconv",
+                "--env",
+                &format!("angular:{}", s(&wide)),
+                "--out",
+                s(&png),
+            ],
+            &[],
+        ),
+        &["wide.exr", "1:1 angular probe", "8×4"],
+    );
+    assert_one_error_line(
+        &shvis(
+            &[
+                "study",
+                "normalmap",
+                "--ratios",
+                "0,1.5",
+                "--out",
+                s(&dir.join("st")),
+            ],
+            &[],
+        ),
+        &["--ratios", "(0, 1]"],
+    );
+    // An EXR height map, as the help says.
+    let h = dir.join("h.exr");
+    exr::prelude::write_rgb_file(&h, 16, 16, |x, y| {
+        let v = if (x / 4 + y / 4) % 2 == 0 {
+            1.0f32
+        } else {
+            0.0
+        };
+        (v, v, v)
+    })
+    .unwrap();
+    let run = shvis(
+        &[
+            "ssbump",
+            "--height-map",
+            s(&h),
+            "--height-scale",
+            "2",
+            "--rays",
+            "16",
+            "--out",
+            s(&dir.join("ss.png")),
+        ],
+        &[],
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+}
