@@ -1,32 +1,12 @@
 //! Bad input at the command line: each case exits non-zero with one `error:` line that
 //! names the input, and never panics (DESIGN §4).
 
+mod cli_run;
 mod scratch;
 
+use cli_run::{assert_one_error_line, shvis};
 use scratch::Scratch;
-use std::process::{Command, Output};
-
-fn shvis(args: &[&str], env: &[(&str, &str)]) -> Output {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_shvis"));
-    cmd.args(args).env("RUST_LOG", "off");
-    for (k, v) in env {
-        cmd.env(k, v);
-    }
-    cmd.output().expect("shvis runs")
-}
-
-/// Asserts failure with exactly one `error…` line on stderr containing every `needle`.
-fn assert_one_error_line(out: &Output, needles: &[&str]) {
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "exit status 0; stderr: {stderr}");
-    assert!(!stderr.contains("panicked"), "panic: {stderr}");
-    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
-    assert_eq!(lines.len(), 1, "expected one line, got: {stderr}");
-    assert!(lines[0].starts_with("error"), "{}", lines[0]);
-    for n in needles {
-        assert!(lines[0].contains(n), "'{n}' missing from: {}", lines[0]);
-    }
-}
+use std::process::Command;
 
 fn scratch(name: &str) -> Scratch {
     Scratch::new("cli", name)

@@ -4,34 +4,13 @@
 //! case exits non-zero with the reason, or does what it says — never hangs, never writes
 //! over what it reads, never reports an empty or stale result as a success.
 
+mod cli_run;
 mod scratch;
 
+use cli_run::{assert_one_error_line, shvis};
 use std::path::Path;
-use std::process::{Command, Output};
 
 use scratch::Scratch;
-
-fn shvis(args: &[&str], env: &[(&str, &str)]) -> Output {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_shvis"));
-    cmd.args(args).env("RUST_LOG", "off");
-    for (k, v) in env {
-        cmd.env(k, v);
-    }
-    cmd.output().expect("shvis runs")
-}
-
-/// Asserts failure with exactly one `error…` line on stderr containing every `needle`.
-fn assert_one_error_line(out: &Output, needles: &[&str]) {
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "exit status 0; stderr: {stderr}");
-    assert!(!stderr.contains("panicked"), "panic: {stderr}");
-    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
-    assert_eq!(lines.len(), 1, "expected one line, got: {stderr}");
-    assert!(lines[0].starts_with("error"), "{}", lines[0]);
-    for n in needles {
-        assert!(lines[0].contains(n), "'{n}' missing from: {}", lines[0]);
-    }
-}
 
 /// A 16×16 8-bit height map with one bump.
 fn height_map(path: &Path) {
@@ -46,6 +25,24 @@ fn s(p: &Path) -> &str {
     p.to_str().expect("a UTF-8 path")
 }
 
+/// `shvis ssbump` of `height` at `scale` with 16 rays into `out`.
+fn ssbump(height: &Path, scale: &str, out: &Path) -> std::process::Output {
+    shvis(
+        &[
+            "ssbump",
+            "--height-map",
+            s(height),
+            "--height-scale",
+            scale,
+            "--rays",
+            "16",
+            "--out",
+            s(out),
+        ],
+        &[],
+    )
+}
+
 /// Heights that once stalled the SSBump march (1e25: t + step == t) are refused at parse
 /// time, and the largest accepted height finishes.
 #[test]
@@ -55,36 +52,10 @@ fn every_ray_march_is_bounded() {
     height_map(&h);
     let out = dir.join("ss.png");
     for scale in ["1e25", "1e30", "101"] {
-        let run = shvis(
-            &[
-                "ssbump",
-                "--height-map",
-                s(&h),
-                "--height-scale",
-                scale,
-                "--rays",
-                "16",
-                "--out",
-                s(&out),
-            ],
-            &[],
-        );
+        let run = ssbump(&h, scale, &out);
         assert_one_error_line(&run, &["--height-scale", scale, "(0, 100]"]);
     }
-    let run = shvis(
-        &[
-            "ssbump",
-            "--height-map",
-            s(&h),
-            "--height-scale",
-            "100",
-            "--rays",
-            "16",
-            "--out",
-            s(&out),
-        ],
-        &[],
-    );
+    let run = ssbump(&h, "100", &out);
     assert!(
         run.status.success(),
         "{}",
@@ -154,18 +125,7 @@ fn no_output_overwrites_an_input() {
     let h = dir.join("x.png");
     height_map(&h);
     let before = std::fs::read(&h).unwrap();
-    let run = shvis(
-        &[
-            "ssbump",
-            "--height-map",
-            s(&h),
-            "--height-scale",
-            "2",
-            "--out",
-            s(&h),
-        ],
-        &[],
-    );
+    let run = ssbump(&h, "2", &h);
     assert_one_error_line(
         &run,
         &["x.png", "--out would overwrite the --height-map input"],
@@ -173,18 +133,7 @@ fn no_output_overwrites_an_input() {
     // The input is a side file (`*_d.png`) of --out.
     let d = dir.join("y_d.png");
     height_map(&d);
-    let run = shvis(
-        &[
-            "ssbump",
-            "--height-map",
-            s(&d),
-            "--height-scale",
-            "2",
-            "--out",
-            s(&dir.join("y.png")),
-        ],
-        &[],
-    );
+    let run = ssbump(&d, "2", &dir.join("y.png"));
     assert_one_error_line(
         &run,
         &["y_d.png", "_d file would overwrite the --height-map input"],
@@ -192,18 +141,7 @@ fn no_output_overwrites_an_input() {
     // Through a symbolic link.
     let link = dir.join("link.png");
     std::os::unix::fs::symlink(&h, &link).unwrap();
-    let run = shvis(
-        &[
-            "ssbump",
-            "--height-map",
-            s(&h),
-            "--height-scale",
-            "2",
-            "--out",
-            s(&link),
-        ],
-        &[],
-    );
+    let run = ssbump(&h, "2", &link);
     assert_one_error_line(
         &run,
         &["link.png", "would overwrite the --height-map input"],
@@ -420,20 +358,7 @@ fn errors_name_the_input_and_what_is_wrong() {
         (v, v, v)
     })
     .unwrap();
-    let run = shvis(
-        &[
-            "ssbump",
-            "--height-map",
-            s(&h),
-            "--height-scale",
-            "2",
-            "--rays",
-            "16",
-            "--out",
-            s(&dir.join("ss.png")),
-        ],
-        &[],
-    );
+    let run = ssbump(&h, "2", &dir.join("ss.png"));
     assert!(
         run.status.success(),
         "{}",

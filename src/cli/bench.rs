@@ -16,8 +16,9 @@ use super::args::{
     finite_f32, with_normal_filter,
 };
 use super::{
-    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, check_frame_memory, check_rows, create_dir,
-    parse_list, parse_techniques, prepare_settings, print_table, print_written, with_gpu,
+    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, check_frame_memory, check_rows,
+    clear_earlier_run, create_dir, parse_list, parse_techniques, prepare_settings, print_table,
+    print_written, with_gpu,
 };
 
 #[derive(Args, Debug)]
@@ -195,18 +196,16 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
         bail!("--relight-rotate: not with --specular (its light is the bake's sun)");
     }
     create_dir(&a.out)?;
-    // Temporaries of a killed run into this folder go first.
-    shvis::files::remove_stale_temps(&a.out);
-    // The report of an earlier run must not sit beside this run's images if it stops early.
-    for stale in [
-        "table.md",
-        "table.json",
-        shvis::report::html::INDEX_NAME,
-        "probe.md",
-        "probe.json",
-    ] {
-        let _ = std::fs::remove_file(a.out.join(stale));
-    }
+    clear_earlier_run(
+        &a.out,
+        &[
+            "table.md",
+            "table.json",
+            shvis::report::html::INDEX_NAME,
+            "probe.md",
+            "probe.json",
+        ],
+    );
     let started = Instant::now();
     let prepare_settings = prepare_settings(&a.scene, &a.env, &settings.techniques, a.bounces)?;
     // The device before the bake: a missing GPU should not cost one, and `--baker gpu`

@@ -178,6 +178,24 @@ where
     if list == "all" {
         return Ok(all.to_vec());
     }
+    parse_each_once(list)
+}
+
+/// A `--techniques` value: a named set (`all`, `paper`, `headline`:
+/// `technique::catalog::named_set`) or a comma-separated list of names.
+fn parse_techniques(list: &str) -> Result<Vec<Technique>> {
+    match shvis::technique::catalog::named_set(list.trim()) {
+        Some(set) => Ok(set),
+        None => parse_each_once(list),
+    }
+}
+
+/// A comma-separated list of names, each at most once.
+fn parse_each_once<T>(list: &str) -> Result<Vec<T>>
+where
+    T: std::str::FromStr + PartialEq + std::fmt::Display,
+    T::Err: std::error::Error + Send + Sync + 'static,
+{
     let mut items: Vec<T> = Vec::new();
     for s in list.split(',') {
         let item: T = s.trim().parse()?;
@@ -189,21 +207,14 @@ where
     Ok(items)
 }
 
-/// A `--techniques` value: a named set (`all`, `paper`, `headline`:
-/// `technique::catalog::named_set`) or a comma-separated list of names, each once.
-fn parse_techniques(list: &str) -> Result<Vec<Technique>> {
-    if let Some(set) = shvis::technique::catalog::named_set(list.trim()) {
-        return Ok(set);
+/// Clears `out` of what an earlier run left there before this one writes into it: the
+/// temporaries of a killed run and the report files `reports`, so that a run that stops
+/// early never leaves a report describing other images.
+fn clear_earlier_run(out: &std::path::Path, reports: &[&str]) {
+    shvis::files::remove_stale_temps(out);
+    for stale in reports {
+        let _ = std::fs::remove_file(out.join(stale));
     }
-    let mut techniques: Vec<Technique> = Vec::new();
-    for name in list.split(',') {
-        let t: Technique = name.trim().parse()?;
-        if techniques.contains(&t) {
-            bail!("--techniques '{list}': {t} is named twice");
-        }
-        techniques.push(t);
-    }
-    Ok(techniques)
 }
 
 /// The technique × path pairs a run measures are those that fit the path's rules

@@ -11,7 +11,8 @@ use shvis::technique::{HwPath, Technique};
 use super::args::{GpuArgs, SceneArgs, finite_f32, finite_f64};
 use super::{
     DEFAULT_EXPOSURE_EV, MAX_FRAME_SIDE, check_frame_memory, check_rows, check_validation,
-    create_dir, parse_list, parse_techniques, prepare_for, print_table, with_gpu,
+    clear_earlier_run, create_dir, parse_list, parse_techniques, prepare_for, print_table,
+    with_gpu,
 };
 
 #[derive(Args, Debug)]
@@ -189,12 +190,7 @@ pub(super) fn run_relight(a: RelightArgs) -> Result<()> {
         a.skip_unsupported,
     )?;
     create_dir(&a.out)?;
-    // Temporaries of a killed run into this folder go first.
-    shvis::files::remove_stale_temps(&a.out);
-    // The report of an earlier run must not sit beside this run's images if it stops early.
-    for stale in ["relight.md", "relight.json"] {
-        let _ = std::fs::remove_file(a.out.join(stale));
-    }
+    clear_earlier_run(&a.out, &["relight.md", "relight.json"]);
     let started = Instant::now();
     let prepared = prepare_for(
         &a.scene,
