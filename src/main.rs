@@ -29,6 +29,7 @@ fn main() -> ExitCode {
             env_logger::WriteStyle::Never
         })
         .init();
+    shvis::files::remove_temporaries_on_interrupt();
     let cli = match cli::Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {

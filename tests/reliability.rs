@@ -365,3 +365,40 @@ fn errors_name_the_input_and_what_is_wrong() {
         String::from_utf8_lossy(&run.stderr)
     );
 }
+
+/// SIGINT while a file is being written: the temporary is removed and the process exits
+/// with 130, leaving no output and no `.NAME.tmp-*` behind.
+#[test]
+fn an_interrupted_write_leaves_no_temporary() {
+    let dir = Scratch::new("reliability", "sigint");
+    let h = dir.join("h.png");
+    height_map(&h);
+    let out = dir.join("ss.png");
+    let run = shvis(
+        &[
+            "ssbump",
+            "--height-map",
+            s(&h),
+            "--height-scale",
+            "2",
+            "--rays",
+            "8",
+            "--out",
+            s(&out),
+        ],
+        &[(shvis::files::INTERRUPT_WHILE_WRITING_ENV, "ss.png")],
+    );
+    assert_eq!(
+        run.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let left: Vec<String> = std::fs::read_dir(&*dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n != "h.png")
+        .collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}

@@ -6,8 +6,10 @@
 //! - **Writes** go through [`write_atomic`]: the bytes go to `.NAME.tmp-PID-N` in the same
 //!   directory, are fsynced and renamed over `NAME` (then a best-effort fsync of the
 //!   directory), so a killed or failed run leaves the old file or none, never a truncated
-//!   one, and a full disk is an error rather than a short file. [`remove_stale_temps`]
-//!   deletes the temporaries of runs that were killed (their process is gone).
+//!   one, and a full disk is an error rather than a short file. On SIGINT or SIGTERM the
+//!   temporaries being written are removed before the process exits (130 or 143;
+//!   [`remove_temporaries_on_interrupt`]); [`remove_stale_temps`] deletes those of runs that
+//!   were killed outright (their process is gone).
 //! - [`check_writable_dir`] creates a directory and a probe file in it before any work, so
 //!   an unwritable `--out` or cache is reported before a bake, not after.
 //! - A [`Manifest`] (`manifest.json`, written last) lists a directory's files with their
@@ -41,6 +43,10 @@ pub const EXR_ENCODING: Encoding = Encoding {
 /// being written by [`write_atomic`], the process kills itself with SIGKILL after writing
 /// half of the bytes (the kill-9 test of `tests/bad_input.rs`).
 pub const KILL_WHILE_WRITING_ENV: &str = "SHVIS_TEST_KILL_WHILE_WRITING";
+
+/// Test hook, not a user setting: as [`KILL_WHILE_WRITING_ENV`], but the process sends
+/// itself SIGINT (the interrupted-write test of `tests/reliability.rs`).
+pub const INTERRUPT_WHILE_WRITING_ENV: &str = "SHVIS_TEST_INTERRUPT_WHILE_WRITING";
 
 /// Name of a bake output directory's manifest.
 pub const MANIFEST_NAME: &str = "manifest.json";
@@ -258,6 +264,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
         std::process::id(),
         COUNTER.fetch_add(1, Ordering::Relaxed)
     ));
+    let slot = interrupt::register(&tmp);
     let result = (|| {
         let mut file = fs::OpenOptions::new()
             .write(true)
@@ -271,10 +278,17 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
             }
             _ => {}
         }
+        if std::env::var_os(INTERRUPT_WHILE_WRITING_ENV)
+            .is_some_and(|v| v.to_string_lossy() == name)
+        {
+            file.write_all(&bytes[..bytes.len() / 2])?;
+            interrupt::raise_sigint();
+        }
         file.write_all(bytes)?;
         file.sync_all()?;
         fs::rename(&tmp, path)
     })();
+    interrupt::unregister(slot);
     if let Err(source) = result {
         let _ = fs::remove_file(&tmp); // best effort: the error below is what matters
         return Err(FileError::Io {
@@ -299,6 +313,89 @@ pub fn write(path: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> io::Result<()> 
         FileError::Io { cause, .. } => cause,
         e => io::Error::other(e.to_string()),
     })
+}
+
+/// Removes the temporaries [`write_atomic`] is writing when SIGINT or SIGTERM arrives, then
+/// exits with 128 + the signal (what the default action would report). Call once, early.
+pub fn remove_temporaries_on_interrupt() {
+    interrupt::install();
+}
+
+/// The temporaries being written, in a fixed table of slots that a signal handler can read
+/// without locks: a slot holds a leaked C string, taken by whichever of the writer (after
+/// its rename) and the handler swaps it out first — the writer frees it, the handler only
+/// unlinks it and exits, so neither ever uses a freed pointer.
+#[allow(unsafe_code)]
+mod interrupt {
+    use std::ffi::{CString, c_char};
+    use std::path::Path;
+    use std::sync::atomic::{AtomicPtr, Ordering};
+
+    const SLOTS: usize = 64;
+    static WRITING: [AtomicPtr<c_char>; SLOTS] =
+        [const { AtomicPtr::new(std::ptr::null_mut()) }; SLOTS];
+
+    /// Records `tmp`; `None` when every slot is taken (then it is left to
+    /// `remove_stale_temps` of the next run).
+    pub(super) fn register(tmp: &Path) -> Option<usize> {
+        use std::os::unix::ffi::OsStrExt;
+        let c = CString::new(tmp.as_os_str().as_bytes()).ok()?.into_raw();
+        for (i, slot) in WRITING.iter().enumerate() {
+            if slot
+                .compare_exchange(std::ptr::null_mut(), c, Ordering::AcqRel, Ordering::Relaxed)
+                .is_ok()
+            {
+                return Some(i);
+            }
+        }
+        // SAFETY: `c` came from `into_raw` just above and was stored nowhere.
+        drop(unsafe { CString::from_raw(c) });
+        None
+    }
+
+    pub(super) fn unregister(slot: Option<usize>) {
+        if let Some(i) = slot {
+            let c = WRITING[i].swap(std::ptr::null_mut(), Ordering::AcqRel);
+            if !c.is_null() {
+                // SAFETY: the pointer came from `into_raw` in `register`, and the swap took it
+                // out of the table: the handler can no longer see it.
+                drop(unsafe { CString::from_raw(c) });
+            }
+        }
+    }
+
+    extern "C" fn on_signal(signal: libc::c_int) {
+        for slot in &WRITING {
+            let c = slot.swap(std::ptr::null_mut(), Ordering::AcqRel);
+            if !c.is_null() {
+                // SAFETY: a valid C string from `register`; unlink is async-signal-safe.
+                unsafe {
+                    libc::unlink(c);
+                }
+            }
+        }
+        // SAFETY: _exit is async-signal-safe and ends the process without unwinding.
+        unsafe { libc::_exit(128 + signal) }
+    }
+
+    pub(super) fn install() {
+        for signal in [libc::SIGINT, libc::SIGTERM] {
+            // SAFETY: installs a handler that only touches atomics and async-signal-safe calls.
+            unsafe {
+                libc::signal(
+                    signal,
+                    on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t,
+                );
+            }
+        }
+    }
+
+    pub(super) fn raise_sigint() {
+        // SAFETY: raise(3) on this thread; the handler runs and exits the process.
+        unsafe {
+            libc::raise(libc::SIGINT);
+        }
+    }
 }
 
 /// SIGKILL to this process ([`KILL_WHILE_WRITING_ENV`]): no destructors, no flushing.
@@ -380,11 +477,10 @@ pub fn check_writable_dir(dir: &Path, what: &str) -> Result<(), FileError> {
     }
     fs::create_dir_all(dir).map_err(unwritable)?;
     let probe = dir.join(format!(".shvis-write-check-{}", std::process::id()));
-    File::create(&probe)
-        .and_then(|mut f| f.write_all(b"shvis"))
-        .map_err(unwritable)?;
+    let written = File::create(&probe).and_then(|mut f| f.write_all(b"shvis"));
+    // Removed whether the write worked or not (a full disk creates the file, then fails).
     let _ = fs::remove_file(&probe);
-    Ok(())
+    written.map_err(unwritable)
 }
 
 /// [`check_writable_dir`] for the directory an output file goes into.
