@@ -347,6 +347,26 @@ fn errors_name_the_input_and_what_is_wrong() {
         ),
         &["--ratios", "(0, 1]"],
     );
+    // A truncated environment map: the decoder's words, and what they mean.
+    let cut = dir.join("cut.exr");
+    exr::prelude::write_rgb_file(&cut, 64, 32, |x, _| (x as f32, 1.0f32, 1.0f32)).unwrap();
+    let bytes = std::fs::read(&cut).unwrap();
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    assert_one_error_line(
+        &shvis(
+            &[
+                "render",
+                "--technique",
+                "preconv",
+                "--env",
+                s(&cut),
+                "--out",
+                s(&png),
+            ],
+            &[],
+        ),
+        &["cut.exr", "invalid OpenEXR file", "truncated?"],
+    );
     // An EXR height map, as the help says.
     let h = dir.join("h.exr");
     exr::prelude::write_rgb_file(&h, 16, 16, |x, y| {

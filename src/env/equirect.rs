@@ -82,13 +82,14 @@ fn decode(bytes: &[u8], path: &Path, square: SquareLayout) -> Result<EnvMap, Env
     };
     let map = if bytes.starts_with(&EXR_MAGIC) {
         check_exr_header(bytes, path)?;
-        decode_exr(bytes).map_err(|e| format_err(format!("invalid OpenEXR file: {e}")))?
+        decode_exr(bytes).map_err(|e| format_err(crate::files::decoder_error("OpenEXR file", e)))?
     } else if RADIANCE_MAGICS.iter().any(|m| bytes.starts_with(m)) {
         let meta = image::codecs::hdr::HdrDecoder::new(Cursor::new(bytes))
-            .map_err(|e| format_err(format!("invalid Radiance HDR file: {e}")))?
+            .map_err(|e| format_err(crate::files::decoder_error("Radiance HDR file", e)))?
             .metadata();
         check_env_size(path, u64::from(meta.width), u64::from(meta.height))?;
-        decode_hdr(bytes).map_err(|e| format_err(format!("invalid Radiance HDR file: {e}")))?
+        decode_hdr(bytes)
+            .map_err(|e| format_err(crate::files::decoder_error("Radiance HDR file", e)))?
     } else {
         let ext = path
             .extension()
@@ -113,7 +114,7 @@ fn check_exr_header(bytes: &[u8], path: &Path) -> Result<(), EnvError> {
     let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(|e| {
         EnvError::Format {
             path: path.to_owned(),
-            detail: format!("invalid OpenEXR file: {e}"),
+            detail: crate::files::decoder_error("OpenEXR file", e),
         }
     })?;
     for header in &meta.headers {

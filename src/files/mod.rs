@@ -106,6 +106,26 @@ pub enum FileError {
     },
 }
 
+/// A decoder's error in words a user can act on: the decoder's own text, with "(the file
+/// ends early: truncated?)" where that text is how the decoder says so.
+pub fn decoder_error(format: &str, error: impl std::fmt::Display) -> String {
+    let text = error.to_string();
+    let truncated = [
+        "failed to fill whole buffer",
+        "EOF while parsing",
+        "reference to missing bytes",
+        "unexpected end of file",
+        "UnexpectedEof",
+    ]
+    .iter()
+    .any(|p| text.contains(p));
+    if truncated {
+        format!("invalid {format}: {text} (the file ends early: truncated?)")
+    } else {
+        format!("invalid {format}: {text}")
+    }
+}
+
 /// The file `path` names once symbolic links and `.`/`..` are resolved: a path that does not
 /// exist yet by its folder's resolved path and its name.
 fn resolved(path: &Path) -> PathBuf {

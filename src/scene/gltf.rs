@@ -191,7 +191,7 @@ impl Loader {
     ) -> Result<(Scene, LoadReport), SceneError> {
         check_glb_header(bytes).map_err(|m| self.err(m))?;
         let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
-            .map_err(|e| self.err(format!("invalid glTF: {e}")))?;
+            .map_err(|e| self.err(crate::files::decoder_error("glTF", e)))?;
         // gltf-json's own validation indexes POSITION accessors unchecked: check them first.
         let json = document.into_json();
         for (m, mesh) in json.meshes.iter().enumerate() {
@@ -212,7 +212,7 @@ impl Loader {
         let document = gltf::Document::from_json(json).map_err(|e| match e {
             // Its message starts with "invalid glTF:" and lists every problem.
             gltf::Error::Validation(_) => self.err(e.to_string()),
-            _ => self.err(format!("invalid glTF: {e}")),
+            _ => self.err(crate::files::decoder_error("glTF", e)),
         })?;
         let buffers = self.buffers(&document, blob)?;
         let mut report = LoadReport::default();
