@@ -13,16 +13,16 @@ CACHE=${SHVIS_CACHE_DIR:-.shvis-cache}
 TIMES="$CACHE/bench-full-seconds.txt"
 mkdir -p "$CACHE"
 
-# name|seconds on a 2-core lavapipe machine|command
+# name|seconds on a 2-core lavapipe machine (measured there)|command
 steps() {
     cat <<STEPS
-bench|1000|$SHVIS bench --techniques all --out $OUT
-study rnm|150|$SHVIS study rnm --envs $RNM_ENVS --out $OUT/rnm
-study normalmap|120|$SHVIS study normalmap $MODEL_ARG --out $OUT/normalmap
-study ndf|200|$SHVIS study ndf --diffuse-envs $NDF_ENVS --out $OUT/ndf
-study nmprt-svd|30|$SHVIS study nmprt-svd --out $OUT/nmprt
-bench relit90|150|$SHVIS bench --techniques $NMPRT_ROWS --relight-rotate 90 --point-reference --ref-spp 256 --no-probe --frames 3 --warmup 1 --out $OUT/relit90
-bench specular|200|$SHVIS bench --scene bumpy --techniques unc6,preconv,unc6ndf,preconvndf --specular mip,ndf,ndfn --light-dir 0,0.3,-1 --vis-res 256 --rays 256 --width 640 --height 360 --out $OUT/specular
+bench|950|$SHVIS bench --techniques all --out $OUT
+study rnm|60|$SHVIS study rnm --envs $RNM_ENVS --out $OUT/rnm
+study normalmap|75|$SHVIS study normalmap $MODEL_ARG --out $OUT/normalmap
+study ndf|40|$SHVIS study ndf --diffuse-envs $NDF_ENVS --out $OUT/ndf
+study nmprt-svd|5|$SHVIS study nmprt-svd --out $OUT/nmprt
+bench relit90|90|$SHVIS bench --techniques $NMPRT_ROWS --relight-rotate 90 --point-reference --ref-spp 256 --no-probe --frames 3 --warmup 1 --out $OUT/relit90
+bench specular|165|$SHVIS bench --scene bumpy --techniques unc6,preconv,unc6ndf,preconvndf --specular mip,ndf,ndfn --light-dir 0,0.3,-1 --vis-res 256 --rays 256 --width 640 --height 360 --out $OUT/specular
 STEPS
 }
 
