@@ -17,16 +17,18 @@ use crate::sh::{Order, ShError, unit_dir, zonal};
 pub enum ToolError {
     #[error("{what}: '{text}' is not three numbers")]
     NotADirection { what: String, text: String },
-    #[error("{what}: {source}")]
-    Direction { what: String, source: ShError },
+    // `cause`, not `source`: the message already carries it, and a source would be printed
+    // twice by the error chain.
+    #[error("{what}: {cause}")]
+    Direction { what: String, cause: ShError },
     #[error(transparent)]
     Sh(#[from] ShError),
     #[error(transparent)]
     Env(#[from] EnvError),
-    #[error("{what}: {source}")]
+    #[error("{what}: {cause}")]
     Io {
         what: &'static str,
-        source: std::io::Error,
+        cause: std::io::Error,
     },
 }
 
@@ -36,9 +38,9 @@ fn fmt17(v: f64) -> String {
 
 fn write_line(out: &mut impl Write, values: &[f64]) -> Result<(), ToolError> {
     let text: Vec<String> = values.iter().map(|&v| fmt17(v)).collect();
-    writeln!(out, "{}", text.join(" ")).map_err(|source| ToolError::Io {
+    writeln!(out, "{}", text.join(" ")).map_err(|cause| ToolError::Io {
         what: "writing stdout",
-        source,
+        cause,
     })
 }
 
@@ -57,9 +59,9 @@ pub fn parse_direction(text: &str, what: &str) -> Result<DVec3, ToolError> {
     let [x, y, z] = values[..] else {
         return Err(not_three());
     };
-    unit_dir(DVec3::new(x, y, z)).map_err(|source| ToolError::Direction {
+    unit_dir(DVec3::new(x, y, z)).map_err(|cause| ToolError::Direction {
         what: what.to_string(),
-        source,
+        cause,
     })
 }
 
@@ -69,9 +71,9 @@ pub fn eval(order: u32, input: impl BufRead, out: &mut impl Write) -> Result<(),
     let order = Order::new(order)?;
     let mut values = vec![0.0; order.coeff_count()];
     for (i, line) in input.lines().enumerate() {
-        let line = line.map_err(|source| ToolError::Io {
+        let line = line.map_err(|cause| ToolError::Io {
             what: "reading stdin",
-            source,
+            cause,
         })?;
         if line.trim().is_empty() || line.trim_start().starts_with('#') {
             continue;

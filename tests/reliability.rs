@@ -347,6 +347,18 @@ fn errors_name_the_input_and_what_is_wrong() {
         ),
         &["--ratios", "(0, 1]"],
     );
+    // A cause is said once, not again after its error's message.
+    let run = shvis(
+        &["sh", "irradiance", "--env", "sky", "--normal", "0,0,0"],
+        &[],
+    );
+    assert_one_error_line(&run, &["--normal", "zero-length"]);
+    assert_eq!(
+        String::from_utf8_lossy(&run.stderr)
+            .matches("zero-length")
+            .count(),
+        1
+    );
     // A truncated environment map: the decoder's words, and what they mean.
     let cut = dir.join("cut.exr");
     exr::prelude::write_rgb_file(&cut, 64, 32, |x, _| (x as f32, 1.0f32, 1.0f32)).unwrap();
