@@ -347,6 +347,26 @@ fn errors_name_the_input_and_what_is_wrong() {
         ),
         &["--ratios", "(0, 1]"],
     );
+    // A low mesh without material UVs (one triangle, POSITION and NORMAL only).
+    let nouv = dir.join("nouv.gltf");
+    std::fs::write(&nouv, NO_UV_TRIANGLE).unwrap();
+    assert_one_error_line(
+        &shvis(
+            &[
+                "normalmap",
+                "--high",
+                "sphere:2",
+                "--low",
+                s(&nouv),
+                "--map-res",
+                "64",
+                "--out",
+                s(&png),
+            ],
+            &[],
+        ),
+        &["no material UVs (TEXCOORD_0)", "--simplify"],
+    );
     // A cause is said once, not again after its error's message.
     let run = shvis(
         &["sh", "irradiance", "--env", "sky", "--normal", "0,0,0"],
@@ -434,3 +454,6 @@ fn an_interrupted_write_leaves_no_temporary() {
         .collect();
     assert!(left.is_empty(), "left behind: {left:?}");
 }
+
+/// A glTF triangle with positions and normals and no TEXCOORD_0.
+const NO_UV_TRIANGLE: &str = "{\"asset\": {\"version\": \"2.0\"}, \"buffers\": [{\"byteLength\": 72, \"uri\": \"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/\"}], \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 36}, {\"buffer\": 0, \"byteOffset\": 36, \"byteLength\": 36}], \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\", \"min\": [0, 0, 0], \"max\": [1, 1, 0]}, {\"bufferView\": 1, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"}], \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, \"NORMAL\": 1}}]}], \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}], \"scene\": 0}";

@@ -246,6 +246,25 @@ pub fn validate(high: &Mesh, low: &Mesh, s: &NormalMapSettings) -> Result<(), No
             "{outside} low-mesh vertices have material UVs outside [0, 1]: a normal map needs a unique parameterization (use --simplify to generate one)"
         ));
     }
+    // No triangle with area in UV space: the mesh has no material UVs (glTF's default is
+    // (0, 0) at every vertex), and no texel could be covered.
+    let has_uv_area = low.indices.chunks_exact(3).any(|t| {
+        let uv = |k: usize| {
+            low.vertices
+                .get(t[k] as usize)
+                .map(|v| glam::Vec2::from(v.uv_material))
+        };
+        match (uv(0), uv(1), uv(2)) {
+            (Some(a), Some(b), Some(c)) => (b - a).perp_dot(c - a).abs() > 1e-12,
+            _ => false,
+        }
+    });
+    if !has_uv_area {
+        return bad(
+            "the low mesh has no material UVs (TEXCOORD_0): every triangle has zero area in UV space; a normal map needs a unique parameterization (use --simplify to generate one)"
+                .to_string(),
+        );
+    }
     Ok(())
 }
 
