@@ -101,6 +101,24 @@ fn a_run_without_rows_fails_with_the_reason() {
         );
         assert_one_error_line(&run, &["nmprtsvd4p.dx9", "--skip-unsupported"]);
     }
+    // A mesh whose lightmap UVs cover no texel centre bakes nothing: an error, not 0 texels.
+    let tiny = dir.join("tiny.gltf");
+    std::fs::write(&tiny, TINY_UV_TRIANGLE).unwrap();
+    let run = shvis(
+        &[
+            "bake",
+            "--scene",
+            s(&tiny),
+            "--vis-res",
+            "64",
+            "--rays",
+            "36",
+            "--out",
+            s(&dir.join("bk")),
+        ],
+        &[],
+    );
+    assert_one_error_line(&run, &["no triangle covers a lightmap texel centre"]);
     // Named twice: an error, not two identical rows.
     let run = shvis(
         &[
@@ -333,6 +351,30 @@ fn errors_name_the_input_and_what_is_wrong() {
         ),
         &["wide.exr", "1:1 angular probe", "8×4"],
     );
+    // A 1:1 map whose light lies only in the corners, outside the probe's disk.
+    let corners = dir.join("corners.exr");
+    exr::prelude::write_rgb_file(&corners, 16, 16, |x, y| {
+        let (dx, dy) = (x as f32 - 7.5, y as f32 - 7.5);
+        let v = if dx.hypot(dy) > 8.8 { 1.0f32 } else { 0.0 };
+        (v, v, v)
+    })
+    .unwrap();
+    let forced = format!("angular:{}", s(&corners));
+    assert_one_error_line(
+        &shvis(
+            &[
+                "render",
+                "--technique",
+                "preconv",
+                "--env",
+                &forced,
+                "--out",
+                s(&png),
+            ],
+            &[],
+        ),
+        &["corners.exr", "it is black", "outside the probe's disk"],
+    );
     assert_one_error_line(
         &shvis(
             &[
@@ -457,3 +499,6 @@ fn an_interrupted_write_leaves_no_temporary() {
 
 /// A glTF triangle with positions and normals and no TEXCOORD_0.
 const NO_UV_TRIANGLE: &str = "{\"asset\": {\"version\": \"2.0\"}, \"buffers\": [{\"byteLength\": 72, \"uri\": \"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/\"}], \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 36}, {\"buffer\": 0, \"byteOffset\": 36, \"byteLength\": 36}], \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\", \"min\": [0, 0, 0], \"max\": [1, 1, 0]}, {\"bufferView\": 1, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"}], \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, \"NORMAL\": 1}}]}], \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}], \"scene\": 0}";
+
+/// A glTF triangle whose lightmap UVs (TEXCOORD_1) span a ten-thousandth of the map.
+const TINY_UV_TRIANGLE: &str = "{\"asset\": {\"version\": \"2.0\"}, \"buffers\": [{\"byteLength\": 120, \"uri\": \"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/zczMPc3MzD07Ac09zczMPc3MzD07Ac09\"}], \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 36}, {\"buffer\": 0, \"byteOffset\": 36, \"byteLength\": 36}, {\"buffer\": 0, \"byteOffset\": 72, \"byteLength\": 24}, {\"buffer\": 0, \"byteOffset\": 96, \"byteLength\": 24}], \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\", \"min\": [0, 0, 0], \"max\": [1, 1, 0]}, {\"bufferView\": 1, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"}, {\"bufferView\": 2, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC2\"}, {\"bufferView\": 3, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC2\"}], \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, \"NORMAL\": 1, \"TEXCOORD_0\": 2, \"TEXCOORD_1\": 3}}]}], \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}], \"scene\": 0}";
