@@ -25,6 +25,22 @@ fn s(p: &Path) -> &str {
     p.to_str().expect("a UTF-8 path")
 }
 
+/// `shvis render --technique preconv --env ENV --out OUT`.
+fn render_preconv(env: &str, out: &str) -> std::process::Output {
+    shvis(
+        &[
+            "render",
+            "--technique",
+            "preconv",
+            "--env",
+            env,
+            "--out",
+            out,
+        ],
+        &[],
+    )
+}
+
 /// `shvis ssbump` of `height` at `scale` with 16 rays into `out`.
 fn ssbump(height: &Path, scale: &str, out: &Path) -> std::process::Output {
     shvis(
@@ -167,18 +183,7 @@ fn no_output_overwrites_an_input() {
     // render's environment, normalmap's low mesh.
     let env = dir.join("e.exr");
     std::fs::write(&env, b"not read").unwrap();
-    let run = shvis(
-        &[
-            "render",
-            "--technique",
-            "preconv",
-            "--env",
-            s(&env),
-            "--out",
-            s(&env),
-        ],
-        &[],
-    );
+    let run = render_preconv(s(&env), s(&env));
     assert_one_error_line(&run, &["e.exr", "--out would overwrite the --env input"]);
     let low = dir.join("low.gltf");
     std::fs::write(&low, b"{}").unwrap();
@@ -319,36 +324,14 @@ fn errors_name_the_input_and_what_is_wrong() {
     let dir = Scratch::new("reliability", "wording");
     let png = dir.join("x.png");
     assert_one_error_line(
-        &shvis(
-            &[
-                "render",
-                "--technique",
-                "preconv",
-                "--env",
-                "angular:",
-                "--out",
-                s(&png),
-            ],
-            &[],
-        ),
+        &render_preconv("angular:", s(&png)),
         &["angular:", "needs the path of a 1:1 angular probe"],
     );
     // A 2:1 map forced to be an angular probe.
     let wide = dir.join("wide.exr");
     exr::prelude::write_rgb_file(&wide, 8, 4, |_, _| (1.0f32, 1.0f32, 1.0f32)).unwrap();
     assert_one_error_line(
-        &shvis(
-            &[
-                "render",
-                "--technique",
-                "preconv",
-                "--env",
-                &format!("angular:{}", s(&wide)),
-                "--out",
-                s(&png),
-            ],
-            &[],
-        ),
+        &render_preconv(&format!("angular:{}", s(&wide)), s(&png)),
         &["wide.exr", "1:1 angular probe", "8×4"],
     );
     // A 1:1 map whose light lies only in the corners, outside the probe's disk.
@@ -361,18 +344,7 @@ fn errors_name_the_input_and_what_is_wrong() {
     .unwrap();
     let forced = format!("angular:{}", s(&corners));
     assert_one_error_line(
-        &shvis(
-            &[
-                "render",
-                "--technique",
-                "preconv",
-                "--env",
-                &forced,
-                "--out",
-                s(&png),
-            ],
-            &[],
-        ),
+        &render_preconv(&forced, s(&png)),
         &["corners.exr", "it is black", "outside the probe's disk"],
     );
     assert_one_error_line(
@@ -427,18 +399,7 @@ fn errors_name_the_input_and_what_is_wrong() {
     let bytes = std::fs::read(&cut).unwrap();
     std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
     assert_one_error_line(
-        &shvis(
-            &[
-                "render",
-                "--technique",
-                "preconv",
-                "--env",
-                s(&cut),
-                "--out",
-                s(&png),
-            ],
-            &[],
-        ),
+        &render_preconv(s(&cut), s(&png)),
         &["cut.exr", "invalid OpenEXR file", "truncated?"],
     );
     // An EXR height map, as the help says.
