@@ -25,6 +25,8 @@
 //!
 //! # Contents
 //!
+//! - [`bases`]: the lightmap bases engines ship (L1, Geomerics, ZH3, luminance L1,
+//!   deringed L2) as encodings of order-3 radiance and their irradiance.
 //! - [`basis`]: evaluation of all y_l^m at a direction, stable to order 30, exact at
 //!   the poles.
 //! - [`zonal`]: the clamped cosine max(0, cos θ) in SH, its convolution factors and
@@ -37,6 +39,7 @@
 //!   reconstruction.
 //! - [`gauss_legendre`]: quadrature nodes used by projections and tests.
 
+pub mod bases;
 pub mod basis;
 pub mod product;
 pub mod project;

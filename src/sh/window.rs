@@ -204,9 +204,8 @@ const DERINGING_SCAN: usize = 32;
 /// If `coeffs` holds fewer than `order.coeff_count()` values.
 pub fn deringing_width(taper: Taper, coeffs: &[f64], order: Order) -> Option<f64> {
     check_len(coeffs.len(), order);
-    let n = order.get() as usize;
     let coeffs = &coeffs[..order.coeff_count()];
-    let grid = band_grid(coeffs, order);
+    let grid = band_grid(coeffs, order, &deringing_grid(order));
     let windowed_min = |sigma: &[f64]| -> f64 {
         let mut lowest: Vec<(f64, DVec3)> = grid
             .iter()
@@ -221,8 +220,42 @@ pub fn deringing_width(taper: Taper, coeffs: &[f64], order: Order) -> Option<f64
             .map(|&(v, d)| refine_minimum(&windowed, order, d, v))
             .fold(f64::INFINITY, f64::min)
     };
-    let sigma_at = |w: f64| -> Vec<f64> { (0..n as u32).map(|l| taper.sigma(l, w)).collect() };
+    search_width(taper, order, windowed_min, BISECTION_REL)
+}
 
+/// [`deringing_width`] with the minimum taken over `dirs` only (no refinement between
+/// them) and the bisection stopped at relative width `rel`: for many small vectors (a
+/// lightmap's texels), where a dense fixed grid is accurate enough and the exact search
+/// too slow. Dips between grid points may stay slightly negative.
+///
+/// # Panics
+/// If `coeffs` holds fewer than `order.coeff_count()` values.
+pub fn deringing_width_on_grid(
+    taper: Taper,
+    coeffs: &[f64],
+    order: Order,
+    dirs: &[DVec3],
+    rel: f64,
+) -> Option<f64> {
+    check_len(coeffs.len(), order);
+    let grid = band_grid(&coeffs[..order.coeff_count()], order, dirs);
+    let windowed_min = |sigma: &[f64]| -> f64 {
+        grid.iter()
+            .map(|(_, bands)| bands.iter().zip(sigma).map(|(b, s)| b * s).sum::<f64>())
+            .fold(f64::INFINITY, f64::min)
+    };
+    search_width(taper, order, windowed_min, rel)
+}
+
+/// Steps 3 of the module doc: the gentlest width whose `windowed_min` is non-negative.
+fn search_width(
+    taper: Taper,
+    order: Order,
+    windowed_min: impl Fn(&[f64]) -> f64,
+    rel: f64,
+) -> Option<f64> {
+    let n = order.get() as usize;
+    let sigma_at = |w: f64| -> Vec<f64> { (0..n as u32).map(|l| taper.sigma(l, w)).collect() };
     if windowed_min(&vec![1.0; n]) >= 0.0 {
         return None;
     }
@@ -253,7 +286,7 @@ pub fn deringing_width(taper: Taper, coeffs: &[f64], order: Order) -> Option<f64
         }
         upper = w;
     }
-    while hi - lo > BISECTION_REL * hi {
+    while hi - lo > rel * hi {
         let mid = 0.5 * (lo + hi);
         if windowed_min(&sigma_at(mid)) >= 0.0 {
             lo = mid;
@@ -264,8 +297,8 @@ pub fn deringing_width(taper: Taper, coeffs: &[f64], order: Order) -> Option<f64
     Some(lo)
 }
 
-/// Per-band reconstructions f_l(ω) on the deringing grid (module doc, step 1).
-fn band_grid(coeffs: &[f64], order: Order) -> Vec<(DVec3, Vec<f64>)> {
+/// The directions of the exact search's grid (module doc, step 1).
+fn deringing_grid(order: Order) -> Vec<DVec3> {
     let n = order.get() as usize;
     let mut dirs: Vec<DVec3> = sphere_quadrature(2 * n + 16)
         .into_iter()
@@ -279,9 +312,15 @@ fn band_grid(coeffs: &[f64], order: Order) -> Vec<(DVec3, Vec<f64>)> {
         DVec3::Z,
         DVec3::NEG_Z,
     ]);
+    dirs
+}
+
+/// Per-band reconstructions f_l(ω) on the deringing grid (module doc, step 1).
+fn band_grid(coeffs: &[f64], order: Order, dirs: &[DVec3]) -> Vec<(DVec3, Vec<f64>)> {
+    let n = order.get() as usize;
     let mut y = vec![0.0; order.coeff_count()];
-    dirs.into_iter()
-        .map(|d| {
+    dirs.iter()
+        .map(|&d| {
             eval_basis(order, d, &mut y);
             let bands = (0..n as i32)
                 .map(|l| {
