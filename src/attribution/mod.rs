@@ -26,9 +26,13 @@
 //! uniform block of order-3 SH; `preconv` replaces V by the pixel's AO, then truncates
 //! irradiance to order 3; `sh2` truncates V to order 2, lighting to order 3 (cosine exact),
 //! then the product and the cosine to order 3 (its shader's math — a rung that measures 0,
-//! since L₃·V₂ has no band above 3 and the clamped cosine's band 3 vanishes). `shlmap`'s
-//! rungs need the inter-reflected radiance at each pixel; it keeps the two-rung
-//! attribution (footprint → point → GPU).
+//! since L₃·V₂ has no band above 3 and the clamped cosine's band 3 vanishes). `shlmap`
+//! gathers the inter-reflected radiance at each pixel as its bake gathers a texel (order-3
+//! SH, cosine exact), then reads its f16 lightmap. The engine bases (`l1`, `zh3`, …;
+//! `sh::bases`) share that first rung, then "basis" (what the texel stores, evaluated
+//! linearly: L1 for the L1 family) and, for Geomerics and hallucinated ZH3,
+//! "reconstruction" (their curve against the linear evaluation of the same values), then
+//! the lightmap texels reconstructed as the shader does.
 //!
 //! Each rung's error is the relative RMSE between consecutive images (`report::metrics`),
 //! so the rungs telescope from the reference to the GPU image. The last CPU rung differs
@@ -57,8 +61,8 @@ use crate::reference::render_point_gbuffer;
 use crate::render::Frame;
 use crate::report::table::AttributionKind;
 use crate::sh::Order;
+use crate::sh::bases::ShBasis;
 use crate::sh::basis::eval_basis;
-use crate::sh::zonal::clamped_cosine_convolution;
 use crate::sphere::SphereMap;
 use crate::technique::pca::{quantized_prefix, weights_only_block};
 use crate::technique::tables::{f16_range_scale, max_abs, table_map};
@@ -420,7 +424,8 @@ pub fn cpu_rungs(
         // GPU image is f16 storage and the basis texture. No rungs before it yet (the
         // transfer's lighting order, the order-3 transferred radiance, the bounces).
         Technique::Nmprt { variant } => row.nmprt(&mut rungs, variant),
-        Technique::Shlmap => row.shlmap(&mut rungs),
+        Technique::Shlmap => row.lightmap_sh(&mut rungs, None),
+        Technique::EngineSh { basis } => row.lightmap_sh(&mut rungs, Some(basis.sh_basis())),
     }
     Ok(rungs)
 }
@@ -866,7 +871,10 @@ impl RowLadder<'_> {
     /// `shlmap`'s rungs: the inter-reflected radiance gathered at each pixel (order 3,
     /// convolved with the clamped cosine), then the SH lightmap's f16 texels (none without
     /// an SH lightmap bake).
-    fn shlmap(&self, rungs: &mut Vec<Rung>) {
+    /// `shlmap`'s rungs (`basis` `None`) and the engine bases' (module doc): the pixel's
+    /// gathered order-3 radiance, then for a basis what it stores evaluated linearly and,
+    /// where it differs, by its own reconstruction; then the lightmap texels.
+    fn lightmap_sh(&self, rungs: &mut Vec<Rung>, basis: Option<ShBasis>) {
         let (px, prepared) = (self.px, self.prepared);
         let radiance = &prepared.radiance_sh;
         let Some(map) = prepared.sh_lightmap.as_ref() else {
@@ -891,46 +899,75 @@ impl RowLadder<'_> {
             )
         });
         // Σ_k A_l(k) c_k y_k(n): eq. (2) at the shading normal.
-        let convolve = |c: &[[f64; 3]], n: DVec3| {
-            let mut y = [0.0; 9];
-            eval_basis(Order::THREE, n, &mut y);
-            let mut e = [0.0; 3];
-            for (k, (ck, yk)) in c.iter().zip(&y).enumerate() {
-                let a = clamped_cosine_convolution(if k == 0 {
-                    0
-                } else if k < 4 {
-                    1
-                } else {
-                    2
-                });
-                for ch in 0..3 {
-                    e[ch] += a * ck[ch] * yk;
-                }
-            }
-            e
-        };
+        let l2 = |c: &[[f64; 3]], n: DVec3| ShBasis::L2.irradiance(&ShBasis::L2.encode(c, None), n);
         self.push(
             rungs,
             AttributionKind::RadianceOrder,
             "shlmap.radiance_order".into(),
-            &|| px.image(|k| convolve(&gathered[k], px.normal[k])),
+            &|| px.image(|k| l2(&gathered[k], px.normal[k])),
         );
-        // As the technique stores it (finite: the bench built it first).
-        let scale = crate::technique::shlmap::stored_scale(map).unwrap_or(1.0);
+        let Some(basis) = basis else {
+            // As the technique stores it (finite: the bench built it first).
+            let scale = crate::technique::shlmap::stored_scale(map).unwrap_or(1.0);
+            let unscale = f64::from(1.0 / scale);
+            self.push(
+                rungs,
+                AttributionKind::LightmapTexels,
+                "shlmap.lightmap".into(),
+                &|| {
+                    px.image(|k| {
+                        let v = lightmap_bilinear(map.res, px.uv[k], 27, |t, j| {
+                            f16_round(map.texel(t)[j / 3][j % 3] * scale)
+                        });
+                        let c: Vec<[f64; 3]> = (0..9)
+                            .map(|i| std::array::from_fn(|ch| v[3 * i + ch] * unscale))
+                            .collect();
+                        l2(&c, px.normal[k])
+                    })
+                },
+            );
+            return;
+        };
+        let technique = self.technique;
+        let linear = basis.linear();
+        // The pixel's own hemisphere, as a texel's (the deringing's shaded normals).
+        let shaded = |k: usize| Some(px.normal_g[k].as_dvec3());
+        self.push(
+            rungs,
+            AttributionKind::Basis,
+            format!("{}.basis", linear.label().replace(' ', "_").to_lowercase()),
+            &|| {
+                px.image(|k| {
+                    linear.irradiance(&basis.encode(&gathered[k], shaded(k)), px.normal[k])
+                })
+            },
+        );
+        if linear != basis {
+            self.push(
+                rungs,
+                AttributionKind::Reconstruction,
+                format!("{technique}.reconstruction"),
+                &|| {
+                    px.image(|k| {
+                        basis.irradiance(&basis.encode(&gathered[k], shaded(k)), px.normal[k])
+                    })
+                },
+            );
+        }
+        let stored = crate::technique::engine_sh::stored_texels(map, basis);
+        let scale = crate::technique::engine_sh::stored_scale(&stored).unwrap_or(1.0);
         let unscale = f64::from(1.0 / scale);
+        let per_texel = basis.stored_values();
         self.push(
             rungs,
             AttributionKind::LightmapTexels,
-            "shlmap.lightmap".into(),
+            format!("{technique}.lightmap"),
             &|| {
                 px.image(|k| {
-                    let v = lightmap_bilinear(map.res, px.uv[k], 27, |t, j| {
-                        f16_round(map.texel(t)[j / 3][j % 3] * scale)
+                    let v = lightmap_bilinear(map.res, px.uv[k], per_texel, |t, j| {
+                        f16_round(stored[t * per_texel + j] * scale) * unscale
                     });
-                    let c: Vec<[f64; 3]> = (0..9)
-                        .map(|i| std::array::from_fn(|ch| v[3 * i + ch] * unscale))
-                        .collect();
-                    convolve(&c, px.normal[k])
+                    basis.irradiance(&v[..per_texel], px.normal[k])
                 })
             },
         );

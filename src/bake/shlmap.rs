@@ -115,6 +115,10 @@ pub struct ShLightmap {
     /// Texel-major, `SH_LIGHTMAP_COEFFS` RGB triples per texel (res² × 9).
     pub coeffs: Vec<[f32; 3]>,
     pub covered: Vec<bool>,
+    /// Unit geometric normal n_g per texel, dilated like `coeffs` (the mean of its sources,
+    /// renormalised); zero where nothing reached. The hemisphere of normals a texel is
+    /// shaded with (`sh::bases`' deringing).
+    pub normal: Vec<Vec3>,
     /// With `bounces` > 0: the irradiance E_{N−1} of eq. (2) per texel (dilated) that the
     /// last bounce read at its hits — what [`radiance_at_points`] reads to gather the same
     /// light at other points. Empty for a direct-only bake.
@@ -288,11 +292,14 @@ pub fn bake_sh_lightmap(
     }
     dilation.apply(&mut planes);
     dilation.apply(&mut rnm);
+    let mut normal = texels.normal.clone();
+    dilation.apply(&mut normal);
     let map = ShLightmap {
         res: texels.res,
         bounces: settings.bounces,
         coeffs: planes.iter().flat_map(|p| p.as_rgb()).collect(),
         covered: texels.covered.clone(),
+        normal: normal.iter().map(|n| n.normalize_or_zero()).collect(),
         bounce_source,
         basis_irradiance: rnm.iter().map(|b| normalized_to_flat(&b.0)).collect(),
         stats: BakeStats {

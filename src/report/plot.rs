@@ -106,7 +106,8 @@ pub fn write_pca_error_plot(
                 | Technique::PcaVertex { .. }
                 | Technique::Rnm { .. }
                 | Technique::Ndf { .. }
-                | Technique::Nmprt { .. } => None,
+                | Technique::Nmprt { .. }
+                | Technique::EngineSh { .. } => None,
             })
             .collect()
     };

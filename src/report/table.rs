@@ -63,6 +63,12 @@ pub enum AttributionKind {
     /// gathered as the bake gathers a texel (the bake's rays, the environment's SH,
     /// bounced light from the lightmap).
     RadianceOrder,
+    /// The engine bases: order-3 radiance → what the basis stores, evaluated linearly
+    /// (L1 for the L1 family; ZH3, luminance L1, deringed L2 as themselves).
+    Basis,
+    /// The non-linear L1 reconstructions (Geomerics, hallucinated ZH3) against the linear
+    /// one of the same data.
+    Reconstruction,
     /// Exact L×H (or PCA T_k) → the table: parameterization, resolution, bilinear, f16.
     NormalTable,
     /// Per-pixel data → the lightmap's texels: resolution, bilinear filtering (clustered:
@@ -89,6 +95,8 @@ impl AttributionKind {
             AttributionKind::ProductOrder => "L·V product → order 3",
             AttributionKind::IrradianceOrder => "irradiance → order 3",
             AttributionKind::RadianceOrder => "incident radiance → order-3 SH",
+            AttributionKind::Basis => "order-3 SH → stored basis",
+            AttributionKind::Reconstruction => "linear → non-linear reconstruction",
             AttributionKind::NormalTable => "normal table",
             AttributionKind::LightmapTexels => "lightmap texels",
             AttributionKind::Gpu => "CPU → GPU",

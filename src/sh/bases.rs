@@ -146,10 +146,13 @@ impl ShBasis {
     /// values 3k + c are colour c of stored coefficient k, in the order of the module doc —
     /// L1: c_00, c_1−1, c_10, c_11; ZH3: those and z; L1 luminance: c_00 (RGB), then
     /// e = d_lum's SH coefficients (e_1−1, e_10, e_11) as values 3..6; L2: the 9.
+    /// `shaded`: the normals the texel is shaded with — the hemisphere about this axis (a
+    /// lightmap texel's geometric normal), or with `None` the whole sphere; only the
+    /// deringing (8) looks at it.
     ///
     /// # Panics
     /// If `radiance` holds fewer than 9 coefficients.
-    pub fn encode(self, radiance: &[[f64; 3]]) -> Vec<f64> {
+    pub fn encode(self, radiance: &[[f64; 3]], shaded: Option<DVec3>) -> Vec<f64> {
         assert!(radiance.len() >= 9, "order-3 radiance needed");
         let rgb = |k: usize| radiance[k];
         let flat = |coeffs: &[[f64; 3]]| coeffs.iter().flatten().copied().collect::<Vec<f64>>();
@@ -172,7 +175,7 @@ impl ShBasis {
             ShBasis::L2 => flat(&radiance[..9]),
             ShBasis::L2Deringed => {
                 let mut c: Vec<[f64; 3]> = radiance[..9].to_vec();
-                if let Some(w) = deringing_width_rgb(&c) {
+                if let Some(w) = deringing_width_rgb(&c, shaded) {
                     for l in 1..3i32 {
                         let sigma = Taper::Hanning.sigma(l as u32, w);
                         for m in -l..=l {
@@ -323,8 +326,21 @@ fn zonal_projection(radiance: &[[f64; 3]], axis: DVec3) -> [f64; 3] {
 }
 
 /// (8)'s width: the smallest over RGB of the gentlest Hanning width that makes each
-/// channel's irradiance non-negative over the sphere, or `None` when none rings negative.
-fn deringing_width_rgb(radiance: &[[f64; 3]]) -> Option<f64> {
+/// channel's irradiance non-negative over the shaded normals (the hemisphere about
+/// `shaded`, else the sphere), or `None` when none rings negative there.
+fn deringing_width_rgb(radiance: &[[f64; 3]], shaded: Option<DVec3>) -> Option<f64> {
+    let hemisphere: Vec<DVec3>;
+    let grid = match shaded {
+        Some(axis) if axis.length_squared() > 0.0 => {
+            hemisphere = deringing_grid()
+                .iter()
+                .copied()
+                .filter(|d| d.dot(axis) >= 0.0)
+                .collect();
+            &hemisphere[..]
+        }
+        _ => deringing_grid(),
+    };
     (0..3)
         .filter_map(|c| {
             let irradiance: Vec<f64> = (0..9)
@@ -334,7 +350,7 @@ fn deringing_width_rgb(radiance: &[[f64; 3]]) -> Option<f64> {
                 Taper::Hanning,
                 &irradiance,
                 Order::THREE,
-                deringing_grid(),
+                grid,
                 DERINGING_REL,
             )
         })
@@ -385,7 +401,7 @@ mod tests {
     fn l2_is_the_clamped_cosine_convolution_and_l1_its_first_two_bands() {
         let radiance = delta_plus_ambient(DVec3::new(0.3, -0.5, 0.8), [1.0, 0.5, 0.25], 0.2);
         for n in sphere_dirs() {
-            let full = ShBasis::L2.irradiance(&ShBasis::L2.encode(&radiance), n);
+            let full = ShBasis::L2.irradiance(&ShBasis::L2.encode(&radiance, None), n);
             let want = crate::sh::zonal::eval_rgb(
                 &crate::sh::zonal::irradiance_from_radiance(&radiance, Order::THREE),
                 Order::THREE,
@@ -398,8 +414,8 @@ mod tests {
             for k in truncated.iter_mut().skip(4) {
                 *k = [0.0; 3];
             }
-            let want = ShBasis::L2.irradiance(&ShBasis::L2.encode(&truncated), n);
-            let l1 = ShBasis::L1.irradiance(&ShBasis::L1.encode(&radiance), n);
+            let want = ShBasis::L2.irradiance(&ShBasis::L2.encode(&truncated, None), n);
+            let l1 = ShBasis::L1.irradiance(&ShBasis::L1.encode(&radiance, None), n);
             for c in 0..3 {
                 assert!((l1[c] - want[c]).abs() < TIGHT, "{n}");
             }
@@ -414,19 +430,19 @@ mod tests {
         // Geomerics: r = 1, p = 3, a = 0: E = R_0 · 4 q³ with R_0 = 1/4, so E(ω) = 1 and
         // E(−ω) = 0 exactly — the true values at the poles of its own axis.
         let geo = |n: DVec3| {
-            ShBasis::L1Geomerics.irradiance(&ShBasis::L1Geomerics.encode(&radiance), n)[0]
+            ShBasis::L1Geomerics.irradiance(&ShBasis::L1Geomerics.encode(&radiance, None), n)[0]
         };
         assert!((geo(w) - 1.0).abs() < TIGHT, "{}", geo(w));
         assert!(geo(-w).abs() < TIGHT, "{}", geo(-w));
         let side = DVec3::X;
         assert!((geo(side) - 0.125).abs() < TIGHT, "{}", geo(side));
         // Linear L1: 1/4 + ½ cos θ.
-        let lin = ShBasis::L1.irradiance(&ShBasis::L1.encode(&radiance), w)[0];
+        let lin = ShBasis::L1.irradiance(&ShBasis::L1.encode(&radiance, None), w)[0];
         assert!((lin - 0.75).abs() < TIGHT);
         // Stored ZH3 of a zonal function about its own axis is L2 exactly.
         for n in sphere_dirs() {
-            let zh3 = ShBasis::Zh3.irradiance(&ShBasis::Zh3.encode(&radiance), n)[0];
-            let l2 = ShBasis::L2.irradiance(&ShBasis::L2.encode(&radiance), n)[0];
+            let zh3 = ShBasis::Zh3.irradiance(&ShBasis::Zh3.encode(&radiance, None), n)[0];
+            let l2 = ShBasis::L2.irradiance(&ShBasis::L2.encode(&radiance, None), n)[0];
             assert!((zh3 - l2).abs() < TIGHT, "{n}: {zh3} vs {l2}");
         }
     }
@@ -440,12 +456,16 @@ mod tests {
         let mut radiance = vec![[0.0; 3]; 9];
         radiance[0] = [1.0; 3];
         radiance[2] = [0.5; 3];
-        let e = ShBasis::L1Zh3Hallucinated
-            .irradiance(&ShBasis::L1Zh3Hallucinated.encode(&radiance), DVec3::Z);
+        let e = ShBasis::L1Zh3Hallucinated.irradiance(
+            &ShBasis::L1Zh3Hallucinated.encode(&radiance, None),
+            DVec3::Z,
+        );
         assert!((e[0] - 1.492_019_303).abs() < 1e-8, "{e:?}");
         // At the equator, Y_20 = −√(5/16π): E = 0.886226925 − (π/4)·0.19·0.315391565.
-        let e = ShBasis::L1Zh3Hallucinated
-            .irradiance(&ShBasis::L1Zh3Hallucinated.encode(&radiance), DVec3::X);
+        let e = ShBasis::L1Zh3Hallucinated.irradiance(
+            &ShBasis::L1Zh3Hallucinated.encode(&radiance, None),
+            DVec3::X,
+        );
         assert!(
             (e[0] - (0.886_226_925 - 0.047_064_512)).abs() < 1e-8,
             "{e:?}"
@@ -463,7 +483,7 @@ mod tests {
         no_mean[2] = [0.3; 3];
         for radiance in [&zero, &ambient, &no_mean] {
             for basis in ShBasis::ALL {
-                let stored = basis.encode(radiance);
+                let stored = basis.encode(radiance, None);
                 assert_eq!(stored.len(), basis.stored_values());
                 for n in sphere_dirs() {
                     let e = basis.irradiance(&stored, n);
@@ -472,10 +492,10 @@ mod tests {
             }
         }
         for basis in ShBasis::ALL {
-            let e = basis.irradiance(&basis.encode(&zero), DVec3::Y);
+            let e = basis.irradiance(&basis.encode(&zero, None), DVec3::Y);
             assert_eq!(e, [0.0; 3], "{basis:?}: a black texel is black");
             let want = A0 * Y00 * 2.0;
-            let e = basis.irradiance(&basis.encode(&ambient), DVec3::Y);
+            let e = basis.irradiance(&basis.encode(&ambient, None), DVec3::Y);
             assert!(
                 e.iter().all(|v| (v - want).abs() < TIGHT),
                 "{basis:?} {e:?}"
@@ -483,9 +503,11 @@ mod tests {
         }
         assert!(zh3_axis(&zero[..4]).is_none());
         // Geomerics and L1 luminance with no mean: no light from the curve, no direction.
-        let g = ShBasis::L1Geomerics.irradiance(&ShBasis::L1Geomerics.encode(&no_mean), DVec3::Z);
+        let g =
+            ShBasis::L1Geomerics.irradiance(&ShBasis::L1Geomerics.encode(&no_mean, None), DVec3::Z);
         assert_eq!(g, [0.0; 3]);
-        let l = ShBasis::L1Luminance.irradiance(&ShBasis::L1Luminance.encode(&no_mean), DVec3::Z);
+        let l =
+            ShBasis::L1Luminance.irradiance(&ShBasis::L1Luminance.encode(&no_mean, None), DVec3::Z);
         assert_eq!(l, [0.0; 3]);
     }
 
@@ -496,8 +518,8 @@ mod tests {
         let sun: Vec<[f64; 3]> = delta_plus_ambient(dir, [1e5, 0.9e5, 0.7e5], 0.3e5);
         for basis in ShBasis::ALL {
             for n in sphere_dirs() {
-                let a = basis.irradiance(&basis.encode(&sky), n);
-                let b = basis.irradiance(&basis.encode(&sun), n);
+                let a = basis.irradiance(&basis.encode(&sky, None), n);
+                let b = basis.irradiance(&basis.encode(&sun, None), n);
                 for c in 0..3 {
                     assert!(b[c].is_finite());
                     assert!(
@@ -514,7 +536,7 @@ mod tests {
         let radiance = delta_plus_ambient(DVec3::new(0.2, 0.9, 0.1), [10.0, 9.0, 8.0], 0.05);
         let dirs = sphere_dirs();
         let min_of = |basis: ShBasis| {
-            let stored = basis.encode(&radiance);
+            let stored = basis.encode(&radiance, None);
             dirs.iter()
                 .flat_map(|&n| basis.irradiance(&stored, n))
                 .fold(f64::INFINITY, f64::min)
@@ -524,12 +546,31 @@ mod tests {
         let mean = A0 * Y00 * radiance[0][0];
         let dip = min_of(ShBasis::L2Deringed);
         assert!(dip > -3e-3 * mean, "{dip} (mean {mean})");
-        let plain = ShBasis::L2.encode(&radiance);
-        let deringed = ShBasis::L2Deringed.encode(&radiance);
+        let plain = ShBasis::L2.encode(&radiance, None);
+        let deringed = ShBasis::L2Deringed.encode(&radiance, None);
         assert_eq!(plain[..3], deringed[..3]);
+        // Over the hemisphere of a texel's normal: non-negative there, and gentler (closer
+        // to the plain L2) than over the whole sphere.
+        let up = DVec3::new(0.0, 1.0, 0.0);
+        let hemi = ShBasis::L2Deringed.encode(&radiance, Some(up));
+        let hemi_min = dirs
+            .iter()
+            .filter(|n| n.dot(up) >= 0.0)
+            .flat_map(|&n| ShBasis::L2Deringed.irradiance(&hemi, n))
+            .fold(f64::INFINITY, f64::min);
+        assert!(hemi_min > -3e-3 * mean, "{hemi_min}");
+        let distance =
+            |a: &[f64]| -> f64 { a.iter().zip(&plain).map(|(x, y)| (x - y).abs()).sum() };
+        assert!(
+            distance(&hemi) < distance(&deringed),
+            "the hemisphere window is gentler"
+        );
         // Non-negative irradiance is left alone.
         let soft = delta_plus_ambient(DVec3::Z, [1.0; 3], 2.0);
-        assert_eq!(ShBasis::L2.encode(&soft), ShBasis::L2Deringed.encode(&soft));
+        assert_eq!(
+            ShBasis::L2.encode(&soft, None),
+            ShBasis::L2Deringed.encode(&soft, None)
+        );
     }
 
     #[test]
@@ -539,7 +580,7 @@ mod tests {
         let f = |d: DVec3| (1.0 + 0.8 * d.x + 0.5 * d.y * d.y - 0.3 * d.x * d.z).max(0.0);
         let coeffs = project_fn(Order::THREE, f, 64);
         let radiance: Vec<[f64; 3]> = coeffs.iter().map(|&v| [v; 3]).collect();
-        let stored = ShBasis::Zh3.encode(&radiance);
+        let stored = ShBasis::Zh3.encode(&radiance, None);
         let axis = zh3_axis(&radiance[..4]).unwrap();
         let z = stored[12];
         let grad: f64 = sphere_quadrature(24)

@@ -220,13 +220,18 @@ pub fn deringing_width(taper: Taper, coeffs: &[f64], order: Order) -> Option<f64
             .map(|&(v, d)| refine_minimum(&windowed, order, d, v))
             .fold(f64::INFINITY, f64::min)
     };
-    search_width(taper, order, windowed_min, BISECTION_REL)
+    let width = search_width(taper, order, windowed_min, BISECTION_REL);
+    if width == Some(1.0) && coeffs[0] < 0.0 {
+        log::warn!("SH deringing: negative mean, no window makes the function non-negative");
+    }
+    width
 }
 
 /// [`deringing_width`] with the minimum taken over `dirs` only (no refinement between
 /// them) and the bisection stopped at relative width `rel`: for many small vectors (a
 /// lightmap's texels), where a dense fixed grid is accurate enough and the exact search
-/// too slow. Dips between grid points may stay slightly negative.
+/// too slow. Dips between grid points may stay slightly negative. Silent where no window
+/// helps (a negative mean: the strongest window, 1.0, is returned).
 ///
 /// # Panics
 /// If `coeffs` holds fewer than `order.coeff_count()` values.
@@ -261,7 +266,6 @@ fn search_width(
     }
     let mut lo = 1.0; // mean only
     if windowed_min(&sigma_at(lo)) < 0.0 {
-        log::warn!("SH deringing: negative mean, no window makes the function non-negative");
         return Some(lo);
     }
     // A width whose reconstruction is negative: σ → 1 as w → ∞, so doubling finds one.

@@ -2,7 +2,7 @@
 //! paper, the paths it runs on and what it bakes. One entry per family, found by an
 //! exhaustive match, so a new family does not compile until it is described here.
 
-use super::spec::{BakeNeeds, HwPath, NdfBase, NmprtVariant, RnmVariant, Technique};
+use super::spec::{BakeNeeds, EngineShBasis, HwPath, NdfBase, NmprtVariant, RnmVariant, Technique};
 
 /// One family's line.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
@@ -56,6 +56,9 @@ const REPRESENTATIVES: &[Technique] = &[
     Technique::Nmprt {
         variant: NmprtVariant::Full,
     },
+    Technique::EngineSh {
+        basis: EngineShBasis::L1,
+    },
 ];
 
 /// The paper's cost table (Iwanicki & Sloan, Table 1): unc3/4/6, pca4–24, pca4w–24w,
@@ -71,8 +74,9 @@ pub fn paper_table() -> Vec<Technique> {
 /// The families of the paper's table (their names as [`family_of`] gives them).
 const PAPER_FAMILIES: &[&str] = &["uncO", "pcaM, pcaMw", "shlmap", "preconv", "sh2"];
 
-/// One row of each family after the paper's: the member that stands for it in the
-/// headline set (the cheapest bake that shows what the family does).
+/// The rows of each family after the paper's that stand for it in the headline set: one
+/// (the cheapest bake that shows what the family does), two for the engine bases (the
+/// plain L1 engines ship and the stored ZH3 that improves on it).
 const LATER_HEADLINES: &[Technique] = &[
     Technique::Vq {
         k: 64,
@@ -99,10 +103,16 @@ const LATER_HEADLINES: &[Technique] = &[
     Technique::Nmprt {
         variant: NmprtVariant::Svd { m: 4 },
     },
+    Technique::EngineSh {
+        basis: EngineShBasis::L1,
+    },
+    Technique::EngineSh {
+        basis: EngineShBasis::Zh3,
+    },
 ];
 
 /// The headline set (`--techniques headline`, what `make bench` measures): the paper's
-/// table and one row of each later family.
+/// table and the rows that stand for each later family.
 pub fn headline() -> Vec<Technique> {
     let mut set = paper_table();
     set.extend_from_slice(LATER_HEADLINES);
@@ -208,6 +218,11 @@ fn describe(t: Technique) -> (&'static str, &'static str, &'static str) {
             "normal mapping for PRT: transfer matrices per texel, evaluated at the normal",
             "Sloan, PRT course (normal mapping)",
         ),
+        Technique::EngineSh { .. } => (
+            "l1, l1geo, l1zh3, zh3, l1lum, shlmapw",
+            "the SH lightmaps engines ship, from shlmap's bake: L1 (linear, Geomerics, hallucinated ZH3), stored ZH3, luminance L1, deringed L2",
+            "Frostbite, Enlighten, Roughton et al. ZH3 (i3D 2024), Unreal, Sloan (deringing)",
+        ),
     }
 }
 
@@ -250,7 +265,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_headline_set_is_the_paper_table_and_one_row_per_later_family() {
+    fn the_headline_set_is_the_paper_table_and_rows_of_every_later_family() {
         let paper = paper_table();
         let names: Vec<String> = paper.iter().map(|t| t.name()).collect();
         assert_eq!(
@@ -258,10 +273,11 @@ mod tests {
             "unc3,unc4,unc6,pca4,pca8,pca12,pca16,pca24,pca4w,pca8w,pca12w,pca16w,pca24w,shlmap,preconv,sh2"
         );
         let headline = headline();
-        let later: Vec<&str> = headline[paper.len()..]
+        let mut later: Vec<&str> = headline[paper.len()..]
             .iter()
             .map(|&t| family_of(t))
             .collect();
+        later.dedup();
         let expected: Vec<&str> = families()
             .iter()
             .map(|f| f.names)

@@ -20,6 +20,7 @@
 pub mod catalog;
 pub mod cluster;
 pub mod cost;
+pub mod engine_sh;
 pub mod finish;
 pub mod lighting;
 pub mod ndf_diffuse;
@@ -39,8 +40,8 @@ use std::sync::Arc;
 
 pub use lighting::{LightingData, LightingRecipe};
 pub use spec::{
-    BakeNeeds, ClusterNeed, HwPath, NdfBase, NmprtVariant, ParseError, ReferenceModel, RnmVariant,
-    SeamMode, Technique,
+    BakeNeeds, ClusterNeed, EngineShBasis, HwPath, NdfBase, NmprtVariant, ParseError,
+    ReferenceModel, RnmVariant, SeamMode, Technique,
 };
 
 use lighting::LightingSet;
@@ -122,6 +123,7 @@ pub fn fragment_shader(technique: Technique) -> ShaderVariant {
         Technique::PcaVertex { m, .. } => vertex::fragment_shader(m),
         Technique::Rnm { variant } => rnm::fragment_shader(variant),
         Technique::Nmprt { variant } => nmprt::fragment_shader(variant),
+        Technique::EngineSh { basis } => engine_sh::fragment_shader(basis),
         Technique::Ndf { base } => {
             let mut shader = fragment_shader(base.technique());
             shader.defines.push(("NDF_DIFFUSE", 1));
@@ -176,7 +178,8 @@ impl Technique {
             | Technique::Preconv
             | Technique::Sh2
             | Technique::PcaVertex { .. }
-            | Technique::Nmprt { .. } => ShaderReads::PLAIN,
+            | Technique::Nmprt { .. }
+            | Technique::EngineSh { .. } => ShaderReads::PLAIN,
             Technique::Vq { seams, .. } => cluster::reads(0, seams),
             Technique::Cpca { m, seams, .. } => cluster::reads(m, seams),
             Technique::Rnm { variant } => ShaderReads {
@@ -432,6 +435,7 @@ fn prepare(
         Technique::PcaVertex { m, .. } => vertex::prepare(m, inputs, &label)?,
         Technique::Rnm { .. } => rnm::prepare(inputs, &label)?,
         Technique::Nmprt { variant } => nmprt::prepare(variant, inputs, &label)?,
+        Technique::EngineSh { basis } => engine_sh::prepare(basis, inputs, &label)?,
         Technique::Ndf { base } => {
             let (texels, recipe) = prepare(base.technique(), path, inputs)?;
             let order = match base {
@@ -492,7 +496,8 @@ fn extra_slot(
         | Technique::Sh2
         | Technique::Vq { .. }
         | Technique::Cpca { .. }
-        | Technique::PcaVertex { .. } => return Ok(None),
+        | Technique::PcaVertex { .. }
+        | Technique::EngineSh { .. } => return Ok(None),
         Technique::Rnm { variant } => (
             finish::SlotKind::Material,
             rnm::material_texture(ctx, variant, inputs, label)?

@@ -64,6 +64,65 @@ pub enum Technique {
     /// lighting changes and evaluated per pixel at the normal-mapped normal in one of four
     /// ways ([`NmprtVariant`]).
     Nmprt { variant: NmprtVariant },
+    /// The SH-family lightmaps engines ship (`crate::sh::bases`): from the same bake as
+    /// `shlmap` (order-3 incident radiance with inter-reflection), each texel stores what its
+    /// basis keeps and the shader reconstructs irradiance at the normal-mapped normal —
+    /// `l1`, `l1geo`, `l1zh3`, `zh3`, `l1lum`, `shlmapw` ([`EngineShBasis`]).
+    EngineSh { basis: EngineShBasis },
+}
+
+/// What an `EngineSh` technique stores and how it reconstructs (`crate::sh::bases`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum EngineShBasis {
+    /// `l1`: L1 SH, 4 coefficients per colour, linear (Frostbite, Godot 4, Bakery).
+    L1,
+    /// `l1geo`: the same data, Geomerics' non-linear reconstruction (Enlighten, Bakery).
+    L1Geomerics,
+    /// `l1zh3`: the same data, the zonal quadratic term hallucinated from it (ZH3 paper).
+    L1Zh3,
+    /// `zh3`: L1 plus one stored zonal quadratic coefficient per colour about the
+    /// luminance axis (ZH3 paper).
+    Zh3,
+    /// `l1lum`: RGB ambient plus L1 of luminance (Unreal's HQ lightmaps).
+    L1Luminance,
+    /// `shlmapw`: `shlmap`'s order-3 SH, deringed by a per-texel Hanning window.
+    L2Deringed,
+}
+
+impl EngineShBasis {
+    pub const ALL: [EngineShBasis; 6] = [
+        EngineShBasis::L1,
+        EngineShBasis::L1Geomerics,
+        EngineShBasis::L1Zh3,
+        EngineShBasis::Zh3,
+        EngineShBasis::L1Luminance,
+        EngineShBasis::L2Deringed,
+    ];
+
+    /// The encoding and reconstruction it runs.
+    pub fn sh_basis(self) -> crate::sh::bases::ShBasis {
+        use crate::sh::bases::ShBasis;
+        match self {
+            EngineShBasis::L1 => ShBasis::L1,
+            EngineShBasis::L1Geomerics => ShBasis::L1Geomerics,
+            EngineShBasis::L1Zh3 => ShBasis::L1Zh3Hallucinated,
+            EngineShBasis::Zh3 => ShBasis::Zh3,
+            EngineShBasis::L1Luminance => ShBasis::L1Luminance,
+            EngineShBasis::L2Deringed => ShBasis::L2Deringed,
+        }
+    }
+
+    /// The CLI name.
+    pub fn name(self) -> &'static str {
+        match self {
+            EngineShBasis::L1 => "l1",
+            EngineShBasis::L1Geomerics => "l1geo",
+            EngineShBasis::L1Zh3 => "l1zh3",
+            EngineShBasis::Zh3 => "zh3",
+            EngineShBasis::L1Luminance => "l1lum",
+            EngineShBasis::L2Deringed => "shlmapw",
+        }
+    }
 }
 
 /// How `nmprt*` evaluates the transferred radiance at the normal-mapped normal.
@@ -353,6 +412,24 @@ impl Technique {
         Technique::Nmprt {
             variant: NmprtVariant::Ratio,
         },
+        Technique::EngineSh {
+            basis: EngineShBasis::L1,
+        },
+        Technique::EngineSh {
+            basis: EngineShBasis::L1Geomerics,
+        },
+        Technique::EngineSh {
+            basis: EngineShBasis::L1Zh3,
+        },
+        Technique::EngineSh {
+            basis: EngineShBasis::Zh3,
+        },
+        Technique::EngineSh {
+            basis: EngineShBasis::L1Luminance,
+        },
+        Technique::EngineSh {
+            basis: EngineShBasis::L2Deringed,
+        },
     ];
 
     /// The CLI name: `unc6`, `pca12`, `pca12w`, `shlmap`, `preconv`, `sh2`.
@@ -394,6 +471,7 @@ impl Technique {
                 NmprtVariant::Hl2 => "nmprthl2".into(),
                 NmprtVariant::Ratio => "nmprtratio".into(),
             },
+            Technique::EngineSh { basis } => basis.name().into(),
         }
     }
 
@@ -410,7 +488,8 @@ impl Technique {
             | Technique::Cpca { .. }
             | Technique::PcaVertex { .. }
             | Technique::Rnm { .. }
-            | Technique::Nmprt { .. } => self,
+            | Technique::Nmprt { .. }
+            | Technique::EngineSh { .. } => self,
         }
     }
 
@@ -431,7 +510,8 @@ impl Technique {
             | Technique::Cpca { .. }
             | Technique::PcaVertex { .. }
             | Technique::Rnm { .. }
-            | Technique::Nmprt { .. } => None,
+            | Technique::Nmprt { .. }
+            | Technique::EngineSh { .. } => None,
         }
     }
 
@@ -463,7 +543,8 @@ impl Technique {
             | Technique::PcaVertex { .. }
             | Technique::Rnm { .. }
             | Technique::Ndf { .. }
-            | Technique::Nmprt { .. } => None,
+            | Technique::Nmprt { .. }
+            | Technique::EngineSh { .. } => None,
         }
     }
 
@@ -486,7 +567,8 @@ impl Technique {
             | Technique::PcaVertex { .. }
             | Technique::Rnm { .. }
             | Technique::Ndf { .. }
-            | Technique::Nmprt { .. } => None,
+            | Technique::Nmprt { .. }
+            | Technique::EngineSh { .. } => None,
         }
     }
 
@@ -529,6 +611,10 @@ impl Technique {
                 pca_vectors: Some(m),
                 ..BakeNeeds::default()
             },
+            Technique::EngineSh { .. } => BakeNeeds {
+                sh_lightmap: true,
+                ..BakeNeeds::default()
+            },
             Technique::Rnm { variant } => BakeNeeds {
                 sh_lightmap: true,
                 ssbump: variant.needs_height(),
@@ -548,9 +634,10 @@ impl Technique {
     /// The ground truth its error is measured against.
     pub fn reference(self) -> ReferenceModel {
         match self {
-            Technique::Shlmap | Technique::Rnm { .. } | Technique::Nmprt { .. } => {
-                ReferenceModel::InterReflected
-            }
+            Technique::Shlmap
+            | Technique::Rnm { .. }
+            | Technique::Nmprt { .. }
+            | Technique::EngineSh { .. } => ReferenceModel::InterReflected,
             Technique::Unc { .. }
             | Technique::Pca { .. }
             | Technique::Preconv
@@ -566,7 +653,7 @@ impl Technique {
     /// not a new bake.
     pub fn dynamic_lighting(self) -> bool {
         match self {
-            Technique::Shlmap | Technique::Rnm { .. } => false,
+            Technique::Shlmap | Technique::Rnm { .. } | Technique::EngineSh { .. } => false,
             Technique::Unc { .. }
             | Technique::Pca { .. }
             | Technique::Preconv
@@ -636,6 +723,9 @@ impl Technique {
                 .map(|variant| Technique::Rnm { variant })
                 .to_vec(),
             Technique::Shlmap | Technique::Preconv | Technique::Sh2 => vec![self],
+            Technique::EngineSh { .. } => EngineShBasis::ALL
+                .map(|basis| Technique::EngineSh { basis })
+                .to_vec(),
             Technique::Ndf { .. } => UNC_ORDERS
                 .filter_map(|o| Order::new(o).ok())
                 .map(|order| NdfBase::Unc { order })
@@ -848,7 +938,10 @@ mod tests {
             let bounced = t.reference() == ReferenceModel::InterReflected;
             let lightmapped = matches!(
                 t,
-                Technique::Shlmap | Technique::Rnm { .. } | Technique::Nmprt { .. }
+                Technique::Shlmap
+                    | Technique::Rnm { .. }
+                    | Technique::Nmprt { .. }
+                    | Technique::EngineSh { .. }
             );
             assert_eq!(bounced, lightmapped, "{t}");
         }

@@ -1,0 +1,192 @@
+//! The engine SH bases (`l1`, `l1geo`, `l1zh3`, `zh3`, `l1lum`, `shlmapw`; `sh::bases`):
+//! the shader's reconstructions against the CPU's on the same stored values, hard cases
+//! included; every row on both paths against the bounced reference.
+
+mod common;
+
+use ash::vk;
+use glam::DVec3;
+use gpu_allocator::MemoryLocation;
+use shvis::gpu::{
+    Buffer, ComputePipeline, ComputePipelineDesc, Resource, ShaderStage, compile_glsl,
+};
+use shvis::report::metrics::image_error;
+use shvis::sh::Order;
+use shvis::sh::bases::ShBasis;
+use shvis::sh::basis::eval_basis;
+use shvis::technique::engine_sh::shader_value;
+use shvis::technique::{EngineShBasis, HwPath, Technique};
+
+/// Order-3 RGB radiance cases: random lights and skies, and the hard ones — black, L1 of
+/// zero length, no mean (L0 = 0), one direction exactly (Geomerics' r = 1), a sun of 1e5.
+fn radiance_cases() -> Vec<Vec<[f64; 3]>> {
+    let mut rng = common::Rng(0x5eed_0051);
+    let mut unit = || rng.below(2001) as f64 / 1000.0 - 1.0;
+    let delta = |d: DVec3, rgb: [f64; 3]| -> Vec<[f64; 3]> {
+        let mut y = [0.0; 9];
+        eval_basis(Order::THREE, d.normalize(), &mut y);
+        y.iter().map(|&v| rgb.map(|c| c * v)).collect()
+    };
+    let mut cases = vec![
+        vec![[0.0; 3]; 9],
+        {
+            let mut c = vec![[0.0; 3]; 9];
+            c[0] = [1.0, 0.8, 0.6];
+            c
+        },
+        {
+            let mut c = vec![[0.0; 3]; 9];
+            c[2] = [0.4, 0.3, 0.2];
+            c[5] = [0.1, 0.1, 0.1];
+            c
+        },
+        delta(DVec3::new(0.0, 0.0, 1.0), [1.0, 1.0, 1.0]),
+        delta(DVec3::new(0.3, 0.8, -0.5), [1e5, 0.9e5, 0.7e5]),
+    ];
+    for _ in 0..60 {
+        let d = DVec3::new(unit(), unit(), unit() + 0.01);
+        let mut c = delta(d, [1.0 + unit(), 1.0 + unit(), 1.0 + unit()]);
+        let ambient = 1.0 + unit();
+        c[0] = c[0].map(|v| v + ambient);
+        for k in c.iter_mut().skip(1) {
+            *k = k.map(|v| v + 0.1 * unit());
+        }
+        cases.push(c);
+    }
+    cases
+}
+
+fn normals() -> Vec<DVec3> {
+    let mut n: Vec<DVec3> = shvis::sh::project::sphere_quadrature(6)
+        .into_iter()
+        .map(|(d, _)| d)
+        .collect();
+    n.extend([DVec3::Z, DVec3::NEG_Z, DVec3::X, DVec3::NEG_Y]);
+    n
+}
+
+#[test]
+fn every_reconstruction_in_the_shader_matches_the_cpu_to_1e_4() {
+    let ctx = common::validated_context();
+    let radiance = radiance_cases();
+    let normals = normals();
+    for basis in ShBasis::ALL {
+        // The stored values as f32 (what a texel holds before f16), and the normal as f32:
+        // both sides evaluate exactly the same inputs.
+        let mut data: Vec<[f32; 4]> = Vec::new();
+        let mut want: Vec<[f64; 3]> = Vec::new();
+        let mut scale: Vec<f64> = Vec::new();
+        for r in &radiance {
+            let stored: Vec<f32> = basis.encode(r, None).iter().map(|&v| v as f32).collect();
+            let stored64: Vec<f64> = stored.iter().map(|&v| f64::from(v)).collect();
+            let mean = stored64[..3].iter().map(|v| v.abs()).fold(0.0, f64::max);
+            for &n in &normals {
+                let n32 = n.as_vec3();
+                let mut flat = stored.clone();
+                flat.resize(28, 0.0);
+                for g in 0..7 {
+                    data.push([
+                        flat[4 * g],
+                        flat[4 * g + 1],
+                        flat[4 * g + 2],
+                        flat[4 * g + 3],
+                    ]);
+                }
+                data.push([n32.x, n32.y, n32.z, 0.0]);
+                want.push(basis.irradiance(&stored64, n32.as_dvec3()));
+                scale.push(mean);
+            }
+        }
+        let count = want.len();
+        let cases = Buffer::with_data(
+            &ctx,
+            bytemuck::cast_slice(&data),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            "check.sh_bases.cases",
+        )
+        .unwrap();
+        let out = Buffer::new(
+            &ctx,
+            (count * 16) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::GpuToCpu,
+            "check.sh_bases.irradiance",
+        )
+        .unwrap();
+        let spirv = compile_glsl(
+            "check/sh_bases.comp",
+            ShaderStage::Compute,
+            &[("ENGINE_SH_BASIS", shader_value(basis))],
+        )
+        .unwrap();
+        let pipeline = ComputePipeline::new(
+            &ctx,
+            &ComputePipelineDesc {
+                name: "check.sh_bases",
+                spirv: &spirv,
+                resources: &[(0, Resource::Storage(&cases)), (1, Resource::Storage(&out))],
+                push_constant_bytes: 4,
+            },
+        )
+        .unwrap();
+        pipeline
+            .dispatch(
+                [(count as u32).div_ceil(64), 1, 1],
+                &(count as u32).to_le_bytes(),
+            )
+            .unwrap();
+        let got: &[[f32; 4]] = bytemuck::cast_slice(out.read().unwrap());
+        let mut worst = 0.0f64;
+        for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+            for c in 0..3 {
+                // Relative to the case's level (its largest mean coefficient): the shader
+                // works in f32, so 1e-4 of the signal, not of a value that cancels to 0.
+                let level = scale[i].max(w[c].abs()).max(1e-30);
+                let err = (f64::from(g[c]) - w[c]).abs() / level;
+                worst = worst.max(err);
+                assert!(
+                    err < 1e-4,
+                    "{basis:?} case {} normal {}: GPU {} CPU {} ({err:.2e})",
+                    i / normals.len(),
+                    i % normals.len(),
+                    g[c],
+                    w[c]
+                );
+            }
+        }
+        println!("{basis:?}: largest relative difference GPU − CPU {worst:.2e} over {count} cases");
+    }
+    common::assert_validation_clean(&ctx, "sh_bases check");
+}
+
+#[test]
+fn every_engine_basis_meets_the_bounced_reference_on_both_paths() {
+    let ctx = common::validated_context();
+    let (reference, settings) = common::house_reference(&ctx);
+    let bounced = reference.bounced.as_ref().expect("a bounced reference");
+    let prepared = common::house();
+    let shlmap: Vec<f64> = HwPath::ALL
+        .iter()
+        .map(|&path| {
+            let frame = common::render(&ctx, prepared, Technique::Shlmap, path, &settings);
+            image_error(&frame, &bounced.frame).unwrap().rel_rmse
+        })
+        .collect();
+    for basis in EngineShBasis::ALL {
+        let technique = Technique::EngineSh { basis };
+        let errors: Vec<f64> = HwPath::ALL
+            .iter()
+            .map(|&path| {
+                let frame = common::render(&ctx, prepared, technique, path, &settings);
+                image_error(&frame, &bounced.frame).unwrap().rel_rmse
+            })
+            .collect();
+        println!("{technique}: relative RMSE {errors:?} (shlmap {shlmap:?})");
+        assert!(errors.iter().all(|&e| e < 0.4), "{technique}: {errors:?}");
+        assert!(
+            (errors[0] - errors[1]).abs() < 0.01,
+            "{technique}: dx9 vs dx10 {errors:?}"
+        );
+    }
+    common::assert_validation_clean(&ctx, "engine bases");
+}
