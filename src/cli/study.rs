@@ -40,6 +40,24 @@ pub(super) enum StudyCommand {
     /// Energy captured by the first M = 1…9 singular values of normal mapping for PRT's
     /// normal basis (PRT course), uniform and cosine-weighted, beside the course's.
     NmprtSvd(StudyNmprtSvdArgs),
+    /// Irradiance error over all normals of each lightmap basis (L1 linear, Geomerics,
+    /// hallucinated and stored ZH3, luminance L1, L2, deringed L2) against exact irradiance,
+    /// per environment, with the values each stores.
+    Bases(StudyBasesArgs),
+}
+
+#[derive(Args, Debug)]
+pub(super) struct StudyBasesArgs {
+    /// Environments, comma-separated: `sky`, `sky:DEG`, .exr/.hdr probes, `angular:PATH`,
+    /// `sh:FILE` (SH coefficients as `shvis sh project` prints them).
+    #[arg(long, value_delimiter = ',', default_value = "sky,sky:15,sky:60")]
+    envs: Vec<String>,
+    /// Normals: an exact sphere quadrature of Q × 2Q nodes.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(4..=256))]
+    quadrature: u32,
+    /// Output directory: bases.md, bases.json, bases_error.svg/.png.
+    #[arg(short, long, default_value = "study-out/bases")]
+    out: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -263,6 +281,7 @@ pub(super) fn run_study(c: StudyCommand) -> Result<()> {
         StudyCommand::Rnm(a) => run_rnm(a).context("study rnm"),
         StudyCommand::Ndf(a) => run_ndf(a).context("study ndf"),
         StudyCommand::NmprtSvd(a) => run_nmprt_svd(a).context("study nmprt-svd"),
+        StudyCommand::Bases(a) => run_bases(a).context("study bases"),
         StudyCommand::Normalmap(a) => run_normalmap(a).context("study normalmap"),
     }
 }
@@ -308,6 +327,43 @@ fn run_nmprt_svd(a: StudyNmprtSvdArgs) -> Result<()> {
     shvis::files::write(&path, &markdown)
         .with_context(|| format!("{}: cannot write", path.display()))?;
     println!("wrote {}", path.display());
+    Ok(())
+}
+
+fn run_bases(a: StudyBasesArgs) -> Result<()> {
+    let envs = super::parse_each_once::<String>(&a.envs.join(","))?;
+    let files: Vec<(&str, &std::path::Path)> = envs
+        .iter()
+        .map(|e| {
+            let path = e
+                .strip_prefix(shvis::env::SH_PREFIX)
+                .or_else(|| e.strip_prefix(shvis::env::ANGULAR_PREFIX))
+                .unwrap_or(e);
+            ("--envs", std::path::Path::new(path))
+        })
+        .collect();
+    let outputs: Vec<(String, PathBuf)> = [
+        "bases.md",
+        "bases.json",
+        "bases_error.svg",
+        "bases_error.png",
+    ]
+    .iter()
+    .map(|f| ("--out".to_string(), a.out.join(f)))
+    .collect();
+    shvis::files::check_outputs_spare_inputs(&outputs, &files)?;
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    let study = shvis::study::bases::run(&envs, a.quadrature as usize, true)?;
+    let markdown = shvis::study::bases::markdown(&study);
+    let md = a.out.join("bases.md");
+    shvis::files::write(&md, &markdown)?;
+    let json = a.out.join("bases.json");
+    shvis::files::write(&json, serde_json::to_string_pretty(&study)?)?;
+    let plots = shvis::study::bases::write_plot(&study, &a.out)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", a.out.join("bases_error.svg").display()))?;
+    print_table(&markdown, &a.out, "bases.md, bases.json", started);
+    print_written(&plots);
     Ok(())
 }
 

@@ -50,20 +50,28 @@ pub fn load(path: &Path) -> Result<EnvMap, EnvError> {
 
 /// [`load`], with the reading of a 1:1 image given.
 pub fn load_as(path: &Path, square: SquareLayout) -> Result<EnvMap, EnvError> {
-    let bytes = crate::files::read_bounded(path, MAX_ENV_FILE_BYTES, "an environment map")
-        .map_err(|e| match e {
-            crate::files::FileError::Io { cause: source, .. } => EnvError::Io {
-                path: path.to_owned(),
-                source,
-            },
-            e => EnvError::Format {
-                path: path.to_owned(),
-                detail: e
-                    .to_string()
-                    .replacen(&format!("{}: ", path.display()), "", 1),
-            },
-        })?;
+    let bytes = read_env_file(path, MAX_ENV_FILE_BYTES, "an environment map")?;
     decode(&bytes, path, square)
+}
+
+/// The bytes of an environment's file, at most `limit`, its errors as [`EnvError`]s.
+pub(super) fn read_env_file(
+    path: &Path,
+    limit: u64,
+    what: &'static str,
+) -> Result<Vec<u8>, EnvError> {
+    crate::files::read_bounded(path, limit, what).map_err(|e| match e {
+        crate::files::FileError::Io { cause: source, .. } => EnvError::Io {
+            path: path.to_owned(),
+            source,
+        },
+        e => EnvError::Format {
+            path: path.to_owned(),
+            detail: e
+                .to_string()
+                .replacen(&format!("{}: ", path.display()), "", 1),
+        },
+    })
 }
 
 /// [`load`] of bytes in memory (`<memory>` in messages): the entry point of the

@@ -34,6 +34,7 @@ pub mod angular;
 pub mod equirect;
 pub mod project;
 pub mod schedule;
+pub mod sh_file;
 pub mod sky;
 
 use std::f64::consts::PI;
@@ -282,10 +283,14 @@ impl EnvMap {
 /// content ([`equirect::SquareLayout::Angular`]).
 pub const ANGULAR_PREFIX: &str = "angular:";
 
+/// Prefix of an `--env` given by its SH coefficients ([`sh_file`]).
+pub const SH_PREFIX: &str = "sh:";
+
 /// `--env` argument → map: [`BUILTIN_SKY`] ("sky") is the procedural sky
 /// ([`sky::sky`], [`BUILTIN_SKY_WIDTH`] × half, default [`sky::SkyParams`]); `sky:DEG` the
 /// same with the sun DEG° high ([`sky::SkyParams::with_sun_elevation`]);
-/// `angular:PATH` a 1:1 image read as an angular probe; anything else a path loaded by
+/// `angular:PATH` a 1:1 image read as an angular probe; `sh:FILE` SH coefficients as
+/// `shvis sh project` prints them ([`sh_file`]); anything else a path loaded by
 /// [`equirect::load`] (1:1 images detected by content).
 ///
 /// # Errors
@@ -314,6 +319,15 @@ pub fn resolve(name_or_path: &str) -> Result<EnvMap, EnvError> {
             });
         }
         equirect::load_as(Path::new(path), equirect::SquareLayout::Angular)
+    } else if let Some(path) = name_or_path.strip_prefix(SH_PREFIX) {
+        if path.is_empty() {
+            return Err(EnvError::Format {
+                path: PathBuf::from(name_or_path),
+                detail: "sh:FILE needs the path of a file of SH coefficients (r g b per line)"
+                    .into(),
+            });
+        }
+        sh_file::environment(Path::new(path))
     } else {
         equirect::load(Path::new(name_or_path))
     }

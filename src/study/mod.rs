@@ -16,9 +16,13 @@
 //!   (`shvis study normalmap`).
 //! - [`nmprt_svd`]: the energy of normal mapping for PRT's "normal basis" (the
 //!   SVD of the hemisphere-clamped quadratic SH over normals), `shvis study nmprt-svd`.
+//! - [`bases`]: irradiance error of each engine lightmap basis (L1, Geomerics, ZH3,
+//!   luminance L1, L2, deringed L2) against exact irradiance per environment
+//!   (`shvis study bases`).
 //! - [`ndf`]: the specular term under naive MIP and normal-distribution filtering
 //!   on the receding bumpy plane against its footprint reference (`shvis study ndf`).
 
+pub mod bases;
 pub mod compression;
 pub mod ndf;
 pub mod ndf_diffuse;
