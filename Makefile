@@ -22,6 +22,14 @@ MODEL ?= ../shared/assets/models/NormalTangentMirrorTest/NormalTangentMirrorTest
 RNM_ENVS = sky:15$(if $(wildcard $(OVERCAST)),$(comma)$(OVERCAST))
 NDF_ENVS = sky$(if $(wildcard $(OVERCAST)),$(comma)$(OVERCAST))
 comma := ,
+# The study of the lightmap bases: the built-in skies and every shared probe present.
+PROBES = $(wildcard ../shared/assets/env/*_1k.exr)
+empty :=
+space := $(empty) $(empty)
+BASES_ENVS = $(subst $(space),$(comma),$(strip sky sky:15 sky:60 $(PROBES)))
+# The engine bases beside shlmap under the overcast probe (the default sky's rows are in
+# the main bench).
+ENGINE_SH_ROWS = shlmap,unc6,l1,l1geo,l1zh3,zh3,l1lum,shlmapw
 # Normal mapping for PRT against unc6 under the sun turned 90° after the bake.
 NMPRT_ROWS = unc6,preconv,shlmap,nmprt,nmprtsvd4,nmprtsvd6,nmprthl2,nmprtratio
 
@@ -35,6 +43,8 @@ bench: build
 bench-full: build
 	SHVIS=target/release/shvis OUT=$(BENCH_OUT) RNM_ENVS='$(RNM_ENVS)' NDF_ENVS='$(NDF_ENVS)' \
 	MODEL_ARG='$(if $(wildcard $(MODEL)),--model $(MODEL))' NMPRT_ROWS='$(NMPRT_ROWS)' \
+	BASES_ENVS='$(BASES_ENVS)' ENGINE_SH_ENV='$(if $(wildcard $(OVERCAST)),$(OVERCAST),sky:15)' \
+	ENGINE_SH_ROWS='$(ENGINE_SH_ROWS)' \
 	scripts/bench-full.sh
 
 clean:

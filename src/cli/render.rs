@@ -24,7 +24,8 @@ use super::{
 #[derive(Args, Debug)]
 pub(super) struct RenderArgs {
     /// `sky` (built-in), an .exr/.hdr equirectangular map (2:1) or angular probe (1:1,
-    /// detected by content; `angular:PATH` forces it).
+    /// detected by content; `angular:PATH` forces it), or `sh:FILE` (SH radiance
+    /// coefficients as `shvis sh project` prints them).
     #[arg(long, default_value = "sky")]
     env: String,
     /// Technique name (see `shvis bench`): unc3…unc6, pca4…pca24, pca4w…pca24w, shlmap,
