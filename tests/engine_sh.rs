@@ -93,7 +93,7 @@ fn every_reconstruction_in_the_shader_matches_the_cpu_to_1e_4() {
                     ]);
                 }
                 data.push([n32.x, n32.y, n32.z, 0.0]);
-                want.push(basis.irradiance(&stored64, n32.as_dvec3()));
+                want.push(basis.irradiance(&stored64, n32.as_dvec3().normalize()));
                 scale.push(mean);
             }
         }
