@@ -40,6 +40,14 @@ fn radiance_cases() -> Vec<Vec<[f64; 3]>> {
             c[5] = [0.1, 0.1, 0.1];
             c
         },
+        {
+            // A mean near zero under a strong direction (a ringing SH): the clamped ratios.
+            let mut c = vec![[0.0; 3]; 9];
+            c[0] = [0.01, 0.012, 0.008];
+            c[2] = [0.4, 0.3, 0.5];
+            c[3] = [-0.2, 0.1, 0.0];
+            c
+        },
         delta(DVec3::new(0.0, 0.0, 1.0), [1.0, 1.0, 1.0]),
         delta(DVec3::new(0.3, 0.8, -0.5), [1e5, 0.9e5, 0.7e5]),
     ];

@@ -18,6 +18,8 @@
 const vec3 SH_LUMINANCE = vec3(0.2126, 0.7152, 0.0722);
 // √(5/16π): the zonal harmonic about an axis, Y_20(t) = SH_K20_ZONAL · (3t² − 1).
 const float SH_K20_ZONAL = 0.31539156525252005;
+// The largest |d| / c_00 of non-negative radiance; the ratios of (5) and (6) are clamped to it.
+const float SH_SQRT_3 = 1.7320508075688772;
 
 // d = (−c_11, −c_1−1, c_10) of channel c: the linear band as a vector.
 vec3 sh_linear_vector(float v[16], int c) {
@@ -81,7 +83,7 @@ vec3 engine_sh_irradiance(float v[16], vec3 n) {
 #if SHVIS_ENGINE_SH_BASIS == 2
     for (int c = 0; c < 3; ++c) {
         float c00 = v[c];
-        float r = c00 > 0.0 ? abs(dot(sh_linear_vector(v, c), axis)) / c00 : 0.0;
+        float r = c00 > 0.0 ? min(abs(dot(sh_linear_vector(v, c), axis)) / c00, SH_SQRT_3) : 0.0;
         z[c] = c00 > 0.0 ? c00 * (0.08 * r + 0.6 * r * r) : 0.0;
     }
 #else
@@ -92,6 +94,10 @@ vec3 engine_sh_irradiance(float v[16], vec3 n) {
     vec3 ambient = vec3(v[0], v[1], v[2]);
     vec3 d = vec3(-v[5], -v[3], v[4]);
     float mean_lum = dot(ambient, SH_LUMINANCE);
+    float d_len = length(d);
+    if (d_len > SH_SQRT_3 * mean_lum) {
+        d *= SH_SQRT_3 * mean_lum / d_len;
+    }
     float directional = mean_lum > 0.0 ? (2.0 * PI / 3.0) * SH_K1 * dot(d, n) / mean_lum : 0.0;
     return PI * SH_K00 * ambient + ambient * directional;
 #else

@@ -23,9 +23,9 @@
 //! ZH3 axis      â = d_lum/|d_lum|   (shared by the three channels)                        (3)
 //! ZH3 stored    z = √(4π/5) Σ_m c_2m y_2m(â)   (the projection onto the zonal harmonic
 //!               about â),  E(n) = (1) + A_2 z Y_20(â·n),  Y_20(t) = √(5/16π)(3t² − 1)      (4)
-//! ZH3 halluc.   r = |d·â| / c_00,  z = c_00 (0.08 r + 0.6 r²),  E(n) as (4)                (5)
-//! L1 luminance  stored c_00 (RGB) and e = d_lum;
-//!               E_c(n) = A_0 c_00,c y_00 + (c_00,c / c_00,lum) A_1 K_1 e·n                (6)
+//! ZH3 halluc.   r = min(|d·â| / c_00, √3),  z = c_00 (0.08 r + 0.6 r²),  E(n) as (4)      (5)
+//! L1 luminance  stored c_00 (RGB) and e = d_lum, ê = e · min(1, √3 c_00,lum / |e|);
+//!               E_c(n) = A_0 c_00,c y_00 + (c_00,c / c_00,lum) A_1 K_1 ê·n                (6)
 //! L2            E(n) = Σ_l A_l Σ_m c_lm y_lm(n)                                           (7)
 //! L2 deringed   (7) with c_lm ← σ_l(w) c_lm, σ the Hanning window, w the gentlest width
 //!               for which (7) is non-negative over the sphere, smallest over RGB          (8)
@@ -48,6 +48,11 @@
 //!
 //! # Degenerate inputs
 //!
+//! For non-negative radiance |d| ≤ √3 c_00 (equality for a single direction), so the ratios
+//! of (5) and (6) never exceed √3; an SH that rings or a noisy gather can break that where
+//! the mean is near zero, and the ratio would then blow up (z grows as |d|²/c_00): both are
+//! clamped to √3, as Geomerics' r is to 1.
+//!
 //! c_00 ≤ 0 (a black texel, or a truncated SH with no mean): Geomerics gives 0,
 //! hallucinated ZH3 and L1 luminance drop their non-linear or directional term. d_lum = 0
 //! (no direction): the ZH3 axis is undefined and the zonal term is dropped (stored as 0).
@@ -68,6 +73,8 @@ pub const LUMINANCE: [f64; 3] = [0.2126, 0.7152, 0.0722];
 const Y00: f64 = 0.282_094_791_773_878_14;
 /// K_1 = √(3/4π).
 const K1: f64 = 0.488_602_511_902_919_9;
+/// The largest |d| / c_00 of non-negative radiance (module doc, degenerate inputs).
+const SQRT_3: f64 = 1.732_050_807_568_877_2;
 /// √(5/16π), the zonal harmonic Y_20(t) = this · (3t² − 1).
 const K20: f64 = 0.315_391_565_252_520_05;
 
@@ -217,7 +224,7 @@ impl ShBasis {
                 std::array::from_fn(|c| {
                     let c00 = l1[0][c];
                     let z = if c00 > 0.0 {
-                        let r = linear_vector(&l1, c).dot(axis).abs() / c00;
+                        let r = (linear_vector(&l1, c).dot(axis).abs() / c00).min(SQRT_3);
                         c00 * (ZH3_LINEAR * r + ZH3_QUADRATIC * r * r)
                     } else {
                         0.0
@@ -240,6 +247,7 @@ impl ShBasis {
                 let e = DVec3::new(-stored[5], -stored[3], stored[4]);
                 let mean_lum = luminance(ambient);
                 let directional = if mean_lum > 0.0 {
+                    let e = e.clamp_length_max(SQRT_3 * mean_lum);
                     A1 * K1 * e.dot(n) / mean_lum
                 } else {
                     0.0
@@ -502,6 +510,20 @@ mod tests {
             );
         }
         assert!(zh3_axis(&zero[..4]).is_none());
+        // A mean near zero under a strong direction: the ratios are clamped to √3, so the
+        // reconstructions stay of the order of the mean, not of |d|²/c00.
+        let mut ringing = zero.clone();
+        ringing[0] = [1e-3; 3];
+        ringing[2] = [0.5; 3];
+        for basis in [ShBasis::L1Zh3Hallucinated, ShBasis::L1Luminance] {
+            let e = basis.irradiance(&basis.encode(&ringing, None), DVec3::Z)[0];
+            let linear = ShBasis::L1.irradiance(&ShBasis::L1.encode(&ringing, None), DVec3::Z)[0];
+            assert!(e.abs() < 10.0 * 1e-3 + linear.abs(), "{basis:?}: {e}");
+            let bound = 1e-3 * (A0 * Y00 + A1 * K1 * SQRT_3);
+            if basis == ShBasis::L1Luminance {
+                assert!(e <= bound * (1.0 + 1e-12), "{e} > {bound}");
+            }
+        }
         // Geomerics and L1 luminance with no mean: no light from the curve, no direction.
         let g =
             ShBasis::L1Geomerics.irradiance(&ShBasis::L1Geomerics.encode(&no_mean, None), DVec3::Z);
