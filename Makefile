@@ -33,7 +33,7 @@ ENGINE_SH_ROWS = shlmap,unc6,l1,l1geo,l1zh3,zh3,l1lum,shlmapw
 # Normal mapping for PRT against unc6 under the sun turned 90° after the bake.
 NMPRT_ROWS = unc6,preconv,shlmap,nmprt,nmprtsvd4,nmprtsvd6,nmprthl2,nmprtratio
 
-# The main job: the paper's cost table and one row of each later family at 1280×800 with the
+# The main job: the paper's cost table and rows of each later family at 1280×800 with the
 # references, errors, attribution ladder, figures and index.html (the bench prints its plan
 # and estimate first, then the time left). Frames are few to fit five minutes on 2 cores.
 bench: build

@@ -48,7 +48,7 @@ pub(super) struct ProbeArgs {
 pub(super) struct BenchArgs {
     #[arg(help_heading = "Rows", long, default_value = "sky")]
     env: String,
-    /// A named set — `headline` (the paper's table and one row of each later family),
+    /// A named set — `headline` (the paper's table and rows of each later family),
     /// `paper` (the paper's table), `all` (every row) — or a comma-separated list of names
     /// (`shvis techniques`).
     #[arg(help_heading = "Rows", long, default_value = "headline")]
