@@ -133,6 +133,96 @@ fn unsupported_output_extension() {
 }
 
 #[test]
+fn sh_coefficient_environments_missing_or_malformed() {
+    let dir = scratch("sh_env");
+    let out_png = dir.join("x.png");
+    let out = shvis(
+        &render_args("sh:/no/such/coeffs.txt", out_png.to_str().unwrap()),
+        &[],
+    );
+    assert_one_error_line(&out, &["/no/such/coeffs.txt", "cannot read"]);
+    let five = dir.join("five.txt");
+    std::fs::write(&five, "1 1 1\n0 0 0\n0 0 0\n0 0 0\n0 0 0\n").unwrap();
+    let env = format!("sh:{}", five.display());
+    let out = shvis(&render_args(&env, out_png.to_str().unwrap()), &[]);
+    assert_one_error_line(&out, &["five.txt", "5 coefficients"]);
+    let study_out = dir.join("bases");
+    let out = shvis(
+        &[
+            "study",
+            "bases",
+            "--envs",
+            &env,
+            "--out",
+            study_out.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert_one_error_line(&out, &["five.txt", "5 coefficients"]);
+    let out = shvis(&render_args("sh:", out_png.to_str().unwrap()), &[]);
+    assert_one_error_line(&out, &["sh:FILE needs the path"]);
+}
+
+#[test]
+fn an_sh_environment_is_studied_and_printed_back() {
+    // `sh project` of an sh: environment returns its coefficients (the map is rasterised
+    // finely enough), and `study bases` measures it: L2 of an order-3 radiance is exact.
+    let dir = scratch("sh_env_ok");
+    let file = dir.join("probe.txt");
+    let coeffs = "2 2 2\n0.3 0.2 0.1\n1.0 0.9 0.8\n0.1 0.1 0.1\n0.2 0.1 0.1\n0 0.1 0\n0.3 0.3 0.3\n0 0 0.1\n0.1 0 0\n";
+    std::fs::write(&file, coeffs).unwrap();
+    let env = format!("sh:{}", file.display());
+    let out = shvis(&["sh", "project", "--env", &env, "--order", "3"], &[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let back: Vec<f64> = String::from_utf8_lossy(&out.stdout)
+        .split_whitespace()
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let want: Vec<f64> = coeffs
+        .split_whitespace()
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(back.len(), 27);
+    for (b, w) in back.iter().zip(&want) {
+        assert!((b - w).abs() < 1e-3, "{back:?}");
+    }
+    let study_out = dir.join("bases");
+    let out = shvis(
+        &[
+            "study",
+            "bases",
+            "--envs",
+            &env,
+            "--out",
+            study_out.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(study_out.join("bases.json")).unwrap())
+            .unwrap();
+    let l2 = json["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["basis"] == "L2")
+        .unwrap();
+    assert!(l2["rms_rel"].as_f64().unwrap() < 1e-9, "{l2}");
+    for f in ["bases.md", "bases_error.svg", "bases_error.png"] {
+        assert!(study_out.join(f).is_file(), "{f}");
+    }
+}
+
+#[test]
 fn sh_order_out_of_range() {
     for order in ["0", "31"] {
         let out = shvis(&["sh", "eval", "--order", order], &[]);

@@ -91,10 +91,7 @@ pub(crate) fn prepare(
     inputs: &Inputs<'_>,
     label: &str,
 ) -> Result<(TexelGroups, Recipe), TechniqueError> {
-    let map = inputs.sh_lightmap.ok_or_else(|| TechniqueError::Input {
-        label: label.into(),
-        detail: "needs the SH lightmap bake".into(),
-    })?;
+    let map = super::shlmap::baked_map(inputs, label)?;
     let sh_basis = basis.sh_basis();
     let per_texel = sh_basis.stored_values();
     let stored = stored_texels(map, sh_basis);

@@ -55,10 +55,7 @@ pub(crate) fn prepare(
     inputs: &Inputs<'_>,
     label: &str,
 ) -> Result<(TexelGroups, Recipe), TechniqueError> {
-    let map = inputs.sh_lightmap.ok_or_else(|| TechniqueError::Input {
-        label: label.into(),
-        detail: "needs the SH lightmap bake".into(),
-    })?;
+    let map = baked_map(inputs, label)?;
     let texels = (map.res * map.res) as usize;
     let Some(scale) = stored_scale(map) else {
         return Err(TechniqueError::Input {
@@ -76,6 +73,17 @@ pub(crate) fn prepare(
         format!("{label}.radiance_sh"),
         scale,
     ))
+}
+
+/// The SH lightmap bake of `inputs`, or the error of a technique (`label`) that needs it.
+pub(crate) fn baked_map<'a>(
+    inputs: &Inputs<'a>,
+    label: &str,
+) -> Result<&'a ShLightmap, TechniqueError> {
+    inputs.sh_lightmap.ok_or_else(|| TechniqueError::Input {
+        label: label.into(),
+        detail: "needs the SH lightmap bake".into(),
+    })
 }
 
 /// Lightmap groups stored in f16 after multiplying by `scale`, and the recipe of their
