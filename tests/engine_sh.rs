@@ -1,5 +1,6 @@
-//! The engine SH bases (`l1`, `l1geo`, `l1zh3`, `zh3`, `l1lum`, `shlmapw`; `sh::bases`):
-//! the shader's reconstructions against the CPU's on the same stored values, hard cases
+//! The lightmap bases from `shlmap`'s bake — the engine SH bases (`l1`, `l1geo`, `l1zh3`,
+//! `zh3`, `l1lum`, `shlmapw`; `sh::bases`) and the H-basis (`hb4`, `hb6`; `sh::hbasis`): the
+//! shader's reconstructions against the CPU's on the same stored values, hard cases
 //! included; every row on both paths against the bounced reference.
 
 mod common;
@@ -14,8 +15,9 @@ use shvis::report::metrics::image_error;
 use shvis::sh::Order;
 use shvis::sh::bases::ShBasis;
 use shvis::sh::basis::eval_basis;
+use shvis::sh::hbasis::{self, HBasisSize};
 use shvis::technique::engine_sh::shader_value;
-use shvis::technique::{EngineShBasis, HwPath, Technique};
+use shvis::technique::{EngineShBasis, HwPath, LocalBasis, Technique};
 
 /// Order-3 RGB radiance cases: random lights and skies, and the hard ones — black, L1 of
 /// zero length, no mean (L0 = 0), one direction exactly (Geomerics' r = 1), a sun of 1e5.
@@ -46,6 +48,19 @@ fn radiance_cases() -> Vec<Vec<[f64; 3]>> {
             c[0] = [0.01, 0.012, 0.008];
             c[2] = [0.4, 0.3, 0.5];
             c[3] = [-0.2, 0.1, 0.0];
+            c
+        },
+        {
+            // A negative mean (a truncated SH's radiance) with and without a direction.
+            let mut c = vec![[0.0; 3]; 9];
+            c[0] = [-0.2, -0.1, -0.3];
+            c
+        },
+        {
+            let mut c = vec![[0.0; 3]; 9];
+            c[0] = [-0.2, 0.1, -0.3];
+            c[1] = [0.3, 0.2, 0.1];
+            c[6] = [0.1, 0.2, 0.3];
             c
         },
         delta(DVec3::new(0.0, 0.0, 1.0), [1.0, 1.0, 1.0]),
@@ -168,6 +183,106 @@ fn every_reconstruction_in_the_shader_matches_the_cpu_to_1e_4() {
 }
 
 #[test]
+fn the_h_basis_shader_matches_the_cpu_to_1e_4() {
+    let ctx = common::validated_context();
+    let mut rng = common::Rng(0x4b_a515);
+    let mut unit = || rng.below(2001) as f64 / 1000.0 - 1.0;
+    // Coefficient sets: random, and one from a projected sky through a tilted frame.
+    let mut sets: Vec<Vec<[f64; 3]>> = (0..40)
+        .map(|_| (0..6).map(|_| [unit(), unit(), unit()]).collect())
+        .collect();
+    let mut radiance = vec![[0.0; 3]; 9];
+    radiance[0] = [2.0, 1.8, 1.5];
+    radiance[2] = [1.0, 0.9, 0.6];
+    radiance[5] = [0.3, 0.2, 0.1];
+    let frame = [
+        DVec3::new(0.8, 0.0, -0.6),
+        DVec3::Y,
+        DVec3::new(0.6, 0.0, 0.8),
+    ];
+    sets.push(hbasis::project_irradiance(&radiance, frame, HBasisSize::H6));
+    let dirs: Vec<DVec3> = hbasis::hemisphere_quadrature(4)
+        .into_iter()
+        .map(|(m, _)| m)
+        .chain([DVec3::Z, DVec3::X])
+        .collect();
+    for size in [HBasisSize::H4, HBasisSize::H6] {
+        let (mut data, mut want, mut level) = (Vec::new(), Vec::new(), Vec::new());
+        for set in &sets {
+            let coeffs: Vec<[f32; 3]> = set[..size.count()]
+                .iter()
+                .map(|c| c.map(|v| v as f32))
+                .collect();
+            let mut flat: Vec<f32> = coeffs.iter().flatten().copied().collect();
+            flat.resize(20, 0.0);
+            let as64: Vec<[f64; 3]> = coeffs.iter().map(|c| c.map(f64::from)).collect();
+            let scale = as64.iter().flatten().map(|v| v.abs()).fold(0.0, f64::max);
+            for &m in &dirs {
+                let m32 = m.as_vec3();
+                for g in 0..5 {
+                    data.push([
+                        flat[4 * g],
+                        flat[4 * g + 1],
+                        flat[4 * g + 2],
+                        flat[4 * g + 3],
+                    ]);
+                }
+                data.push([m32.x, m32.y, m32.z, 0.0]);
+                want.push(hbasis::irradiance(&as64, m32.as_dvec3()));
+                level.push(scale);
+            }
+        }
+        let count = want.len();
+        let cases = Buffer::with_data(
+            &ctx,
+            bytemuck::cast_slice(&data),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            "check.hbasis.cases",
+        )
+        .unwrap();
+        let out = Buffer::new(
+            &ctx,
+            (count * 16) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::GpuToCpu,
+            "check.hbasis.irradiance",
+        )
+        .unwrap();
+        let spirv = compile_glsl("check/hbasis.comp", ShaderStage::Compute, &[]).unwrap();
+        let pipeline = ComputePipeline::new(
+            &ctx,
+            &ComputePipelineDesc {
+                name: "check.hbasis",
+                spirv: &spirv,
+                resources: &[(0, Resource::Storage(&cases)), (1, Resource::Storage(&out))],
+                push_constant_bytes: 8,
+            },
+        )
+        .unwrap();
+        let push = [count as u32, size.count() as u32];
+        pipeline
+            .dispatch(
+                [(count as u32).div_ceil(64), 1, 1],
+                bytemuck::cast_slice(&push),
+            )
+            .unwrap();
+        let got: &[[f32; 4]] = bytemuck::cast_slice(out.read().unwrap());
+        for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+            for c in 0..3 {
+                let err = (f64::from(g[c]) - w[c]).abs() / level[i].max(w[c].abs()).max(1e-30);
+                assert!(
+                    err < 1e-4,
+                    "{size:?} case {i}: GPU {} CPU {} ({err:.2e})",
+                    g[c],
+                    w[c]
+                );
+            }
+        }
+    }
+    common::assert_validation_clean(&ctx, "hbasis check");
+}
+
+#[test]
 fn every_engine_basis_meets_the_bounced_reference_on_both_paths() {
     let ctx = common::validated_context();
     let (reference, settings) = common::house_reference(&ctx);
@@ -180,8 +295,11 @@ fn every_engine_basis_meets_the_bounced_reference_on_both_paths() {
             image_error(&frame, &bounced.frame).unwrap().rel_rmse
         })
         .collect();
-    for basis in EngineShBasis::ALL {
-        let technique = Technique::EngineSh { basis };
+    let techniques = EngineShBasis::ALL
+        .map(|basis| Technique::EngineSh { basis })
+        .into_iter()
+        .chain(LocalBasis::ALL.map(|basis| Technique::Local { basis }));
+    for technique in techniques {
         let errors: Vec<f64> = HwPath::ALL
             .iter()
             .map(|&path| {

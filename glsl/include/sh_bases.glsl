@@ -95,7 +95,7 @@ vec3 engine_sh_irradiance(float v[16], vec3 n) {
     vec3 d = vec3(-v[5], -v[3], v[4]);
     float mean_lum = dot(ambient, SH_LUMINANCE);
     float d_len = length(d);
-    if (d_len > SH_SQRT_3 * mean_lum) {
+    if (mean_lum > 0.0 && d_len > SH_SQRT_3 * mean_lum) {
         d *= SH_SQRT_3 * mean_lum / d_len;
     }
     float directional = mean_lum > 0.0 ? (2.0 * PI / 3.0) * SH_K1 * dot(d, n) / mean_lum : 0.0;

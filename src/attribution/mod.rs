@@ -29,8 +29,9 @@
 //! since L₃·V₂ has no band above 3 and the clamped cosine's band 3 vanishes). `shlmap`
 //! gathers the inter-reflected radiance at each pixel as its bake gathers a texel (order-3
 //! SH, cosine exact), then reads its f16 lightmap. The engine bases (`l1`, `zh3`, …;
-//! `sh::bases`) share that first rung, then "basis" (what the texel stores, evaluated
-//! linearly: L1 for the L1 family) and, for Geomerics and hallucinated ZH3,
+//! `sh::bases`) share that first rung, then "basis" (what the texel stores, evaluated by
+//! `ShBasis::linear`: linear L1 for the L1 family, each other basis by its own formula) and,
+//! for Geomerics and hallucinated ZH3,
 //! "reconstruction" (their curve against the linear evaluation of the same values), then
 //! the lightmap texels reconstructed as the shader does.
 //!
@@ -426,6 +427,9 @@ pub fn cpu_rungs(
         Technique::Nmprt { variant } => row.nmprt(&mut rungs, variant),
         Technique::Shlmap => row.lightmap_sh(&mut rungs, None),
         Technique::EngineSh { basis } => row.lightmap_sh(&mut rungs, Some(basis.sh_basis())),
+        // The H-basis is evaluated in each pixel's tangent frame, which the ladder's pixels
+        // do not carry yet: its error is reported whole (point sampling → technique).
+        Technique::Local { .. } => {}
     }
     Ok(rungs)
 }
@@ -868,12 +872,10 @@ impl RowLadder<'_> {
         );
     }
 
-    /// `shlmap`'s rungs: the inter-reflected radiance gathered at each pixel (order 3,
-    /// convolved with the clamped cosine), then the SH lightmap's f16 texels (none without
-    /// an SH lightmap bake).
     /// `shlmap`'s rungs (`basis` `None`) and the engine bases' (module doc): the pixel's
-    /// gathered order-3 radiance, then for a basis what it stores evaluated linearly and,
-    /// where it differs, by its own reconstruction; then the lightmap texels.
+    /// gathered order-3 radiance, then for a basis what it stores evaluated by
+    /// [`ShBasis::linear`] and, where that differs, by its own reconstruction; then the
+    /// lightmap texels. None without an SH lightmap bake.
     fn lightmap_sh(&self, rungs: &mut Vec<Rung>, basis: Option<ShBasis>) {
         let (px, prepared) = (self.px, self.prepared);
         let radiance = &prepared.radiance_sh;
@@ -954,15 +956,16 @@ impl RowLadder<'_> {
                 },
             );
         }
-        let stored = crate::technique::engine_sh::stored_texels(map, basis);
-        let scale = crate::technique::engine_sh::stored_scale(&stored).unwrap_or(1.0);
-        let unscale = f64::from(1.0 / scale);
         let per_texel = basis.stored_values();
         self.push(
             rungs,
             AttributionKind::LightmapTexels,
             format!("{technique}.lightmap"),
             &|| {
+                // Encoded here, so a cached rung does not pay for it (the deringing search).
+                let stored = crate::technique::engine_sh::stored_texels(map, basis);
+                let scale = crate::technique::engine_sh::stored_scale(&stored).unwrap_or(1.0);
+                let unscale = f64::from(1.0 / scale);
                 px.image(|k| {
                     let v = lightmap_bilinear(map.res, px.uv[k], per_texel, |t, j| {
                         f16_round(stored[t * per_texel + j] * scale) * unscale

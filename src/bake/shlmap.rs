@@ -119,6 +119,10 @@ pub struct ShLightmap {
     /// renormalised); zero where nothing reached. The hemisphere of normals a texel is
     /// shaded with (`sh::bases`' deringing).
     pub normal: Vec<Vec3>,
+    /// The normal map's frame per texel (columns: tangent, bitangent, interpolated normal,
+    /// as `glsl/include/common.glsl` builds it), dilated like `coeffs`; zero where nothing
+    /// reached. What tangent-space bases (`sh::hbasis`) are projected through.
+    pub frame: Vec<glam::Mat3>,
     /// With `bounces` > 0: the irradiance E_{N−1} of eq. (2) per texel (dilated) that the
     /// last bounce read at its hits — what [`radiance_at_points`] reads to gather the same
     /// light at other points. Empty for a direct-only bake.
@@ -294,12 +298,24 @@ pub fn bake_sh_lightmap(
     dilation.apply(&mut rnm);
     let mut normal = texels.normal.clone();
     dilation.apply(&mut normal);
+    let mut frame: Vec<glam::Mat3> = (0..res * res)
+        .map(|i| {
+            if !texels.covered[i] {
+                return glam::Mat3::ZERO;
+            }
+            let n = texels.shading_normal[i].normalize_or(texels.normal[i]);
+            let t = crate::scene::tangent::orthonormalize(n, texels.tangent[i]);
+            glam::Mat3::from_cols(t.truncate(), n.cross(t.truncate()) * t.w, n)
+        })
+        .collect();
+    dilation.apply(&mut frame);
     let map = ShLightmap {
         res: texels.res,
         bounces: settings.bounces,
         coeffs: planes.iter().flat_map(|p| p.as_rgb()).collect(),
         covered: texels.covered.clone(),
         normal: normal.iter().map(|n| n.normalize_or_zero()).collect(),
+        frame,
         bounce_source,
         basis_irradiance: rnm.iter().map(|b| normalized_to_flat(&b.0)).collect(),
         stats: BakeStats {

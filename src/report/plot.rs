@@ -107,7 +107,8 @@ pub fn write_pca_error_plot(
                 | Technique::Rnm { .. }
                 | Technique::Ndf { .. }
                 | Technique::Nmprt { .. }
-                | Technique::EngineSh { .. } => None,
+                | Technique::EngineSh { .. }
+                | Technique::Local { .. } => None,
             })
             .collect()
     };

@@ -28,7 +28,8 @@
 //!               E_c(n) = A_0 c_00,c y_00 + (c_00,c / c_00,lum) A_1 K_1 ê·n                (6)
 //! L2            E(n) = Σ_l A_l Σ_m c_lm y_lm(n)                                           (7)
 //! L2 deringed   (7) with c_lm ← σ_l(w) c_lm, σ the Hanning window, w the gentlest width
-//!               for which (7) is non-negative over the sphere, smallest over RGB          (8)
+//!               for which (7) is non-negative over the shaded normals (a texel's
+//!               hemisphere, or the sphere), smallest over RGB                             (8)
 //! ```
 //!
 //! (2) is Geomerics' non-linear L1 reconstruction (Enlighten; "Reconstructing Diffuse
@@ -349,20 +350,28 @@ fn deringing_width_rgb(radiance: &[[f64; 3]], shaded: Option<DVec3>) -> Option<f
         }
         _ => deringing_grid(),
     };
-    (0..3)
-        .filter_map(|c| {
-            let irradiance: Vec<f64> = (0..9)
-                .map(|k| clamped_cosine_convolution(band_of(k)) * radiance[k][c])
-                .collect();
-            deringing_width_on_grid(
-                Taper::Hanning,
-                &irradiance,
-                Order::THREE,
-                grid,
-                DERINGING_REL,
-            )
+    let irradiance: [Vec<f64>; 3] = std::array::from_fn(|c| {
+        (0..9)
+            .map(|k| clamped_cosine_convolution(band_of(k)) * radiance[k][c])
+            .collect()
+    });
+    let w = irradiance
+        .iter()
+        .filter_map(|e| {
+            deringing_width_on_grid(Taper::Hanning, e, Order::THREE, grid, DERINGING_REL)
         })
-        .reduce(f64::min)
+        .reduce(f64::min)?;
+    // The minimum need not be monotonic in w: a channel non-negative at its own width may
+    // dip at a narrower one. Then the strongest window (the mean alone) is used.
+    let all_non_negative = irradiance.iter().all(|e| {
+        let mut windowed = e.clone();
+        for (k, v) in windowed.iter_mut().enumerate() {
+            *v *= Taper::Hanning.sigma(band_of(k), w);
+        }
+        grid.iter()
+            .all(|&d| super::project::eval(&windowed, Order::THREE, d) >= 0.0)
+    });
+    Some(if all_non_negative { w } else { 1.0 })
 }
 
 /// Relative precision of (8)'s width.

@@ -9,7 +9,9 @@
 //! irradiance E(n) = ∫ L(ω) max(0, n·ω) dω is a quadrature over the map's texels
 //! (`env::project::irradiance_brute_force`, `shvis sh irradiance --exact`); for an
 //! environment given by SH coefficients (`sh:FILE`) it is the coefficients convolved with the
-//! clamped cosine at their own order (exact for that radiance). Each basis encodes the
+//! clamped cosine at their own order (exact for that radiance; clamped at 0 like the
+//! reconstructions, so a truncated SH that dips negative is compared as displayed). Each
+//! basis encodes the
 //! environment's order-3 radiance SH and reconstructs Ê(n), clamped at 0 as its shader
 //! does. On luminance, with E_max = max_j E(n_j) the peak irradiance:
 //!
@@ -25,7 +27,8 @@
 //! 1/4 + t/2 + (5/16)P_2(t) misses max(0, t) by 0.094 at t = 0, 9.4 % of its peak of 1 —
 //! the 9 % bound.
 //!
-//! and the share of normals where the basis' unclamped reconstruction is negative. Lightmap
+//! Also reported: the share of normals where the basis' unclamped reconstruction is
+//! negative. Lightmap
 //! texels see a hemisphere; a probe here is lit from the whole sphere, as in Probulator.
 
 use std::path::{Path, PathBuf};
@@ -101,7 +104,7 @@ fn environment(name: &str, nodes: &[(DVec3, f64)]) -> Result<(Vec<[f64; 3]>, Vec
         let irradiance = zonal::irradiance_from_radiance(&coeffs, order);
         let exact = nodes
             .iter()
-            .map(|&(n, _)| luminance(zonal::eval_rgb(&irradiance, order, n)))
+            .map(|&(n, _)| luminance(zonal::eval_rgb(&irradiance, order, n).map(|v| v.max(0.0))))
             .collect();
         let mut radiance = coeffs;
         radiance.resize(Order::THREE.coeff_count().max(radiance.len()), [0.0; 3]);
@@ -174,8 +177,9 @@ fn measure(
         .collect()
 }
 
-/// The published figures the study is read beside (module doc of `sh::bases`; RMS of
-/// irradiance relative to L2 over four well-known probes): (basis, low, high).
+/// The published figures the study is read beside (RMS of irradiance relative to L2,
+/// computed from the published L2 coefficients of four well-known probes, as the ZH3
+/// paper's comparison does): (basis, low, high).
 pub const PUBLISHED_VS_L2: &[(&str, f64, f64)] = &[
     ("L1 linear", 0.09, 0.45),
     ("L1 + hallucinated ZH3", 0.06, 0.12),

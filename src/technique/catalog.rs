@@ -2,7 +2,9 @@
 //! paper, the paths it runs on and what it bakes. One entry per family, found by an
 //! exhaustive match, so a new family does not compile until it is described here.
 
-use super::spec::{BakeNeeds, EngineShBasis, HwPath, NdfBase, NmprtVariant, RnmVariant, Technique};
+use super::spec::{
+    BakeNeeds, EngineShBasis, HwPath, LocalBasis, NdfBase, NmprtVariant, RnmVariant, Technique,
+};
 
 /// One family's line.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
@@ -59,6 +61,9 @@ const REPRESENTATIVES: &[Technique] = &[
     Technique::EngineSh {
         basis: EngineShBasis::L1,
     },
+    Technique::Local {
+        basis: LocalBasis::HBasis(crate::sh::hbasis::HBasisSize::H4),
+    },
 ];
 
 /// The paper's cost table (Iwanicki & Sloan, Table 1): unc3/4/6, pca4–24, pca4w–24w,
@@ -108,6 +113,9 @@ const LATER_HEADLINES: &[Technique] = &[
     },
     Technique::EngineSh {
         basis: EngineShBasis::Zh3,
+    },
+    Technique::Local {
+        basis: LocalBasis::HBasis(crate::sh::hbasis::HBasisSize::H4),
     },
 ];
 
@@ -222,6 +230,11 @@ fn describe(t: Technique) -> (&'static str, &'static str, &'static str) {
             "l1, l1geo, l1zh3, zh3, l1lum, shlmapw",
             "the SH lightmaps engines ship, from shlmap's bake: L1 (linear, Geomerics, hallucinated ZH3), stored ZH3, luminance L1, deringed L2",
             "Frostbite, Enlighten, Roughton et al. ZH3 (i3D 2024), Unreal, Sloan (deringing)",
+        ),
+        Technique::Local { .. } => (
+            "hb4, hb6",
+            "the H-basis: irradiance over the tangent-frame hemisphere, indexed by the tangent-space normal",
+            "Habel & Wimmer, Efficient Irradiance Normal Mapping (I3D 2010)",
         ),
     }
 }

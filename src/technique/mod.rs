@@ -23,6 +23,7 @@ pub mod cost;
 pub mod engine_sh;
 pub mod finish;
 pub mod lighting;
+pub mod local;
 pub mod ndf_diffuse;
 pub mod nmprt;
 pub mod pca;
@@ -40,7 +41,7 @@ use std::sync::Arc;
 
 pub use lighting::{LightingData, LightingRecipe};
 pub use spec::{
-    BakeNeeds, ClusterNeed, EngineShBasis, HwPath, NdfBase, NmprtVariant, ParseError,
+    BakeNeeds, ClusterNeed, EngineShBasis, HwPath, LocalBasis, NdfBase, NmprtVariant, ParseError,
     ReferenceModel, RnmVariant, SeamMode, Technique,
 };
 
@@ -124,6 +125,7 @@ pub fn fragment_shader(technique: Technique) -> ShaderVariant {
         Technique::Rnm { variant } => rnm::fragment_shader(variant),
         Technique::Nmprt { variant } => nmprt::fragment_shader(variant),
         Technique::EngineSh { basis } => engine_sh::fragment_shader(basis),
+        Technique::Local { basis } => local::fragment_shader(basis),
         Technique::Ndf { base } => {
             let mut shader = fragment_shader(base.technique());
             shader.defines.push(("NDF_DIFFUSE", 1));
@@ -179,7 +181,8 @@ impl Technique {
             | Technique::Sh2
             | Technique::PcaVertex { .. }
             | Technique::Nmprt { .. }
-            | Technique::EngineSh { .. } => ShaderReads::PLAIN,
+            | Technique::EngineSh { .. }
+            | Technique::Local { .. } => ShaderReads::PLAIN,
             Technique::Vq { seams, .. } => cluster::reads(0, seams),
             Technique::Cpca { m, seams, .. } => cluster::reads(m, seams),
             Technique::Rnm { variant } => ShaderReads {
@@ -436,6 +439,7 @@ fn prepare(
         Technique::Rnm { .. } => rnm::prepare(inputs, &label)?,
         Technique::Nmprt { variant } => nmprt::prepare(variant, inputs, &label)?,
         Technique::EngineSh { basis } => engine_sh::prepare(basis, inputs, &label)?,
+        Technique::Local { basis } => local::prepare(basis, inputs, &label)?,
         Technique::Ndf { base } => {
             let (texels, recipe) = prepare(base.technique(), path, inputs)?;
             let order = match base {
@@ -497,7 +501,8 @@ fn extra_slot(
         | Technique::Vq { .. }
         | Technique::Cpca { .. }
         | Technique::PcaVertex { .. }
-        | Technique::EngineSh { .. } => return Ok(None),
+        | Technique::EngineSh { .. }
+        | Technique::Local { .. } => return Ok(None),
         Technique::Rnm { variant } => (
             finish::SlotKind::Material,
             rnm::material_texture(ctx, variant, inputs, label)?

@@ -69,6 +69,33 @@ pub enum Technique {
     /// basis keeps and the shader reconstructs irradiance at the normal-mapped normal —
     /// `l1`, `l1geo`, `l1zh3`, `zh3`, `l1lum`, `shlmapw` ([`EngineShBasis`]).
     EngineSh { basis: EngineShBasis },
+    /// Local lightmap bases over the texel's tangent-frame hemisphere, from the same bake:
+    /// `hb4`, `hb6` — the H-basis (Habel & Wimmer 2010; `crate::sh::hbasis`), indexed by the
+    /// tangent-space normal.
+    Local { basis: LocalBasis },
+}
+
+/// What a `Local` technique stores.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum LocalBasis {
+    /// `hb4`, `hb6`: the H-basis of the irradiance over the hemisphere.
+    HBasis(crate::sh::hbasis::HBasisSize),
+}
+
+impl LocalBasis {
+    pub const ALL: [LocalBasis; 2] = [
+        LocalBasis::HBasis(crate::sh::hbasis::HBasisSize::H4),
+        LocalBasis::HBasis(crate::sh::hbasis::HBasisSize::H6),
+    ];
+
+    /// The CLI name.
+    pub fn name(self) -> &'static str {
+        use crate::sh::hbasis::HBasisSize;
+        match self {
+            LocalBasis::HBasis(HBasisSize::H4) => "hb4",
+            LocalBasis::HBasis(HBasisSize::H6) => "hb6",
+        }
+    }
 }
 
 /// What an `EngineSh` technique stores and how it reconstructs (`crate::sh::bases`).
@@ -430,6 +457,12 @@ impl Technique {
         Technique::EngineSh {
             basis: EngineShBasis::L2Deringed,
         },
+        Technique::Local {
+            basis: LocalBasis::HBasis(crate::sh::hbasis::HBasisSize::H4),
+        },
+        Technique::Local {
+            basis: LocalBasis::HBasis(crate::sh::hbasis::HBasisSize::H6),
+        },
     ];
 
     /// The CLI name: `unc6`, `pca12`, `pca12w`, `shlmap`, `preconv`, `sh2`.
@@ -472,6 +505,7 @@ impl Technique {
                 NmprtVariant::Ratio => "nmprtratio".into(),
             },
             Technique::EngineSh { basis } => basis.name().into(),
+            Technique::Local { basis } => basis.name().into(),
         }
     }
 
@@ -489,7 +523,8 @@ impl Technique {
             | Technique::PcaVertex { .. }
             | Technique::Rnm { .. }
             | Technique::Nmprt { .. }
-            | Technique::EngineSh { .. } => self,
+            | Technique::EngineSh { .. }
+            | Technique::Local { .. } => self,
         }
     }
 
@@ -511,7 +546,8 @@ impl Technique {
             | Technique::PcaVertex { .. }
             | Technique::Rnm { .. }
             | Technique::Nmprt { .. }
-            | Technique::EngineSh { .. } => None,
+            | Technique::EngineSh { .. }
+            | Technique::Local { .. } => None,
         }
     }
 
@@ -544,7 +580,8 @@ impl Technique {
             | Technique::Rnm { .. }
             | Technique::Ndf { .. }
             | Technique::Nmprt { .. }
-            | Technique::EngineSh { .. } => None,
+            | Technique::EngineSh { .. }
+            | Technique::Local { .. } => None,
         }
     }
 
@@ -568,7 +605,8 @@ impl Technique {
             | Technique::Rnm { .. }
             | Technique::Ndf { .. }
             | Technique::Nmprt { .. }
-            | Technique::EngineSh { .. } => None,
+            | Technique::EngineSh { .. }
+            | Technique::Local { .. } => None,
         }
     }
 
@@ -611,7 +649,7 @@ impl Technique {
                 pca_vectors: Some(m),
                 ..BakeNeeds::default()
             },
-            Technique::EngineSh { .. } => BakeNeeds {
+            Technique::EngineSh { .. } | Technique::Local { .. } => BakeNeeds {
                 sh_lightmap: true,
                 ..BakeNeeds::default()
             },
@@ -637,7 +675,8 @@ impl Technique {
             Technique::Shlmap
             | Technique::Rnm { .. }
             | Technique::Nmprt { .. }
-            | Technique::EngineSh { .. } => ReferenceModel::InterReflected,
+            | Technique::EngineSh { .. }
+            | Technique::Local { .. } => ReferenceModel::InterReflected,
             Technique::Unc { .. }
             | Technique::Pca { .. }
             | Technique::Preconv
@@ -653,7 +692,10 @@ impl Technique {
     /// not a new bake.
     pub fn dynamic_lighting(self) -> bool {
         match self {
-            Technique::Shlmap | Technique::Rnm { .. } | Technique::EngineSh { .. } => false,
+            Technique::Shlmap
+            | Technique::Rnm { .. }
+            | Technique::EngineSh { .. }
+            | Technique::Local { .. } => false,
             Technique::Unc { .. }
             | Technique::Pca { .. }
             | Technique::Preconv
@@ -723,6 +765,9 @@ impl Technique {
                 .map(|variant| Technique::Rnm { variant })
                 .to_vec(),
             Technique::Shlmap | Technique::Preconv | Technique::Sh2 => vec![self],
+            Technique::Local { .. } => LocalBasis::ALL
+                .map(|basis| Technique::Local { basis })
+                .to_vec(),
             Technique::EngineSh { .. } => EngineShBasis::ALL
                 .map(|basis| Technique::EngineSh { basis })
                 .to_vec(),
@@ -942,6 +987,7 @@ mod tests {
                     | Technique::Rnm { .. }
                     | Technique::Nmprt { .. }
                     | Technique::EngineSh { .. }
+                    | Technique::Local { .. }
             );
             assert_eq!(bounced, lightmapped, "{t}");
         }
