@@ -63,7 +63,8 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
     let _ = std::fs::remove_dir_all(&out_dir);
     std::fs::create_dir_all(&out_dir).expect("output folder");
     let techniques: Vec<Technique> = [
-        "unc3", "unc4", "unc6", "pca16", "pca16w", "preconv", "sh2", "shlmap",
+        "unc3", "unc4", "unc6", "pca16", "pca16w", "preconv", "sh2", "shlmap", "l1geo", "zh3",
+        "hb6",
     ]
     .iter()
     .map(|t| t.parse().expect("technique name"))
@@ -178,6 +179,18 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
                 .image
                 .ends_with("shlmap.radiance_order.exr")
         );
+        // The lightmap bases share shlmap's first rung, then add their basis (and, for the
+        // non-linear L1 curves, their reconstruction) rung.
+        for name in ["l1geo", "zh3", "hb6"] {
+            let r = row(name, path);
+            assert_eq!(
+                step(r, AttributionKind::RadianceOrder),
+                step(shlmap, AttributionKind::RadianceOrder),
+                "{name}"
+            );
+            assert!(step(r, AttributionKind::Basis) > 0.0, "{name}");
+        }
+        assert!(step(row("l1geo", path), AttributionKind::Reconstruction) > 0.0);
         // sh2's product is exact for order-3 lighting and order-2 visibility (the clamped
         // cosine has no band 3): its rung is at rounding level.
         assert!(step(row("sh2", path), AttributionKind::ProductOrder) < 1e-6);

@@ -82,6 +82,10 @@ pub struct LadderPixels {
     position: Vec<Vec3>,
     /// Interpolated vertex normal (the horizon of the rays).
     normal_g: Vec<Vec3>,
+    /// The normal map's tangent-space normal and world frame (tangent, bitangent, vertex
+    /// normal) at each pixel: what the H-basis is evaluated and projected in.
+    tangent_normal: Vec<DVec3>,
+    frame: Vec<[DVec3; 3]>,
     /// Visibility (bake order) and AO at each pixel.
     vis: PointVisibility,
     /// `shlmap`'s incident-radiance SH at each pixel, gathered on first use.
@@ -140,6 +144,15 @@ impl LadderPixels {
             uv: index
                 .iter()
                 .map(|&i| [g.uv_lightmap.rgba[i][0], g.uv_lightmap.rgba[i][1]])
+                .collect(),
+            tangent_normal: index
+                .iter()
+                .map(|&i| v3(&g.tangent_normal, i).as_dvec3())
+                .collect(),
+            frame: index
+                .iter()
+                .zip(&normals_g)
+                .map(|(&i, n)| [v3(&g.tangent, i), v3(&g.bitangent, i), *n].map(|c| c.as_dvec3()))
                 .collect(),
             index,
             position: positions,
@@ -427,9 +440,9 @@ pub fn cpu_rungs(
         Technique::Nmprt { variant } => row.nmprt(&mut rungs, variant),
         Technique::Shlmap => row.lightmap_sh(&mut rungs, None),
         Technique::EngineSh { basis } => row.lightmap_sh(&mut rungs, Some(basis.sh_basis())),
-        // The H-basis is evaluated in each pixel's tangent frame, which the ladder's pixels
-        // do not carry yet: its error is reported whole (point sampling → technique).
-        Technique::Local { .. } => {}
+        Technique::Local {
+            basis: crate::technique::LocalBasis::HBasis(size),
+        } => row.hbasis(&mut rungs, size),
     }
     Ok(rungs)
 }
@@ -445,7 +458,7 @@ struct RowLadder<'a> {
     label: String,
 }
 
-impl RowLadder<'_> {
+impl<'a> RowLadder<'a> {
     /// Appends the rung `stem`, made through the cache (`LadderPixels::rung`) by `make`.
     fn push(
         &self,
@@ -872,16 +885,16 @@ impl RowLadder<'_> {
         );
     }
 
-    /// `shlmap`'s rungs (`basis` `None`) and the engine bases' (module doc): the pixel's
-    /// gathered order-3 radiance, then for a basis what it stores evaluated by
-    /// [`ShBasis::linear`] and, where that differs, by its own reconstruction; then the
-    /// lightmap texels. None without an SH lightmap bake.
-    fn lightmap_sh(&self, rungs: &mut Vec<Rung>, basis: Option<ShBasis>) {
+    /// The first rung of the lightmap families: incident radiance with inter-reflection
+    /// gathered at each pixel as the bake gathers a texel, to order 3 (cosine exact, eq. (2)
+    /// at the shading normal). Returns the SH lightmap and the gathered SH, `None` without
+    /// an SH lightmap bake.
+    fn push_radiance_order(
+        &self,
+        rungs: &mut Vec<Rung>,
+    ) -> Option<(&'a crate::bake::shlmap::ShLightmap, &'a [[[f64; 3]; 9]])> {
         let (px, prepared) = (self.px, self.prepared);
-        let radiance = &prepared.radiance_sh;
-        let Some(map) = prepared.sh_lightmap.as_ref() else {
-            return;
-        };
+        let map = prepared.sh_lightmap.as_ref()?;
         let settings = ShLightmapSettings {
             rays: prepared.visibility_settings.rays,
             seed: prepared.visibility_settings.seed,
@@ -894,20 +907,78 @@ impl RowLadder<'_> {
                 &prepared.scene,
                 &tracer,
                 map,
-                radiance,
+                &prepared.radiance_sh,
                 &settings,
                 &px.position,
                 &px.normal_g,
             )
         });
-        // Σ_k A_l(k) c_k y_k(n): eq. (2) at the shading normal.
-        let l2 = |c: &[[f64; 3]], n: DVec3| ShBasis::L2.irradiance(&ShBasis::L2.encode(c, None), n);
         self.push(
             rungs,
             AttributionKind::RadianceOrder,
             "shlmap.radiance_order".into(),
-            &|| px.image(|k| l2(&gathered[k], px.normal[k])),
+            &|| {
+                px.image(|k| {
+                    ShBasis::L2.irradiance(&ShBasis::L2.encode(&gathered[k], None), px.normal[k])
+                })
+            },
         );
+        Some((map, gathered))
+    }
+
+    /// The H-basis rungs: the pixel's gathered radiance, then its irradiance projected onto
+    /// the H-basis through the pixel's own frame and evaluated at its tangent-space normal,
+    /// then the lightmap's f16 texels (projected through each texel's frame).
+    fn hbasis(&self, rungs: &mut Vec<Rung>, size: crate::sh::hbasis::HBasisSize) {
+        use crate::sh::hbasis;
+        let px = self.px;
+        let Some((map, gathered)) = self.push_radiance_order(rungs) else {
+            return;
+        };
+        let technique = self.technique;
+        self.push(
+            rungs,
+            AttributionKind::Basis,
+            format!("{technique}.basis"),
+            &|| {
+                px.image(|k| {
+                    let h = hbasis::project_irradiance(&gathered[k], px.frame[k], size);
+                    hbasis::irradiance(&h, px.tangent_normal[k])
+                })
+            },
+        );
+        let per_texel = 3 * size.count();
+        self.push(
+            rungs,
+            AttributionKind::LightmapTexels,
+            format!("{technique}.lightmap"),
+            &|| {
+                let stored = crate::technique::local::stored_texels(map, size);
+                let scale = crate::technique::local::stored_scale(&stored).unwrap_or(1.0);
+                let unscale = f64::from(1.0 / scale);
+                px.image(|k| {
+                    let v = lightmap_bilinear(map.res, px.uv[k], per_texel, |t, j| {
+                        f16_round(stored[t * per_texel + j] * scale) * unscale
+                    });
+                    let h: Vec<[f64; 3]> = (0..size.count())
+                        .map(|i| [v[3 * i], v[3 * i + 1], v[3 * i + 2]])
+                        .collect();
+                    hbasis::irradiance(&h, px.tangent_normal[k])
+                })
+            },
+        );
+    }
+
+    /// `shlmap`'s rungs (`basis` `None`) and the engine bases' (module doc): the pixel's
+    /// gathered order-3 radiance, then for a basis what it stores evaluated by
+    /// [`ShBasis::linear`] and, where that differs, by its own reconstruction; then the
+    /// lightmap texels. None without an SH lightmap bake.
+    fn lightmap_sh(&self, rungs: &mut Vec<Rung>, basis: Option<ShBasis>) {
+        let px = self.px;
+        let Some((map, gathered)) = self.push_radiance_order(rungs) else {
+            return;
+        };
+        let l2 = |c: &[[f64; 3]], n: DVec3| ShBasis::L2.irradiance(&ShBasis::L2.encode(c, None), n);
         let Some(basis) = basis else {
             // As the technique stores it (finite: the bench built it first).
             let scale = crate::technique::shlmap::stored_scale(map).unwrap_or(1.0);

@@ -309,6 +309,12 @@ pub struct PointGBuffer {
     pub vertex_normal: Frame,
     /// Lightmap UV in .xy.
     pub uv_lightmap: Frame,
+    /// The normal map's tangent-space normal.
+    pub tangent_normal: Frame,
+    /// Tangent and bitangent of the normal map's world frame (`common.glsl`'s
+    /// `tangent_frame`; the interpolated vertex normal is the third column).
+    pub tangent: Frame,
+    pub bitangent: Frame,
 }
 
 /// Renders [`PointGBuffer`] of `scene` from its camera (RGBA32F, no jitter).
@@ -329,23 +335,29 @@ pub fn render_point_gbuffer(
             material_level0: false,
         },
     )?;
-    let mut frames = Vec::with_capacity(5);
-    for pipeline in &gbuffer_pipelines(ctx, &gpu, false, 5)? {
+    let mut frames = Vec::with_capacity(GBUFFER_OUTPUTS as usize);
+    for pipeline in &gbuffer_pipelines(ctx, &gpu, false, GBUFFER_OUTPUTS)? {
         frames.push(gpu.render_pipeline(pipeline, 0, 1)?);
     }
     let mut frames = frames.into_iter();
-    let mut next = || frames.next().expect("five G-buffer passes");
+    let mut next = || frames.next().expect("a pass per G-buffer output");
     Ok(PointGBuffer {
         position: next(),
         normal: next(),
         albedo: next(),
         vertex_normal: next(),
         uv_lightmap: next(),
+        tangent_normal: next(),
+        tangent: next(),
+        bitangent: next(),
     })
 }
 
+/// Outputs of `glsl/reference/gbuffer.frag` ([`PointGBuffer`]'s frames).
+const GBUFFER_OUTPUTS: u32 = 8;
+
 /// The first `outputs` G-buffer pipelines (position, shading normal, albedo, vertex normal,
-/// lightmap UV); with `level0` the material textures are read at full resolution.
+/// lightmap UV, tangent-space normal, tangent, bitangent); with `level0` the material textures are read at full resolution.
 pub(crate) fn gbuffer_pipelines(
     ctx: &Arc<Context>,
     gpu: &SceneGpu,
@@ -361,7 +373,10 @@ pub(crate) fn gbuffer_pipelines(
                     "normal",
                     "albedo",
                     "vertex_normal",
-                    "uv_lightmap"
+                    "uv_lightmap",
+                    "tangent_normal",
+                    "tangent",
+                    "bitangent"
                 ][output as usize]
             );
             let fragment = compile_glsl(
@@ -646,7 +661,7 @@ mod tests {
 
     #[test]
     fn every_g_buffer_output_compiles() {
-        for output in 0..5 {
+        for output in 0..GBUFFER_OUTPUTS {
             compile_glsl(
                 "reference/gbuffer.frag",
                 ShaderStage::Fragment,

@@ -64,7 +64,8 @@ pub enum AttributionKind {
     /// bounced light from the lightmap).
     RadianceOrder,
     /// The engine bases: order-3 radiance → what the basis stores, evaluated linearly
-    /// (L1 for the L1 family; ZH3, luminance L1, deringed L2 as themselves).
+    /// (L1 for the L1 family; ZH3, luminance L1, deringed L2 as themselves); the H-basis:
+    /// the pixel's irradiance projected through its own frame, at its tangent-space normal.
     Basis,
     /// The non-linear L1 reconstructions (Geomerics, hallucinated ZH3) against the linear
     /// one of the same data.
