@@ -49,6 +49,8 @@ pub struct PrepareSettings {
     pub table_res: u32,
     /// Order of the clamped cosine in the L×H product (the paper's 3).
     pub h_order: Order,
+    /// How `sgN` fits its amplitudes.
+    pub sg_solver: crate::sh::sg::Solver,
     /// Where bakes are cached (`None`: `bake::cache::default_cache_dir()`).
     pub cache_dir: Option<PathBuf>,
     /// Bake the SH lightmap (`shlmap`) with this many bounces; `None`: skip it.
@@ -74,6 +76,7 @@ impl Default for PrepareSettings {
             order: Order::SIX,
             table_res: 32,
             h_order: Order::THREE,
+            sg_solver: crate::sh::sg::DEFAULT_SOLVER,
             cache_dir: None,
             sh_lightmap_bounces: None,
             transfer_bounces: None,
@@ -102,6 +105,7 @@ pub struct Prepared {
     pub irradiance_sh: Vec<[f64; 3]>,
     pub table_res: u32,
     pub h_order: Order,
+    pub sg_solver: crate::sh::sg::Solver,
     /// Order-3 SH of incident radiance with inter-reflection, when asked for.
     pub sh_lightmap: Option<ShLightmap>,
     /// Transfer matrices with inter-reflection (lighting of order
@@ -366,6 +370,7 @@ impl Prepared {
             transfer: self.transfer.as_ref(),
             table_res: self.table_res,
             h_order: self.h_order,
+            sg_solver: self.sg_solver,
         }
     }
 }
@@ -559,6 +564,7 @@ pub fn prepare_with(
         irradiance_sh,
         table_res: settings.table_res,
         h_order: settings.h_order,
+        sg_solver: settings.sg_solver,
         clusters: Vec::new(),
         seed: settings.seed,
         cache_dir: settings.cache_dir.clone().unwrap_or_else(default_cache_dir),

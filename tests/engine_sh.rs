@@ -298,7 +298,11 @@ fn every_engine_basis_meets_the_bounced_reference_on_both_paths() {
     let techniques = EngineShBasis::ALL
         .map(|basis| Technique::EngineSh { basis })
         .into_iter()
-        .chain(LocalBasis::ALL.map(|basis| Technique::Local { basis }));
+        .chain(
+            LocalBasis::all()
+                .into_iter()
+                .map(|basis| Technique::Local { basis }),
+        );
     for technique in techniques {
         let errors: Vec<f64> = HwPath::ALL
             .iter()

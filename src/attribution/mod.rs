@@ -443,6 +443,9 @@ pub fn cpu_rungs(
         Technique::Local {
             basis: crate::technique::LocalBasis::HBasis(size),
         } => row.hbasis(&mut rungs, size),
+        Technique::Local {
+            basis: crate::technique::LocalBasis::Sg { lobes },
+        } => row.sg(&mut rungs, lobes),
     }
     Ok(rungs)
 }
@@ -964,6 +967,52 @@ impl<'a> RowLadder<'a> {
                         .map(|i| [v[3 * i], v[3 * i + 1], v[3 * i + 2]])
                         .collect();
                     hbasis::irradiance(&h, px.tangent_normal[k])
+                })
+            },
+        );
+    }
+
+    /// The SG rungs: the pixel's gathered radiance, then the lobes fitted to it through the
+    /// pixel's own frame by the run's solver and evaluated at its tangent-space normal, then
+    /// the lightmap's f16 amplitudes (fitted through each texel's frame).
+    fn sg(&self, rungs: &mut Vec<Rung>, lobes: u32) {
+        use crate::technique::local::{fit_sg, sg_basis, sg_irradiance, sg_stored_texels};
+        let (px, prepared) = (self.px, self.prepared);
+        let Some((map, gathered)) = self.push_radiance_order(rungs) else {
+            return;
+        };
+        let technique = self.technique;
+        let basis = sg_basis(lobes);
+        let solver = prepared.sg_solver;
+        self.push(
+            rungs,
+            AttributionKind::Basis,
+            format!("{technique}.{solver}.basis"),
+            &|| {
+                px.image(|k| {
+                    let mut stats = crate::sh::sg::FitStats::default();
+                    let a = fit_sg(&basis, &gathered[k], px.frame[k], solver, &mut stats);
+                    sg_irradiance(&basis, &a, px.tangent_normal[k])
+                })
+            },
+        );
+        let per_texel = 3 * lobes as usize;
+        self.push(
+            rungs,
+            AttributionKind::LightmapTexels,
+            format!("{technique}.{solver}.lightmap"),
+            &|| {
+                let (stored, _) = sg_stored_texels(map, lobes, solver);
+                let scale = crate::technique::local::stored_scale(&stored).unwrap_or(1.0);
+                let unscale = f64::from(1.0 / scale);
+                px.image(|k| {
+                    let v = lightmap_bilinear(map.res, px.uv[k], per_texel, |t, j| {
+                        f16_round(stored[t * per_texel + j] * scale) * unscale
+                    });
+                    let a: Vec<[f64; 3]> = (0..lobes as usize)
+                        .map(|i| [v[3 * i], v[3 * i + 1], v[3 * i + 2]])
+                        .collect();
+                    sg_irradiance(&basis, &a, px.tangent_normal[k])
                 })
             },
         );

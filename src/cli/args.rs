@@ -77,6 +77,10 @@ pub(super) struct SceneArgs {
     /// SH order of the clamped cosine in the L×H product (the paper uses 3).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=shvis::sh::MAX_ORDER as i64))]
     pub(super) h_order: u32,
+    /// How sgN techniques fit their lobes' amplitudes: projection, ls (least squares),
+    /// nnls (non-negative least squares), running (running average), running-nn.
+    #[arg(long = "sg-solve", default_value_t = shvis::sh::sg::DEFAULT_SOLVER)]
+    pub(super) sg_solve: shvis::sh::sg::Solver,
     /// Lighting order O of the transfer matrices of the nmprt* techniques (9 × O² per
     /// texel and colour): at most the prepared lighting's order 8.
     #[arg(long, default_value_t = shvis::bake::transfer::DEFAULT_LIGHTING_ORDER.get(), value_parser = clap::value_parser!(u32).range(1..=shvis::prepare::LIGHTING_ORDER as i64))]

@@ -282,6 +282,7 @@ fn prepare_settings(
         order: shvis::sh::Order::new(scene.order).context("--order")?,
         table_res: scene.table_res,
         h_order: shvis::sh::Order::new(scene.h_order).context("--h-order")?,
+        sg_solver: scene.sg_solve,
         cache_dir: None,
         sh_lightmap_bounces: needs(|n| n.sh_lightmap),
         transfer_bounces: needs(|n| n.transfer),

@@ -27,6 +27,7 @@
 //!
 //! - [`bases`]: the lightmap bases engines ship (L1, Geomerics, ZH3, luminance L1,
 //!   deringed L2) as encodings of order-3 radiance and their irradiance.
+//! - [`sg`]: spherical Gaussian lightmap lobes, their fitting solvers and diffuse evaluation.
 //! - [`hbasis`]: the H-basis over a tangent frame's hemisphere (Habel & Wimmer 2010).
 //! - [`basis`]: evaluation of all y_l^m at a direction, stable to order 30, exact at
 //!   the poles.
@@ -46,6 +47,7 @@ pub mod hbasis;
 pub mod product;
 pub mod project;
 pub mod rotate;
+pub mod sg;
 pub mod window;
 pub mod zonal;
 

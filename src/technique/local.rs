@@ -1,12 +1,18 @@
-//! `hb4`, `hb6`: the H-basis lightmaps (Habel & Wimmer 2010; `crate::sh::hbasis`, whose
-//! module doc has the functions and the projection), from `shlmap`'s bake.
+//! The local lightmap bases, from `shlmap`'s bake, over each texel's tangent-frame
+//! hemisphere and read at the normal map's tangent-space normal m (no frame, no SH per
+//! pixel); the lighting is baked in. Values per texel (RGB, value 3i + c) are range-scaled
+//! into f16 as `shlmap`'s are and packed 4 per RGBA16F texel.
 //!
-//! Per texel the H coefficients of the irradiance over the hemisphere of its normal-map frame
-//! (RGB, value 3i + c), range-scaled into f16 as `shlmap`'s values are and packed 4 per
-//! RGBA16F texel: `hb4` 12 values in 3 groups (24 bytes), `hb6` 18 in 5 (40 bytes). The
-//! shader (`glsl/technique/hbasis.frag`, functions in `glsl/include/hbasis.glsl`) evaluates
-//! Σ h_i H_i(m) at the normal map's tangent-space normal m — no frame, no SH. The lighting is
-//! baked in.
+//! - `hb4`, `hb6`: the H-basis (Habel & Wimmer 2010; `crate::sh::hbasis`, whose module doc
+//!   has the functions and the projection): the H coefficients of the irradiance over the
+//!   hemisphere, 12 values in 3 groups (24 bytes) / 18 in 5 (40 bytes); the shader
+//!   (`glsl/technique/hbasis.frag`, `glsl/include/hbasis.glsl`) evaluates Σ h_i H_i(m).
+//! - `sgN`: N spherical Gaussians (`crate::sh::sg`): per texel the RGB amplitudes fitted to
+//!   the texel's incident radiance over its hemisphere (its order-3 SH, read through its
+//!   frame at the fitting nodes) by the run's solver, 3N values in ⌈3N/4⌉ groups (sg9: 27
+//!   values, 7 groups, 56 bytes); the lobes' axes and sharpness go in the uniform block and
+//!   the shader (`glsl/technique/sg.frag`, `glsl/include/sg.glsl`) sums Hill's fitted
+//!   SG–cosine integral of each lobe at m.
 
 use half::f16;
 use rayon::prelude::*;
@@ -18,11 +24,26 @@ use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
 use super::{Inputs, ShaderVariant, TechniqueError};
 use crate::bake::shlmap::ShLightmap;
 use crate::sh::hbasis::{self, HBasisSize};
+use crate::sh::sg::{FitStats, SgBasis, Solver};
+
+/// Largest lobe count (the uniform block's array).
+pub const SG_MAX_LOBES: usize = 12;
+
+/// Uniforms of glsl/technique/sg.frag, block `SgParams` (std140).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SgParams {
+    /// x: factor undoing the f16 range scaling.
+    pub unscale: [f32; 4],
+    /// Lobe axes (tangent space) in .xyz, sharpness in .w.
+    pub lobes: [[f32; 4]; SG_MAX_LOBES],
+}
 
 /// Values per texel of `basis` (RGB counted three times).
 pub fn stored_values(basis: LocalBasis) -> usize {
     match basis {
         LocalBasis::HBasis(size) => 3 * size.count(),
+        LocalBasis::Sg { lobes } => 3 * lobes as usize,
     }
 }
 
@@ -39,7 +60,90 @@ pub fn fragment_shader(basis: LocalBasis) -> ShaderVariant {
                 ),
             ],
         },
+        LocalBasis::Sg { lobes } => ShaderVariant {
+            path: "technique/sg.frag",
+            defines: vec![
+                ("SG_LOBES", lobes),
+                (
+                    "SG_GROUPS",
+                    stored_values(basis).div_ceil(VALUES_PER_TEXEL) as u32,
+                ),
+            ],
+        },
     }
+}
+
+/// The lobes of an `sgN` basis (shared, built once per N).
+pub fn sg_basis(lobes: u32) -> std::sync::Arc<SgBasis> {
+    static BASES: std::sync::Mutex<Vec<std::sync::Arc<SgBasis>>> =
+        std::sync::Mutex::new(Vec::new());
+    let mut bases = BASES.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(b) = bases.iter().find(|b| b.len() == lobes as usize) {
+        return b.clone();
+    }
+    let b = std::sync::Arc::new(SgBasis::new(lobes as usize));
+    bases.push(b.clone());
+    b
+}
+
+/// The amplitudes (RGB, lobe-major) fitting order-3 RGB radiance `radiance` over the
+/// hemisphere of `frame` = [tangent, bitangent, normal] (its values at the fitting nodes).
+pub fn fit_sg(
+    basis: &SgBasis,
+    radiance: &[[f64; 3]],
+    frame: [glam::DVec3; 3],
+    solver: Solver,
+    stats: &mut FitStats,
+) -> Vec<[f64; 3]> {
+    let mut y = [0.0; 9];
+    let samples: Vec<[f64; 3]> = basis
+        .nodes()
+        .iter()
+        .map(|&(m, _)| {
+            let world = frame[0] * m.x + frame[1] * m.y + frame[2] * m.z;
+            let Some(d) = world.try_normalize() else {
+                return [0.0; 3];
+            };
+            crate::sh::basis::eval_basis(crate::sh::Order::THREE, d, &mut y);
+            std::array::from_fn(|c| (0..9).map(|k| radiance[k][c] * y[k]).sum())
+        })
+        .collect();
+    let per_colour: [Vec<f64>; 3] = std::array::from_fn(|c| {
+        let channel: Vec<f64> = samples.iter().map(|s| s[c]).collect();
+        basis.fit(&channel, solver, stats)
+    });
+    (0..basis.len())
+        .map(|k| std::array::from_fn(|c| per_colour[c][k]))
+        .collect()
+}
+
+/// Every texel's SG amplitudes (texel-major, 3N each) before the f16 range scale, and how
+/// many the solver made negative.
+pub fn sg_stored_texels(map: &ShLightmap, lobes: u32, solver: Solver) -> (Vec<f32>, FitStats) {
+    let basis = sg_basis(lobes);
+    let texels = (map.res * map.res) as usize;
+    let fits: Vec<(Vec<f32>, FitStats)> = (0..texels)
+        .into_par_iter()
+        .map(|t| {
+            let frame = map.frame[t];
+            let mut stats = FitStats::default();
+            if frame == glam::Mat3::ZERO {
+                return (vec![0.0; 3 * basis.len()], stats);
+            }
+            let radiance: Vec<[f64; 3]> = map.texel(t).iter().map(|c| c.map(f64::from)).collect();
+            let columns = [frame.x_axis, frame.y_axis, frame.z_axis].map(|c| c.as_dvec3());
+            let a = fit_sg(&basis, &radiance, columns, solver, &mut stats);
+            (a.into_iter().flatten().map(|v| v as f32).collect(), stats)
+        })
+        .collect();
+    let mut total = FitStats::default();
+    let mut stored = Vec::with_capacity(texels * 3 * basis.len());
+    for (values, stats) in fits {
+        stored.extend(values);
+        total.amplitudes += stats.amplitudes;
+        total.negative += stats.negative;
+    }
+    (stored, total)
 }
 
 /// Every texel's stored values (texel-major, [`stored_values`] each) before the f16 range
@@ -74,8 +178,20 @@ pub(crate) fn prepare(
     label: &str,
 ) -> Result<(TexelGroups, Recipe), TechniqueError> {
     let map = super::shlmap::baked_map(inputs, label)?;
-    let LocalBasis::HBasis(size) = basis;
-    let stored = stored_texels(map, size);
+    let stored = match basis {
+        LocalBasis::HBasis(size) => stored_texels(map, size),
+        LocalBasis::Sg { lobes } => {
+            let (stored, stats) = sg_stored_texels(map, lobes, inputs.sg_solver);
+            log::info!(
+                "{label}: {} fit, {} of {} amplitudes negative ({:.2} %)",
+                inputs.sg_solver,
+                stats.negative,
+                stats.amplitudes,
+                100.0 * stats.negative as f64 / stats.amplitudes.max(1) as f64
+            );
+            stored
+        }
+    };
     let Some(scale) = stored_scale(&stored) else {
         return Err(TechniqueError::Input {
             label: label.into(),
@@ -87,10 +203,32 @@ pub(crate) fn prepare(
     let groups = pack_groups(texels, per_texel, |t, value| {
         f16::from_f32(stored[t * per_texel + value] * scale)
     });
-    Ok(super::shlmap::baked_lightmap(
-        &groups,
-        map.res,
-        format!("{label}.hbasis"),
-        scale,
-    ))
+    let (texel_groups, recipe) =
+        super::shlmap::baked_lightmap(&groups, map.res, format!("{label}.{}", basis.name()), scale);
+    let recipe = match basis {
+        LocalBasis::HBasis(_) => recipe,
+        LocalBasis::Sg { lobes } => {
+            let sg = sg_basis(lobes);
+            let mut params = SgParams {
+                unscale: [1.0 / scale, 0.0, 0.0, 0.0],
+                lobes: [[0.0; 4]; SG_MAX_LOBES],
+            };
+            for (dst, mu) in params.lobes.iter_mut().zip(&sg.axes) {
+                *dst = [mu.x as f32, mu.y as f32, mu.z as f32, sg.sharpness as f32];
+            }
+            Recipe::Baked(super::lighting::LightingData::params(
+                bytemuck::bytes_of(&params).to_vec(),
+            ))
+        }
+    };
+    Ok((texel_groups, recipe))
+}
+
+/// The shared SG evaluation the ladder and the tests use: E at tangent-space `m` from
+/// lobe-major RGB amplitudes.
+pub fn sg_irradiance(basis: &SgBasis, amplitudes: &[[f64; 3]], m: glam::DVec3) -> [f64; 3] {
+    std::array::from_fn(|c| {
+        let a: Vec<f64> = amplitudes.iter().map(|v| v[c]).collect();
+        basis.irradiance(&a, m)
+    })
 }

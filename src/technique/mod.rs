@@ -87,6 +87,8 @@ pub struct Inputs<'a> {
     pub table_res: u32,
     /// Clamped-cosine order of the L×H product.
     pub h_order: Order,
+    /// How `sgN` fits its amplitudes (`--sg-solve`).
+    pub sg_solver: crate::sh::sg::Solver,
 }
 
 /// Memory and cost figures of a technique on a path (the cost table's columns), computed

@@ -69,9 +69,10 @@ pub enum Technique {
     /// basis keeps and the shader reconstructs irradiance at the normal-mapped normal —
     /// `l1`, `l1geo`, `l1zh3`, `zh3`, `l1lum`, `shlmapw` ([`EngineShBasis`]).
     EngineSh { basis: EngineShBasis },
-    /// Local lightmap bases over the texel's tangent-frame hemisphere, from the same bake:
-    /// `hb4`, `hb6` — the H-basis (Habel & Wimmer 2010; `crate::sh::hbasis`), indexed by the
-    /// tangent-space normal.
+    /// Local lightmap bases over the texel's tangent-frame hemisphere, from the same bake,
+    /// indexed by the tangent-space normal: `hb4`, `hb6` — the H-basis (Habel & Wimmer 2010;
+    /// `crate::sh::hbasis`); `sg5`, `sg6`, `sg9`, `sg12` — spherical Gaussians
+    /// (`crate::sh::sg`).
     Local { basis: LocalBasis },
 }
 
@@ -80,20 +81,35 @@ pub enum Technique {
 pub enum LocalBasis {
     /// `hb4`, `hb6`: the H-basis of the irradiance over the hemisphere.
     HBasis(crate::sh::hbasis::HBasisSize),
+    /// `sgN`: N spherical Gaussian lobes over the hemisphere, RGB amplitudes fitted by the
+    /// run's `--sg-solve` (`crate::sh::sg`).
+    Sg { lobes: u32 },
 }
 
 impl LocalBasis {
-    pub const ALL: [LocalBasis; 2] = [
-        LocalBasis::HBasis(crate::sh::hbasis::HBasisSize::H4),
-        LocalBasis::HBasis(crate::sh::hbasis::HBasisSize::H6),
-    ];
+    /// Every member a name may denote.
+    pub fn all() -> Vec<LocalBasis> {
+        use crate::sh::hbasis::HBasisSize;
+        [
+            LocalBasis::HBasis(HBasisSize::H4),
+            LocalBasis::HBasis(HBasisSize::H6),
+        ]
+        .into_iter()
+        .chain(
+            crate::sh::sg::LOBE_COUNTS
+                .iter()
+                .map(|&n| LocalBasis::Sg { lobes: n as u32 }),
+        )
+        .collect()
+    }
 
     /// The CLI name.
-    pub fn name(self) -> &'static str {
+    pub fn name(self) -> String {
         use crate::sh::hbasis::HBasisSize;
         match self {
-            LocalBasis::HBasis(HBasisSize::H4) => "hb4",
-            LocalBasis::HBasis(HBasisSize::H6) => "hb6",
+            LocalBasis::HBasis(HBasisSize::H4) => "hb4".into(),
+            LocalBasis::HBasis(HBasisSize::H6) => "hb6".into(),
+            LocalBasis::Sg { lobes } => format!("sg{lobes}"),
         }
     }
 }
@@ -463,6 +479,15 @@ impl Technique {
         Technique::Local {
             basis: LocalBasis::HBasis(crate::sh::hbasis::HBasisSize::H6),
         },
+        Technique::Local {
+            basis: LocalBasis::Sg { lobes: 6 },
+        },
+        Technique::Local {
+            basis: LocalBasis::Sg { lobes: 9 },
+        },
+        Technique::Local {
+            basis: LocalBasis::Sg { lobes: 12 },
+        },
     ];
 
     /// The CLI name: `unc6`, `pca12`, `pca12w`, `shlmap`, `preconv`, `sh2`.
@@ -505,7 +530,7 @@ impl Technique {
                 NmprtVariant::Ratio => "nmprtratio".into(),
             },
             Technique::EngineSh { basis } => basis.name().into(),
-            Technique::Local { basis } => basis.name().into(),
+            Technique::Local { basis } => basis.name(),
         }
     }
 
@@ -765,9 +790,10 @@ impl Technique {
                 .map(|variant| Technique::Rnm { variant })
                 .to_vec(),
             Technique::Shlmap | Technique::Preconv | Technique::Sh2 => vec![self],
-            Technique::Local { .. } => LocalBasis::ALL
+            Technique::Local { .. } => LocalBasis::all()
+                .into_iter()
                 .map(|basis| Technique::Local { basis })
-                .to_vec(),
+                .collect(),
             Technique::EngineSh { .. } => EngineShBasis::ALL
                 .map(|basis| Technique::EngineSh { basis })
                 .to_vec(),

@@ -1,0 +1,573 @@
+//! Spherical Gaussian (SG) lightmaps: fixed lobes over a texel's tangent-frame hemisphere,
+//! per-texel RGB amplitudes fitted to its incident radiance by one of five solvers, and the
+//! diffuse irradiance of the fit at a normal (MJP's "SG Series" and BakingLab; The Order:
+//! 1886's lightmaps).
+//!
+//! # Lobes
+//!
+//! G(ω; μ, λ) = e^{λ(μ·ω − 1)}. N lobes (5, 6, 9 or 12) over the hemisphere z ≥ 0 of the
+//! tangent frame: axes on a spherical Fibonacci spiral, uniform in area (z_k = 1 − (k + ½)/N,
+//! φ_k = k · golden angle), all of sharpness λ = N ln 2, so that a lobe falls to one half at
+//! the edge of the cap of area 2π/N it stands for (1 − cos θ = 1/N). Over the hemisphere,
+//! not the sphere: a lightmap texel's radiance is zero below its horizon (the bake gathers
+//! n_g·ω > 0) and its normal-mapped normals look above it, so lobes below would store
+//! nothing.
+//!
+//! # Fitting (per texel, per colour; `Solver`)
+//!
+//! The target is the texel's incident radiance L on the Q nodes ω_q (weights w_q) of a
+//! hemisphere rule (`sh::hbasis::hemisphere_quadrature`), with G_qk = G_k(ω_q):
+//!
+//! ```text
+//! projection       a_k = Σ_q w_q L_q G_qk / Σ_q w_q G_qk        (a lobe-weighted average)
+//! least squares    a = argmin Σ_q w_q (Σ_k a_k G_qk − L_q)²     (SVD pseudo-inverse, f64)
+//! NNLS             the same with a ≥ 0                           (Lawson–Hanson)
+//! running average  one pass over the nodes: for each, every lobe moves its amplitude toward
+//!                  the value that would explain the node given the other lobes, by the
+//!                  node's share of the lobe's accumulated weight (MJP's progressive fit)
+//! running ≥ 0      the same, amplitudes clamped at 0 after each update
+//! ```
+//!
+//! The least-squares system is the same for every texel (lobes and nodes are fixed in
+//! tangent space), so its pseudo-inverse is computed once by SVD with singular values below
+//! 10⁻¹⁰ of the largest dropped: 12 lobes of λ = 8.3 overlap little and are well
+//! conditioned, but the solve stays stable whatever the lobes. Negative amplitudes of the
+//! unconstrained fits are counted ([`FitStats`]).
+//!
+//! # Diffuse evaluation
+//!
+//! E(n) = Σ_k a_k ∫ G_k(ω) max(0, n·ω) dω, each term by Hill's fitted approximation of the
+//! SG–clamped-cosine product (MJP, "SG Series Part 3", `SGIrradianceFitted`): with
+//! t = μ·n, e = e^{−λ}, s = 1 + 2e² − 1/λ, b = (e − e²)/λ − e², x = √(1 − s),
+//! u = 0.36 t + x/(4·0.36), y = u²/x where |0.36 t| ≤ x/(4·0.36), else max(0, t):
+//! ∫ G max(0, n·ω) dω ≈ (s y + b) · 2π(1 − e^{−2λ})/λ. A test compares it with quadrature.
+
+use glam::DVec3;
+
+use super::hbasis::hemisphere_quadrature;
+
+/// How amplitudes are fitted (module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Solver {
+    Projection,
+    LeastSquares,
+    NonNegative,
+    RunningAverage,
+    RunningAverageNonNegative,
+}
+
+impl Solver {
+    pub const ALL: [Solver; 5] = [
+        Solver::Projection,
+        Solver::LeastSquares,
+        Solver::NonNegative,
+        Solver::RunningAverage,
+        Solver::RunningAverageNonNegative,
+    ];
+
+    /// The CLI name (`--sg-solve`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Solver::Projection => "projection",
+            Solver::LeastSquares => "ls",
+            Solver::NonNegative => "nnls",
+            Solver::RunningAverage => "running",
+            Solver::RunningAverageNonNegative => "running-nn",
+        }
+    }
+}
+
+impl std::fmt::Display for Solver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Solver {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Solver::ALL
+            .into_iter()
+            .find(|v| v.name() == s)
+            .ok_or_else(|| {
+                let known: Vec<&str> = Solver::ALL.iter().map(|v| v.name()).collect();
+                format!("unknown SG solver '{s}'; known: {}", known.join(", "))
+            })
+    }
+}
+
+/// The solver `--sg-solve` defaults to: the best of `shvis study bases`' SG rows.
+pub const DEFAULT_SOLVER: Solver = Solver::NonNegative;
+
+/// Lobe counts an `sgN` name may take.
+pub const LOBE_COUNTS: [usize; 4] = [5, 6, 9, 12];
+
+/// Gauss–Legendre nodes per unit of z of the fitting rule: 8 × 16 = 128 nodes.
+pub const FIT_N: usize = 8;
+
+/// N fixed lobes and everything the solvers precompute for them (module doc).
+#[derive(Clone, Debug)]
+pub struct SgBasis {
+    pub axes: Vec<DVec3>,
+    pub sharpness: f64,
+    /// Fitting nodes (tangent space) and weights.
+    nodes: Vec<(DVec3, f64)>,
+    /// G_qk, node-major.
+    g: Vec<f64>,
+    /// The least-squares pseudo-inverse P (N × Q): a = P L.
+    pinv: Vec<f64>,
+}
+
+/// What a fit did: amplitudes the unconstrained solvers made negative.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FitStats {
+    pub amplitudes: u64,
+    pub negative: u64,
+}
+
+impl SgBasis {
+    /// The basis of `n` lobes (any n ≥ 1; the techniques use [`LOBE_COUNTS`]).
+    pub fn new(n: usize) -> SgBasis {
+        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        let axes: Vec<DVec3> = (0..n)
+            .map(|k| {
+                let z = 1.0 - (k as f64 + 0.5) / n as f64;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let phi = golden * k as f64;
+                DVec3::new(r * phi.cos(), r * phi.sin(), z)
+            })
+            .collect();
+        let sharpness = n as f64 * std::f64::consts::LN_2;
+        let nodes = hemisphere_quadrature(FIT_N);
+        let g: Vec<f64> = nodes
+            .iter()
+            .flat_map(|&(d, _)| axes.iter().map(move |&mu| lobe(mu, sharpness, d)))
+            .collect();
+        // Weighted least squares: minimise ‖W^½ (G a − L)‖, a = (W^½ G)⁺ W^½ L.
+        let q = nodes.len();
+        let mut wg = nalgebra::DMatrix::<f64>::zeros(q, n);
+        for (i, &(_, w)) in nodes.iter().enumerate() {
+            for k in 0..n {
+                wg[(i, k)] = w.sqrt() * g[i * n + k];
+            }
+        }
+        let svd = wg.svd(true, true);
+        let largest = svd.singular_values.max();
+        let pinv_w = svd
+            .pseudo_inverse(1e-10 * largest)
+            .expect("the SVD was computed with U and V");
+        let mut pinv = vec![0.0; n * q];
+        for k in 0..n {
+            for (i, &(_, w)) in nodes.iter().enumerate() {
+                pinv[k * q + i] = pinv_w[(k, i)] * w.sqrt();
+            }
+        }
+        SgBasis {
+            axes,
+            sharpness,
+            nodes,
+            g,
+            pinv,
+        }
+    }
+
+    /// Lobes.
+    pub fn len(&self) -> usize {
+        self.axes.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.axes.is_empty()
+    }
+
+    /// The fitting nodes (tangent space) and weights.
+    pub fn nodes(&self) -> &[(DVec3, f64)] {
+        &self.nodes
+    }
+
+    /// Amplitudes (one per lobe) fitting `radiance` given at [`Self::nodes`], one colour.
+    pub fn fit(&self, radiance: &[f64], solver: Solver, stats: &mut FitStats) -> Vec<f64> {
+        let (n, q) = (self.len(), self.nodes.len());
+        assert_eq!(radiance.len(), q, "one radiance value per node");
+        let a = match solver {
+            Solver::Projection => (0..n)
+                .map(|k| {
+                    let (mut num, mut den) = (0.0, 0.0);
+                    for (i, &(_, w)) in self.nodes.iter().enumerate() {
+                        num += w * radiance[i] * self.g[i * n + k];
+                        den += w * self.g[i * n + k];
+                    }
+                    if den > 0.0 { num / den } else { 0.0 }
+                })
+                .collect(),
+            Solver::LeastSquares => self.least_squares(radiance),
+            Solver::NonNegative => self.nnls(radiance),
+            Solver::RunningAverage => self.running_average(radiance, false),
+            Solver::RunningAverageNonNegative => self.running_average(radiance, true),
+        };
+        stats.amplitudes += n as u64;
+        stats.negative += a.iter().filter(|&&v| v < 0.0).count() as u64;
+        a
+    }
+
+    fn least_squares(&self, radiance: &[f64]) -> Vec<f64> {
+        let q = self.nodes.len();
+        (0..self.len())
+            .map(|k| {
+                self.pinv[k * q..(k + 1) * q]
+                    .iter()
+                    .zip(radiance)
+                    .map(|(p, l)| p * l)
+                    .sum()
+            })
+            .collect()
+    }
+
+    /// Lawson–Hanson active-set NNLS on the weighted system (module doc).
+    fn nnls(&self, radiance: &[f64]) -> Vec<f64> {
+        let (n, q) = (self.len(), self.nodes.len());
+        let w: Vec<f64> = self.nodes.iter().map(|&(_, w)| w).collect();
+        // Normal equations in f64: H = Gᵀ W G, c = Gᵀ W L; NNLS on ½aᵀHa − cᵀa.
+        let mut h = vec![0.0; n * n];
+        let mut c = vec![0.0; n];
+        for i in 0..q {
+            let row = &self.g[i * n..(i + 1) * n];
+            for k in 0..n {
+                c[k] += w[i] * row[k] * radiance[i];
+                for j in 0..n {
+                    h[k * n + j] += w[i] * row[k] * row[j];
+                }
+            }
+        }
+        nnls_normal(&h, &c, n)
+    }
+
+    fn running_average(&self, radiance: &[f64], non_negative: bool) -> Vec<f64> {
+        let n = self.len();
+        let mut a = vec![0.0; n];
+        let mut lobe_weight = vec![0.0; n];
+        let mut total = 0.0;
+        for (i, &(_, w)) in self.nodes.iter().enumerate() {
+            total += w;
+            let g = &self.g[i * n..(i + 1) * n];
+            let estimate: f64 = a.iter().zip(g).map(|(a, g)| a * g).sum();
+            for k in 0..n {
+                if g[k] == 0.0 {
+                    continue;
+                }
+                // The running mean of G_k² over the nodes so far (weights w), and the value
+                // this node asks of lobe k given the others' current contribution.
+                lobe_weight[k] += (g[k] * g[k] - lobe_weight[k]) * w / total;
+                let others = estimate - a[k] * g[k];
+                let wanted = (radiance[i] - others) * g[k] / lobe_weight[k].max(f64::MIN_POSITIVE);
+                a[k] += (wanted - a[k]) * w / total;
+                if non_negative {
+                    a[k] = a[k].max(0.0);
+                }
+            }
+        }
+        a
+    }
+
+    /// Σ_k a_k G_k(m) at tangent-space `m`, one colour.
+    pub fn radiance(&self, amplitudes: &[f64], m: DVec3) -> f64 {
+        self.axes
+            .iter()
+            .zip(amplitudes)
+            .map(|(&mu, a)| a * lobe(mu, self.sharpness, m))
+            .sum()
+    }
+
+    /// E(n) = Σ_k a_k · (Hill's fitted SG–cosine integral) at tangent-space normal `n`
+    /// (module doc), one colour.
+    pub fn irradiance(&self, amplitudes: &[f64], n: DVec3) -> f64 {
+        self.axes
+            .iter()
+            .zip(amplitudes)
+            .map(|(&mu, a)| a * cosine_integral_fitted(mu.dot(n), self.sharpness))
+            .sum()
+    }
+}
+
+/// G(d; μ, λ).
+pub fn lobe(mu: DVec3, sharpness: f64, d: DVec3) -> f64 {
+    (sharpness * (mu.dot(d) - 1.0)).exp()
+}
+
+/// ∫ G(ω; μ, λ) dω over the sphere: 2π(1 − e^{−2λ})/λ.
+pub fn lobe_integral(sharpness: f64) -> f64 {
+    2.0 * std::f64::consts::PI * (1.0 - (-2.0 * sharpness).exp()) / sharpness
+}
+
+/// Hill's fitted ∫ G(ω; μ, λ) max(0, n·ω) dω for t = μ·n (module doc).
+pub fn cosine_integral_fitted(t: f64, sharpness: f64) -> f64 {
+    const C0: f64 = 0.36;
+    const C1: f64 = 1.0 / (4.0 * C0);
+    let e = (-sharpness).exp();
+    let e2 = e * e;
+    let r = 1.0 / sharpness;
+    let scale = 1.0 + 2.0 * e2 - r;
+    let bias = (e - e2) * r - e2;
+    let x = (1.0 - scale).max(0.0).sqrt();
+    let x0 = C0 * t;
+    let x1 = C1 * x;
+    let y = if x0.abs() <= x1 {
+        let u = x0 + x1;
+        u * u / x
+    } else {
+        t.clamp(0.0, 1.0)
+    };
+    (scale * y + bias) * lobe_integral(sharpness)
+}
+
+/// NNLS min ½aᵀHa − cᵀa, a ≥ 0, for symmetric positive semi-definite H (n × n, row-major):
+/// Lawson and Hanson's active-set method on the normal equations, at most 3n outer steps.
+pub fn nnls_normal(h: &[f64], c: &[f64], n: usize) -> Vec<f64> {
+    let mut a = vec![0.0; n];
+    let mut passive = vec![false; n];
+    let tolerance = 1e-12 * c.iter().map(|v| v.abs()).fold(0.0, f64::max).max(1e-300);
+    for _ in 0..3 * n {
+        // Gradient of the objective's negative: c − H a.
+        let grad: Vec<f64> = (0..n)
+            .map(|k| c[k] - (0..n).map(|j| h[k * n + j] * a[j]).sum::<f64>())
+            .collect();
+        let Some((best, &g)) = grad
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| !passive[*k])
+            .max_by(|x, y| x.1.total_cmp(y.1))
+        else {
+            break;
+        };
+        if g <= tolerance {
+            break;
+        }
+        passive[best] = true;
+        // Inner loop: solve on the passive set, step back while a variable would go negative.
+        loop {
+            let set: Vec<usize> = (0..n).filter(|&k| passive[k]).collect();
+            let z = solve_subset(h, c, n, &set);
+            if set.iter().zip(&z).all(|(_, &v)| v > 0.0) {
+                a = vec![0.0; n];
+                for (&k, &v) in set.iter().zip(&z) {
+                    a[k] = v;
+                }
+                break;
+            }
+            // Move from a toward z as far as feasibility allows, drop what hits zero.
+            let mut alpha = f64::INFINITY;
+            for (&k, &v) in set.iter().zip(&z) {
+                if v <= 0.0 {
+                    alpha = alpha.min(a[k] / (a[k] - v));
+                }
+            }
+            for (&k, &v) in set.iter().zip(&z) {
+                a[k] += alpha * (v - a[k]);
+                if a[k] <= 1e-15 * (1.0 + v.abs()) {
+                    a[k] = 0.0;
+                    passive[k] = false;
+                }
+            }
+            if !passive.iter().any(|&p| p) {
+                break;
+            }
+        }
+    }
+    a
+}
+
+/// The solution of H_SS z = c_S on the index set S (Cholesky-free: a small LU via nalgebra).
+fn solve_subset(h: &[f64], c: &[f64], n: usize, set: &[usize]) -> Vec<f64> {
+    let m = set.len();
+    let hs = nalgebra::DMatrix::from_fn(m, m, |i, j| h[set[i] * n + set[j]]);
+    let cs = nalgebra::DVector::from_fn(m, |i, _| c[set[i]]);
+    match hs.clone().lu().solve(&cs) {
+        Some(z) => z.iter().copied().collect(),
+        // Singular on this set: the least-squares solution instead.
+        None => {
+            let svd = hs.svd(true, true);
+            let tol = 1e-12 * svd.singular_values.max();
+            svd.solve(&cs, tol)
+                .map(|z| z.iter().copied().collect())
+                .unwrap_or_else(|_| vec![0.0; m])
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_fitted_cosine_integral_is_close_to_quadrature() {
+        let rule = crate::sh::project::sphere_quadrature(96);
+        for sharpness in [2.0, 6.2, 8.3] {
+            for t in [-1.0, -0.5, 0.0, 0.3, 0.7, 1.0] {
+                let mu = DVec3::new((1.0f64 - t * t).sqrt(), 0.0, t);
+                let exact: f64 = rule
+                    .iter()
+                    .map(|&(d, w)| w * lobe(mu, sharpness, d) * d.z.max(0.0))
+                    .sum();
+                let fitted = cosine_integral_fitted(t, sharpness);
+                let peak = cosine_integral_fitted(1.0, sharpness);
+                assert!(
+                    (fitted - exact).abs() < 0.05 * peak,
+                    "λ {sharpness} t {t}: {fitted} vs {exact}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn nnls_matches_brute_force_on_small_cases() {
+        // Every subset's unconstrained optimum, kept if feasible; the best is the NNLS one.
+        let cases: [(&[f64], &[f64]); 3] = [
+            (
+                &[2.0, 0.5, 0.0, 0.5, 1.0, 0.2, 0.0, 0.2, 1.5],
+                &[1.0, -1.0, 0.5],
+            ),
+            (
+                &[1.0, 0.9, 0.1, 0.9, 1.0, 0.2, 0.1, 0.2, 1.0],
+                &[0.3, 0.8, -0.2],
+            ),
+            (
+                &[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+                &[-1.0, -2.0, -3.0],
+            ),
+        ];
+        for (h, c) in cases {
+            let n = 3;
+            let objective = |a: &[f64]| -> f64 {
+                let mut v = 0.0;
+                for k in 0..n {
+                    v -= c[k] * a[k];
+                    for j in 0..n {
+                        v += 0.5 * a[k] * h[k * n + j] * a[j];
+                    }
+                }
+                v
+            };
+            let mut best = (objective(&[0.0; 3]), vec![0.0; 3]);
+            for mask in 1..8u32 {
+                let set: Vec<usize> = (0..n).filter(|k| mask & (1 << k) != 0).collect();
+                let z = solve_subset(h, c, n, &set);
+                if z.iter().all(|&v| v >= 0.0) {
+                    let mut a = vec![0.0; n];
+                    for (&k, &v) in set.iter().zip(&z) {
+                        a[k] = v;
+                    }
+                    let o = objective(&a);
+                    if o < best.0 {
+                        best = (o, a);
+                    }
+                }
+            }
+            let got = nnls_normal(h, c, n);
+            assert!(got.iter().all(|&v| v >= 0.0), "{got:?}");
+            assert!(
+                (objective(&got) - best.0).abs() < 1e-12,
+                "{got:?} vs {:?}",
+                best.1
+            );
+        }
+    }
+
+    #[test]
+    fn each_solver_fits_a_lobe_of_the_basis_and_least_squares_beats_the_others() {
+        let basis = SgBasis::new(9);
+        // Radiance that is exactly 2 × lobe 3 + 0.5 × lobe 7: least squares recovers it.
+        let target: Vec<f64> = basis
+            .nodes()
+            .iter()
+            .map(|&(d, _)| {
+                2.0 * lobe(basis.axes[3], basis.sharpness, d)
+                    + 0.5 * lobe(basis.axes[7], basis.sharpness, d)
+            })
+            .collect();
+        let mut stats = FitStats::default();
+        let ls = basis.fit(&target, Solver::LeastSquares, &mut stats);
+        for (k, a) in ls.iter().enumerate() {
+            let want = match k {
+                3 => 2.0,
+                7 => 0.5,
+                _ => 0.0,
+            };
+            assert!((a - want).abs() < 1e-8, "lobe {k}: {a}");
+        }
+        let nn = basis.fit(&target, Solver::NonNegative, &mut stats);
+        for (a, b) in nn.iter().zip(&ls) {
+            assert!((a - b).abs() < 1e-6 && *a >= 0.0, "{nn:?}");
+        }
+        // Weighted squared error of each fit: least squares is the smallest by definition.
+        let error = |a: &[f64]| -> f64 {
+            basis
+                .nodes()
+                .iter()
+                .zip(&target)
+                .map(|(&(d, w), l)| w * (basis.radiance(a, d) - l).powi(2))
+                .sum()
+        };
+        for solver in Solver::ALL {
+            let a = basis.fit(&target, solver, &mut stats);
+            assert!(a.iter().all(|v| v.is_finite()), "{solver:?}");
+            assert!(error(&a) >= error(&ls) - 1e-12, "{solver:?}");
+        }
+    }
+
+    #[test]
+    fn hard_cases() {
+        let basis = SgBasis::new(12);
+        let mut stats = FitStats::default();
+        // A black texel: every solver gives zeros.
+        let black = vec![0.0; basis.nodes().len()];
+        for solver in Solver::ALL {
+            assert!(
+                basis
+                    .fit(&black, solver, &mut stats)
+                    .iter()
+                    .all(|&a| a == 0.0)
+            );
+        }
+        // One direction exactly between two lobes (a narrow lobe there), a sun of 1e5: the
+        // fit scales linearly (least squares) and stays non-negative where it must.
+        let between = (basis.axes[0] + basis.axes[1]).normalize();
+        let sun: Vec<f64> = basis
+            .nodes()
+            .iter()
+            .map(|&(d, _)| 1e5 * lobe(between, 60.0, d))
+            .collect();
+        let unit: Vec<f64> = sun.iter().map(|v| v / 1e5).collect();
+        let a = basis.fit(&sun, Solver::LeastSquares, &mut stats);
+        let b = basis.fit(&unit, Solver::LeastSquares, &mut stats);
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - 1e5 * y).abs() <= 1e-6 * (1.0 + x.abs()));
+        }
+        // The unconstrained fit of a narrow light rings negative somewhere; NNLS and the
+        // clamped running average do not.
+        let mut counted = FitStats::default();
+        let _ = basis.fit(&unit, Solver::LeastSquares, &mut counted);
+        assert!(counted.negative > 0, "{counted:?}");
+        for solver in [Solver::NonNegative, Solver::RunningAverageNonNegative] {
+            assert!(
+                basis
+                    .fit(&unit, solver, &mut stats)
+                    .iter()
+                    .all(|&a| a >= 0.0)
+            );
+        }
+        // The lobe nearest the light gets the largest amplitude.
+        let nn = basis.fit(&unit, Solver::NonNegative, &mut stats);
+        let largest = (0..basis.len())
+            .max_by(|&i, &j| nn[i].total_cmp(&nn[j]))
+            .unwrap();
+        let nearest = (0..basis.len())
+            .max_by(|&i, &j| {
+                basis.axes[i]
+                    .dot(between)
+                    .total_cmp(&basis.axes[j].dot(between))
+            })
+            .unwrap();
+        let tie = basis.axes[largest].dot(between) >= basis.axes[nearest].dot(between) - 1e-9;
+        assert!(largest == nearest || tie, "{nn:?}");
+    }
+}
