@@ -283,6 +283,65 @@ fn the_h_basis_shader_matches_the_cpu_to_1e_4() {
 }
 
 #[test]
+fn the_sg_shader_matches_the_cpu_to_1e_4() {
+    use shvis::sh::sg::{LOBE_COUNTS, SgBasis, cosine_integral_fitted};
+    let ctx = common::validated_context();
+    // Every lobe count's sharpness, μ·n over [−1, 1] (both branches of the fit).
+    let mut cases: Vec<[f32; 2]> = Vec::new();
+    for n in LOBE_COUNTS {
+        let sharpness = SgBasis::new(n).sharpness as f32;
+        for i in 0..=200 {
+            cases.push([-1.0 + i as f32 / 100.0, sharpness]);
+        }
+    }
+    let count = cases.len();
+    let input = Buffer::with_data(
+        &ctx,
+        bytemuck::cast_slice(&cases),
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        "check.sg.cases",
+    )
+    .unwrap();
+    let out = Buffer::new(
+        &ctx,
+        (count * 4) as u64,
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        MemoryLocation::GpuToCpu,
+        "check.sg.values",
+    )
+    .unwrap();
+    let spirv = compile_glsl("check/sg.comp", ShaderStage::Compute, &[]).unwrap();
+    let pipeline = ComputePipeline::new(
+        &ctx,
+        &ComputePipelineDesc {
+            name: "check.sg",
+            spirv: &spirv,
+            resources: &[(0, Resource::Storage(&input)), (1, Resource::Storage(&out))],
+            push_constant_bytes: 4,
+        },
+    )
+    .unwrap();
+    pipeline
+        .dispatch(
+            [(count as u32).div_ceil(64), 1, 1],
+            &(count as u32).to_le_bytes(),
+        )
+        .unwrap();
+    let got: &[f32] = bytemuck::cast_slice(out.read().unwrap());
+    for (c, &g) in cases.iter().zip(got) {
+        let (t, sharpness) = (f64::from(c[0]), f64::from(c[1]));
+        let want = cosine_integral_fitted(t, sharpness);
+        let peak = cosine_integral_fitted(1.0, sharpness);
+        let err = (f64::from(g) - want).abs() / peak;
+        assert!(
+            err < 1e-4,
+            "t {t} λ {sharpness}: GPU {g} CPU {want} ({err:.2e})"
+        );
+    }
+    common::assert_validation_clean(&ctx, "sg check");
+}
+
+#[test]
 fn every_engine_basis_meets_the_bounced_reference_on_both_paths() {
     let ctx = common::validated_context();
     let (reference, settings) = common::house_reference(&ctx);

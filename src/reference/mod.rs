@@ -661,7 +661,7 @@ mod tests {
 
     #[test]
     fn every_g_buffer_output_compiles() {
-        for output in 0..GBUFFER_OUTPUTS {
+        for output in 0..super::GBUFFER_OUTPUTS {
             compile_glsl(
                 "reference/gbuffer.frag",
                 ShaderStage::Fragment,
