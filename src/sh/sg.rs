@@ -22,9 +22,10 @@
 //! projection       a_k = Σ_q w_q L_q G_qk / Σ_q w_q G_qk        (a lobe-weighted average)
 //! least squares    a = argmin Σ_q w_q (Σ_k a_k G_qk − L_q)²     (SVD pseudo-inverse, f64)
 //! NNLS             the same with a ≥ 0                           (Lawson–Hanson)
-//! running average  one pass over the nodes: for each, every lobe moves its amplitude toward
-//!                  the value that would explain the node given the other lobes, by the
-//!                  node's share of the lobe's accumulated weight (MJP's progressive fit)
+//! running average  passes over the nodes in scrambled order: for each, every lobe moves its
+//!                  amplitude toward the value that would explain the node given the other
+//!                  lobes, by the node's share of the accumulated weight (MJP's progressive
+//!                  fit, meant for a path tracer's stream of random samples)
 //! running ≥ 0      the same, amplitudes clamped at 0 after each update
 //! ```
 //!
@@ -97,7 +98,16 @@ impl std::str::FromStr for Solver {
 }
 
 /// The solver `--sg-solve` defaults to: the best of `shvis study bases`' SG rows.
-pub const DEFAULT_SOLVER: Solver = Solver::NonNegative;
+pub const DEFAULT_SOLVER: Solver = Solver::LeastSquares;
+
+/// Passes of the running average over the fitting nodes.
+pub const RUNNING_PASSES: usize = 8;
+/// A lobe whose running mean of G² is below this takes no update yet (as MJP's guard).
+const RUNNING_MIN_WEIGHT: f64 = 1e-5;
+
+fn gcd(a: usize, b: usize) -> usize {
+    if b == 0 { a } else { gcd(b, a % b) }
+}
 
 /// Lobe counts an `sgN` name may take.
 pub const LOBE_COUNTS: [usize; 4] = [5, 6, 9, 12];
@@ -243,23 +253,31 @@ impl SgBasis {
     }
 
     fn running_average(&self, radiance: &[f64], non_negative: bool) -> Vec<f64> {
-        let n = self.len();
+        let (n, q) = (self.len(), self.nodes.len());
         let mut a = vec![0.0; n];
         let mut lobe_weight = vec![0.0; n];
         let mut total = 0.0;
-        for (i, &(_, w)) in self.nodes.iter().enumerate() {
+        // The progressive fit expects samples in random order: the nodes are visited with a
+        // stride coprime to their count (a fixed scramble), RUNNING_PASSES times over.
+        let stride = (0..q)
+            .map(|s| (q * 5 / 8 + s) | 1)
+            .find(|&s| gcd(s, q) == 1)
+            .unwrap_or(1);
+        for step in 0..RUNNING_PASSES * q {
+            let i = (step * stride) % q;
+            let w = self.nodes[i].1;
             total += w;
             let g = &self.g[i * n..(i + 1) * n];
             let estimate: f64 = a.iter().zip(g).map(|(a, g)| a * g).sum();
             for k in 0..n {
-                if g[k] == 0.0 {
+                // The running mean of G_k² over the samples so far, and the value this
+                // sample asks of lobe k given the others' current contribution.
+                lobe_weight[k] += (g[k] * g[k] - lobe_weight[k]) * w / total;
+                if lobe_weight[k] < RUNNING_MIN_WEIGHT {
                     continue;
                 }
-                // The running mean of G_k² over the nodes so far (weights w), and the value
-                // this node asks of lobe k given the others' current contribution.
-                lobe_weight[k] += (g[k] * g[k] - lobe_weight[k]) * w / total;
                 let others = estimate - a[k] * g[k];
-                let wanted = (radiance[i] - others) * g[k] / lobe_weight[k].max(f64::MIN_POSITIVE);
+                let wanted = (radiance[i] - others) * g[k] / lobe_weight[k];
                 a[k] += (wanted - a[k]) * w / total;
                 if non_negative {
                     a[k] = a[k].max(0.0);

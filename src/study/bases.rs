@@ -61,12 +61,29 @@ pub struct BasisRow {
     pub negative_share: f64,
 }
 
+/// One basis of the floor table: a texel facing up under the environment.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct FloorRow {
+    pub env: String,
+    /// "L2", "H6", "SG9 nnls"…
+    pub basis: String,
+    /// Values stored (RGB counted three times).
+    pub coefficients: usize,
+    /// RMS of irradiance over the upper hemisphere of normals, relative to the reference.
+    pub rms_rel: f64,
+    /// For SG: the share of amplitudes the solver made negative.
+    pub negative_amplitudes: Option<f64>,
+}
+
 /// The study's results.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct BasesStudy {
     /// Normals over the sphere.
     pub normals: usize,
     pub rows: Vec<BasisRow>,
+    /// Normals over the floor's hemisphere.
+    pub floor_normals: usize,
+    pub floor: Vec<FloorRow>,
 }
 
 /// Runs the study on `envs` (`env::resolve` names, `sh:FILE` included) with
@@ -76,11 +93,18 @@ pub struct BasesStudy {
 /// An environment that does not load.
 pub fn run(envs: &[String], quadrature: usize, progress: bool) -> Result<BasesStudy, EnvError> {
     let nodes = sphere_quadrature(quadrature);
+    let floor_nodes = crate::sh::hbasis::hemisphere_quadrature(quadrature / 2);
     let mut rows = Vec::new();
+    let mut floor = Vec::new();
     for (i, name) in envs.iter().enumerate() {
         let started = Instant::now();
         let (radiance, exact) = environment(name, &nodes)?;
         rows.extend(measure(name, &radiance, &exact, &nodes));
+        floor.extend(measure_floor(
+            name,
+            &high_order_radiance(name)?,
+            &floor_nodes,
+        ));
         if progress {
             eprintln!(
                 "study bases: [{}/{}] {name} in {:.1} s",
@@ -93,7 +117,126 @@ pub fn run(envs: &[String], quadrature: usize, progress: bool) -> Result<BasesSt
     Ok(BasesStudy {
         normals: nodes.len(),
         rows,
+        floor_normals: floor_nodes.len(),
+        floor,
     })
+}
+
+/// Order of the radiance SH the floor table starts from (the bake's lighting order).
+const FLOOR_LIGHTING_ORDER: u32 = 8;
+
+/// The environment's radiance SH at [`FLOOR_LIGHTING_ORDER`] (an `sh:FILE` as given).
+fn high_order_radiance(name: &str) -> Result<Vec<[f64; 3]>, EnvError> {
+    if let Some(path) = name.strip_prefix(env::SH_PREFIX) {
+        return env::sh_file::load(Path::new(path));
+    }
+    let map = env::resolve(name)?;
+    let order = Order::new(FLOOR_LIGHTING_ORDER).expect("a valid order");
+    Ok(env::project::project_sh(&map, order))
+}
+
+/// The floor table of one environment (module doc): a texel facing +Y sees the radiance
+/// above its plane; each basis stores what its technique stores for that texel and is
+/// compared, over the hemisphere of normals, with the irradiance of that radiance.
+fn measure_floor(env: &str, radiance: &[[f64; 3]], normals: &[(DVec3, f64)]) -> Vec<FloorRow> {
+    use crate::sh::hbasis::{self, HBasisSize};
+    use crate::sh::sg::{FitStats, LOBE_COUNTS, Solver};
+    use crate::technique::local::{fit_sg, sg_basis, sg_irradiance};
+    let order = Order::new((radiance.len() as f64).sqrt().round() as u32).expect("n² coefficients");
+    // Tangent frame of the floor: tangent +X, bitangent −Z, normal +Y (t × b = n).
+    let frame = [DVec3::X, DVec3::NEG_Z, DVec3::Y];
+    let to_world = |m: DVec3| frame[0] * m.x + frame[1] * m.y + frame[2] * m.z;
+    // The radiance above the plane on a fine hemisphere rule: the reference irradiance and
+    // the texel's order-3 SH (what the bake stores) both come from it.
+    let fine = hbasis::hemisphere_quadrature(48);
+    let mut y = vec![0.0; order.coeff_count()];
+    let above: Vec<(DVec3, f64, [f64; 3])> = fine
+        .iter()
+        .map(|&(m, w)| {
+            let d = to_world(m);
+            crate::sh::basis::eval_basis(order, d, &mut y);
+            let l = std::array::from_fn(|c| radiance.iter().zip(&y).map(|(k, y)| k[c] * y).sum());
+            (d, w, l)
+        })
+        .collect();
+    let mut sh3 = vec![[0.0; 3]; 9];
+    let mut y3 = [0.0; 9];
+    for &(d, w, l) in &above {
+        crate::sh::basis::eval_basis(Order::THREE, d, &mut y3);
+        for k in 0..9 {
+            for c in 0..3 {
+                sh3[k][c] += w * l[c] * y3[k];
+            }
+        }
+    }
+    let reference: Vec<f64> = normals
+        .iter()
+        .map(|&(m, _)| {
+            let n = to_world(m);
+            luminance(std::array::from_fn(|c| {
+                above
+                    .iter()
+                    .map(|&(d, w, l)| w * l[c] * n.dot(d).max(0.0))
+                    .sum()
+            }))
+        })
+        .collect();
+    let ref_sq: f64 = normals
+        .iter()
+        .zip(&reference)
+        .map(|(&(_, w), e)| w * e * e)
+        .sum();
+    let rms = |e: &dyn Fn(DVec3) -> [f64; 3]| -> f64 {
+        let se: f64 = normals
+            .iter()
+            .zip(&reference)
+            .map(|(&(m, w), r)| w * (luminance(e(m).map(|v| v.max(0.0))) - r).powi(2))
+            .sum();
+        if ref_sq > 0.0 {
+            (se / ref_sq).sqrt()
+        } else {
+            0.0
+        }
+    };
+    let row = |basis: String, coefficients: usize, rms_rel: f64, negative: Option<f64>| FloorRow {
+        env: env.to_string(),
+        basis,
+        coefficients,
+        rms_rel,
+        negative_amplitudes: negative,
+    };
+    let mut rows = Vec::new();
+    for basis in [ShBasis::L1, ShBasis::Zh3, ShBasis::L2] {
+        let stored = basis.encode(&sh3, Some(DVec3::Y));
+        let e = |m: DVec3| basis.irradiance(&stored, to_world(m));
+        rows.push(row(
+            basis.label().into(),
+            basis.stored_values(),
+            rms(&e),
+            None,
+        ));
+    }
+    for (size, label) in [(HBasisSize::H4, "H4"), (HBasisSize::H6, "H6")] {
+        let h = hbasis::project_irradiance(&sh3, frame, size);
+        let e = |m: DVec3| hbasis::irradiance(&h, m);
+        rows.push(row(label.into(), 3 * size.count(), rms(&e), None));
+    }
+    for n in LOBE_COUNTS {
+        let basis = sg_basis(n as u32);
+        for solver in Solver::ALL {
+            let mut stats = FitStats::default();
+            let a = fit_sg(&basis, &sh3, frame, solver, &mut stats);
+            let e = |m: DVec3| sg_irradiance(&basis, &a, m);
+            let negative = stats.negative as f64 / stats.amplitudes.max(1) as f64;
+            rows.push(row(
+                format!("SG{n} {solver}"),
+                3 * n,
+                rms(&e),
+                Some(negative),
+            ));
+        }
+    }
+    rows
 }
 
 /// The order-3 radiance SH of `name` and its exact irradiance (luminance) at `nodes`.
@@ -240,6 +383,27 @@ pub fn markdown(study: &BasesStudy) -> String {
             yes(r.mean_abs_rel < RH_AVERAGE),
             yes(r.max_rel < RH_MAX_PRACTICE),
             yes(r.max_rel < RH_MAX_BOUND)
+        );
+    }
+    s += &format!(
+        "\n## A floor under each environment: the local bases and the SG solvers\n\n\
+         A texel facing up (+Y) sees the radiance above its plane (the environment's order-8 \
+         SH there); each basis stores what its technique stores for that texel — from the \
+         texel's order-3 SH, as the bake gives it — and is compared over the {} normals of \
+         the upper hemisphere with the irradiance of that radiance. RMS relative to it; for SG, \
+         the share of amplitudes the solver made negative.\n\n\
+         | environment | basis | values | RMS | negative amplitudes |\n|---|---|---:|---:|---:|\n",
+        study.floor_normals
+    );
+    for r in &study.floor {
+        s += &format!(
+            "| {} | {} | {} | {:.2} % | {} |\n",
+            r.env,
+            r.basis,
+            r.coefficients,
+            100.0 * r.rms_rel,
+            r.negative_amplitudes
+                .map_or_else(|| "—".to_string(), |v| format!("{:.1} %", 100.0 * v))
         );
     }
     s += "\n## The L1 family beside the published figures\n\n\

@@ -81,7 +81,8 @@ const PAPER_FAMILIES: &[&str] = &["uncO", "pcaM, pcaMw", "shlmap", "preconv", "s
 
 /// The rows of each family after the paper's that stand for it in the headline set: one
 /// (the cheapest bake that shows what the family does), two for the engine bases (the
-/// plain L1 engines ship and the stored ZH3 that improves on it).
+/// plain L1 engines ship and the stored ZH3 that improves on it) and for the local bases
+/// (the H-basis and nine spherical Gaussians).
 const LATER_HEADLINES: &[Technique] = &[
     Technique::Vq {
         k: 64,
@@ -116,6 +117,9 @@ const LATER_HEADLINES: &[Technique] = &[
     },
     Technique::Local {
         basis: LocalBasis::HBasis(crate::sh::hbasis::HBasisSize::H4),
+    },
+    Technique::Local {
+        basis: LocalBasis::Sg { lobes: 9 },
     },
 ];
 
