@@ -288,6 +288,7 @@ fn shlmap_tracks_strong_inter_reflection() {
         transfer: None,
         table_res: 16,
         h_order: Order::THREE,
+        sg_solver: shvis::sh::sg::DEFAULT_SOLVER,
     };
     for &path in HwPath::ALL {
         let tech = shvis::technique::build(&ctx, &gpu, Technique::Shlmap, path, &inputs).unwrap();
