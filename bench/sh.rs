@@ -173,6 +173,7 @@ fn lighting_update(c: &mut Criterion) {
         transfer: None,
         table_res: 32,
         h_order: Order::THREE,
+        sg_solver: shvis::sh::sg::DEFAULT_SOLVER,
     };
     let mut g = c.benchmark_group("lighting_update");
     for name in ["unc6", "pca16", "pca16w", "sh2"] {
