@@ -24,8 +24,10 @@
 //! NNLS             the same with a ≥ 0                           (Lawson–Hanson)
 //! running average  passes over the nodes in scrambled order: for each, every lobe moves its
 //!                  amplitude toward the value that would explain the node given the other
-//!                  lobes, by the node's share of the accumulated weight (MJP's progressive
-//!                  fit, meant for a path tracer's stream of random samples)
+//!                  lobes, (L_q − Σ_{j≠k} a_j G_qj) G_qk / ⟨G_k²⟩, by the node's share of the
+//!                  weight so far (MJP's progressive fit, meant for a path tracer's stream
+//!                  of samples; ⟨G_k²⟩, which it estimates as it goes, is known here —
+//!                  estimated, its first steps are large enough to diverge on these lobes)
 //! running ≥ 0      the same, amplitudes clamped at 0 after each update
 //! ```
 //!
@@ -102,7 +104,7 @@ pub const DEFAULT_SOLVER: Solver = Solver::LeastSquares;
 
 /// Passes of the running average over the fitting nodes.
 pub const RUNNING_PASSES: usize = 8;
-/// A lobe whose running mean of G² is below this takes no update yet (as MJP's guard).
+/// A lobe whose mean of G² is below this takes no update (as MJP's guard).
 const RUNNING_MIN_WEIGHT: f64 = 1e-5;
 
 fn gcd(a: usize, b: usize) -> usize {
@@ -255,7 +257,19 @@ impl SgBasis {
     fn running_average(&self, radiance: &[f64], non_negative: bool) -> Vec<f64> {
         let (n, q) = (self.len(), self.nodes.len());
         let mut a = vec![0.0; n];
-        let mut lobe_weight = vec![0.0; n];
+        // Each lobe's mean of G² over the hemisphere, known in advance here (the progressive
+        // form estimates it from the samples so far, which makes its first steps large).
+        let area: f64 = self.nodes.iter().map(|&(_, w)| w).sum();
+        let mean_g2: Vec<f64> = (0..n)
+            .map(|k| {
+                self.nodes
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &(_, w))| w * self.g[i * n + k].powi(2))
+                    .sum::<f64>()
+                    / area
+            })
+            .collect();
         let mut total = 0.0;
         // The progressive fit expects samples in random order: the nodes are visited with a
         // stride coprime to their count (a fixed scramble), RUNNING_PASSES times over.
@@ -270,14 +284,13 @@ impl SgBasis {
             let g = &self.g[i * n..(i + 1) * n];
             let estimate: f64 = a.iter().zip(g).map(|(a, g)| a * g).sum();
             for k in 0..n {
-                // The running mean of G_k² over the samples so far, and the value this
-                // sample asks of lobe k given the others' current contribution.
-                lobe_weight[k] += (g[k] * g[k] - lobe_weight[k]) * w / total;
-                if lobe_weight[k] < RUNNING_MIN_WEIGHT {
+                if mean_g2[k] < RUNNING_MIN_WEIGHT {
                     continue;
                 }
+                // The value this sample asks of lobe k given the others' current
+                // contribution, averaged in with the sample's share of the weight so far.
                 let others = estimate - a[k] * g[k];
-                let wanted = (radiance[i] - others) * g[k] / lobe_weight[k];
+                let wanted = (radiance[i] - others) * g[k] / mean_g2[k];
                 a[k] += (wanted - a[k]) * w / total;
                 if non_negative {
                     a[k] = a[k].max(0.0);
