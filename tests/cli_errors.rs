@@ -132,6 +132,21 @@ fn unsupported_output_extension() {
     assert_one_error_line(&out, &["x.bmp", ".png or .exr"]);
 }
 
+/// `shvis study bases --envs ENV --out OUT`.
+fn study_bases(env: &str, out: &std::path::Path) -> std::process::Output {
+    shvis(
+        &[
+            "study",
+            "bases",
+            "--envs",
+            env,
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &[],
+    )
+}
+
 #[test]
 fn sh_coefficient_environments_missing_or_malformed() {
     let dir = scratch("sh_env");
@@ -147,17 +162,7 @@ fn sh_coefficient_environments_missing_or_malformed() {
     let out = shvis(&render_args(&env, out_png.to_str().unwrap()), &[]);
     assert_one_error_line(&out, &["five.txt", "5 coefficients"]);
     let study_out = dir.join("bases");
-    let out = shvis(
-        &[
-            "study",
-            "bases",
-            "--envs",
-            &env,
-            "--out",
-            study_out.to_str().unwrap(),
-        ],
-        &[],
-    );
+    let out = study_bases(&env, &study_out);
     assert_one_error_line(&out, &["five.txt", "5 coefficients"]);
     let out = shvis(&render_args("sh:", out_png.to_str().unwrap()), &[]);
     assert_one_error_line(&out, &["sh:FILE needs the path"]);
@@ -191,17 +196,7 @@ fn an_sh_environment_is_studied_and_printed_back() {
         assert!((b - w).abs() < 1e-3, "{back:?}");
     }
     let study_out = dir.join("bases");
-    let out = shvis(
-        &[
-            "study",
-            "bases",
-            "--envs",
-            &env,
-            "--out",
-            study_out.to_str().unwrap(),
-        ],
-        &[],
-    );
+    let out = study_bases(&env, &study_out);
     assert!(
         out.status.success(),
         "{}",

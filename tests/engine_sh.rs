@@ -88,6 +88,53 @@ fn normals() -> Vec<DVec3> {
     n
 }
 
+/// Runs the check compute shader `shader` (`glsl/check/`, with `defines`) over `count` cases
+/// in `input` with push constants `push` (its first word the count), and returns its
+/// `out_floats` × `count` output floats.
+fn run_check(
+    ctx: &std::sync::Arc<shvis::gpu::Context>,
+    shader: &str,
+    defines: &[(&'static str, u32)],
+    input: &[u8],
+    push: &[u32],
+    count: usize,
+    out_floats: usize,
+) -> Vec<f32> {
+    let cases = Buffer::with_data(
+        ctx,
+        input,
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        "check.cases",
+    )
+    .unwrap();
+    let out = Buffer::new(
+        ctx,
+        (count * out_floats * 4) as u64,
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        MemoryLocation::GpuToCpu,
+        "check.values",
+    )
+    .unwrap();
+    let spirv = compile_glsl(shader, ShaderStage::Compute, defines).unwrap();
+    let pipeline = ComputePipeline::new(
+        ctx,
+        &ComputePipelineDesc {
+            name: shader,
+            spirv: &spirv,
+            resources: &[(0, Resource::Storage(&cases)), (1, Resource::Storage(&out))],
+            push_constant_bytes: 4 * push.len() as u32,
+        },
+    )
+    .unwrap();
+    pipeline
+        .dispatch(
+            [(count as u32).div_ceil(64), 1, 1],
+            bytemuck::cast_slice(push),
+        )
+        .unwrap();
+    bytemuck::cast_slice(out.read().unwrap()).to_vec()
+}
+
 #[test]
 fn every_reconstruction_in_the_shader_matches_the_cpu_to_1e_4() {
     let ctx = common::validated_context();
@@ -121,44 +168,16 @@ fn every_reconstruction_in_the_shader_matches_the_cpu_to_1e_4() {
             }
         }
         let count = want.len();
-        let cases = Buffer::with_data(
+        let values = run_check(
             &ctx,
-            bytemuck::cast_slice(&data),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            "check.sh_bases.cases",
-        )
-        .unwrap();
-        let out = Buffer::new(
-            &ctx,
-            (count * 16) as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::GpuToCpu,
-            "check.sh_bases.irradiance",
-        )
-        .unwrap();
-        let spirv = compile_glsl(
             "check/sh_bases.comp",
-            ShaderStage::Compute,
             &[("ENGINE_SH_BASIS", shader_value(basis))],
-        )
-        .unwrap();
-        let pipeline = ComputePipeline::new(
-            &ctx,
-            &ComputePipelineDesc {
-                name: "check.sh_bases",
-                spirv: &spirv,
-                resources: &[(0, Resource::Storage(&cases)), (1, Resource::Storage(&out))],
-                push_constant_bytes: 4,
-            },
-        )
-        .unwrap();
-        pipeline
-            .dispatch(
-                [(count as u32).div_ceil(64), 1, 1],
-                &(count as u32).to_le_bytes(),
-            )
-            .unwrap();
-        let got: &[[f32; 4]] = bytemuck::cast_slice(out.read().unwrap());
+            bytemuck::cast_slice(&data),
+            &[count as u32],
+            count,
+            4,
+        );
+        let got: &[[f32; 4]] = bytemuck::cast_slice(&values);
         let mut worst = 0.0f64;
         for (i, (g, w)) in got.iter().zip(&want).enumerate() {
             for c in 0..3 {
@@ -233,40 +252,16 @@ fn the_h_basis_shader_matches_the_cpu_to_1e_4() {
             }
         }
         let count = want.len();
-        let cases = Buffer::with_data(
+        let values = run_check(
             &ctx,
+            "check/hbasis.comp",
+            &[],
             bytemuck::cast_slice(&data),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            "check.hbasis.cases",
-        )
-        .unwrap();
-        let out = Buffer::new(
-            &ctx,
-            (count * 16) as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::GpuToCpu,
-            "check.hbasis.irradiance",
-        )
-        .unwrap();
-        let spirv = compile_glsl("check/hbasis.comp", ShaderStage::Compute, &[]).unwrap();
-        let pipeline = ComputePipeline::new(
-            &ctx,
-            &ComputePipelineDesc {
-                name: "check.hbasis",
-                spirv: &spirv,
-                resources: &[(0, Resource::Storage(&cases)), (1, Resource::Storage(&out))],
-                push_constant_bytes: 8,
-            },
-        )
-        .unwrap();
-        let push = [count as u32, size.count() as u32];
-        pipeline
-            .dispatch(
-                [(count as u32).div_ceil(64), 1, 1],
-                bytemuck::cast_slice(&push),
-            )
-            .unwrap();
-        let got: &[[f32; 4]] = bytemuck::cast_slice(out.read().unwrap());
+            &[count as u32, size.count() as u32],
+            count,
+            4,
+        );
+        let got: &[[f32; 4]] = bytemuck::cast_slice(&values);
         for (i, (g, w)) in got.iter().zip(&want).enumerate() {
             for c in 0..3 {
                 let err = (f64::from(g[c]) - w[c]).abs() / level[i].max(w[c].abs()).max(1e-30);
@@ -295,40 +290,16 @@ fn the_sg_shader_matches_the_cpu_to_1e_4() {
         }
     }
     let count = cases.len();
-    let input = Buffer::with_data(
+    let got = run_check(
         &ctx,
+        "check/sg.comp",
+        &[],
         bytemuck::cast_slice(&cases),
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        "check.sg.cases",
-    )
-    .unwrap();
-    let out = Buffer::new(
-        &ctx,
-        (count * 4) as u64,
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        MemoryLocation::GpuToCpu,
-        "check.sg.values",
-    )
-    .unwrap();
-    let spirv = compile_glsl("check/sg.comp", ShaderStage::Compute, &[]).unwrap();
-    let pipeline = ComputePipeline::new(
-        &ctx,
-        &ComputePipelineDesc {
-            name: "check.sg",
-            spirv: &spirv,
-            resources: &[(0, Resource::Storage(&input)), (1, Resource::Storage(&out))],
-            push_constant_bytes: 4,
-        },
-    )
-    .unwrap();
-    pipeline
-        .dispatch(
-            [(count as u32).div_ceil(64), 1, 1],
-            &(count as u32).to_le_bytes(),
-        )
-        .unwrap();
-    let got: &[f32] = bytemuck::cast_slice(out.read().unwrap());
-    for (c, &g) in cases.iter().zip(got) {
+        &[count as u32],
+        count,
+        1,
+    );
+    for (c, &g) in cases.iter().zip(&got) {
         let (t, sharpness) = (f64::from(c[0]), f64::from(c[1]));
         let want = cosine_integral_fitted(t, sharpness);
         let peak = cosine_integral_fitted(1.0, sharpness);
