@@ -929,6 +929,50 @@ impl<'a> RowLadder<'a> {
         Some((map, gathered))
     }
 
+    /// The lightmap-texels rung of a technique that stores `per_texel` values derived from
+    /// the SH lightmap (`stored`: texel-major, before the f16 scale; made only when the rung
+    /// is not cached): the values at each pixel as the GPU reads them — range-scaled, f16,
+    /// bilinear at the pixel's lightmap UV — and `eval`uated there.
+    fn push_lightmap_values(
+        &self,
+        rungs: &mut Vec<Rung>,
+        map: &crate::bake::shlmap::ShLightmap,
+        per_texel: usize,
+        stored: &dyn Fn() -> Vec<f32>,
+        eval: &(dyn Fn(&[f64], usize) -> [f64; 3] + Sync),
+    ) {
+        let px = self.px;
+        // An SG fit depends on the run's solver: its rung is cached per solver.
+        let sg = matches!(
+            self.technique,
+            Technique::Local {
+                basis: crate::technique::LocalBasis::Sg { .. }
+            }
+        );
+        let label = if sg {
+            format!("{}.{}", self.technique, self.prepared.sg_solver)
+        } else {
+            self.technique.to_string()
+        };
+        self.push(
+            rungs,
+            AttributionKind::LightmapTexels,
+            format!("{label}.lightmap"),
+            &|| {
+                let stored = stored();
+                let scale = crate::technique::tables::finite_f16_scale(stored.iter().copied())
+                    .unwrap_or(1.0);
+                let unscale = f64::from(1.0 / scale);
+                px.image(|k| {
+                    let v = lightmap_bilinear(map.res, px.uv[k], per_texel, |t, j| {
+                        f16_round(stored[t * per_texel + j] * scale) * unscale
+                    });
+                    eval(&v[..per_texel], k)
+                })
+            },
+        );
+    }
+
     /// The H-basis rungs: the pixel's gathered radiance, then its irradiance projected onto
     /// the H-basis through the pixel's own frame and evaluated at its tangent-space normal,
     /// then the lightmap's f16 texels (projected through each texel's frame).
@@ -950,24 +994,16 @@ impl<'a> RowLadder<'a> {
                 })
             },
         );
-        let per_texel = 3 * size.count();
-        self.push(
+        self.push_lightmap_values(
             rungs,
-            AttributionKind::LightmapTexels,
-            format!("{technique}.lightmap"),
-            &|| {
-                let stored = crate::technique::local::stored_texels(map, size);
-                let scale = crate::technique::local::stored_scale(&stored).unwrap_or(1.0);
-                let unscale = f64::from(1.0 / scale);
-                px.image(|k| {
-                    let v = lightmap_bilinear(map.res, px.uv[k], per_texel, |t, j| {
-                        f16_round(stored[t * per_texel + j] * scale) * unscale
-                    });
-                    let h: Vec<[f64; 3]> = (0..size.count())
-                        .map(|i| [v[3 * i], v[3 * i + 1], v[3 * i + 2]])
-                        .collect();
-                    hbasis::irradiance(&h, px.tangent_normal[k])
-                })
+            map,
+            3 * size.count(),
+            &|| crate::technique::local::stored_texels(map, size),
+            &|v, k| {
+                let h: Vec<[f64; 3]> = (0..size.count())
+                    .map(|i| [v[3 * i], v[3 * i + 1], v[3 * i + 2]])
+                    .collect();
+                hbasis::irradiance(&h, px.tangent_normal[k])
             },
         );
     }
@@ -996,24 +1032,16 @@ impl<'a> RowLadder<'a> {
                 })
             },
         );
-        let per_texel = 3 * lobes as usize;
-        self.push(
+        self.push_lightmap_values(
             rungs,
-            AttributionKind::LightmapTexels,
-            format!("{technique}.{solver}.lightmap"),
-            &|| {
-                let (stored, _) = sg_stored_texels(map, lobes, solver);
-                let scale = crate::technique::local::stored_scale(&stored).unwrap_or(1.0);
-                let unscale = f64::from(1.0 / scale);
-                px.image(|k| {
-                    let v = lightmap_bilinear(map.res, px.uv[k], per_texel, |t, j| {
-                        f16_round(stored[t * per_texel + j] * scale) * unscale
-                    });
-                    let a: Vec<[f64; 3]> = (0..lobes as usize)
-                        .map(|i| [v[3 * i], v[3 * i + 1], v[3 * i + 2]])
-                        .collect();
-                    sg_irradiance(&basis, &a, px.tangent_normal[k])
-                })
+            map,
+            3 * lobes as usize,
+            &|| sg_stored_texels(map, lobes, solver).0,
+            &|v, k| {
+                let a: Vec<[f64; 3]> = (0..lobes as usize)
+                    .map(|i| [v[3 * i], v[3 * i + 1], v[3 * i + 2]])
+                    .collect();
+                sg_irradiance(&basis, &a, px.tangent_normal[k])
             },
         );
     }
@@ -1076,23 +1104,12 @@ impl<'a> RowLadder<'a> {
                 },
             );
         }
-        let per_texel = basis.stored_values();
-        self.push(
+        self.push_lightmap_values(
             rungs,
-            AttributionKind::LightmapTexels,
-            format!("{technique}.lightmap"),
-            &|| {
-                // Encoded here, so a cached rung does not pay for it (the deringing search).
-                let stored = crate::technique::engine_sh::stored_texels(map, basis);
-                let scale = crate::technique::engine_sh::stored_scale(&stored).unwrap_or(1.0);
-                let unscale = f64::from(1.0 / scale);
-                px.image(|k| {
-                    let v = lightmap_bilinear(map.res, px.uv[k], per_texel, |t, j| {
-                        f16_round(stored[t * per_texel + j] * scale) * unscale
-                    });
-                    basis.irradiance(&v[..per_texel], px.normal[k])
-                })
-            },
+            map,
+            basis.stored_values(),
+            &|| crate::technique::engine_sh::stored_texels(map, basis),
+            &|v, k| basis.irradiance(v, px.normal[k]),
         );
     }
 }

@@ -20,13 +20,11 @@
 //! of degree one in the stored values, so the shader multiplies the f16 range scale back
 //! after reconstructing. No per-lighting data: the lighting is baked in, as for `shlmap`.
 
-use half::f16;
 use rayon::prelude::*;
 
 use super::lighting::Recipe;
 use super::spec::EngineShBasis;
-use super::tables::{f16_range_scale, max_abs};
-use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
+use super::texels::{TexelGroups, VALUES_PER_TEXEL};
 use super::{Inputs, ShaderVariant, TechniqueError};
 use crate::bake::shlmap::ShLightmap;
 use crate::sh::bases::ShBasis;
@@ -95,22 +93,10 @@ pub(crate) fn prepare(
     let sh_basis = basis.sh_basis();
     let per_texel = sh_basis.stored_values();
     let stored = stored_texels(map, sh_basis);
-    let Some(scale) = stored_scale(&stored) else {
-        return Err(TechniqueError::Input {
-            label: label.into(),
-            detail: "the SH lightmap is not finite (non-finite lighting?)".into(),
-        });
-    };
-    let texels = (map.res * map.res) as usize;
-    let groups = pack_groups(texels, per_texel, |t, value| {
-        f16::from_f32(stored[t * per_texel + value] * scale)
-    });
-    Ok(super::shlmap::baked_lightmap(
-        &groups,
-        map.res,
-        format!("{label}.{}", sh_basis_stem(basis)),
-        scale,
-    ))
+    let name = format!("{label}.{}", sh_basis_stem(basis));
+    let (texels, recipe, _) =
+        super::shlmap::baked_values(&stored, per_texel, map.res, name, label)?;
+    Ok((texels, recipe))
 }
 
 /// The debug-name stem of the per-texel images.
@@ -121,10 +107,4 @@ fn sh_basis_stem(basis: EngineShBasis) -> &'static str {
         EngineShBasis::L1Luminance => "ambient_luminance_l1",
         EngineShBasis::L2Deringed => "deringed_sh",
     }
-}
-
-/// The factor the stored values are multiplied by before f16 storage, for the ladder.
-pub fn stored_scale(stored: &[f32]) -> Option<f32> {
-    let max = max_abs(stored.iter().copied());
-    max.is_finite().then(|| f16_range_scale(max))
 }

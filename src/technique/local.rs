@@ -14,13 +14,11 @@
 //!   the shader (`glsl/technique/sg.frag`, `glsl/include/sg.glsl`) sums Hill's fitted
 //!   SG–cosine integral of each lobe at m.
 
-use half::f16;
 use rayon::prelude::*;
 
 use super::lighting::Recipe;
 use super::spec::LocalBasis;
-use super::tables::{f16_range_scale, max_abs};
-use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
+use super::texels::{TexelGroups, VALUES_PER_TEXEL};
 use super::{Inputs, ShaderVariant, TechniqueError};
 use crate::bake::shlmap::ShLightmap;
 use crate::sh::hbasis::{self, HBasisSize};
@@ -164,13 +162,6 @@ pub fn stored_texels(map: &ShLightmap, size: HBasisSize) -> Vec<f32> {
         .collect()
 }
 
-/// The factor the stored values are multiplied by before f16 storage, or `None` when a
-/// value is not finite.
-pub fn stored_scale(stored: &[f32]) -> Option<f32> {
-    let max = max_abs(stored.iter().copied());
-    max.is_finite().then(|| f16_range_scale(max))
-}
-
 /// The stored values, range-scaled into f16, and the recipe of their baked-in lighting.
 pub(crate) fn prepare(
     basis: LocalBasis,
@@ -192,19 +183,9 @@ pub(crate) fn prepare(
             stored
         }
     };
-    let Some(scale) = stored_scale(&stored) else {
-        return Err(TechniqueError::Input {
-            label: label.into(),
-            detail: "the SH lightmap is not finite (non-finite lighting?)".into(),
-        });
-    };
-    let per_texel = stored_values(basis);
-    let texels = (map.res * map.res) as usize;
-    let groups = pack_groups(texels, per_texel, |t, value| {
-        f16::from_f32(stored[t * per_texel + value] * scale)
-    });
-    let (texel_groups, recipe) =
-        super::shlmap::baked_lightmap(&groups, map.res, format!("{label}.{}", basis.name()), scale);
+    let name = format!("{label}.{}", basis.name());
+    let (texel_groups, recipe, scale) =
+        super::shlmap::baked_values(&stored, stored_values(basis), map.res, name, label)?;
     let recipe = match basis {
         LocalBasis::HBasis(_) => recipe,
         LocalBasis::Sg { lobes } => {

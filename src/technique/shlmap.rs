@@ -17,7 +17,7 @@ use ash::vk;
 use half::f16;
 
 use super::lighting::{LightingData, Recipe};
-use super::tables::{f16_range_scale, max_abs};
+
 use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
 use super::{Inputs, ShaderVariant, TechniqueError};
 use crate::bake::shlmap::{SH_LIGHTMAP_COEFFS, ShLightmap};
@@ -45,8 +45,7 @@ pub fn fragment_shader() -> ShaderVariant {
 /// The factor the lightmap's values are multiplied by before f16 storage (the shader
 /// divides it out), or `None` when a value is not finite.
 pub fn stored_scale(map: &ShLightmap) -> Option<f32> {
-    let max_abs = max_abs(map.coeffs.iter().flatten().copied());
-    max_abs.is_finite().then(|| f16_range_scale(max_abs))
+    super::tables::finite_f16_scale(map.coeffs.iter().flatten().copied())
 }
 
 /// The SH lightmap, range-scaled into f16, and a recipe that always gives the block undoing
@@ -84,6 +83,30 @@ pub(crate) fn baked_map<'a>(
         label: label.into(),
         detail: "needs the SH lightmap bake".into(),
     })
+}
+
+/// Per-texel values derived from the SH lightmap (`per_texel` each, texel-major, before the
+/// f16 scale) as f16 groups with their scale, and the recipe of the baked-in lighting:
+/// what the engine and local bases upload. Returns the scale too (the SG block needs it).
+pub(crate) fn baked_values(
+    stored: &[f32],
+    per_texel: usize,
+    res: u32,
+    name: String,
+    label: &str,
+) -> Result<(TexelGroups, Recipe, f32), TechniqueError> {
+    let Some(scale) = super::tables::finite_f16_scale(stored.iter().copied()) else {
+        return Err(TechniqueError::Input {
+            label: label.into(),
+            detail: "the SH lightmap is not finite (non-finite lighting?)".into(),
+        });
+    };
+    let texels = (res * res) as usize;
+    let groups = pack_groups(texels, per_texel, |t, value| {
+        f16::from_f32(stored[t * per_texel + value] * scale)
+    });
+    let (texels, recipe) = baked_lightmap(&groups, res, name, scale);
+    Ok((texels, recipe, scale))
 }
 
 /// Lightmap groups stored in f16 after multiplying by `scale`, and the recipe of their

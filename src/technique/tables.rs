@@ -42,6 +42,13 @@ pub fn f16_range_scale(max_abs: f32) -> f32 {
     }
 }
 
+/// [`f16_range_scale`] of `values`, or `None` when one is not finite: the scale of baked
+/// per-texel values before their f16 storage.
+pub fn finite_f16_scale(values: impl IntoIterator<Item = f32>) -> Option<f32> {
+    let max = max_abs(values);
+    max.is_finite().then(|| f16_range_scale(max))
+}
+
 /// Largest magnitude of `values`, NaN if any is NaN (`f32::max` alone would skip it), so
 /// callers check the result with `is_finite`; what [`f16_range_scale`] is given.
 pub fn max_abs(values: impl IntoIterator<Item = f32>) -> f32 {
