@@ -1,5 +1,6 @@
 //! The lightmap bases from `shlmap`'s bake — the engine SH bases (`l1`, `l1geo`, `l1zh3`,
-//! `zh3`, `l1lum`, `shlmapw`; `sh::bases`) and the H-basis (`hb4`, `hb6`; `sh::hbasis`): the
+//! `zh3`, `l1lum`, `shlmapw`; `sh::bases`), the H-basis (`hb4`, `hb6`; `sh::hbasis`), SG
+//! (`sgN`; `sh::sg`) and Ambient Dice (`dice`, `dicey`; `sh::dice`): the
 //! shader's reconstructions against the CPU's on the same stored values, hard cases
 //! included; every row on both paths against the bounced reference.
 
@@ -275,6 +276,93 @@ fn the_h_basis_shader_matches_the_cpu_to_1e_4() {
         }
     }
     common::assert_validation_clean(&ctx, "hbasis check");
+}
+
+#[test]
+fn the_ambient_dice_shader_matches_the_cpu_to_1e_4() {
+    use shvis::sh::dice::{DiceVariant, dice};
+    let ctx = common::validated_context();
+    let basis = dice();
+    let mut rng = common::Rng(0xd1ce);
+    let mut unit = || rng.below(2001) as f64 / 1000.0 - 1.0;
+    // Directions: the fitting nodes, every stored vertex, face centre and edge midpoint,
+    // and one below the horizon (lifted to it).
+    let mut dirs: Vec<DVec3> = basis.nodes().iter().map(|&(m, _)| m).collect();
+    dirs.extend(basis.vertices.iter().copied());
+    for face in &basis.faces {
+        dirs.push(face.centre);
+        for i in 0..3 {
+            let (a, b) = (face.vertices[i], face.vertices[(i + 1) % 3]);
+            dirs.push((basis.vertices[a] + basis.vertices[b]).normalize());
+        }
+    }
+    dirs.push(DVec3::new(0.3, -0.2, -0.5).normalize());
+    let table = shvis::technique::local::dice_face_table();
+    for variant in DiceVariant::ALL {
+        let values = variant.stored_values();
+        let groups = values.div_ceil(4);
+        // Value sets: random, and one fitted to a sky through a tilted frame.
+        let mut sets: Vec<Vec<f64>> = (0..6)
+            .map(|_| (0..values).map(|_| unit()).collect())
+            .collect();
+        let mut radiance = vec![[0.0; 3]; 9];
+        radiance[0] = [2.0, 1.8, 1.5];
+        radiance[2] = [1.0, 0.9, 0.6];
+        radiance[5] = [0.3, 0.2, 0.1];
+        let frame = [
+            DVec3::new(0.8, 0.0, -0.6),
+            DVec3::Y,
+            DVec3::new(0.6, 0.0, 0.8),
+        ];
+        sets.push(basis.project_irradiance(variant, &radiance, frame));
+        let mut data: Vec<[f32; 4]> = table.clone();
+        let (mut want, mut level) = (Vec::new(), Vec::new());
+        for set in &sets {
+            let set32: Vec<f32> = set.iter().map(|&v| v as f32).collect();
+            let as64: Vec<f64> = set32.iter().map(|&v| f64::from(v)).collect();
+            let scale = as64.iter().map(|v| v.abs()).fold(0.0, f64::max);
+            for &m in &dirs {
+                let m32 = m.as_vec3();
+                for g in 0..groups {
+                    data.push(std::array::from_fn(|k| {
+                        set32.get(4 * g + k).copied().unwrap_or(0.0)
+                    }));
+                }
+                data.push([m32.x, m32.y, m32.z, 0.0]);
+                want.push(basis.irradiance(variant, &as64, m32.as_dvec3()));
+                level.push(scale);
+            }
+        }
+        let count = want.len();
+        let got = run_check(
+            &ctx,
+            "check/dice.comp",
+            &[
+                ("DICE_YCOCG", u32::from(variant == DiceVariant::YCoCg)),
+                ("DICE_FACES", basis.faces.len() as u32),
+            ],
+            bytemuck::cast_slice(&data),
+            &[count as u32, table.len() as u32, groups as u32 + 1],
+            count,
+            4,
+        );
+        let got: &[[f32; 4]] = bytemuck::cast_slice(&got);
+        let mut worst = 0.0f64;
+        for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+            for c in 0..3 {
+                let err = (f64::from(g[c]) - w[c]).abs() / level[i].max(w[c].abs()).max(1e-30);
+                worst = worst.max(err);
+                assert!(
+                    err < 1e-4,
+                    "{variant:?} case {i}: GPU {} CPU {} ({err:.2e})",
+                    g[c],
+                    w[c]
+                );
+            }
+        }
+        println!("{variant:?}: largest relative difference {worst:.2e} over {count} cases");
+    }
+    common::assert_validation_clean(&ctx, "dice check");
 }
 
 #[test]

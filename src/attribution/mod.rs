@@ -446,6 +446,9 @@ pub fn cpu_rungs(
         Technique::Local {
             basis: crate::technique::LocalBasis::Sg { lobes },
         } => row.sg(&mut rungs, lobes),
+        Technique::Local {
+            basis: crate::technique::LocalBasis::Dice(variant),
+        } => row.dice(&mut rungs, variant),
     }
     Ok(rungs)
 }
@@ -1011,6 +1014,35 @@ impl<'a> RowLadder<'a> {
     /// The SG rungs: the pixel's gathered radiance, then the lobes fitted to it through the
     /// pixel's own frame by the run's solver and evaluated at its tangent-space normal, then
     /// the lightmap's f16 amplitudes (fitted through each texel's frame).
+    /// The Ambient Dice rungs: as the H-basis', the basis being the fit at the ten vertices
+    /// and its hybrid (or YCoCg) interpolation at the pixel's tangent-space normal.
+    fn dice(&self, rungs: &mut Vec<Rung>, variant: crate::sh::dice::DiceVariant) {
+        let px = self.px;
+        let Some((map, gathered)) = self.push_radiance_order(rungs) else {
+            return;
+        };
+        let technique = self.technique;
+        let basis = crate::sh::dice::dice();
+        self.push(
+            rungs,
+            AttributionKind::Basis,
+            format!("{technique}.basis"),
+            &|| {
+                px.image(|k| {
+                    let x = basis.project_irradiance(variant, &gathered[k], px.frame[k]);
+                    basis.irradiance(variant, &x, px.tangent_normal[k])
+                })
+            },
+        );
+        self.push_lightmap_values(
+            rungs,
+            map,
+            variant.stored_values(),
+            &|| crate::technique::local::dice_stored_texels(map, variant),
+            &|v, k| basis.irradiance(variant, v, px.tangent_normal[k]),
+        );
+    }
+
     fn sg(&self, rungs: &mut Vec<Rung>, lobes: u32) {
         use crate::technique::local::{fit_sg, sg_basis, sg_irradiance, sg_stored_texels};
         let (px, prepared) = (self.px, self.prepared);

@@ -29,6 +29,7 @@
 //!   deringed L2) as encodings of order-3 radiance and their irradiance.
 //! - [`sg`]: spherical Gaussian lightmap lobes, their fitting solvers and diffuse evaluation.
 //! - [`hbasis`]: the H-basis over a tangent frame's hemisphere (Habel & Wimmer 2010).
+//! - [`dice`]: Ambient Dice over a tangent frame's hemisphere (Iwanicki & Sloan 2017).
 //! - [`basis`]: evaluation of all y_l^m at a direction, stable to order 30, exact at
 //!   the poles.
 //! - [`zonal`]: the clamped cosine max(0, cos θ) in SH, its convolution factors and
@@ -43,6 +44,7 @@
 
 pub mod bases;
 pub mod basis;
+pub mod dice;
 pub mod hbasis;
 pub mod product;
 pub mod project;

@@ -236,9 +236,9 @@ fn describe(t: Technique) -> (&'static str, &'static str, &'static str) {
             "Frostbite, Enlighten, Roughton et al. ZH3 (i3D 2024), Unreal, Sloan (deringing)",
         ),
         Technique::Local { .. } => (
-            "hb4, hb6, sgN",
-            "bases over the tangent-frame hemisphere, read at the tangent-space normal: the H-basis; N spherical Gaussians fitted by --sg-solve",
-            "Habel & Wimmer (I3D 2010); Neubelt & Pettineo (The Order: 1886), MJP's SG series",
+            "hb4, hb6, sgN, dice, dicey",
+            "bases over the tangent-frame hemisphere, read at the tangent-space normal: the H-basis; N spherical Gaussians fitted by --sg-solve; Ambient Dice (icosahedron vertices, hybrid Bézier; YCoCg)",
+            "Habel & Wimmer (I3D 2010); Neubelt & Pettineo (The Order: 1886), MJP's SG series; Iwanicki & Sloan (EGSR 2017)",
         ),
     }
 }

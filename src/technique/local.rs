@@ -13,6 +13,14 @@
 //!   values, 7 groups, 56 bytes); the lobes' axes and sharpness go in the uniform block and
 //!   the shader (`glsl/technique/sg.frag`, `glsl/include/sg.glsl`) sums Hill's fitted
 //!   SG–cosine integral of each lobe at m.
+//! - `dice`, `dicey`: Ambient Dice (`crate::sh::dice`): the least-squares fit of the
+//!   texel's irradiance over its hemisphere at the ten vertices that cover it — RGB value
+//!   and two derivatives per vertex (90 values, 23 groups, 184 bytes) or Y, its derivatives,
+//!   Co and Cg (50 values, 13 groups, 104 bytes). The shader (`glsl/technique/dice.frag`,
+//!   `glsl/include/dice.glsl`) finds m's face from the face table in the uniform block
+//!   ([`dice_face_table`]) and reads only that face's three vertices — 9 or 6 group reads
+//!   at computed indices: array layers on dx10, atlas tiles on dx9
+//!   (`texels::TexelGroups::with_dx9_atlas`).
 
 use rayon::prelude::*;
 
@@ -21,6 +29,7 @@ use super::spec::LocalBasis;
 use super::texels::{TexelGroups, VALUES_PER_TEXEL};
 use super::{Inputs, ShaderVariant, TechniqueError};
 use crate::bake::shlmap::ShLightmap;
+use crate::sh::dice::{self, DiceVariant};
 use crate::sh::hbasis::{self, HBasisSize};
 use crate::sh::sg::{FitStats, SgBasis, Solver};
 
@@ -37,11 +46,65 @@ pub struct SgParams {
     pub lobes: [[f32; 4]; SG_MAX_LOBES],
 }
 
+/// vec4s per face in [`dice_face_table`].
+pub const DICE_FACE_VEC4S: usize = 7;
+
+/// Largest face count of the table (the uniform block's array; `dice` uses 12).
+pub const DICE_MAX_FACES: usize = 12;
+
+/// Uniforms of glsl/technique/dice.frag, block `DiceParams` (std140).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct DiceParams {
+    /// x: factor undoing the f16 range scaling.
+    pub unscale: [f32; 4],
+    /// x, y: the dx9 atlas' columns and rows of tiles.
+    pub atlas: [f32; 4],
+    /// [`dice_face_table`], a face per entry.
+    pub faces: [[[f32; 4]; DICE_FACE_VEC4S]; DICE_MAX_FACES],
+}
+
+/// The faces for the shader, 7 vec4s each: the centre (xyz); per vertex i its dual vector
+/// (xyz; barycentric λ_i = dual_i · m) with the stored vertex's index in w; per vertex i
+/// the edge factors (t_u,i·v_j, t_v,i·v_j) toward its two others j in increasing order
+/// (xy, zw) — `sh::dice`'s (1).
+pub fn dice_face_table() -> Vec<[f32; 4]> {
+    let mut out = Vec::new();
+    for face in &dice::dice().faces {
+        let c = face.centre.as_vec3();
+        out.push([c.x, c.y, c.z, 0.0]);
+        for (i, d) in face.dual.iter().enumerate() {
+            let d = d.as_vec3();
+            out.push([d.x, d.y, d.z, face.vertices[i] as f32]);
+        }
+        for i in 0..3 {
+            let others: Vec<usize> = (0..3).filter(|&j| j != i).collect();
+            let (a, b) = (face.edge[i][others[0]], face.edge[i][others[1]]);
+            out.push([a[0], a[1], b[0], b[1]].map(|v| v as f32));
+        }
+    }
+    out
+}
+
 /// Values per texel of `basis` (RGB counted three times).
 pub fn stored_values(basis: LocalBasis) -> usize {
     match basis {
         LocalBasis::HBasis(size) => 3 * size.count(),
         LocalBasis::Sg { lobes } => 3 * lobes as usize,
+        LocalBasis::Dice(variant) => variant.stored_values(),
+    }
+}
+
+/// Per-texel group reads per pixel where the shader picks its groups (Ambient Dice: three
+/// vertices of 9 or 5 values, each spanning 3 or 2 groups whatever its offset); `None`:
+/// every group once.
+pub fn group_reads(basis: LocalBasis) -> Option<u32> {
+    match basis {
+        LocalBasis::HBasis(_) | LocalBasis::Sg { .. } => None,
+        LocalBasis::Dice(variant) => Some(match variant {
+            DiceVariant::Rgb => 9,
+            DiceVariant::YCoCg => 6,
+        }),
     }
 }
 
@@ -66,6 +129,13 @@ pub fn fragment_shader(basis: LocalBasis) -> ShaderVariant {
                     "SG_GROUPS",
                     stored_values(basis).div_ceil(VALUES_PER_TEXEL) as u32,
                 ),
+            ],
+        },
+        LocalBasis::Dice(variant) => ShaderVariant {
+            path: "technique/dice.frag",
+            defines: vec![
+                ("DICE_YCOCG", u32::from(variant == DiceVariant::YCoCg)),
+                ("DICE_FACES", dice::dice().faces.len() as u32),
             ],
         },
     }
@@ -144,6 +214,25 @@ pub fn sg_stored_texels(map: &ShLightmap, lobes: u32, solver: Solver) -> (Vec<f3
     (stored, total)
 }
 
+/// Every texel's Ambient Dice data (texel-major, [`DiceVariant::stored_values`] each) before
+/// the f16 range scale; zeros where the lightmap has no frame.
+pub fn dice_stored_texels(map: &ShLightmap, variant: DiceVariant) -> Vec<f32> {
+    let basis = dice::dice();
+    let texels = (map.res * map.res) as usize;
+    (0..texels)
+        .into_par_iter()
+        .flat_map_iter(|t| {
+            let frame = map.frame[t];
+            let radiance: Vec<[f64; 3]> = map.texel(t).iter().map(|c| c.map(f64::from)).collect();
+            let columns = [frame.x_axis, frame.y_axis, frame.z_axis].map(|c| c.as_dvec3());
+            basis
+                .project_irradiance(variant, &radiance, columns)
+                .into_iter()
+                .map(|v| v as f32)
+        })
+        .collect()
+}
+
 /// Every texel's stored values (texel-major, [`stored_values`] each) before the f16 range
 /// scale; zeros where the lightmap has no frame.
 pub fn stored_texels(map: &ShLightmap, size: HBasisSize) -> Vec<f32> {
@@ -182,12 +271,35 @@ pub(crate) fn prepare(
             );
             stored
         }
+        LocalBasis::Dice(variant) => dice_stored_texels(map, variant),
     };
     let name = format!("{label}.{}", basis.name());
     let (texel_groups, recipe, scale) =
         super::shlmap::baked_values(&stored, stored_values(basis), map.res, name, label)?;
+    let (texel_groups, recipe) = match basis {
+        LocalBasis::HBasis(_) | LocalBasis::Sg { .. } => (texel_groups, recipe),
+        LocalBasis::Dice(_) => {
+            let texel_groups = texel_groups.with_dx9_atlas();
+            let atlas = texel_groups
+                .dx9_atlas
+                .as_ref()
+                .map_or([1.0, 1.0], |a| [a.columns as f32, a.rows as f32]);
+            let mut params = DiceParams {
+                unscale: [1.0 / scale, 0.0, 0.0, 0.0],
+                atlas: [atlas[0], atlas[1], 0.0, 0.0],
+                faces: [[[0.0; 4]; DICE_FACE_VEC4S]; DICE_MAX_FACES],
+            };
+            for (dst, src) in params.faces.iter_mut().flatten().zip(dice_face_table()) {
+                *dst = src;
+            }
+            let recipe = Recipe::Baked(super::lighting::LightingData::params(
+                bytemuck::bytes_of(&params).to_vec(),
+            ));
+            (texel_groups, recipe)
+        }
+    };
     let recipe = match basis {
-        LocalBasis::HBasis(_) => recipe,
+        LocalBasis::HBasis(_) | LocalBasis::Dice(_) => recipe,
         LocalBasis::Sg { lobes } => {
             let sg = sg_basis(lobes);
             let mut params = SgParams {

@@ -183,8 +183,17 @@ impl Technique {
             | Technique::Sh2
             | Technique::PcaVertex { .. }
             | Technique::Nmprt { .. }
-            | Technique::EngineSh { .. }
-            | Technique::Local { .. } => ShaderReads::PLAIN,
+            | Technique::EngineSh { .. } => ShaderReads::PLAIN,
+            Technique::Local { basis } => match local::group_reads(basis) {
+                Some(lookups) => ShaderReads {
+                    per_texel_taps: Some(PerTexelTaps {
+                        lookups,
+                        fetches: 0,
+                    }),
+                    ..ShaderReads::PLAIN
+                },
+                None => ShaderReads::PLAIN,
+            },
             Technique::Vq { seams, .. } => cluster::reads(0, seams),
             Technique::Cpca { m, seams, .. } => cluster::reads(m, seams),
             Technique::Rnm { variant } => ShaderReads {

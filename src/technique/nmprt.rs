@@ -653,6 +653,7 @@ pub(crate) fn prepare(
                 res: transfer.res,
                 groups: Vec::new(),
                 name: format!("{label}.none"),
+                dx9_atlas: None,
             }
         }
     };

@@ -72,7 +72,8 @@ pub enum Technique {
     /// Local lightmap bases over the texel's tangent-frame hemisphere, from the same bake,
     /// indexed by the tangent-space normal: `hb4`, `hb6` — the H-basis (Habel & Wimmer 2010;
     /// `crate::sh::hbasis`); `sg5`, `sg6`, `sg9`, `sg12` — spherical Gaussians
-    /// (`crate::sh::sg`).
+    /// (`crate::sh::sg`); `dice`, `dicey` — Ambient Dice (Iwanicki & Sloan 2017;
+    /// `crate::sh::dice`).
     Local { basis: LocalBasis },
 }
 
@@ -84,6 +85,8 @@ pub enum LocalBasis {
     /// `sgN`: N spherical Gaussian lobes over the hemisphere, RGB amplitudes fitted by the
     /// run's `--sg-solve` (`crate::sh::sg`).
     Sg { lobes: u32 },
+    /// `dice`, `dicey`: Ambient Dice, RGB or YCoCg (`crate::sh::dice`).
+    Dice(crate::sh::dice::DiceVariant),
 }
 
 impl LocalBasis {
@@ -100,6 +103,7 @@ impl LocalBasis {
                 .iter()
                 .map(|&n| LocalBasis::Sg { lobes: n as u32 }),
         )
+        .chain(crate::sh::dice::DiceVariant::ALL.map(LocalBasis::Dice))
         .collect()
     }
 
@@ -110,6 +114,8 @@ impl LocalBasis {
             LocalBasis::HBasis(HBasisSize::H4) => "hb4".into(),
             LocalBasis::HBasis(HBasisSize::H6) => "hb6".into(),
             LocalBasis::Sg { lobes } => format!("sg{lobes}"),
+            LocalBasis::Dice(crate::sh::dice::DiceVariant::Rgb) => "dice".into(),
+            LocalBasis::Dice(crate::sh::dice::DiceVariant::YCoCg) => "dicey".into(),
         }
     }
 }
@@ -487,6 +493,12 @@ impl Technique {
         },
         Technique::Local {
             basis: LocalBasis::Sg { lobes: 12 },
+        },
+        Technique::Local {
+            basis: LocalBasis::Dice(crate::sh::dice::DiceVariant::Rgb),
+        },
+        Technique::Local {
+            basis: LocalBasis::Dice(crate::sh::dice::DiceVariant::YCoCg),
         },
     ];
 

@@ -4,8 +4,13 @@
 //! ```text
 //! group g of texel t = values 4g … 4g+3 of t (the last group padded with zeros)
 //! dx9:  one 2D texture per group            (sampler2D per_texel_tex[G])
+//!       or, for a shader that picks its groups per pixel, one atlas of the groups as
+//!       res × res tiles, row-major, `columns` wide (sampler2D per_texel_atlas)
 //! dx10: one 2D array, layer g = group g      (sampler2DArray per_texel_tex)
 //! ```
+//!
+//! The atlas is how DX9-class hardware indexes data by a computed number: sampler arrays
+//! take constant indices only, a texture coordinate anything.
 //!
 //! Shaders read them through `glsl/include/per_texel.glsl`.
 
@@ -45,6 +50,25 @@ pub struct TexelGroups {
     pub groups: Vec<Vec<u8>>,
     /// Debug name of the images ("unc6.dx9.visibility").
     pub name: String,
+    /// On dx9, the groups as one atlas instead of a texture each ([`TexelGroups::with_dx9_atlas`]).
+    pub dx9_atlas: Option<Atlas>,
+}
+
+/// The groups side by side in one texture: group g at tile (g mod columns, g div columns).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Atlas {
+    pub columns: u32,
+    pub rows: u32,
+    pub bytes: Vec<u8>,
+}
+
+/// The atlas width in tiles for `groups` groups: of ⌈√G⌉ … 2⌈√G⌉ columns, the fewest
+/// padding tiles (then the fewest columns).
+pub fn atlas_columns(groups: u32) -> u32 {
+    let low = (f64::from(groups).sqrt().ceil() as u32).max(1);
+    (low..=2 * low)
+        .min_by_key(|&c| (c * groups.div_ceil(c), c))
+        .unwrap_or(low)
 }
 
 impl TexelGroups {
@@ -63,23 +87,65 @@ impl TexelGroups {
                 .map(|g| bytemuck::cast_slice(g).to_vec())
                 .collect(),
             name,
+            dx9_atlas: None,
         }
     }
 
-    /// Uploads the groups on `path` ([`upload_texel_groups`]).
+    /// The same data, laid out on dx9 as one atlas ([`atlas_columns`] wide; tiles past the
+    /// last group are zeros).
+    pub fn with_dx9_atlas(mut self) -> Self {
+        let groups = self.groups.len() as u32;
+        let columns = atlas_columns(groups);
+        let rows = groups.div_ceil(columns);
+        let texel = crate::gpu::image::format_texel_bytes(self.format).unwrap_or(0) as usize;
+        let (res, row_bytes) = (self.res as usize, self.res as usize * texel);
+        let width_bytes = columns as usize * row_bytes;
+        let mut bytes = vec![0u8; width_bytes * rows as usize * res];
+        for (g, data) in self.groups.iter().enumerate() {
+            let (col, row) = (g % columns as usize, g / columns as usize);
+            for y in 0..res {
+                let dst = (row * res + y) * width_bytes + col * row_bytes;
+                bytes[dst..dst + row_bytes]
+                    .copy_from_slice(&data[y * row_bytes..(y + 1) * row_bytes]);
+            }
+        }
+        self.dx9_atlas = Some(Atlas {
+            columns,
+            rows,
+            bytes,
+        });
+        self
+    }
+
+    /// Uploads the groups on `path` ([`image_layout`], or the dx9 atlas).
     pub fn upload(&self, ctx: &Arc<Context>, path: HwPath) -> Result<Vec<Image>, TechniqueError> {
-        let bytes: Vec<&[u8]> = self.groups.iter().map(Vec::as_slice).collect();
-        upload_texel_groups(ctx, path, self.res, self.format, &bytes, &self.name)
+        self.image_levels_named(path)
+            .into_iter()
+            .map(|(desc, levels, name)| Ok(Image::with_data(ctx, &desc, &levels, &name)?))
+            .collect()
     }
 
     /// The images the groups become on `path`, each with its bytes (one slice per layer,
     /// level 0) and debug name ([`image_layout`]).
     pub fn image_levels(&self, path: HwPath) -> Vec<(ImageDesc, Vec<Vec<&[u8]>>)> {
-        let bytes: Vec<&[u8]> = self.groups.iter().map(Vec::as_slice).collect();
-        image_layout(path, self.res, self.format, &bytes, &self.name)
+        self.image_levels_named(path)
             .into_iter()
             .map(|(desc, levels, _)| (desc, levels))
             .collect()
+    }
+
+    fn image_levels_named(&self, path: HwPath) -> Vec<ImageBytes<'_>> {
+        match (&self.dx9_atlas, path) {
+            (Some(atlas), HwPath::Dx9) if !self.groups.is_empty() => vec![(
+                ImageDesc::texture_2d(self.format, atlas.columns * self.res, atlas.rows * self.res),
+                vec![vec![atlas.bytes.as_slice()]],
+                format!("{}.atlas", self.name),
+            )],
+            _ => {
+                let bytes: Vec<&[u8]> = self.groups.iter().map(Vec::as_slice).collect();
+                image_layout(path, self.res, self.format, &bytes, &self.name)
+            }
+        }
     }
 }
 
@@ -154,5 +220,44 @@ mod tests {
         }
         assert_eq!(pack_groups(5, 4, |_, _| 1u8).len(), 1);
         assert!(pack_groups(5, 0, |_, _| 1u8).is_empty());
+    }
+
+    #[test]
+    fn the_atlas_puts_each_group_in_its_tile() {
+        assert_eq!(atlas_columns(23), 6);
+        assert_eq!(atlas_columns(13), 7);
+        assert_eq!(atlas_columns(4), 2);
+        assert_eq!(atlas_columns(1), 1);
+        // 5 groups of 2×2 RGBA16F texels, texel (x, y) of group g holding 100 g + 10 y + x.
+        let res = 2;
+        let groups: Vec<Vec<u16>> = (0..5u16)
+            .map(|g| {
+                (0..4u16)
+                    .flat_map(|t| [100 * g + 10 * (t / 2) + t % 2; 4])
+                    .collect()
+            })
+            .collect();
+        let texels = TexelGroups::new(vk::Format::R16G16B16A16_SFLOAT, res, &groups, "t".into())
+            .with_dx9_atlas();
+        let atlas = texels.dx9_atlas.as_ref().unwrap();
+        assert_eq!((atlas.columns, atlas.rows), (3, 2));
+        let values: &[u16] = bytemuck::cast_slice(&atlas.bytes);
+        let width = (atlas.columns * res) as usize;
+        for g in 0..6u16 {
+            for (y, x) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+                let (col, row) = ((g % 3) as usize, (g / 3) as usize);
+                let at = ((row * 2 + y) * width + col * 2 + x) * 4;
+                let want = if g < 5 {
+                    100 * g + 10 * y as u16 + x as u16
+                } else {
+                    0
+                };
+                assert_eq!(values[at], want, "group {g} texel ({x}, {y})");
+            }
+        }
+        let images = texels.image_levels(HwPath::Dx9);
+        assert_eq!(images.len(), 1);
+        assert_eq!((images[0].0.width, images[0].0.height), (6, 4));
+        assert_eq!(texels.image_levels(HwPath::Dx10)[0].0.layers, 5);
     }
 }
