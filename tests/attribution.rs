@@ -64,7 +64,7 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
     std::fs::create_dir_all(&out_dir).expect("output folder");
     let techniques: Vec<Technique> = [
         "unc3", "unc4", "unc6", "pca16", "pca16w", "preconv", "sh2", "shlmap", "l1geo", "zh3",
-        "hb6",
+        "hb6", "dice",
     ]
     .iter()
     .map(|t| t.parse().expect("technique name"))
@@ -181,7 +181,7 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
         );
         // The lightmap bases share shlmap's first rung, then add their basis (and, for the
         // non-linear L1 curves, their reconstruction) rung.
-        for name in ["l1geo", "zh3", "hb6"] {
+        for name in ["l1geo", "zh3", "hb6", "dice"] {
             let r = row(name, path);
             assert_eq!(
                 step(r, AttributionKind::RadianceOrder),

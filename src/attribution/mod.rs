@@ -290,15 +290,20 @@ fn lightmap_taps(res: u32, uv: [f32; 2]) -> ([usize; 4], [f64; 4]) {
     )
 }
 
-/// `n` per-texel values at `uv`, bilinear; `texel(t, j)` is value j of texel t as stored.
-fn lightmap_bilinear(
+/// Most values per texel a derived basis' rung reads (`dice`: 90).
+const LIGHTMAP_MAX_VALUES: usize = 96;
+
+/// `n` (≤ N) per-texel values at `uv`, bilinear, in an array of N; `texel(t, j)` is value j
+/// of texel t as stored.
+fn lightmap_bilinear<const N: usize>(
     res: u32,
     uv: [f32; 2],
     n: usize,
     texel: impl Fn(usize, usize) -> f64,
-) -> [f64; 36] {
+) -> [f64; N] {
+    assert!(n <= N, "{n} values per texel, at most {N}");
     let (index, weight) = lightmap_taps(res, uv);
-    let mut out = [0.0; 36];
+    let mut out = [0.0; N];
     for (&t, &w) in index.iter().zip(&weight) {
         if w == 0.0 {
             continue;
@@ -766,7 +771,7 @@ impl<'a> RowLadder<'a> {
                 }
             } else {
                 let c = q.cluster_of[texel_index_of(q.res, px.uv[k])] as usize;
-                let u = lightmap_bilinear(q.res, px.uv[k], q.m, |t, i| {
+                let u: [f64; 36] = lightmap_bilinear(q.res, px.uv[k], q.m, |t, i| {
                     f64::from(q.weights_unorm[t * q.m + i]) / 255.0
                 });
                 out[..n2].copy_from_slice(&q.means[c][..n2]);
@@ -817,7 +822,7 @@ impl<'a> RowLadder<'a> {
             "preconv.lightmap".into(),
             &|| {
                 px.image(|k| {
-                    let a = lightmap_bilinear(ao_map.res, px.uv[k], 1, |t, _| {
+                    let a = lightmap_bilinear::<1>(ao_map.res, px.uv[k], 1, |t, _| {
                         f16_round(ao_map.values[t])
                     })[0];
                     e3(k).map(|e| a * e)
@@ -874,7 +879,7 @@ impl<'a> RowLadder<'a> {
                 let values = recipe.texel_values_all(radiance, irradiance);
                 let v = recipe.values_per_texel();
                 px.image(|k| {
-                    let x = lightmap_bilinear(transfer.res, px.uv[k], v, |t, j| {
+                    let x = lightmap_bilinear::<36>(transfer.res, px.uv[k], v, |t, j| {
                         f64::from(values[t * v + j])
                     });
                     // The frame of the nearest covered tap.
@@ -967,9 +972,10 @@ impl<'a> RowLadder<'a> {
                     .unwrap_or(1.0);
                 let unscale = f64::from(1.0 / scale);
                 px.image(|k| {
-                    let v = lightmap_bilinear(map.res, px.uv[k], per_texel, |t, j| {
-                        f16_round(stored[t * per_texel + j] * scale) * unscale
-                    });
+                    let v: [f64; LIGHTMAP_MAX_VALUES] =
+                        lightmap_bilinear(map.res, px.uv[k], per_texel, |t, j| {
+                            f16_round(stored[t * per_texel + j] * scale) * unscale
+                        });
                     eval(&v[..per_texel], k)
                 })
             },
@@ -1098,7 +1104,7 @@ impl<'a> RowLadder<'a> {
                 "shlmap.lightmap".into(),
                 &|| {
                     px.image(|k| {
-                        let v = lightmap_bilinear(map.res, px.uv[k], 27, |t, j| {
+                        let v = lightmap_bilinear::<27>(map.res, px.uv[k], 27, |t, j| {
                             f16_round(map.texel(t)[j / 3][j % 3] * scale)
                         });
                         let c: Vec<[f64; 3]> = (0..9)

@@ -323,11 +323,11 @@ impl Dice {
         };
         for i in 0..3 {
             out.value[i] = corner[i];
-            for j in 0..3 {
+            for (j, (&w, factors)) in edge_point[i].iter().zip(&f.edge[i]).enumerate() {
                 if i != j {
-                    out.value[i] += edge_point[i][j];
-                    out.du[i] += edge_point[i][j] * f.edge[i][j][0] / 3.0;
-                    out.dv[i] += edge_point[i][j] * f.edge[i][j][1] / 3.0;
+                    out.value[i] += w;
+                    out.du[i] += w * factors[0] / 3.0;
+                    out.dv[i] += w * factors[1] / 3.0;
                 }
             }
         }

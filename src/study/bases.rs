@@ -139,6 +139,7 @@ fn high_order_radiance(name: &str) -> Result<Vec<[f64; 3]>, EnvError> {
 /// above its plane; each basis stores what its technique stores for that texel and is
 /// compared, over the hemisphere of normals, with the irradiance of that radiance.
 fn measure_floor(env: &str, radiance: &[[f64; 3]], normals: &[(DVec3, f64)]) -> Vec<FloorRow> {
+    use crate::sh::dice::DiceVariant;
     use crate::sh::hbasis::{self, HBasisSize};
     use crate::sh::sg::{FitStats, LOBE_COUNTS, Solver};
     use crate::technique::local::{fit_sg, sg_basis, sg_irradiance};
@@ -220,6 +221,15 @@ fn measure_floor(env: &str, radiance: &[[f64; 3]], normals: &[(DVec3, f64)]) -> 
         let h = hbasis::project_irradiance(&sh3, frame, size);
         let e = |m: DVec3| hbasis::irradiance(&h, m);
         rows.push(row(label.into(), 3 * size.count(), rms(&e), None));
+    }
+    for (variant, label) in [
+        (DiceVariant::Rgb, "Dice"),
+        (DiceVariant::YCoCg, "Dice YCoCg"),
+    ] {
+        let basis = crate::sh::dice::dice();
+        let x = basis.project_irradiance(variant, &sh3, frame);
+        let e = |m: DVec3| basis.irradiance(variant, &x, m);
+        rows.push(row(label.into(), variant.stored_values(), rms(&e), None));
     }
     for n in LOBE_COUNTS {
         let basis = sg_basis(n as u32);

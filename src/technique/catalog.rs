@@ -81,8 +81,8 @@ const PAPER_FAMILIES: &[&str] = &["uncO", "pcaM, pcaMw", "shlmap", "preconv", "s
 
 /// The rows of each family after the paper's that stand for it in the headline set: one
 /// (the cheapest bake that shows what the family does), two for the engine bases (the
-/// plain L1 engines ship and the stored ZH3 that improves on it) and for the local bases
-/// (the H-basis and nine spherical Gaussians).
+/// plain L1 engines ship and the stored ZH3 that improves on it), three for the local
+/// bases (the H-basis, nine spherical Gaussians and Ambient Dice).
 const LATER_HEADLINES: &[Technique] = &[
     Technique::Vq {
         k: 64,
@@ -120,6 +120,9 @@ const LATER_HEADLINES: &[Technique] = &[
     },
     Technique::Local {
         basis: LocalBasis::Sg { lobes: 9 },
+    },
+    Technique::Local {
+        basis: LocalBasis::Dice(crate::sh::dice::DiceVariant::Rgb),
     },
 ];
 

@@ -228,9 +228,10 @@ mod tests {
         assert_eq!(atlas_columns(13), 7);
         assert_eq!(atlas_columns(4), 2);
         assert_eq!(atlas_columns(1), 1);
-        // 5 groups of 2×2 RGBA16F texels, texel (x, y) of group g holding 100 g + 10 y + x.
+        // 7 groups of 2×2 RGBA16F texels, texel (x, y) of group g holding 100 g + 10 y + x:
+        // 4 × 2 tiles, the last one padding.
         let res = 2;
-        let groups: Vec<Vec<u16>> = (0..5u16)
+        let groups: Vec<Vec<u16>> = (0..7u16)
             .map(|g| {
                 (0..4u16)
                     .flat_map(|t| [100 * g + 10 * (t / 2) + t % 2; 4])
@@ -240,14 +241,14 @@ mod tests {
         let texels = TexelGroups::new(vk::Format::R16G16B16A16_SFLOAT, res, &groups, "t".into())
             .with_dx9_atlas();
         let atlas = texels.dx9_atlas.as_ref().unwrap();
-        assert_eq!((atlas.columns, atlas.rows), (3, 2));
+        assert_eq!((atlas.columns, atlas.rows), (4, 2));
         let values: &[u16] = bytemuck::cast_slice(&atlas.bytes);
         let width = (atlas.columns * res) as usize;
-        for g in 0..6u16 {
+        for g in 0..8u16 {
             for (y, x) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
-                let (col, row) = ((g % 3) as usize, (g / 3) as usize);
+                let (col, row) = ((g % 4) as usize, (g / 4) as usize);
                 let at = ((row * 2 + y) * width + col * 2 + x) * 4;
-                let want = if g < 5 {
+                let want = if g < 7 {
                     100 * g + 10 * y as u16 + x as u16
                 } else {
                     0
@@ -257,7 +258,7 @@ mod tests {
         }
         let images = texels.image_levels(HwPath::Dx9);
         assert_eq!(images.len(), 1);
-        assert_eq!((images[0].0.width, images[0].0.height), (6, 4));
-        assert_eq!(texels.image_levels(HwPath::Dx10)[0].0.layers, 5);
+        assert_eq!((images[0].0.width, images[0].0.height), (8, 4));
+        assert_eq!(texels.image_levels(HwPath::Dx10)[0].0.layers, 7);
     }
 }
