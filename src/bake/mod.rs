@@ -13,11 +13,13 @@
 //! - [`transfer`]: per-texel transfer matrices M (lighting → order-3 transferred incident
 //!   radiance, inter-reflection included) of normal mapping for PRT.
 //! - [`cache`]: versioned, checksummed bake cache files, and EXR dumps for inspection.
+//! - [`block`]: BC6H / BC7 block compression (Intel's ISPC encoder) and decoding (`bcdec_rs`).
 //!
 //! Inputs a user controls (ray counts, resolutions) are validated here once, by
 //! [`validate_rays`] and [`validate_res`], so the bake math itself returns no errors.
 
 pub mod ao;
+pub mod block;
 pub mod cache;
 pub mod cluster;
 pub mod directions;

@@ -44,6 +44,25 @@ pub(super) enum StudyCommand {
     /// hallucinated and stored ZH3, luminance L1, L2, deringed L2) against exact irradiance,
     /// per environment, with the values each stores.
     Bases(StudyBasesArgs),
+    /// The SH lightmap block-compressed (BC6H, BC7) under each packing of its signed
+    /// coefficients — raw, offset, band-0 ratios — and BC6H's encoder settings against
+    /// time: irradiance error and bytes per texel.
+    Block(StudyBlockArgs),
+}
+
+#[derive(Args, Debug)]
+pub(super) struct StudyBlockArgs {
+    /// Environment the SH lightmap is baked under (as for `render`).
+    #[arg(long, default_value = "sky")]
+    env: String,
+    /// Reflections baked into the SH lightmap.
+    #[arg(long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
+    bounces: u32,
+    /// Output directory: block.md, block.json.
+    #[arg(short, long, default_value = "study-out/block")]
+    out: PathBuf,
+    #[command(flatten)]
+    scene: SceneArgs,
 }
 
 #[derive(Args, Debug)]
@@ -282,6 +301,7 @@ pub(super) fn run_study(c: StudyCommand) -> Result<()> {
         StudyCommand::Ndf(a) => run_ndf(a).context("study ndf"),
         StudyCommand::NmprtSvd(a) => run_nmprt_svd(a).context("study nmprt-svd"),
         StudyCommand::Bases(a) => run_bases(a).context("study bases"),
+        StudyCommand::Block(a) => run_block(a).context("study block"),
         StudyCommand::Normalmap(a) => run_normalmap(a).context("study normalmap"),
     }
 }
@@ -364,6 +384,35 @@ fn run_bases(a: StudyBasesArgs) -> Result<()> {
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.out.join("bases_error.svg").display()))?;
     print_table(&markdown, &a.out, "bases.md, bases.json", started);
     print_written(&plots);
+    Ok(())
+}
+
+fn run_block(a: StudyBlockArgs) -> Result<()> {
+    let outputs: Vec<(String, PathBuf)> = ["block.md", "block.json"]
+        .iter()
+        .map(|f| ("--out".to_string(), a.out.join(f)))
+        .collect();
+    shvis::files::check_outputs_spare_inputs(&outputs, &[])?;
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    let prepared = shvis::prepare::prepare(&prepare_settings(
+        &a.scene,
+        &a.env,
+        &[Technique::Shlmap],
+        a.bounces,
+    )?)?;
+    let map = prepared
+        .sh_lightmap
+        .as_ref()
+        .context("the SH lightmap was not baked")?;
+    let study = shvis::study::block::run(map);
+    let markdown = shvis::study::block::markdown(&study);
+    shvis::files::write(a.out.join("block.md"), &markdown)?;
+    shvis::files::write(
+        a.out.join("block.json"),
+        serde_json::to_string_pretty(&study)?,
+    )?;
+    print_table(&markdown, &a.out, "block.md, block.json", started);
     Ok(())
 }
 

@@ -19,10 +19,13 @@
 //! - [`bases`]: irradiance error of each engine lightmap basis (L1, Geomerics, ZH3,
 //!   luminance L1, L2, deringed L2) against exact irradiance per environment
 //!   (`shvis study bases`).
+//! - [`block`]: the SH lightmap block-compressed (BC6H, BC7) under each packing of its
+//!   signed coefficients, and the encoder's settings against time (`shvis study block`).
 //! - [`ndf`]: the specular term under naive MIP and normal-distribution filtering
 //!   on the receding bumpy plane against its footprint reference (`shvis study ndf`).
 
 pub mod bases;
+pub mod block;
 pub mod compression;
 pub mod ndf;
 pub mod ndf_diffuse;

@@ -1,0 +1,274 @@
+//! Block compression of per-texel data as DX11-class hardware stores it: 4 × 4 texels in
+//! 16 bytes (1 byte per texel), BC6H for unsigned half-float RGB, BC7 for 8-bit RGBA.
+//!
+//! Encoding is Intel's ISPC Texture Compressor (`intel_tex_2`, prebuilt kernels) at a chosen
+//! quality; decoding — the CPU's view of what the GPU will read, for the error ladder and
+//! the tests — is `bcdec_rs`, an independent decoder, so an encoder bug cannot hide behind
+//! a matching decoder of our own.
+//!
+//! BC6H here is the unsigned variant (the encoder writes no other): values must lie in
+//! [0, 65504]. Whatever does not — negative, non-finite, or above the largest half — is
+//! clamped and counted ([`Clamped`]) for the caller to report; nothing is clamped silently.
+//! A side that is not a multiple of 4 is padded by repeating the last row and column.
+
+use half::f16;
+
+/// Largest finite half float, BC6H's ceiling.
+pub const HALF_MAX: f32 = 65504.0;
+
+/// Bytes per 4 × 4 block (BC6H and BC7).
+pub const BLOCK_BYTES: usize = 16;
+
+/// The encoder's BC6H quality settings, fastest first.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Bc6hQuality {
+    VeryFast,
+    Fast,
+    Basic,
+    Slow,
+    VerySlow,
+}
+
+impl Bc6hQuality {
+    pub const ALL: [Bc6hQuality; 5] = [
+        Bc6hQuality::VeryFast,
+        Bc6hQuality::Fast,
+        Bc6hQuality::Basic,
+        Bc6hQuality::Slow,
+        Bc6hQuality::VerySlow,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Bc6hQuality::VeryFast => "very-fast",
+            Bc6hQuality::Fast => "fast",
+            Bc6hQuality::Basic => "basic",
+            Bc6hQuality::Slow => "slow",
+            Bc6hQuality::VerySlow => "very-slow",
+        }
+    }
+
+    fn settings(self) -> intel_tex_2::bc6h::EncodeSettings {
+        use intel_tex_2::bc6h;
+        match self {
+            Bc6hQuality::VeryFast => bc6h::very_fast_settings(),
+            Bc6hQuality::Fast => bc6h::fast_settings(),
+            Bc6hQuality::Basic => bc6h::basic_settings(),
+            Bc6hQuality::Slow => bc6h::slow_settings(),
+            Bc6hQuality::VerySlow => bc6h::very_slow_settings(),
+        }
+    }
+}
+
+/// Values an encoder clamped into its range.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Clamped {
+    /// Negative or not a number: stored as 0.
+    pub below: u64,
+    /// Above [`HALF_MAX`] (or +∞): stored as [`HALF_MAX`].
+    pub above: u64,
+}
+
+impl Clamped {
+    pub fn add(&mut self, other: Clamped) {
+        self.below += other.below;
+        self.above += other.above;
+    }
+}
+
+/// Blocks of a `res` × `res` image (the side padded to a multiple of 4).
+pub fn compressed_bytes(res: u32) -> usize {
+    let blocks = res.div_ceil(4) as usize;
+    blocks * blocks * BLOCK_BYTES
+}
+
+/// Texel (x, y) of the padded image: the nearest texel of the `res`-sided source.
+fn source_index(res: u32, x: u32, y: u32) -> usize {
+    (y.min(res - 1) * res + x.min(res - 1)) as usize
+}
+
+/// BC6H (unsigned) blocks of the RGB image `rgb` (`res` × `res`, row-major), and what was
+/// clamped into [0, 65504].
+///
+/// # Panics
+/// If `rgb` does not hold res² texels.
+pub fn encode_bc6h(rgb: &[[f32; 3]], res: u32, quality: Bc6hQuality) -> (Vec<u8>, Clamped) {
+    assert_eq!(rgb.len(), (res * res) as usize, "res² texels");
+    let side = res.div_ceil(4) * 4;
+    let mut clamped = Clamped::default();
+    let mut data = Vec::with_capacity((side * side) as usize * 8);
+    for y in 0..side {
+        for x in 0..side {
+            let inside = x < res && y < res;
+            for &v in &rgb[source_index(res, x, y)] {
+                let stored = if v.is_nan() || v < 0.0 {
+                    clamped.below += u64::from(inside);
+                    0.0
+                } else if v > HALF_MAX {
+                    clamped.above += u64::from(inside);
+                    HALF_MAX
+                } else {
+                    v
+                };
+                data.extend_from_slice(&f16::from_f32(stored).to_le_bytes());
+            }
+            data.extend_from_slice(&[0, 0]);
+        }
+    }
+    let surface = intel_tex_2::RgbaSurface {
+        data: &data,
+        width: side,
+        height: side,
+        stride: side * 8,
+    };
+    let blocks = intel_tex_2::bc6h::compress_blocks(&quality.settings(), &surface);
+    (blocks, clamped)
+}
+
+/// The RGB image BC6H (unsigned) `blocks` of a `res` × `res` image decode to.
+///
+/// # Panics
+/// If `blocks` is not [`compressed_bytes`]`(res)` long.
+pub fn decode_bc6h(blocks: &[u8], res: u32) -> Vec<[f32; 3]> {
+    assert_eq!(
+        blocks.len(),
+        compressed_bytes(res),
+        "blocks of a res² image"
+    );
+    let per_row = res.div_ceil(4) as usize;
+    let res = res as usize;
+    let mut out = vec![[0.0; 3]; res * res];
+    let mut texels = [0.0f32; 48];
+    for (b, block) in blocks.chunks_exact(BLOCK_BYTES).enumerate() {
+        let (bx, by) = (b % per_row, b / per_row);
+        bcdec_rs::bc6h_float(block, &mut texels, 12, false);
+        for j in 0..4 {
+            for i in 0..4 {
+                let (x, y) = (4 * bx + i, 4 * by + j);
+                if x < res && y < res {
+                    let t = 12 * j + 3 * i;
+                    out[y * res + x] = [texels[t], texels[t + 1], texels[t + 2]];
+                }
+            }
+        }
+    }
+    out
+}
+
+/// BC7 blocks (opaque, the encoder's basic quality) of the RGBA8 image `rgba`.
+///
+/// # Panics
+/// If `rgba` does not hold res² texels.
+pub fn encode_bc7(rgba: &[[u8; 4]], res: u32) -> Vec<u8> {
+    assert_eq!(rgba.len(), (res * res) as usize, "res² texels");
+    let side = res.div_ceil(4) * 4;
+    let mut data = Vec::with_capacity((side * side) as usize * 4);
+    for y in 0..side {
+        for x in 0..side {
+            data.extend_from_slice(&rgba[source_index(res, x, y)]);
+        }
+    }
+    let surface = intel_tex_2::RgbaSurface {
+        data: &data,
+        width: side,
+        height: side,
+        stride: side * 4,
+    };
+    intel_tex_2::bc7::compress_blocks(&intel_tex_2::bc7::opaque_basic_settings(), &surface)
+}
+
+/// The RGBA8 image BC7 `blocks` of a `res` × `res` image decode to.
+///
+/// # Panics
+/// If `blocks` is not [`compressed_bytes`]`(res)` long.
+pub fn decode_bc7(blocks: &[u8], res: u32) -> Vec<[u8; 4]> {
+    assert_eq!(
+        blocks.len(),
+        compressed_bytes(res),
+        "blocks of a res² image"
+    );
+    let per_row = res.div_ceil(4) as usize;
+    let res = res as usize;
+    let mut out = vec![[0; 4]; res * res];
+    let mut texels = [0u8; 64];
+    for (b, block) in blocks.chunks_exact(BLOCK_BYTES).enumerate() {
+        let (bx, by) = (b % per_row, b / per_row);
+        bcdec_rs::bc7(block, &mut texels, 16);
+        for j in 0..4 {
+            for i in 0..4 {
+                let (x, y) = (4 * bx + i, 4 * by + j);
+                if x < res && y < res {
+                    let t = 16 * j + 4 * i;
+                    out[y * res + x] = [texels[t], texels[t + 1], texels[t + 2], texels[t + 3]];
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A coloured light whose intensity varies smoothly (BC6H interpolates each block
+    /// along one line in RGB, as a lightmap's colours mostly are).
+    fn smooth(res: u32) -> Vec<[f32; 3]> {
+        (0..res * res)
+            .map(|i| {
+                let (x, y) = ((i % res) as f32 / res as f32, (i / res) as f32 / res as f32);
+                let s = 1.0 + x + 0.5 * y * y;
+                [s, 0.8 * s, 0.5 * s]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn bc6h_round_trips_a_smooth_image_within_a_few_per_cent() {
+        for res in [16, 18] {
+            let image = smooth(res);
+            let (blocks, clamped) = encode_bc6h(&image, res, Bc6hQuality::Basic);
+            assert_eq!(clamped, Clamped::default());
+            assert_eq!(blocks.len(), compressed_bytes(res));
+            let back = decode_bc6h(&blocks, res);
+            for (a, b) in image.iter().zip(&back) {
+                for c in 0..3 {
+                    assert!(
+                        (a[c] - b[c]).abs() <= 0.02 * a[c].abs().max(0.1),
+                        "{a:?} {b:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bc6h_clamps_what_it_cannot_hold_and_counts_it() {
+        let mut image = smooth(8);
+        image[0] = [-1.0, f32::NAN, 2.0];
+        image[9] = [1e6, f32::INFINITY, 1.0];
+        let (blocks, clamped) = encode_bc6h(&image, 8, Bc6hQuality::VeryFast);
+        assert_eq!(clamped, Clamped { below: 2, above: 2 });
+        let back = decode_bc6h(&blocks, 8);
+        assert!(back.iter().flatten().all(|v| v.is_finite() && *v >= 0.0));
+        assert!(back[9][0] > 0.5 * HALF_MAX, "{:?}", back[9]);
+    }
+
+    #[test]
+    fn bc7_round_trips_a_smooth_image_within_a_few_levels() {
+        let res = 12;
+        let image: Vec<[u8; 4]> = (0..res * res)
+            .map(|i| [(i % res * 20) as u8, (i / res * 20) as u8, 128, 255])
+            .collect();
+        let back = decode_bc7(&encode_bc7(&image, res), res);
+        for (a, b) in image.iter().zip(&back) {
+            for c in 0..4 {
+                assert!(
+                    (i32::from(a[c]) - i32::from(b[c])).abs() <= 6,
+                    "{a:?} {b:?}"
+                );
+            }
+        }
+    }
+}

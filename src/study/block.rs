@@ -1,0 +1,499 @@
+//! `shvis study block`: the SH lightmap (`shlmap`'s order-3 RGB radiance per texel) block-
+//! compressed as DX11-class hardware would store it — 9 layers of 1 byte per texel instead
+//! of 56 bytes of RGBA16F — under each packing of its signed coefficients, and the
+//! encoder's quality settings against time.
+//!
+//! # Packings (coefficient k of band l, RGB, per texel)
+//!
+//! ```text
+//! half         every L_k in f16 (shlmap's storage, the baseline)
+//! bc6h-raw     each L_k as a BC6H image; BC6H is unsigned, so negative terms clamp to 0
+//! bc6h-offset  each L_k − m_k in BC6H, m_k ≤ 0 the map's least value of L_k, added back
+//! bc6h-ratio   L_0 in BC6H; for k ≥ 1 the ratio r = L_k / L_0 remapped to
+//!              u = ½ + r / (2 R_k) ∈ [0, 1] in BC6H; decoded L_k = L̂_0 (2u − 1) R_k
+//! bc7-ratio    the same, u in BC7 (8 bits per channel)
+//! ```
+//!
+//! For a non-negative radiance |L_lm| ≤ √(2l+1) L_0 (|y_lm| ≤ √((2l+1)/4π), y_00 = 1/√(4π)),
+//! but a bake's radiance is not always non-negative: the environment's SH and the bounced
+//! SH irradiance ring below zero where a sun is, and there the ratios of dark texels run
+//! far past it. So R_k is the smaller of that bound and the map's own range, the 99.9th
+//! percentile of |r| over its texels with L_0 > 0 (a number per coefficient, for the
+//! manifest): the bound keeps a sunlit map's few wild ratios from costing every texel its
+//! precision, the percentile tightens an overcast map's; what lies beyond is clamped and
+//! counted. A texel with L_0 ≤ 0 (per channel)
+//! stores ratio 0 — and L_0 = 0, BC6H being unsigned. The ratio packings are Frostbite's and
+//! Godot's for L1, carried to band 2.
+//!
+//! # Error
+//!
+//! Over the covered texels, on irradiance (E_lm = A_l L_lm, `sh::zonal`):
+//!
+//! ```text
+//! sphere   √(Σ_t ‖ΔE_t‖²) / √(Σ_t ‖E_t‖²), ‖·‖ the L2 norm over all normals (RGB)
+//! p99      the 99th percentile over texels of ‖ΔE_t‖ / ‖E_t‖
+//! normal   √(Σ_t |ΔE_t(n_t)|²) / √(Σ_t |E_t(n_t)|²) at each texel's geometric normal
+//! ```
+
+use std::time::Instant;
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::bake::block::{self, Bc6hQuality, Clamped};
+use crate::bake::shlmap::ShLightmap;
+use crate::sh::Order;
+use crate::sh::zonal::clamped_cosine_convolution;
+
+/// The packings (module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Packing {
+    Half,
+    Bc6hRaw,
+    Bc6hOffset,
+    Bc6hRatio,
+    Bc7Ratio,
+}
+
+impl Packing {
+    pub const ALL: [Packing; 5] = [
+        Packing::Half,
+        Packing::Bc6hRaw,
+        Packing::Bc6hOffset,
+        Packing::Bc6hRatio,
+        Packing::Bc7Ratio,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Packing::Half => "half",
+            Packing::Bc6hRaw => "bc6h-raw",
+            Packing::Bc6hOffset => "bc6h-offset",
+            Packing::Bc6hRatio => "bc6h-ratio",
+            Packing::Bc7Ratio => "bc7-ratio",
+        }
+    }
+
+    /// Bytes per texel on the GPU: RGBA16F groups for `half` (`shlmap`'s 7), one byte per
+    /// coefficient layer otherwise.
+    pub fn bytes_per_texel(self) -> u32 {
+        match self {
+            Packing::Half => 56,
+            _ => COEFFS as u32,
+        }
+    }
+}
+
+const COEFFS: usize = 9;
+
+/// One packing at one quality.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BlockRow {
+    pub packing: Packing,
+    /// BC6H quality (none for `half`; BC7 runs at the encoder's basic quality).
+    pub quality: Option<Bc6hQuality>,
+    pub bytes_per_texel: u32,
+    pub encode_seconds: f64,
+    pub rms_sphere: f64,
+    pub p99_sphere: f64,
+    pub rms_normal: f64,
+    /// Values the encoding clamped (BC6H's range, or a ratio outside [0, 1]).
+    pub clamped: Clamped,
+}
+
+/// The study of one lightmap.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BlockStudy {
+    pub res: u32,
+    pub covered_texels: usize,
+    /// Covered texels with L_0 ≤ 0 in some channel.
+    pub nonpositive_l0_texels: usize,
+    /// R_k, k = 1…8, of the ratio packings.
+    pub ratio_ranges: Vec<f32>,
+    pub rows: Vec<BlockRow>,
+    /// The quality the ratio packing defaults to: the fastest within 5 % of the best error.
+    pub default_quality: Bc6hQuality,
+}
+
+fn band(k: usize) -> u32 {
+    match k {
+        0 => 0,
+        1..=3 => 1,
+        _ => 2,
+    }
+}
+
+/// R_k of the module doc: the smaller of √(2l+1) and the 99.9th percentile of |L_k / L_0|
+/// over the channels of `map`'s texels with L_0 > 0.
+pub fn ratio_range(map: &ShLightmap, k: usize) -> f32 {
+    let bound = ((2 * band(k) + 1) as f32).sqrt();
+    let mut ratios: Vec<f32> = (0..(map.res * map.res) as usize)
+        .flat_map(|t| {
+            let (lk, base) = (map.texel(t)[k], map.texel(t)[0]);
+            (0..3)
+                .filter(move |&c| base[c] > 0.0)
+                .map(move |c| (lk[c] / base[c]).abs())
+        })
+        .filter(|r| r.is_finite())
+        .collect();
+    if ratios.is_empty() {
+        return bound;
+    }
+    let at = ((ratios.len() as f64 * 0.999) as usize).min(ratios.len() - 1);
+    let (_, &mut range, _) = ratios.select_nth_unstable_by(at, f32::total_cmp);
+    if range > 0.0 { range.min(bound) } else { bound }
+}
+
+/// Texels whose L_0 is ≤ 0 in some channel (stored as black by the ratio packings).
+pub fn nonpositive_l0(map: &ShLightmap) -> usize {
+    (0..(map.res * map.res) as usize)
+        .filter(|&t| map.covered[t] && map.texel(t)[0].iter().any(|&v| v <= 0.0))
+        .count()
+}
+
+/// The coefficients of `map` after `packing` at `quality` (texel-major, as `map.coeffs`),
+/// and what was clamped.
+pub fn round_trip(
+    map: &ShLightmap,
+    packing: Packing,
+    quality: Bc6hQuality,
+) -> (Vec<[f32; 3]>, Clamped) {
+    let res = map.res;
+    let texels = (res * res) as usize;
+    let layer = |k: usize| -> Vec<[f32; 3]> { (0..texels).map(|t| map.texel(t)[k]).collect() };
+    let mut out = vec![[0.0f32; 3]; texels * COEFFS];
+    let mut clamped = Clamped::default();
+    let mut put = |k: usize, values: &[[f32; 3]]| {
+        for (t, v) in values.iter().enumerate() {
+            out[t * COEFFS + k] = *v;
+        }
+    };
+    match packing {
+        Packing::Half => {
+            let scale =
+                crate::technique::tables::finite_f16_scale(map.coeffs.iter().flatten().copied())
+                    .unwrap_or(1.0);
+            for k in 0..COEFFS {
+                let values: Vec<[f32; 3]> = layer(k)
+                    .iter()
+                    .map(|v| v.map(|x| half::f16::from_f32(x * scale).to_f32() / scale))
+                    .collect();
+                put(k, &values);
+            }
+        }
+        Packing::Bc6hRaw | Packing::Bc6hOffset => {
+            let coded: Vec<(Vec<[f32; 3]>, Clamped)> = (0..COEFFS)
+                .into_par_iter()
+                .map(|k| {
+                    let values = layer(k);
+                    let offset = if packing == Packing::Bc6hOffset {
+                        values.iter().flatten().fold(0.0f32, |m, &v| m.min(v))
+                    } else {
+                        0.0
+                    };
+                    let shifted: Vec<[f32; 3]> =
+                        values.iter().map(|v| v.map(|x| x - offset)).collect();
+                    let (blocks, c) = block::encode_bc6h(&shifted, res, quality);
+                    let back = block::decode_bc6h(&blocks, res)
+                        .into_iter()
+                        .map(|v| v.map(|x| x + offset))
+                        .collect();
+                    (back, c)
+                })
+                .collect();
+            for (k, (values, c)) in coded.iter().enumerate() {
+                put(k, values);
+                clamped.add(*c);
+            }
+        }
+        Packing::Bc6hRatio | Packing::Bc7Ratio => {
+            let (l0_blocks, c0) = block::encode_bc6h(&layer(0), res, quality);
+            clamped.add(c0);
+            let l0 = block::decode_bc6h(&l0_blocks, res);
+            put(0, &l0);
+            let coded: Vec<(Vec<[f32; 3]>, Clamped)> = (1..COEFFS)
+                .into_par_iter()
+                .map(|k| {
+                    let bound = ratio_range(map, k);
+                    let mut c = Clamped::default();
+                    let u: Vec<[f32; 3]> = (0..texels)
+                        .map(|t| {
+                            let (lk, base) = (map.texel(t)[k], map.texel(t)[0]);
+                            std::array::from_fn(|ch| {
+                                let r = if base[ch] > 0.0 {
+                                    lk[ch] / base[ch]
+                                } else {
+                                    0.0
+                                };
+                                let u = 0.5 + r / (2.0 * bound);
+                                if u < 0.0 {
+                                    c.below += 1;
+                                } else if u > 1.0 {
+                                    c.above += 1;
+                                }
+                                u.clamp(0.0, 1.0)
+                            })
+                        })
+                        .collect();
+                    let decoded_u: Vec<[f32; 3]> = if packing == Packing::Bc6hRatio {
+                        let (blocks, cb) = block::encode_bc6h(&u, res, quality);
+                        c.add(cb);
+                        block::decode_bc6h(&blocks, res)
+                    } else {
+                        let rgba: Vec<[u8; 4]> = u
+                            .iter()
+                            .map(|v| {
+                                let q = v.map(|x| (x * 255.0).round() as u8);
+                                [q[0], q[1], q[2], 255]
+                            })
+                            .collect();
+                        block::decode_bc7(&block::encode_bc7(&rgba, res), res)
+                            .iter()
+                            .map(|q| [0, 1, 2].map(|ch| f32::from(q[ch]) / 255.0))
+                            .collect()
+                    };
+                    let values = decoded_u
+                        .iter()
+                        .zip(&l0)
+                        .map(|(u, base)| {
+                            std::array::from_fn(|ch| base[ch] * (2.0 * u[ch] - 1.0) * bound)
+                        })
+                        .collect();
+                    (values, c)
+                })
+                .collect();
+            for (i, (values, c)) in coded.iter().enumerate() {
+                put(i + 1, values);
+                clamped.add(*c);
+            }
+        }
+    }
+    (out, clamped)
+}
+
+/// The module doc's three errors of `decoded` against `map`.
+pub fn errors(map: &ShLightmap, decoded: &[[f32; 3]]) -> (f64, f64, f64) {
+    let a: Vec<f64> = (0..COEFFS)
+        .map(|k| clamped_cosine_convolution(band(k)))
+        .collect();
+    let per_texel: Vec<(f64, f64, f64, f64)> = (0..(map.res * map.res) as usize)
+        .into_par_iter()
+        .filter(|&t| map.covered[t])
+        .map(|t| {
+            let (orig, got) = (map.texel(t), &decoded[t * COEFFS..(t + 1) * COEFFS]);
+            let (mut err, mut norm) = (0.0, 0.0);
+            for k in 0..COEFFS {
+                for c in 0..3 {
+                    let (o, g) = (f64::from(orig[k][c]), f64::from(got[k][c]));
+                    err += (a[k] * (g - o)).powi(2);
+                    norm += (a[k] * o).powi(2);
+                }
+            }
+            let n = map.normal[t].as_dvec3();
+            let (mut en_err, mut en) = (0.0, 0.0);
+            if n != DVec3::ZERO {
+                let mut y = [0.0; COEFFS];
+                crate::sh::basis::eval_basis(Order::THREE, n, &mut y);
+                for c in 0..3 {
+                    let e = |coeffs: &[[f32; 3]]| -> f64 {
+                        (0..COEFFS)
+                            .map(|k| a[k] * f64::from(coeffs[k][c]) * y[k])
+                            .sum()
+                    };
+                    let (eo, eg) = (e(orig), e(got));
+                    en_err += (eg - eo).powi(2);
+                    en += eo * eo;
+                }
+            }
+            (err, norm, en_err, en)
+        })
+        .collect();
+    let sum = |f: fn(&(f64, f64, f64, f64)) -> f64| per_texel.iter().map(f).sum::<f64>();
+    let ratio = |e: f64, n: f64| if n > 0.0 { (e / n).sqrt() } else { 0.0 };
+    let rms_sphere = ratio(sum(|p| p.0), sum(|p| p.1));
+    let rms_normal = ratio(sum(|p| p.2), sum(|p| p.3));
+    let mut relative: Vec<f64> = per_texel
+        .iter()
+        .filter(|p| p.1 > 0.0)
+        .map(|p| (p.0 / p.1).sqrt())
+        .collect();
+    relative.sort_by(f64::total_cmp);
+    let p99 = relative
+        .get(((relative.len() as f64 * 0.99) as usize).min(relative.len().saturating_sub(1)))
+        .copied()
+        .unwrap_or(0.0);
+    (rms_sphere, p99, rms_normal)
+}
+
+/// Every packing at the basic quality, and the ratio packing at every BC6H quality.
+pub fn run(map: &ShLightmap) -> BlockStudy {
+    let mut rows = Vec::new();
+    let mut measure = |packing: Packing, quality: Bc6hQuality| {
+        let started = Instant::now();
+        let (decoded, clamped) = round_trip(map, packing, quality);
+        let encode_seconds = started.elapsed().as_secs_f64();
+        let (rms_sphere, p99_sphere, rms_normal) = errors(map, &decoded);
+        let row = BlockRow {
+            packing,
+            quality: (packing != Packing::Half).then_some(quality),
+            bytes_per_texel: packing.bytes_per_texel(),
+            encode_seconds,
+            rms_sphere,
+            p99_sphere,
+            rms_normal,
+            clamped,
+        };
+        log::info!(
+            "{} {}: {:.3} % RMS in {:.2} s",
+            packing.name(),
+            quality.name(),
+            100.0 * rms_sphere,
+            encode_seconds
+        );
+        rows.push(row);
+    };
+    for packing in Packing::ALL {
+        if packing == Packing::Bc6hRatio {
+            for quality in Bc6hQuality::ALL {
+                measure(packing, quality);
+            }
+        } else {
+            measure(packing, Bc6hQuality::Basic);
+        }
+    }
+    let ratio: Vec<&BlockRow> = rows
+        .iter()
+        .filter(|r| r.packing == Packing::Bc6hRatio)
+        .collect();
+    let best = ratio
+        .iter()
+        .map(|r| r.rms_sphere)
+        .fold(f64::INFINITY, f64::min);
+    let default_quality = ratio
+        .iter()
+        .find(|r| r.rms_sphere <= 1.05 * best)
+        .and_then(|r| r.quality)
+        .unwrap_or(Bc6hQuality::Basic);
+    BlockStudy {
+        res: map.res,
+        covered_texels: map.covered.iter().filter(|&&c| c).count(),
+        nonpositive_l0_texels: nonpositive_l0(map),
+        ratio_ranges: (1..COEFFS).map(|k| ratio_range(map, k)).collect(),
+        rows,
+        default_quality,
+    }
+}
+
+/// The study as a Markdown page.
+pub fn markdown(study: &BlockStudy) -> String {
+    let mut s = format!(
+        "# Block compression of the SH lightmap\n\n\
+         {}² texels ({} covered, {} of them with L0 ≤ 0 in some channel), 9 RGB coefficients \
+         each; ratio ranges R1…R8 {}. Errors on irradiance over the covered texels: over all \
+         normals (RMS and 99th percentile per texel) and at each texel's geometric normal; \
+         encode time of the 9 layers on this machine.\n\n\
+         | packing | BC6H quality | bytes/texel | RMS | p99 | at the normal | encode s | clamped below / above |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|\n",
+        study.res,
+        study.covered_texels,
+        study.nonpositive_l0_texels,
+        study
+            .ratio_ranges
+            .iter()
+            .map(|r| format!("{r:.2}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    for r in &study.rows {
+        s += &format!(
+            "| {} | {} | {} | {:.3} % | {:.2} % | {:.3} % | {:.2} | {} / {} |\n",
+            r.packing.name(),
+            r.quality.map_or("—", Bc6hQuality::name),
+            r.bytes_per_texel,
+            100.0 * r.rms_sphere,
+            100.0 * r.p99_sphere,
+            100.0 * r.rms_normal,
+            r.encode_seconds,
+            r.clamped.below,
+            r.clamped.above
+        );
+    }
+    s += &format!(
+        "\nDefault BC6H quality (the fastest within 5 % of the best ratio-packing error): {}.\n",
+        study.default_quality.name()
+    );
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 64² map of sky-like texels with signed band-2 terms, one texel with L_0 = 0 and,
+    /// with `ringing`, one whose L1 is far outside the others' range.
+    fn map(ringing: bool) -> ShLightmap {
+        let res = 64;
+        let texels = (res * res) as usize;
+        let mut coeffs = Vec::with_capacity(texels * COEFFS);
+        for t in 0..texels {
+            let x = (t % 16) as f32 / 16.0;
+            let mut c = [[0.0f32; 3]; COEFFS];
+            c[0] = [1.0 + x, 0.9 + 0.5 * x, 0.8];
+            c[2] = [0.5 * x, 0.3, 0.2];
+            c[3] = [0.1 * x, 0.08 * x, 0.05 * x];
+            c[4] = [-0.2, 0.1 * x, -0.05];
+            c[8] = [0.1, -0.15, 0.05 * x];
+            if t == 5 {
+                c = [[0.0; 3]; COEFFS];
+            }
+            if ringing && t == 7 {
+                c[3] = [5.0, 5.0, 5.0];
+            }
+            coeffs.extend(c);
+        }
+        ShLightmap {
+            res,
+            bounces: 0,
+            coeffs,
+            covered: vec![true; texels],
+            normal: vec![glam::Vec3::Y; texels],
+            frame: vec![glam::Mat3::IDENTITY; texels],
+            bounce_source: Vec::new(),
+            basis_irradiance: Vec::new(),
+            stats: Default::default(),
+        }
+    }
+
+    #[test]
+    fn the_ratio_packings_keep_signed_terms_and_raw_bc6h_loses_them() {
+        let plain = map(false);
+        let error = |p: Packing| {
+            let (decoded, clamped) = round_trip(&plain, p, Bc6hQuality::Basic);
+            (errors(&plain, &decoded).0, clamped, decoded)
+        };
+        let (half, _, _) = error(Packing::Half);
+        assert!(half < 1e-3, "{half}");
+        let (raw, raw_clamped, _) = error(Packing::Bc6hRaw);
+        assert!(raw_clamped.below > 0);
+        let (ratio, ratio_clamped, decoded) = error(Packing::Bc6hRatio);
+        let (bc7, _, _) = error(Packing::Bc7Ratio);
+        assert!(ratio < 0.05 && bc7 < 0.05, "ratio {ratio} bc7 {bc7}");
+        assert!(raw > 2.0 * ratio, "raw {raw} ratio {ratio}");
+        assert_eq!(ratio_clamped, Clamped::default());
+        // L0 = 0 decodes to zero everywhere.
+        assert!(
+            decoded[5 * COEFFS..6 * COEFFS]
+                .iter()
+                .flatten()
+                .all(|v| v.abs() < 1e-3)
+        );
+        // A texel whose L1 is far beyond the others' range (a ringing SH) is clamped and
+        // counted, per channel.
+        let ringing = map(true);
+        assert!(ratio_range(&ringing, 3) < 0.1);
+        assert!(ratio_range(&ringing, 2) <= 3f32.sqrt());
+        let (_, clamped) = round_trip(&ringing, Packing::Bc6hRatio, Bc6hQuality::Basic);
+        assert_eq!(clamped.above, 3, "{clamped:?}");
+    }
+}
