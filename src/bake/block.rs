@@ -126,11 +126,13 @@ pub fn encode_bc6h(rgb: &[[f32; 3]], res: u32, quality: Bc6hQuality) -> (Vec<u8>
     (blocks, clamped)
 }
 
-/// The RGB image BC6H (unsigned) `blocks` of a `res` × `res` image decode to.
-///
-/// # Panics
-/// If `blocks` is not [`compressed_bytes`]`(res)` long.
-pub fn decode_bc6h(blocks: &[u8], res: u32) -> Vec<[f32; 3]> {
+/// The `res` × `res` image of `C`-channel texels that `blocks` decode to, each block by
+/// `decode` (its 4 × 4 texels row-major into the scratch slice).
+fn decode_blocks<T: Copy + Default, const C: usize>(
+    blocks: &[u8],
+    res: u32,
+    decode: impl Fn(&[u8], &mut [T]),
+) -> Vec<[T; C]> {
     assert_eq!(
         blocks.len(),
         compressed_bytes(res),
@@ -138,22 +140,31 @@ pub fn decode_bc6h(blocks: &[u8], res: u32) -> Vec<[f32; 3]> {
     );
     let per_row = res.div_ceil(4) as usize;
     let res = res as usize;
-    let mut out = vec![[0.0; 3]; res * res];
-    let mut texels = [0.0f32; 48];
+    let mut out = vec![[T::default(); C]; res * res];
+    let mut texels = vec![T::default(); 16 * C];
     for (b, block) in blocks.chunks_exact(BLOCK_BYTES).enumerate() {
         let (bx, by) = (b % per_row, b / per_row);
-        bcdec_rs::bc6h_float(block, &mut texels, 12, false);
+        decode(block, &mut texels);
         for j in 0..4 {
             for i in 0..4 {
                 let (x, y) = (4 * bx + i, 4 * by + j);
                 if x < res && y < res {
-                    let t = 12 * j + 3 * i;
-                    out[y * res + x] = [texels[t], texels[t + 1], texels[t + 2]];
+                    out[y * res + x] = std::array::from_fn(|c| texels[(4 * j + i) * C + c]);
                 }
             }
         }
     }
     out
+}
+
+/// The RGB image BC6H (unsigned) `blocks` of a `res` × `res` image decode to.
+///
+/// # Panics
+/// If `blocks` is not [`compressed_bytes`]`(res)` long.
+pub fn decode_bc6h(blocks: &[u8], res: u32) -> Vec<[f32; 3]> {
+    decode_blocks(blocks, res, |block, texels| {
+        bcdec_rs::bc6h_float(block, texels, 12, false)
+    })
 }
 
 /// BC7 blocks (opaque, the encoder's basic quality) of the RGBA8 image `rgba`.
@@ -183,29 +194,9 @@ pub fn encode_bc7(rgba: &[[u8; 4]], res: u32) -> Vec<u8> {
 /// # Panics
 /// If `blocks` is not [`compressed_bytes`]`(res)` long.
 pub fn decode_bc7(blocks: &[u8], res: u32) -> Vec<[u8; 4]> {
-    assert_eq!(
-        blocks.len(),
-        compressed_bytes(res),
-        "blocks of a res² image"
-    );
-    let per_row = res.div_ceil(4) as usize;
-    let res = res as usize;
-    let mut out = vec![[0; 4]; res * res];
-    let mut texels = [0u8; 64];
-    for (b, block) in blocks.chunks_exact(BLOCK_BYTES).enumerate() {
-        let (bx, by) = (b % per_row, b / per_row);
-        bcdec_rs::bc7(block, &mut texels, 16);
-        for j in 0..4 {
-            for i in 0..4 {
-                let (x, y) = (4 * bx + i, 4 * by + j);
-                if x < res && y < res {
-                    let t = 16 * j + 4 * i;
-                    out[y * res + x] = [texels[t], texels[t + 1], texels[t + 2], texels[t + 3]];
-                }
-            }
-        }
-    }
-    out
+    decode_blocks(blocks, res, |block, texels| {
+        bcdec_rs::bc7(block, texels, 16)
+    })
 }
 
 #[cfg(test)]

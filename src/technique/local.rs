@@ -218,6 +218,17 @@ pub fn sg_stored_texels(map: &ShLightmap, lobes: u32, solver: Solver) -> (Vec<f3
 /// the f16 range scale; zeros where the lightmap has no frame.
 pub fn dice_stored_texels(map: &ShLightmap, variant: DiceVariant) -> Vec<f32> {
     let basis = dice::dice();
+    per_texel_values(map, |radiance, frame| {
+        basis.project_irradiance(variant, radiance, frame)
+    })
+}
+
+/// `project`(the texel's order-3 RGB radiance, its frame columns) for every texel of `map`,
+/// concatenated in f32.
+fn per_texel_values(
+    map: &ShLightmap,
+    project: impl Fn(&[[f64; 3]], [glam::DVec3; 3]) -> Vec<f64> + Sync,
+) -> Vec<f32> {
     let texels = (map.res * map.res) as usize;
     (0..texels)
         .into_par_iter()
@@ -225,10 +236,7 @@ pub fn dice_stored_texels(map: &ShLightmap, variant: DiceVariant) -> Vec<f32> {
             let frame = map.frame[t];
             let radiance: Vec<[f64; 3]> = map.texel(t).iter().map(|c| c.map(f64::from)).collect();
             let columns = [frame.x_axis, frame.y_axis, frame.z_axis].map(|c| c.as_dvec3());
-            basis
-                .project_irradiance(variant, &radiance, columns)
-                .into_iter()
-                .map(|v| v as f32)
+            project(&radiance, columns).into_iter().map(|v| v as f32)
         })
         .collect()
 }
@@ -236,19 +244,12 @@ pub fn dice_stored_texels(map: &ShLightmap, variant: DiceVariant) -> Vec<f32> {
 /// Every texel's stored values (texel-major, [`stored_values`] each) before the f16 range
 /// scale; zeros where the lightmap has no frame.
 pub fn stored_texels(map: &ShLightmap, size: HBasisSize) -> Vec<f32> {
-    let texels = (map.res * map.res) as usize;
-    (0..texels)
-        .into_par_iter()
-        .flat_map_iter(|t| {
-            let frame = map.frame[t];
-            let radiance: Vec<[f64; 3]> = map.texel(t).iter().map(|c| c.map(f64::from)).collect();
-            let columns = [frame.x_axis, frame.y_axis, frame.z_axis].map(|c| c.as_dvec3());
-            hbasis::project_irradiance(&radiance, columns, size)
-                .into_iter()
-                .flatten()
-                .map(|v| v as f32)
-        })
-        .collect()
+    per_texel_values(map, |radiance, frame| {
+        hbasis::project_irradiance(radiance, frame, size)
+            .into_iter()
+            .flatten()
+            .collect()
+    })
 }
 
 /// The stored values, range-scaled into f16, and the recipe of their baked-in lighting.
