@@ -73,7 +73,7 @@ use super::hbasis::hemisphere_quadrature;
 pub const STORED_VERTICES: usize = 10;
 
 /// Gauss–Legendre nodes in z of the fitting rule (2·FIT_N azimuths each).
-pub const FIT_N: usize = 10;
+pub const FIT_N: usize = 6;
 
 /// The two variants.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
