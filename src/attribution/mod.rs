@@ -290,6 +290,10 @@ fn lightmap_taps(res: u32, uv: [f32; 2]) -> ([usize; 4], [f64; 4]) {
     )
 }
 
+/// A local basis fitted to a pixel's order-3 radiance through its frame (tangent, bitangent,
+/// normal) and evaluated at its tangent-space normal.
+type FitEval<'f> = dyn Fn(&[[f64; 3]], [glam::DVec3; 3], glam::DVec3) -> [f64; 3] + Sync + 'f;
+
 /// Most values per texel a derived basis' rung reads (`dice`: 90).
 const LIGHTMAP_MAX_VALUES: usize = 96;
 
@@ -982,105 +986,98 @@ impl<'a> RowLadder<'a> {
         );
     }
 
-    /// The H-basis rungs: the pixel's gathered radiance, then its irradiance projected onto
-    /// the H-basis through the pixel's own frame and evaluated at its tangent-space normal,
-    /// then the lightmap's f16 texels (projected through each texel's frame).
+    /// The rungs of a local basis (`hb*`, `sg*`, `dice*`): the pixel's gathered radiance,
+    /// then the basis fitted to it through the pixel's own frame and evaluated at its
+    /// tangent-space normal (`fit_eval`; rung `{basis_label}.basis`), then the lightmap's
+    /// f16 values (`stored`, fitted through each texel's frame; `eval` reads them).
+    fn local_basis(
+        &self,
+        rungs: &mut Vec<Rung>,
+        basis_label: String,
+        fit_eval: &FitEval<'_>,
+        per_texel: usize,
+        stored: &dyn Fn(&crate::bake::shlmap::ShLightmap) -> Vec<f32>,
+        eval: &(dyn Fn(&[f64], glam::DVec3) -> [f64; 3] + Sync),
+    ) {
+        let px = self.px;
+        let Some((map, gathered)) = self.push_radiance_order(rungs) else {
+            return;
+        };
+        self.push(
+            rungs,
+            AttributionKind::Basis,
+            format!("{basis_label}.basis"),
+            &|| px.image(|k| fit_eval(&gathered[k], px.frame[k], px.tangent_normal[k])),
+        );
+        self.push_lightmap_values(rungs, map, per_texel, &|| stored(map), &|v, k| {
+            eval(v, px.tangent_normal[k])
+        });
+    }
+
+    /// The H-basis rungs ([`RowLadder::local_basis`]).
     fn hbasis(&self, rungs: &mut Vec<Rung>, size: crate::sh::hbasis::HBasisSize) {
         use crate::sh::hbasis;
-        let px = self.px;
-        let Some((map, gathered)) = self.push_radiance_order(rungs) else {
-            return;
+        let rgb = |v: &[f64]| -> Vec<[f64; 3]> {
+            (0..size.count())
+                .map(|i| [v[3 * i], v[3 * i + 1], v[3 * i + 2]])
+                .collect()
         };
-        let technique = self.technique;
-        self.push(
+        self.local_basis(
             rungs,
-            AttributionKind::Basis,
-            format!("{technique}.basis"),
-            &|| {
-                px.image(|k| {
-                    let h = hbasis::project_irradiance(&gathered[k], px.frame[k], size);
-                    hbasis::irradiance(&h, px.tangent_normal[k])
-                })
+            self.technique.to_string(),
+            &|radiance, frame, m| {
+                hbasis::irradiance(&hbasis::project_irradiance(radiance, frame, size), m)
             },
-        );
-        self.push_lightmap_values(
-            rungs,
-            map,
             3 * size.count(),
-            &|| crate::technique::local::stored_texels(map, size),
-            &|v, k| {
-                let h: Vec<[f64; 3]> = (0..size.count())
-                    .map(|i| [v[3 * i], v[3 * i + 1], v[3 * i + 2]])
-                    .collect();
-                hbasis::irradiance(&h, px.tangent_normal[k])
-            },
+            &|map| crate::technique::local::stored_texels(map, size),
+            &|v, m| hbasis::irradiance(&rgb(v), m),
         );
     }
 
-    /// The SG rungs: the pixel's gathered radiance, then the lobes fitted to it through the
-    /// pixel's own frame by the run's solver and evaluated at its tangent-space normal, then
-    /// the lightmap's f16 amplitudes (fitted through each texel's frame).
-    /// The Ambient Dice rungs: as the H-basis', the basis being the fit at the ten vertices
-    /// and its hybrid (or YCoCg) interpolation at the pixel's tangent-space normal.
+    /// The Ambient Dice rungs ([`RowLadder::local_basis`]): the fit at the ten vertices
+    /// and its hybrid (or YCoCg) interpolation.
     fn dice(&self, rungs: &mut Vec<Rung>, variant: crate::sh::dice::DiceVariant) {
-        let px = self.px;
-        let Some((map, gathered)) = self.push_radiance_order(rungs) else {
-            return;
-        };
-        let technique = self.technique;
         let basis = crate::sh::dice::dice();
-        self.push(
+        self.local_basis(
             rungs,
-            AttributionKind::Basis,
-            format!("{technique}.basis"),
-            &|| {
-                px.image(|k| {
-                    let x = basis.project_irradiance(variant, &gathered[k], px.frame[k]);
-                    basis.irradiance(variant, &x, px.tangent_normal[k])
-                })
+            self.technique.to_string(),
+            &|radiance, frame, m| {
+                basis.irradiance(
+                    variant,
+                    &basis.project_irradiance(variant, radiance, frame),
+                    m,
+                )
             },
-        );
-        self.push_lightmap_values(
-            rungs,
-            map,
             variant.stored_values(),
-            &|| crate::technique::local::dice_stored_texels(map, variant),
-            &|v, k| basis.irradiance(variant, v, px.tangent_normal[k]),
+            &|map| crate::technique::local::dice_stored_texels(map, variant),
+            &|v, m| basis.irradiance(variant, v, m),
         );
     }
 
+    /// The SG rungs ([`RowLadder::local_basis`]): the lobes fitted by the run's solver.
     fn sg(&self, rungs: &mut Vec<Rung>, lobes: u32) {
         use crate::technique::local::{fit_sg, sg_basis, sg_irradiance, sg_stored_texels};
-        let (px, prepared) = (self.px, self.prepared);
-        let Some((map, gathered)) = self.push_radiance_order(rungs) else {
-            return;
-        };
-        let technique = self.technique;
         let basis = sg_basis(lobes);
-        let solver = prepared.sg_solver;
-        self.push(
+        let solver = self.prepared.sg_solver;
+        let rgb = |v: &[f64]| -> Vec<[f64; 3]> {
+            (0..lobes as usize)
+                .map(|i| [v[3 * i], v[3 * i + 1], v[3 * i + 2]])
+                .collect()
+        };
+        self.local_basis(
             rungs,
-            AttributionKind::Basis,
-            format!("{technique}.{solver}.basis"),
-            &|| {
-                px.image(|k| {
-                    let mut stats = crate::sh::sg::FitStats::default();
-                    let a = fit_sg(&basis, &gathered[k], px.frame[k], solver, &mut stats);
-                    sg_irradiance(&basis, &a, px.tangent_normal[k])
-                })
+            format!("{}.{solver}", self.technique),
+            &|radiance, frame, m| {
+                let mut stats = crate::sh::sg::FitStats::default();
+                sg_irradiance(
+                    &basis,
+                    &fit_sg(&basis, radiance, frame, solver, &mut stats),
+                    m,
+                )
             },
-        );
-        self.push_lightmap_values(
-            rungs,
-            map,
             3 * lobes as usize,
-            &|| sg_stored_texels(map, lobes, solver).0,
-            &|v, k| {
-                let a: Vec<[f64; 3]> = (0..lobes as usize)
-                    .map(|i| [v[3 * i], v[3 * i + 1], v[3 * i + 2]])
-                    .collect();
-                sg_irradiance(&basis, &a, px.tangent_normal[k])
-            },
+            &|map| sg_stored_texels(map, lobes, solver).0,
+            &|v, m| sg_irradiance(&basis, &rgb(v), m),
         );
     }
 
