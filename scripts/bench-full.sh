@@ -17,7 +17,7 @@ mkdir -p "$CACHE"
 # name|seconds on a 2-core lavapipe machine (measured there)|command
 steps() {
     cat <<STEPS
-bench|950|$SHVIS bench --techniques all --out $OUT
+bench|1550|$SHVIS bench --techniques all --paths dx9,dx10,dx11 --out $OUT
 study rnm|60|$SHVIS study rnm --envs $RNM_ENVS --out $OUT/rnm
 study normalmap|75|$SHVIS study normalmap $MODEL_ARG --out $OUT/normalmap
 study ndf|40|$SHVIS study ndf --diffuse-envs $NDF_ENVS --out $OUT/ndf

@@ -432,7 +432,8 @@ impl App<'_> {
             (_, "p") => {
                 let path = match st.path {
                     HwPath::Dx9 => HwPath::Dx10,
-                    HwPath::Dx10 => HwPath::Dx9,
+                    HwPath::Dx10 => HwPath::Dx11,
+                    HwPath::Dx11 => HwPath::Dx9,
                 };
                 switch(
                     st,

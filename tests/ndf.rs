@@ -370,6 +370,7 @@ fn the_bench_measures_the_specular_filterings_side_by_side() {
             probe_fresh: false,
             probe_frames: 5,
             relight_degrees: None,
+            dx11_rows: None,
         },
     )
     .unwrap();

@@ -1,7 +1,7 @@
 // dice, dicey: Ambient Dice lightmaps (src/technique/local.rs). Per texel the stored values
 // of ten icosahedron vertices (9 or 5 each) in RGBA groups; the shader reads only the three
 // vertices of the face holding the normal map's tangent-space normal
-// (glsl/include/dice.glsl): dx10 at computed array layers, dx9 at computed tiles of one
+// (glsl/include/dice.glsl): dx10 and dx11 at computed array layers, dx9 at computed tiles of one
 // atlas texture (sampler arrays take constant indices only). radiance = albedo/π · max(0, E).
 #version 450
 #extension GL_GOOGLE_include_directive : require
@@ -34,9 +34,11 @@ vec4 dice_read(int g) {
     return textureLod(per_texel_atlas, (tile + uv) / tiles, 0.0);
 }
 #else
-layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0) uniform sampler2DArray per_texel_tex;
+// dx10 and dx11 (whose per_texel.glsl decodes the block-compressed groups).
+#define SHVIS_PER_TEXEL_GROUPS SHVIS_DICE_GROUPS
+#include "per_texel.glsl"
 vec4 dice_read(int g) {
-    return textureLod(per_texel_tex, vec3(in_uv_lightmap, float(g)), 0.0);
+    return SAMPLE_PER_TEXEL_LOD0(g);
 }
 #endif
 

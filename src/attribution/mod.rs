@@ -516,6 +516,59 @@ impl<'a> RowLadder<'a> {
         );
     }
 
+    /// On `dx11`, appends the block compression rung: the lightmap rung's `eval` of
+    /// `per_texel` values, each what the technique's blocks decode to (×`unscale`, the
+    /// inverse of its range scale), filtered at the pixel's lightmap UV as the shader
+    /// filters them (`DecodedBlocks::filtered`). A row whose data
+    /// cannot be compressed was refused before its ladder; a failure here is logged and
+    /// leaves the rung out (its share then stays in the CPU → GPU rung).
+    fn push_block_compression(
+        &self,
+        rungs: &mut Vec<Rung>,
+        per_texel: usize,
+        unscale: f64,
+        eval: &(dyn Fn(&[f64], usize) -> [f64; 3] + Sync),
+    ) {
+        if self.path != HwPath::Dx11 {
+            return;
+        }
+        let px = self.px;
+        let decoded =
+            match crate::technique::dx11_decoded_values(self.technique, &self.prepared.inputs()) {
+                Ok(decoded) => decoded,
+                Err(e) => {
+                    log::warn!("{}: no block compression rung: {e}", self.label);
+                    return;
+                }
+            };
+        // An SG fit depends on the run's solver: its rung is cached per solver.
+        let sg = matches!(
+            self.technique,
+            Technique::Local {
+                basis: crate::technique::LocalBasis::Sg { .. }
+            }
+        );
+        let sg_solver = if sg {
+            format!(".{}", self.prepared.sg_solver)
+        } else {
+            String::new()
+        };
+        self.push(
+            rungs,
+            AttributionKind::BlockCompression,
+            format!("{}{sg_solver}.block", self.label),
+            &|| {
+                px.image(|k| {
+                    let (texels, weights) = lightmap_taps(decoded.res, px.uv[k]);
+                    let v: Vec<f64> = (0..per_texel)
+                        .map(|j| decoded.filtered(&texels, &weights, j) * unscale)
+                        .collect();
+                    eval(&v, k)
+                })
+            },
+        );
+    }
+
     /// Appends [`compression_rungs`] of `compressed` and returns the L×H matrices the
     /// later rungs use.
     fn push_compression(
@@ -576,6 +629,7 @@ impl<'a> RowLadder<'a> {
             format!("{label}.lightmap"),
             &|| px.image(|k| table_dot(&self.lightmap_v(k, n2), k)),
         );
+        self.push_block_compression(rungs, n2, 1.0, &table_dot);
         Ok(())
     }
 
@@ -833,6 +887,7 @@ impl<'a> RowLadder<'a> {
                 })
             },
         );
+        self.push_block_compression(rungs, 1, 1.0, &|v, k| e3(k).map(|e| v[0] * e));
     }
 
     /// `sh2`'s rungs: V truncated to order 2, lighting to order 3, then the product and
@@ -863,6 +918,7 @@ impl<'a> RowLadder<'a> {
             "sh2.lightmap".into(),
             &|| px.image(|k| shade(&product, px.normal[k], &self.lightmap_v(k, n2))),
         );
+        self.push_block_compression(rungs, n2, 1.0, &|v, k| shade(&product, px.normal[k], v));
     }
 
     /// `nmprt*`'s one rung: the technique's own model at each pixel (none without a
@@ -984,6 +1040,12 @@ impl<'a> RowLadder<'a> {
                 })
             },
         );
+        if self.path == HwPath::Dx11 {
+            let stored = stored();
+            let scale =
+                crate::technique::tables::finite_f16_scale(stored.iter().copied()).unwrap_or(1.0);
+            self.push_block_compression(rungs, per_texel, f64::from(1.0 / scale), eval);
+        }
     }
 
     /// The rungs of a local basis (`hb*`, `sg*`, `dice*`): the pixel's gathered radiance,
@@ -1111,6 +1173,12 @@ impl<'a> RowLadder<'a> {
                     })
                 },
             );
+            self.push_block_compression(rungs, 27, unscale, &|v, k| {
+                let c: Vec<[f64; 3]> = (0..9)
+                    .map(|i| std::array::from_fn(|ch| v[3 * i + ch]))
+                    .collect();
+                l2(&c, px.normal[k])
+            });
             return;
         };
         let technique = self.technique;

@@ -1,5 +1,6 @@
 //! Block compression of per-texel data as DX11-class hardware stores it: 4 × 4 texels in
-//! 16 bytes (1 byte per texel), BC6H for unsigned half-float RGB, BC7 for 8-bit RGBA.
+//! 16 bytes (1 byte per texel), BC6H for unsigned half-float RGB, BC7 for 8-bit RGBA; BC4
+//! for one 8-bit channel in 8 bytes (half a byte per texel).
 //!
 //! Encoding is Intel's ISPC Texture Compressor (`intel_tex_2`, prebuilt kernels) at a chosen
 //! quality; decoding — the CPU's view of what the GPU will read, for the error ladder and
@@ -18,6 +19,9 @@ pub const HALF_MAX: f32 = 65504.0;
 
 /// Bytes per 4 × 4 block (BC6H and BC7).
 pub const BLOCK_BYTES: usize = 16;
+
+/// Bytes per 4 × 4 BC4 block.
+pub const BC4_BLOCK_BYTES: usize = 8;
 
 /// The encoder's BC6H quality settings, fastest first.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
@@ -77,10 +81,25 @@ impl Clamped {
     }
 }
 
-/// Blocks of a `res` × `res` image (the side padded to a multiple of 4).
+/// Bytes of the BC6H or BC7 blocks of a `res` × `res` image (the side padded to a
+/// multiple of 4).
 pub fn compressed_bytes(res: u32) -> usize {
     let blocks = res.div_ceil(4) as usize;
     blocks * blocks * BLOCK_BYTES
+}
+
+/// The `res` × `res` image of `C`-byte texels padded to a multiple of 4 on each side
+/// ([`source_index`]), row-major: what the encoder reads.
+fn padded<const C: usize>(texels: &[[u8; C]], res: u32) -> (Vec<u8>, u32) {
+    assert_eq!(texels.len(), (res * res) as usize, "res² texels");
+    let side = res.div_ceil(4) * 4;
+    let mut data = Vec::with_capacity((side * side) as usize * C);
+    for y in 0..side {
+        for x in 0..side {
+            data.extend_from_slice(&texels[source_index(res, x, y)]);
+        }
+    }
+    (data, side)
 }
 
 /// Texel (x, y) of the padded image: the nearest texel of the `res`-sided source.
@@ -131,19 +150,20 @@ pub fn encode_bc6h(rgb: &[[f32; 3]], res: u32, quality: Bc6hQuality) -> (Vec<u8>
 fn decode_blocks<T: Copy + Default, const C: usize>(
     blocks: &[u8],
     res: u32,
+    block_bytes: usize,
     decode: impl Fn(&[u8], &mut [T]),
 ) -> Vec<[T; C]> {
+    let per_side = res.div_ceil(4) as usize;
     assert_eq!(
         blocks.len(),
-        compressed_bytes(res),
+        per_side * per_side * block_bytes,
         "blocks of a res² image"
     );
-    let per_row = res.div_ceil(4) as usize;
     let res = res as usize;
     let mut out = vec![[T::default(); C]; res * res];
     let mut texels = vec![T::default(); 16 * C];
-    for (b, block) in blocks.chunks_exact(BLOCK_BYTES).enumerate() {
-        let (bx, by) = (b % per_row, b / per_row);
+    for (b, block) in blocks.chunks_exact(block_bytes).enumerate() {
+        let (bx, by) = (b % per_side, b / per_side);
         decode(block, &mut texels);
         for j in 0..4 {
             for i in 0..4 {
@@ -162,31 +182,59 @@ fn decode_blocks<T: Copy + Default, const C: usize>(
 /// # Panics
 /// If `blocks` is not [`compressed_bytes`]`(res)` long.
 pub fn decode_bc6h(blocks: &[u8], res: u32) -> Vec<[f32; 3]> {
-    decode_blocks(blocks, res, |block, texels| {
+    decode_blocks(blocks, res, BLOCK_BYTES, |block, texels| {
         bcdec_rs::bc6h_float(block, texels, 12, false)
     })
 }
 
-/// BC7 blocks (opaque, the encoder's basic quality) of the RGBA8 image `rgba`.
+/// BC7 blocks (the encoder's basic quality) of the RGBA8 image `rgba`; `alpha`: the alpha
+/// channel holds data (else it is taken as opaque and decodes as 255).
 ///
 /// # Panics
 /// If `rgba` does not hold res² texels.
-pub fn encode_bc7(rgba: &[[u8; 4]], res: u32) -> Vec<u8> {
-    assert_eq!(rgba.len(), (res * res) as usize, "res² texels");
-    let side = res.div_ceil(4) * 4;
-    let mut data = Vec::with_capacity((side * side) as usize * 4);
-    for y in 0..side {
-        for x in 0..side {
-            data.extend_from_slice(&rgba[source_index(res, x, y)]);
-        }
-    }
+pub fn encode_bc7(rgba: &[[u8; 4]], res: u32, alpha: bool) -> Vec<u8> {
+    let (data, side) = padded(rgba, res);
     let surface = intel_tex_2::RgbaSurface {
         data: &data,
         width: side,
         height: side,
         stride: side * 4,
     };
-    intel_tex_2::bc7::compress_blocks(&intel_tex_2::bc7::opaque_basic_settings(), &surface)
+    let settings = if alpha {
+        intel_tex_2::bc7::alpha_basic_settings()
+    } else {
+        intel_tex_2::bc7::opaque_basic_settings()
+    };
+    intel_tex_2::bc7::compress_blocks(&settings, &surface)
+}
+
+/// BC4 blocks of the one-channel 8-bit image `r`.
+///
+/// # Panics
+/// If `r` does not hold res² texels.
+pub fn encode_bc4(r: &[u8], res: u32) -> Vec<u8> {
+    let texels: Vec<[u8; 1]> = r.iter().map(|&v| [v]).collect();
+    let (data, side) = padded(&texels, res);
+    let surface = intel_tex_2::RSurface {
+        data: &data,
+        width: side,
+        height: side,
+        stride: side,
+    };
+    intel_tex_2::bc4::compress_blocks(&surface)
+}
+
+/// The one-channel image BC4 `blocks` of a `res` × `res` image decode to.
+///
+/// # Panics
+/// If `blocks` is not the blocks of a res² image.
+pub fn decode_bc4(blocks: &[u8], res: u32) -> Vec<u8> {
+    decode_blocks::<u8, 1>(blocks, res, BC4_BLOCK_BYTES, |block, texels| {
+        bcdec_rs::bc4(block, texels, 4, false)
+    })
+    .into_iter()
+    .map(|[v]| v)
+    .collect()
 }
 
 /// The RGBA8 image BC7 `blocks` of a `res` × `res` image decode to.
@@ -194,7 +242,7 @@ pub fn encode_bc7(rgba: &[[u8; 4]], res: u32) -> Vec<u8> {
 /// # Panics
 /// If `blocks` is not [`compressed_bytes`]`(res)` long.
 pub fn decode_bc7(blocks: &[u8], res: u32) -> Vec<[u8; 4]> {
-    decode_blocks(blocks, res, |block, texels| {
+    decode_blocks(blocks, res, BLOCK_BYTES, |block, texels| {
         bcdec_rs::bc7(block, texels, 16)
     })
 }
@@ -252,7 +300,7 @@ mod tests {
         let image: Vec<[u8; 4]> = (0..res * res)
             .map(|i| [(i % res * 20) as u8, (i / res * 20) as u8, 128, 255])
             .collect();
-        let back = decode_bc7(&encode_bc7(&image, res), res);
+        let back = decode_bc7(&encode_bc7(&image, res, true), res);
         for (a, b) in image.iter().zip(&back) {
             for c in 0..4 {
                 assert!(

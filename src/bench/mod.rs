@@ -75,6 +75,9 @@ pub struct BenchSettings {
     pub probe_fresh: bool,
     /// Timed frames per microbenchmark of the probe.
     pub probe_frames: u32,
+    /// The techniques measured on `dx11` where `paths` has it (`None`: every one with a
+    /// dx11 form; the `headline` set: `catalog::HEADLINE_DX11`).
+    pub dx11_rows: Option<Vec<Technique>>,
 }
 
 /// The specular term of a bench: its light and base spread, and the normal-map filterings
@@ -97,6 +100,25 @@ impl SpecularSettings {
 }
 
 impl BenchSettings {
+    /// Whether the run measures `technique` on `path`: it runs there
+    /// (`Technique::runs_on`) and, on dx11, is one of [`BenchSettings::dx11_rows`].
+    pub fn measures(&self, technique: Technique, path: HwPath) -> bool {
+        technique.runs_on(path)
+            && (path != HwPath::Dx11
+                || self
+                    .dx11_rows
+                    .as_ref()
+                    .is_none_or(|rows| rows.contains(&technique)))
+    }
+
+    /// The rows per filtering: technique × path pairs the run measures.
+    pub fn row_count(&self) -> usize {
+        self.techniques
+            .iter()
+            .map(|&t| self.paths.iter().filter(|&&p| self.measures(t, p)).count())
+            .sum()
+    }
+
     /// Whether a technique of the run bakes inter-reflection (and so needs the
     /// inter-reflected reference).
     pub fn needs_inter_reflection(&self) -> bool {
@@ -200,12 +222,7 @@ pub fn run(
     };
     let per_round = settings.frames.div_ceil(rounds);
     let filters = settings.specular.as_ref().map_or(1, |s| s.filters.len());
-    let rows_planned = settings
-        .techniques
-        .iter()
-        .map(|t| settings.paths.iter().filter(|&&p| t.runs_on(p)).count())
-        .sum::<usize>()
-        * filters;
+    let rows_planned = settings.row_count() * filters;
     clock.progress = plan::Progress::new(rows_planned * rounds as usize);
     let (mut rows, mut samples) = measure_rows(
         ctx,

@@ -116,11 +116,7 @@ impl Plan {
         prepare: &PrepareSettings,
         probe_cached: Option<String>,
     ) -> Plan {
-        let rows_per_filter = settings
-            .techniques
-            .iter()
-            .map(|t| settings.paths.iter().filter(|&&p| t.runs_on(p)).count())
-            .sum::<usize>();
+        let rows_per_filter = settings.row_count();
         let filters = settings.specular.as_ref().map_or(1, |s| s.filters.len());
         let rows = rows_per_filter * filters;
         let rounds = if settings.specular.is_some() {

@@ -74,11 +74,11 @@ pub(super) fn measure_rows(
         };
         for &technique in &settings.techniques {
             for &path in &settings.paths {
-                if !technique.runs_on(path) {
+                if !settings.measures(technique, path) {
                     if k == 0 {
-                        log::info!(
-                            "{technique}.{path}: left out (it does not fit the path's rules)"
-                        );
+                        if let Some(why) = technique.refusal(path) {
+                            log::info!("{technique}.{path}: left out ({why})");
+                        }
                     }
                     continue;
                 }

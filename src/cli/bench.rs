@@ -185,6 +185,8 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
         probe_fresh: a.probe == ProbeMode::Fresh,
         probe_frames: a.probe_frames.unwrap_or(a.frames.clamp(5, 30)),
         relight_degrees: a.relight_rotate,
+        dx11_rows: (a.techniques.trim() == "headline")
+            .then(|| shvis::technique::catalog::HEADLINE_DX11.to_vec()),
     };
     check_rows(
         &a.techniques,

@@ -232,15 +232,13 @@ fn check_rows(
         .flat_map(|&t| {
             paths
                 .iter()
-                .filter(move |&&p| !t.runs_on(p))
-                .map(move |p| format!("{t}.{p}"))
+                .filter_map(move |&p| t.refusal(p).map(|why| format!("{t}.{p} ({why})")))
         })
         .collect();
     let runnable = techniques.len() * paths.len() - unsupported.len();
-    let reason = "(its per-texel matrices need more textures than dx9 binds)";
     if runnable == 0 {
         bail!(
-            "no row to measure: {} {reason}; add --paths dx10",
+            "no row to measure: {}; add --paths dx10",
             unsupported.join(", ")
         );
     }
@@ -250,12 +248,12 @@ fn check_rows(
     let named_set = shvis::technique::catalog::named_set(list.trim()).is_some();
     if !named_set && !skip_unsupported {
         bail!(
-            "{} cannot run {reason}; leave it out, or pass --skip-unsupported to measure the rest",
+            "cannot run {}; leave it out, or pass --skip-unsupported to measure the rest",
             unsupported.join(", ")
         );
     }
     eprintln!(
-        "note: left out, as they cannot run {reason}: {}",
+        "note: left out, as they cannot run: {}",
         unsupported.join(", ")
     );
     Ok(())

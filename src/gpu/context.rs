@@ -48,6 +48,7 @@ pub struct Context {
     limits: vk::PhysicalDeviceLimits,
     timestamp_valid_bits: u32,
     image_cube_array: bool,
+    texture_compression_bc: bool,
     multi_draw_indirect: bool,
     fragment_subgroup_ops: vk::SubgroupFeatureFlags,
     messages: std::sync::Arc<MessageCounts>,
@@ -115,6 +116,7 @@ impl Context {
             limits: info.props.limits,
             timestamp_valid_bits: info.families[queue_family as usize].timestamp_valid_bits,
             image_cube_array: info.features.image_cube_array != 0,
+            texture_compression_bc: info.features.texture_compression_bc != 0,
             multi_draw_indirect,
             fragment_subgroup_ops: info.fragment_subgroup_ops,
             messages,
@@ -194,6 +196,13 @@ impl Context {
 
     pub fn supports_cube_arrays(&self) -> bool {
         self.image_cube_array
+    }
+
+    /// Whether the device samples block-compressed `format` with linear filtering: the
+    /// `textureCompressionBC` feature (enabled where present) and the format's own
+    /// properties.
+    pub fn supports_block_format(&self, format: vk::Format) -> bool {
+        self.texture_compression_bc && self.supports_linear_filter(format)
     }
 
     /// Whether optimal-tiling images of `format` can be sampled with linear filtering.
@@ -692,7 +701,9 @@ fn open_device(
         )
         // Normal-map generation draws one indirect command per low triangle.
         .multi_draw_indirect(multi_draw_indirect)
-        .draw_indirect_first_instance(multi_draw_indirect);
+        .draw_indirect_first_instance(multi_draw_indirect)
+        // BC formats: the dx11 path's per-texel data.
+        .texture_compression_bc(features.texture_compression_bc != 0);
     // VK_KHR_maintenance4 relaxes vertex-output/fragment-input matching, so a pass may
     // read a subset of the shared mesh.vert outputs (the reference's G-buffer passes).
     // SAFETY: a plain query on this instance's physical device.

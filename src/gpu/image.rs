@@ -25,8 +25,7 @@ pub struct ImageDesc {
 impl ImageDesc {
     /// Bytes of mip level 0 over all layers (0 for a format shvis does not upload).
     pub fn level0_bytes(&self) -> u64 {
-        let texel = format_texel_bytes(self.format).unwrap_or(0) as u64;
-        texel * self.width as u64 * self.height as u64 * self.layers as u64
+        format_level_bytes(self.format, self.width, self.height).unwrap_or(0) * self.layers as u64
     }
 
     /// A sampled 2D texture that is filled by upload.
@@ -272,7 +271,24 @@ impl Drop for Sampler {
     }
 }
 
-/// Bytes per texel of the formats shvis uploads.
+/// The block side and bytes per block of a block-compressed `format` (BC4: 4 × 4 texels in
+/// 8 bytes; BC6H, BC7: in 16), `None` for others.
+pub fn format_block(format: vk::Format) -> Option<(u32, u32)> {
+    Some(match format {
+        vk::Format::BC4_UNORM_BLOCK => (4, 8),
+        vk::Format::BC6H_UFLOAT_BLOCK | vk::Format::BC7_UNORM_BLOCK => (4, 16),
+        _ => return None,
+    })
+}
+
+/// Bytes of one `width` × `height` layer of `format` (whole blocks for a block-compressed
+/// one), `None` for a format shvis does not upload.
+pub fn format_level_bytes(format: vk::Format, width: u32, height: u32) -> Option<u64> {
+    let (side, bytes) = format_block(format).or_else(|| Some((1, format_texel_bytes(format)?)))?;
+    Some(u64::from(width.div_ceil(side)) * u64::from(height.div_ceil(side)) * u64::from(bytes))
+}
+
+/// Bytes per texel of an uncompressed `format` shvis uploads.
 pub fn format_texel_bytes(format: vk::Format) -> Option<u32> {
     Some(match format {
         vk::Format::R8_UNORM => 1,

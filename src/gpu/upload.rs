@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use ash::vk;
 
-use super::image::format_texel_bytes;
+use super::image::format_level_bytes;
 use super::{Buffer, Context, GpuError, Image};
 
 /// Copies of texel data into images, staged in one host-visible buffer.
@@ -139,12 +139,12 @@ fn stage_levels(
         what: name.into(),
         detail,
     };
-    let texel = format_texel_bytes(desc.format).ok_or_else(|| {
-        invalid(format!(
+    if format_level_bytes(desc.format, 1, 1).is_none() {
+        return Err(invalid(format!(
             "upload of format {:?} is not supported",
             desc.format
-        ))
-    })? as usize;
+        )));
+    }
     if levels.len() != desc.mip_levels as usize {
         return Err(invalid(format!(
             "{} mip levels given, {} expected",
@@ -164,7 +164,7 @@ fn stage_levels(
             )));
         }
         for (layer, data) in layers.iter().enumerate() {
-            let expected = w as usize * h as usize * texel;
+            let expected = format_level_bytes(desc.format, w, h).unwrap_or(0) as usize;
             if data.len() != expected {
                 return Err(invalid(format!(
                     "mip {mip} layer {layer}: {} bytes given, {expected} expected",

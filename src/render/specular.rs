@@ -191,7 +191,7 @@ impl SceneSpecular {
     pub fn images(&self, path: HwPath) -> &[Image] {
         match path {
             HwPath::Dx9 => &self.images[0],
-            HwPath::Dx10 => &self.images[1],
+            HwPath::Dx10 | HwPath::Dx11 => &self.images[1],
         }
     }
 
@@ -242,7 +242,7 @@ pub fn upload_maps(
                 )
             })
             .collect(),
-        HwPath::Dx10 => {
+        HwPath::Dx10 | HwPath::Dx11 => {
             let data: Vec<Vec<&[u8]>> = (0..maps.levels.len())
                 .map(|l| (0..3).map(|k| bytes(k, l)).collect())
                 .collect();
@@ -276,7 +276,8 @@ pub fn render_specular(
         "ndf/specular.frag",
         gpu::ShaderStage::Fragment,
         &[
-            path.shader_define(),
+            path.shader_defines()[0],
+            path.shader_defines()[1],
             ("SPECULAR", filter.shader_value()),
             ("GBUFFER", 1),
         ],

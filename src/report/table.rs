@@ -75,6 +75,9 @@ pub enum AttributionKind {
     /// Per-pixel data → the lightmap's texels: resolution, bilinear filtering (clustered:
     /// the 4-tap blend or the filtered weights), storage (f16, or 8-bit weights).
     LightmapTexels,
+    /// `dx11`: the lightmap's values → what its blocks decode to (BC7 ratios to a BC6H
+    /// norm, or BC4; `technique::block`), decoded on the CPU by an independent decoder.
+    BlockCompression,
     /// The last CPU rung → the technique's GPU image (f32 arithmetic, filter weights,
     /// the f16 target).
     Gpu,
@@ -100,6 +103,7 @@ impl AttributionKind {
             AttributionKind::Reconstruction => "linear → non-linear reconstruction",
             AttributionKind::NormalTable => "normal table",
             AttributionKind::LightmapTexels => "lightmap texels",
+            AttributionKind::BlockCompression => "block compression",
             AttributionKind::Gpu => "CPU → GPU",
             AttributionKind::Technique => "point sampling → technique",
         }

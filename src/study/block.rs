@@ -248,7 +248,7 @@ pub fn round_trip(
                                 [q[0], q[1], q[2], 255]
                             })
                             .collect();
-                        block::decode_bc7(&block::encode_bc7(&rgba, res), res)
+                        block::decode_bc7(&block::encode_bc7(&rgba, res, false), res)
                             .iter()
                             .map(|q| [0, 1, 2].map(|ch| f32::from(q[ch]) / 255.0))
                             .collect()

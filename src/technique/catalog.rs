@@ -134,6 +134,16 @@ pub fn headline() -> Vec<Technique> {
     set
 }
 
+/// The `headline` set's rows on `dx11` (lavapipe samples BC textures in software, 20–40×
+/// slower than dx10, so the headline bench measures the two the dx11 path is about: the
+/// SH lightmap, and the paper's uncompressed visibility).
+pub const HEADLINE_DX11: &[Technique] = &[
+    Technique::Shlmap,
+    Technique::Unc {
+        order: crate::sh::Order::SIX,
+    },
+];
+
 /// A named set of techniques (`all`, `paper`, `headline`), if `name` is one.
 pub fn named_set(name: &str) -> Option<Vec<Technique>> {
     match name {

@@ -229,7 +229,7 @@ mod tests {
                     // The measuring build compiles too (with and without subgroup votes).
                     for vote in plan.measure_defines.iter().flat_map(|_| [0, 1]) {
                         let mut defines = fragment_shader(8, m, seams).defines;
-                        defines.push(path.shader_define());
+                        defines.extend(path.shader_defines());
                         defines.push(("MATERIAL_LEVEL0", 0));
                         defines.push(("SUBGROUP_VOTE", vote));
                         defines.extend(plan.measure_defines.iter().flatten().copied());
@@ -242,7 +242,7 @@ mod tests {
                     }
                     for variant in plan.variants {
                         let mut defines = fragment_shader(8, m, seams).defines;
-                        defines.push(path.shader_define());
+                        defines.extend(path.shader_defines());
                         defines.push(("MATERIAL_LEVEL0", 0));
                         defines.extend_from_slice(&variant.defines);
                         let spirv = crate::gpu::compile_glsl(

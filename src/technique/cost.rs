@@ -191,13 +191,13 @@ fn lookup_counts(
                 continue;
             }
             (SlotKind::PerTexel, HwPath::Dx9) => Kind::Bilinear2d,
-            (SlotKind::PerTexel, HwPath::Dx10) => Kind::Array2d,
+            (SlotKind::PerTexel, HwPath::Dx10 | HwPath::Dx11) => Kind::Array2d,
             (SlotKind::NormalTable, HwPath::Dx9) => Kind::Dependent2d,
-            (SlotKind::NormalTable, HwPath::Dx10) => Kind::CubeArray,
+            (SlotKind::NormalTable, HwPath::Dx10 | HwPath::Dx11) => Kind::CubeArray,
             // The disk texture is read at the normal map's coordinates: dependent, a 2D
             // array layer on dx10.
             (SlotKind::NormalBasis, HwPath::Dx9) => Kind::Dependent2d,
-            (SlotKind::NormalBasis, HwPath::Dx10) => Kind::Array2d,
+            (SlotKind::NormalBasis, HwPath::Dx10 | HwPath::Dx11) => Kind::Array2d,
         };
         lookups.push((kind, n));
     }

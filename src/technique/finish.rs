@@ -289,10 +289,8 @@ pub(crate) fn compile_fragment_source(
     if let Some(source) = source {
         shader.path = source;
     }
-    let mut defines = vec![
-        path.shader_define(),
-        ("MATERIAL_LEVEL0", scene.material_level0() as u32),
-    ];
+    let mut defines = super::block::path_defines(technique, path);
+    defines.push(("MATERIAL_LEVEL0", scene.material_level0() as u32));
     defines.extend_from_slice(&shader.defines);
     defines.extend_from_slice(extra_defines);
     if let Some(specular) = scene.specular() {
@@ -376,7 +374,7 @@ pub fn check_path_rules(
     technique_textures: &[&Image],
 ) -> Result<(), TechniqueError> {
     match path {
-        HwPath::Dx10 => return Ok(()),
+        HwPath::Dx10 | HwPath::Dx11 => return Ok(()),
         HwPath::Dx9 => {}
     }
     let total = technique_textures.len() as u32 + layout::MATERIAL_TEXTURES;

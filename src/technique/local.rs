@@ -136,6 +136,10 @@ pub fn fragment_shader(basis: LocalBasis) -> ShaderVariant {
             defines: vec![
                 ("DICE_YCOCG", u32::from(variant == DiceVariant::YCoCg)),
                 ("DICE_FACES", dice::dice().faces.len() as u32),
+                (
+                    "DICE_GROUPS",
+                    stored_values(basis).div_ceil(VALUES_PER_TEXEL) as u32,
+                ),
             ],
         },
     }

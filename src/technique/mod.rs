@@ -17,6 +17,7 @@
 //! matches; README
 //! "How to add a technique" lists the places a new family touches.
 
+pub mod block;
 pub mod catalog;
 pub mod cluster;
 pub mod cost;
@@ -429,6 +430,24 @@ pub fn build_dynamic(
     build_sets(ctx, scene, technique, path, inputs, 2)
 }
 
+/// What `technique`'s `dx11` blocks decode to, for the error ladder's block compression
+/// rung.
+///
+/// # Errors
+/// A technique without a dx11 form, or inputs it lacks.
+pub fn dx11_decoded_values(
+    technique: Technique,
+    inputs: &Inputs<'_>,
+) -> Result<block::DecodedBlocks, TechniqueError> {
+    let label = format!("{technique}.{}", HwPath::Dx11);
+    let codec = block::block_codec(technique).map_err(|reason| TechniqueError::Input {
+        label: label.clone(),
+        detail: format!("has no dx11 form: {reason}"),
+    })?;
+    let (texels, _) = prepare(technique, HwPath::Dx11, inputs)?;
+    Ok(block::compress(&texels, codec, &label)?.decode())
+}
+
 /// The CPU half of a build: the per-texel data to upload and the lighting recipe.
 fn prepare(
     technique: Technique,
@@ -487,8 +506,8 @@ fn build_sets(
         let gpu = vertex::finish(ctx, scene, technique, path, inputs, &data, sets)?;
         return Ok((gpu, recipe));
     }
-    let per_texel = texels.upload(ctx, path)?;
     let label = format!("{technique}.{path}");
+    let per_texel = block::upload_per_texel(ctx, &texels, technique, path, &label)?;
     let extra = extra_slot(ctx, technique, path, inputs, &label)?;
     let gpu = finish::finish(ctx, scene, technique, path, per_texel, extra, &data, sets)?;
     Ok((gpu, recipe))
@@ -574,7 +593,7 @@ mod tests {
         for technique in techniques {
             let shader = fragment_shader(technique);
             for &path in HwPath::ALL {
-                let mut defines = vec![path.shader_define()];
+                let mut defines = block::path_defines(technique, path);
                 defines.extend_from_slice(&shader.defines);
                 // What the build adds from its data (the default lighting order's).
                 if let Technique::Nmprt {

@@ -745,19 +745,28 @@ impl Technique {
         }
     }
 
-    /// Whether it can run on `path`: every technique runs on dx10; `nmprtsvdMp`'s per-texel
-    /// matrices need more than dx9's 16 textures (`finish` refuses it there by the path
-    /// rules; the bench and the suites leave that row out).
+    /// Whether it can run on `path` ([`Technique::refusal`]).
     pub fn runs_on(self, path: HwPath) -> bool {
-        !matches!(
-            (self, path),
-            (
+        self.refusal(path).is_none()
+    }
+
+    /// Why it cannot run on `path`, if it cannot: every technique runs on dx10;
+    /// `nmprtsvdMp`'s per-texel matrices need more than dx9's 16 textures (`finish` refuses
+    /// it there by the path rules); on dx11 those whose per-texel data has no
+    /// block-compressed form (`super::block::block_codec`). The bench and the suites leave
+    /// such rows out.
+    pub fn refusal(self, path: HwPath) -> Option<&'static str> {
+        match path {
+            HwPath::Dx9 => matches!(
+                self,
                 Technique::Nmprt {
-                    variant: NmprtVariant::SvdPixel { .. }
-                },
-                HwPath::Dx9
+                    variant: NmprtVariant::SvdPixel { .. },
+                }
             )
-        )
+            .then_some("its per-texel matrices need more textures than dx9 binds"),
+            HwPath::Dx10 => None,
+            HwPath::Dx11 => super::block::block_codec(self).err(),
+        }
     }
 
     /// Every technique of this one's family that a name may denote: each valid parameter.

@@ -88,7 +88,7 @@ pub fn lxh_table(
 pub fn table_map(path: HwPath, table_res: u32, label: &str) -> Result<SphereMap, TechniqueError> {
     let kind = match path {
         HwPath::Dx9 => Parameterization::DualParaboloid,
-        HwPath::Dx10 => Parameterization::CubeDx10,
+        HwPath::Dx10 | HwPath::Dx11 => Parameterization::CubeDx10,
     };
     SphereMap::new(kind, table_res).map_err(|e| TechniqueError::Input {
         label: label.into(),
@@ -257,7 +257,7 @@ pub fn normal_table_data(
             }
             (images, slot_sizes)
         }
-        HwPath::Dx10 => {
+        HwPath::Dx10 | HwPath::Dx11 => {
             // Cube p is plane p; its layer f is face f's samples, already row-major.
             let image = TableImage {
                 desc: ImageDesc::texture_cube_array(fmt, tr, plane_count as u32),

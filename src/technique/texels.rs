@@ -176,7 +176,7 @@ fn image_layout<'a>(
                 )
             })
             .collect(),
-        HwPath::Dx10 => vec![(
+        HwPath::Dx10 | HwPath::Dx11 => vec![(
             ImageDesc::texture_2d_array(format, res, res, groups.len() as u32),
             vec![groups.to_vec()],
             name.to_string(),

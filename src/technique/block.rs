@@ -1,0 +1,669 @@
+//! The `dx11` path's per-texel data: a technique's per-texel groups
+//! (`super::texels`) block-compressed as DX11-class hardware stores them, and the decode
+//! the shaders apply (`glsl/include/per_texel.glsl`). Encoding and the independent decoder
+//! are `crate::bake::block`'s.
+//!
+//! **Ratios to a per-texel norm** — values of either sign and any magnitude in 8-bit
+//! blocks (the packing `shvis study block` found to hold where offsets and plain BC6H do
+//! not; here with the norm in place of L0, so no ratio is ever clamped):
+//!
+//! ```text
+//! n_c(t)  = max over the values j of colour c of |v_j(t)|        BC6H, one RGB layer
+//! r_j(t)  = v_j(t) / n_colour(j)(t)   ∈ [−1, 1]   (0 where n = 0)
+//! s_j(t)  = (128 + round(127 r)) / 255                            BC7, layer g = group g
+//! v_j     = (255 s − 128) / 127 · n_colour(j)                     the shader's decode
+//! ```
+//!
+//! colour(j) is [`NormColours`]: one norm per texel, or one per colour where values are RGB.
+//! A texel whose values are all 0 (L0 = 0, a black texel, the gutter) stores r = 0, which
+//! decodes to 0 exactly whatever its norm; it takes the largest norm of its block
+//! ([`fill_empty_norms`]).
+//! Norms above the largest half float are clamped and counted, with a warning.
+//!
+//! **One value per texel in [0, 1]** (`preconv`'s AO): BC4, read as dx10 reads R16F.
+//!
+//! The GPU filters s and n bilinearly apart, then multiplies; where n changes between
+//! neighbouring texels that differs from filtering the decoded values
+//! ([`DecodedBlocks::filtered`] does as the GPU does).
+//!
+//! Techniques whose per-texel data is not a set of values (cluster indices), is rebuilt for
+//! each lighting (`nmprt*`) or absent (per-vertex PCA) have no `dx11` row
+//! ([`block_codec`]).
+
+use std::sync::Arc;
+
+use ash::vk;
+use half::f16;
+
+use super::spec::{EngineShBasis, LocalBasis};
+use super::texels::{TexelGroups, VALUES_PER_TEXEL};
+use super::{HwPath, Technique, TechniqueError};
+use crate::bake::block::{self as bc, Bc6hQuality, Clamped};
+use crate::gpu::{Context, Image, ImageDesc};
+use crate::sh::dice::DiceVariant;
+
+/// How a technique's per-texel data is stored on `dx11` (module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BlockCodec {
+    /// One value per texel in [0, 1]: BC4.
+    Bc4,
+    /// Ratios to a per-texel norm: BC7 ratios, BC6H norms.
+    Ratio(NormColours),
+}
+
+/// Which norm divides value j of a texel (j = 4g + i: channel i of group g).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NormColours {
+    /// One norm for every value.
+    One,
+    /// RGB triplets packed 4 per group (value 3k + c has colour c): `shlmap`'s layout.
+    Triplets,
+    /// An RGB triple per group (channel i has colour i, alpha goes with red): `rnm`'s.
+    GroupRgb,
+}
+
+impl NormColours {
+    /// The colour (0, 1, 2) of value `j`.
+    fn colour(self, j: usize) -> usize {
+        match self {
+            NormColours::One => 0,
+            NormColours::Triplets => j % 3,
+            NormColours::GroupRgb => (j % VALUES_PER_TEXEL) % 3,
+        }
+    }
+}
+
+impl BlockCodec {
+    /// The value of the shader macro `SHVIS_PER_TEXEL_CODEC` (glsl/include/per_texel.glsl).
+    pub fn shader_value(self) -> u32 {
+        match self {
+            BlockCodec::Bc4 => 1,
+            BlockCodec::Ratio(NormColours::One) => 2,
+            BlockCodec::Ratio(NormColours::Triplets) => 3,
+            BlockCodec::Ratio(NormColours::GroupRgb) => 4,
+        }
+    }
+}
+
+/// How `technique`'s per-texel data is block-compressed, or why it has no `dx11` row.
+pub fn block_codec(technique: Technique) -> Result<BlockCodec, &'static str> {
+    use NormColours::{GroupRgb, One, Triplets};
+    Ok(match technique {
+        Technique::Unc { .. } | Technique::Pca { .. } | Technique::Sh2 => BlockCodec::Ratio(One),
+        Technique::Shlmap => BlockCodec::Ratio(Triplets),
+        Technique::Preconv => BlockCodec::Bc4,
+        Technique::Rnm { .. } => BlockCodec::Ratio(GroupRgb),
+        Technique::EngineSh { basis } => match basis {
+            EngineShBasis::L1
+            | EngineShBasis::L1Geomerics
+            | EngineShBasis::L1Zh3
+            | EngineShBasis::L2Deringed => BlockCodec::Ratio(Triplets),
+            EngineShBasis::Zh3 | EngineShBasis::L1Luminance => BlockCodec::Ratio(One),
+        },
+        Technique::Local { basis } => match basis {
+            LocalBasis::HBasis(_) | LocalBasis::Sg { .. } | LocalBasis::Dice(DiceVariant::Rgb) => {
+                BlockCodec::Ratio(Triplets)
+            }
+            LocalBasis::Dice(DiceVariant::YCoCg) => BlockCodec::Ratio(One),
+        },
+        Technique::Ndf { base } => return block_codec(base.technique()),
+        Technique::Vq { .. } | Technique::Cpca { .. } => {
+            return Err("its per-texel cluster indices cannot be block-compressed");
+        }
+        Technique::Nmprt { .. } => {
+            return Err("its per-texel data is rebuilt for each lighting, not baked");
+        }
+        Technique::PcaVertex { .. } => return Err("it has no per-texel data to compress"),
+    })
+}
+
+/// The shader macros of `technique` on `path`: the path's, and on `dx11` the codec's
+/// (`SHVIS_PER_TEXEL_CODEC`, 0 where the path stores the data as dx10 does).
+pub fn path_defines(technique: Technique, path: HwPath) -> Vec<(&'static str, u32)> {
+    let codec = match path {
+        HwPath::Dx11 => block_codec(technique).map_or(0, BlockCodec::shader_value),
+        HwPath::Dx9 | HwPath::Dx10 => 0,
+    };
+    let mut defines = path.shader_defines().to_vec();
+    defines.push(("PER_TEXEL_CODEC", codec));
+    defines
+}
+
+/// The BC6H quality of the norms: the study's default (the fastest within 5 % of the best).
+pub const NORM_QUALITY: Bc6hQuality = Bc6hQuality::Basic;
+
+/// A technique's per-texel groups block-compressed ([`compress`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlockTexels {
+    pub codec: BlockCodec,
+    pub res: u32,
+    /// The groups' blocks, one layer each (BC7 ratios, or BC4 values).
+    pub layers: Vec<Vec<u8>>,
+    /// The norms' BC6H blocks (ratio codecs).
+    pub norms: Option<Vec<u8>>,
+    /// Norms clamped into BC6H's range.
+    pub clamped: Clamped,
+    /// Debug name of the images ("shlmap.dx11.radiance").
+    pub name: String,
+}
+
+/// The values of each group as f32 (`[texel][channel]`, res² texels), from `texels`' format.
+fn group_values(
+    texels: &TexelGroups,
+    label: &str,
+) -> Result<(usize, Vec<Vec<f32>>), TechniqueError> {
+    let (channels, value): (usize, fn(&[u8]) -> f32) = match texels.format {
+        vk::Format::R16G16B16A16_SFLOAT => (4, |b| f16::from_le_bytes([b[0], b[1]]).to_f32()),
+        vk::Format::R16_SFLOAT => (1, |b| f16::from_le_bytes([b[0], b[1]]).to_f32()),
+        vk::Format::R8G8B8A8_UNORM => (4, |b| f32::from(b[0]) / 255.0),
+        other => {
+            return Err(TechniqueError::Input {
+                label: label.into(),
+                detail: format!("per-texel data of format {other:?} has no block-compressed form"),
+            });
+        }
+    };
+    let bytes =
+        crate::gpu::image::format_texel_bytes(texels.format).unwrap_or(1) as usize / channels;
+    let groups = texels
+        .groups
+        .iter()
+        .map(|g| g.chunks_exact(bytes).map(value).collect())
+        .collect();
+    Ok((channels, groups))
+}
+
+/// Gives each texel whose values are all 0 (gutter, black texels: ratio 0, so any norm
+/// decodes to 0) the largest norm of its 4 × 4 block: BC6H then spends the block's range
+/// on the covered texels only, and the filter at a chart's edge blends the edge texel's
+/// ratio by a norm near its own, not by 0.
+fn fill_empty_norms(norms: &mut [[f32; 3]], res: u32) {
+    let res = res as usize;
+    for by in (0..res).step_by(4) {
+        for bx in (0..res).step_by(4) {
+            let block = || {
+                (by..(by + 4).min(res))
+                    .flat_map(move |y| (bx..(bx + 4).min(res)).map(move |x| y * res + x))
+            };
+            let fill: [f32; 3] =
+                std::array::from_fn(|c| block().map(|t| norms[t][c]).fold(0.0, f32::max));
+            for t in block() {
+                if norms[t] == [0.0; 3] {
+                    norms[t] = fill;
+                }
+            }
+        }
+    }
+}
+
+/// The ratio r ∈ [−1, 1] as the 8-bit value BC7 stores (module doc).
+fn ratio_byte(r: f32) -> u8 {
+    (128.0 + (127.0 * r.clamp(-1.0, 1.0)).round()) as u8
+}
+
+/// The ratio an 8-bit (or filtered, ×255) stored value decodes to.
+pub fn byte_ratio(s: f32) -> f32 {
+    (s - 128.0) / 127.0
+}
+
+/// Compresses `texels` with `codec` (module doc). `label` names the row in errors.
+///
+/// # Errors
+/// A format the codec cannot take; for BC4, values outside [0, 1]; non-finite values.
+pub fn compress(
+    texels: &TexelGroups,
+    codec: BlockCodec,
+    label: &str,
+) -> Result<BlockTexels, TechniqueError> {
+    let input = |detail: String| TechniqueError::Input {
+        label: label.into(),
+        detail,
+    };
+    let (channels, groups) = group_values(texels, label)?;
+    if groups.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(input("per-texel data holds a non-finite value".into()));
+    }
+    let res = texels.res;
+    let name = texels.name.clone();
+    match codec {
+        BlockCodec::Bc4 => {
+            if channels != 1 {
+                return Err(input(format!(
+                    "BC4 takes one value per texel, the data has {channels}"
+                )));
+            }
+            if let Some(v) = groups.iter().flatten().find(|v| !(0.0..=1.0).contains(*v)) {
+                return Err(input(format!(
+                    "BC4 takes values in [0, 1]; the data holds {v}"
+                )));
+            }
+            let layers = groups
+                .iter()
+                .map(|g| {
+                    let bytes: Vec<u8> = g.iter().map(|v| (v * 255.0).round() as u8).collect();
+                    bc::encode_bc4(&bytes, res)
+                })
+                .collect();
+            Ok(BlockTexels {
+                codec,
+                res,
+                layers,
+                norms: None,
+                clamped: Clamped::default(),
+                name,
+            })
+        }
+        BlockCodec::Ratio(colours) => {
+            if channels != VALUES_PER_TEXEL {
+                return Err(input(format!(
+                    "ratio blocks take RGBA groups, the data has {channels} channels"
+                )));
+            }
+            let texel_count = (res * res) as usize;
+            let mut norms = vec![[0f32; 3]; texel_count];
+            for (g, group) in groups.iter().enumerate() {
+                for (t, texel) in group.chunks_exact(VALUES_PER_TEXEL).enumerate() {
+                    for (i, v) in texel.iter().enumerate() {
+                        let c = colours.colour(VALUES_PER_TEXEL * g + i);
+                        norms[t][c] = norms[t][c].max(v.abs());
+                    }
+                }
+            }
+            if colours == NormColours::One {
+                for n in &mut norms {
+                    *n = [n[0]; 3];
+                }
+            }
+            let ratio_norms = norms.clone();
+            fill_empty_norms(&mut norms, res);
+            let (norm_blocks, clamped) = bc::encode_bc6h(&norms, res, NORM_QUALITY);
+            if clamped != Clamped::default() {
+                log::warn!(
+                    "{label}: {} per-texel norms above the largest half float ({}) stored as {}",
+                    clamped.above,
+                    bc::HALF_MAX,
+                    bc::HALF_MAX
+                );
+            }
+            let layers: Vec<Vec<u8>> = groups
+                .iter()
+                .enumerate()
+                .map(|(g, group)| {
+                    let rgba: Vec<[u8; 4]> = group
+                        .chunks_exact(VALUES_PER_TEXEL)
+                        .enumerate()
+                        .map(|(t, texel)| {
+                            std::array::from_fn(|i| {
+                                let n = ratio_norms[t][colours.colour(VALUES_PER_TEXEL * g + i)];
+                                ratio_byte(if n > 0.0 { texel[i] / n } else { 0.0 })
+                            })
+                        })
+                        .collect();
+                    bc::encode_bc7(&rgba, res, true)
+                })
+                .collect();
+            Ok(BlockTexels {
+                codec,
+                res,
+                layers,
+                norms: Some(norm_blocks),
+                clamped,
+                name,
+            })
+        }
+    }
+}
+
+impl BlockTexels {
+    /// The image formats: the groups' layers, then the norms'.
+    fn formats(&self) -> (vk::Format, Option<vk::Format>) {
+        match self.codec {
+            BlockCodec::Bc4 => (vk::Format::BC4_UNORM_BLOCK, None),
+            BlockCodec::Ratio(_) => (
+                vk::Format::BC7_UNORM_BLOCK,
+                Some(vk::Format::BC6H_UFLOAT_BLOCK),
+            ),
+        }
+    }
+
+    /// The images: a 2D array of the groups' layers, and for the ratio codecs a one-layer
+    /// array of the norms; each with its level-0 layers and debug name.
+    pub fn image_levels(&self) -> Vec<(ImageDesc, Vec<Vec<&[u8]>>, String)> {
+        let (groups, norms) = self.formats();
+        let mut images = vec![(
+            ImageDesc::texture_2d_array(groups, self.res, self.res, self.layers.len() as u32),
+            vec![self.layers.iter().map(Vec::as_slice).collect()],
+            self.name.clone(),
+        )];
+        if let (Some(format), Some(blocks)) = (norms, &self.norms) {
+            images.push((
+                ImageDesc::texture_2d_array(format, self.res, self.res, 1),
+                vec![vec![blocks.as_slice()]],
+                format!("{}.norms", self.name),
+            ));
+        }
+        images
+    }
+
+    /// Uploads the images, after checking the device samples their formats.
+    ///
+    /// # Errors
+    /// A device without BC support (`textureCompressionBC`, or a format it cannot filter).
+    pub fn upload(&self, ctx: &Arc<Context>, label: &str) -> Result<Vec<Image>, TechniqueError> {
+        let (groups, norms) = self.formats();
+        for format in std::iter::once(groups).chain(norms) {
+            if !ctx.supports_block_format(format) {
+                return Err(TechniqueError::Input {
+                    label: label.into(),
+                    detail: format!(
+                        "{} cannot sample {format:?} (textureCompressionBC); the dx11 path needs block-compressed textures",
+                        ctx.device_name()
+                    ),
+                });
+            }
+        }
+        self.image_levels()
+            .into_iter()
+            .map(|(desc, levels, name)| Ok(Image::with_data(ctx, &desc, &levels, &name)?))
+            .collect()
+    }
+
+    /// Bytes per texel on the GPU (whole blocks over res²).
+    pub fn bytes_per_texel(&self) -> f64 {
+        let bytes: usize = self.layers.iter().map(Vec::len).sum::<usize>()
+            + self.norms.as_ref().map_or(0, Vec::len);
+        bytes as f64 / f64::from(self.res * self.res)
+    }
+
+    /// The blocks decoded on the CPU by the independent decoder ([`DecodedBlocks`]).
+    pub fn decode(&self) -> DecodedBlocks {
+        let res = self.res;
+        let (stored, norms, colours) = match (self.codec, &self.norms) {
+            (BlockCodec::Ratio(colours), Some(norms)) => (
+                self.layers
+                    .iter()
+                    .map(|layer| {
+                        bc::decode_bc7(layer, res)
+                            .iter()
+                            .flat_map(|s| s.map(|v| byte_ratio(f32::from(v))))
+                            .collect()
+                    })
+                    .collect(),
+                Some(bc::decode_bc6h(norms, res)),
+                colours,
+            ),
+            _ => (
+                self.layers
+                    .iter()
+                    .map(|layer| {
+                        bc::decode_bc4(layer, res)
+                            .iter()
+                            .flat_map(|&v| [f32::from(v) / 255.0, 0.0, 0.0, 0.0])
+                            .collect()
+                    })
+                    .collect(),
+                None,
+                NormColours::One,
+            ),
+        };
+        DecodedBlocks {
+            res,
+            stored,
+            norms,
+            colours,
+        }
+    }
+
+    /// What the GPU reads at each texel: `[group][texel · 4 + channel]` ([`DecodedBlocks::value`]).
+    pub fn decoded_values(&self) -> Vec<Vec<f32>> {
+        let decoded = self.decode();
+        let texels = (self.res * self.res) as usize;
+        (0..self.layers.len())
+            .map(|g| {
+                (0..texels * VALUES_PER_TEXEL)
+                    .map(|k| {
+                        decoded.value(
+                            k / VALUES_PER_TEXEL,
+                            VALUES_PER_TEXEL * g + k % VALUES_PER_TEXEL,
+                        )
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+}
+
+/// A technique's dx11 blocks decoded: per group the stored ratios (or BC4 values) and per
+/// texel the norms, kept apart as the GPU filters them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DecodedBlocks {
+    pub res: u32,
+    /// `[group][texel · 4 + channel]`: r ∈ [−1, 1], or the BC4 value in channel 0.
+    stored: Vec<Vec<f32>>,
+    /// The norms per texel (ratio codecs).
+    norms: Option<Vec<[f32; 3]>>,
+    colours: NormColours,
+}
+
+impl DecodedBlocks {
+    /// Value `j` of texel `t`.
+    pub fn value(&self, t: usize, j: usize) -> f32 {
+        let r = self.stored[j / VALUES_PER_TEXEL][VALUES_PER_TEXEL * t + j % VALUES_PER_TEXEL];
+        match &self.norms {
+            Some(norms) => r * norms[t][self.colours.colour(j)],
+            None => r,
+        }
+    }
+
+    /// Value `j` where the sampler blends `texels` by `weights`: the stored ratio and the
+    /// norm filtered apart, then multiplied, as the shader decodes (module doc).
+    pub fn filtered(&self, texels: &[usize; 4], weights: &[f64; 4], j: usize) -> f64 {
+        let (g, i) = (j / VALUES_PER_TEXEL, j % VALUES_PER_TEXEL);
+        let blend = |f: &dyn Fn(usize) -> f32| -> f64 {
+            texels
+                .iter()
+                .zip(weights)
+                .map(|(&t, &w)| w * f64::from(f(t)))
+                .sum()
+        };
+        let r = blend(&|t| self.stored[g][VALUES_PER_TEXEL * t + i]);
+        match &self.norms {
+            Some(norms) => r * blend(&|t| norms[t][self.colours.colour(j)]),
+            None => r,
+        }
+    }
+}
+
+/// The per-texel images of `technique` on `path`: on `dx11` block-compressed (refused
+/// with the reason where its data has no such form), else as `texels` uploads them.
+pub fn upload_per_texel(
+    ctx: &Arc<Context>,
+    texels: &TexelGroups,
+    technique: Technique,
+    path: HwPath,
+    label: &str,
+) -> Result<Vec<Image>, TechniqueError> {
+    match path {
+        HwPath::Dx11 => {
+            let codec = block_codec(technique).map_err(|reason| TechniqueError::Input {
+                label: label.into(),
+                detail: format!("has no dx11 form: {reason}"),
+            })?;
+            if texels.groups.is_empty() {
+                return Ok(Vec::new());
+            }
+            compress(texels, codec, label)?.upload(ctx, label)
+        }
+        HwPath::Dx9 | HwPath::Dx10 => texels.upload(ctx, path),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rgba16f(res: u32, groups: usize, value: impl Fn(usize, usize) -> f32) -> TexelGroups {
+        let texels = (res * res) as usize;
+        let data: Vec<Vec<f16>> = (0..groups)
+            .map(|g| {
+                (0..texels * 4)
+                    .map(|k| f16::from_f32(value(k / 4, 4 * g + k % 4)))
+                    .collect()
+            })
+            .collect();
+        TexelGroups::new(vk::Format::R16G16B16A16_SFLOAT, res, &data, "t".into())
+    }
+
+    /// Largest |decoded − stored| over the texels, relative to each texel's largest value.
+    fn worst_relative(texels: &TexelGroups, block: &BlockTexels) -> f32 {
+        let (_, groups) = group_values(texels, "t").unwrap();
+        let decoded = block.decoded_values();
+        let n = (texels.res * texels.res) as usize;
+        (0..n)
+            .map(|t| {
+                let scale = groups
+                    .iter()
+                    .flat_map(|g| &g[4 * t..4 * t + 4])
+                    .fold(0f32, |m, v| m.max(v.abs()));
+                let err = groups
+                    .iter()
+                    .zip(&decoded)
+                    .flat_map(|(g, d)| (4 * t..4 * t + 4).map(move |k| (g[k] - d[k]).abs()))
+                    .fold(0f32, f32::max);
+                if scale > 0.0 { err / scale } else { err }
+            })
+            .fold(0f32, f32::max)
+    }
+
+    #[test]
+    fn signed_high_order_terms_and_hdr_round_trip_within_a_few_per_cent_of_the_texel() {
+        // SH-like RGB data: L0 positive over four decades, higher terms of either sign.
+        let res = 16;
+        let texels = rgba16f(res, 7, |t, j| {
+            let (x, y) = ((t as u32 % res) as f32, (t as u32 / res) as f32);
+            let l0 = 10f32.powf(x / res as f32 * 4.0 - 1.0);
+            let k = j / 3;
+            if j >= 27 {
+                0.0
+            } else if k == 0 {
+                l0 * [1.0, 0.8, 0.6][j % 3]
+            } else {
+                l0 * 0.5 * ((k as f32 + y * 0.3).sin())
+            }
+        });
+        let block = compress(&texels, BlockCodec::Ratio(NormColours::Triplets), "t").unwrap();
+        assert_eq!(block.layers.len(), 7);
+        assert_eq!(block.clamped, Clamped::default());
+        assert_eq!(block.bytes_per_texel(), 8.0);
+        let worst = worst_relative(&texels, &block);
+        assert!(
+            worst < 0.05,
+            "worst texel error {worst} of its largest value"
+        );
+    }
+
+    #[test]
+    fn a_black_texel_decodes_to_zero_and_beyond_half_is_clamped_and_counted() {
+        let res = 8;
+        let texels = rgba16f(res, 1, |t, _| match t {
+            0 => 0.0,
+            _ => 1.0,
+        });
+        let block = compress(&texels, BlockCodec::Ratio(NormColours::One), "t").unwrap();
+        let decoded = block.decoded_values();
+        assert_eq!(&decoded[0][..4], &[0.0; 4], "L0 = 0 stores black");
+        // f16 holds nothing above 65504, so the data goes through f32 groups.
+        let mut texels = texels;
+        texels.format = vk::Format::R8G8B8A8_UNORM;
+        texels.groups = vec![vec![255; (res * res * 4) as usize]];
+        let (_, mut groups) = group_values(&texels, "t").unwrap();
+        groups[0][0] = 1e6;
+        let norms: Vec<[f32; 3]> = groups[0]
+            .chunks(4)
+            .map(|v| [v[0].abs().max(v[1]); 3])
+            .collect();
+        let (_, clamped) = bc::encode_bc6h(&norms, res, NORM_QUALITY);
+        assert_eq!(
+            clamped.above, 3,
+            "one norm (three channels) above the largest half, counted"
+        );
+    }
+
+    #[test]
+    fn a_block_across_a_chart_border_and_its_gutter_keeps_the_covered_texels() {
+        // Each 4 × 4 block holds bright covered texels beside black gutter texels and a
+        // dim chart: the per-texel norm keeps every covered texel to its own scale.
+        let res = 8;
+        // One chart beside the gutter: every covered texel within 5 % of its own scale.
+        let res = 8;
+        let chart = |bright: f32, dim: f32| {
+            rgba16f(res, 3, move |t, j| {
+                let (x, y) = (t % res as usize, t / res as usize);
+                let base = match x % 4 {
+                    0 | 1 => 0.0,
+                    2 => bright,
+                    _ => dim,
+                } * (1.0 + 0.1 * y as f32);
+                base * [1.0, -0.5, 0.25, 0.7][j % 4]
+            })
+        };
+        let texels = chart(50.0, 20.0);
+        let block = compress(&texels, BlockCodec::Ratio(NormColours::GroupRgb), "t").unwrap();
+        let worst = worst_relative(&texels, &block);
+        assert!(worst < 0.05, "worst texel error {worst} of its scale");
+        let decoded = block.decoded_values();
+        for y in 0..res as usize {
+            for x in [0, 1, 4, 5] {
+                let t = y * res as usize + x;
+                assert!(
+                    decoded.iter().all(|g| g[4 * t..4 * t + 4] == [0.0; 4]),
+                    "gutter stays black"
+                );
+            }
+        }
+        // Two charts 2500 : 1 apart in one block: BC6H's endpoints cannot hold both
+        // magnitudes and the gutter well; the dim chart's texels err by up to 10–15 % of
+        // their own scale (docs/dx11.md).
+        let texels = chart(50.0, 0.02);
+        let block = compress(&texels, BlockCodec::Ratio(NormColours::GroupRgb), "t").unwrap();
+        let worst = worst_relative(&texels, &block);
+        assert!(worst < 0.2, "worst texel error {worst} of its scale");
+    }
+
+    #[test]
+    fn ao_goes_to_bc4_and_out_of_range_values_are_refused() {
+        let res = 8;
+        let ao: Vec<f16> = (0..res * res)
+            .map(|t| f16::from_f32(t as f32 / 63.0))
+            .collect();
+        let texels = TexelGroups::new(vk::Format::R16_SFLOAT, res, &[ao], "ao".into());
+        let block = compress(&texels, BlockCodec::Bc4, "t").unwrap();
+        assert_eq!(block.bytes_per_texel(), 0.5);
+        let back = block.decoded_values();
+        for (t, v) in back[0].iter().step_by(4).enumerate() {
+            // BC4: 8 levels between a block's extremes, here at most 27/63 apart.
+            assert!((v - t as f32 / 63.0).abs() < 0.035, "{t}: {v}");
+        }
+        let bad = TexelGroups::new(
+            vk::Format::R16_SFLOAT,
+            res,
+            &[vec![f16::from_f32(2.0); 64]],
+            "ao".into(),
+        );
+        assert!(compress(&bad, BlockCodec::Bc4, "t").is_err());
+        assert!(compress(&texels, BlockCodec::Ratio(NormColours::One), "t").is_err());
+    }
+
+    #[test]
+    fn every_technique_has_a_codec_or_a_reason() {
+        for &t in Technique::ALL {
+            match block_codec(t) {
+                Ok(codec) => assert!(codec.shader_value() > 0),
+                Err(reason) => assert!(!reason.is_empty()),
+            }
+        }
+        assert!(block_codec("shlmap".parse().unwrap()).is_ok());
+        assert!(block_codec("unc6".parse().unwrap()).is_ok());
+        assert!(block_codec("vq16".parse().unwrap()).is_err());
+    }
+}
