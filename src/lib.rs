@@ -19,6 +19,7 @@ pub mod bake;
 pub mod bench;
 pub mod cost;
 pub mod env;
+pub mod export;
 pub mod files;
 #[allow(unsafe_code)]
 pub mod gpu;
@@ -59,7 +60,7 @@ pub const LAYERS: &[&[&str]] = &[
     &["prepare"],
     &["attribution", "normalmap"],
     // The commands' work.
-    &["bench", "study", "relight", "view", "tools"],
+    &["bench", "study", "relight", "view", "tools", "export"],
 ];
 
 /// The modules (paths from the crate root) where `unsafe` is allowed; nowhere else does

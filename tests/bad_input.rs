@@ -615,12 +615,12 @@ fn argument_cases(suite: &mut Suite) {
             "--technique",
             "preconv",
             "--path",
-            "dx11",
+            "dx12",
             "--out",
             &png,
         ],
         2,
-        vec!["dx11"],
+        vec!["dx12"],
     ));
     for (flag, v) in [
         ("--ref-spp", "0"),
@@ -654,9 +654,9 @@ fn argument_cases(suite: &mut Suite) {
         vec!["nope"],
     ));
     table.push((
-        vec!["bench", "--paths", "dx11", "--out", &out],
+        vec!["bench", "--paths", "dx12", "--out", &out],
         1,
-        vec!["dx11"],
+        vec!["dx12"],
     ));
     for (flag, v) in [
         ("--frames", "0"),

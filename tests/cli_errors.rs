@@ -71,13 +71,13 @@ fn unknown_path_lists_the_names() {
             "--technique",
             "preconv",
             "--path",
-            "dx11",
+            "dx12",
             "--out",
             "x.png",
         ],
         &[],
     );
-    assert_one_error_line(&out, &["dx11", "dx9", "dx10"]);
+    assert_one_error_line(&out, &["dx12", "dx9", "dx10", "dx11"]);
 }
 
 #[test]

@@ -53,7 +53,8 @@ pub(super) struct BenchArgs {
     /// (`shvis techniques`).
     #[arg(help_heading = "Rows", long, default_value = "headline")]
     techniques: String,
-    /// Comma-separated hardware paths.
+    /// Comma-separated hardware paths (`dx9`, `dx10`, `dx11`); with `--techniques
+    /// headline`, `dx11` measures `shlmap` and `unc6` only.
     #[arg(help_heading = "Rows", long, default_value = "dx9,dx10")]
     paths: String,
     /// How unc* and preconv read the normal map: `mip` (its MIP chain of averaged normals)

@@ -6,6 +6,7 @@
 mod args;
 mod bake;
 mod bench;
+mod export;
 mod render;
 mod study;
 mod tools;
@@ -48,6 +49,9 @@ enum Command {
     Bake(bake::BakeArgs),
     /// Render one technique on one hardware path to a PNG or EXR.
     Render(render::RenderArgs),
+    /// Write a technique's baked data for an engine: KTX2 files, the uniform block, the
+    /// decode shader and a manifest.
+    Export(export::ExportArgs),
     /// Ground truth: G-buffer on the GPU, ray-cast visibility and importance-sampled
     /// environment integration on the CPU; prints its noise level.
     Reference(render::ReferenceArgs),
@@ -92,6 +96,7 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Bake(a) => bake::run_bake(a).context("bake"),
         Command::Render(a) => render::run_render(a).context("render"),
+        Command::Export(a) => export::run_export(a).context("export"),
         Command::Reference(a) => render::run_reference(a).context("reference"),
         Command::Bench(a) => bench::run_bench(a).context("bench"),
         Command::Probe(a) => bench::run_probe(a).context("probe"),

@@ -32,7 +32,7 @@ pub(super) struct RenderArgs {
     /// preconv, sh2.
     #[arg(long)]
     technique: Technique,
-    /// Hardware path: dx9 or dx10.
+    /// Hardware path: dx9, dx10 or dx11.
     #[arg(long, default_value = "dx10")]
     path: HwPath,
     #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=MAX_FRAME_SIDE as i64))]

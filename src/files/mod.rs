@@ -23,6 +23,7 @@
 
 pub mod clock;
 pub mod hash;
+pub mod ktx2;
 
 pub use hash::{Hasher64, hash64, splitmix64};
 

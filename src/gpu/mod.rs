@@ -35,7 +35,7 @@ pub use descriptors::Resource;
 pub use image::{Image, ImageDesc, Sampler, SamplerKind};
 pub use pass::{MeshBuffers, MeshPipeline, MeshPipelineDesc, VertexLayout};
 pub use path::{HwPath, UnknownPath};
-pub use shader::{ShaderStage, compile_glsl};
+pub use shader::{ShaderStage, compile_glsl, compile_source, flattened_glsl};
 pub use target::RenderTarget;
 pub use timing::TimingStats;
 pub use upload::PendingUpload;

@@ -39,6 +39,68 @@ pub fn compile_glsl(
     compile_source(&format!("glsl/{path}"), text, stage, defines)
 }
 
+/// `glsl/{path}` as one self-contained GLSL text: the layout macros and `defines` as
+/// `#define SHVIS_…` lines after `#version`, every `#include` replaced by the file's text
+/// (each file once; the include guards keep repeats empty), the include extension dropped.
+/// It compiles as [`compile_glsl`] compiles the original (`shvis export`'s decode snippet).
+///
+/// # Errors
+/// An unknown path or include.
+pub fn flattened_glsl(path: &str, defines: &[(&str, u32)]) -> Result<String, GpuError> {
+    let text = source(path)
+        .ok_or_else(|| GpuError::Shader(format!("glsl/{path}: no such embedded shader")))?;
+    let mut out = String::new();
+    let mut included = std::collections::HashSet::new();
+    fn inline(
+        text: &str,
+        name: &str,
+        out: &mut String,
+        included: &mut std::collections::HashSet<String>,
+        defines: &str,
+    ) -> Result<(), GpuError> {
+        for line in text.lines() {
+            let trimmed = line.trim_start();
+            if trimmed.starts_with("#extension GL_GOOGLE_include_directive") {
+                continue;
+            }
+            if let Some(rest) = trimmed.strip_prefix("#include") {
+                let requested = rest.trim().trim_matches('"');
+                let path = format!("include/{requested}");
+                let content = source(&path).ok_or_else(|| {
+                    GpuError::Shader(format!(
+                        "{name}: include \"{requested}\" not found under glsl/include/"
+                    ))
+                })?;
+                if included.insert(path.clone()) {
+                    out.push_str(&format!("// ---- glsl/{path}\n"));
+                    inline(content, &path, out, included, "")?;
+                    out.push_str(&format!("// ---- end of glsl/{path}\n"));
+                }
+                continue;
+            }
+            out.push_str(line);
+            out.push('\n');
+            if trimmed.starts_with("#version") {
+                out.push_str(defines);
+            }
+        }
+        Ok(())
+    }
+    let defines: String = SHADER_MACROS
+        .iter()
+        .chain(defines)
+        .map(|(n, v)| format!("#define SHVIS_{n} {v}\n"))
+        .collect();
+    inline(
+        text,
+        &format!("glsl/{path}"),
+        &mut out,
+        &mut included,
+        &defines,
+    )?;
+    Ok(out)
+}
+
 /// SPIR-V compiled in this process, by (name, text, stage, defines): a bench builds each
 /// row once per timing round, a probe each point once per batch, from the same source.
 type CompiledKey = (String, String, u8, Vec<(String, u32)>);

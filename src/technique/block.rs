@@ -591,9 +591,7 @@ mod tests {
 
     #[test]
     fn a_block_across_a_chart_border_and_its_gutter_keeps_the_covered_texels() {
-        // Each 4 × 4 block holds bright covered texels beside black gutter texels and a
-        // dim chart: the per-texel norm keeps every covered texel to its own scale.
-        let res = 8;
+        // Each 4 × 4 block holds two columns of black gutter texels beside two of a chart.
         // One chart beside the gutter: every covered texel within 5 % of its own scale.
         let res = 8;
         let chart = |bright: f32, dim: f32| {

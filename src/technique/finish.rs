@@ -125,7 +125,7 @@ pub fn stats(
 /// Makes `technique` on `path` drawable with `sets` copies of its lighting data (1, or 2
 /// for double-buffered dynamic lighting, `super::lighting`): checks the path rules, uploads
 /// each copy's uniform block and tables, compiles the fragment shader
-/// ([`super::fragment_shader`]) once and builds one pipeline per copy over the per-texel
+/// ([`super::fragment_shader`], unless `own_fragment` gives SPIR-V in its place) once and builds one pipeline per copy over the per-texel
 /// images (binding TEXTURE0: the bake's, shared by the copies, or — when the lighting data
 /// has per-texel images — that copy's), the technique's extra slot if it has one (material
 /// textures, a normal basis; the next binding) and that copy's tables (the bindings after
@@ -140,10 +140,14 @@ pub fn finish(
     extra: Option<TextureSlot>,
     lighting: &LightingData,
     sets: usize,
+    own_fragment: Option<Vec<u32>>,
 ) -> Result<TechniqueGpu, TechniqueError> {
     let label = format!("{technique}.{path}");
     let shared_per_texel = TextureSlot::per_texel(per_texel);
-    let fragment = compile_fragment(technique, path, scene, &lighting.defines)?;
+    let fragment = match own_fragment {
+        Some(spirv) => spirv,
+        None => compile_fragment(technique, path, scene, &lighting.defines)?,
+    };
     check_uniform_size(ctx, lighting.params.len(), &label)?;
     let reads = technique.reads();
     let mut built = Vec::with_capacity(sets);

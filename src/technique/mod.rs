@@ -406,7 +406,21 @@ pub fn build(
     path: HwPath,
     inputs: &Inputs<'_>,
 ) -> Result<TechniqueGpu, TechniqueError> {
-    Ok(build_sets(ctx, scene, technique, path, inputs, 1)?.0)
+    Ok(build_sets(ctx, scene, technique, path, inputs, 1, None)?.0)
+}
+
+/// [`build`] with `fragment` (SPIR-V) in place of the technique's own shader: a shader
+/// assembled from `shvis export`'s decode snippet, to check it draws what the technique
+/// draws.
+pub fn build_with_fragment(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    technique: Technique,
+    path: HwPath,
+    inputs: &Inputs<'_>,
+    fragment: Vec<u32>,
+) -> Result<TechniqueGpu, TechniqueError> {
+    Ok(build_sets(ctx, scene, technique, path, inputs, 1, Some(fragment))?.0)
 }
 
 /// Builds `technique` for lighting that changes: two copies of its lighting data to swap
@@ -427,7 +441,20 @@ pub fn build_dynamic(
                     .into(),
         });
     }
-    build_sets(ctx, scene, technique, path, inputs, 2)
+    build_sets(ctx, scene, technique, path, inputs, 2, None)
+}
+
+/// The per-texel data of `technique` as [`build`] uploads it on `path` before any block
+/// compression (`shvis export`).
+///
+/// # Errors
+/// Inputs the technique lacks.
+pub fn per_texel_data(
+    technique: Technique,
+    path: HwPath,
+    inputs: &Inputs<'_>,
+) -> Result<texels::TexelGroups, TechniqueError> {
+    Ok(prepare(technique, path, inputs)?.0)
 }
 
 /// What `technique`'s `dx11` blocks decode to, for the error ladder's block compression
@@ -499,6 +526,7 @@ fn build_sets(
     path: HwPath,
     inputs: &Inputs<'_>,
     sets: usize,
+    own_fragment: Option<Vec<u32>>,
 ) -> Result<(TechniqueGpu, LightingRecipe), TechniqueError> {
     let (texels, recipe) = prepare(technique, path, inputs)?;
     let data = recipe.build(inputs.radiance_sh, inputs.irradiance_sh)?;
@@ -509,7 +537,17 @@ fn build_sets(
     let label = format!("{technique}.{path}");
     let per_texel = block::upload_per_texel(ctx, &texels, technique, path, &label)?;
     let extra = extra_slot(ctx, technique, path, inputs, &label)?;
-    let gpu = finish::finish(ctx, scene, technique, path, per_texel, extra, &data, sets)?;
+    let gpu = finish::finish(
+        ctx,
+        scene,
+        technique,
+        path,
+        per_texel,
+        extra,
+        &data,
+        sets,
+        own_fragment,
+    )?;
     Ok((gpu, recipe))
 }
 

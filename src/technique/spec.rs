@@ -930,8 +930,8 @@ mod tests {
         }
         let e = "unc7".parse::<Technique>().unwrap_err().to_string();
         assert!(e.contains("unc7") && e.contains("preconv"), "{e}");
-        let e = "dx11".parse::<HwPath>().unwrap_err().to_string();
-        assert!(e.contains("dx9, dx10"), "{e}");
+        let e = "dx12".parse::<HwPath>().unwrap_err().to_string();
+        assert!(e.contains("dx9, dx10, dx11"), "{e}");
     }
 
     #[test]

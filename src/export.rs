@@ -1,0 +1,302 @@
+//! `shvis export`: a technique's baked data as files an engine loads (docs/export.md).
+//!
+//! ```text
+//! per_texel.ktx2         the per-texel data: dx10 RGBA16F / RGBA8 / R16F 2D array (layer g =
+//!                        values 4g … 4g+3); dx11 BC7 ratios or BC4 values (technique::block)
+//! per_texel_norms.ktx2   dx11 ratio codecs: the BC6H per-texel norms (one layer)
+//! table_{i}.ktx2         the normal-indexed tables: cube arrays (faces 6) of RGBA16F
+//! params.bin             the uniform block, std140, as the shader declares it
+//! decode.glsl            the technique's fragment shader as one self-contained file
+//! manifest.json          what each file holds, the decode, the conventions
+//! ```
+//!
+//! The files are what the renderer uploads: the tests read them back with the `ktx2`
+//! crate and compare texels, and build the technique with `decode.glsl` compiled in place
+//! of its own shader.
+
+use std::path::Path;
+
+use serde_json::json;
+
+use crate::files::ktx2::{Ktx2Image, encode};
+use crate::prepare::Prepared;
+use crate::technique::block::{BlockCodec, NormColours, block_codec, compress, path_defines};
+use crate::technique::texels::TexelGroups;
+use crate::technique::{
+    HwPath, LightingRecipe, Technique, TechniqueError, fragment_shader, per_texel_data,
+};
+
+/// Errors of an export.
+#[derive(Debug, thiserror::Error)]
+pub enum ExportError {
+    #[error("{label}: {detail}")]
+    Refused { label: String, detail: String },
+    #[error(transparent)]
+    Technique(#[from] TechniqueError),
+    #[error(transparent)]
+    Gpu(#[from] crate::gpu::GpuError),
+    #[error(transparent)]
+    File(#[from] crate::files::FileError),
+}
+
+/// Version of the manifest's layout.
+pub const MANIFEST_VERSION: u32 = 1;
+
+/// An export: each file's name and bytes, the manifest last.
+pub struct Export {
+    pub files: Vec<(String, Vec<u8>)>,
+}
+
+/// Why `technique` has no export, if it has none: its data is more than per-texel images,
+/// tables and a uniform block.
+pub fn refusal(technique: Technique) -> Option<&'static str> {
+    match technique {
+        Technique::Unc { .. }
+        | Technique::Pca { .. }
+        | Technique::Shlmap
+        | Technique::Preconv
+        | Technique::Sh2
+        | Technique::Vq { .. }
+        | Technique::Cpca { .. }
+        | Technique::EngineSh { .. }
+        | Technique::Local { .. } => None,
+        Technique::PcaVertex { .. } => Some("its weights live in the vertex stream"),
+        Technique::Rnm { .. } | Technique::Ndf { .. } => {
+            Some("it also reads material-space textures, which export does not write yet")
+        }
+        Technique::Nmprt { .. } => Some("its per-texel data is rebuilt for each lighting"),
+    }
+}
+
+fn ktx2(image: &Ktx2Image<'_>, label: &str) -> Result<Vec<u8>, ExportError> {
+    encode(image).ok_or_else(|| ExportError::Refused {
+        label: label.into(),
+        detail: format!("format {:?} has no KTX2 description here", image.format),
+    })
+}
+
+/// The per-texel data of an export on dx10: one 2D array.
+fn dx10_per_texel(texels: &TexelGroups, label: &str) -> Result<Vec<u8>, ExportError> {
+    let data: Vec<u8> = texels.groups.concat();
+    ktx2(
+        &Ktx2Image {
+            format: texels.format,
+            width: texels.res,
+            height: texels.res,
+            layers: texels.groups.len() as u32,
+            faces: 1,
+            data: &data,
+        },
+        label,
+    )
+}
+
+fn codec_json(codec: BlockCodec) -> serde_json::Value {
+    match codec {
+        BlockCodec::Bc4 => json!({
+            "name": "bc4",
+            "decode": "value = texture(per_texel, uv).r (BC4_UNORM: the value in [0, 1])",
+        }),
+        BlockCodec::Ratio(colours) => json!({
+            "name": "ratio-to-norm",
+            "decode": "value_j = (255 * s_j - 128) / 127 * n[colour(j)], s_j = channel j mod 4 of layer j div 4 of per_texel (BC7_UNORM), n = per_texel_norms layer 0 (BC6H_UFLOAT, RGB)",
+            "colour": match colours {
+                NormColours::One => "0 for every value (n.r)",
+                NormColours::Triplets => "j mod 3 (values 3k + c are RGB triplets)",
+                NormColours::GroupRgb => "(j mod 4) mod 3 (an RGB triple per layer, alpha with red)",
+            },
+            "filtering": "filter s and n bilinearly apart, then decode (as decode.glsl does)",
+        }),
+    }
+}
+
+/// Builds the export of `technique` on `path` from `prepared`.
+///
+/// # Errors
+/// A technique with no export ([`refusal`]) or no form on the path, the dx9 path (export
+/// writes the array layouts), inputs the technique lacks.
+pub fn export(
+    prepared: &Prepared,
+    technique: Technique,
+    path: HwPath,
+) -> Result<Export, ExportError> {
+    let label = format!("{technique}.{path}");
+    let refused = |detail: String| ExportError::Refused {
+        label: label.clone(),
+        detail,
+    };
+    if let Some(why) = refusal(technique) {
+        return Err(refused(format!("has no export: {why}")));
+    }
+    if let Some(why) = technique.refusal(path) {
+        return Err(refused(format!("cannot run on {path}: {why}")));
+    }
+    if path == HwPath::Dx9 {
+        return Err(refused(
+            "export writes the dx10 and dx11 layouts (arrays, cube maps); pass --path dx10 or dx11"
+                .into(),
+        ));
+    }
+    let inputs = prepared.inputs();
+    let texels = per_texel_data(technique, path, &inputs)?;
+    let recipe = LightingRecipe::new(technique, path, &inputs)?;
+    let lighting = recipe.build(inputs.radiance_sh, inputs.irradiance_sh)?;
+    let mut files = Vec::new();
+    let values = texels.groups.len() * crate::technique::texels::VALUES_PER_TEXEL;
+    let per_texel = match path {
+        HwPath::Dx11 => {
+            let codec = block_codec(technique).map_err(|why| refused(why.into()))?;
+            let block = compress(&texels, codec, &label)?;
+            let images = block.image_levels();
+            let mut names = Vec::new();
+            for (k, (desc, levels, _)) in images.iter().enumerate() {
+                let name = if k == 0 {
+                    "per_texel.ktx2"
+                } else {
+                    "per_texel_norms.ktx2"
+                };
+                let data: Vec<u8> = levels[0].concat();
+                files.push((
+                    name.to_string(),
+                    ktx2(
+                        &Ktx2Image {
+                            format: desc.format,
+                            width: desc.width,
+                            height: desc.height,
+                            layers: desc.layers,
+                            faces: 1,
+                            data: &data,
+                        },
+                        &label,
+                    )?,
+                ));
+                names.push(json!({"file": name, "format": format!("{:?}", desc.format), "layers": desc.layers}));
+            }
+            json!({
+                "files": names,
+                "res": texels.res,
+                "layers": texels.groups.len(),
+                "values_per_texel": values,
+                "codec": codec_json(codec),
+                "bytes_per_texel": block.bytes_per_texel(),
+            })
+        }
+        HwPath::Dx9 | HwPath::Dx10 => {
+            files.push(("per_texel.ktx2".into(), dx10_per_texel(&texels, &label)?));
+            json!({
+                "files": [{"file": "per_texel.ktx2", "format": format!("{:?}", texels.format), "layers": texels.groups.len()}],
+                "res": texels.res,
+                "layers": texels.groups.len(),
+                "values_per_texel": values,
+                "codec": {"name": "plain", "decode": "value_j = channel j mod 4 of layer j div 4 (RGBA8 as unorm)"},
+            })
+        }
+    };
+    let mut tables = Vec::new();
+    if let Some(data) = &lighting.tables {
+        for (i, image) in data.images.iter().enumerate() {
+            let desc = image.desc;
+            let cube = matches!(
+                desc.view_type,
+                ash::vk::ImageViewType::CUBE | ash::vk::ImageViewType::CUBE_ARRAY
+            );
+            let (layers, faces) = if cube {
+                (desc.layers / 6, 6)
+            } else {
+                (desc.layers, 1)
+            };
+            let bytes: Vec<u8> = data.image_levels(i)[0].concat();
+            let name = format!("table_{i}.ktx2");
+            files.push((
+                name.clone(),
+                ktx2(
+                    &Ktx2Image {
+                        format: desc.format,
+                        width: desc.width,
+                        height: desc.height,
+                        layers,
+                        faces,
+                        data: &bytes,
+                    },
+                    &label,
+                )?,
+            ));
+            tables.push(json!({
+                "file": name,
+                "format": format!("{:?}", desc.format),
+                "kind": if cube { "cube array (+X −X +Y −Y +Z −Z per layer)" } else { "2D array" },
+                "layers": layers,
+                "unscale": data.unscale,
+            }));
+        }
+    }
+    files.push(("params.bin".into(), lighting.params.clone()));
+    let shader = fragment_shader(technique);
+    let mut defines = path_defines(technique, path);
+    defines.push(("MATERIAL_LEVEL0", 0));
+    defines.extend_from_slice(&shader.defines);
+    defines.extend_from_slice(&lighting.defines);
+    let glsl = crate::gpu::flattened_glsl(shader.path, &defines)?;
+    files.push(("decode.glsl".into(), glsl.into_bytes()));
+    let layout = crate::gpu::layout::SHADER_MACROS
+        .iter()
+        .map(|(n, v)| (format!("SHVIS_{n}"), json!(v)))
+        .collect::<serde_json::Map<_, _>>();
+    let manifest = json!({
+        "shvis_export": MANIFEST_VERSION,
+        "technique": technique.name(),
+        "path": path.name(),
+        "family": crate::technique::catalog::family_of(technique),
+        "per_texel": per_texel,
+        "tables": tables,
+        "uniform_block": {
+            "file": "params.bin",
+            "bytes": lighting.params.len(),
+            "layout": "std140; its declaration is the first uniform block of decode.glsl",
+        },
+        "shader": {
+            "file": "decode.glsl",
+            "stage": "fragment",
+            "source": format!("glsl/{}", shader.path),
+            "defines": defines.iter().map(|(n, v)| (format!("SHVIS_{n}"), json!(v))).collect::<serde_json::Map<_, _>>(),
+            "bindings": layout,
+            "inputs": "the lightmap UV (in_uv_lightmap), the material UV, the tangent frame and the normal map, as glsl/include/common.glsl declares them",
+        },
+        "conventions": {
+            "sh": "real SH, Sloan's graphics convention with the Condon–Shortley phase (y1-1 = −√(3/4π)·y, y10 = √(3/4π)·z, y11 = −√(3/4π)·x), flat index l(l+1)+m; order n = bands l < n",
+            "space": "right-handed, +Y up; tangent space z = the surface normal (glTF tangents)",
+            "lightmap_uv": "the scene's lightmap UVs: glTF TEXCOORD_1, or generated where a file has none; texel centres at (i + ½)/res",
+            "radiance": "linear RGB; the shader writes albedo/π · irradiance",
+        },
+    });
+    let manifest =
+        serde_json::to_vec_pretty(&manifest).map_err(|e| refused(format!("manifest: {e}")))?;
+    files.push(("manifest.json".into(), manifest));
+    Ok(Export { files })
+}
+
+impl Export {
+    /// Writes every file into `dir` (created if missing), each atomically.
+    ///
+    /// # Errors
+    /// A file that cannot be written.
+    pub fn write(&self, dir: &Path) -> Result<(), ExportError> {
+        std::fs::create_dir_all(dir).map_err(|cause| crate::files::FileError::Io {
+            path: dir.to_path_buf(),
+            action: "create the directory",
+            cause,
+        })?;
+        for (name, bytes) in &self.files {
+            crate::files::write_atomic(&dir.join(name), bytes)?;
+        }
+        Ok(())
+    }
+
+    /// The bytes of file `name`.
+    pub fn file(&self, name: &str) -> Option<&[u8]> {
+        self.files
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, b)| b.as_slice())
+    }
+}

@@ -1,0 +1,146 @@
+//! `shvis export`: every KTX2 file read back by the `ktx2` crate holds the texels the
+//! renderer uploads, the manifest names every file, and the decode snippet, compiled in
+//! place of the technique's shader, draws the technique's image.
+
+mod common;
+
+use shvis::export::export;
+use shvis::gpu::{HwPath, ShaderStage, compile_source};
+use shvis::render::{FrameSettings, SceneGpu};
+use shvis::technique::block::{block_codec, compress};
+use shvis::technique::{self, LightingRecipe, Technique, per_texel_data};
+
+/// Level 0 of a KTX2 file, after checking the reader's header against the expectation.
+fn level0(bytes: &[u8], format: ash::vk::Format, side: u32, layers: u32, faces: u32) -> Vec<u8> {
+    let reader = ktx2::Reader::new(bytes).expect("a valid KTX2 file");
+    let header = reader.header();
+    assert_eq!(
+        header.format.map(|f| f.value()),
+        Some(format.as_raw() as u32)
+    );
+    assert_eq!((header.pixel_width, header.pixel_height), (side, side));
+    assert_eq!((header.layer_count, header.face_count), (layers, faces));
+    assert_eq!(header.level_count, 1);
+    reader.levels().next().expect("level 0").data.to_vec()
+}
+
+#[test]
+fn every_file_reads_back_as_the_texels_the_renderer_uploads() {
+    let prepared = common::house();
+    let inputs = prepared.inputs();
+    for (name, path) in [
+        ("shlmap", HwPath::Dx11),
+        ("unc6", HwPath::Dx11),
+        ("unc6", HwPath::Dx10),
+        ("preconv", HwPath::Dx11),
+    ] {
+        let t: Technique = name.parse().unwrap();
+        let label = format!("{t}.{path}");
+        let out = export(prepared, t, path).unwrap_or_else(|e| panic!("{label}: {e}"));
+        let manifest: serde_json::Value =
+            serde_json::from_slice(out.file("manifest.json").expect("manifest")).unwrap();
+        assert_eq!(manifest["technique"], name);
+        assert_eq!(manifest["path"], path.name());
+        for (file, _) in &out.files {
+            if file != "manifest.json" {
+                assert!(
+                    manifest.to_string().contains(file.as_str()),
+                    "{label}: the manifest names {file}"
+                );
+            }
+        }
+        // The per-texel images as `technique::block::upload_per_texel` uploads them.
+        let texels = per_texel_data(t, path, &inputs).unwrap();
+        let uploads: Vec<(ash::vk::Format, u32, Vec<u8>)> = match path {
+            HwPath::Dx11 => compress(&texels, block_codec(t).unwrap(), &label)
+                .unwrap()
+                .image_levels()
+                .into_iter()
+                .map(|(desc, levels, _)| (desc.format, desc.layers, levels[0].concat()))
+                .collect(),
+            HwPath::Dx9 | HwPath::Dx10 => {
+                vec![(
+                    texels.format,
+                    texels.groups.len() as u32,
+                    texels.groups.concat(),
+                )]
+            }
+        };
+        for ((format, layers, bytes), file) in uploads
+            .iter()
+            .zip(["per_texel.ktx2", "per_texel_norms.ktx2"])
+        {
+            let read = level0(out.file(file).expect(file), *format, texels.res, *layers, 1);
+            assert!(read == *bytes, "{label}: {file} holds the uploaded texels");
+        }
+        // The tables as `NormalTableData::upload` uploads them.
+        let recipe = LightingRecipe::new(t, path, &inputs).unwrap();
+        let lighting = recipe
+            .build(inputs.radiance_sh, inputs.irradiance_sh)
+            .unwrap();
+        assert_eq!(out.file("params.bin"), Some(lighting.params.as_slice()));
+        if let Some(tables) = &lighting.tables {
+            for (i, image) in tables.images.iter().enumerate() {
+                let file = format!("table_{i}.ktx2");
+                let desc = image.desc;
+                let read = level0(
+                    out.file(&file).expect("table"),
+                    desc.format,
+                    desc.width,
+                    desc.layers / 6,
+                    6,
+                );
+                assert!(
+                    read == tables.image_levels(i)[0].concat(),
+                    "{label}: {file}"
+                );
+            }
+        } else {
+            assert!(out.file("table_0.ktx2").is_none());
+        }
+    }
+}
+
+#[test]
+fn the_decode_snippet_draws_the_techniques_image() {
+    let ctx = common::validated_context();
+    let prepared = common::house();
+    let settings = FrameSettings {
+        width: 160,
+        height: 100,
+        ..FrameSettings::default()
+    };
+    let scene = SceneGpu::new(&ctx, &prepared.scene, &settings).unwrap();
+    for (name, path) in [
+        ("shlmap", HwPath::Dx11),
+        ("unc6", HwPath::Dx11),
+        ("unc6", HwPath::Dx10),
+    ] {
+        let t: Technique = name.parse().unwrap();
+        let out = export(prepared, t, path).unwrap();
+        let snippet = std::str::from_utf8(out.file("decode.glsl").unwrap()).unwrap();
+        assert!(!snippet.contains("#include"), "self-contained");
+        let spirv = compile_source("decode.glsl", snippet, ShaderStage::Fragment, &[])
+            .unwrap_or_else(|e| panic!("{t}.{path}: the snippet compiles: {e}"));
+        let own = technique::build(&ctx, &scene, t, path, &prepared.inputs()).unwrap();
+        let expected = own.render(&scene, 0, 1).unwrap();
+        drop(own);
+        let snippet_built =
+            technique::build_with_fragment(&ctx, &scene, t, path, &prepared.inputs(), spirv)
+                .unwrap();
+        let got = snippet_built.render(&scene, 0, 1).unwrap();
+        drop(snippet_built);
+        let worst = expected
+            .rgba
+            .iter()
+            .zip(&got.rgba)
+            .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
+            .fold(0f32, f32::max);
+        assert!(
+            worst <= 1e-6,
+            "{t}.{path}: the snippet's image differs by {worst}"
+        );
+    }
+    drop(scene);
+    common::assert_validation_clean(&ctx, "export snippets");
+}
