@@ -20,7 +20,9 @@ use serde_json::json;
 
 use crate::files::ktx2::{Ktx2Image, encode};
 use crate::prepare::Prepared;
-use crate::technique::block::{BlockCodec, NormColours, block_codec, compress, path_defines};
+use crate::technique::block::{
+    BlockCodec, NormColours, block_codec, compress_cached, path_defines,
+};
 use crate::technique::texels::TexelGroups;
 use crate::technique::{
     HwPath, LightingRecipe, Technique, TechniqueError, fragment_shader, per_texel_data,
@@ -146,7 +148,7 @@ pub fn export(
     let per_texel = match path {
         HwPath::Dx11 => {
             let codec = block_codec(technique).map_err(|why| refused(why.into()))?;
-            let block = compress(&texels, codec, &label)?;
+            let block = compress_cached(&texels, codec, &label, inputs.cache_dir)?;
             let images = block.image_levels();
             let mut names = Vec::new();
             for (k, (desc, levels, _)) in images.iter().enumerate() {

@@ -357,6 +357,7 @@ impl Prepared {
 
     pub fn inputs(&self) -> Inputs<'_> {
         Inputs {
+            cache_dir: Some(&self.cache_dir),
             ao: &self.ao,
             irradiance_sh: &self.irradiance_sh,
             radiance_sh: &self.radiance_sh,

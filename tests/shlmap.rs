@@ -289,6 +289,7 @@ fn shlmap_tracks_strong_inter_reflection() {
         table_res: 16,
         h_order: Order::THREE,
         sg_solver: shvis::sh::sg::DEFAULT_SOLVER,
+        cache_dir: None,
     };
     for &path in HwPath::ALL {
         let tech = shvis::technique::build(&ctx, &gpu, Technique::Shlmap, path, &inputs).unwrap();

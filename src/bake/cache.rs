@@ -57,6 +57,8 @@ pub const CACHE_DIR_ENV: &str = "SHVIS_CACHE_DIR";
 const KIND_VISIBILITY: u32 = 1;
 /// Kind tag of VQ / CPCA fit caches.
 const KIND_CLUSTERS: u32 = 2;
+/// Kind tag of a derived product's bytes ([`load_or_build_blob`]).
+const KIND_BLOB: u32 = 3;
 
 /// The cache directory: `$SHVIS_CACHE_DIR` when set and not empty, else `.shvis-cache`
 /// in the current directory.
@@ -113,6 +115,29 @@ pub fn load_or_bake_visibility(
         |bytes| decode_visibility(bytes, key, res, settings.order),
         || Ok(bake()),
         |map| encode_visibility(map, key),
+    )
+}
+
+/// A derived product's bytes (`what`: "dx11 blocks") cached under `key` in `cache_dir`
+/// as `{prefix}-{key:016x}.bin`, with the header and checks of every cache file; `build`
+/// makes them when the file is missing or does not check.
+///
+/// # Errors
+/// `build`'s, or the cache file cannot be written.
+pub fn load_or_build_blob(
+    cache_dir: &Path,
+    prefix: &str,
+    what: &str,
+    key: u64,
+    build: impl FnOnce() -> Result<Vec<u8>, BakeError>,
+) -> Result<Vec<u8>, BakeError> {
+    let path = cache_dir.join(format!("{prefix}-{key:016x}.bin"));
+    load_or_build(
+        &path,
+        what,
+        |bytes| payload_of(bytes, KIND_BLOB, what, key).map(<[u8]>::to_vec),
+        build,
+        |bytes| with_header(KIND_BLOB, key, bytes),
     )
 }
 

@@ -119,6 +119,9 @@ pub enum BakeError {
     },
     #[error(transparent)]
     File(#[from] crate::files::FileError),
+    /// Data derived from a bake and cached with it (the dx11 blocks) could not be made.
+    #[error("{0}")]
+    Derived(String),
 }
 
 /// Checks a rays-per-texel count against [`MIN_RAYS`]..=[`MAX_RAYS`].

@@ -368,6 +368,62 @@ impl BlockTexels {
             .collect()
     }
 
+    /// The layers, norms and clamp counts as cache bytes ([`BlockTexels::from_bytes`]).
+    fn to_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        let mut blob = |b: &[u8]| {
+            out.extend_from_slice(&(b.len() as u64).to_le_bytes());
+            out.extend_from_slice(b);
+        };
+        for layer in &self.layers {
+            blob(layer);
+        }
+        blob(self.norms.as_deref().unwrap_or(&[]));
+        out.extend_from_slice(&(self.layers.len() as u64).to_le_bytes());
+        out.extend_from_slice(&self.clamped.below.to_le_bytes());
+        out.extend_from_slice(&self.clamped.above.to_le_bytes());
+        out
+    }
+
+    /// The blocks of `texels` under `codec` from [`BlockTexels::to_bytes`]' bytes; `None`
+    /// when they do not fit (another layer count or size).
+    fn from_bytes(bytes: &[u8], codec: BlockCodec, texels: &TexelGroups) -> Option<BlockTexels> {
+        let tail = bytes.len().checked_sub(24)?;
+        let word = |at: usize| Some(u64::from_le_bytes(bytes.get(at..at + 8)?.try_into().ok()?));
+        let layers = word(tail)? as usize;
+        let clamped = Clamped {
+            below: word(tail + 8)?,
+            above: word(tail + 16)?,
+        };
+        let mut at = 0;
+        let mut blobs = Vec::new();
+        for _ in 0..=layers {
+            let len = word(at)? as usize;
+            blobs.push(bytes.get(at + 8..at + 8 + len)?.to_vec());
+            at += 8 + len;
+        }
+        let norms = blobs.pop()?;
+        let per_layer = match codec {
+            BlockCodec::Bc4 => bc::compressed_bytes(texels.res) / 2,
+            BlockCodec::Ratio(_) => bc::compressed_bytes(texels.res),
+        };
+        let fits = at == tail
+            && layers == texels.groups.len()
+            && blobs.iter().all(|b| b.len() == per_layer)
+            && match codec {
+                BlockCodec::Bc4 => norms.is_empty(),
+                BlockCodec::Ratio(_) => norms.len() == bc::compressed_bytes(texels.res),
+            };
+        fits.then(|| BlockTexels {
+            codec,
+            res: texels.res,
+            layers: blobs,
+            norms: (!norms.is_empty()).then_some(norms),
+            clamped,
+            name: texels.name.clone(),
+        })
+    }
+
     /// Bytes per texel on the GPU (whole blocks over res²).
     pub fn bytes_per_texel(&self) -> f64 {
         let bytes: usize = self.layers.iter().map(Vec::len).sum::<usize>()
@@ -474,14 +530,69 @@ impl DecodedBlocks {
     }
 }
 
+/// What the encoding depends on besides the data: the encoder and its settings. Part of
+/// the cache key, so a change of either re-encodes.
+const ENCODER_TAG: &str =
+    "intel_tex_2 0.5: bc7 alpha_basic, bc6h basic, bc4; ratio 128+127r; norms filled per block";
+
+/// [`compress`] through the bake cache in `cache_dir` (none: no cache): the blocks are
+/// part of the bake, keyed by the data, the codec and [`ENCODER_TAG`].
+///
+/// # Errors
+/// [`compress`]'s; a cache folder that cannot be written.
+pub fn compress_cached(
+    texels: &TexelGroups,
+    codec: BlockCodec,
+    label: &str,
+    cache_dir: Option<&std::path::Path>,
+) -> Result<BlockTexels, TechniqueError> {
+    let Some(dir) = cache_dir else {
+        return compress(texels, codec, label);
+    };
+    let mut id = Vec::new();
+    id.extend_from_slice(ENCODER_TAG.as_bytes());
+    id.extend_from_slice(&codec.shader_value().to_le_bytes());
+    id.extend_from_slice(&texels.format.as_raw().to_le_bytes());
+    id.extend_from_slice(&texels.res.to_le_bytes());
+    for g in &texels.groups {
+        id.extend_from_slice(&(g.len() as u64).to_le_bytes());
+        id.extend_from_slice(g);
+    }
+    let key = crate::files::hash64(&id);
+    let mut built = None;
+    let bytes = crate::bake::cache::load_or_build_blob(dir, "blocks", "dx11 blocks", key, || {
+        let block = compress(texels, codec, label)
+            .map_err(|e| crate::bake::BakeError::Derived(e.to_string()))?;
+        let bytes = block.to_bytes();
+        built = Some(block);
+        Ok(bytes)
+    })
+    .map_err(|e| TechniqueError::Input {
+        label: label.into(),
+        detail: e.to_string(),
+    })?;
+    if let Some(block) = built {
+        return Ok(block);
+    }
+    match BlockTexels::from_bytes(&bytes, codec, texels) {
+        Some(block) => Ok(block),
+        None => {
+            log::warn!("{label}: the cached dx11 blocks do not fit the data; encoding again");
+            compress(texels, codec, label)
+        }
+    }
+}
+
 /// The per-texel images of `technique` on `path`: on `dx11` block-compressed (refused
-/// with the reason where its data has no such form), else as `texels` uploads them.
+/// with the reason where its data has no such form; through the cache in `cache_dir`),
+/// else as `texels` uploads them.
 pub fn upload_per_texel(
     ctx: &Arc<Context>,
     texels: &TexelGroups,
     technique: Technique,
     path: HwPath,
     label: &str,
+    cache_dir: Option<&std::path::Path>,
 ) -> Result<Vec<Image>, TechniqueError> {
     match path {
         HwPath::Dx11 => {
@@ -492,7 +603,7 @@ pub fn upload_per_texel(
             if texels.groups.is_empty() {
                 return Ok(Vec::new());
             }
-            compress(texels, codec, label)?.upload(ctx, label)
+            compress_cached(texels, codec, label, cache_dir)?.upload(ctx, label)
         }
         HwPath::Dx9 | HwPath::Dx10 => texels.upload(ctx, path),
     }
@@ -650,6 +761,42 @@ mod tests {
         );
         assert!(compress(&bad, BlockCodec::Bc4, "t").is_err());
         assert!(compress(&texels, BlockCodec::Ratio(NormColours::One), "t").is_err());
+    }
+
+    #[test]
+    fn the_blocks_are_cached_with_the_bake_and_a_damaged_file_is_rebuilt() {
+        let dir = std::env::temp_dir().join(format!("shvis-blocks-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let texels = rgba16f(8, 2, |t, j| (t as f32 * 0.1 + j as f32).sin());
+        let codec = BlockCodec::Ratio(NormColours::One);
+        let fresh = compress_cached(&texels, codec, "t", Some(&dir)).unwrap();
+        let files: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        assert_eq!(files.len(), 1, "one cache file");
+        assert_eq!(
+            compress_cached(&texels, codec, "t", Some(&dir)).unwrap(),
+            fresh
+        );
+        let mut bytes = std::fs::read(&files[0]).unwrap();
+        let last = bytes.len() - 1;
+        bytes[last] ^= 0xFF;
+        std::fs::write(&files[0], &bytes).unwrap();
+        assert_eq!(
+            compress_cached(&texels, codec, "t", Some(&dir)).unwrap(),
+            fresh,
+            "rebuilt"
+        );
+        // Other data, another key.
+        let other = rgba16f(8, 2, |t, j| (t as f32 * 0.2 + j as f32).cos());
+        assert_ne!(
+            compress_cached(&other, codec, "t", Some(&dir)).unwrap(),
+            fresh
+        );
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 2);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

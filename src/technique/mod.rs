@@ -60,6 +60,9 @@ use crate::sh::Order;
 
 /// What techniques read from the bake and the lighting prep.
 pub struct Inputs<'a> {
+    /// The bake cache's folder, where derived data is cached too (the dx11 blocks); `None`:
+    /// nothing cached.
+    pub cache_dir: Option<&'a std::path::Path>,
     /// Ambient occlusion in the lightmap (`preconv`).
     pub ao: &'a AoMap,
     /// Order-3 SH of irradiance (radiance convolved with the clamped cosine), RGB.
@@ -472,7 +475,7 @@ pub fn dx11_decoded_values(
         detail: format!("has no dx11 form: {reason}"),
     })?;
     let (texels, _) = prepare(technique, HwPath::Dx11, inputs)?;
-    Ok(block::compress(&texels, codec, &label)?.decode())
+    Ok(block::compress_cached(&texels, codec, &label, inputs.cache_dir)?.decode())
 }
 
 /// The CPU half of a build: the per-texel data to upload and the lighting recipe.
@@ -535,7 +538,8 @@ fn build_sets(
         return Ok((gpu, recipe));
     }
     let label = format!("{technique}.{path}");
-    let per_texel = block::upload_per_texel(ctx, &texels, technique, path, &label)?;
+    let per_texel =
+        block::upload_per_texel(ctx, &texels, technique, path, &label, inputs.cache_dir)?;
     let extra = extra_slot(ctx, technique, path, inputs, &label)?;
     let gpu = finish::finish(
         ctx,
