@@ -134,14 +134,29 @@ pub fn compile_source(
     Ok(spirv)
 }
 
+/// The process's one shaderc compiler, created on first use and kept: every compile takes
+/// its lock. Creating and dropping a compiler per compile initializes and finalizes
+/// glslang's process-wide state each time (shaderc's `GlslangInitializer`), and two
+/// threads doing so while a third compiles is what glslang does not guard; one compiler
+/// for the process, one compile at a time, never finalizes it.
+static COMPILER: std::sync::Mutex<Option<shaderc::Compiler>> = std::sync::Mutex::new(None);
+
 fn compile_uncached(
     name: &str,
     text: &str,
     stage: ShaderStage,
     defines: &[(&str, u32)],
 ) -> Result<Vec<u32>, GpuError> {
-    let compiler = shaderc::Compiler::new()
-        .map_err(|e| GpuError::Shader(format!("shaderc unavailable: {e}")))?;
+    let mut guard = COMPILER
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    if guard.is_none() {
+        *guard = Some(
+            shaderc::Compiler::new()
+                .map_err(|e| GpuError::Shader(format!("shaderc unavailable: {e}")))?,
+        );
+    }
+    let compiler = guard.as_ref().expect("created above");
     let mut options = shaderc::CompileOptions::new()
         .map_err(|e| GpuError::Shader(format!("shaderc options: {e}")))?;
     options.set_target_env(
