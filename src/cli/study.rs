@@ -406,11 +406,18 @@ fn run_block(a: StudyBlockArgs) -> Result<()> {
         .as_ref()
         .context("the SH lightmap was not baked")?;
     let study = shvis::study::block::run(map);
-    let markdown = shvis::study::block::markdown(&study);
+    let table_rows = shvis::study::block::tables(
+        &prepared,
+        &["unc6", "pca8"].map(|n| n.parse().expect("technique names")),
+    )?;
+    let markdown =
+        shvis::study::block::markdown(&study) + &shvis::study::block::tables_markdown(&table_rows);
     shvis::files::write(a.out.join("block.md"), &markdown)?;
     shvis::files::write(
         a.out.join("block.json"),
-        serde_json::to_string_pretty(&study)?,
+        serde_json::to_string_pretty(
+            &serde_json::json!({"lightmap": study, "tables": table_rows}),
+        )?,
     )?;
     print_table(&markdown, &a.out, "block.md, block.json", started);
     Ok(())

@@ -385,6 +385,109 @@ pub fn run(map: &ShLightmap) -> BlockStudy {
     }
 }
 
+/// One technique's normal-indexed tables block-compressed as the `dx11` path compresses
+/// per-texel data (`technique::block`: BC7 ratios to a BC6H norm, one norm per table texel
+/// and cube face), against their RGBA16F storage.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct TableRow {
+    pub technique: String,
+    /// The tables' texels on dx10 (RGBA16F) and as blocks.
+    pub bytes_half: u64,
+    pub bytes_blocks: u64,
+    /// √(Σ Δ²) / √(Σ v²) over every stored table value, and the largest |Δ| over the
+    /// largest |v|.
+    pub rms: f64,
+    pub max: f64,
+    /// Encoding time of the tables on this machine: on the path a lighting change takes.
+    pub encode_seconds: f64,
+}
+
+/// [`TableRow`] of each technique in `techniques` that has tables, on dx10's layout.
+///
+/// # Errors
+/// The technique's own (inputs it lacks).
+pub fn tables(
+    prepared: &crate::prepare::Prepared,
+    techniques: &[crate::technique::Technique],
+) -> Result<Vec<TableRow>, crate::technique::TechniqueError> {
+    use crate::technique::block::{BlockCodec, NormColours, compress};
+    use crate::technique::texels::TexelGroups;
+    let inputs = prepared.inputs();
+    let mut rows = Vec::new();
+    for &t in techniques {
+        let recipe =
+            crate::technique::LightingRecipe::new(t, crate::technique::HwPath::Dx10, &inputs)?;
+        let data = recipe.build(inputs.radiance_sh, inputs.irradiance_sh)?;
+        let Some(tables) = data.tables else { continue };
+        let started = Instant::now();
+        let (mut sum_d2, mut sum_v2, mut max_d, mut max_v) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+        let (mut bytes_half, mut bytes_blocks) = (0u64, 0u64);
+        for image in &tables.images {
+            let faces = if image.desc.layers % 6 == 0 { 6 } else { 1 };
+            let res = image.desc.width;
+            for face in 0..faces {
+                let groups: Vec<Vec<half::f16>> = image
+                    .layers
+                    .iter()
+                    .skip(face)
+                    .step_by(faces)
+                    .map(|l| l.iter().flatten().copied().collect())
+                    .collect();
+                let texels = TexelGroups::new(
+                    ash::vk::Format::R16G16B16A16_SFLOAT,
+                    res,
+                    &groups,
+                    image.name.clone(),
+                );
+                let block = compress(&texels, BlockCodec::Ratio(NormColours::One), &image.name)?;
+                bytes_half += texels.groups.iter().map(|g| g.len() as u64).sum::<u64>();
+                bytes_blocks += (block.bytes_per_texel() * f64::from(res * res)) as u64;
+                for (g, decoded) in groups.iter().zip(block.decoded_values()) {
+                    for (v, d) in g.iter().zip(decoded) {
+                        let (v, d) = (f64::from(v.to_f32()), f64::from(d));
+                        sum_d2 += (v - d) * (v - d);
+                        sum_v2 += v * v;
+                        max_d = max_d.max((v - d).abs());
+                        max_v = max_v.max(v.abs());
+                    }
+                }
+            }
+        }
+        rows.push(TableRow {
+            technique: t.name(),
+            bytes_half,
+            bytes_blocks,
+            rms: (sum_d2 / sum_v2.max(f64::MIN_POSITIVE)).sqrt(),
+            max: max_d / max_v.max(f64::MIN_POSITIVE),
+            encode_seconds: started.elapsed().as_secs_f64(),
+        });
+    }
+    Ok(rows)
+}
+
+/// The table rows as a Markdown section.
+pub fn tables_markdown(rows: &[TableRow]) -> String {
+    let mut s = String::from(
+        "\n## Lighting tables\n\nEach technique's normal-indexed tables (dx10's cube arrays) in \
+         the dx11 path's packing, one norm per table texel and face, against their RGBA16F \
+         values:\n\n\
+         | technique | RGBA16F bytes | block bytes | RMS | largest error / largest value | encode s |\n\
+         |---|---:|---:|---:|---:|---:|\n",
+    );
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {} | {:.3} % | {:.3} % | {:.2} |\n",
+            r.technique,
+            r.bytes_half,
+            r.bytes_blocks,
+            100.0 * r.rms,
+            100.0 * r.max,
+            r.encode_seconds
+        );
+    }
+    s
+}
+
 /// The study as a Markdown page.
 pub fn markdown(study: &BlockStudy) -> String {
     let mut s = format!(
