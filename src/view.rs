@@ -507,6 +507,15 @@ fn switch(
     if let Some((_, handle)) = st.building.take() {
         let _ = handle.join();
     }
+    // A technique without a form on the path (dx11's refusals) is shown on dx10.
+    let technique = s.techniques[index];
+    let path = match technique.refusal(path) {
+        Some(why) => {
+            log::info!("{technique}.{path}: {why}; showing dx10");
+            HwPath::Dx10
+        }
+        None => path,
+    };
     let step = st.sun.round() as u32 % SUN_STEPS_PER_TURN;
     let (tech, recipe) = build(
         &st.ctx,
