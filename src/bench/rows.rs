@@ -250,8 +250,13 @@ fn measure_row(
         textures_bound: tech.stats.textures_bound,
         lookups_per_pixel: tech.stats.lookups_per_pixel,
         ratio_to_preconv: None,
-        paper_ms: technique.paper_ms(),
-        paper_ratio_to_preconv: technique.paper_ratio_to_preconv(),
+        // The paper measured its techniques uncompressed (DX9- and DX10-class cards).
+        paper_ms: (path != HwPath::Dx11)
+            .then(|| technique.paper_ms())
+            .flatten(),
+        paper_ratio_to_preconv: (path != HwPath::Dx11)
+            .then(|| technique.paper_ratio_to_preconv())
+            .flatten(),
         reference: reference_kind,
         attribution,
         clipped_pixels: frame.clipped_pixels(),
