@@ -699,29 +699,29 @@ impl<'a> RowLadder<'a> {
     ) {
         let (px, technique) = (self.px, self.technique);
         let block = weights_only_block(&q.basis, &q.mean, order, &self.prepared.radiance_sh);
+        let shade_weights = |u: &[f64], k: usize| {
+            let mut y = [0.0; 9];
+            eval_basis(Order::THREE, px.normal[k], &mut y);
+            let mut e = [0.0; 3];
+            for (i, yi) in y.iter().enumerate() {
+                for c in 0..3 {
+                    let mut coeff = f64::from(block[9 * q.m + i][c]);
+                    for (b, ub) in u[..q.m].iter().enumerate() {
+                        coeff += ub * f64::from(block[9 * b + i][c]);
+                    }
+                    e[c] += coeff * yi;
+                }
+            }
+            e
+        };
         self.push(
             rungs,
             AttributionKind::LightmapTexels,
             format!("{technique}.lightmap"),
-            &|| {
-                px.image(|k| {
-                    let u = lightmap_u(k);
-                    let mut y = [0.0; 9];
-                    eval_basis(Order::THREE, px.normal[k], &mut y);
-                    let mut e = [0.0; 3];
-                    for (i, yi) in y.iter().enumerate() {
-                        for c in 0..3 {
-                            let mut coeff = f64::from(block[9 * q.m + i][c]);
-                            for (b, ub) in u[..q.m].iter().enumerate() {
-                                coeff += ub * f64::from(block[9 * b + i][c]);
-                            }
-                            e[c] += coeff * yi;
-                        }
-                    }
-                    e
-                })
-            },
+            &|| px.image(|k| shade_weights(&lightmap_u(k), k)),
         );
+        // The blocks decode to the weights' unorm values, as the RGBA8 lightmap reads.
+        self.push_block_compression(rungs, q.m, 1.0, &shade_weights);
     }
 
     /// `pcaM`'s last rungs: the quantized basis's and mean's normal tables read with the
@@ -778,6 +778,7 @@ impl<'a> RowLadder<'a> {
             format!("{label}.lightmap"),
             &|| px.image(|k| tables_dot(&lightmap_u(k), k)),
         );
+        self.push_block_compression(rungs, q.m, 1.0, &tables_dot);
         Ok(())
     }
 
