@@ -174,6 +174,7 @@ fn lighting_update(c: &mut Criterion) {
         table_res: 32,
         h_order: Order::THREE,
         sg_solver: shvis::sh::sg::DEFAULT_SOLVER,
+        cache_dir: None,
     };
     let mut g = c.benchmark_group("lighting_update");
     for name in ["unc6", "pca16", "pca16w", "sh2"] {

@@ -75,10 +75,8 @@ pub(super) fn measure_rows(
         for &technique in &settings.techniques {
             for &path in &settings.paths {
                 if !settings.measures(technique, path) {
-                    if k == 0 {
-                        if let Some(why) = technique.refusal(path) {
-                            log::info!("{technique}.{path}: left out ({why})");
-                        }
+                    if let (0, Some(why)) = (k, technique.refusal(path)) {
+                        log::info!("{technique}.{path}: left out ({why})");
                     }
                     continue;
                 }

@@ -36,7 +36,7 @@ use ash::vk;
 use half::f16;
 
 use super::spec::{EngineShBasis, LocalBasis};
-use super::texels::{TexelGroups, VALUES_PER_TEXEL};
+use super::texels::{ImageBytes, TexelGroups, VALUES_PER_TEXEL};
 use super::{HwPath, Technique, TechniqueError};
 use crate::bake::block::{self as bc, Bc6hQuality, Clamped};
 use crate::gpu::{Context, Image, ImageDesc};
@@ -328,7 +328,7 @@ impl BlockTexels {
 
     /// The images: a 2D array of the groups' layers, and for the ratio codecs a one-layer
     /// array of the norms; each with its level-0 layers and debug name.
-    pub fn image_levels(&self) -> Vec<(ImageDesc, Vec<Vec<&[u8]>>, String)> {
+    pub fn image_levels(&self) -> Vec<ImageBytes<'_>> {
         let (groups, norms) = self.formats();
         let mut images = vec![(
             ImageDesc::texture_2d_array(groups, self.res, self.res, self.layers.len() as u32),

@@ -150,7 +150,7 @@ impl TexelGroups {
 }
 
 /// An image's description, its level-0 layers' bytes and its debug name.
-type ImageBytes<'a> = (ImageDesc, Vec<Vec<&'a [u8]>>, String);
+pub type ImageBytes<'a> = (ImageDesc, Vec<Vec<&'a [u8]>>, String);
 
 /// Per-texel groups as images (`groups[g]` = res² texels of `format`): one 2D texture per
 /// group on dx9, one 2D array on dx10; each with its level-0 layers and name.
