@@ -15,7 +15,7 @@
 //! outside the overlay equals `shvis render` of the same view byte for byte, which is what
 //! the viewer test checks.
 //!
-//! Keys: Tab / N next technique, B previous, P switch dx9 ↔ dx10, ← / → turn
+//! Keys: Tab / N next technique, B previous, P the next path (dx9 → dx10 → dx11), ← / → turn
 //! the sun by 15°, Space start/stop the sun's animation, R reset camera and sun, Esc / Q
 //! quit. Drag with the left button to orbit the camera, with the right one to turn the sun;
 //! wheel to move closer.
