@@ -65,6 +65,53 @@ impl Bc6hQuality {
     }
 }
 
+/// The encoder's BC7 quality settings (with alpha), fastest first.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Bc7Quality {
+    UltraFast,
+    VeryFast,
+    Fast,
+    Basic,
+    Slow,
+}
+
+impl Bc7Quality {
+    pub const ALL: [Bc7Quality; 5] = [
+        Bc7Quality::UltraFast,
+        Bc7Quality::VeryFast,
+        Bc7Quality::Fast,
+        Bc7Quality::Basic,
+        Bc7Quality::Slow,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Bc7Quality::UltraFast => "ultra-fast",
+            Bc7Quality::VeryFast => "very-fast",
+            Bc7Quality::Fast => "fast",
+            Bc7Quality::Basic => "basic",
+            Bc7Quality::Slow => "slow",
+        }
+    }
+
+    fn settings(self, alpha: bool) -> intel_tex_2::bc7::EncodeSettings {
+        use intel_tex_2::bc7;
+        match (self, alpha) {
+            (Bc7Quality::UltraFast, true) => bc7::alpha_ultra_fast_settings(),
+            (Bc7Quality::VeryFast, true) => bc7::alpha_very_fast_settings(),
+            (Bc7Quality::Fast, true) => bc7::alpha_fast_settings(),
+            (Bc7Quality::Basic, true) => bc7::alpha_basic_settings(),
+            (Bc7Quality::Slow, true) => bc7::alpha_slow_settings(),
+            (Bc7Quality::UltraFast, false) => bc7::opaque_ultra_fast_settings(),
+            (Bc7Quality::VeryFast, false) => bc7::opaque_very_fast_settings(),
+            (Bc7Quality::Fast, false) => bc7::opaque_fast_settings(),
+            (Bc7Quality::Basic, false) => bc7::opaque_basic_settings(),
+            (Bc7Quality::Slow, false) => bc7::opaque_slow_settings(),
+        }
+    }
+}
+
 /// Values an encoder clamped into its range.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct Clamped {
@@ -193,6 +240,14 @@ pub fn decode_bc6h(blocks: &[u8], res: u32) -> Vec<[f32; 3]> {
 /// # Panics
 /// If `rgba` does not hold res² texels.
 pub fn encode_bc7(rgba: &[[u8; 4]], res: u32, alpha: bool) -> Vec<u8> {
+    encode_bc7_at(rgba, res, alpha, Bc7Quality::Basic)
+}
+
+/// [`encode_bc7`] at `quality`.
+///
+/// # Panics
+/// If `rgba` does not hold res² texels.
+pub fn encode_bc7_at(rgba: &[[u8; 4]], res: u32, alpha: bool, quality: Bc7Quality) -> Vec<u8> {
     let (data, side) = padded(rgba, res);
     let surface = intel_tex_2::RgbaSurface {
         data: &data,
@@ -200,12 +255,7 @@ pub fn encode_bc7(rgba: &[[u8; 4]], res: u32, alpha: bool) -> Vec<u8> {
         height: side,
         stride: side * 4,
     };
-    let settings = if alpha {
-        intel_tex_2::bc7::alpha_basic_settings()
-    } else {
-        intel_tex_2::bc7::opaque_basic_settings()
-    };
-    intel_tex_2::bc7::compress_blocks(&settings, &surface)
+    intel_tex_2::bc7::compress_blocks(&quality.settings(alpha), &surface)
 }
 
 /// BC4 blocks of the one-channel 8-bit image `r`.

@@ -12,6 +12,9 @@
 //! bc6h-ratio   L_0 in BC6H; for k ≥ 1 the ratio r = L_k / L_0 remapped to
 //!              u = ½ + r / (2 R_k) ∈ [0, 1] in BC6H; decoded L_k = L̂_0 (2u − 1) R_k
 //! bc7-ratio    the same, u in BC7 (8 bits per channel)
+//! bc7-norm     the dx11 path's (technique::block): the texel's norm per colour
+//!              n_c = max_k |L_k,c| in BC6H, every L_k,c / n_c in BC7 (shlmap's RGBA
+//!              groups), at each BC7 quality
 //! ```
 //!
 //! For a non-negative radiance |L_lm| ≤ √(2l+1) L_0 (|y_lm| ≤ √((2l+1)/4π), y_00 = 1/√(4π)),
@@ -40,7 +43,7 @@ use std::time::Instant;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::bake::block::{self, Bc6hQuality, Clamped};
+use crate::bake::block::{self, Bc6hQuality, Bc7Quality, Clamped};
 use crate::bake::shlmap::ShLightmap;
 use crate::sh::Order;
 use crate::sh::zonal::clamped_cosine_convolution;
@@ -54,15 +57,18 @@ pub enum Packing {
     Bc6hOffset,
     Bc6hRatio,
     Bc7Ratio,
+    /// The `dx11` path's packing (`technique::block`): BC7 ratios to a BC6H norm per colour.
+    Bc7Norm,
 }
 
 impl Packing {
-    pub const ALL: [Packing; 5] = [
+    pub const ALL: [Packing; 6] = [
         Packing::Half,
         Packing::Bc6hRaw,
         Packing::Bc6hOffset,
         Packing::Bc6hRatio,
         Packing::Bc7Ratio,
+        Packing::Bc7Norm,
     ];
 
     pub fn name(self) -> &'static str {
@@ -72,15 +78,20 @@ impl Packing {
             Packing::Bc6hOffset => "bc6h-offset",
             Packing::Bc6hRatio => "bc6h-ratio",
             Packing::Bc7Ratio => "bc7-ratio",
+            Packing::Bc7Norm => "bc7-norm",
         }
     }
 
     /// Bytes per texel on the GPU: RGBA16F groups for `half` (`shlmap`'s 7), one byte per
-    /// coefficient layer otherwise.
+    /// coefficient layer for the ratio and offset packings, one per RGBA group and one for
+    /// the norms for `bc7-norm`.
     pub fn bytes_per_texel(self) -> u32 {
         match self {
             Packing::Half => 56,
-            _ => COEFFS as u32,
+            Packing::Bc7Norm => 8,
+            Packing::Bc6hRaw | Packing::Bc6hOffset | Packing::Bc6hRatio | Packing::Bc7Ratio => {
+                COEFFS as u32
+            }
         }
     }
 }
@@ -91,8 +102,10 @@ const COEFFS: usize = 9;
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct BlockRow {
     pub packing: Packing,
-    /// BC6H quality (none for `half`; BC7 runs at the encoder's basic quality).
+    /// BC6H quality (none for `half`).
     pub quality: Option<Bc6hQuality>,
+    /// BC7 quality of the BC7 packings.
+    pub bc7_quality: Option<Bc7Quality>,
     pub bytes_per_texel: u32,
     pub encode_seconds: f64,
     pub rms_sphere: f64,
@@ -114,6 +127,8 @@ pub struct BlockStudy {
     pub rows: Vec<BlockRow>,
     /// The quality the ratio packing defaults to: the fastest within 5 % of the best error.
     pub default_quality: Bc6hQuality,
+    /// The same for `bc7-norm`'s BC7 quality.
+    pub default_bc7_quality: Bc7Quality,
 }
 
 fn band(k: usize) -> u32 {
@@ -170,6 +185,7 @@ pub fn round_trip(
         }
     };
     match packing {
+        Packing::Bc7Norm => return norm_round_trip(map, Bc7Quality::Basic),
         Packing::Half => {
             let scale =
                 crate::technique::tables::finite_f16_scale(map.coeffs.iter().flatten().copied())
@@ -272,6 +288,44 @@ pub fn round_trip(
     (out, clamped)
 }
 
+/// The coefficients of `map` through the `dx11` path's packing (`technique::block`, RGB
+/// triplets, as `shlmap` stores them on that path) with the ratios at BC7 `quality`.
+pub fn norm_round_trip(map: &ShLightmap, quality: Bc7Quality) -> (Vec<[f32; 3]>, Clamped) {
+    use crate::technique::block::{BlockCodec, NormColours, compress_at};
+    use crate::technique::texels::{TexelGroups, pack_groups};
+    let res = map.res;
+    let texels = (res * res) as usize;
+    let scale = crate::technique::tables::finite_f16_scale(map.coeffs.iter().flatten().copied())
+        .unwrap_or(1.0);
+    let groups = pack_groups(texels, 3 * COEFFS, |t, j| {
+        half::f16::from_f32(map.texel(t)[j / 3][j % 3] * scale)
+    });
+    let stored = TexelGroups::new(
+        ash::vk::Format::R16G16B16A16_SFLOAT,
+        res,
+        &groups,
+        "shlmap".into(),
+    );
+    let block = compress_at(
+        &stored,
+        BlockCodec::Ratio(NormColours::Triplets),
+        "shlmap",
+        quality,
+    )
+    .expect("range-scaled f16 data compresses");
+    let decoded = block.decoded_values();
+    let out = (0..texels * COEFFS)
+        .map(|i| {
+            let (t, k) = (i / COEFFS, i % COEFFS);
+            std::array::from_fn(|c| {
+                let j = 3 * k + c;
+                decoded[j / 4][4 * t + j % 4] / scale
+            })
+        })
+        .collect();
+    (out, block.clamped)
+}
+
 /// The module doc's three errors of `decoded` against `map`.
 pub fn errors(map: &ShLightmap, decoded: &[[f32; 3]]) -> (f64, f64, f64) {
     let a: Vec<f64> = (0..COEFFS)
@@ -329,14 +383,18 @@ pub fn errors(map: &ShLightmap, decoded: &[[f32; 3]]) -> (f64, f64, f64) {
 /// Every packing at the basic quality, and the ratio packing at every BC6H quality.
 pub fn run(map: &ShLightmap) -> BlockStudy {
     let mut rows = Vec::new();
-    let mut measure = |packing: Packing, quality: Bc6hQuality| {
+    let mut measure = |packing: Packing, quality: Bc6hQuality, bc7: Option<Bc7Quality>| {
         let started = Instant::now();
-        let (decoded, clamped) = round_trip(map, packing, quality);
+        let (decoded, clamped) = match (packing, bc7) {
+            (Packing::Bc7Norm, Some(q)) => norm_round_trip(map, q),
+            _ => round_trip(map, packing, quality),
+        };
         let encode_seconds = started.elapsed().as_secs_f64();
         let (rms_sphere, p99_sphere, rms_normal) = errors(map, &decoded);
         let row = BlockRow {
             packing,
             quality: (packing != Packing::Half).then_some(quality),
+            bc7_quality: bc7,
             bytes_per_texel: packing.bytes_per_texel(),
             encode_seconds,
             rms_sphere,
@@ -347,21 +405,43 @@ pub fn run(map: &ShLightmap) -> BlockStudy {
         log::info!(
             "{} {}: {:.3} % RMS in {:.2} s",
             packing.name(),
-            quality.name(),
+            bc7.map_or(quality.name(), Bc7Quality::name),
             100.0 * rms_sphere,
             encode_seconds
         );
         rows.push(row);
     };
     for packing in Packing::ALL {
-        if packing == Packing::Bc6hRatio {
-            for quality in Bc6hQuality::ALL {
-                measure(packing, quality);
+        match packing {
+            Packing::Bc6hRatio => {
+                for quality in Bc6hQuality::ALL {
+                    measure(packing, quality, None);
+                }
             }
-        } else {
-            measure(packing, Bc6hQuality::Basic);
+            Packing::Bc7Norm => {
+                for q in Bc7Quality::ALL {
+                    measure(packing, crate::technique::block::NORM_QUALITY, Some(q));
+                }
+            }
+            Packing::Bc7Ratio => measure(packing, Bc6hQuality::Basic, Some(Bc7Quality::Basic)),
+            Packing::Half | Packing::Bc6hRaw | Packing::Bc6hOffset => {
+                measure(packing, Bc6hQuality::Basic, None);
+            }
         }
     }
+    let norm: Vec<&BlockRow> = rows
+        .iter()
+        .filter(|r| r.packing == Packing::Bc7Norm)
+        .collect();
+    let best_norm = norm
+        .iter()
+        .map(|r| r.rms_sphere)
+        .fold(f64::INFINITY, f64::min);
+    let default_bc7_quality = norm
+        .iter()
+        .find(|r| r.rms_sphere <= 1.05 * best_norm)
+        .and_then(|r| r.bc7_quality)
+        .unwrap_or(Bc7Quality::Basic);
     let ratio: Vec<&BlockRow> = rows
         .iter()
         .filter(|r| r.packing == Packing::Bc6hRatio)
@@ -382,6 +462,7 @@ pub fn run(map: &ShLightmap) -> BlockStudy {
         ratio_ranges: (1..COEFFS).map(|k| ratio_range(map, k)).collect(),
         rows,
         default_quality,
+        default_bc7_quality,
     }
 }
 
@@ -496,8 +577,8 @@ pub fn markdown(study: &BlockStudy) -> String {
          each; ratio ranges R1…R8 {}. Errors on irradiance over the covered texels: over all \
          normals (RMS and 99th percentile per texel) and at each texel's geometric normal; \
          encode time of the 9 layers on this machine.\n\n\
-         | packing | BC6H quality | bytes/texel | RMS | p99 | at the normal | encode s | clamped below / above |\n\
-         |---|---|---:|---:|---:|---:|---:|---:|\n",
+         | packing | BC6H quality | BC7 quality | bytes/texel | RMS | p99 | at the normal | encode s | clamped below / above |\n\
+         |---|---|---|---:|---:|---:|---:|---:|---:|\n",
         study.res,
         study.covered_texels,
         study.nonpositive_l0_texels,
@@ -510,9 +591,10 @@ pub fn markdown(study: &BlockStudy) -> String {
     );
     for r in &study.rows {
         s += &format!(
-            "| {} | {} | {} | {:.3} % | {:.2} % | {:.3} % | {:.2} | {} / {} |\n",
+            "| {} | {} | {} | {} | {:.3} % | {:.2} % | {:.3} % | {:.2} | {} / {} |\n",
             r.packing.name(),
             r.quality.map_or("—", Bc6hQuality::name),
+            r.bc7_quality.map_or("—", Bc7Quality::name),
             r.bytes_per_texel,
             100.0 * r.rms_sphere,
             100.0 * r.p99_sphere,
@@ -523,8 +605,10 @@ pub fn markdown(study: &BlockStudy) -> String {
         );
     }
     s += &format!(
-        "\nDefault BC6H quality (the fastest within 5 % of the best ratio-packing error): {}.\n",
-        study.default_quality.name()
+        "\nDefault BC6H quality (the fastest within 5 % of the best ratio-packing error): {}; \
+         BC7 quality of `bc7-norm` by the same rule: {}.\n",
+        study.default_quality.name(),
+        study.default_bc7_quality.name()
     );
     s
 }
@@ -582,8 +666,14 @@ mod tests {
         let (ratio, ratio_clamped, decoded) = error(Packing::Bc6hRatio);
         let (bc7, _, _) = error(Packing::Bc7Ratio);
         assert!(ratio < 0.05 && bc7 < 0.05, "ratio {ratio} bc7 {bc7}");
-        assert!(raw > 2.0 * ratio, "raw {raw} ratio {ratio}");
-        assert_eq!(ratio_clamped, Clamped::default());
+        // The dx11 path's packing: nothing clamped; the black texel stores ratio 0 under its
+        // block's norm, so it decodes to within the block's BC7 error of 0 (its neighbours'
+        // L0 is about 1–2).
+        let (norm, norm_clamped, norm_decoded) = error(Packing::Bc7Norm);
+        assert!(norm < 0.05, "bc7-norm {norm}");
+        assert_eq!(norm_clamped, Clamped::default());
+        let black = &norm_decoded[5 * COEFFS..6 * COEFFS];
+        assert!(black.iter().flatten().all(|v| v.abs() < 0.05), "{black:?}");
         // L0 = 0 decodes to zero everywhere.
         assert!(
             decoded[5 * COEFFS..6 * COEFFS]

@@ -15,9 +15,10 @@
 //! ```
 //!
 //! colour(j) is [`NormColours`]: one norm per texel, or one per colour where values are RGB.
-//! A texel whose values are all 0 (L0 = 0, a black texel, the gutter) stores r = 0, which
-//! decodes to 0 exactly whatever its norm; it takes the largest norm of its block
-//! ([`fill_empty_norms`]).
+//! A texel whose values are all 0 (a black texel, the gutter) stores r = 0 and takes the
+//! largest norm of its block ([`fill_empty_norms`]): it decodes to the block's BC7 error
+//! of 0 (1–3 % of its neighbours; exactly 0 where the block keeps 128), instead of an
+//! exact 0 that would cost the covered texels of its block their BC6H range.
 //! Norms above the largest half float are clamped and counted, with a warning.
 //!
 //! **One value per texel in [0, 1]** (`preconv`'s AO): BC4, read as dx10 reads R16F.
@@ -38,7 +39,7 @@ use half::f16;
 use super::spec::{EngineShBasis, LocalBasis};
 use super::texels::{ImageBytes, TexelGroups, VALUES_PER_TEXEL};
 use super::{HwPath, Technique, TechniqueError};
-use crate::bake::block::{self as bc, Bc6hQuality, Clamped};
+use crate::bake::block::{self as bc, Bc6hQuality, Bc7Quality, Clamped};
 use crate::gpu::{Context, Image, ImageDesc};
 use crate::sh::dice::DiceVariant;
 
@@ -132,6 +133,9 @@ pub fn path_defines(technique: Technique, path: HwPath) -> Vec<(&'static str, u3
 /// The BC6H quality of the norms: the study's default (the fastest within 5 % of the best).
 pub const NORM_QUALITY: Bc6hQuality = Bc6hQuality::Basic;
 
+/// The BC7 quality of the ratios (`shvis study block`'s `bc7-norm` rows).
+pub const RATIO_QUALITY: Bc7Quality = Bc7Quality::Basic;
+
 /// A technique's per-texel groups block-compressed ([`compress`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BlockTexels {
@@ -206,7 +210,8 @@ pub fn byte_ratio(s: f32) -> f32 {
     (s - 128.0) / 127.0
 }
 
-/// Compresses `texels` with `codec` (module doc). `label` names the row in errors.
+/// Compresses `texels` with `codec` (module doc), the ratios at [`RATIO_QUALITY`]. `label`
+/// names the row in errors.
 ///
 /// # Errors
 /// A format the codec cannot take; for BC4, values outside [0, 1]; non-finite values.
@@ -214,6 +219,19 @@ pub fn compress(
     texels: &TexelGroups,
     codec: BlockCodec,
     label: &str,
+) -> Result<BlockTexels, TechniqueError> {
+    compress_at(texels, codec, label, RATIO_QUALITY)
+}
+
+/// [`compress`] with the ratios at BC7 quality `ratio_quality` (the study's comparison).
+///
+/// # Errors
+/// As [`compress`].
+pub fn compress_at(
+    texels: &TexelGroups,
+    codec: BlockCodec,
+    label: &str,
+    ratio_quality: Bc7Quality,
 ) -> Result<BlockTexels, TechniqueError> {
     let input = |detail: String| TechniqueError::Input {
         label: label.into(),
@@ -299,7 +317,7 @@ pub fn compress(
                             })
                         })
                         .collect();
-                    bc::encode_bc7(&rgba, res, true)
+                    bc::encode_bc7_at(&rgba, res, true, ratio_quality)
                 })
                 .collect();
             Ok(BlockTexels {
