@@ -674,7 +674,9 @@ mod tests {
         assert_eq!(norm_clamped, Clamped::default());
         let black = &norm_decoded[5 * COEFFS..6 * COEFFS];
         assert!(black.iter().flatten().all(|v| v.abs() < 0.05), "{black:?}");
-        // L0 = 0 decodes to zero everywhere.
+        assert!(raw > 2.0 * ratio, "raw {raw} ratio {ratio}");
+        assert_eq!(ratio_clamped, Clamped::default());
+        // The L0 ratio packings store L0 = 0 as a black texel.
         assert!(
             decoded[5 * COEFFS..6 * COEFFS]
                 .iter()
