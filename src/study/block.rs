@@ -429,31 +429,9 @@ pub fn run(map: &ShLightmap) -> BlockStudy {
             }
         }
     }
-    let norm: Vec<&BlockRow> = rows
-        .iter()
-        .filter(|r| r.packing == Packing::Bc7Norm)
-        .collect();
-    let best_norm = norm
-        .iter()
-        .map(|r| r.rms_sphere)
-        .fold(f64::INFINITY, f64::min);
-    let default_bc7_quality = norm
-        .iter()
-        .find(|r| r.rms_sphere <= 1.05 * best_norm)
-        .and_then(|r| r.bc7_quality)
+    let default_bc7_quality = fastest_within_5_percent(&rows, Packing::Bc7Norm, |r| r.bc7_quality)
         .unwrap_or(Bc7Quality::Basic);
-    let ratio: Vec<&BlockRow> = rows
-        .iter()
-        .filter(|r| r.packing == Packing::Bc6hRatio)
-        .collect();
-    let best = ratio
-        .iter()
-        .map(|r| r.rms_sphere)
-        .fold(f64::INFINITY, f64::min);
-    let default_quality = ratio
-        .iter()
-        .find(|r| r.rms_sphere <= 1.05 * best)
-        .and_then(|r| r.quality)
+    let default_quality = fastest_within_5_percent(&rows, Packing::Bc6hRatio, |r| r.quality)
         .unwrap_or(Bc6hQuality::Basic);
     BlockStudy {
         res: map.res,
@@ -567,6 +545,22 @@ pub fn tables_markdown(rows: &[TableRow]) -> String {
         );
     }
     s
+}
+
+/// The quality of the fastest row of `packing` (rows are measured fastest setting first)
+/// whose RMS is within 5 % of the packing's best.
+fn fastest_within_5_percent<Q>(
+    rows: &[BlockRow],
+    packing: Packing,
+    quality: impl Fn(&BlockRow) -> Option<Q>,
+) -> Option<Q> {
+    let of_packing = || rows.iter().filter(move |r| r.packing == packing);
+    let best = of_packing()
+        .map(|r| r.rms_sphere)
+        .fold(f64::INFINITY, f64::min);
+    of_packing()
+        .find(|r| r.rms_sphere <= 1.05 * best)
+        .and_then(quality)
 }
 
 /// The study as a Markdown page.
