@@ -658,6 +658,21 @@ fn argument_cases(suite: &mut Suite) {
         1,
         vec!["dx12"],
     ));
+    table.push((
+        vec!["export", "--technique", "vq16", "--out", &out],
+        1,
+        vec!["vq16.dx11", "cluster indices"],
+    ));
+    table.push((
+        vec!["export", "--technique", "unc6", "--path", "dx9", "--out", &out],
+        1,
+        vec!["unc6.dx9", "--path dx10 or dx11"],
+    ));
+    table.push((
+        vec!["export", "--technique", "rnm", "--out", &out],
+        1,
+        vec!["rnm", "material-space"],
+    ));
     for (flag, v) in [
         ("--frames", "0"),
         ("--every", "0"),

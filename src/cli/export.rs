@@ -41,6 +41,21 @@ pub(super) fn run_export(a: ExportArgs) -> Result<()> {
     if let Some(why) = shvis::export::refusal(a.technique) {
         anyhow::bail!("{}: has no export: {why}", a.technique);
     }
+    // Refusals before the bake, not after it.
+    if let Some(why) = a.technique.refusal(a.path) {
+        anyhow::bail!(
+            "{}.{}: cannot run on {}: {why}",
+            a.technique,
+            a.path,
+            a.path
+        );
+    }
+    if a.path == HwPath::Dx9 {
+        anyhow::bail!(
+            "{}.dx9: export writes the dx10 and dx11 layouts (arrays, cube maps); pass --path dx10 or dx11",
+            a.technique
+        );
+    }
     let settings = prepare_settings(&a.scene, &a.env, &[a.technique], a.bounces)?;
     let mut prepared = shvis::prepare::prepare(&settings)?;
     prepared.prepare_techniques(&[a.technique])?;
