@@ -664,7 +664,15 @@ fn argument_cases(suite: &mut Suite) {
         vec!["vq16.dx11", "cluster indices"],
     ));
     table.push((
-        vec!["export", "--technique", "unc6", "--path", "dx9", "--out", &out],
+        vec![
+            "export",
+            "--technique",
+            "unc6",
+            "--path",
+            "dx9",
+            "--out",
+            &out,
+        ],
         1,
         vec!["unc6.dx9", "--path dx10 or dx11"],
     ));
