@@ -70,12 +70,10 @@ fn frames_timed_several_to_a_query_are_per_frame_times() {
     scene.set_min_query_span(1e6);
     let batched = tech.time(&scene, 2, 5).unwrap();
     assert_eq!(batched.len(), 5, "{batched:?}");
-    let median = |v: &[f64]| {
-        let mut v = v.to_vec();
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
-    let (a, b) = (median(&alone), median(&batched));
+    // The fastest frame of each: the other test of this binary renders on the same two
+    // cores, and a median of five can catch its load on one side only.
+    let fastest = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+    let (a, b) = (fastest(&alone), fastest(&batched));
     // 64 frames a query: a query's span undivided would be ≈ 64× a frame.
     assert!(
         b > a / 8.0 && b < a * 8.0,
