@@ -20,9 +20,7 @@ use serde_json::json;
 
 use crate::files::ktx2::{Ktx2Image, encode};
 use crate::prepare::Prepared;
-use crate::technique::block::{
-    BlockCodec, NormColours, block_codec, compress_cached, path_defines,
-};
+use crate::technique::block::{BlockCodec, NormColours, compress_cached, dx11_codec, path_defines};
 use crate::technique::texels::TexelGroups;
 use crate::technique::{
     HwPath, LightingRecipe, Technique, TechniqueError, fragment_shader, per_texel_data,
@@ -147,7 +145,7 @@ pub fn export(
     let values = texels.groups.len() * crate::technique::texels::VALUES_PER_TEXEL;
     let per_texel = match path {
         HwPath::Dx11 => {
-            let codec = block_codec(technique).map_err(|why| refused(why.into()))?;
+            let codec = dx11_codec(technique, &label)?;
             let block = compress_cached(&texels, codec, &label, inputs.cache_dir)?;
             let images = block.image_levels();
             let mut names = Vec::new();

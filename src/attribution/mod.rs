@@ -1011,6 +1011,18 @@ impl<'a> RowLadder<'a> {
         eval: &(dyn Fn(&[f64], usize) -> [f64; 3] + Sync),
     ) {
         let px = self.px;
+        // The stored values and their f16 range scale, made once for both rungs (a local
+        // basis fits every texel to make them).
+        let made = std::cell::OnceCell::new();
+        let stored_scaled = || {
+            let (values, scale) = made.get_or_init(|| {
+                let values = stored();
+                let scale = crate::technique::tables::finite_f16_scale(values.iter().copied())
+                    .unwrap_or(1.0);
+                (values, scale)
+            });
+            (values.as_slice(), *scale)
+        };
         // An SG fit depends on the run's solver: its rung is cached per solver.
         let sg = matches!(
             self.technique,
@@ -1028,9 +1040,7 @@ impl<'a> RowLadder<'a> {
             AttributionKind::LightmapTexels,
             format!("{label}.lightmap"),
             &|| {
-                let stored = stored();
-                let scale = crate::technique::tables::finite_f16_scale(stored.iter().copied())
-                    .unwrap_or(1.0);
+                let (stored, scale) = stored_scaled();
                 let unscale = f64::from(1.0 / scale);
                 px.image(|k| {
                     let v: [f64; LIGHTMAP_MAX_VALUES] =
@@ -1042,9 +1052,7 @@ impl<'a> RowLadder<'a> {
             },
         );
         if self.path == HwPath::Dx11 {
-            let stored = stored();
-            let scale =
-                crate::technique::tables::finite_f16_scale(stored.iter().copied()).unwrap_or(1.0);
+            let (_, scale) = stored_scaled();
             self.push_block_compression(rungs, per_texel, f64::from(1.0 / scale), eval);
         }
     }

@@ -118,6 +118,17 @@ pub fn block_codec(technique: Technique) -> Result<BlockCodec, &'static str> {
     })
 }
 
+/// [`block_codec`] as a row's error: "{label}: has no dx11 form: …".
+///
+/// # Errors
+/// A technique without a dx11 form.
+pub fn dx11_codec(technique: Technique, label: &str) -> Result<BlockCodec, TechniqueError> {
+    block_codec(technique).map_err(|reason| TechniqueError::Input {
+        label: label.into(),
+        detail: format!("has no dx11 form: {reason}"),
+    })
+}
+
 /// The shader macros of `technique` on `path`: the path's, and on `dx11` the codec's
 /// (`SHVIS_PER_TEXEL_CODEC`, 0 where the path stores the data as dx10 does).
 pub fn path_defines(technique: Technique, path: HwPath) -> Vec<(&'static str, u32)> {
@@ -614,10 +625,7 @@ pub fn upload_per_texel(
 ) -> Result<Vec<Image>, TechniqueError> {
     match path {
         HwPath::Dx11 => {
-            let codec = block_codec(technique).map_err(|reason| TechniqueError::Input {
-                label: label.into(),
-                detail: format!("has no dx11 form: {reason}"),
-            })?;
+            let codec = dx11_codec(technique, label)?;
             if texels.groups.is_empty() {
                 return Ok(Vec::new());
             }

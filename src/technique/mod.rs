@@ -470,10 +470,7 @@ pub fn dx11_decoded_values(
     inputs: &Inputs<'_>,
 ) -> Result<block::DecodedBlocks, TechniqueError> {
     let label = format!("{technique}.{}", HwPath::Dx11);
-    let codec = block::block_codec(technique).map_err(|reason| TechniqueError::Input {
-        label: label.clone(),
-        detail: format!("has no dx11 form: {reason}"),
-    })?;
+    let codec = block::dx11_codec(technique, &label)?;
     let (texels, _) = prepare(technique, HwPath::Dx11, inputs)?;
     Ok(block::compress_cached(&texels, codec, &label, inputs.cache_dir)?.decode())
 }
