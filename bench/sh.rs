@@ -173,7 +173,7 @@ fn lighting_update(c: &mut Criterion) {
         transfer: None,
         table_res: 32,
         h_order: Order::THREE,
-        sg_solver: shvis::sh::sg::DEFAULT_SOLVER,
+        options: Default::default(),
         cache_dir: None,
     };
     let mut g = c.benchmark_group("lighting_update");
@@ -233,7 +233,7 @@ fn nmprt_lighting_update(c: &mut Criterion) {
         NmprtVariant::Hl2,
         NmprtVariant::Ratio,
     ] {
-        let name = Technique::Nmprt { variant }.name();
+        let name = Technique::Nmprt(shvis::technique::Nmprt { variant }).name();
         let recipe = NmprtRecipe::new(variant, transfer.clone());
         g.bench_function(format!("{name}_256"), |b| {
             b.iter(|| black_box(recipe.lighting(black_box(&radiance), &irradiance, "bench")))

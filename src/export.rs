@@ -22,9 +22,7 @@ use crate::files::ktx2::{Ktx2Image, encode};
 use crate::prepare::Prepared;
 use crate::technique::block::{BlockCodec, NormColours, compress_cached, dx11_codec, path_defines};
 use crate::technique::texels::TexelGroups;
-use crate::technique::{
-    HwPath, LightingRecipe, Technique, TechniqueError, fragment_shader, per_texel_data,
-};
+use crate::technique::{HwPath, LightingRecipe, Technique, TechniqueError, per_texel_data};
 
 /// Errors of an export.
 #[derive(Debug, thiserror::Error)]
@@ -47,24 +45,19 @@ pub struct Export {
     pub files: Vec<(String, Vec<u8>)>,
 }
 
-/// Why `technique` has no export, if it has none: its data is more than per-texel images,
-/// tables and a uniform block.
-pub fn refusal(technique: Technique) -> Option<&'static str> {
-    match technique {
-        Technique::Unc { .. }
-        | Technique::Pca { .. }
-        | Technique::Shlmap
-        | Technique::Preconv
-        | Technique::Sh2
-        | Technique::Vq { .. }
-        | Technique::Cpca { .. }
-        | Technique::EngineSh { .. }
-        | Technique::Local { .. } => None,
-        Technique::PcaVertex { .. } => Some("its weights live in the vertex stream"),
-        Technique::Rnm { .. } | Technique::Ndf { .. } => {
-            Some("it also reads material-space textures, which export does not write yet")
-        }
-        Technique::Nmprt { .. } => Some("its per-texel data is rebuilt for each lighting"),
+/// Why `technique` has no export on `path`, if it has none: no form on the path, or a form
+/// with more than per-texel images, tables and a uniform block; `shvis export` asks before
+/// the bake.
+pub fn refusal(technique: Technique, path: HwPath) -> Option<ExportError> {
+    match technique.form_on(path) {
+        Err(why) => Some(ExportError::Refused {
+            label: format!("{technique}.{path}"),
+            detail: format!("cannot run on {path}: {why}"),
+        }),
+        Ok(form) => form.export_refusal().map(|why| ExportError::Refused {
+            label: technique.name(),
+            detail: format!("has no export: {why}"),
+        }),
     }
 }
 
@@ -125,11 +118,8 @@ pub fn export(
         label: label.clone(),
         detail,
     };
-    if let Some(why) = refusal(technique) {
-        return Err(refused(format!("has no export: {why}")));
-    }
-    if let Some(why) = technique.refusal(path) {
-        return Err(refused(format!("cannot run on {path}: {why}")));
+    if let Some(refused) = refusal(technique, path) {
+        return Err(refused);
     }
     if path == HwPath::Dx9 {
         return Err(refused(
@@ -231,7 +221,7 @@ pub fn export(
         }
     }
     files.push(("params.bin".into(), lighting.params.clone()));
-    let shader = fragment_shader(technique);
+    let shader = technique.fragment_shader();
     let mut defines = path_defines(technique, path);
     defines.push(("MATERIAL_LEVEL0", 0));
     defines.extend_from_slice(&shader.defines);

@@ -49,8 +49,8 @@ pub struct PrepareSettings {
     pub table_res: u32,
     /// Order of the clamped cosine in the L×H product (the paper's 3).
     pub h_order: Order,
-    /// How `sgN` fits its amplitudes.
-    pub sg_solver: crate::sh::sg::Solver,
+    /// Each family's run options (`--sg-solve`: how `sgN` fits its amplitudes).
+    pub options: crate::technique::FamilyOptions,
     /// Where bakes are cached (`None`: `bake::cache::default_cache_dir()`).
     pub cache_dir: Option<PathBuf>,
     /// Bake the SH lightmap (`shlmap`) with this many bounces; `None`: skip it.
@@ -76,7 +76,7 @@ impl Default for PrepareSettings {
             order: Order::SIX,
             table_res: 32,
             h_order: Order::THREE,
-            sg_solver: crate::sh::sg::DEFAULT_SOLVER,
+            options: crate::technique::FamilyOptions::default(),
             cache_dir: None,
             sh_lightmap_bounces: None,
             transfer_bounces: None,
@@ -105,7 +105,7 @@ pub struct Prepared {
     pub irradiance_sh: Vec<[f64; 3]>,
     pub table_res: u32,
     pub h_order: Order,
-    pub sg_solver: crate::sh::sg::Solver,
+    pub options: crate::technique::FamilyOptions,
     /// Order-3 SH of incident radiance with inter-reflection, when asked for.
     pub sh_lightmap: Option<ShLightmap>,
     /// Transfer matrices with inter-reflection (lighting of order
@@ -231,7 +231,7 @@ impl Prepared {
     /// Fits the VQ / CPCA models `techniques` need that are not fitted yet (k-means with
     /// the bake's seed, `bake::cluster`), logging each fit's time and error.
     pub fn fit_clusters(&mut self, techniques: &[Technique]) -> Result<(), PrepareError> {
-        for need in techniques.iter().filter_map(|t| t.cluster_need()) {
+        for need in techniques.iter().filter_map(|t| t.needs().clusters) {
             if self.clusters.iter().any(|c| need.is_met_by(c)) {
                 continue;
             }
@@ -265,7 +265,7 @@ impl Prepared {
     pub fn bake_vertex_pca(&mut self, techniques: &[Technique]) {
         let mut tracer = None;
         for &t in techniques {
-            let Technique::PcaVertex { m, max_edge_cm } = t else {
+            let Some((m, max_edge_cm)) = t.needs().vertex_pca else {
                 continue;
             };
             if self
@@ -371,7 +371,7 @@ impl Prepared {
             transfer: self.transfer.as_ref(),
             table_res: self.table_res,
             h_order: self.h_order,
-            sg_solver: self.sg_solver,
+            options: self.options,
         }
     }
 }
@@ -565,7 +565,7 @@ pub fn prepare_with(
         irradiance_sh,
         table_res: settings.table_res,
         h_order: settings.h_order,
-        sg_solver: settings.sg_solver,
+        options: settings.options,
         clusters: Vec::new(),
         seed: settings.seed,
         cache_dir: settings.cache_dir.clone().unwrap_or_else(default_cache_dir),

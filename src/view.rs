@@ -509,12 +509,12 @@ fn switch(
     }
     // A technique without a form on the path (dx11's refusals) is shown on dx10.
     let technique = s.techniques[index];
-    let path = match technique.refusal(path) {
-        Some(why) => {
+    let path = match technique.form_on(path) {
+        Err(why) => {
             log::info!("{technique}.{path}: {why}; showing dx10");
             HwPath::Dx10
         }
-        None => path,
+        Ok(_) => path,
     };
     let step = st.sun.round() as u32 % SUN_STEPS_PER_TURN;
     let (tech, recipe) = build(

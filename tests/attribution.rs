@@ -139,7 +139,7 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
         // weights come back from lavapipe's filter about one 8-bit step off (≈ 3e-3, README).
         let gpu = step(row, AttributionKind::Gpu);
         let bound = match row.technique {
-            Technique::Pca { .. } => 5e-3,
+            Technique::Pca(shvis::technique::Pca { .. }) => 5e-3,
             _ => 2e-3,
         };
         assert!(gpu <= bound, "{label}: CPU → GPU {gpu}");

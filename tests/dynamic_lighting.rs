@@ -116,7 +116,7 @@ fn every_dynamic_technique_swaps_its_tables_with_validation_clean() {
     let shlmap = technique::build_dynamic(
         &ctx,
         &scene,
-        Technique::Shlmap,
+        Technique::Shlmap(shvis::technique::Shlmap),
         HwPath::Dx10,
         &with(&la, &ea),
     );

@@ -17,8 +17,8 @@ use shvis::sh::Order;
 use shvis::sh::bases::ShBasis;
 use shvis::sh::basis::eval_basis;
 use shvis::sh::hbasis::{self, HBasisSize};
-use shvis::technique::engine_sh::shader_value;
-use shvis::technique::{EngineShBasis, HwPath, LocalBasis, Technique};
+use shvis::technique::sh_variant::shader_value;
+use shvis::technique::{Family, HwPath, Technique};
 
 /// Order-3 RGB radiance cases: random lights and skies, and the hard ones — black, L1 of
 /// zero length, no mean (L0 = 0), one direction exactly (Geomerics' r = 1), a sun of 1e5.
@@ -304,7 +304,7 @@ fn the_ambient_dice_shader_matches_the_cpu_to_1e_4() {
         }
     }
     dirs.push(DVec3::new(0.3, -0.2, -0.5).normalize());
-    let table = shvis::technique::local::dice_face_table();
+    let table = shvis::technique::hemisphere::dice_face_table();
     for variant in DiceVariant::ALL {
         let values = variant.stored_values();
         let groups = values.div_ceil(4);
@@ -408,18 +408,20 @@ fn every_engine_basis_meets_the_bounced_reference_on_both_paths() {
     let shlmap: Vec<f64> = HwPath::ALL
         .iter()
         .map(|&path| {
-            let frame = common::render(&ctx, prepared, Technique::Shlmap, path, &settings);
+            let frame = common::render(
+                &ctx,
+                prepared,
+                Technique::Shlmap(shvis::technique::Shlmap),
+                path,
+                &settings,
+            );
             image_error(&frame, &bounced.frame).unwrap().rel_rmse
         })
         .collect();
-    let techniques = EngineShBasis::ALL
-        .map(|basis| Technique::EngineSh { basis })
+    let techniques = Technique::from(shvis::technique::ShVariant::EXAMPLE)
+        .family_members()
         .into_iter()
-        .chain(
-            LocalBasis::all()
-                .into_iter()
-                .map(|basis| Technique::Local { basis }),
-        );
+        .chain(Technique::from(shvis::technique::Hemisphere::EXAMPLE).family_members());
     for technique in techniques {
         let errors: Vec<f64> = HwPath::ALL
             .iter()

@@ -7,7 +7,7 @@ mod common;
 use shvis::export::export;
 use shvis::gpu::{HwPath, ShaderStage, compile_source};
 use shvis::render::{FrameSettings, SceneGpu};
-use shvis::technique::block::{block_codec, compress};
+use shvis::technique::block::{compress, dx11_codec};
 use shvis::technique::{self, LightingRecipe, Technique, per_texel_data};
 
 /// Level 0 of a KTX2 file, after checking the reader's header against the expectation.
@@ -52,7 +52,7 @@ fn every_file_reads_back_as_the_texels_the_renderer_uploads() {
         // The per-texel images as `technique::block::upload_per_texel` uploads them.
         let texels = per_texel_data(t, path, &inputs).unwrap();
         let uploads: Vec<(ash::vk::Format, u32, Vec<u8>)> = match path {
-            HwPath::Dx11 => compress(&texels, block_codec(t).unwrap(), &label)
+            HwPath::Dx11 => compress(&texels, dx11_codec(t, &label).unwrap(), &label)
                 .unwrap()
                 .image_levels()
                 .into_iter()

@@ -16,7 +16,7 @@ fn every_technique_and_path_is_validation_clean() {
         flat_normals: false,
         ..FrameSettings::default()
     };
-    for &id in Technique::ALL {
+    for &id in Technique::all() {
         for &path in HwPath::ALL.iter().filter(|&&p| id.runs_on(p)) {
             let frame = common::render(&ctx, prepared, id, path, &settings);
             let covered = (0..frame.height)

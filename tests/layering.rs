@@ -376,12 +376,13 @@ fn no_wildcard_arm_over_technique_or_its_families() {
         found.join("\n")
     );
     // The check itself: it finds a planted one and passes the exhaustive form.
-    let planted = "match t {\n    Technique::Unc { .. } => 1,\n    _ => 0,\n}\n";
+    let planted =
+        "match t {\n    Technique::Unc(shvis::technique::Unc { .. }) => 1,\n    _ => 0,\n}\n";
     assert_eq!(wildcard_arms_over_families("x.rs", planted), ["src/x.rs:3"]);
-    let tuple = "match (kind, t) {\n    (Kind::A, Technique::Sh2) => 1,\n    _ => 0,\n}\n";
+    let tuple = "match (kind, t) {\n    (Kind::A, Technique::Sh2(shvis::technique::Sh2)) => 1,\n    _ => 0,\n}\n";
     assert_eq!(wildcard_arms_over_families("x.rs", tuple).len(), 1);
-    let other = "match kind {\n    Kind::A => Technique::Sh2,\n    _ => Technique::Shlmap,\n}\n";
+    let other = "match kind {\n    Kind::A => Technique::Sh2(shvis::technique::Sh2),\n    _ => Technique::Shlmap(shvis::technique::Shlmap),\n}\n";
     assert!(wildcard_arms_over_families("x.rs", other).is_empty());
-    let exhaustive = "match t {\n    Technique::Unc { .. } => 1,\n    Technique::Sh2 => 0,\n}\n";
+    let exhaustive = "match t {\n    Technique::Unc(shvis::technique::Unc { .. }) => 1,\n    Technique::Sh2(shvis::technique::Sh2) => 0,\n}\n";
     assert!(wildcard_arms_over_families("x.rs", exhaustive).is_empty());
 }

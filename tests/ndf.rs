@@ -159,7 +159,12 @@ fn diffuse_ndf_variants_change_nothing_magnified_and_follow_the_footprint_minifi
     ];
     let all: Vec<Technique> = bases
         .iter()
-        .flat_map(|&b| [b.technique(), Technique::Ndf { base: b }])
+        .flat_map(|&b| {
+            [
+                b.technique(),
+                Technique::Ndf(shvis::technique::Ndf { base: b }),
+            ]
+        })
         .collect();
     prepared.prepare_techniques(&all).unwrap();
     let receding = prepared.scene.camera;
@@ -194,7 +199,7 @@ fn diffuse_ndf_variants_change_nothing_magnified_and_follow_the_footprint_minifi
                         .unwrap()
                 };
                 let plain = render(base.technique());
-                let filtered = render(Technique::Ndf { base });
+                let filtered = render(Technique::Ndf(shvis::technique::Ndf { base }));
                 let label = format!("{}.{path}", base.technique());
                 let mean = |f: &shvis::render::Frame| {
                     let sum: f64 = (0..mask.len())

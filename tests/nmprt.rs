@@ -90,9 +90,9 @@ fn nmprt_renders_the_sh_lightmap_of_the_same_bake_on_both_paths() {
         ..prepared.inputs()
     };
     let (ctx, scene) = gpu_house(prepared);
-    let nmprt = Technique::Nmprt {
+    let nmprt = Technique::Nmprt(shvis::technique::Nmprt {
         variant: NmprtVariant::Full,
-    };
+    });
     for &path in HwPath::ALL.iter().filter(|&&p| nmprt.runs_on(p)) {
         let render = |t: Technique| {
             technique::build(&ctx, &scene, t, path, &inputs)
@@ -100,10 +100,10 @@ fn nmprt_renders_the_sh_lightmap_of_the_same_bake_on_both_paths() {
                 .render(&scene, 0, 1)
                 .expect("renders")
         };
-        let want = render(Technique::Shlmap);
-        let got = render(Technique::Nmprt {
+        let want = render(Technique::Shlmap(shvis::technique::Shlmap));
+        let got = render(Technique::Nmprt(shvis::technique::Nmprt {
             variant: NmprtVariant::Full,
-        });
+        }));
         let (worst, largest, lit) = max_difference(&got, &want);
         println!("{path}: {lit} channels, max |nmprt − shlmap| = {worst:.3e} of max {largest:.3}");
         assert!(lit > 3000 && largest > 0.0);

@@ -19,14 +19,14 @@ fn error_falls_with_basis_size_and_weights_only_matches() {
     let (reference, settings) = common::house_reference(&ctx);
     let pairs = [4, 8, 12, 16, 24].map(|m| {
         (
-            Technique::Pca {
+            Technique::Pca(shvis::technique::Pca {
                 m,
                 weights_only: false,
-            },
-            Technique::Pca {
+            }),
+            Technique::Pca(shvis::technique::Pca {
                 m,
                 weights_only: true,
-            },
+            }),
         )
     });
     let mut errors = Vec::new();
@@ -45,7 +45,7 @@ fn error_falls_with_basis_size_and_weights_only_matches() {
     let unc6 = common::render(
         &ctx,
         prepared,
-        Technique::Unc { order: Order::SIX },
+        Technique::Unc(shvis::technique::Unc { order: Order::SIX }),
         HwPath::Dx10,
         &settings,
     );

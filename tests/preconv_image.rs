@@ -31,7 +31,7 @@ fn render(flat_normals: bool) -> Frame {
     common::render(
         &ctx,
         common::house(),
-        Technique::Preconv,
+        Technique::Preconv(shvis::technique::Preconv),
         HwPath::Dx10,
         &FrameSettings {
             width: WIDTH,

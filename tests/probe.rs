@@ -114,7 +114,7 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
     };
     let scene = shvis::render::SceneGpu::new(&ctx, &prepared.scene, &settings).unwrap();
     let inputs = prepared.inputs();
-    for &t in Technique::ALL {
+    for &t in Technique::all() {
         for &path in HwPath::ALL.iter().filter(|&&p| t.runs_on(p)) {
             let tech = technique::build(&ctx, &scene, t, path, &inputs).unwrap();
             let costs = technique::cost::counts(&ctx, &scene, &tech).unwrap();
@@ -159,10 +159,10 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
             // RGBA32F lookups are the NDF moment maps': preconvndf reads all three, unc6ndf
             // the first; no other technique binds RGBA32F (no specular term here).
             let wide = match t {
-                Technique::Ndf {
+                Technique::Ndf(shvis::technique::Ndf {
                     base: shvis::technique::NdfBase::Preconv,
-                } => 3.0,
-                Technique::Ndf { .. } => 1.0,
+                }) => 3.0,
+                Technique::Ndf(shvis::technique::Ndf { .. }) => 1.0,
                 _ => 0.0,
             };
             assert_eq!(c.get(Kind::TrilinearWide), wide, "{t}.{path}: {c:?}");
@@ -176,8 +176,8 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
             // the cluster's block per vector and mean inside a cluster, four decodes for
             // the measured share of fragments whose batch straddles a boundary.
             let vectors = match t {
-                Technique::Vq { .. } => Some(0),
-                Technique::Cpca { m, .. } => Some(m),
+                Technique::Vq(shvis::technique::Vq { .. }) => Some(0),
+                Technique::Cpca(shvis::technique::Cpca { m, .. }) => Some(m),
                 _ => None,
             };
             if let Some(m) = vectors {

@@ -60,7 +60,10 @@ fn dynamic_techniques_follow_a_rotating_environment() {
         .expect("relight runs");
         assert_eq!(table.faded, faded);
         common::assert_validation_clean(&ctx, &format!("relight every {every}, {upload}"));
-        assert_eq!(table.static_only, vec![Technique::Shlmap]);
+        assert_eq!(
+            table.static_only,
+            vec![Technique::Shlmap(shvis::technique::Shlmap)]
+        );
         assert_eq!(table.results.len(), 5 * 2);
         for row in &table.results {
             let label = format!("{}.{}", row.technique, row.path);

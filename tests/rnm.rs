@@ -145,7 +145,7 @@ fn listing_2_with_the_unoccluded_d_encoding_equals_listing_1_per_pixel() {
         let gpu_scene = SceneGpu::new(&ctx, &scene, &settings).expect("scene uploads");
         for path in [HwPath::Dx9, HwPath::Dx10] {
             let render = |variant| {
-                let t = Technique::Rnm { variant };
+                let t = Technique::Rnm(shvis::technique::Rnm { variant });
                 let built = technique::build(&ctx, &gpu_scene, t, path, &inputs)
                     .unwrap_or_else(|e| panic!("{t}.{path}: {e}"));
                 built.render(&gpu_scene, 0, 1).expect("renders")

@@ -353,7 +353,7 @@ fn node_transforms_apply_to_positions_normals_tangents_and_camera() {
     let frame = common::render(
         &ctx,
         &prepared,
-        shvis::technique::Technique::Preconv,
+        shvis::technique::Technique::Preconv(shvis::technique::Preconv),
         shvis::technique::HwPath::Dx10,
         &shvis::render::FrameSettings {
             width: w,

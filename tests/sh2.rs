@@ -36,7 +36,10 @@ fn sh2_error_is_below_preconv_and_paths_agree() {
             let frame = common::render(&ctx, prepared, t, path, &settings);
             image_error(&frame, &reference.frame).unwrap().rel_rmse
         };
-        let (e_sh2, e_preconv) = (e(Technique::Sh2), e(Technique::Preconv));
+        let (e_sh2, e_preconv) = (
+            e(Technique::Sh2(shvis::technique::Sh2)),
+            e(Technique::Preconv(shvis::technique::Preconv)),
+        );
         println!(
             "{path}: relative RMSE sh2 {e_sh2:.4}, preconv {e_preconv:.4} (reference noise {:.4})",
             reference.rel_noise

@@ -205,7 +205,13 @@ fn shlmap_meets_the_reference_with_two_bounces() {
     let prepared = common::house();
     let mut errors = vec![];
     for &path in HwPath::ALL {
-        let frame = common::render(&ctx, prepared, Technique::Shlmap, path, &settings);
+        let frame = common::render(
+            &ctx,
+            prepared,
+            Technique::Shlmap(shvis::technique::Shlmap),
+            path,
+            &settings,
+        );
         let against_bounced = image_error(&frame, &bounced.frame).unwrap().rel_rmse;
         let against_direct = image_error(&frame, &reference.frame).unwrap().rel_rmse;
         println!(
@@ -288,11 +294,18 @@ fn shlmap_tracks_strong_inter_reflection() {
         transfer: None,
         table_res: 16,
         h_order: Order::THREE,
-        sg_solver: shvis::sh::sg::DEFAULT_SOLVER,
+        options: Default::default(),
         cache_dir: None,
     };
     for &path in HwPath::ALL {
-        let tech = shvis::technique::build(&ctx, &gpu, Technique::Shlmap, path, &inputs).unwrap();
+        let tech = shvis::technique::build(
+            &ctx,
+            &gpu,
+            Technique::Shlmap(shvis::technique::Shlmap),
+            path,
+            &inputs,
+        )
+        .unwrap();
         let frame = tech.render(&gpu, 0, 1).unwrap();
         let e_bounced = image_error(&frame, &bounced.frame).unwrap().rel_rmse;
         let e_direct = image_error(&frame, &reference.frame).unwrap().rel_rmse;

@@ -24,7 +24,7 @@ fn error_falls_with_order_and_paths_agree() {
     let (reference, settings) = common::house_reference(&ctx);
     let mut errors = Vec::new();
     for order in [Order::THREE, Order::FOUR, Order::SIX] {
-        let id = Technique::Unc { order };
+        let id = Technique::Unc(shvis::technique::Unc { order });
         let mut per_path = Vec::new();
         for path in [HwPath::Dx9, HwPath::Dx10] {
             let frame = common::render(&ctx, prepared, id, path, &settings);
@@ -76,7 +76,10 @@ fn hdr_sun_renders_finite_on_both_paths() {
             ..prepared.inputs()
         };
         let scene = SceneGpu::new(&ctx, &prepared.scene, &settings).unwrap();
-        for id in [Technique::Unc { order: Order::SIX }, Technique::Preconv] {
+        for id in [
+            Technique::Unc(shvis::technique::Unc { order: Order::SIX }),
+            Technique::Preconv(shvis::technique::Preconv),
+        ] {
             for path in [HwPath::Dx9, HwPath::Dx10] {
                 let tech = technique::build(&ctx, &scene, id, path, &inputs).unwrap();
                 let frame = tech.render(&scene, 0, 1).unwrap();

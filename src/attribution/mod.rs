@@ -41,7 +41,19 @@
 //! lavapipe; `pca*` reach ≈ 3·10⁻³ there, differences of about one 8-bit weight step that
 //! llvmpipe's filtering of the RGBA8 weight textures adds (README, "Error attribution").
 
+mod cluster;
 pub mod exact_light;
+mod hemisphere;
+mod ndf;
+mod nmprt;
+mod pca;
+mod preconv;
+mod rnm;
+mod sh2;
+mod sh_variant;
+mod shlmap;
+mod unc;
+mod vertex;
 
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
@@ -427,40 +439,32 @@ pub fn cpu_rungs(
         label: format!("{technique}.{path}"),
     };
     let mut rungs = Vec::new();
-    match technique {
-        Technique::Unc { order } => row.unc(&mut rungs, order)?,
-        Technique::Pca { m, weights_only } => row.pca(&mut rungs, m, weights_only)?,
-        Technique::Vq { .. } | Technique::Cpca { .. } => row.clustered(&mut rungs)?,
-        // The CPU ladder walks lightmap texels; per-vertex weights have none.
-        Technique::PcaVertex { .. } => {}
-        Technique::Preconv => row.preconv(&mut rungs),
-        Technique::Sh2 => row.sh2(&mut rungs),
-        // No ladder for the radiosity-normal-mapping family yet: its error is measured
-        // against the displaced-geometry reference (`study rnm`), not split into rungs.
-        // The NDF variants' rungs are their base technique's; their own step (the normal
-        // map's filtering) is measured by `shvis study ndf`.
-        // `nmprt*`: no ladder yet (its rungs would be the transfer bake's lighting order,
-        // the normal basis' truncation and the bounces; only its total error is reported).
-        Technique::Rnm { .. } | Technique::Ndf { .. } => {}
-        // `nmprt*`: the technique's own model per pixel, exact (f32 texel values, f64
-        // evaluation, the SVD basis evaluated rather than looked up); what remains to the
-        // GPU image is f16 storage and the basis texture. No rungs before it yet (the
-        // transfer's lighting order, the order-3 transferred radiance, the bounces).
-        Technique::Nmprt { variant } => row.nmprt(&mut rungs, variant),
-        Technique::Shlmap => row.lightmap_sh(&mut rungs, None),
-        Technique::EngineSh { basis } => row.lightmap_sh(&mut rungs, Some(basis.sh_basis())),
-        Technique::Local {
-            basis: crate::technique::LocalBasis::HBasis(size),
-        } => row.hbasis(&mut rungs, size),
-        Technique::Local {
-            basis: crate::technique::LocalBasis::Sg { lobes },
-        } => row.sg(&mut rungs, lobes),
-        Technique::Local {
-            basis: crate::technique::LocalBasis::Dice(variant),
-        } => row.dice(&mut rungs, variant),
-    }
+    family_rungs(technique, &row, &mut rungs)?;
     Ok(rungs)
 }
+
+/// A family's rungs: the ladder's per-family interface, implemented beside the ladder, one
+/// file per family, dispatched over the registry ([`crate::technique::registry`]).
+trait LadderRecipe {
+    /// Appends the rungs of this member's row to `rungs`.
+    fn rungs(self, row: &RowLadder<'_>, rungs: &mut Vec<Rung>) -> Result<(), TechniqueError>;
+}
+
+macro_rules! define_family_rungs {
+    ($($variant:ident: $family:ty,)*) => {
+        /// `technique`'s rungs, by its family's [`LadderRecipe`].
+        fn family_rungs(
+            technique: Technique,
+            row: &RowLadder<'_>,
+            rungs: &mut Vec<Rung>,
+        ) -> Result<(), TechniqueError> {
+            match technique {
+                $(Technique::$variant(member) => LadderRecipe::rungs(member, row, rungs),)*
+            }
+        }
+    };
+}
+crate::technique::registry::with_families!(define_family_rungs);
 
 /// What the rungs of one bench row share: the ladder's pixels, the prepared scene, the
 /// row's technique and path, and its label (`technique.path`, the stem of the rungs that
@@ -541,22 +545,15 @@ impl<'a> RowLadder<'a> {
                     return;
                 }
             };
-        // An SG fit depends on the run's solver: its rung is cached per solver.
-        let sg = matches!(
-            self.technique,
-            Technique::Local {
-                basis: crate::technique::LocalBasis::Sg { .. }
-            }
-        );
-        let sg_solver = if sg {
-            format!(".{}", self.prepared.sg_solver)
-        } else {
-            String::new()
-        };
+        // A fit that depends on the run's options (an SG's solver) is cached per option.
+        let tag = self
+            .technique
+            .options_tag(&self.prepared.options)
+            .map_or(String::new(), |tag| format!(".{tag}"));
         self.push(
             rungs,
             AttributionKind::BlockCompression,
-            format!("{}{sg_solver}.block", self.label),
+            format!("{}{tag}.block", self.label),
             &|| {
                 px.image(|k| {
                     let (texels, weights) = lightmap_taps(decoded.res, px.uv[k]);
@@ -587,374 +584,6 @@ impl<'a> RowLadder<'a> {
                 .map(|(step, stem, frame)| Rung { step, stem, frame }),
         );
         lxh
-    }
-
-    /// `unc`'s rungs: visibility, lighting and cosine orders, the normal table, the
-    /// lightmap texels.
-    fn unc(&self, rungs: &mut Vec<Rung>, order: Order) -> Result<(), TechniqueError> {
-        let (px, prepared, technique, label) =
-            (self.px, self.prepared, self.technique, &self.label);
-        let radiance = &prepared.radiance_sh;
-        let n2 = order.coeff_count();
-        self.push_visibility(rungs, order);
-        let lighting = exact_cosine(radiance, order.get() + 2, order);
-        self.push(
-            rungs,
-            AttributionKind::LightingOrder,
-            format!("{technique}.lighting_order"),
-            &|| px.image(|k| shade(&lighting, px.normal[k], &px.visibility(k, n2))),
-        );
-        let lxh = LxhMatrices::new(radiance, order, prepared.h_order);
-        self.push(
-            rungs,
-            AttributionKind::CosineOrder,
-            format!("{technique}.cosine_order"),
-            &|| px.image(|k| shade(&lxh, px.normal[k], &px.visibility(k, n2))),
-        );
-        let map = table_map(self.path, prepared.table_res, label)?;
-        let table = build_table(&lxh, map);
-        let stored = StoredTable::new(map, n2, |t, j| table.values[t * n2 + j]);
-        let table_dot = |v: &[f64], k: usize| {
-            dot_rgb(v, &stored.eval(px.normal[k]), n2).map(|x| x * stored.unscale)
-        };
-        self.push(
-            rungs,
-            AttributionKind::NormalTable,
-            format!("{label}.normal_table"),
-            &|| px.image(|k| table_dot(&px.visibility(k, n2), k)),
-        );
-        self.push(
-            rungs,
-            AttributionKind::LightmapTexels,
-            format!("{label}.lightmap"),
-            &|| px.image(|k| table_dot(&self.lightmap_v(k, n2), k)),
-        );
-        self.push_block_compression(rungs, n2, 1.0, &table_dot);
-        Ok(())
-    }
-
-    /// `pcaM` and `pcaMw`'s rungs: visibility order, the PCA compression and the rungs of
-    /// [`compression_rungs`], then the stored form (tables, or the weights-only block).
-    fn pca(&self, rungs: &mut Vec<Rung>, m: u32, weights_only: bool) -> Result<(), TechniqueError> {
-        let (px, label) = (self.px, &self.label);
-        let model = &self.prepared.pca;
-        let order = model.order;
-        let n2 = order.coeff_count();
-        if n2 > 36 {
-            log::warn!(
-                "{label}: the error ladder handles PCA of visibility up to order 6, the bake has order {order}; no CPU rungs"
-            );
-            return Ok(());
-        }
-        let m = (m as usize).min(model.basis.len());
-        self.push_visibility(rungs, order);
-        // V_e + Σ_k (V_k·(V − V_e)) V_k over the first m (orthonormal) vectors.
-        let compressed = |k: usize| {
-            let v = px.visibility(k, n2);
-            let mut out = [0.0; 36];
-            out[..n2].copy_from_slice(&model.mean[..n2]);
-            for b in &model.basis[..m] {
-                let w: f64 = (0..n2).map(|j| b[j] * (v[j] - model.mean[j])).sum();
-                for j in 0..n2 {
-                    out[j] += w * b[j];
-                }
-            }
-            out
-        };
-        let base = format!("pca{m}");
-        let lxh = self.push_compression(
-            rungs,
-            order,
-            (
-                AttributionKind::PcaCompression,
-                format!("{base}.pca_compression"),
-            ),
-            &base,
-            &compressed,
-        );
-        let q = quantized_prefix(model, m);
-        // The stored weights, bilinear: UNORM8 reads as q / 255.
-        let unorm = f64::from((1u32 << q.bits) - 1);
-        let lightmap_u = |k: usize| {
-            lightmap_bilinear(q.res, px.uv[k], q.m, |t, i| {
-                f64::from(q.weights_unorm[t * q.m + i]) / unorm
-            })
-        };
-        if weights_only {
-            self.push_pca_weights_only_lightmap(rungs, order, &q, &lightmap_u);
-        } else {
-            self.push_pca_table_rungs(rungs, &lxh, &q, &compressed, &lightmap_u)?;
-        }
-        Ok(())
-    }
-
-    /// `pcaMw`'s lightmap rung: the stored weights `lightmap_u` applied to the uniform
-    /// block of order-3 SH (`weights_only_block`), evaluated at the shading normal.
-    fn push_pca_weights_only_lightmap(
-        &self,
-        rungs: &mut Vec<Rung>,
-        order: Order,
-        q: &QuantizedPca,
-        lightmap_u: &(dyn Fn(usize) -> [f64; 36] + Sync),
-    ) {
-        let (px, technique) = (self.px, self.technique);
-        let block = weights_only_block(&q.basis, &q.mean, order, &self.prepared.radiance_sh);
-        let shade_weights = |u: &[f64], k: usize| {
-            let mut y = [0.0; 9];
-            eval_basis(Order::THREE, px.normal[k], &mut y);
-            let mut e = [0.0; 3];
-            for (i, yi) in y.iter().enumerate() {
-                for c in 0..3 {
-                    let mut coeff = f64::from(block[9 * q.m + i][c]);
-                    for (b, ub) in u[..q.m].iter().enumerate() {
-                        coeff += ub * f64::from(block[9 * b + i][c]);
-                    }
-                    e[c] += coeff * yi;
-                }
-            }
-            e
-        };
-        self.push(
-            rungs,
-            AttributionKind::LightmapTexels,
-            format!("{technique}.lightmap"),
-            &|| px.image(|k| shade_weights(&lightmap_u(k), k)),
-        );
-        // The blocks decode to the weights' unorm values, as the RGBA8 lightmap reads.
-        self.push_block_compression(rungs, q.m, 1.0, &shade_weights);
-    }
-
-    /// `pcaM`'s last rungs: the quantized basis's and mean's normal tables read with the
-    /// compressed V's continuous weights (normal table), then with the stored weights
-    /// `lightmap_u` (lightmap texels).
-    fn push_pca_table_rungs(
-        &self,
-        rungs: &mut Vec<Rung>,
-        lxh: &LxhMatrices,
-        q: &QuantizedPca,
-        compressed: &(dyn Fn(usize) -> [f64; 36] + Sync),
-        lightmap_u: &(dyn Fn(usize) -> [f64; 36] + Sync),
-    ) -> Result<(), TechniqueError> {
-        let (px, label) = (self.px, &self.label);
-        let n2 = self.prepared.pca.order.coeff_count();
-        // Basis tables T_k = Σ_j V_kj (L×H)_j and the mean's, as pca.rs builds them.
-        let map = table_map(self.path, self.prepared.table_res, label)?;
-        let table = build_table(lxh, map);
-        let project = |t: usize, v: &[f64]| table.project(t, v);
-        let stored = StoredTable::new(map, q.m + 1, |t, i| {
-            project(t, if i < q.m { &q.basis[i] } else { &q.mean })
-        });
-        let tables_dot = |u: &[f64], k: usize| {
-            let t = stored.eval(px.normal[k]);
-            let mut s = t[q.m];
-            for (ui, ti) in u[..q.m].iter().zip(&t) {
-                for c in 0..3 {
-                    s[c] += ui * ti[c];
-                }
-            }
-            s.map(|x| x * stored.unscale)
-        };
-        // The compressed V in the quantized basis's coordinates, unrounded.
-        let continuous_u = |k: usize| {
-            let v = compressed(k);
-            let mut u = [0.0; 36];
-            for (ui, b) in u.iter_mut().zip(&q.basis) {
-                let norm2: f64 = b.iter().map(|x| x * x).sum();
-                if norm2 > 0.0 {
-                    *ui = (0..n2).map(|j| b[j] * (v[j] - q.mean[j])).sum::<f64>() / norm2;
-                }
-            }
-            u
-        };
-        self.push(
-            rungs,
-            AttributionKind::NormalTable,
-            format!("{label}.normal_table"),
-            &|| px.image(|k| tables_dot(&continuous_u(k), k)),
-        );
-        self.push(
-            rungs,
-            AttributionKind::LightmapTexels,
-            format!("{label}.lightmap"),
-            &|| px.image(|k| tables_dot(&lightmap_u(k), k)),
-        );
-        self.push_block_compression(rungs, q.m, 1.0, &tables_dot);
-        Ok(())
-    }
-
-    /// `vq*` and `cpca*`'s rungs: visibility order, the cluster compression and the rungs
-    /// of [`compression_rungs`], then the stored lightmap as the shader reads it.
-    fn clustered(&self, rungs: &mut Vec<Rung>) -> Result<(), TechniqueError> {
-        let (px, technique, label) = (self.px, self.technique, &self.label);
-        let need = technique.cluster_need().expect("a clustered technique");
-        let model = crate::technique::cluster::find(&self.prepared.inputs(), need, label)?;
-        let order = model.order;
-        let n2 = order.coeff_count();
-        self.push_visibility(rungs, order);
-        let compressed = |k: usize| {
-            let mut out = [0.0; 36];
-            out[..n2].copy_from_slice(&model.compress(&px.visibility(k, n2)[..n2]));
-            out
-        };
-        let base = technique.name();
-        let lxh = self.push_compression(
-            rungs,
-            order,
-            (
-                AttributionKind::ClusterCompression,
-                format!("{base}.compression"),
-            ),
-            &base,
-            &compressed,
-        );
-        // The stored lightmap as the shader reads it (glsl/technique/cluster.frag).
-        let q = model.quantize();
-        let blended = matches!(
-            technique,
-            Technique::Vq {
-                seams: SeamMode::Blended,
-                ..
-            } | Technique::Cpca {
-                seams: SeamMode::Blended,
-                ..
-            }
-        );
-        let stored = |k: usize| -> [f64; 36] {
-            let mut out = [0.0; 36];
-            if blended {
-                let (index, weight) = lightmap_taps(q.res, px.uv[k]);
-                for (&t, &w) in index.iter().zip(&weight) {
-                    for (o, v) in out.iter_mut().zip(q.reconstruct(t)) {
-                        *o += w * v;
-                    }
-                }
-            } else {
-                let c = q.cluster_of[texel_index_of(q.res, px.uv[k])] as usize;
-                let u: [f64; 36] = lightmap_bilinear(q.res, px.uv[k], q.m, |t, i| {
-                    f64::from(q.weights_unorm[t * q.m + i]) / 255.0
-                });
-                out[..n2].copy_from_slice(&q.means[c][..n2]);
-                for (b, ub) in q.bases[c].iter().zip(&u) {
-                    for (o, bj) in out.iter_mut().zip(b) {
-                        *o += ub * bj;
-                    }
-                }
-            }
-            out
-        };
-        self.push(
-            rungs,
-            AttributionKind::LightmapTexels,
-            format!("{label}.lightmap"),
-            &|| px.image(|k| shade(&lxh, px.normal[k], &stored(k))),
-        );
-        Ok(())
-    }
-
-    /// `preconv`'s rungs: V replaced by the pixel's AO, irradiance truncated to order 3,
-    /// the AO lightmap's texels.
-    fn preconv(&self, rungs: &mut Vec<Rung>) {
-        let (px, prepared) = (self.px, self.prepared);
-        let y00 = 0.5 / std::f64::consts::PI.sqrt();
-        let ao = |k: usize| f64::from(px.vis.ao[k]);
-        self.push(
-            rungs,
-            AttributionKind::AmbientOcclusion,
-            "preconv.ambient_occlusion".into(),
-            // ∫ L H_n = G_0 / y_00.
-            &|| px.image(|k| self.exact(k)[0].map(|g| ao(k) * g / y00)),
-        );
-        let e3 = |k: usize| {
-            crate::sh::zonal::eval_rgb(&prepared.irradiance_sh, Order::THREE, px.normal[k])
-                .map(|e| e.max(0.0))
-        };
-        self.push(
-            rungs,
-            AttributionKind::IrradianceOrder,
-            "preconv.irradiance_order".into(),
-            &|| px.image(|k| e3(k).map(|e| ao(k) * e)),
-        );
-        let ao_map = &prepared.ao;
-        self.push(
-            rungs,
-            AttributionKind::LightmapTexels,
-            "preconv.lightmap".into(),
-            &|| {
-                px.image(|k| {
-                    let a = lightmap_bilinear::<1>(ao_map.res, px.uv[k], 1, |t, _| {
-                        f16_round(ao_map.values[t])
-                    })[0];
-                    e3(k).map(|e| a * e)
-                })
-            },
-        );
-        self.push_block_compression(rungs, 1, 1.0, &|v, k| e3(k).map(|e| v[0] * e));
-    }
-
-    /// `sh2`'s rungs: V truncated to order 2, lighting to order 3, then the product and
-    /// the cosine to order 3, then the lightmap texels.
-    fn sh2(&self, rungs: &mut Vec<Rung>) {
-        let px = self.px;
-        let radiance = &self.prepared.radiance_sh;
-        let order = Order::TWO;
-        let n2 = order.coeff_count();
-        self.push_visibility(rungs, order);
-        let lighting = exact_cosine(radiance, 3, order);
-        self.push(
-            rungs,
-            AttributionKind::LightingOrder,
-            "sh2.lighting_order".into(),
-            &|| px.image(|k| shade(&lighting, px.normal[k], &px.visibility(k, n2))),
-        );
-        let product = LxhMatrices::with_lighting_order(radiance, Order::THREE, order, Order::THREE);
-        self.push(
-            rungs,
-            AttributionKind::ProductOrder,
-            "sh2.product_order".into(),
-            &|| px.image(|k| shade(&product, px.normal[k], &px.visibility(k, n2))),
-        );
-        self.push(
-            rungs,
-            AttributionKind::LightmapTexels,
-            "sh2.lightmap".into(),
-            &|| px.image(|k| shade(&product, px.normal[k], &self.lightmap_v(k, n2))),
-        );
-        self.push_block_compression(rungs, n2, 1.0, &|v, k| shade(&product, px.normal[k], v));
-    }
-
-    /// `nmprt*`'s one rung: the technique's own model at each pixel (none without a
-    /// transfer bake).
-    fn nmprt(&self, rungs: &mut Vec<Rung>, variant: NmprtVariant) {
-        let (px, prepared, technique) = (self.px, self.prepared, self.technique);
-        let Some(transfer) = prepared.transfer.as_ref() else {
-            return;
-        };
-        let recipe = crate::technique::nmprt::NmprtRecipe::new(variant, transfer.clone());
-        let radiance = &prepared.radiance_sh;
-        let irradiance = &prepared.irradiance_sh;
-        self.push(
-            rungs,
-            AttributionKind::Technique,
-            format!("{technique}.model"),
-            &|| {
-                let values = recipe.texel_values_all(radiance, irradiance);
-                let v = recipe.values_per_texel();
-                px.image(|k| {
-                    let x = lightmap_bilinear::<36>(transfer.res, px.uv[k], v, |t, j| {
-                        f64::from(values[t * v + j])
-                    });
-                    // The frame of the nearest covered tap.
-                    let (taps, weights) = lightmap_taps(transfer.res, px.uv[k]);
-                    let frame = taps
-                        .iter()
-                        .zip(weights)
-                        .filter(|(t, _)| transfer.covered[**t])
-                        .max_by(|a, b| a.1.total_cmp(&b.1))
-                        .map_or([Vec3::ZERO; 3], |(t, _)| transfer.frames[*t]);
-                    recipe.eval(&x[..v], px.normal[k], &frame, irradiance)
-                })
-            },
-        );
     }
 
     /// The first rung of the lightmap families: incident radiance with inter-reflection
@@ -1023,17 +652,10 @@ impl<'a> RowLadder<'a> {
             });
             (values.as_slice(), *scale)
         };
-        // An SG fit depends on the run's solver: its rung is cached per solver.
-        let sg = matches!(
-            self.technique,
-            Technique::Local {
-                basis: crate::technique::LocalBasis::Sg { .. }
-            }
-        );
-        let label = if sg {
-            format!("{}.{}", self.technique, self.prepared.sg_solver)
-        } else {
-            self.technique.to_string()
+        // A fit that depends on the run's options (an SG's solver) is cached per option.
+        let label = match self.technique.options_tag(&self.prepared.options) {
+            Some(tag) => format!("{}.{tag}", self.technique),
+            None => self.technique.to_string(),
         };
         self.push(
             rungs,
@@ -1055,174 +677,6 @@ impl<'a> RowLadder<'a> {
             let (_, scale) = stored_scaled();
             self.push_block_compression(rungs, per_texel, f64::from(1.0 / scale), eval);
         }
-    }
-
-    /// The rungs of a local basis (`hb*`, `sg*`, `dice*`): the pixel's gathered radiance,
-    /// then the basis fitted to it through the pixel's own frame and evaluated at its
-    /// tangent-space normal (`fit_eval`; rung `{basis_label}.basis`), then the lightmap's
-    /// f16 values (`stored`, fitted through each texel's frame; `eval` reads them).
-    fn local_basis(
-        &self,
-        rungs: &mut Vec<Rung>,
-        basis_label: String,
-        fit_eval: &FitEval<'_>,
-        per_texel: usize,
-        stored: &dyn Fn(&crate::bake::shlmap::ShLightmap) -> Vec<f32>,
-        eval: &(dyn Fn(&[f64], glam::DVec3) -> [f64; 3] + Sync),
-    ) {
-        let px = self.px;
-        let Some((map, gathered)) = self.push_radiance_order(rungs) else {
-            return;
-        };
-        self.push(
-            rungs,
-            AttributionKind::Basis,
-            format!("{basis_label}.basis"),
-            &|| px.image(|k| fit_eval(&gathered[k], px.frame[k], px.tangent_normal[k])),
-        );
-        self.push_lightmap_values(rungs, map, per_texel, &|| stored(map), &|v, k| {
-            eval(v, px.tangent_normal[k])
-        });
-    }
-
-    /// The H-basis rungs ([`RowLadder::local_basis`]).
-    fn hbasis(&self, rungs: &mut Vec<Rung>, size: crate::sh::hbasis::HBasisSize) {
-        use crate::sh::hbasis;
-        let rgb = |v: &[f64]| -> Vec<[f64; 3]> {
-            (0..size.count())
-                .map(|i| [v[3 * i], v[3 * i + 1], v[3 * i + 2]])
-                .collect()
-        };
-        self.local_basis(
-            rungs,
-            self.technique.to_string(),
-            &|radiance, frame, m| {
-                hbasis::irradiance(&hbasis::project_irradiance(radiance, frame, size), m)
-            },
-            3 * size.count(),
-            &|map| crate::technique::local::stored_texels(map, size),
-            &|v, m| hbasis::irradiance(&rgb(v), m),
-        );
-    }
-
-    /// The Ambient Dice rungs ([`RowLadder::local_basis`]): the fit at the ten vertices
-    /// and its hybrid (or YCoCg) interpolation.
-    fn dice(&self, rungs: &mut Vec<Rung>, variant: crate::sh::dice::DiceVariant) {
-        let basis = crate::sh::dice::dice();
-        self.local_basis(
-            rungs,
-            self.technique.to_string(),
-            &|radiance, frame, m| {
-                basis.irradiance(
-                    variant,
-                    &basis.project_irradiance(variant, radiance, frame),
-                    m,
-                )
-            },
-            variant.stored_values(),
-            &|map| crate::technique::local::dice_stored_texels(map, variant),
-            &|v, m| basis.irradiance(variant, v, m),
-        );
-    }
-
-    /// The SG rungs ([`RowLadder::local_basis`]): the lobes fitted by the run's solver.
-    fn sg(&self, rungs: &mut Vec<Rung>, lobes: u32) {
-        use crate::technique::local::{fit_sg, sg_basis, sg_irradiance, sg_stored_texels};
-        let basis = sg_basis(lobes);
-        let solver = self.prepared.sg_solver;
-        let rgb = |v: &[f64]| -> Vec<[f64; 3]> {
-            (0..lobes as usize)
-                .map(|i| [v[3 * i], v[3 * i + 1], v[3 * i + 2]])
-                .collect()
-        };
-        self.local_basis(
-            rungs,
-            format!("{}.{solver}", self.technique),
-            &|radiance, frame, m| {
-                let mut stats = crate::sh::sg::FitStats::default();
-                sg_irradiance(
-                    &basis,
-                    &fit_sg(&basis, radiance, frame, solver, &mut stats),
-                    m,
-                )
-            },
-            3 * lobes as usize,
-            &|map| sg_stored_texels(map, lobes, solver).0,
-            &|v, m| sg_irradiance(&basis, &rgb(v), m),
-        );
-    }
-
-    /// `shlmap`'s rungs (`basis` `None`) and the engine bases' (module doc): the pixel's
-    /// gathered order-3 radiance, then for a basis what it stores evaluated by
-    /// [`ShBasis::linear`] and, where that differs, by its own reconstruction; then the
-    /// lightmap texels. None without an SH lightmap bake.
-    fn lightmap_sh(&self, rungs: &mut Vec<Rung>, basis: Option<ShBasis>) {
-        let px = self.px;
-        let Some((map, gathered)) = self.push_radiance_order(rungs) else {
-            return;
-        };
-        let l2 = |c: &[[f64; 3]], n: DVec3| ShBasis::L2.irradiance(&ShBasis::L2.encode(c, None), n);
-        let Some(basis) = basis else {
-            // As the technique stores it (finite: the bench built it first).
-            let scale = crate::technique::shlmap::stored_scale(map).unwrap_or(1.0);
-            let unscale = f64::from(1.0 / scale);
-            self.push(
-                rungs,
-                AttributionKind::LightmapTexels,
-                "shlmap.lightmap".into(),
-                &|| {
-                    px.image(|k| {
-                        let v = lightmap_bilinear::<27>(map.res, px.uv[k], 27, |t, j| {
-                            f16_round(map.texel(t)[j / 3][j % 3] * scale)
-                        });
-                        let c: Vec<[f64; 3]> = (0..9)
-                            .map(|i| std::array::from_fn(|ch| v[3 * i + ch] * unscale))
-                            .collect();
-                        l2(&c, px.normal[k])
-                    })
-                },
-            );
-            self.push_block_compression(rungs, 27, unscale, &|v, k| {
-                let c: Vec<[f64; 3]> = (0..9)
-                    .map(|i| std::array::from_fn(|ch| v[3 * i + ch]))
-                    .collect();
-                l2(&c, px.normal[k])
-            });
-            return;
-        };
-        let technique = self.technique;
-        let linear = basis.linear();
-        // The pixel's own hemisphere, as a texel's (the deringing's shaded normals).
-        let shaded = |k: usize| Some(px.normal_g[k].as_dvec3());
-        self.push(
-            rungs,
-            AttributionKind::Basis,
-            format!("{}.basis", linear.label().replace(' ', "_").to_lowercase()),
-            &|| {
-                px.image(|k| {
-                    linear.irradiance(&basis.encode(&gathered[k], shaded(k)), px.normal[k])
-                })
-            },
-        );
-        if linear != basis {
-            self.push(
-                rungs,
-                AttributionKind::Reconstruction,
-                format!("{technique}.reconstruction"),
-                &|| {
-                    px.image(|k| {
-                        basis.irradiance(&basis.encode(&gathered[k], shaded(k)), px.normal[k])
-                    })
-                },
-            );
-        }
-        self.push_lightmap_values(
-            rungs,
-            map,
-            basis.stored_values(),
-            &|| crate::technique::engine_sh::stored_texels(map, basis),
-            &|v, k| basis.irradiance(v, px.normal[k]),
-        );
     }
 }
 

@@ -76,7 +76,7 @@ pub struct BenchSettings {
     /// Timed frames per microbenchmark of the probe.
     pub probe_frames: u32,
     /// The techniques measured on `dx11` where `paths` has it (`None`: every one with a
-    /// dx11 form; the `headline` set: `catalog::HEADLINE_DX11`).
+    /// dx11 form; the `headline` set: `catalog::headline_on(HwPath::Dx11)`).
     pub dx11_rows: Option<Vec<Technique>>,
 }
 

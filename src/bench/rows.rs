@@ -75,7 +75,7 @@ pub(super) fn measure_rows(
         for &technique in &settings.techniques {
             for &path in &settings.paths {
                 if !settings.measures(technique, path) {
-                    if let (0, Some(why)) = (k, technique.refusal(path)) {
+                    if let (0, Err(why)) = (k, technique.form_on(path)) {
                         log::info!("{technique}.{path}: left out ({why})");
                     }
                     continue;

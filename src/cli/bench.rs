@@ -187,7 +187,7 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
         probe_frames: a.probe_frames.unwrap_or(a.frames.clamp(5, 30)),
         relight_degrees: a.relight_rotate,
         dx11_rows: (a.techniques.trim() == "headline")
-            .then(|| shvis::technique::catalog::HEADLINE_DX11.to_vec()),
+            .then(|| shvis::technique::catalog::headline_on(HwPath::Dx11)),
     };
     check_rows(
         &a.techniques,

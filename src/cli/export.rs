@@ -38,17 +38,9 @@ pub(super) struct ExportArgs {
 }
 
 pub(super) fn run_export(a: ExportArgs) -> Result<()> {
-    if let Some(why) = shvis::export::refusal(a.technique) {
-        anyhow::bail!("{}: has no export: {why}", a.technique);
-    }
     // Refusals before the bake, not after it.
-    if let Some(why) = a.technique.refusal(a.path) {
-        anyhow::bail!(
-            "{}.{}: cannot run on {}: {why}",
-            a.technique,
-            a.path,
-            a.path
-        );
+    if let Some(refused) = shvis::export::refusal(a.technique, a.path) {
+        return Err(refused.into());
     }
     if a.path == HwPath::Dx9 {
         anyhow::bail!(

@@ -237,7 +237,7 @@ fn check_rows(
         .flat_map(|&t| {
             paths
                 .iter()
-                .filter_map(move |&p| t.refusal(p).map(|why| format!("{t}.{p} ({why})")))
+                .filter_map(move |&p| t.form_on(p).err().map(|why| format!("{t}.{p} ({why})")))
         })
         .collect();
     let runnable = techniques.len() * paths.len() - unsupported.len();
@@ -285,7 +285,10 @@ fn prepare_settings(
         order: shvis::sh::Order::new(scene.order).context("--order")?,
         table_res: scene.table_res,
         h_order: shvis::sh::Order::new(scene.h_order).context("--h-order")?,
-        sg_solver: scene.sg_solve,
+        options: shvis::technique::FamilyOptions {
+            Hemisphere: scene.sg_solve,
+            ..Default::default()
+        },
         cache_dir: None,
         sh_lightmap_bounces: needs(|n| n.sh_lightmap),
         transfer_bounces: needs(|n| n.transfer),

@@ -398,7 +398,7 @@ fn run_block(a: StudyBlockArgs) -> Result<()> {
     let prepared = shvis::prepare::prepare(&prepare_settings(
         &a.scene,
         &a.env,
-        &[Technique::Shlmap],
+        &[Technique::Shlmap(shvis::technique::Shlmap)],
         a.bounces,
     )?)?;
     let map = prepared

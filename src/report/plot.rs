@@ -9,7 +9,7 @@ use crate::sh::Order;
 use crate::technique::{HwPath, Technique};
 
 /// The uncompressed row the PCA plot compares with.
-const UNC6: Technique = Technique::Unc { order: Order::SIX };
+const UNC6: Technique = Technique::Unc(crate::technique::Unc { order: Order::SIX });
 
 /// TrueType fonts tried, in order, for plot labels after `$SHVIS_FONT`. plotters is built
 /// with `ab_glyph` (no system font lookup), so a font file must be registered by hand.
@@ -92,23 +92,11 @@ pub fn write_pca_error_plot(
     let series = |weights_only: bool| -> Vec<(f64, f64)> {
         rows.iter()
             .filter(|r| r.path == path && r.specular.is_none())
-            .filter_map(|r| match r.technique {
-                Technique::Pca { m, weights_only: w } if w == weights_only => {
-                    Some((f64::from(m), r.rel_rmse?))
-                }
-                Technique::Pca { .. }
-                | Technique::Unc { .. }
-                | Technique::Shlmap
-                | Technique::Preconv
-                | Technique::Sh2
-                | Technique::Vq { .. }
-                | Technique::Cpca { .. }
-                | Technique::PcaVertex { .. }
-                | Technique::Rnm { .. }
-                | Technique::Ndf { .. }
-                | Technique::Nmprt { .. }
-                | Technique::EngineSh { .. }
-                | Technique::Local { .. } => None,
+            .filter_map(|r| {
+                let Technique::Pca(pca) = r.technique else {
+                    return None;
+                };
+                (pca.weights_only == weights_only).then_some((f64::from(pca.m), r.rel_rmse?))
             })
             .collect()
     };

@@ -196,7 +196,7 @@ pub struct BenchRow {
 pub fn fill_ratios_to_preconv(rows: &mut [BenchRow]) {
     let preconv: Vec<(HwPath, _, f64)> = rows
         .iter()
-        .filter(|r| r.technique == Technique::Preconv)
+        .filter(|r| r.technique == Technique::Preconv(crate::technique::Preconv))
         .filter_map(|r| Some((r.path, r.specular, r.ms_median?)))
         .collect();
     for row in rows.iter_mut() {
@@ -524,11 +524,11 @@ pub(crate) mod tests {
     #[test]
     fn ratios_use_the_preconv_row_of_the_same_path() {
         let mut rows = vec![
-            row(Technique::Sh2, 3.0, vec![]),
-            row(Technique::Preconv, 2.0, vec![]),
+            row(Technique::Sh2(crate::technique::Sh2), 3.0, vec![]),
+            row(Technique::Preconv(crate::technique::Preconv), 2.0, vec![]),
         ];
         rows[0].path = HwPath::Dx9;
-        rows.push(row(Technique::Sh2, 4.0, vec![]));
+        rows.push(row(Technique::Sh2(crate::technique::Sh2), 4.0, vec![]));
         fill_ratios_to_preconv(&mut rows);
         assert_eq!(rows[0].ratio_to_preconv, None, "no dx9 preconv row");
         assert_eq!(rows[2].ratio_to_preconv, Some(2.0));
@@ -569,8 +569,8 @@ pub(crate) mod tests {
             seconds: 0.0,
             phases: BenchPhases::default(),
             results: vec![
-                row(Technique::Preconv, 1.0, steps),
-                row(Technique::Sh2, 1.0, vec![]),
+                row(Technique::Preconv(crate::technique::Preconv), 1.0, steps),
+                row(Technique::Sh2(crate::technique::Sh2), 1.0, vec![]),
             ],
         };
         let md = table.to_markdown();

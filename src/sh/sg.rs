@@ -103,6 +103,12 @@ impl std::str::FromStr for Solver {
 /// over the built-in skies and the shared probes (least squares within 1.5 %).
 pub const DEFAULT_SOLVER: Solver = Solver::RunningAverage;
 
+impl Default for Solver {
+    fn default() -> Solver {
+        DEFAULT_SOLVER
+    }
+}
+
 /// Passes of the running average over the fitting nodes.
 pub const RUNNING_PASSES: usize = 8;
 /// A lobe whose mean of G² is below this takes no update (as MJP's guard).

@@ -142,7 +142,7 @@ fn measure_floor(env: &str, radiance: &[[f64; 3]], normals: &[(DVec3, f64)]) -> 
     use crate::sh::dice::DiceVariant;
     use crate::sh::hbasis::{self, HBasisSize};
     use crate::sh::sg::{FitStats, LOBE_COUNTS, Solver};
-    use crate::technique::local::{fit_sg, sg_basis, sg_irradiance};
+    use crate::technique::hemisphere::{fit_sg, sg_basis, sg_irradiance};
     let order = Order::new((radiance.len() as f64).sqrt().round() as u32).expect("n² coefficients");
     // Tangent frame of the floor: tangent +X, bitangent −Z, normal +Y (t × b = n).
     let frame = [DVec3::X, DVec3::NEG_Z, DVec3::Y];

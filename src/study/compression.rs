@@ -273,7 +273,7 @@ pub fn screen_errors(
             let gpu = technique::build(ctx, &scene, t, path, &prepared.inputs())?;
             Ok((gpu.render(&scene, 0, 1)?, gpu.stats))
         };
-        let (truth, _) = render(Technique::Unc { order: Order::SIX })?;
+        let (truth, _) = render(Technique::Unc(crate::technique::Unc { order: Order::SIX }))?;
         for &t in techniques {
             let (frame, stats) = render(t)?;
             let error = image_error(&frame, &truth).ok_or_else(|| TechniqueError::Input {

@@ -211,7 +211,12 @@ pub fn run(
     ];
     let techniques: Vec<Technique> = bases
         .iter()
-        .flat_map(|&base| [base.technique(), Technique::Ndf { base }])
+        .flat_map(|&base| {
+            [
+                base.technique(),
+                Technique::Ndf(crate::technique::Ndf { base }),
+            ]
+        })
         .collect();
     let (mut scenes, mut rows) = (Vec::new(), Vec::new());
     let env = env_label(&s.env);
@@ -300,7 +305,10 @@ pub fn run(
         let inputs = prepared.inputs();
         for &base in &bases {
             for &path in &s.paths {
-                let pair = [base.technique(), Technique::Ndf { base }];
+                let pair = [
+                    base.technique(),
+                    Technique::Ndf(crate::technique::Ndf { base }),
+                ];
                 let mut frames = Vec::new();
                 let mut lookups = [0; 2];
                 for (k, &t) in pair.iter().enumerate() {

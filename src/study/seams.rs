@@ -25,6 +25,7 @@ use crate::gpu::Context;
 use crate::prepare::Prepared;
 use crate::reference::render_point_gbuffer;
 use crate::render::{Frame, FrameSettings, SceneGpu};
+use crate::technique::cluster::{Cpca, Vq};
 use crate::technique::{self, HwPath, SeamMode, Technique, TechniqueError};
 
 /// Discontinuity statistics of one set of pixel pairs.
@@ -79,7 +80,8 @@ pub fn measure(
     height: u32,
 ) -> Result<Vec<SeamRow>, TechniqueError> {
     let need = technique
-        .cluster_need()
+        .needs()
+        .clusters
         .ok_or_else(|| TechniqueError::Input {
             label: technique.name(),
             detail: "seams are measured for clustered techniques (vqK, cpcaK_M)".into(),
@@ -96,9 +98,9 @@ pub fn measure(
         let gpu = technique::build(ctx, &scene, t, path, &prepared.inputs())?;
         Ok(gpu.render(&scene, 0, 1)?)
     };
-    let truth = render(Technique::Unc {
+    let truth = render(Technique::Unc(crate::technique::Unc {
         order: crate::sh::Order::SIX,
-    })?;
+    }))?;
     let covered: Vec<f64> = truth
         .rgba
         .iter()
@@ -150,18 +152,7 @@ pub fn measure(
     }
     let mut rows = Vec::new();
     for seams in SeamMode::ALL {
-        let t = match technique {
-            Technique::Vq { k, .. } => Technique::Vq { k, seams },
-            Technique::Cpca {
-                k, m, iterative, ..
-            } => Technique::Cpca {
-                k,
-                m,
-                iterative,
-                seams,
-            },
-            other => other,
-        };
+        let t = with_seams(technique, seams);
         let image = render(t)?;
         let (mut boundary, mut interior) = (Vec::new(), Vec::new());
         for &(p, q, across) in &pairs {
@@ -205,4 +196,14 @@ pub fn to_markdown(rows: &[SeamRow], width: u32, height: u32) -> String {
         );
     }
     s
+}
+/// `technique` (a clustered one) crossing cluster boundaries by `seams`.
+fn with_seams(technique: Technique, seams: SeamMode) -> Technique {
+    if let Technique::Vq(vq) = technique {
+        return Vq { seams, ..vq }.into();
+    }
+    if let Technique::Cpca(cpca) = technique {
+        return Cpca { seams, ..cpca }.into();
+    }
+    technique
 }

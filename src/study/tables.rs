@@ -91,7 +91,7 @@ pub fn compression_screen(
 
 /// Refuses techniques without clusters (the seams study measures vqK and cpcaK_M).
 pub fn check_clustered(techniques: &[Technique]) -> Result<(), TableStudyError> {
-    match techniques.iter().find(|t| t.cluster_need().is_none()) {
+    match techniques.iter().find(|t| t.needs().clusters.is_none()) {
         Some(t) => Err(TableStudyError::Invalid(format!(
             "{t} is not a clustered technique (vqK, cpcaK_M)"
         ))),

@@ -28,20 +28,18 @@
 //! ([`DecodedBlocks::filtered`] does as the GPU does).
 //!
 //! Techniques whose per-texel data is not a set of values (cluster indices), is rebuilt for
-//! each lighting (`nmprt*`) or absent (per-vertex PCA) have no `dx11` row
-//! ([`block_codec`]).
+//! each lighting (`nmprt*`) or absent (per-vertex PCA) have no `dx11` row: each family's
+//! `form_on` says so, and names its codec where it has one.
 
 use std::sync::Arc;
 
 use ash::vk;
 use half::f16;
 
-use super::spec::{EngineShBasis, LocalBasis};
 use super::texels::{ImageBytes, TexelGroups, VALUES_PER_TEXEL};
 use super::{HwPath, Technique, TechniqueError};
 use crate::bake::block::{self as bc, Bc6hQuality, Bc7Quality, Clamped};
 use crate::gpu::{Context, Image, ImageDesc};
-use crate::sh::dice::DiceVariant;
 
 /// How a technique's per-texel data is stored on `dx11` (module doc).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -86,56 +84,29 @@ impl BlockCodec {
     }
 }
 
-/// How `technique`'s per-texel data is block-compressed, or why it has no `dx11` row.
-pub fn block_codec(technique: Technique) -> Result<BlockCodec, &'static str> {
-    use NormColours::{GroupRgb, One, Triplets};
-    Ok(match technique {
-        Technique::Unc { .. } | Technique::Pca { .. } | Technique::Sh2 => BlockCodec::Ratio(One),
-        Technique::Shlmap => BlockCodec::Ratio(Triplets),
-        Technique::Preconv => BlockCodec::Bc4,
-        Technique::Rnm { .. } => BlockCodec::Ratio(GroupRgb),
-        Technique::EngineSh { basis } => match basis {
-            EngineShBasis::L1
-            | EngineShBasis::L1Geomerics
-            | EngineShBasis::L1Zh3
-            | EngineShBasis::L2Deringed => BlockCodec::Ratio(Triplets),
-            EngineShBasis::Zh3 | EngineShBasis::L1Luminance => BlockCodec::Ratio(One),
-        },
-        Technique::Local { basis } => match basis {
-            LocalBasis::HBasis(_) | LocalBasis::Sg { .. } | LocalBasis::Dice(DiceVariant::Rgb) => {
-                BlockCodec::Ratio(Triplets)
-            }
-            LocalBasis::Dice(DiceVariant::YCoCg) => BlockCodec::Ratio(One),
-        },
-        Technique::Ndf { base } => return block_codec(base.technique()),
-        Technique::Vq { .. } | Technique::Cpca { .. } => {
-            return Err("its per-texel cluster indices cannot be block-compressed");
-        }
-        Technique::Nmprt { .. } => {
-            return Err("its per-texel data is rebuilt for each lighting, not baked");
-        }
-        Technique::PcaVertex { .. } => return Err("it has no per-texel data to compress"),
-    })
-}
-
-/// [`block_codec`] as a row's error: "{label}: has no dx11 form: …".
+/// How `technique`'s per-texel data is block-compressed on `dx11`, or the error of a row
+/// without a `dx11` form ([`Technique::form_on`]).
 ///
 /// # Errors
 /// A technique without a dx11 form.
 pub fn dx11_codec(technique: Technique, label: &str) -> Result<BlockCodec, TechniqueError> {
-    block_codec(technique).map_err(|reason| TechniqueError::Input {
+    let form = technique
+        .form_on(HwPath::Dx11)
+        .map_err(|why| super::refused(label, HwPath::Dx11, why))?;
+    form.codec().ok_or_else(|| TechniqueError::Input {
         label: label.into(),
-        detail: format!("has no dx11 form: {reason}"),
+        detail: "its dx11 form stores no blocks".into(),
     })
 }
 
-/// The shader macros of `technique` on `path`: the path's, and on `dx11` the codec's
+/// The shader macros of `technique` on `path`: the path's, and the codec's
 /// (`SHVIS_PER_TEXEL_CODEC`, 0 where the path stores the data as dx10 does).
 pub fn path_defines(technique: Technique, path: HwPath) -> Vec<(&'static str, u32)> {
-    let codec = match path {
-        HwPath::Dx11 => block_codec(technique).map_or(0, BlockCodec::shader_value),
-        HwPath::Dx9 | HwPath::Dx10 => 0,
-    };
+    let codec = technique
+        .form_on(path)
+        .ok()
+        .and_then(|form| form.codec())
+        .map_or(0, BlockCodec::shader_value);
     let mut defines = path.shader_defines().to_vec();
     defines.push(("PER_TEXEL_CODEC", codec));
     defines
@@ -827,14 +798,18 @@ mod tests {
 
     #[test]
     fn every_technique_has_a_codec_or_a_reason() {
-        for &t in Technique::ALL {
-            match block_codec(t) {
-                Ok(codec) => assert!(codec.shader_value() > 0),
-                Err(reason) => assert!(!reason.is_empty()),
+        for &t in Technique::all() {
+            match t.form_on(HwPath::Dx11) {
+                Ok(form) => assert!(form.codec().is_some_and(|c| c.shader_value() > 0), "{t}"),
+                Err(reason) => assert!(!reason.to_string().is_empty()),
             }
         }
-        assert!(block_codec("shlmap".parse().unwrap()).is_ok());
-        assert!(block_codec("unc6".parse().unwrap()).is_ok());
-        assert!(block_codec("vq16".parse().unwrap()).is_err());
+        let codec = |name: &str| dx11_codec(name.parse().unwrap(), name);
+        assert!(codec("shlmap").is_ok() && codec("unc6").is_ok());
+        let e = codec("vq16").unwrap_err().to_string();
+        assert!(
+            e.contains("cannot run on dx11") && e.contains("cluster indices"),
+            "{e}"
+        );
     }
 }

@@ -289,7 +289,7 @@ pub(crate) fn compile_fragment_source(
     scene: &SceneGpu,
     extra_defines: &[(&'static str, u32)],
 ) -> Result<Vec<u32>, TechniqueError> {
-    let mut shader = super::fragment_shader(technique);
+    let mut shader = technique.fragment_shader();
     if let Some(source) = source {
         shader.path = source;
     }

@@ -74,7 +74,7 @@ impl LightingData {
 
 /// What each family needs besides the lighting.
 #[derive(Clone)]
-pub(crate) enum Recipe {
+pub enum Recipe {
     Unc {
         order: Order,
         /// The symmetric build over the path's table map (orbits found once).

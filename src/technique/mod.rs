@@ -1,36 +1,41 @@
-//! Techniques of the paper's cost table (DESIGN §2) on the two hardware paths.
+//! Techniques on the three hardware paths (`dx9`, `dx10`, `dx11`; DESIGN §2).
 //!
-//! - [`spec`]: what a technique is, GPU-free — family and parameters, names, the paper's
-//!   figures, what it needs from the bake, which reference it meets.
-//! - one module per family ([`unc`], [`pca`], [`shlmap`], [`preconv`], [`sh2`]): what it
-//!   uploads and which fragment shader it runs (`fragment_shader`).
-//! - [`texels`] (per-texel groups) and [`tables`] (normal-indexed tables): the data layouts
-//!   the families share.
+//! - [`family`]: the interface every family implements ([`Family`]) — its names, bake,
+//!   reference, lighting, form on each path ([`Form`], [`Refusal`]), preparation, shader and
+//!   reads; [`registry`]: the one list of families, from which [`Technique`] and its
+//!   dispatch are generated.
+//! - one module per family: [`unc`], [`pca`], [`shlmap`], [`preconv`], [`sh2`], [`cluster`]
+//!   (`vqK`, `cpcaK_M`), [`vertex`] (`pcaMv`), [`rnm`], [`ndf_diffuse`], [`nmprt`],
+//!   [`sh_variant`] (the SH lightmaps engines ship), [`hemisphere`] (bases over the
+//!   tangent-frame hemisphere).
+//! - [`spec`]: the GPU-free vocabulary (what a technique needs from the bake, its reference)
+//!   and name parsing; [`catalog`]: the named sets and `shvis techniques`' listing.
+//! - [`texels`] (per-texel groups), [`tables`] (normal-indexed tables) and [`block`] (the
+//!   dx11 blocks): the data layouts the families share.
 //! - [`lighting`]: the lighting-dependent half of each technique (uniforms, tables) and
 //!   its recipe, so lighting can change without touching the per-texel data (§3.3).
 //! - [`finish`]: the one path from uploaded data to a drawable [`TechniqueGpu`], with the
-//!   path rules and the cost table's memory and lookup columns.
+//!   path rules and the cost table's memory and lookup columns; [`cost`]: its counts for the
+//!   cost model.
 //!
-//! Each family provides `per_texel` (uploads its bake data, returns its lighting recipe)
-//! and `lighting` (CPU: the lighting-dependent data). [`build`] / [`build_dynamic`],
-//! [`LightingRecipe::build`] and [`fragment_shader`] dispatch on the family by exhaustive
-//! matches; README
-//! "How to add a technique" lists the places a new family touches.
+//! docs/design.md, "How to add a technique", lists what a new family writes.
 
 pub mod block;
 pub mod catalog;
 pub mod cluster;
 pub mod cost;
-pub mod engine_sh;
+pub mod family;
 pub mod finish;
+pub mod hemisphere;
 pub mod lighting;
-pub mod local;
 pub mod ndf_diffuse;
 pub mod nmprt;
 pub mod pca;
 pub mod preconv;
+pub mod registry;
 pub mod rnm;
 pub mod sh2;
+pub mod sh_variant;
 pub mod shlmap;
 pub mod spec;
 pub mod tables;
@@ -40,11 +45,23 @@ pub mod vertex;
 
 use std::sync::Arc;
 
+pub use cluster::{Cpca, SeamMode, Vq};
+pub use family::{Family, Form, Refusal, Storage};
+pub use hemisphere::{Hemisphere, HemisphereBasis};
 pub use lighting::{LightingData, LightingRecipe};
+pub use ndf_diffuse::{Ndf, NdfBase};
+pub use nmprt::{Nmprt, NmprtVariant};
+pub use pca::Pca;
+pub use preconv::Preconv;
+pub use rnm::{Rnm, RnmVariant};
+pub use sh_variant::{ShVariant, ShVariantBasis};
+pub use sh2::Sh2;
+pub use shlmap::Shlmap;
 pub use spec::{
-    BakeNeeds, ClusterNeed, EngineShBasis, HwPath, LocalBasis, NdfBase, NmprtVariant, ParseError,
-    ReferenceModel, RnmVariant, SeamMode, Technique,
+    BakeNeeds, ClusterNeed, FamilyOptions, HwPath, ParseError, ReferenceModel, Technique,
 };
+pub use unc::Unc;
+pub use vertex::PcaVertex;
 
 use lighting::LightingSet;
 
@@ -91,8 +108,8 @@ pub struct Inputs<'a> {
     pub table_res: u32,
     /// Clamped-cosine order of the L×H product.
     pub h_order: Order,
-    /// How `sgN` fits its amplitudes (`--sg-solve`).
-    pub sg_solver: crate::sh::sg::Solver,
+    /// Each family's run options (`--sg-solve` for the hemisphere bases).
+    pub options: FamilyOptions,
 }
 
 /// Memory and cost figures of a technique on a path (the cost table's columns), computed
@@ -115,29 +132,6 @@ pub struct TechniqueStats {
 pub struct ShaderVariant {
     pub path: &'static str,
     pub defines: Vec<(&'static str, u32)>,
-}
-
-/// The fragment shader each family registers.
-pub fn fragment_shader(technique: Technique) -> ShaderVariant {
-    match technique {
-        Technique::Unc { order } => unc::fragment_shader(order),
-        Technique::Pca { m, weights_only } => pca::fragment_shader(m, weights_only),
-        Technique::Shlmap => shlmap::fragment_shader(),
-        Technique::Preconv => preconv::fragment_shader(),
-        Technique::Sh2 => sh2::fragment_shader(),
-        Technique::Vq { k, seams } => cluster::fragment_shader(k, 0, seams),
-        Technique::Cpca { k, m, seams, .. } => cluster::fragment_shader(k, m, seams),
-        Technique::PcaVertex { m, .. } => vertex::fragment_shader(m),
-        Technique::Rnm { variant } => rnm::fragment_shader(variant),
-        Technique::Nmprt { variant } => nmprt::fragment_shader(variant),
-        Technique::EngineSh { basis } => engine_sh::fragment_shader(basis),
-        Technique::Local { basis } => local::fragment_shader(basis),
-        Technique::Ndf { base } => {
-            let mut shader = fragment_shader(base.technique());
-            shader.defines.push(("NDF_DIFFUSE", 1));
-            shader
-        }
-    }
 }
 
 /// What a family's fragment shader reads per pixel beyond one fetch of each layer it binds:
@@ -174,48 +168,6 @@ impl ShaderReads {
         reads_normal_map: true,
         count_plan: None,
     };
-}
-
-impl Technique {
-    /// What its fragment shader reads ([`ShaderReads`]).
-    pub fn reads(self) -> ShaderReads {
-        match self {
-            Technique::Unc { .. }
-            | Technique::Pca { .. }
-            | Technique::Shlmap
-            | Technique::Preconv
-            | Technique::Sh2
-            | Technique::PcaVertex { .. }
-            | Technique::Nmprt { .. }
-            | Technique::EngineSh { .. } => ShaderReads::PLAIN,
-            Technique::Local { basis } => match local::group_reads(basis) {
-                Some(lookups) => ShaderReads {
-                    per_texel_taps: Some(PerTexelTaps {
-                        lookups,
-                        fetches: 0,
-                    }),
-                    ..ShaderReads::PLAIN
-                },
-                None => ShaderReads::PLAIN,
-            },
-            Technique::Vq { seams, .. } => cluster::reads(0, seams),
-            Technique::Cpca { m, seams, .. } => cluster::reads(m, seams),
-            Technique::Rnm { variant } => ShaderReads {
-                reads_normal_map: match variant {
-                    RnmVariant::NormalMap | RnmVariant::NormalMapAo => true,
-                    RnmVariant::SelfShadowed => false,
-                },
-                ..ShaderReads::PLAIN
-            },
-            Technique::Ndf { base } => ShaderReads {
-                table_fetches: match base {
-                    NdfBase::Unc { .. } => 2,
-                    NdfBase::Preconv => 1,
-                },
-                ..base.technique().reads()
-            },
-        }
-    }
 }
 
 /// An input error unless `coeffs` has at least `need` SH coefficients (`what`: "lighting",
@@ -482,34 +434,7 @@ fn prepare(
     inputs: &Inputs<'_>,
 ) -> Result<(texels::TexelGroups, LightingRecipe), TechniqueError> {
     let label = format!("{technique}.{path}");
-    let (texels, recipe) = match technique {
-        Technique::Unc { order } => unc::prepare(order, path, inputs, &label)?,
-        Technique::Pca { m, weights_only } => pca::prepare(m, weights_only, path, inputs, &label)?,
-        Technique::Shlmap => shlmap::prepare(inputs, &label)?,
-        Technique::Preconv => preconv::prepare(inputs, &label),
-        Technique::Sh2 => sh2::prepare(inputs, &label)?,
-        Technique::Vq { .. } | Technique::Cpca { .. } => {
-            let need = technique.cluster_need().expect("a clustered technique");
-            cluster::prepare(need, inputs, &label)?
-        }
-        Technique::PcaVertex { m, .. } => vertex::prepare(m, inputs, &label)?,
-        Technique::Rnm { .. } => rnm::prepare(inputs, &label)?,
-        Technique::Nmprt { variant } => nmprt::prepare(variant, inputs, &label)?,
-        Technique::EngineSh { basis } => engine_sh::prepare(basis, inputs, &label)?,
-        Technique::Local { basis } => local::prepare(basis, inputs, &label)?,
-        Technique::Ndf { base } => {
-            let (texels, recipe) = prepare(base.technique(), path, inputs)?;
-            let order = match base {
-                NdfBase::Unc { order } => Some(order),
-                NdfBase::Preconv => None,
-            };
-            let recipe = lighting::Recipe::Ndf {
-                base: Box::new(recipe.recipe),
-                order,
-            };
-            (texels, recipe)
-        }
-    };
+    let (texels, recipe) = technique.prepare_data(path, inputs, &label)?;
     let recipe = LightingRecipe {
         technique,
         path,
@@ -528,16 +453,19 @@ fn build_sets(
     sets: usize,
     own_fragment: Option<Vec<u32>>,
 ) -> Result<(TechniqueGpu, LightingRecipe), TechniqueError> {
+    let label = format!("{technique}.{path}");
+    let form = technique
+        .form_on(path)
+        .map_err(|why| refused(&label, path, why))?;
     let (texels, recipe) = prepare(technique, path, inputs)?;
     let data = recipe.build(inputs.radiance_sh, inputs.irradiance_sh)?;
-    if let Technique::PcaVertex { .. } = technique {
+    if form.storage == Storage::VertexStream {
         let gpu = vertex::finish(ctx, scene, technique, path, inputs, &data, sets)?;
         return Ok((gpu, recipe));
     }
-    let label = format!("{technique}.{path}");
     let per_texel =
         block::upload_per_texel(ctx, &texels, technique, path, &label, inputs.cache_dir)?;
-    let extra = extra_slot(ctx, technique, path, inputs, &label)?;
+    let extra = technique.extra_slot(ctx, path, inputs, &label)?;
     let gpu = finish::finish(
         ctx,
         scene,
@@ -552,49 +480,12 @@ fn build_sets(
     Ok((gpu, recipe))
 }
 
-/// A technique's own slot besides its per-texel data and tables: material textures (`rnm`'s
-/// and `ssbump`'s AO or SSBump, the NDF moments) or a normal basis (`nmprtsvdM`'s U(n)).
-fn extra_slot(
-    ctx: &Arc<Context>,
-    technique: Technique,
-    path: HwPath,
-    inputs: &Inputs<'_>,
-    label: &str,
-) -> Result<Option<finish::TextureSlot>, TechniqueError> {
-    let (kind, images) = match technique {
-        Technique::Unc { .. }
-        | Technique::Pca { .. }
-        | Technique::Shlmap
-        | Technique::Preconv
-        | Technique::Sh2
-        | Technique::Vq { .. }
-        | Technique::Cpca { .. }
-        | Technique::PcaVertex { .. }
-        | Technique::EngineSh { .. }
-        | Technique::Local { .. } => return Ok(None),
-        Technique::Rnm { variant } => (
-            finish::SlotKind::Material,
-            rnm::material_texture(ctx, variant, inputs, label)?
-                .into_iter()
-                .collect(),
-        ),
-        Technique::Nmprt { variant } => (
-            finish::SlotKind::NormalBasis,
-            nmprt::basis_images(ctx, variant, path, label)?,
-        ),
-        Technique::Ndf { base } => {
-            let maps = inputs.ndf_moments.ok_or_else(|| TechniqueError::Input {
-                label: label.into(),
-                detail: "needs the moments of the material's normal map (prepare builds them)"
-                    .into(),
-            })?;
-            (
-                finish::SlotKind::Material,
-                ndf_diffuse::upload(ctx, maps, base, path, label)?,
-            )
-        }
-    };
-    Ok((!images.is_empty()).then_some(finish::TextureSlot { kind, images }))
+/// The error of building `label` on a path it has no form on.
+pub fn refused(label: &str, path: HwPath, why: Refusal) -> TechniqueError {
+    TechniqueError::Input {
+        label: label.into(),
+        detail: format!("cannot run on {path}: {why}"),
+    }
 }
 
 /// Errors of building a technique.
@@ -625,19 +516,19 @@ mod tests {
             "cpca4_3n",
             "cpca4_15",
         ];
-        let techniques = Technique::ALL
+        let techniques = Technique::all()
             .iter()
             .copied()
             .chain(beyond_the_table.iter().map(|n| n.parse().unwrap()));
         for technique in techniques {
-            let shader = fragment_shader(technique);
+            let shader = technique.fragment_shader();
             for &path in HwPath::ALL {
                 let mut defines = block::path_defines(technique, path);
                 defines.extend_from_slice(&shader.defines);
                 // What the build adds from its data (the default lighting order's).
-                if let Technique::Nmprt {
+                if let Technique::Nmprt(nmprt::Nmprt {
                     variant: NmprtVariant::SvdPixel { .. },
-                } = technique
+                }) = technique
                 {
                     let order = crate::bake::transfer::DEFAULT_LIGHTING_ORDER;
                     defines.push(nmprt::pixel_row_groups(order.coeff_count()));

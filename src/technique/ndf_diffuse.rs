@@ -50,8 +50,14 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::spec::NdfBase;
-use super::{HwPath, texels::VALUES_PER_TEXEL};
+use super::family::{Description, Family, Form, Refusal};
+use super::finish::{SlotKind, TextureSlot};
+use super::lighting::Recipe;
+use super::spec::{BakeNeeds, ReferenceModel};
+use super::texels::TexelGroups;
+use super::{
+    HwPath, Inputs, ShaderReads, ShaderVariant, Technique, TechniqueError, texels::VALUES_PER_TEXEL,
+};
 use crate::gpu::{Context, GpuError, Image, ImageDesc};
 use crate::ndf::{Moments, NdfMaps};
 use crate::sh::Order;
@@ -264,5 +270,163 @@ mod tests {
         assert_eq!(zonal_attenuation(1.0), [1.0, 1.0]);
         assert_eq!(zonal_attenuation(0.0), [0.0, 0.0]);
         assert_eq!(mean_length(&[DVec3::Z, -DVec3::Z]), 0.0);
+    }
+}
+
+/// The technique an NDF-filtered variant ([`Ndf`]) extends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum NdfBase {
+    Unc { order: Order },
+    Preconv,
+}
+
+impl NdfBase {
+    /// The unfiltered technique.
+    pub fn technique(self) -> Technique {
+        match self {
+            NdfBase::Unc { order } => super::unc::Unc { order }.into(),
+            NdfBase::Preconv => super::preconv::Preconv.into(),
+        }
+    }
+}
+
+/// The `uncOndf`, `preconvndf` family: the base technique with its normal map filtered as a
+/// distribution (Olano & North; module doc): the clamped-cosine bands attenuated at lookup
+/// time by the zonal coefficients of the pixel's filtered normals — isotropic from the mean
+/// length for `unc`, exact from all nine moments for `preconv`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Ndf {
+    pub base: NdfBase,
+}
+
+impl Family for Ndf {
+    type Options = ();
+    const DESCRIPTION: Description = Description {
+        names: "uncOndf, preconvndf",
+        what: "the base technique with its normal map filtered as a distribution (moment maps)",
+        paper: "Olano & North, Normal Distribution Mapping",
+        in_paper_table: false,
+    };
+    const EXAMPLE: Ndf = Ndf {
+        base: NdfBase::Preconv,
+    };
+
+    fn members() -> Vec<Ndf> {
+        super::unc::UNC_ORDERS
+            .filter_map(|o| Order::new(o).ok())
+            .map(|order| NdfBase::Unc { order })
+            .chain([NdfBase::Preconv])
+            .map(|base| Ndf { base })
+            .collect()
+    }
+
+    fn table_rows() -> Vec<Ndf> {
+        vec![
+            Ndf {
+                base: NdfBase::Unc { order: Order::SIX },
+            },
+            Ndf::EXAMPLE,
+        ]
+    }
+
+    fn headline(path: HwPath) -> Vec<Ndf> {
+        match path {
+            HwPath::Dx9 | HwPath::Dx10 => vec![Ndf {
+                base: NdfBase::Unc { order: Order::SIX },
+            }],
+            HwPath::Dx11 => Vec::new(),
+        }
+    }
+
+    fn name(self) -> String {
+        format!("{}ndf", self.base.technique().name())
+    }
+
+    fn paper_ms(self) -> Option<f64> {
+        None
+    }
+
+    fn needs(self) -> BakeNeeds {
+        BakeNeeds {
+            ndf_moments: true,
+            ..self.base.technique().needs()
+        }
+    }
+
+    fn reference(self) -> ReferenceModel {
+        ReferenceModel::Direct
+    }
+
+    fn dynamic_lighting(self) -> bool {
+        true
+    }
+
+    fn ndf_variant(self) -> Option<Technique> {
+        Some(self.into())
+    }
+
+    fn form_on(self, path: HwPath) -> Result<Form, Refusal> {
+        Ok(Form {
+            material_textures: true,
+            ..self.base.technique().form_on(path)?
+        })
+    }
+
+    fn prepare(
+        self,
+        path: HwPath,
+        inputs: &Inputs<'_>,
+        _: &(),
+        _: &str,
+    ) -> Result<(TexelGroups, Recipe), TechniqueError> {
+        let base = self.base.technique();
+        let (texels, recipe) = base.prepare_data(path, inputs, &format!("{base}.{path}"))?;
+        let order = match self.base {
+            NdfBase::Unc { order } => Some(order),
+            NdfBase::Preconv => None,
+        };
+        let recipe = Recipe::Ndf {
+            base: Box::new(recipe),
+            order,
+        };
+        Ok((texels, recipe))
+    }
+
+    fn extra_slot(
+        self,
+        ctx: &Arc<Context>,
+        path: HwPath,
+        inputs: &Inputs<'_>,
+        label: &str,
+    ) -> Result<Option<TextureSlot>, TechniqueError> {
+        let maps = inputs.ndf_moments.ok_or_else(|| TechniqueError::Input {
+            label: label.into(),
+            detail: "needs the moments of the material's normal map (prepare builds them)".into(),
+        })?;
+        let images = upload(ctx, maps, self.base, path, label)?;
+        Ok((!images.is_empty()).then_some(TextureSlot {
+            kind: SlotKind::Material,
+            images,
+        }))
+    }
+
+    fn fragment_shader(self) -> ShaderVariant {
+        let mut shader = self.base.technique().fragment_shader();
+        shader.defines.push(("NDF_DIFFUSE", 1));
+        shader
+    }
+
+    fn reads(self) -> ShaderReads {
+        ShaderReads {
+            table_fetches: match self.base {
+                NdfBase::Unc { .. } => 2,
+                NdfBase::Preconv => 1,
+            },
+            ..self.base.technique().reads()
+        }
+    }
+
+    fn options_tag(self, _: &()) -> Option<String> {
+        None
     }
 }

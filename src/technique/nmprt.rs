@@ -41,12 +41,16 @@ use half::f16;
 use nalgebra::{DMatrix, SymmetricEigen};
 use rayon::prelude::*;
 
+use super::family::{Description, Family, Form, Refusal};
+use super::finish::{SlotKind, TextureSlot};
 use super::lighting::{LightingData, Recipe};
 use super::preconv::PreconvParams;
+use super::rnm::RnmVariant;
 use super::shlmap::ShLightmapParams;
+use super::spec::{BakeNeeds, ReferenceModel};
 use super::tables::{f16_range_scale, max_abs};
 use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups, upload_texel_groups};
-use super::{HwPath, Inputs, NmprtVariant, RnmVariant, ShaderVariant, TechniqueError};
+use super::{HwPath, Inputs, ShaderReads, ShaderVariant, Technique, TechniqueError};
 use crate::bake::raster::DilationPlan;
 use crate::bake::transfer::{TRANSFER_ROWS, TransferMap};
 use crate::bake::visibility::DILATION_PASSES;
@@ -628,7 +632,7 @@ pub(crate) fn prepare(
         detail: "needs the transfer-matrix bake".into(),
     })?;
     if let NmprtVariant::Svd { m } | NmprtVariant::SvdPixel { m } = variant
-        && !super::spec::NMPRT_SVD_VECTORS.contains(&m)
+        && !NMPRT_SVD_VECTORS.contains(&m)
     {
         return Err(TechniqueError::Input {
             label: label.into(),
@@ -686,6 +690,163 @@ pub fn basis_images(
         &bytes,
         &format!("{label}.normal_basis"),
     )
+}
+
+/// How `nmprt*` evaluates the transferred radiance at the normal-mapped normal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum NmprtVariant {
+    /// `nmprt`: y(n)ᵀ C l', the 27 coefficients of l' per texel.
+    Full,
+    /// `nmprtsvdM`: the course's normal basis, e(n) = U(n) S_M V_Mᵀ R l' — M values per
+    /// colour per texel, U(n) looked up by the tangent-space normal.
+    Svd { m: u32 },
+    /// `nmprtsvdMp`: the same normal basis with the course's pixel shader — per texel the
+    /// M × O² matrices V_Mᵀ R M (per colour) as bake data, the lighting l in uniforms, the
+    /// matrix–vector product per pixel; nothing per texel changes with the lighting. Its
+    /// 3·M·⌈O²/4⌉ RGBA layers exceed dx9's 16 textures: dx10 only.
+    SvdPixel { m: u32 },
+    /// `nmprthl2`: three rows — the least-squares fit of e(n) by the HL2 blend weights,
+    /// three RGB values per texel blended like `rnm`.
+    Hl2,
+    /// `nmprtratio`: the shadowed/unshadowed luminance ratio at the texel's shading normal
+    /// times the unshadowed irradiance at the normal-mapped normal.
+    Ratio,
+}
+
+/// Singular vectors an `nmprtsvdM` name may keep (M = 9 is the full evaluation).
+pub const NMPRT_SVD_VECTORS: std::ops::RangeInclusive<u32> = 1..=9;
+
+/// The normal-mapping-for-PRT family (Sloan, PRT course; module doc): per texel a transfer
+/// matrix M (`bake::transfer`: shadows and inter-reflection baked, lighting free) gives
+/// transferred incident radiance l' = M·l, formed on the CPU when the lighting changes and
+/// evaluated per pixel at the normal-mapped normal in one of four ways ([`NmprtVariant`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Nmprt {
+    pub variant: NmprtVariant,
+}
+
+impl Family for Nmprt {
+    type Options = ();
+    const DESCRIPTION: Description = Description {
+        names: "nmprt, nmprtsvdM, nmprtsvdMp, nmprthl2, nmprtratio",
+        what: "normal mapping for PRT: transfer matrices per texel, evaluated at the normal",
+        paper: "Sloan, PRT course (normal mapping)",
+        in_paper_table: false,
+    };
+    const EXAMPLE: Nmprt = Nmprt {
+        variant: NmprtVariant::Full,
+    };
+
+    fn members() -> Vec<Nmprt> {
+        [NmprtVariant::Full, NmprtVariant::Hl2, NmprtVariant::Ratio]
+            .into_iter()
+            .chain(NMPRT_SVD_VECTORS.map(|m| NmprtVariant::Svd { m }))
+            .chain(NMPRT_SVD_VECTORS.map(|m| NmprtVariant::SvdPixel { m }))
+            .map(|variant| Nmprt { variant })
+            .collect()
+    }
+
+    fn table_rows() -> Vec<Nmprt> {
+        [
+            NmprtVariant::Full,
+            NmprtVariant::Svd { m: 4 },
+            NmprtVariant::Svd { m: 6 },
+            NmprtVariant::SvdPixel { m: 4 },
+            NmprtVariant::Hl2,
+            NmprtVariant::Ratio,
+        ]
+        .map(|variant| Nmprt { variant })
+        .to_vec()
+    }
+
+    fn headline(path: HwPath) -> Vec<Nmprt> {
+        match path {
+            HwPath::Dx9 | HwPath::Dx10 => vec![Nmprt {
+                variant: NmprtVariant::Svd { m: 4 },
+            }],
+            HwPath::Dx11 => Vec::new(),
+        }
+    }
+
+    fn name(self) -> String {
+        match self.variant {
+            NmprtVariant::Full => "nmprt".into(),
+            NmprtVariant::Svd { m } => format!("nmprtsvd{m}"),
+            NmprtVariant::SvdPixel { m } => format!("nmprtsvd{m}p"),
+            NmprtVariant::Hl2 => "nmprthl2".into(),
+            NmprtVariant::Ratio => "nmprtratio".into(),
+        }
+    }
+
+    fn paper_ms(self) -> Option<f64> {
+        None
+    }
+
+    fn needs(self) -> BakeNeeds {
+        BakeNeeds {
+            transfer: true,
+            ..BakeNeeds::default()
+        }
+    }
+
+    fn reference(self) -> ReferenceModel {
+        ReferenceModel::InterReflected
+    }
+
+    fn dynamic_lighting(self) -> bool {
+        true
+    }
+
+    fn ndf_variant(self) -> Option<Technique> {
+        None
+    }
+
+    fn form_on(self, path: HwPath) -> Result<Form, Refusal> {
+        match (path, self.variant) {
+            (HwPath::Dx9, NmprtVariant::SvdPixel { .. }) => Err(Refusal::Dx9Textures),
+            (HwPath::Dx11, _) => Err(Refusal::RebuiltPerLighting),
+            (HwPath::Dx9 | HwPath::Dx10, _) => Ok(Form {
+                per_lighting_texels: true,
+                ..Form::TEXTURES
+            }),
+        }
+    }
+
+    fn prepare(
+        self,
+        _: HwPath,
+        inputs: &Inputs<'_>,
+        _: &(),
+        label: &str,
+    ) -> Result<(TexelGroups, Recipe), TechniqueError> {
+        prepare(self.variant, inputs, label)
+    }
+
+    fn extra_slot(
+        self,
+        ctx: &Arc<Context>,
+        path: HwPath,
+        _: &Inputs<'_>,
+        label: &str,
+    ) -> Result<Option<TextureSlot>, TechniqueError> {
+        let images = basis_images(ctx, self.variant, path, label)?;
+        Ok((!images.is_empty()).then_some(TextureSlot {
+            kind: SlotKind::NormalBasis,
+            images,
+        }))
+    }
+
+    fn fragment_shader(self) -> ShaderVariant {
+        fragment_shader(self.variant)
+    }
+
+    fn reads(self) -> ShaderReads {
+        ShaderReads::PLAIN
+    }
+
+    fn options_tag(self, _: &()) -> Option<String> {
+        None
+    }
 }
 
 #[cfg(test)]

@@ -22,12 +22,17 @@ use std::sync::Arc;
 
 use ash::vk;
 
+use super::block::{BlockCodec, NormColours};
+use super::family::{Description, Family, Form, Refusal};
+use super::finish::TextureSlot;
 use super::lighting::{LightingData, Recipe};
+use super::spec::{BakeNeeds, ReferenceModel, paper_figure};
 use super::tables::{NormalTableData, lxh_table, normal_table_data, table_map};
 use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
-use super::{HwPath, Inputs, ShaderVariant, TechniqueError};
+use super::{HwPath, Inputs, ShaderReads, ShaderVariant, Technique, TechniqueError};
 use crate::bake::lxh::SymmetricBuild;
 use crate::bake::pca::{PcaModel, QuantizedPca};
+use crate::gpu::Context;
 use crate::sh::Order;
 use crate::sh::product::product;
 use crate::sh::zonal::clamped_cosine_convolution;
@@ -288,5 +293,126 @@ mod tests {
         }
         // Asking for more vectors than the fit has gives them all.
         assert_eq!(quantized_prefix(&model(8, 4), 12).m, 8);
+    }
+}
+
+/// The `pcaM` / `pcaMw` family: M PCA weights per texel; `weights_only`: the basis'
+/// SH(V_k·L) in uniforms instead of tables.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Pca {
+    pub m: u32,
+    pub weights_only: bool,
+}
+
+/// Largest PCA basis (`pca24`): the fit in `prepare` computes this many vectors.
+pub const PCA_MAX_VECTORS: u32 = 24;
+/// PCA weights are packed 4 per RGBA8 texel, so M is a multiple of this.
+pub const PCA_VECTORS_PER_TEXEL: u32 = 4;
+
+/// The paper's ms/frame of the table variant (the only one it timed).
+const PAPER_MS: &[(u32, f64)] = &[(4, 1.40), (8, 2.08), (16, 3.61), (24, 5.56)];
+
+/// Every M a `pcaM` name may take.
+pub fn vector_counts() -> impl Iterator<Item = u32> {
+    (PCA_VECTORS_PER_TEXEL..=PCA_MAX_VECTORS).step_by(PCA_VECTORS_PER_TEXEL as usize)
+}
+
+impl Family for Pca {
+    type Options = ();
+    const DESCRIPTION: Description = Description {
+        names: "pcaM, pcaMw",
+        what: "M PCA weights of the visibility per texel; per-vector tables (w: SH of V_k·L in uniforms)",
+        paper: "Iwanicki & Sloan §3–4",
+        in_paper_table: true,
+    };
+    const EXAMPLE: Pca = Pca {
+        m: 8,
+        weights_only: false,
+    };
+
+    fn members() -> Vec<Pca> {
+        vector_counts()
+            .flat_map(|m| [false, true].map(|weights_only| Pca { m, weights_only }))
+            .collect()
+    }
+
+    fn table_rows() -> Vec<Pca> {
+        [false, true]
+            .into_iter()
+            .flat_map(|weights_only| [4, 8, 12, 16, 24].map(|m| Pca { m, weights_only }))
+            .collect()
+    }
+
+    fn headline(path: HwPath) -> Vec<Pca> {
+        match path {
+            HwPath::Dx9 | HwPath::Dx10 => Pca::table_rows(),
+            HwPath::Dx11 => Vec::new(),
+        }
+    }
+
+    fn name(self) -> String {
+        format!("pca{}{}", self.m, if self.weights_only { "w" } else { "" })
+    }
+
+    fn paper_ms(self) -> Option<f64> {
+        (!self.weights_only)
+            .then(|| paper_figure(PAPER_MS, self.m))
+            .flatten()
+    }
+
+    fn needs(self) -> BakeNeeds {
+        BakeNeeds {
+            visibility: Some(Order::SIX),
+            pca_vectors: Some(self.m),
+            ..BakeNeeds::default()
+        }
+    }
+
+    fn reference(self) -> ReferenceModel {
+        ReferenceModel::Direct
+    }
+
+    fn dynamic_lighting(self) -> bool {
+        true
+    }
+
+    fn ndf_variant(self) -> Option<Technique> {
+        None
+    }
+
+    fn form_on(self, path: HwPath) -> Result<Form, Refusal> {
+        Ok(Form::values(path, BlockCodec::Ratio(NormColours::One)))
+    }
+
+    fn prepare(
+        self,
+        path: HwPath,
+        inputs: &Inputs<'_>,
+        _: &(),
+        label: &str,
+    ) -> Result<(TexelGroups, Recipe), TechniqueError> {
+        prepare(self.m, self.weights_only, path, inputs, label)
+    }
+
+    fn extra_slot(
+        self,
+        _: &Arc<Context>,
+        _: HwPath,
+        _: &Inputs<'_>,
+        _: &str,
+    ) -> Result<Option<TextureSlot>, TechniqueError> {
+        Ok(None)
+    }
+
+    fn fragment_shader(self) -> ShaderVariant {
+        fragment_shader(self.m, self.weights_only)
+    }
+
+    fn reads(self) -> ShaderReads {
+        ShaderReads::PLAIN
+    }
+
+    fn options_tag(self, _: &()) -> Option<String> {
+        None
     }
 }

@@ -10,9 +10,16 @@
 use ash::vk;
 use half::f16;
 
+use super::block::BlockCodec;
+use super::family::{Description, Family, Form, Refusal};
+use super::finish::TextureSlot;
 use super::lighting::{LightingData, Recipe};
+use super::spec::{BakeNeeds, ReferenceModel};
 use super::texels::TexelGroups;
+use super::{HwPath, ShaderReads, Technique};
 use super::{Inputs, ShaderVariant, TechniqueError, rgb_order3_block};
+use crate::gpu::Context;
+use std::sync::Arc;
 
 /// Uniforms of glsl/technique/preconv.frag, block `PreconvParams` (std140).
 #[repr(C)]
@@ -51,4 +58,104 @@ pub fn lighting(irradiance_sh: &[[f64; 3]], label: &str) -> Result<LightingData,
         irradiance_sh: rgb_order3_block(irradiance_sh),
     };
     Ok(LightingData::params(bytemuck::bytes_of(&params).to_vec()))
+}
+
+/// The `preconv` family (one member).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Preconv;
+
+impl Family for Preconv {
+    type Options = ();
+    const DESCRIPTION: Description = Description {
+        names: "preconv",
+        what: "ambient occlusion × pre-convolved irradiance at the normal",
+        paper: "Iwanicki & Sloan §5",
+        in_paper_table: true,
+    };
+    const EXAMPLE: Preconv = Preconv;
+
+    fn members() -> Vec<Preconv> {
+        vec![Preconv]
+    }
+
+    fn table_rows() -> Vec<Preconv> {
+        vec![Preconv]
+    }
+
+    fn headline(path: HwPath) -> Vec<Preconv> {
+        match path {
+            HwPath::Dx9 | HwPath::Dx10 => vec![Preconv],
+            HwPath::Dx11 => Vec::new(),
+        }
+    }
+
+    fn name(self) -> String {
+        "preconv".into()
+    }
+
+    fn paper_ms(self) -> Option<f64> {
+        Some(0.648)
+    }
+
+    fn needs(self) -> BakeNeeds {
+        BakeNeeds {
+            ao: true,
+            ..BakeNeeds::default()
+        }
+    }
+
+    fn reference(self) -> ReferenceModel {
+        ReferenceModel::Direct
+    }
+
+    fn dynamic_lighting(self) -> bool {
+        true
+    }
+
+    fn ndf_variant(self) -> Option<Technique> {
+        Some(
+            super::ndf_diffuse::Ndf {
+                base: super::ndf_diffuse::NdfBase::Preconv,
+            }
+            .into(),
+        )
+    }
+
+    fn form_on(self, path: HwPath) -> Result<Form, Refusal> {
+        Ok(Form::values(path, BlockCodec::Bc4))
+    }
+
+    fn prepare(
+        self,
+        path: HwPath,
+        inputs: &Inputs<'_>,
+        _: &(),
+        label: &str,
+    ) -> Result<(TexelGroups, Recipe), TechniqueError> {
+        let _ = path;
+        Ok(prepare(inputs, label))
+    }
+
+    fn extra_slot(
+        self,
+        ctx: &Arc<Context>,
+        path: HwPath,
+        inputs: &Inputs<'_>,
+        label: &str,
+    ) -> Result<Option<TextureSlot>, TechniqueError> {
+        let _ = (ctx, path, inputs, label);
+        Ok(None)
+    }
+
+    fn fragment_shader(self) -> ShaderVariant {
+        fragment_shader()
+    }
+
+    fn reads(self) -> ShaderReads {
+        ShaderReads::PLAIN
+    }
+
+    fn options_tag(self, _: &()) -> Option<String> {
+        None
+    }
 }

@@ -27,11 +27,15 @@ use std::sync::Arc;
 use ash::vk;
 use half::f16;
 
+use super::block::{BlockCodec, NormColours};
+use super::family::{Description, Family, Form, Refusal};
+use super::finish::{SlotKind, TextureSlot};
 use super::lighting::Recipe;
-use super::spec::RnmVariant;
+use super::spec::{BakeNeeds, HwPath, ReferenceModel};
 use super::tables::{f16_range_scale, max_abs};
 use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
 use super::{Inputs, ShaderVariant, TechniqueError};
+use super::{ShaderReads, Technique};
 use crate::bake::ssbump::{SsBumpMaps, SsBumpStorage};
 use crate::gpu::{Context, Image, ImageDesc};
 
@@ -151,4 +155,158 @@ fn upload_maps(ctx: &Arc<Context>, maps: &SsBumpMaps, name: &str) -> Result<Imag
     let desc =
         ImageDesc::texture_2d(format, maps.width, maps.height).mip_levels(levels.len() as u32);
     Ok(Image::with_data(ctx, &desc, &level_bytes, name)?)
+}
+
+/// Which per-pixel weights blend the three `rnm` lightmaps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum RnmVariant {
+    /// `rnm`: saturate(N·B_i)², normalized (Listing 1).
+    NormalMap,
+    /// `rnmao`: Listing 1 times the height field's scalar ambient occlusion.
+    NormalMapAo,
+    /// `ssbump`: D_i · directional occlusion_i read from the SSBump texture (Listing 2).
+    SelfShadowed,
+}
+
+impl RnmVariant {
+    pub const ALL: [RnmVariant; 3] = [
+        RnmVariant::NormalMap,
+        RnmVariant::NormalMapAo,
+        RnmVariant::SelfShadowed,
+    ];
+
+    /// The value of the shader macro `SHVIS_RNM_VARIANT`.
+    pub fn shader_value(self) -> u32 {
+        match self {
+            RnmVariant::NormalMap => 0,
+            RnmVariant::NormalMapAo => 1,
+            RnmVariant::SelfShadowed => 2,
+        }
+    }
+
+    /// Whether it reads the height field's SSBump / AO texture.
+    pub fn needs_height(self) -> bool {
+        self != RnmVariant::NormalMap
+    }
+}
+
+/// The radiosity-normal-mapping family (Green, Valve): three lightmaps of irradiance around
+/// the HL2 tangent-space basis, blended per pixel — `rnm` (Listing 1, weights from the
+/// normal map), `rnmao` (× scalar AO of the height field), `ssbump` (Listing 2, the
+/// self-shadowed bump map's texels are the weights).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Rnm {
+    pub variant: RnmVariant,
+}
+
+impl Family for Rnm {
+    type Options = ();
+    const DESCRIPTION: Description = Description {
+        names: "rnm, rnmao, ssbump",
+        what: "radiosity normal mapping: three lightmaps in the HL2 basis; ao: × height-field AO; ssbump: self-shadowed bump map",
+        paper: "Green, Valve (SIGGRAPH 2007 course)",
+        in_paper_table: false,
+    };
+    const EXAMPLE: Rnm = Rnm {
+        variant: RnmVariant::NormalMap,
+    };
+
+    fn members() -> Vec<Rnm> {
+        RnmVariant::ALL.map(|variant| Rnm { variant }).to_vec()
+    }
+
+    fn table_rows() -> Vec<Rnm> {
+        Rnm::members()
+    }
+
+    fn headline(path: HwPath) -> Vec<Rnm> {
+        match path {
+            HwPath::Dx9 | HwPath::Dx10 => vec![Rnm::EXAMPLE],
+            HwPath::Dx11 => Vec::new(),
+        }
+    }
+
+    fn name(self) -> String {
+        match self.variant {
+            RnmVariant::NormalMap => "rnm",
+            RnmVariant::NormalMapAo => "rnmao",
+            RnmVariant::SelfShadowed => "ssbump",
+        }
+        .into()
+    }
+
+    fn paper_ms(self) -> Option<f64> {
+        None
+    }
+
+    fn needs(self) -> BakeNeeds {
+        BakeNeeds {
+            sh_lightmap: true,
+            ssbump: self.variant.needs_height(),
+            ..BakeNeeds::default()
+        }
+    }
+
+    fn reference(self) -> ReferenceModel {
+        ReferenceModel::InterReflected
+    }
+
+    fn dynamic_lighting(self) -> bool {
+        false
+    }
+
+    fn ndf_variant(self) -> Option<Technique> {
+        None
+    }
+
+    fn form_on(self, path: HwPath) -> Result<Form, Refusal> {
+        Ok(Form {
+            material_textures: self.variant.needs_height(),
+            ..Form::values(path, BlockCodec::Ratio(NormColours::GroupRgb))
+        })
+    }
+
+    fn prepare(
+        self,
+        _: HwPath,
+        inputs: &Inputs<'_>,
+        _: &(),
+        label: &str,
+    ) -> Result<(TexelGroups, Recipe), TechniqueError> {
+        prepare(inputs, label)
+    }
+
+    fn extra_slot(
+        self,
+        ctx: &Arc<Context>,
+        _: HwPath,
+        inputs: &Inputs<'_>,
+        label: &str,
+    ) -> Result<Option<TextureSlot>, TechniqueError> {
+        let images: Vec<Image> = material_texture(ctx, self.variant, inputs, label)?
+            .into_iter()
+            .collect();
+        Ok((!images.is_empty()).then_some(TextureSlot {
+            kind: SlotKind::Material,
+            images,
+        }))
+    }
+
+    fn fragment_shader(self) -> ShaderVariant {
+        fragment_shader(self.variant)
+    }
+
+    fn reads(self) -> ShaderReads {
+        ShaderReads {
+            reads_normal_map: match self.variant {
+                RnmVariant::NormalMap | RnmVariant::NormalMapAo => true,
+                RnmVariant::SelfShadowed => false,
+            },
+            ..ShaderReads::PLAIN
+        }
+    }
+
+    fn options_tag(self, _: &()) -> Option<String> {
+        None
+    }
 }

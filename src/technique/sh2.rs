@@ -21,11 +21,18 @@ use std::fmt::Write as _;
 use ash::vk;
 use half::f16;
 
+use super::block::{BlockCodec, NormColours};
+use super::family::{Description, Family, Form, Refusal};
+use super::finish::TextureSlot;
 use super::lighting::{LightingData, Recipe};
+use super::spec::{BakeNeeds, ReferenceModel};
 use super::texels::{TexelGroups, pack_groups};
+use super::{HwPath, ShaderReads, Technique};
 use super::{Inputs, ShaderVariant, TechniqueError, rgb_order3_block};
+use crate::gpu::Context;
 use crate::sh::Order;
 use crate::sh::product::gaunt_tensor;
+use std::sync::Arc;
 
 /// Uniforms of glsl/technique/sh2.frag, block `Sh2Params` (std140).
 #[repr(C)]
@@ -128,4 +135,99 @@ pub fn lighting(radiance_sh: &[[f64; 3]], label: &str) -> Result<LightingData, T
         });
     }
     Ok(LightingData::params(bytemuck::bytes_of(&params).to_vec()))
+}
+
+/// The `sh2` family (one member).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Sh2;
+
+impl Family for Sh2 {
+    type Options = ();
+    const DESCRIPTION: Description = Description {
+        names: "sh2",
+        what: "order-2 visibility per texel, the SH product with the lighting in the shader",
+        paper: "Iwanicki & Sloan §5",
+        in_paper_table: true,
+    };
+    const EXAMPLE: Sh2 = Sh2;
+
+    fn members() -> Vec<Sh2> {
+        vec![Sh2]
+    }
+
+    fn table_rows() -> Vec<Sh2> {
+        vec![Sh2]
+    }
+
+    fn headline(path: HwPath) -> Vec<Sh2> {
+        match path {
+            HwPath::Dx9 | HwPath::Dx10 => vec![Sh2],
+            HwPath::Dx11 => Vec::new(),
+        }
+    }
+
+    fn name(self) -> String {
+        "sh2".into()
+    }
+
+    fn paper_ms(self) -> Option<f64> {
+        Some(0.607)
+    }
+
+    fn needs(self) -> BakeNeeds {
+        BakeNeeds {
+            visibility: Some(Order::TWO),
+            ..BakeNeeds::default()
+        }
+    }
+
+    fn reference(self) -> ReferenceModel {
+        ReferenceModel::Direct
+    }
+
+    fn dynamic_lighting(self) -> bool {
+        true
+    }
+
+    fn ndf_variant(self) -> Option<Technique> {
+        None
+    }
+
+    fn form_on(self, path: HwPath) -> Result<Form, Refusal> {
+        Ok(Form::values(path, BlockCodec::Ratio(NormColours::One)))
+    }
+
+    fn prepare(
+        self,
+        path: HwPath,
+        inputs: &Inputs<'_>,
+        _: &(),
+        label: &str,
+    ) -> Result<(TexelGroups, Recipe), TechniqueError> {
+        let _ = path;
+        prepare(inputs, label)
+    }
+
+    fn extra_slot(
+        self,
+        ctx: &Arc<Context>,
+        path: HwPath,
+        inputs: &Inputs<'_>,
+        label: &str,
+    ) -> Result<Option<TextureSlot>, TechniqueError> {
+        let _ = (ctx, path, inputs, label);
+        Ok(None)
+    }
+
+    fn fragment_shader(self) -> ShaderVariant {
+        fragment_shader()
+    }
+
+    fn reads(self) -> ShaderReads {
+        ShaderReads::PLAIN
+    }
+
+    fn options_tag(self, _: &()) -> Option<String> {
+        None
+    }
 }

@@ -16,7 +16,14 @@
 use ash::vk;
 use half::f16;
 
+use super::block::{BlockCodec, NormColours};
+use super::family::{Description, Family, Form, Refusal};
+use super::finish::TextureSlot;
 use super::lighting::{LightingData, Recipe};
+use super::spec::{BakeNeeds, ReferenceModel};
+use super::{HwPath, ShaderReads, Technique};
+use crate::gpu::Context;
+use std::sync::Arc;
 
 use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
 use super::{Inputs, ShaderVariant, TechniqueError};
@@ -125,4 +132,97 @@ pub(crate) fn baked_lightmap(
         texels,
         Recipe::Baked(LightingData::params(bytemuck::bytes_of(&params).to_vec())),
     )
+}
+
+/// The `shlmap` family (one member).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Shlmap;
+
+impl Family for Shlmap {
+    type Options = ();
+    const DESCRIPTION: Description = Description {
+        names: "shlmap",
+        what: "order-3 SH of incident radiance with inter-reflection per texel (static light)",
+        paper: "Iwanicki & Sloan §5",
+        in_paper_table: true,
+    };
+    const EXAMPLE: Shlmap = Shlmap;
+
+    fn members() -> Vec<Shlmap> {
+        vec![Shlmap]
+    }
+
+    fn table_rows() -> Vec<Shlmap> {
+        vec![Shlmap]
+    }
+
+    fn headline(path: HwPath) -> Vec<Shlmap> {
+        let _ = path;
+        vec![Shlmap]
+    }
+
+    fn name(self) -> String {
+        "shlmap".into()
+    }
+
+    fn paper_ms(self) -> Option<f64> {
+        Some(0.846)
+    }
+
+    fn needs(self) -> BakeNeeds {
+        BakeNeeds {
+            sh_lightmap: true,
+            ..BakeNeeds::default()
+        }
+    }
+
+    fn reference(self) -> ReferenceModel {
+        ReferenceModel::InterReflected
+    }
+
+    fn dynamic_lighting(self) -> bool {
+        false
+    }
+
+    fn ndf_variant(self) -> Option<Technique> {
+        None
+    }
+
+    fn form_on(self, path: HwPath) -> Result<Form, Refusal> {
+        Ok(Form::values(path, BlockCodec::Ratio(NormColours::Triplets)))
+    }
+
+    fn prepare(
+        self,
+        path: HwPath,
+        inputs: &Inputs<'_>,
+        _: &(),
+        label: &str,
+    ) -> Result<(TexelGroups, Recipe), TechniqueError> {
+        let _ = path;
+        prepare(inputs, label)
+    }
+
+    fn extra_slot(
+        self,
+        ctx: &Arc<Context>,
+        path: HwPath,
+        inputs: &Inputs<'_>,
+        label: &str,
+    ) -> Result<Option<TextureSlot>, TechniqueError> {
+        let _ = (ctx, path, inputs, label);
+        Ok(None)
+    }
+
+    fn fragment_shader(self) -> ShaderVariant {
+        fragment_shader()
+    }
+
+    fn reads(self) -> ShaderReads {
+        ShaderReads::PLAIN
+    }
+
+    fn options_tag(self, _: &()) -> Option<String> {
+        None
+    }
 }

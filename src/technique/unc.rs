@@ -16,11 +16,16 @@ use std::sync::Arc;
 use ash::vk;
 use half::f16;
 
+use super::block::{BlockCodec, NormColours};
+use super::family::{Description, Family, Form, Refusal};
+use super::finish::TextureSlot;
 use super::lighting::{LightingData, Recipe};
+use super::spec::{BakeNeeds, ReferenceModel, paper_figure};
 use super::tables::{lxh_table, normal_table_data, table_map};
 use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
-use super::{HwPath, Inputs, ShaderVariant, TechniqueError};
+use super::{HwPath, Inputs, ShaderReads, ShaderVariant, Technique, TechniqueError};
 use crate::bake::lxh::SymmetricBuild;
+use crate::gpu::Context;
 use crate::sh::Order;
 
 /// RGBA groups of order-`order` visibility.
@@ -108,4 +113,116 @@ pub fn lighting(
         texels: None,
         defines: Vec::new(),
     })
+}
+
+/// The `uncO` family: O is the visibility order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Unc {
+    pub order: Order,
+}
+
+/// Visibility orders a `uncO` name may ask for: the shader packs at most 9 RGBA groups
+/// (order 6), and order 1 has no directional information to shadow with.
+pub const UNC_ORDERS: std::ops::RangeInclusive<u32> = 2..=6;
+
+/// The paper's ms/frame (GeForce GTX 295, 1280×800, 512² visibility).
+const PAPER_MS: &[(u32, f64)] = &[(6, 8.19), (4, 3.33), (3, 2.75)];
+
+impl Family for Unc {
+    type Options = ();
+    const DESCRIPTION: Description = Description {
+        names: "uncO",
+        what: "SH visibility of order O per texel, an L×H table looked up by the normal",
+        paper: "Iwanicki & Sloan §3",
+        in_paper_table: true,
+    };
+    const EXAMPLE: Unc = Unc { order: Order::SIX };
+
+    fn members() -> Vec<Unc> {
+        UNC_ORDERS
+            .filter_map(|o| Order::new(o).ok())
+            .map(|order| Unc { order })
+            .collect()
+    }
+
+    fn table_rows() -> Vec<Unc> {
+        [Order::THREE, Order::FOUR, Order::SIX]
+            .map(|order| Unc { order })
+            .to_vec()
+    }
+
+    fn headline(path: HwPath) -> Vec<Unc> {
+        match path {
+            HwPath::Dx9 | HwPath::Dx10 => Unc::table_rows(),
+            HwPath::Dx11 => vec![Unc::EXAMPLE],
+        }
+    }
+
+    fn name(self) -> String {
+        format!("unc{}", self.order)
+    }
+
+    fn paper_ms(self) -> Option<f64> {
+        paper_figure(PAPER_MS, self.order.get())
+    }
+
+    fn needs(self) -> BakeNeeds {
+        BakeNeeds {
+            visibility: Some(self.order),
+            ..BakeNeeds::default()
+        }
+    }
+
+    fn reference(self) -> ReferenceModel {
+        ReferenceModel::Direct
+    }
+
+    fn dynamic_lighting(self) -> bool {
+        true
+    }
+
+    fn ndf_variant(self) -> Option<Technique> {
+        Some(
+            super::ndf_diffuse::Ndf {
+                base: super::ndf_diffuse::NdfBase::Unc { order: self.order },
+            }
+            .into(),
+        )
+    }
+
+    fn form_on(self, path: HwPath) -> Result<Form, Refusal> {
+        Ok(Form::values(path, BlockCodec::Ratio(NormColours::One)))
+    }
+
+    fn prepare(
+        self,
+        path: HwPath,
+        inputs: &Inputs<'_>,
+        _: &(),
+        label: &str,
+    ) -> Result<(TexelGroups, Recipe), TechniqueError> {
+        prepare(self.order, path, inputs, label)
+    }
+
+    fn extra_slot(
+        self,
+        _: &Arc<Context>,
+        _: HwPath,
+        _: &Inputs<'_>,
+        _: &str,
+    ) -> Result<Option<TextureSlot>, TechniqueError> {
+        Ok(None)
+    }
+
+    fn fragment_shader(self) -> ShaderVariant {
+        fragment_shader(self.order)
+    }
+
+    fn reads(self) -> ShaderReads {
+        ShaderReads::PLAIN
+    }
+
+    fn options_tag(self, _: &()) -> Option<String> {
+        None
+    }
 }

@@ -11,7 +11,11 @@ use std::sync::Arc;
 
 use ash::vk;
 
+use super::ShaderReads;
+use super::family::{Description, Family, Form, Refusal, Storage};
+use super::finish::TextureSlot;
 use super::lighting::{LightingData, LightingSet, Recipe};
+use super::spec::{BakeNeeds, ReferenceModel};
 use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
 use super::{
     HwPath, Inputs, ShaderVariant, Technique, TechniqueError, TechniqueGpu, TechniqueStats,
@@ -133,7 +137,7 @@ pub(crate) fn finish(
     lighting: &LightingData,
     sets: usize,
 ) -> Result<TechniqueGpu, TechniqueError> {
-    let Technique::PcaVertex { m, max_edge_cm } = technique else {
+    let Technique::PcaVertex(PcaVertex { m, max_edge_cm }) = technique else {
         unreachable!("vertex::finish builds pcaMv only");
     };
     let label = format!("{technique}.{path}");
@@ -213,7 +217,7 @@ pub fn own_mesh_load(
     technique: Technique,
     inputs: &Inputs<'_>,
 ) -> Result<Option<crate::render::ShadingLoad>, TechniqueError> {
-    let Technique::PcaVertex { m, max_edge_cm } = technique else {
+    let Technique::PcaVertex(PcaVertex { m, max_edge_cm }) = technique else {
         return Ok(None);
     };
     let label = format!("{technique}");
@@ -258,5 +262,135 @@ mod tests {
         let l = weighted_layout(&base, 2);
         assert_eq!(l.stride as usize, stride);
         assert_eq!(l.attributes.last().unwrap().0, FIRST_WEIGHT_LOCATION + 1);
+    }
+}
+
+/// The `pcaMv` / `pcaMvE` family: the first M weights of the lightmap's PCA basis baked at
+/// the vertices of the mesh (subdivided so no edge exceeds E cm; none: as authored), in a
+/// vertex stream, interpolated and shaded as `pcaMw`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PcaVertex {
+    pub m: u32,
+    pub max_edge_cm: Option<u32>,
+}
+
+/// Edge lengths (cm) a `pcaMvE` name may subdivide the mesh to.
+pub const VERTEX_EDGES_CM: &[u32] = &[100, 50, 25, 10];
+
+impl Family for PcaVertex {
+    type Options = ();
+    const DESCRIPTION: Description = Description {
+        names: "pcaMv, pcaMvE",
+        what: "PCA weights baked at mesh vertices (edges ≤ E cm), interpolated, shaded as pcaMw",
+        paper: "Iwanicki & Sloan §4 (per-vertex)",
+        in_paper_table: false,
+    };
+    const EXAMPLE: PcaVertex = PcaVertex {
+        m: 12,
+        max_edge_cm: None,
+    };
+
+    fn members() -> Vec<PcaVertex> {
+        super::pca::vector_counts()
+            .flat_map(|m| {
+                std::iter::once(None)
+                    .chain(VERTEX_EDGES_CM.iter().copied().map(Some))
+                    .map(move |max_edge_cm| PcaVertex { m, max_edge_cm })
+            })
+            .collect()
+    }
+
+    fn table_rows() -> Vec<PcaVertex> {
+        vec![
+            PcaVertex::EXAMPLE,
+            PcaVertex {
+                m: 12,
+                max_edge_cm: Some(25),
+            },
+        ]
+    }
+
+    fn headline(path: HwPath) -> Vec<PcaVertex> {
+        match path {
+            HwPath::Dx9 | HwPath::Dx10 => vec![PcaVertex {
+                m: 12,
+                max_edge_cm: Some(25),
+            }],
+            HwPath::Dx11 => Vec::new(),
+        }
+    }
+
+    fn name(self) -> String {
+        match self.max_edge_cm {
+            Some(cm) => format!("pca{}v{cm}", self.m),
+            None => format!("pca{}v", self.m),
+        }
+    }
+
+    fn paper_ms(self) -> Option<f64> {
+        None
+    }
+
+    fn needs(self) -> BakeNeeds {
+        BakeNeeds {
+            visibility: Some(crate::sh::Order::SIX),
+            pca_vectors: Some(self.m),
+            vertex_pca: Some((self.m, self.max_edge_cm)),
+            ..BakeNeeds::default()
+        }
+    }
+
+    fn reference(self) -> ReferenceModel {
+        ReferenceModel::Direct
+    }
+
+    fn dynamic_lighting(self) -> bool {
+        true
+    }
+
+    fn ndf_variant(self) -> Option<Technique> {
+        None
+    }
+
+    fn form_on(self, path: HwPath) -> Result<Form, Refusal> {
+        match path {
+            HwPath::Dx9 | HwPath::Dx10 => Ok(Form {
+                storage: Storage::VertexStream,
+                ..Form::TEXTURES
+            }),
+            HwPath::Dx11 => Err(Refusal::VertexStream),
+        }
+    }
+
+    fn prepare(
+        self,
+        _: HwPath,
+        inputs: &Inputs<'_>,
+        _: &(),
+        label: &str,
+    ) -> Result<(TexelGroups, Recipe), TechniqueError> {
+        prepare(self.m, inputs, label)
+    }
+
+    fn extra_slot(
+        self,
+        _: &Arc<Context>,
+        _: HwPath,
+        _: &Inputs<'_>,
+        _: &str,
+    ) -> Result<Option<TextureSlot>, TechniqueError> {
+        Ok(None)
+    }
+
+    fn fragment_shader(self) -> ShaderVariant {
+        fragment_shader(self.m)
+    }
+
+    fn reads(self) -> ShaderReads {
+        ShaderReads::PLAIN
+    }
+
+    fn options_tag(self, _: &()) -> Option<String> {
+        None
     }
 }

@@ -33,7 +33,7 @@ pub fn house() -> &'static Prepared {
         })
         .expect("the built-in scene prepares");
         prepared
-            .prepare_techniques(Technique::ALL)
+            .prepare_techniques(Technique::all())
             .expect("the cost table's cluster fits and vertex bakes");
         prepared
     })

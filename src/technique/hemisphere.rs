@@ -1,4 +1,4 @@
-//! The local lightmap bases, from `shlmap`'s bake, over each texel's tangent-frame
+//! The hemisphere lightmap bases, from `shlmap`'s bake, over each texel's tangent-frame
 //! hemisphere and read at the normal map's tangent-space normal m (no frame, no SH per
 //! pixel); the lighting is baked in. Values per texel (RGB, value 3i + c) are range-scaled
 //! into f16 as `shlmap`'s are and packed 4 per RGBA16F texel.
@@ -25,10 +25,17 @@
 use rayon::prelude::*;
 
 use super::lighting::Recipe;
-use super::spec::LocalBasis;
+use std::sync::Arc;
+
+use super::block::{BlockCodec, NormColours};
+use super::family::{Description, Family, Form, Refusal};
+use super::finish::TextureSlot;
+use super::spec::{BakeNeeds, HwPath, ReferenceModel};
 use super::texels::{TexelGroups, VALUES_PER_TEXEL};
 use super::{Inputs, ShaderVariant, TechniqueError};
+use super::{PerTexelTaps, ShaderReads, Technique};
 use crate::bake::shlmap::ShLightmap;
+use crate::gpu::Context;
 use crate::sh::dice::{self, DiceVariant};
 use crate::sh::hbasis::{self, HBasisSize};
 use crate::sh::sg::{FitStats, SgBasis, Solver};
@@ -87,21 +94,21 @@ pub fn dice_face_table() -> Vec<[f32; 4]> {
 }
 
 /// Values per texel of `basis` (RGB counted three times).
-pub fn stored_values(basis: LocalBasis) -> usize {
+pub fn stored_values(basis: HemisphereBasis) -> usize {
     match basis {
-        LocalBasis::HBasis(size) => 3 * size.count(),
-        LocalBasis::Sg { lobes } => 3 * lobes as usize,
-        LocalBasis::Dice(variant) => variant.stored_values(),
+        HemisphereBasis::HBasis(size) => 3 * size.count(),
+        HemisphereBasis::Sg { lobes } => 3 * lobes as usize,
+        HemisphereBasis::Dice(variant) => variant.stored_values(),
     }
 }
 
 /// Per-texel group reads per pixel where the shader picks its groups (Ambient Dice: three
 /// vertices of 9 or 5 values, each spanning 3 or 2 groups whatever its offset); `None`:
 /// every group once.
-pub fn group_reads(basis: LocalBasis) -> Option<u32> {
+pub fn group_reads(basis: HemisphereBasis) -> Option<u32> {
     match basis {
-        LocalBasis::HBasis(_) | LocalBasis::Sg { .. } => None,
-        LocalBasis::Dice(variant) => Some(match variant {
+        HemisphereBasis::HBasis(_) | HemisphereBasis::Sg { .. } => None,
+        HemisphereBasis::Dice(variant) => Some(match variant {
             DiceVariant::Rgb => 9,
             DiceVariant::YCoCg => 6,
         }),
@@ -109,9 +116,9 @@ pub fn group_reads(basis: LocalBasis) -> Option<u32> {
 }
 
 /// The fragment shader of `basis`.
-pub fn fragment_shader(basis: LocalBasis) -> ShaderVariant {
+pub fn fragment_shader(basis: HemisphereBasis) -> ShaderVariant {
     match basis {
-        LocalBasis::HBasis(size) => ShaderVariant {
+        HemisphereBasis::HBasis(size) => ShaderVariant {
             path: "technique/hbasis.frag",
             defines: vec![
                 ("HBASIS_COUNT", size.count() as u32),
@@ -121,7 +128,7 @@ pub fn fragment_shader(basis: LocalBasis) -> ShaderVariant {
                 ),
             ],
         },
-        LocalBasis::Sg { lobes } => ShaderVariant {
+        HemisphereBasis::Sg { lobes } => ShaderVariant {
             path: "technique/sg.frag",
             defines: vec![
                 ("SG_LOBES", lobes),
@@ -131,7 +138,7 @@ pub fn fragment_shader(basis: LocalBasis) -> ShaderVariant {
                 ),
             ],
         },
-        LocalBasis::Dice(variant) => ShaderVariant {
+        HemisphereBasis::Dice(variant) => ShaderVariant {
             path: "technique/dice.frag",
             defines: vec![
                 ("DICE_YCOCG", u32::from(variant == DiceVariant::YCoCg)),
@@ -258,32 +265,33 @@ pub fn stored_texels(map: &ShLightmap, size: HBasisSize) -> Vec<f32> {
 
 /// The stored values, range-scaled into f16, and the recipe of their baked-in lighting.
 pub(crate) fn prepare(
-    basis: LocalBasis,
+    basis: HemisphereBasis,
     inputs: &Inputs<'_>,
+    solver: Solver,
     label: &str,
 ) -> Result<(TexelGroups, Recipe), TechniqueError> {
     let map = super::shlmap::baked_map(inputs, label)?;
     let stored = match basis {
-        LocalBasis::HBasis(size) => stored_texels(map, size),
-        LocalBasis::Sg { lobes } => {
-            let (stored, stats) = sg_stored_texels(map, lobes, inputs.sg_solver);
+        HemisphereBasis::HBasis(size) => stored_texels(map, size),
+        HemisphereBasis::Sg { lobes } => {
+            let (stored, stats) = sg_stored_texels(map, lobes, solver);
             log::info!(
                 "{label}: {} fit, {} of {} amplitudes negative ({:.2} %)",
-                inputs.sg_solver,
+                solver,
                 stats.negative,
                 stats.amplitudes,
                 100.0 * stats.negative as f64 / stats.amplitudes.max(1) as f64
             );
             stored
         }
-        LocalBasis::Dice(variant) => dice_stored_texels(map, variant),
+        HemisphereBasis::Dice(variant) => dice_stored_texels(map, variant),
     };
-    let name = format!("{label}.{}", basis.name());
+    let name = format!("{label}.{}", Hemisphere { basis }.name());
     let (texel_groups, recipe, scale) =
         super::shlmap::baked_values(&stored, stored_values(basis), map.res, name, label)?;
     let (texel_groups, recipe) = match basis {
-        LocalBasis::HBasis(_) | LocalBasis::Sg { .. } => (texel_groups, recipe),
-        LocalBasis::Dice(_) => {
+        HemisphereBasis::HBasis(_) | HemisphereBasis::Sg { .. } => (texel_groups, recipe),
+        HemisphereBasis::Dice(_) => {
             let texel_groups = texel_groups.with_dx9_atlas();
             let atlas = texel_groups
                 .dx9_atlas
@@ -304,8 +312,8 @@ pub(crate) fn prepare(
         }
     };
     let recipe = match basis {
-        LocalBasis::HBasis(_) | LocalBasis::Dice(_) => recipe,
-        LocalBasis::Sg { lobes } => {
+        HemisphereBasis::HBasis(_) | HemisphereBasis::Dice(_) => recipe,
+        HemisphereBasis::Sg { lobes } => {
             let sg = sg_basis(lobes);
             let mut params = SgParams {
                 unscale: [1.0 / scale, 0.0, 0.0, 0.0],
@@ -320,6 +328,168 @@ pub(crate) fn prepare(
         }
     };
     Ok((texel_groups, recipe))
+}
+
+/// What a [`Hemisphere`] technique stores.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum HemisphereBasis {
+    /// `hb4`, `hb6`: the H-basis of the irradiance over the hemisphere.
+    HBasis(HBasisSize),
+    /// `sgN`: N spherical Gaussian lobes over the hemisphere, RGB amplitudes fitted by the
+    /// run's `--sg-solve` (`crate::sh::sg`).
+    Sg { lobes: u32 },
+    /// `dice`, `dicey`: Ambient Dice, RGB or YCoCg (`crate::sh::dice`).
+    Dice(DiceVariant),
+}
+
+/// The lightmap bases over the texel's tangent-frame hemisphere (module doc), from the same
+/// bake as `shlmap`, indexed by the tangent-space normal: `hb4`, `hb6` — the H-basis (Habel
+/// & Wimmer 2010; `crate::sh::hbasis`); `sg5`, `sg6`, `sg9`, `sg12` — spherical Gaussians
+/// (`crate::sh::sg`); `dice`, `dicey` — Ambient Dice (Iwanicki & Sloan 2017;
+/// `crate::sh::dice`). Its option is the SG solver (`--sg-solve`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Hemisphere {
+    pub basis: HemisphereBasis,
+}
+
+impl Family for Hemisphere {
+    type Options = Solver;
+    const DESCRIPTION: Description = Description {
+        names: "hb4, hb6, sgN, dice, dicey",
+        what: "bases over the tangent-frame hemisphere, read at the tangent-space normal: the H-basis; N spherical Gaussians fitted by --sg-solve; Ambient Dice (icosahedron vertices, hybrid Bézier; YCoCg)",
+        paper: "Habel & Wimmer (I3D 2010); Neubelt & Pettineo (The Order: 1886), MJP's SG series; Iwanicki & Sloan (EGSR 2017)",
+        in_paper_table: false,
+    };
+    const EXAMPLE: Hemisphere = Hemisphere {
+        basis: HemisphereBasis::HBasis(HBasisSize::H4),
+    };
+
+    fn members() -> Vec<Hemisphere> {
+        [
+            HemisphereBasis::HBasis(HBasisSize::H4),
+            HemisphereBasis::HBasis(HBasisSize::H6),
+        ]
+        .into_iter()
+        .chain(
+            crate::sh::sg::LOBE_COUNTS
+                .iter()
+                .map(|&n| HemisphereBasis::Sg { lobes: n as u32 }),
+        )
+        .chain(DiceVariant::ALL.map(HemisphereBasis::Dice))
+        .map(|basis| Hemisphere { basis })
+        .collect()
+    }
+
+    fn table_rows() -> Vec<Hemisphere> {
+        [
+            HemisphereBasis::HBasis(HBasisSize::H4),
+            HemisphereBasis::HBasis(HBasisSize::H6),
+            HemisphereBasis::Sg { lobes: 6 },
+            HemisphereBasis::Sg { lobes: 9 },
+            HemisphereBasis::Sg { lobes: 12 },
+            HemisphereBasis::Dice(DiceVariant::Rgb),
+            HemisphereBasis::Dice(DiceVariant::YCoCg),
+        ]
+        .map(|basis| Hemisphere { basis })
+        .to_vec()
+    }
+
+    fn headline(path: HwPath) -> Vec<Hemisphere> {
+        match path {
+            HwPath::Dx9 | HwPath::Dx10 => [
+                HemisphereBasis::HBasis(HBasisSize::H4),
+                HemisphereBasis::Sg { lobes: 9 },
+                HemisphereBasis::Dice(DiceVariant::Rgb),
+            ]
+            .map(|basis| Hemisphere { basis })
+            .to_vec(),
+            HwPath::Dx11 => Vec::new(),
+        }
+    }
+
+    fn name(self) -> String {
+        match self.basis {
+            HemisphereBasis::HBasis(HBasisSize::H4) => "hb4".into(),
+            HemisphereBasis::HBasis(HBasisSize::H6) => "hb6".into(),
+            HemisphereBasis::Sg { lobes } => format!("sg{lobes}"),
+            HemisphereBasis::Dice(DiceVariant::Rgb) => "dice".into(),
+            HemisphereBasis::Dice(DiceVariant::YCoCg) => "dicey".into(),
+        }
+    }
+
+    fn paper_ms(self) -> Option<f64> {
+        None
+    }
+
+    fn needs(self) -> BakeNeeds {
+        BakeNeeds {
+            sh_lightmap: true,
+            ..BakeNeeds::default()
+        }
+    }
+
+    fn reference(self) -> ReferenceModel {
+        ReferenceModel::InterReflected
+    }
+
+    fn dynamic_lighting(self) -> bool {
+        false
+    }
+
+    fn ndf_variant(self) -> Option<Technique> {
+        None
+    }
+
+    fn form_on(self, path: HwPath) -> Result<Form, Refusal> {
+        let colours = match self.basis {
+            HemisphereBasis::HBasis(_)
+            | HemisphereBasis::Sg { .. }
+            | HemisphereBasis::Dice(DiceVariant::Rgb) => NormColours::Triplets,
+            HemisphereBasis::Dice(DiceVariant::YCoCg) => NormColours::One,
+        };
+        Ok(Form::values(path, BlockCodec::Ratio(colours)))
+    }
+
+    fn prepare(
+        self,
+        _: HwPath,
+        inputs: &Inputs<'_>,
+        solver: &Solver,
+        label: &str,
+    ) -> Result<(TexelGroups, Recipe), TechniqueError> {
+        prepare(self.basis, inputs, *solver, label)
+    }
+
+    fn extra_slot(
+        self,
+        _: &Arc<Context>,
+        _: HwPath,
+        _: &Inputs<'_>,
+        _: &str,
+    ) -> Result<Option<TextureSlot>, TechniqueError> {
+        Ok(None)
+    }
+
+    fn fragment_shader(self) -> ShaderVariant {
+        fragment_shader(self.basis)
+    }
+
+    fn reads(self) -> ShaderReads {
+        match group_reads(self.basis) {
+            Some(lookups) => ShaderReads {
+                per_texel_taps: Some(PerTexelTaps {
+                    lookups,
+                    fetches: 0,
+                }),
+                ..ShaderReads::PLAIN
+            },
+            None => ShaderReads::PLAIN,
+        }
+    }
+
+    fn options_tag(self, solver: &Solver) -> Option<String> {
+        matches!(self.basis, HemisphereBasis::Sg { .. }).then(|| solver.to_string())
+    }
 }
 
 /// The shared SG evaluation the ladder and the tests use: E at tangent-space `m` from

@@ -1,0 +1,275 @@
+//! `l1`, `l1geo`, `l1zh3`, `zh3`, `l1lum`, `shlmapw`: the SH-family lightmaps engines ship
+//! (`crate::sh::bases`, whose module doc has the equations), from `shlmap`'s bake.
+//!
+//! Per texel the basis' stored values ([`ShBasis::encode`] of the texel's order-3 radiance
+//! SH), range-scaled into f16 as `shlmap`'s are and packed 4 per RGBA16F texel; the shader
+//! (`glsl/technique/engine_sh.frag`, reconstructions in `glsl/include/sh_bases.glsl`)
+//! reconstructs irradiance at the normal-mapped normal:
+//!
+//! ```text
+//! technique  stored values            groups  bytes/texel  reconstruction
+//! l1         c_00, c_1m  (RGB)        3       24           linear, (1)
+//! l1geo      the same                 3       24           Geomerics, (2)
+//! l1zh3      the same                 3       24           ZH3 hallucinated, (5)
+//! zh3        + z about the lum. axis  4       32           ZH3, (4)
+//! l1lum      c_00 (RGB), e (lum.)     2       16           luminance-directional, (6)
+//! shlmapw    9 c_lm (RGB), windowed   7       56           L2 deringed, (8); shlmap's shader
+//! ```
+//!
+//! dx9 binds one 2D texture per group, dx10 one array. Every reconstruction is homogeneous
+//! of degree one in the stored values, so the shader multiplies the f16 range scale back
+//! after reconstructing. No per-lighting data: the lighting is baked in, as for `shlmap`.
+
+use rayon::prelude::*;
+
+use super::lighting::Recipe;
+use std::sync::Arc;
+
+use super::block::{BlockCodec, NormColours};
+use super::family::{Description, Family, Form, Refusal};
+use super::finish::TextureSlot;
+use super::spec::{BakeNeeds, HwPath, ReferenceModel};
+use super::texels::{TexelGroups, VALUES_PER_TEXEL};
+use super::{Inputs, ShaderReads, ShaderVariant, Technique, TechniqueError};
+use crate::bake::shlmap::ShLightmap;
+use crate::gpu::Context;
+use crate::sh::bases::ShBasis;
+
+/// RGBA groups per texel of `basis`.
+pub fn groups(basis: ShVariantBasis) -> usize {
+    basis.sh_basis().stored_values().div_ceil(VALUES_PER_TEXEL)
+}
+
+/// The value of the shader macro `SHVIS_ENGINE_SH_BASIS` (glsl/include/sh_bases.glsl) that
+/// reconstructs `basis`; 5 (L2, `sh_irradiance_order3`) for both L2s.
+pub fn shader_value(basis: ShBasis) -> u32 {
+    match basis {
+        ShBasis::L1 => 0,
+        ShBasis::L1Geomerics => 1,
+        ShBasis::L1Zh3Hallucinated => 2,
+        ShBasis::Zh3 => 3,
+        ShBasis::L1Luminance => 4,
+        ShBasis::L2 | ShBasis::L2Deringed => 5,
+    }
+}
+
+/// The fragment shader of `basis`: `shlmap`'s for the deringed L2 (the same layout),
+/// `engine_sh.frag` otherwise.
+pub fn fragment_shader(basis: ShVariantBasis) -> ShaderVariant {
+    match basis {
+        ShVariantBasis::L2Deringed => super::shlmap::fragment_shader(),
+        ShVariantBasis::L1
+        | ShVariantBasis::L1Geomerics
+        | ShVariantBasis::L1Zh3
+        | ShVariantBasis::Zh3
+        | ShVariantBasis::L1Luminance => ShaderVariant {
+            path: "technique/engine_sh.frag",
+            defines: vec![
+                ("ENGINE_SH_BASIS", shader_value(basis.sh_basis())),
+                ("ENGINE_SH_GROUPS", groups(basis) as u32),
+            ],
+        },
+    }
+}
+
+/// Every texel's stored values (texel-major, [`ShBasis::stored_values`] each), in f32 as
+/// the bake's coefficients are, before the f16 range scale.
+pub fn stored_texels(map: &ShLightmap, basis: ShBasis) -> Vec<f32> {
+    let texels = (map.res * map.res) as usize;
+    (0..texels)
+        .into_par_iter()
+        .flat_map_iter(|t| {
+            let radiance: Vec<[f64; 3]> = map.texel(t).iter().map(|c| c.map(f64::from)).collect();
+            let shaded = map.normal[t].as_dvec3();
+            basis
+                .encode(&radiance, Some(shaded))
+                .into_iter()
+                .map(|v| v as f32)
+        })
+        .collect()
+}
+
+/// The stored values, range-scaled into f16, and the recipe of their baked-in lighting.
+pub(crate) fn prepare(
+    basis: ShVariantBasis,
+    inputs: &Inputs<'_>,
+    label: &str,
+) -> Result<(TexelGroups, Recipe), TechniqueError> {
+    let map = super::shlmap::baked_map(inputs, label)?;
+    let sh_basis = basis.sh_basis();
+    let per_texel = sh_basis.stored_values();
+    let stored = stored_texels(map, sh_basis);
+    let name = format!("{label}.{}", sh_basis_stem(basis));
+    let (texels, recipe, _) =
+        super::shlmap::baked_values(&stored, per_texel, map.res, name, label)?;
+    Ok((texels, recipe))
+}
+
+/// The debug-name stem of the per-texel images.
+fn sh_basis_stem(basis: ShVariantBasis) -> &'static str {
+    match basis {
+        ShVariantBasis::L1 | ShVariantBasis::L1Geomerics | ShVariantBasis::L1Zh3 => "l1_sh",
+        ShVariantBasis::Zh3 => "zh3_sh",
+        ShVariantBasis::L1Luminance => "ambient_luminance_l1",
+        ShVariantBasis::L2Deringed => "deringed_sh",
+    }
+}
+
+/// What a [`ShVariant`] technique stores and how it reconstructs (`crate::sh::bases`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ShVariantBasis {
+    /// `l1`: L1 SH, 4 coefficients per colour, linear (Frostbite, Godot 4, Bakery).
+    L1,
+    /// `l1geo`: the same data, Geomerics' non-linear reconstruction (Enlighten, Bakery).
+    L1Geomerics,
+    /// `l1zh3`: the same data, the zonal quadratic term hallucinated from it (ZH3 paper).
+    L1Zh3,
+    /// `zh3`: L1 plus one stored zonal quadratic coefficient per colour about the
+    /// luminance axis (ZH3 paper).
+    Zh3,
+    /// `l1lum`: RGB ambient plus L1 of luminance (Unreal's HQ lightmaps).
+    L1Luminance,
+    /// `shlmapw`: `shlmap`'s order-3 SH, deringed by a per-texel Hanning window.
+    L2Deringed,
+}
+
+impl ShVariantBasis {
+    pub const ALL: [ShVariantBasis; 6] = [
+        ShVariantBasis::L1,
+        ShVariantBasis::L1Geomerics,
+        ShVariantBasis::L1Zh3,
+        ShVariantBasis::Zh3,
+        ShVariantBasis::L1Luminance,
+        ShVariantBasis::L2Deringed,
+    ];
+
+    /// The encoding and reconstruction it runs.
+    pub fn sh_basis(self) -> ShBasis {
+        match self {
+            ShVariantBasis::L1 => ShBasis::L1,
+            ShVariantBasis::L1Geomerics => ShBasis::L1Geomerics,
+            ShVariantBasis::L1Zh3 => ShBasis::L1Zh3Hallucinated,
+            ShVariantBasis::Zh3 => ShBasis::Zh3,
+            ShVariantBasis::L1Luminance => ShBasis::L1Luminance,
+            ShVariantBasis::L2Deringed => ShBasis::L2Deringed,
+        }
+    }
+}
+
+/// The SH-lightmap variants engines ship (module doc): from the same bake as `shlmap`
+/// (order-3 incident radiance with inter-reflection), each texel stores what its basis
+/// keeps and the shader reconstructs irradiance at the normal-mapped normal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ShVariant {
+    pub basis: ShVariantBasis,
+}
+
+impl Family for ShVariant {
+    type Options = ();
+    const DESCRIPTION: Description = Description {
+        names: "l1, l1geo, l1zh3, zh3, l1lum, shlmapw",
+        what: "the SH lightmaps engines ship, from shlmap's bake: L1 (linear, Geomerics, hallucinated ZH3), stored ZH3, luminance L1, deringed L2",
+        paper: "Frostbite, Enlighten, Roughton et al. ZH3 (i3D 2024), Unreal, Sloan (deringing)",
+        in_paper_table: false,
+    };
+    const EXAMPLE: ShVariant = ShVariant {
+        basis: ShVariantBasis::L1,
+    };
+
+    fn members() -> Vec<ShVariant> {
+        ShVariantBasis::ALL
+            .map(|basis| ShVariant { basis })
+            .to_vec()
+    }
+
+    fn table_rows() -> Vec<ShVariant> {
+        ShVariant::members()
+    }
+
+    fn headline(path: HwPath) -> Vec<ShVariant> {
+        match path {
+            HwPath::Dx9 | HwPath::Dx10 => [ShVariantBasis::L1, ShVariantBasis::Zh3]
+                .map(|basis| ShVariant { basis })
+                .to_vec(),
+            HwPath::Dx11 => Vec::new(),
+        }
+    }
+
+    fn name(self) -> String {
+        match self.basis {
+            ShVariantBasis::L1 => "l1",
+            ShVariantBasis::L1Geomerics => "l1geo",
+            ShVariantBasis::L1Zh3 => "l1zh3",
+            ShVariantBasis::Zh3 => "zh3",
+            ShVariantBasis::L1Luminance => "l1lum",
+            ShVariantBasis::L2Deringed => "shlmapw",
+        }
+        .into()
+    }
+
+    fn paper_ms(self) -> Option<f64> {
+        None
+    }
+
+    fn needs(self) -> BakeNeeds {
+        BakeNeeds {
+            sh_lightmap: true,
+            ..BakeNeeds::default()
+        }
+    }
+
+    fn reference(self) -> ReferenceModel {
+        ReferenceModel::InterReflected
+    }
+
+    fn dynamic_lighting(self) -> bool {
+        false
+    }
+
+    fn ndf_variant(self) -> Option<Technique> {
+        None
+    }
+
+    fn form_on(self, path: HwPath) -> Result<Form, Refusal> {
+        let colours = match self.basis {
+            ShVariantBasis::L1
+            | ShVariantBasis::L1Geomerics
+            | ShVariantBasis::L1Zh3
+            | ShVariantBasis::L2Deringed => NormColours::Triplets,
+            ShVariantBasis::Zh3 | ShVariantBasis::L1Luminance => NormColours::One,
+        };
+        Ok(Form::values(path, BlockCodec::Ratio(colours)))
+    }
+
+    fn prepare(
+        self,
+        _: HwPath,
+        inputs: &Inputs<'_>,
+        _: &(),
+        label: &str,
+    ) -> Result<(TexelGroups, Recipe), TechniqueError> {
+        prepare(self.basis, inputs, label)
+    }
+
+    fn extra_slot(
+        self,
+        _: &Arc<Context>,
+        _: HwPath,
+        _: &Inputs<'_>,
+        _: &str,
+    ) -> Result<Option<TextureSlot>, TechniqueError> {
+        Ok(None)
+    }
+
+    fn fragment_shader(self) -> ShaderVariant {
+        fragment_shader(self.basis)
+    }
+
+    fn reads(self) -> ShaderReads {
+        ShaderReads::PLAIN
+    }
+
+    fn options_tag(self, _: &()) -> Option<String> {
+        None
+    }
+}
