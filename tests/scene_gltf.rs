@@ -1,4 +1,4 @@
-//! glTF loading (src/scene/gltf.rs, DESIGN §1): node transforms on positions, normals and
+//! glTF loading (src/scene/gltf/, DESIGN §1): node transforms on positions, normals and
 //! tangents (mirroring included), the camera from its node, generated lightmap UVs without
 //! overlapping texels, every kind of bad input as one clear error (never a panic), the real
 //! Avocado and NormalTangentMirrorTest models, and a deterministic stand-in for the

@@ -29,7 +29,7 @@
 //! that draws one zero-area triangle (fixed), the empty shader over half the screen (half
 //! the triangles, half the fragments) and over the screen with the depth test off — by a
 //! **minimax** fit: the costs that make the largest relative error over the points least
-//! (a linear program, `probe::chebyshev_fit`), as the model is judged by its worst point. A
+//! (a linear program, `probe::fit::chebyshev_fit`), as the model is judged by its worst point. A
 //! least-squares fit (weighted by 1/t) leaves 7.6–9.5 % on the same points where this
 //! leaves 6.1–8.0 %.
 //!

@@ -77,8 +77,10 @@ pub fn run(
     CHECKS
         .iter()
         .map(|&(name, body, lookups)| {
-            let source =
-                super::fragment_shader("", &format!("    acc.xy = in_uv_lightmap;\n    {body}\n"));
+            let source = super::shaders::fragment_shader(
+                "",
+                &format!("    acc.xy = in_uv_lightmap;\n    {body}\n"),
+            );
             let spirv = crate::gpu::shader::compile_source(
                 "scene_check.frag",
                 &source,

@@ -48,17 +48,29 @@
 //! buffers and images, out-of-range accessors, indices ≥ the vertex count, index counts not
 //! a multiple of 3, non-finite attribute values, node cycles, no scene, no meshes, no usable
 //! triangles, and charts that do not fit the lightmap.
+//!
+//! This file is the loader: the document, the node walk, each primitive read, transformed,
+//! filtered and appended in named steps, the lightmap UVs, the material and the camera.
+//! Beside it, `accessor` decodes accessors and buffer views (checked offsets and strides,
+//! normalized and sparse values, index buffers) into a primitive's checked attributes and
+//! indices, and `uri` holds the URI policy above and reads what it allows.
+
+mod accessor;
+mod uri;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
-use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::{Mode, Semantic};
 use rustc_hash::FxHashMap;
 
 use super::lightmap_uv;
 use super::{Camera, Material, Mesh, Scene, SceneError, Texture8, Vertex, framing_camera, tangent};
+use accessor::{PrimitiveData, read_primitive};
+use uri::read_uri;
+
+pub use uri::MAX_REFERENCED_FILE_BYTES;
 
 /// Triangles with |e₁ × e₂| ≤ this × |e₁|·|e₂| (sine of the corner angle) are degenerate.
 /// Relative, so it is scale-free (Avocado is 6 cm); f32 positions resolve sines ~1e-7.
@@ -68,9 +80,6 @@ pub const DEGENERATE_SINE: f32 = 1e-7;
 pub const MIN_UV_AREA: f32 = 1e-12;
 /// Lightmap UVs given in a file may stray this far outside [0, 1] (exporter rounding).
 const LIGHTMAP_UV_SLACK: f32 = 1e-4;
-/// Accessors without a buffer view are zero-filled; more elements than this are refused
-/// (a hostile file could otherwise ask for gigabytes of zeros).
-const MAX_ZERO_FILLED: usize = 1 << 20;
 /// Positions farther than this from the origin, metres, are refused (squared lengths and
 /// areas must stay finite in f32).
 pub const MAX_ABS_POSITION: f32 = 1e12;
@@ -189,31 +198,7 @@ impl Loader {
         bytes: &[u8],
         lightmap_res: u32,
     ) -> Result<(Scene, LoadReport), SceneError> {
-        check_glb_header(bytes).map_err(|m| self.err(m))?;
-        let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
-            .map_err(|e| self.err(crate::files::decoder_error("glTF", e)))?;
-        // gltf-json's own validation indexes POSITION accessors unchecked: check them first.
-        let json = document.into_json();
-        for (m, mesh) in json.meshes.iter().enumerate() {
-            for (p, prim) in mesh.primitives.iter().enumerate() {
-                let position = gltf::json::validation::Checked::Valid(Semantic::Positions);
-                if let Some(a) = prim.attributes.get(&position)
-                    && a.value() >= json.accessors.len()
-                {
-                    return Err(self.err(format!(
-                        "invalid glTF: meshes[{m}].primitives[{p}] POSITION refers to \
-                         accessor {} of {}",
-                        a.value(),
-                        json.accessors.len()
-                    )));
-                }
-            }
-        }
-        let document = gltf::Document::from_json(json).map_err(|e| match e {
-            // Its message starts with "invalid glTF:" and lists every problem.
-            gltf::Error::Validation(_) => self.err(e.to_string()),
-            _ => self.err(crate::files::decoder_error("glTF", e)),
-        })?;
+        let (document, blob) = self.parse(bytes)?;
         let buffers = self.buffers(&document, blob)?;
         let mut report = LoadReport::default();
 
@@ -232,29 +217,8 @@ impl Loader {
 
         let mut mesh = Mesh::default();
         let mut textures = TextureChoice::default();
-        let mut all_have_uv1 = true;
-        let mut modes_skipped: Vec<String> = Vec::new();
-        for inst in &instances {
-            for prim in inst.mesh.primitives() {
-                let what = format!("mesh {} primitive {}", inst.mesh.index(), prim.index());
-                if prim.mode() != Mode::Triangles {
-                    report.skipped_primitives += 1;
-                    modes_skipped.push(format!("{what} ({:?})", prim.mode()));
-                    continue;
-                }
-                all_have_uv1 &= prim.get(&Semantic::TexCoords(1)).is_some();
-                self.choose_textures(&prim, &mut textures);
-                self.append_primitive(&what, &prim, inst, &buffers, &mut mesh, &mut report)?;
-            }
-        }
-        if !modes_skipped.is_empty() {
-            log::warn!(
-                "{}: skipped {} primitive(s) that are not triangle lists: {}",
-                self.file,
-                modes_skipped.len(),
-                modes_skipped.join(", ")
-            );
-        }
+        let all_have_uv1 =
+            self.append_instances(&instances, &buffers, &mut mesh, &mut textures, &mut report)?;
         if report.degenerate_triangles + report.zero_uv_area_triangles > 0 {
             log::warn!(
                 "{}: skipped {} degenerate and {} zero-UV-area triangle(s)",
@@ -280,8 +244,109 @@ impl Loader {
             );
         }
 
+        let instanced_once = uses.values().all(|&n| n == 1);
+        self.lightmap_uvs(
+            &mut mesh,
+            all_have_uv1,
+            instanced_once,
+            lightmap_res,
+            &mut report,
+        )?;
+        let material = self.material(&document, &textures, &buffers)?;
+        let bounds = mesh.bounds();
+        let camera = self.camera(&document, camera_node, bounds, &mut report);
+        Ok((
+            Scene {
+                name: name.to_string(),
+                mesh,
+                material,
+                camera,
+            },
+            report,
+        ))
+    }
+
+    /// The document in `bytes` and its `.glb` BIN chunk, validated.
+    fn parse(&self, bytes: &[u8]) -> Result<(gltf::Document, Option<Vec<u8>>), SceneError> {
+        check_glb_header(bytes).map_err(|m| self.err(m))?;
+        let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
+            .map_err(|e| self.err(crate::files::decoder_error("glTF", e)))?;
+        // gltf-json's own validation indexes POSITION accessors unchecked: check them first.
+        let json = document.into_json();
+        for (m, mesh) in json.meshes.iter().enumerate() {
+            for (p, prim) in mesh.primitives.iter().enumerate() {
+                let position = gltf::json::validation::Checked::Valid(Semantic::Positions);
+                if let Some(a) = prim.attributes.get(&position)
+                    && a.value() >= json.accessors.len()
+                {
+                    return Err(self.err(format!(
+                        "invalid glTF: meshes[{m}].primitives[{p}] POSITION refers to \
+                         accessor {} of {}",
+                        a.value(),
+                        json.accessors.len()
+                    )));
+                }
+            }
+        }
+        let document = gltf::Document::from_json(json).map_err(|e| match e {
+            // Its message starts with "invalid glTF:" and lists every problem.
+            gltf::Error::Validation(_) => self.err(e.to_string()),
+            _ => self.err(crate::files::decoder_error("glTF", e)),
+        })?;
+        Ok((document, blob))
+    }
+
+    /// Appends every triangle-list primitive of the `instances` to `mesh` and records their
+    /// textures; primitives of other modes are skipped (one warning for all). Returns
+    /// whether every appended primitive has TEXCOORD_1.
+    fn append_instances(
+        &self,
+        instances: &[Instance],
+        buffers: &[Vec<u8>],
+        mesh: &mut Mesh,
+        textures: &mut TextureChoice,
+        report: &mut LoadReport,
+    ) -> Result<bool, SceneError> {
+        let mut all_have_uv1 = true;
+        let mut modes_skipped: Vec<String> = Vec::new();
+        for inst in instances {
+            for prim in inst.mesh.primitives() {
+                let what = format!("mesh {} primitive {}", inst.mesh.index(), prim.index());
+                if prim.mode() != Mode::Triangles {
+                    report.skipped_primitives += 1;
+                    modes_skipped.push(format!("{what} ({:?})", prim.mode()));
+                    continue;
+                }
+                all_have_uv1 &= prim.get(&Semantic::TexCoords(1)).is_some();
+                self.choose_textures(&prim, textures);
+                self.append_primitive(&what, &prim, inst, buffers, mesh, report)?;
+            }
+        }
+        if !modes_skipped.is_empty() {
+            log::warn!(
+                "{}: skipped {} primitive(s) that are not triangle lists: {}",
+                self.file,
+                modes_skipped.len(),
+                modes_skipped.join(", ")
+            );
+        }
+        Ok(all_have_uv1)
+    }
+
+    /// The lightmap UVs: TEXCOORD_1 as given (clamped to [0, 1]) where every primitive has
+    /// it (`all_have_uv1`), within [0, 1] up to exporter rounding, and no mesh is drawn
+    /// twice (`instanced_once`); else charts generated for the whole scene (counted in
+    /// `report`, with a warning where TEXCOORD_1 was there but unusable).
+    fn lightmap_uvs(
+        &self,
+        mesh: &mut Mesh,
+        all_have_uv1: bool,
+        instanced_once: bool,
+        lightmap_res: u32,
+        report: &mut LoadReport,
+    ) -> Result<(), SceneError> {
         let given_ok = all_have_uv1
-            && uses.values().all(|&n| n == 1)
+            && instanced_once
             && mesh.vertices.iter().all(|v| {
                 v.uv_lightmap
                     .iter()
@@ -300,7 +365,7 @@ impl Loader {
                 );
             }
             let charting = std::time::Instant::now();
-            let charts = lightmap_uv::generate(&mut mesh, lightmap_res).map_err(|e| {
+            let charts = lightmap_uv::generate(mesh, lightmap_res).map_err(|e| {
                 self.err(format!(
                     "{} lightmap charts do not fit a {lightmap_res}² lightmap; raise --vis-res",
                     e.charts
@@ -314,23 +379,42 @@ impl Loader {
             );
             report.generated_charts = Some(charts.charts);
         }
+        Ok(())
+    }
 
-        let material = Material {
+    /// The scene's material: the chosen textures decoded, else a white albedo and a flat
+    /// normal map.
+    fn material(
+        &self,
+        document: &gltf::Document,
+        textures: &TextureChoice,
+        buffers: &[Vec<u8>],
+    ) -> Result<Material, SceneError> {
+        Ok(Material {
             albedo: match textures.albedo {
-                Some(i) => self.texture(&document, i, &buffers)?,
+                Some(i) => self.texture(document, i, buffers)?,
                 None => Texture8::solid([255; 4]),
             },
             normal: match textures.normal {
-                Some((i, _)) => self.texture(&document, i, &buffers)?,
+                Some((i, _)) => self.texture(document, i, buffers)?,
                 None => Texture8::solid(FLAT_NORMAL),
             },
             normal_scale: textures.normal.map_or(1.0, |(_, s)| s),
             height: None,
-        };
-        let bounds = mesh.bounds();
-        let camera = match camera_node
-            .map(|(cam, world)| (cam, file_camera(&document, cam, world, bounds)))
-        {
+        })
+    }
+
+    /// The camera of `camera_node` (the first perspective camera met: its index and world
+    /// matrix) where it is usable, else one that frames `bounds` (with a warning where the
+    /// file's is unusable).
+    fn camera(
+        &self,
+        document: &gltf::Document,
+        camera_node: Option<(usize, Mat4)>,
+        bounds: (Vec3, Vec3),
+        report: &mut LoadReport,
+    ) -> Camera {
+        match camera_node.map(|(cam, world)| (cam, file_camera(document, cam, world, bounds))) {
             Some((_, Ok(camera))) => {
                 report.camera_from_file = true;
                 camera
@@ -343,16 +427,7 @@ impl Loader {
                 framing_camera(bounds)
             }
             None => framing_camera(bounds),
-        };
-        Ok((
-            Scene {
-                name: name.to_string(),
-                mesh,
-                material,
-                camera,
-            },
-            report,
-        ))
+        }
     }
 
     /// Loads every buffer: the GLB BIN chunk, data URIs, or files next to the glTF.
@@ -370,8 +445,7 @@ impl Loader {
                         buffer.index()
                     ))
                 })?,
-                gltf::buffer::Source::Uri(uri) => self
-                    .read_uri(uri)
+                gltf::buffer::Source::Uri(uri) => read_uri(self.base.as_deref(), uri)
                     .map_err(|m| self.err(format!("buffer {}: {m}", buffer.index())))?,
             };
             if data.len() < buffer.length() {
@@ -385,33 +459,6 @@ impl Loader {
             out.push(data);
         }
         Ok(out)
-    }
-
-    /// Bytes behind a URI: a base64 data URI, a relative path or a `file:` URI.
-    fn read_uri(&self, uri: &str) -> Result<Vec<u8>, String> {
-        if uri.starts_with("data:") {
-            // Data URIs never touch the file system; the crate's decoder is safe here.
-            return gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), None)
-                .map(|d| d.0)
-                .map_err(|e| format!("bad data URI: {e}"));
-        }
-        let Some(base) = &self.base else {
-            return Err(format!(
-                "refers to external file '{}', which cannot be loaded from memory",
-                short(uri)
-            ));
-        };
-        let relative = check_relative_uri(uri)?;
-        let path = base.join(relative);
-        crate::files::read_bounded(&path, MAX_REFERENCED_FILE_BYTES, "a glTF buffer or image")
-            .map_err(|e| match e {
-                crate::files::FileError::Io { cause: source, .. }
-                    if source.kind() == std::io::ErrorKind::NotFound =>
-                {
-                    format!("'{}' not found", path.display())
-                }
-                e => e.to_string(),
-            })
     }
 
     /// Mesh instances (depth-first, in child order) and the first perspective camera node.
@@ -498,71 +545,22 @@ impl Loader {
         report: &mut LoadReport,
     ) -> Result<(), SceneError> {
         let err = |m: String| self.err(format!("{what}: {m}"));
-        let attr = |semantic: Semantic, dims: usize| -> Result<Option<Vec<f32>>, SceneError> {
-            let Some(acc) = prim.get(&semantic) else {
-                return Ok(None);
-            };
-            let name = format!("{} (accessor {})", semantic_name(&semantic), acc.index());
-            let values =
-                read_floats(&acc, buffers, dims).map_err(|m| err(format!("{name}: {m}")))?;
-            if let Some(bad) = values.iter().position(|x| !x.is_finite()) {
-                return Err(err(format!("{name}: element {} is not finite", bad / dims)));
-            }
-            Ok(Some(values))
-        };
-        let positions = attr(Semantic::Positions, 3)?.ok_or_else(|| err("no POSITION".into()))?;
-        let count = positions.len() / 3;
-        let normals = attr(Semantic::Normals, 3)?;
-        let tangents = attr(Semantic::Tangents, 4)?;
-        let uv0 = attr(Semantic::TexCoords(0), 2)?;
-        let uv1 = attr(Semantic::TexCoords(1), 2)?;
-        for (name, values, dims) in [
-            ("NORMAL", &normals, 3),
-            ("TANGENT", &tangents, 4),
-            ("TEXCOORD_0", &uv0, 2),
-            ("TEXCOORD_1", &uv1, 2),
-        ] {
-            if let Some(v) = values.as_ref().filter(|v| v.len() / dims != count) {
-                return Err(err(format!(
-                    "{name} has {} elements but POSITION has {count}",
-                    v.len() / dims
-                )));
-            }
-        }
-        let indices: Vec<u32> = match prim.indices() {
-            Some(acc) => read_indices(&acc, buffers)
-                .map_err(|m| err(format!("indices (accessor {}): {m}", acc.index())))?,
-            None => (0..count as u32).collect(),
-        };
-        if !indices.len().is_multiple_of(3) {
-            return Err(err(format!(
-                "{} indices is not a whole number of triangles",
-                indices.len()
-            )));
-        }
-        if let Some(bad) = indices.iter().find(|&&i| i as usize >= count) {
-            return Err(err(format!(
-                "index {bad} is out of range (the primitive has {count} vertices)"
-            )));
-        }
+        let PrimitiveData {
+            positions,
+            count,
+            normals,
+            tangents,
+            uv0,
+            uv1,
+            indices,
+        } = read_primitive(prim, buffers).map_err(err)?;
 
         // World space.
         let m = inst.world_from_mesh;
         let linear = Mat3::from_mat4(m);
         let mirrored = linear.determinant() < 0.0;
         let normal_from_mesh = linear.inverse().transpose();
-        let p: Vec<Vec3> = positions
-            .chunks_exact(3)
-            .map(|c| m.transform_point3(Vec3::from_slice(c)))
-            .collect();
-        if p.iter().any(|v| !v.is_finite()) {
-            return Err(err("the node transform gives non-finite positions".into()));
-        }
-        if p.iter().any(|v| v.abs().max_element() > MAX_ABS_POSITION) {
-            return Err(err(format!(
-                "positions reach beyond ±{MAX_ABS_POSITION:e} m"
-            )));
-        }
+        let p = world_positions(m, &positions).map_err(err)?;
         let uv = |values: &Option<Vec<f32>>| -> Vec<Vec2> {
             match values {
                 Some(v) => v.chunks_exact(2).map(Vec2::from_slice).collect(),
@@ -571,72 +569,22 @@ impl Loader {
         };
         let (uv0_v, uv1_v) = (uv(&uv0), uv(&uv1));
 
-        // Keep non-degenerate triangles, wound counter-clockwise in world space.
-        let mut kept: Vec<[u32; 3]> = Vec::with_capacity(indices.len() / 3);
-        for t in indices.chunks_exact(3) {
-            let tri = if mirrored {
-                [t[0], t[2], t[1]]
-            } else {
-                [t[0], t[1], t[2]]
-            };
-            let [a, b, c] = tri.map(|i| p[i as usize]);
-            let (e1, e2) = (b - a, c - a);
-            let scale = e1.length() * e2.length();
-            // Written so that NaN-free zero areas and zero-length edges both count.
-            let area_ok = e1.cross(e2).length() > DEGENERATE_SINE * scale;
-            if !area_ok || scale == 0.0 {
-                report.degenerate_triangles += 1;
-                continue;
-            }
-            if uv0.is_some() {
-                let [ua, ub, uc] = tri.map(|i| uv0_v[i as usize]);
-                if (ub - ua).perp_dot(uc - ua).abs() < MIN_UV_AREA {
-                    report.zero_uv_area_triangles += 1;
-                    continue;
-                }
-            }
-            kept.push(tri);
-        }
+        let kept = keep_triangles(
+            &indices,
+            &p,
+            uv0.is_some().then_some(uv0_v.as_slice()),
+            mirrored,
+            report,
+        );
         if kept.is_empty() {
             return Ok(());
         }
-
-        // Normals: given (inverse-transpose), else area-weighted smooth.
-        let mut smooth = vec![Vec3::ZERO; count];
-        for tri in &kept {
-            let [a, b, c] = tri.map(|i| p[i as usize]);
-            let n = (b - a).cross(c - a);
-            for &i in tri {
-                smooth[i as usize] += n;
-            }
-        }
-        let n: Vec<Vec3> = (0..count)
-            .map(|i| {
-                let given = normals.as_ref().and_then(|v| {
-                    (normal_from_mesh * Vec3::from_slice(&v[3 * i..])).try_normalize()
-                });
-                given
-                    .or_else(|| smooth[i].try_normalize())
-                    .unwrap_or(Vec3::Y)
-            })
-            .collect();
+        let n = vertex_normals(count, &kept, &p, normals.as_deref(), normal_from_mesh);
 
         // Tangents per corner: given (upper 3×3, w mirrored), else MikkTSpace.
         let flat: Vec<u32> = kept.iter().flatten().copied().collect();
         let corner_tangents: Vec<Vec4> = match &tangents {
-            Some(t) => flat
-                .iter()
-                .map(|&i| {
-                    let i = i as usize;
-                    let given = Vec4::from_slice(&t[4 * i..]);
-                    let w = if (given.w < 0.0) != mirrored {
-                        -1.0
-                    } else {
-                        1.0
-                    };
-                    tangent::orthonormalize(n[i], (linear * given.truncate()).extend(w))
-                })
-                .collect(),
+            Some(t) => given_tangents(&flat, t, linear, mirrored, &n),
             None => {
                 report.generated_tangents = true;
                 if uv0.is_some() {
@@ -649,43 +597,16 @@ impl Loader {
             }
         };
 
-        // Append, splitting a vertex only where its corners' tangents differ.
         let tint = prim.material().pbr_metallic_roughness().base_color_factor();
-        // A vertex's first tangent's index kept per vertex (most have one); the others
-        // in a map.
-        let mut first_tangent: Vec<Option<([u32; 4], u32)>> = vec![None; p.len()];
-        let mut remap: FxHashMap<(u32, [u32; 4]), u32> = FxHashMap::default();
-        for (&i, t) in flat.iter().zip(&corner_tangents) {
-            let bits = t.to_array().map(f32::to_bits);
-            let first = first_tangent[i as usize];
-            if let Some((first_bits, index)) = first
-                && first_bits == bits
-            {
-                mesh.indices.push(index);
-                continue;
-            }
-            let mut new_vertex = || {
-                let k = i as usize;
-                mesh.vertices.push(Vertex {
-                    position: p[k].to_array(),
-                    normal: n[k].to_array(),
-                    tangent: t.to_array(),
-                    uv_material: uv0_v[k].to_array(),
-                    uv_lightmap: uv1_v[k].to_array(),
-                    albedo_tint: [tint[0], tint[1], tint[2]],
-                });
-                (mesh.vertices.len() - 1) as u32
-            };
-            let index = match first {
-                None => {
-                    let index = new_vertex();
-                    first_tangent[i as usize] = Some((bits, index));
-                    index
-                }
-                Some(_) => *remap.entry((i, bits)).or_insert_with(new_vertex),
-            };
-            mesh.indices.push(index);
-        }
+        let vertex = |k: usize, t: Vec4| Vertex {
+            position: p[k].to_array(),
+            normal: n[k].to_array(),
+            tangent: t.to_array(),
+            uv_material: uv0_v[k].to_array(),
+            uv_lightmap: uv1_v[k].to_array(),
+            albedo_tint: [tint[0], tint[1], tint[2]],
+        };
+        append_corners(mesh, p.len(), &flat, &corner_tangents, vertex);
         Ok(())
     }
 
@@ -702,7 +623,9 @@ impl Loader {
             .nth(index)
             .ok_or_else(|| err("missing".into()))?;
         let bytes: Vec<u8> = match image.source() {
-            gltf::image::Source::Uri { uri, .. } => self.read_uri(uri).map_err(err)?,
+            gltf::image::Source::Uri { uri, .. } => {
+                read_uri(self.base.as_deref(), uri).map_err(err)?
+            }
             gltf::image::Source::View { view, .. } => {
                 let data = buffers
                     .get(view.buffer().index())
@@ -725,6 +648,146 @@ impl Loader {
                 .map(|c| [c[0], c[1], c[2], c[3]])
                 .collect(),
         })
+    }
+}
+
+/// `positions` (flat xyz) by the world matrix, checked finite and within
+/// [`MAX_ABS_POSITION`] of the origin.
+fn world_positions(world_from_mesh: Mat4, positions: &[f32]) -> Result<Vec<Vec3>, String> {
+    let p: Vec<Vec3> = positions
+        .chunks_exact(3)
+        .map(|c| world_from_mesh.transform_point3(Vec3::from_slice(c)))
+        .collect();
+    if p.iter().any(|v| !v.is_finite()) {
+        return Err("the node transform gives non-finite positions".into());
+    }
+    if p.iter().any(|v| v.abs().max_element() > MAX_ABS_POSITION) {
+        return Err(format!("positions reach beyond ±{MAX_ABS_POSITION:e} m"));
+    }
+    Ok(p)
+}
+
+/// The triangles of `indices` to keep, wound counter-clockwise in world space (their
+/// corners swapped where the transform is `mirrored`): those of zero area, and where the
+/// primitive has TEXCOORD_0 (`uv0`) those of zero UV area, are skipped and counted in
+/// `report`.
+fn keep_triangles(
+    indices: &[u32],
+    p: &[Vec3],
+    uv0: Option<&[Vec2]>,
+    mirrored: bool,
+    report: &mut LoadReport,
+) -> Vec<[u32; 3]> {
+    let mut kept: Vec<[u32; 3]> = Vec::with_capacity(indices.len() / 3);
+    for t in indices.chunks_exact(3) {
+        let tri = if mirrored {
+            [t[0], t[2], t[1]]
+        } else {
+            [t[0], t[1], t[2]]
+        };
+        let [a, b, c] = tri.map(|i| p[i as usize]);
+        let (e1, e2) = (b - a, c - a);
+        let scale = e1.length() * e2.length();
+        // Written so that NaN-free zero areas and zero-length edges both count.
+        let area_ok = e1.cross(e2).length() > DEGENERATE_SINE * scale;
+        if !area_ok || scale == 0.0 {
+            report.degenerate_triangles += 1;
+            continue;
+        }
+        if let Some(uv0) = uv0 {
+            let [ua, ub, uc] = tri.map(|i| uv0[i as usize]);
+            if (ub - ua).perp_dot(uc - ua).abs() < MIN_UV_AREA {
+                report.zero_uv_area_triangles += 1;
+                continue;
+            }
+        }
+        kept.push(tri);
+    }
+    kept
+}
+
+/// World-space normals of the `count` vertices: given ones (flat xyz) by
+/// `normal_from_mesh` (the inverse-transpose), else area-weighted smooth over the `kept`
+/// triangles, else +Y.
+fn vertex_normals(
+    count: usize,
+    kept: &[[u32; 3]],
+    p: &[Vec3],
+    normals: Option<&[f32]>,
+    normal_from_mesh: Mat3,
+) -> Vec<Vec3> {
+    let mut smooth = vec![Vec3::ZERO; count];
+    for tri in kept {
+        let [a, b, c] = tri.map(|i| p[i as usize]);
+        let n = (b - a).cross(c - a);
+        for &i in tri {
+            smooth[i as usize] += n;
+        }
+    }
+    (0..count)
+        .map(|i| {
+            let given = normals
+                .and_then(|v| (normal_from_mesh * Vec3::from_slice(&v[3 * i..])).try_normalize());
+            given
+                .or_else(|| smooth[i].try_normalize())
+                .unwrap_or(Vec3::Y)
+        })
+        .collect()
+}
+
+/// The given tangents (flat xyzw) of the corners `flat`: xyz by the upper 3×3 `linear`, w
+/// negated where the transform is `mirrored`, made perpendicular to the normal `n`.
+fn given_tangents(flat: &[u32], t: &[f32], linear: Mat3, mirrored: bool, n: &[Vec3]) -> Vec<Vec4> {
+    flat.iter()
+        .map(|&i| {
+            let i = i as usize;
+            let given = Vec4::from_slice(&t[4 * i..]);
+            let w = if (given.w < 0.0) != mirrored {
+                -1.0
+            } else {
+                1.0
+            };
+            tangent::orthonormalize(n[i], (linear * given.truncate()).extend(w))
+        })
+        .collect()
+}
+
+/// Appends the corners `flat` (indices among the primitive's `vertex_count` vertices) with
+/// their tangents to `mesh`, splitting a vertex only where its corners' tangents differ;
+/// `vertex(k, t)` is vertex k with tangent t.
+fn append_corners(
+    mesh: &mut Mesh,
+    vertex_count: usize,
+    flat: &[u32],
+    corner_tangents: &[Vec4],
+    vertex: impl Fn(usize, Vec4) -> Vertex,
+) {
+    // A vertex's first tangent's index kept per vertex (most have one); the others
+    // in a map.
+    let mut first_tangent: Vec<Option<([u32; 4], u32)>> = vec![None; vertex_count];
+    let mut remap: FxHashMap<(u32, [u32; 4]), u32> = FxHashMap::default();
+    for (&i, t) in flat.iter().zip(corner_tangents) {
+        let bits = t.to_array().map(f32::to_bits);
+        let first = first_tangent[i as usize];
+        if let Some((first_bits, index)) = first
+            && first_bits == bits
+        {
+            mesh.indices.push(index);
+            continue;
+        }
+        let mut new_vertex = || {
+            mesh.vertices.push(vertex(i as usize, *t));
+            (mesh.vertices.len() - 1) as u32
+        };
+        let index = match first {
+            None => {
+                let index = new_vertex();
+                first_tangent[i as usize] = Some((bits, index));
+                index
+            }
+            Some(_) => *remap.entry((i, bits)).or_insert_with(new_vertex),
+        };
+        mesh.indices.push(index);
     }
 }
 
@@ -760,90 +823,6 @@ fn decode_texture(bytes: &[u8]) -> Result<image::RgbaImage, String> {
     Ok(r.decode()
         .map_err(|e| format!("cannot decode: {e}"))?
         .to_rgba8())
-}
-
-/// The attribute's glTF spelling (`POSITION`, `TEXCOORD_1`, …) for messages.
-fn semantic_name(semantic: &Semantic) -> String {
-    match semantic {
-        Semantic::Positions => "POSITION".into(),
-        Semantic::Normals => "NORMAL".into(),
-        Semantic::Tangents => "TANGENT".into(),
-        Semantic::TexCoords(n) => format!("TEXCOORD_{n}"),
-        other => format!("{other:?}"),
-    }
-}
-
-/// Largest buffer or image file a glTF may reference.
-pub const MAX_REFERENCED_FILE_BYTES: u64 = 4 << 30;
-
-/// The relative path a non-data URI names, when the URI policy (module doc) allows it.
-fn check_relative_uri(uri: &str) -> Result<PathBuf, String> {
-    let refuse = |why: &str| {
-        Err(format!(
-            "URI '{}' is refused: {why}; glTF files may only reference files beside them (relative paths inside their folder) or data: URIs",
-            short(uri)
-        ))
-    };
-    if uri.starts_with("file:") {
-        return refuse("file: URIs can name any file on the machine");
-    }
-    // A scheme is letters, digits, '+', '-', '.' before the first ':' (RFC 3986); a
-    // Windows drive letter ("C:") lands here too and is absolute.
-    if let Some((scheme, _)) = uri.split_once(':')
-        && !scheme.is_empty()
-        && scheme
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '+' | '-' | '.'))
-    {
-        return refuse(
-            "only relative paths and data: URIs are read (no network, no other schemes)",
-        );
-    }
-    let decoded = percent_decode(uri).ok_or("bad percent-encoding in URI")?;
-    let path = Path::new(&decoded);
-    if path.is_absolute() || decoded.starts_with('/') || decoded.starts_with('\\') {
-        return refuse("absolute paths can name any file on the machine");
-    }
-    let mut depth = 0i32;
-    for part in path.components() {
-        match part {
-            std::path::Component::ParentDir => depth -= 1,
-            std::path::Component::Normal(_) => depth += 1,
-            std::path::Component::CurDir => {}
-            _ => return refuse("absolute paths can name any file on the machine"),
-        }
-        if depth < 0 {
-            return refuse("the path leaves the glTF file's folder");
-        }
-    }
-    Ok(path.to_path_buf())
-}
-
-/// `uri` shortened for messages (data URIs can be megabytes).
-fn short(uri: &str) -> String {
-    const MAX: usize = 80;
-    match uri.char_indices().nth(MAX) {
-        Some((i, _)) => format!("{}…", &uri[..i]),
-        None => uri.to_string(),
-    }
-}
-
-/// RFC 3986 percent-decoding into UTF-8, `None` when malformed.
-fn percent_decode(s: &str) -> Option<String> {
-    let bytes = s.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut i = 0;
-    while i < bytes.len() {
-        if bytes[i] == b'%' {
-            let hex = std::str::from_utf8(bytes.get(i + 1..i + 3)?).ok()?;
-            out.push(u8::from_str_radix(hex, 16).ok()?);
-            i += 3;
-        } else {
-            out.push(bytes[i]);
-            i += 1;
-        }
-    }
-    String::from_utf8(out).ok()
 }
 
 /// Rejects a `.glb` header the `gltf` crate would mishandle (length below the header).
@@ -927,192 +906,4 @@ fn file_camera(
         z_near: p.znear,
         z_far,
     })
-}
-
-/// Where an accessor's elements live: bytes from the first element on, and the stride.
-fn element_bytes<'b>(
-    acc: &gltf::Accessor,
-    buffers: &'b [Vec<u8>],
-    elem_size: usize,
-) -> Result<Option<(&'b [u8], usize)>, String> {
-    let Some(view) = acc.view() else {
-        return Ok(None);
-    };
-    let data = buffers
-        .get(view.buffer().index())
-        .ok_or("bad buffer index")?;
-    let view_bytes = view
-        .offset()
-        .checked_add(view.length())
-        .and_then(|end| data.get(view.offset()..end))
-        .ok_or("buffer view runs past its buffer")?;
-    let stride = view.stride().unwrap_or(elem_size);
-    if stride < elem_size {
-        return Err(format!("byteStride {stride} < element size {elem_size}"));
-    }
-    let count = acc.count();
-    let needed = match count {
-        0 => 0,
-        n => (n - 1)
-            .checked_mul(stride)
-            .and_then(|b| b.checked_add(elem_size))
-            .ok_or("size overflows")?,
-    };
-    let bytes = acc
-        .offset()
-        .checked_add(needed)
-        .and_then(|end| view_bytes.get(acc.offset()..end))
-        .ok_or_else(|| {
-            format!(
-                "{count} elements at offset {} run past the buffer view ({} bytes)",
-                acc.offset(),
-                view_bytes.len()
-            )
-        })?;
-    Ok(Some((bytes, stride)))
-}
-
-/// One component at `bytes[0..]` as f32, normalized per glTF §3.11 when asked.
-fn component(bytes: &[u8], ty: DataType, normalized: bool) -> f32 {
-    let b = |k: usize| bytes.get(k).copied().unwrap_or(0);
-    match (ty, normalized) {
-        (DataType::I8, false) => f32::from(b(0) as i8),
-        (DataType::I8, true) => (f32::from(b(0) as i8) / 127.0).max(-1.0),
-        (DataType::U8, false) => f32::from(b(0)),
-        (DataType::U8, true) => f32::from(b(0)) / 255.0,
-        (DataType::I16, n) => {
-            let v = f32::from(i16::from_le_bytes([b(0), b(1)]));
-            if n { (v / 32767.0).max(-1.0) } else { v }
-        }
-        (DataType::U16, n) => {
-            let v = f32::from(u16::from_le_bytes([b(0), b(1)]));
-            if n { v / 65535.0 } else { v }
-        }
-        (DataType::U32, n) => {
-            let v = u32::from_le_bytes([b(0), b(1), b(2), b(3)]) as f32;
-            if n { v / u32::MAX as f32 } else { v }
-        }
-        (DataType::F32, _) => f32::from_le_bytes([b(0), b(1), b(2), b(3)]),
-    }
-}
-
-/// An accessor of `dims` components per element as flat f32 values (sparse applied).
-fn read_floats(acc: &gltf::Accessor, buffers: &[Vec<u8>], dims: usize) -> Result<Vec<f32>, String> {
-    let found = match acc.dimensions() {
-        Dimensions::Scalar => 1,
-        Dimensions::Vec2 => 2,
-        Dimensions::Vec3 => 3,
-        Dimensions::Vec4 => 4,
-        other => return Err(format!("type {other:?} where VEC{dims} was expected")),
-    };
-    if found != dims {
-        return Err(format!("VEC{found} where VEC{dims} was expected"));
-    }
-    let ty = acc.data_type();
-    let size = ty.size();
-    let elem = size * dims;
-    let count = acc.count();
-    let mut out = match element_bytes(acc, buffers, elem)? {
-        Some((bytes, stride)) => {
-            let mut out = Vec::with_capacity(count * dims);
-            for i in 0..count {
-                let e = &bytes[i * stride..i * stride + elem];
-                out.extend((0..dims).map(|k| component(&e[k * size..], ty, acc.normalized())));
-            }
-            out
-        }
-        None if count <= MAX_ZERO_FILLED => vec![0.0; count * dims],
-        None => return Err(format!("{count} elements without a buffer view")),
-    };
-    if let Some(sparse) = acc.sparse() {
-        let n = sparse.count();
-        let indices = sparse_indices(&sparse, buffers)?;
-        let values = sparse.values();
-        let data = buffers
-            .get(values.view().buffer().index())
-            .ok_or("bad buffer index")?;
-        let start = values
-            .view()
-            .offset()
-            .checked_add(values.offset())
-            .ok_or("sparse offset overflows")?;
-        let bytes = n
-            .checked_mul(elem)
-            .and_then(|len| len.checked_add(start))
-            .and_then(|end| data.get(start..end))
-            .ok_or("sparse values run past their buffer")?;
-        for (k, &i) in indices.iter().enumerate() {
-            let slot = out
-                .get_mut(i as usize * dims..(i as usize + 1) * dims)
-                .ok_or_else(|| format!("sparse index {i} ≥ count {count}"))?;
-            for (c, v) in slot.iter_mut().enumerate() {
-                *v = component(&bytes[k * elem + c * size..], ty, acc.normalized());
-            }
-        }
-    }
-    Ok(out)
-}
-
-/// Indices of a sparse accessor.
-fn sparse_indices(
-    sparse: &gltf::accessor::sparse::Sparse,
-    buffers: &[Vec<u8>],
-) -> Result<Vec<u32>, String> {
-    let idx = sparse.indices();
-    let size = idx.index_type().size();
-    let data = buffers
-        .get(idx.view().buffer().index())
-        .ok_or("bad buffer index")?;
-    let start = idx
-        .view()
-        .offset()
-        .checked_add(idx.offset())
-        .ok_or("sparse offset overflows")?;
-    let bytes = sparse
-        .count()
-        .checked_mul(size)
-        .and_then(|len| len.checked_add(start))
-        .and_then(|end| data.get(start..end))
-        .ok_or("sparse indices run past their buffer")?;
-    Ok(bytes
-        .chunks_exact(size)
-        .map(|c| match c {
-            [a] => u32::from(*a),
-            [a, b] => u32::from(u16::from_le_bytes([*a, *b])),
-            [a, b, c, d] => u32::from_le_bytes([*a, *b, *c, *d]),
-            _ => u32::MAX,
-        })
-        .collect())
-}
-
-/// A SCALAR accessor of unsigned integers (the index buffer).
-fn read_indices(acc: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u32>, String> {
-    if acc.dimensions() != Dimensions::Scalar {
-        return Err(format!(
-            "type {:?} where SCALAR was expected",
-            acc.dimensions()
-        ));
-    }
-    let ty = acc.data_type();
-    if !matches!(ty, DataType::U8 | DataType::U16 | DataType::U32) || acc.normalized() {
-        return Err(format!("component type {ty:?} cannot hold indices"));
-    }
-    // Integers below 2²⁴ survive f32 exactly; larger ones are read directly.
-    let size = ty.size();
-    match element_bytes(acc, buffers, size)? {
-        Some((bytes, stride)) if acc.sparse().is_none() => Ok((0..acc.count())
-            .map(|i| {
-                let e = &bytes[i * stride..i * stride + size];
-                match ty {
-                    DataType::U8 => u32::from(e[0]),
-                    DataType::U16 => u32::from(u16::from_le_bytes([e[0], e[1]])),
-                    _ => u32::from_le_bytes([e[0], e[1], e[2], e[3]]),
-                }
-            })
-            .collect()),
-        _ => Ok(read_floats(acc, buffers, 1)?
-            .into_iter()
-            .map(|v| v as u32)
-            .collect()),
-    }
 }
