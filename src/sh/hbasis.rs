@@ -29,9 +29,8 @@
 
 use glam::DVec3;
 
-use super::basis::eval_basis;
-use super::zonal::clamped_cosine_convolution;
-use super::{Order, gauss_legendre};
+use super::gauss_legendre;
+use super::zonal::irradiance_at;
 
 /// The paper's two sizes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -105,24 +104,8 @@ pub fn project_irradiance(
     assert!(radiance.len() >= 9, "order-3 radiance needed");
     let count = size.count();
     let mut h = vec![[0.0; 3]; count];
-    let mut y = [0.0; 9];
     for (m, w) in hemisphere_rule() {
-        let world = frame[0] * m.x + frame[1] * m.y + frame[2] * m.z;
-        let Some(n) = world.try_normalize() else {
-            continue;
-        };
-        eval_basis(Order::THREE, n, &mut y);
-        let mut e = [0.0; 3];
-        for (k, yk) in y.iter().enumerate() {
-            let a = clamped_cosine_convolution(match k {
-                0 => 0,
-                1..=3 => 1,
-                _ => 2,
-            });
-            for (c, ec) in e.iter_mut().enumerate() {
-                *ec += a * radiance[k][c] * yk;
-            }
-        }
+        let e = irradiance_in_frame(radiance, frame, *m);
         let basis = eval(*m);
         for (hi, bi) in h.iter_mut().zip(&basis) {
             for c in 0..3 {
@@ -131,6 +114,20 @@ pub fn project_irradiance(
         }
     }
     h
+}
+
+/// The irradiance E(T m / |T m|) (RGB) a texel with normal-map frame `frame` = T =
+/// [tangent, bitangent, normal] receives at tangent-space normal `m` under order-3 RGB
+/// radiance SH `radiance` (world space): the world normal built as the shader builds it,
+/// zero where T m vanishes (a texel without a frame).
+///
+/// # Panics
+/// If `radiance` holds fewer than 9 coefficients.
+pub fn irradiance_in_frame(radiance: &[[f64; 3]], frame: [DVec3; 3], m: DVec3) -> [f64; 3] {
+    let world = frame[0] * m.x + frame[1] * m.y + frame[2] * m.z;
+    world
+        .try_normalize()
+        .map_or([0.0; 3], |n| irradiance_at(radiance, n))
 }
 
 /// Σ_i h_i H_i(m), RGB, for `h` of either size.
@@ -147,6 +144,8 @@ fn hemisphere_rule() -> &'static [(DVec3, f64)] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sh::Order;
+    use crate::sh::basis::eval_basis;
 
     const TIGHT: f64 = 1e-12;
 

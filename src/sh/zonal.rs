@@ -84,6 +84,29 @@ pub fn irradiance_from_radiance(radiance: &[[f64; 3]], order: Order) -> Vec<[f64
     out
 }
 
+/// Irradiance (RGB) at unit direction `n` under order-3 RGB radiance SH `radiance`:
+/// Σ_lm A_l L_l^m y_l^m(n), without forming the irradiance coefficients (the per-node
+/// kernel of the tangent-space fits, `sh::hbasis` and `sh::ambient_cube`).
+///
+/// # Panics
+/// If `radiance` holds fewer than 9 coefficients.
+pub fn irradiance_at(radiance: &[[f64; 3]], n: DVec3) -> [f64; 3] {
+    assert!(radiance.len() >= 9, "order-3 radiance needed");
+    let mut y = [0.0; 9];
+    eval_basis(Order::THREE, n, &mut y);
+    let mut e = [0.0; 3];
+    for l in 0..3 {
+        let a = clamped_cosine_convolution(l as u32);
+        for m in -l..=l {
+            let k = sh_index(l, m);
+            for (c, ec) in e.iter_mut().enumerate() {
+                *ec += a * radiance[k][c] * y[k];
+            }
+        }
+    }
+    e
+}
+
 /// Evaluates an RGB SH expansion Σᵢ cᵢ yᵢ(`dir`) over the bands l < `order`.
 /// `dir` is unit length (debug-checked).
 ///
@@ -198,6 +221,32 @@ mod tests {
         for n in [DVec3::Z, DVec3::NEG_Y, DVec3::new(0.6, 0.0, 0.8)] {
             for c in eval_rgb(&e, order, n) {
                 assert!((c - PI).abs() < CLOSED_FORM, "E({n}) = {c}");
+            }
+        }
+    }
+
+    #[test]
+    fn irradiance_at_a_direction_is_the_irradiance_expansion_there() {
+        let radiance: Vec<[f64; 3]> = (0..9)
+            .map(|k| {
+                let k = k as f64;
+                [0.3 - 0.05 * k, 0.1 * (k - 4.0), 0.02 * k * k - 0.4]
+            })
+            .collect();
+        let e = irradiance_from_radiance(&radiance, Order::THREE);
+        for n in [
+            DVec3::Z,
+            DVec3::NEG_X,
+            DVec3::new(0.6, 0.0, 0.8),
+            DVec3::new(-0.48, 0.6, -0.64),
+        ] {
+            let want = eval_rgb(&e, Order::THREE, n);
+            let got = irradiance_at(&radiance, n);
+            for c in 0..3 {
+                assert!(
+                    (got[c] - want[c]).abs() < CLOSED_FORM,
+                    "{n}: {got:?} vs {want:?}"
+                );
             }
         }
     }
