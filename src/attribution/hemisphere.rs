@@ -2,40 +2,12 @@
 //! radiance, the basis fitted through the pixel's own frame, then the lightmap's f16
 //! values.
 
-use super::{AttributionKind, FitEval, LadderRecipe, RowLadder, Rung};
+use super::{LadderRecipe, RowLadder, Rung};
 use crate::technique::TechniqueError;
 use crate::technique::hemisphere::{Hemisphere, HemisphereBasis};
 
 impl<'a> RowLadder<'a> {
-    /// The rungs of a local basis (`hb*`, `sg*`, `dice*`): the pixel's gathered radiance,
-    /// then the basis fitted to it through the pixel's own frame and evaluated at its
-    /// tangent-space normal (`fit_eval`; rung `{basis_label}.basis`), then the lightmap's
-    /// f16 values (`stored`, fitted through each texel's frame; `eval` reads them).
-    fn local_basis(
-        &self,
-        rungs: &mut Vec<Rung>,
-        basis_label: String,
-        fit_eval: &FitEval<'_>,
-        per_texel: usize,
-        stored: &dyn Fn(&crate::bake::shlmap::ShLightmap) -> Vec<f32>,
-        eval: &(dyn Fn(&[f64], glam::DVec3) -> [f64; 3] + Sync),
-    ) {
-        let px = self.px;
-        let Some((map, gathered)) = self.push_radiance_order(rungs) else {
-            return;
-        };
-        self.push(
-            rungs,
-            AttributionKind::Basis,
-            format!("{basis_label}.basis"),
-            &|| px.image(|k| fit_eval(&gathered[k], px.frame[k], px.tangent_normal[k])),
-        );
-        self.push_lightmap_values(rungs, map, per_texel, &|| stored(map), &|v, k| {
-            eval(v, px.tangent_normal[k])
-        });
-    }
-
-    /// The H-basis rungs ([`RowLadder::local_basis`]).
+    /// The H-basis rungs ([`RowLadder::tangent_basis`]).
     fn hbasis(&self, rungs: &mut Vec<Rung>, size: crate::sh::hbasis::HBasisSize) {
         use crate::sh::hbasis;
         let rgb = |v: &[f64]| -> Vec<[f64; 3]> {
@@ -43,7 +15,7 @@ impl<'a> RowLadder<'a> {
                 .map(|i| [v[3 * i], v[3 * i + 1], v[3 * i + 2]])
                 .collect()
         };
-        self.local_basis(
+        self.tangent_basis(
             rungs,
             self.technique.to_string(),
             &|radiance, frame, m| {
@@ -55,11 +27,11 @@ impl<'a> RowLadder<'a> {
         );
     }
 
-    /// The Ambient Dice rungs ([`RowLadder::local_basis`]): the fit at the ten vertices
+    /// The Ambient Dice rungs ([`RowLadder::tangent_basis`]): the fit at the ten vertices
     /// and its hybrid (or YCoCg) interpolation.
     fn dice(&self, rungs: &mut Vec<Rung>, variant: crate::sh::dice::DiceVariant) {
         let basis = crate::sh::dice::dice();
-        self.local_basis(
+        self.tangent_basis(
             rungs,
             self.technique.to_string(),
             &|radiance, frame, m| {
@@ -75,7 +47,7 @@ impl<'a> RowLadder<'a> {
         );
     }
 
-    /// The SG rungs ([`RowLadder::local_basis`]): the lobes fitted by the run's solver.
+    /// The SG rungs ([`RowLadder::tangent_basis`]): the lobes fitted by the run's solver.
     fn sg(&self, rungs: &mut Vec<Rung>, lobes: u32) {
         use crate::technique::hemisphere::{fit_sg, sg_basis, sg_irradiance, sg_stored_texels};
         let basis = sg_basis(lobes);
@@ -85,7 +57,7 @@ impl<'a> RowLadder<'a> {
                 .map(|i| [v[3 * i], v[3 * i + 1], v[3 * i + 2]])
                 .collect()
         };
-        self.local_basis(
+        self.tangent_basis(
             rungs,
             format!("{}.{solver}", self.technique),
             &|radiance, frame, m| {

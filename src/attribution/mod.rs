@@ -678,6 +678,34 @@ impl<'a> RowLadder<'a> {
             self.push_block_compression(rungs, per_texel, f64::from(1.0 / scale), eval);
         }
     }
+
+    /// The rungs of a basis over the tangent frame (the hemisphere bases, the ambient cube): the pixel's gathered radiance,
+    /// then the basis fitted to it through the pixel's own frame and evaluated at its
+    /// tangent-space normal (`fit_eval`; rung `{basis_label}.basis`), then the lightmap's
+    /// f16 values (`stored`, fitted through each texel's frame; `eval` reads them).
+    fn tangent_basis(
+        &self,
+        rungs: &mut Vec<Rung>,
+        basis_label: String,
+        fit_eval: &FitEval<'_>,
+        per_texel: usize,
+        stored: &dyn Fn(&crate::bake::shlmap::ShLightmap) -> Vec<f32>,
+        eval: &(dyn Fn(&[f64], glam::DVec3) -> [f64; 3] + Sync),
+    ) {
+        let px = self.px;
+        let Some((map, gathered)) = self.push_radiance_order(rungs) else {
+            return;
+        };
+        self.push(
+            rungs,
+            AttributionKind::Basis,
+            format!("{basis_label}.basis"),
+            &|| px.image(|k| fit_eval(&gathered[k], px.frame[k], px.tangent_normal[k])),
+        );
+        self.push_lightmap_values(rungs, map, per_texel, &|| stored(map), &|v, k| {
+            eval(v, px.tangent_normal[k])
+        });
+    }
 }
 
 #[cfg(test)]

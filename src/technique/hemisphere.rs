@@ -236,7 +236,7 @@ pub fn dice_stored_texels(map: &ShLightmap, variant: DiceVariant) -> Vec<f32> {
 
 /// `project`(the texel's order-3 RGB radiance, its frame columns) for every texel of `map`,
 /// concatenated in f32.
-fn per_texel_values(
+pub(crate) fn per_texel_values(
     map: &ShLightmap,
     project: impl Fn(&[[f64; 3]], [glam::DVec3; 3]) -> Vec<f64> + Sync,
 ) -> Vec<f32> {
