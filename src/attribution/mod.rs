@@ -41,6 +41,7 @@
 //! lavapipe; `pca*` reach ≈ 3·10⁻³ there, differences of about one 8-bit weight step that
 //! llvmpipe's filtering of the RGBA8 weight textures adds (README, "Error attribution").
 
+mod ambient_cube;
 mod cluster;
 pub mod exact_light;
 mod hemisphere;

@@ -20,6 +20,7 @@
 //!
 //! docs/design.md, "How to add a technique", lists what a new family writes.
 
+pub mod ambient_cube;
 pub mod block;
 pub mod catalog;
 pub mod cluster;

@@ -31,6 +31,7 @@ macro_rules! with_families {
             Nmprt: $crate::technique::nmprt::Nmprt,
             ShVariant: $crate::technique::sh_variant::ShVariant,
             Hemisphere: $crate::technique::hemisphere::Hemisphere,
+            AmbientCube: $crate::technique::ambient_cube::AmbientCube,
         }
     };
 }
