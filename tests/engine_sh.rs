@@ -17,7 +17,7 @@ use shvis::sh::Order;
 use shvis::sh::bases::ShBasis;
 use shvis::sh::basis::eval_basis;
 use shvis::sh::hbasis::{self, HBasisSize};
-use shvis::technique::sh_variant::shader_value;
+use shvis::technique::sh_variant::{basis_ids, shader_value};
 use shvis::technique::{Family, HwPath, Technique};
 
 /// Order-3 RGB radiance cases: random lights and skies, and the hard ones — black, L1 of
@@ -172,7 +172,11 @@ fn every_reconstruction_in_the_shader_matches_the_cpu_to_1e_4() {
         let values = run_check(
             &ctx,
             "check/sh_bases.comp",
-            &[("ENGINE_SH_BASIS", shader_value(basis))],
+            &[
+                vec![("ENGINE_SH_BASIS", shader_value(basis))],
+                basis_ids().ids,
+            ]
+            .concat(),
             bytemuck::cast_slice(&data),
             &[count as u32],
             count,

@@ -21,7 +21,7 @@ void main() {
         return;
     }
     uint base = i * 8u;
-#if SHVIS_ENGINE_SH_BASIS == 5
+#if SHVIS_ENGINE_SH_BASIS == SHVIS_SH_BASIS_L2
     // L2: 27 values in vec4s 0..6, normal in vec4 7.
     vec3 radiance[9];
     float flat_v[28];

@@ -10,7 +10,7 @@ layout(location = 0) out vec4 out_radiance;
 
 void write_diffuse(vec3 irradiance) {
     vec3 radiance = material_albedo() / PI * irradiance;
-#if defined(SHVIS_SPECULAR) && SHVIS_SPECULAR > 0
+#ifdef SHVIS_SPECULAR
     radiance += specular_radiance();
 #endif
     out_radiance = vec4(radiance, 1.0);

@@ -1,9 +1,11 @@
 // The engine lightmap bases' irradiance reconstructions (src/sh/bases.rs, equations
 // (1)–(8) of its module doc), for the stored layout of ShBasis::encode: v[3k + c] is colour c
-// of stored coefficient k. SHVIS_ENGINE_SH_BASIS selects one:
-//   0 L1 linear (1)   1 L1 Geomerics (2)   2 L1 + hallucinated ZH3 (5)
-//   3 ZH3 stored (4)  4 L1 luminance (6)
-//   5 L2 (7), deringed L2 (8): sh.glsl's sh_irradiance_order3 on 27 values (shlmap.frag);
+// of stored coefficient k. SHVIS_ENGINE_SH_BASIS selects one (ids SHVIS_SH_BASIS_*, from
+// src/technique/engine_sh.rs):
+//   L1: L1 linear (1)   L1_GEOMERICS: L1 Geomerics (2)
+//   L1_ZH3_HALLUCINATED: L1 + hallucinated ZH3 (5)   ZH3: ZH3 stored (4)
+//   L1_LUMINANCE: L1 luminance (6)
+//   L2: L2 (7), deringed L2 (8): sh.glsl's sh_irradiance_order3 on 27 values (shlmap.frag);
 //     engine_sh_irradiance is not defined for it.
 // Every reconstruction is homogeneous of degree one in v (a range scale commutes with it).
 #ifndef SHVIS_SH_BASES_GLSL
@@ -13,6 +15,9 @@
 
 #ifndef SHVIS_ENGINE_SH_BASIS
 #error "define SHVIS_ENGINE_SH_BASIS before including sh_bases.glsl"
+#endif
+#ifndef SHVIS_SH_BASIS_L2
+#error "the engine SH basis ids are not defined (technique::engine_sh::basis_ids)"
 #endif
 
 const vec3 SH_LUMINANCE = vec3(0.2126, 0.7152, 0.0722);
@@ -60,18 +65,18 @@ bool sh_zh3_axis(float v[16], out vec3 axis) {
     return len > 0.0;
 }
 
-#if SHVIS_ENGINE_SH_BASIS < 5
+#if SHVIS_ENGINE_SH_BASIS != SHVIS_SH_BASIS_L2
 vec3 engine_sh_irradiance(float v[16], vec3 n) {
-#if SHVIS_ENGINE_SH_BASIS == 0
+#if SHVIS_ENGINE_SH_BASIS == SHVIS_SH_BASIS_L1
     return sh_l1_linear(v, n);
-#elif SHVIS_ENGINE_SH_BASIS == 1
+#elif SHVIS_ENGINE_SH_BASIS == SHVIS_SH_BASIS_L1_GEOMERICS
     vec3 e;
     for (int c = 0; c < 3; ++c) {
         vec3 r1 = 0.5 * (2.0 * PI / 3.0) * SH_K1 * sh_linear_vector(v, c);
         e[c] = sh_geomerics(PI * SH_K00 * v[c], r1, n);
     }
     return e;
-#elif SHVIS_ENGINE_SH_BASIS == 2 || SHVIS_ENGINE_SH_BASIS == 3
+#elif SHVIS_ENGINE_SH_BASIS == SHVIS_SH_BASIS_L1_ZH3_HALLUCINATED || SHVIS_ENGINE_SH_BASIS == SHVIS_SH_BASIS_ZH3
     vec3 e = sh_l1_linear(v, n);
     vec3 axis;
     if (!sh_zh3_axis(v, axis)) {
@@ -80,7 +85,7 @@ vec3 engine_sh_irradiance(float v[16], vec3 n) {
     float t = dot(axis, n);
     float y20 = SH_K20_ZONAL * (3.0 * t * t - 1.0);
     vec3 z;
-#if SHVIS_ENGINE_SH_BASIS == 2
+#if SHVIS_ENGINE_SH_BASIS == SHVIS_SH_BASIS_L1_ZH3_HALLUCINATED
     for (int c = 0; c < 3; ++c) {
         float c00 = v[c];
         float r = c00 > 0.0 ? min(abs(dot(sh_linear_vector(v, c), axis)) / c00, SH_SQRT_3) : 0.0;
@@ -90,7 +95,7 @@ vec3 engine_sh_irradiance(float v[16], vec3 n) {
     z = vec3(v[12], v[13], v[14]);
 #endif
     return e + (PI / 4.0) * z * y20;
-#elif SHVIS_ENGINE_SH_BASIS == 4
+#elif SHVIS_ENGINE_SH_BASIS == SHVIS_SH_BASIS_L1_LUMINANCE
     vec3 ambient = vec3(v[0], v[1], v[2]);
     vec3 d = vec3(-v[5], -v[3], v[4]);
     float mean_lum = dot(ambient, SH_LUMINANCE);

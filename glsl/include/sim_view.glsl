@@ -3,7 +3,7 @@
 // by u, v, the window fitted to the box's projection. "sky" is a point's distance below
 // the plane facing d that touches the box: nearer the sky = smaller. Shared by
 // depth.vert and mark.comp.
-layout(push_constant) uniform Push {
+layout(push_constant) uniform DirectionView {
     vec4 axis_u;      // xyz: the image's x axis; w: the window's centre along it
     vec4 axis_v;      // xyz: the image's y axis; w: the window's centre along it
     vec4 axis_d;      // xyz: the direction d (towards the sky); w: the sky plane along it
@@ -15,8 +15,7 @@ layout(push_constant) uniform Push {
     uint mask_words;  // 32-bit mask words per point
     float t_min;      // smallest hit distance counted by the exact test, metres (the CPU tracer's)
     float epsilon;    // the ray origins' offset along the normal, metres (the CPU tracer's)
-    uint pad1;
-    uint pad2;
+    uvec2 pad;
 } push;
 
 // (x, y) in [-1, 1]² and the sky distance of world point p.

@@ -1,10 +1,11 @@
 // The specular material term of a directional light under three normal-map filterings
 // (Olano & North; src/ndf/render.rs): L = k_s E · D(h) where n·l > 0 and n·v > 0
 // (n the interpolated normal; no shadowing or masking, as in the paper).
-//   SHVIS_SPECULAR 1 (mip):  the MIP chain of averaged normals, renormalized, base lobe
-//                            D = κ₀ g(|h − n̄|²/σ²)/σ³;
-//   SHVIS_SPECULAR 2 (ndf):  the NDF maps' filtered moments, D = κ₀ g(d)/√det S;
-//   SHVIS_SPECULAR 3 (ndfn): the same with the per-texel 1/N of the maps.
+// SHVIS_SPECULAR, where defined, is one of the ids of src/render/specular.rs:
+//   SHVIS_SPECULAR_MIP:  the MIP chain of averaged normals, renormalized, base lobe
+//                        D = κ₀ g(|h − n̄|²/σ²)/σ³;
+//   SHVIS_SPECULAR_NDF:  the NDF maps' filtered moments, D = κ₀ g(d)/√det S;
+//   SHVIS_SPECULAR_NDFN: the same with the per-texel 1/N of the maps.
 // g(t) = max(0, 1 − t/16)^8 (Pearson type II, m = 8), d = (h − u)ᵀ S⁻¹ (h − u) in the
 // normal map's tangent space, S = E[xxᵀ] − uuᵀ. The study's own pass (ndf/specular.frag)
 // and every technique's ending (diffuse_out.glsl, `--specular`) evaluate it here; the
@@ -12,7 +13,10 @@
 #ifndef SHVIS_SPECULAR_GLSL
 #define SHVIS_SPECULAR_GLSL
 
-#if defined(SHVIS_SPECULAR) && SHVIS_SPECULAR > 0
+#ifdef SHVIS_SPECULAR
+#ifndef SHVIS_SPECULAR_MIP
+#error "the specular filtering ids are not defined (render::specular::filter_ids)"
+#endif
 
 layout(std140, set = 0, binding = SHVIS_BINDING_SPECULAR_PARAMS) uniform SpecularParams {
     layout(offset = 0) vec4 light_dir;       // xyz: unit, toward the light
@@ -21,7 +25,7 @@ layout(std140, set = 0, binding = SHVIS_BINDING_SPECULAR_PARAMS) uniform Specula
     layout(offset = 36) float kappa0;        // 1 / N(n, σ²I)
 } specular_params;
 
-#if SHVIS_SPECULAR > 1
+#if SHVIS_SPECULAR != SHVIS_SPECULAR_MIP
 #if SHVIS_PATH_DX9
 // (E[x], E[y], E[z], 1/N), (E[xx], E[yy], E[zz], ·), (E[xy], E[xz], E[yz], ·)
 layout(set = 0, binding = SHVIS_BINDING_SPECULAR_MOMENTS) uniform sampler2D specular_moments_tex[3];
@@ -50,7 +54,7 @@ vec3 specular_radiance() {
     tangent_frame(f);
     vec3 h = normalize(l + v);
     vec3 h_ts = h * f; // (h·t, h·b, h·n)
-#if SHVIS_SPECULAR == 1
+#if SHVIS_SPECULAR == SHVIS_SPECULAR_MIP
     vec3 r = h_ts - tangent_space_normal();
     float s2 = specular_params.sigma * specular_params.sigma;
     float density = specular_params.kappa0 * pearson(dot(r, r) / s2) / (s2 * specular_params.sigma);
@@ -66,7 +70,7 @@ vec3 specular_radiance() {
     float det = determinant(s);
     vec3 r = h_ts - u;
     float density = det > 0.0 ? pearson(dot(r, inverse(s) * r)) / sqrt(det) : 0.0;
-#if SHVIS_SPECULAR == 2
+#if SHVIS_SPECULAR == SHVIS_SPECULAR_NDF
     density *= specular_params.kappa0;
 #else
     density *= m0.w;

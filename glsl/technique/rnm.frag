@@ -1,9 +1,10 @@
 // rnm / rnmao / ssbump: radiosity normal mapping and self-shadowed bump maps (Green,
 // Valve; src/technique/rnm.rs). Three lightmaps of irradiance around the HL2
-// basis directions (per-texel groups 0–2, .rgb), blended per pixel by
-//   SHVIS_RNM_VARIANT 0 (rnm):    Listing 1, saturate(N·B_i)² normalized, N from the normal map;
-//   SHVIS_RNM_VARIANT 1 (rnmao):  Listing 1 × the height field's AO (ssbump_ao_tex.a);
-//   SHVIS_RNM_VARIANT 2 (ssbump): Listing 2, the SSBump texel (ssbump_ao_tex.rgb) as weights.
+// basis directions (per-texel groups 0–2, .rgb), blended per pixel by SHVIS_RNM_VARIANT
+// (ids from src/technique/rnm.rs):
+//   SHVIS_RNM_NORMAL_MAP (rnm):      Listing 1, saturate(N·B_i)² normalized, N from the normal map;
+//   SHVIS_RNM_NORMAL_MAP_AO (rnmao): Listing 1 × the height field's AO (ssbump_ao_tex.a);
+//   SHVIS_RNM_SELF_SHADOWED (ssbump): Listing 2, the SSBump texel (ssbump_ao_tex.rgb) as weights.
 // radiance = albedo/π · Σ w_i E_i.
 #version 450
 #extension GL_GOOGLE_include_directive : require
@@ -19,7 +20,11 @@ layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform RnmPar
 #include "per_texel.glsl"
 #include "diffuse_out.glsl"
 
-#if SHVIS_RNM_VARIANT != 0
+#ifndef SHVIS_RNM_NORMAL_MAP
+#error "the rnm variant ids are not defined (technique::block::path_defines gives them)"
+#endif
+
+#if SHVIS_RNM_VARIANT != SHVIS_RNM_NORMAL_MAP
 // Material space, sampled like the normal map: RGB = SSBump, A = AO.
 layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0 + 1) uniform sampler2D ssbump_ao_tex;
 #endif
@@ -34,7 +39,7 @@ void main() {
     vec3 lightmap0 = SAMPLE_PER_TEXEL(0).rgb;
     vec3 lightmap1 = SAMPLE_PER_TEXEL(1).rgb;
     vec3 lightmap2 = SAMPLE_PER_TEXEL(2).rgb;
-#if SHVIS_RNM_VARIANT == 2
+#if SHVIS_RNM_VARIANT == SHVIS_RNM_SELF_SHADOWED
     vec3 w = SAMPLE_MATERIAL(ssbump_ao_tex, in_uv_material).rgb;
 #else
     vec3 n = tangent_space_normal();
@@ -42,7 +47,7 @@ void main() {
     dp *= dp;
     float sum = dot(dp, vec3(1.0));
     vec3 w = sum > 0.0 ? dp / sum : vec3(1.0 / 3.0);
-#if SHVIS_RNM_VARIANT == 1
+#if SHVIS_RNM_VARIANT == SHVIS_RNM_NORMAL_MAP_AO
     w *= SAMPLE_MATERIAL(ssbump_ao_tex, in_uv_material).a;
 #endif
 #endif

@@ -1,9 +1,8 @@
 //! What a compiled fragment shader does per invocation, read off its SPIR-V: the
 //! cost model's operation counts are derived from the shader itself, not typed beside it.
 //!
-//! One pass over the instruction stream (SPIR-V 1.x §2.3: each instruction is a word with
-//! its length in the high half and its opcode in the low half) records the types, the
-//! pointers' storage classes and, per value instruction, what it costs:
+//! One pass over the instruction stream (`crate::gpu::reflect::instructions`) records the
+//! types, the pointers' storage classes and, per value instruction, what it costs:
 //! - **float ops**: arithmetic on floats, counted in scalar operations of the result's
 //!   width (a `vec4` add or fused multiply-add is 4, a dot of two `vec3`s 3, a 3×3 matrix
 //!   times a vector 9, a normalize 3 per component); comparisons, conversions and selects
@@ -103,14 +102,7 @@ pub fn count(spirv: &[u32]) -> OpCounts {
     let mut constants: HashMap<u32, u32> = HashMap::new();
     // Access chains with a non-constant index on their way (module doc).
     let mut indexed_pointers: HashSet<u32> = HashSet::new();
-    let mut i = 5; // after the header
-    while i < spirv.len() {
-        let word = spirv[i];
-        let (len, op) = ((word >> 16) as usize, word & 0xffff);
-        if len == 0 || i + len > spirv.len() {
-            break;
-        }
-        let w = &spirv[i + 1..i + len];
+    for (op, w) in crate::gpu::reflect::instructions(spirv) {
         let shape_of =
             |shapes: &HashMap<u32, Shape>, t: u32| shapes.get(&t).copied().unwrap_or_default();
         match op {
@@ -282,7 +274,6 @@ pub fn count(spirv: &[u32]) -> OpCounts {
         if has_result_type(op) && w.len() >= 2 {
             value_types.entry(w[1]).or_insert(w[0]);
         }
-        i += len;
     }
     counts
 }

@@ -1,6 +1,7 @@
 //! The Vulkan layer (ash): instance and device selection, validation and debug names,
 //! memory (gpu-allocator), buffers and images, shaders (shaderc), the mesh pipeline,
-//! timestamp queries, the offscreen target and readback.
+//! timestamp queries, the offscreen target and readback; what a compiled shader declares
+//! (its blocks, [`reflect`]) and the Rust half of that contract (`layout`).
 //!
 //! It knows nothing of SH or techniques: `technique/` describes what to bind and which
 //! shader to run, this layer turns that into Vulkan objects. Every object is owned by one
@@ -21,6 +22,7 @@ pub mod normal_bake;
 pub mod pass;
 mod pass_objects;
 pub mod path;
+pub mod reflect;
 pub mod shader;
 pub mod swapchain;
 pub mod target;

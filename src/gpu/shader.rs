@@ -20,6 +20,11 @@ pub enum ShaderStage {
     Compute,
 }
 
+/// Every embedded GLSL file as (path under `glsl/`, text), sorted by path.
+pub fn embedded_sources() -> &'static [(&'static str, &'static str)] {
+    SOURCES
+}
+
 fn source(path: &str) -> Option<&'static str> {
     SOURCES.iter().find(|(p, _)| *p == path).map(|(_, s)| *s)
 }

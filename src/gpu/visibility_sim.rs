@@ -34,7 +34,8 @@ const TIMESTAMPS: u32 = 3;
 /// Cleared sky distance: no surface.
 const EMPTY_SKY: f32 = 1e30;
 
-/// The view of one direction, as `glsl/include/sim_view.glsl`'s push constants lay it out.
+/// The view of one direction, as `glsl/include/sim_view.glsl`'s push constants
+/// (`DirectionView`) lay it out.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct DirectionView {
@@ -58,6 +59,20 @@ pub struct DirectionView {
     pub epsilon: f32,
     pub pad: [u32; 2],
 }
+super::layout::glsl_block!(DirectionView = "DirectionView" {
+    axis_u,
+    axis_v,
+    axis_d,
+    centre,
+    window,
+    res,
+    direction,
+    point_count,
+    mask_words,
+    t_min,
+    epsilon,
+    pad,
+});
 
 /// Everything one simulation needs.
 pub struct SimulationJob<'a> {

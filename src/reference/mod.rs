@@ -49,6 +49,7 @@ use rayon::prelude::*;
 use crate::bake::surface::SurfaceReader;
 use crate::bake::trace::Tracer;
 use crate::env::EnvMap;
+use crate::gpu::layout::ShaderIds;
 use crate::gpu::{Context, GpuError, ShaderStage, compile_glsl};
 use crate::render::{Frame, FrameSettings, SceneGpu};
 use crate::scene::Scene;
@@ -356,6 +357,39 @@ pub fn render_point_gbuffer(
 /// Outputs of `glsl/reference/gbuffer.frag` ([`PointGBuffer`]'s frames).
 const GBUFFER_OUTPUTS: u32 = 8;
 
+/// The ids of `SHVIS_GBUFFER_OUTPUT`, the output glsl/reference/gbuffer.frag writes, in
+/// output order.
+const GBUFFER_OUTPUT_NAMES: [&str; GBUFFER_OUTPUTS as usize] = [
+    "GBUFFER_POSITION",
+    "GBUFFER_NORMAL",
+    "GBUFFER_ALBEDO",
+    "GBUFFER_VERTEX_NORMAL",
+    "GBUFFER_UV_LIGHTMAP",
+    "GBUFFER_TANGENT_NORMAL",
+    "GBUFFER_TANGENT",
+    "GBUFFER_BITANGENT",
+];
+
+/// `SHVIS_GBUFFER_OUTPUT`'s ids: output i is i.
+pub fn gbuffer_output_ids() -> ShaderIds {
+    ShaderIds {
+        selector: "GBUFFER_OUTPUT",
+        ids: GBUFFER_OUTPUT_NAMES.iter().copied().zip(0..).collect(),
+    }
+}
+
+/// The macros of G-buffer output `output` (material textures at full resolution with
+/// `level0`).
+fn gbuffer_defines(output: u32, level0: bool) -> Vec<(&'static str, u32)> {
+    let mut defines = vec![
+        ("GBUFFER", 1),
+        ("GBUFFER_OUTPUT", output),
+        ("MATERIAL_LEVEL0", level0 as u32),
+    ];
+    defines.extend(gbuffer_output_ids().ids);
+    defines
+}
+
 /// The first `outputs` G-buffer pipelines (position, shading normal, albedo, vertex normal,
 /// lightmap UV, tangent-space normal, tangent, bitangent); with `level0` the material textures are read at full resolution.
 pub(crate) fn gbuffer_pipelines(
@@ -366,27 +400,15 @@ pub(crate) fn gbuffer_pipelines(
 ) -> Result<Vec<crate::gpu::MeshPipeline>, GpuError> {
     (0..outputs)
         .map(|output| {
+            let id = GBUFFER_OUTPUT_NAMES[output as usize];
             let name = format!(
                 "reference.gbuffer.{}",
-                [
-                    "position",
-                    "normal",
-                    "albedo",
-                    "vertex_normal",
-                    "uv_lightmap",
-                    "tangent_normal",
-                    "tangent",
-                    "bitangent"
-                ][output as usize]
+                id.trim_start_matches("GBUFFER_").to_lowercase()
             );
             let fragment = compile_glsl(
                 "reference/gbuffer.frag",
                 ShaderStage::Fragment,
-                &[
-                    ("GBUFFER", 1),
-                    ("GBUFFER_OUTPUT", output),
-                    ("MATERIAL_LEVEL0", level0 as u32),
-                ],
+                &gbuffer_defines(output, level0),
             )?;
             gpu.mesh_pipeline(ctx, &name, &fragment, &gpu.common_resources())
         })
@@ -665,11 +687,7 @@ mod tests {
             compile_glsl(
                 "reference/gbuffer.frag",
                 ShaderStage::Fragment,
-                &[
-                    ("GBUFFER", 1),
-                    ("GBUFFER_OUTPUT", output),
-                    ("MATERIAL_LEVEL0", output % 2),
-                ],
+                &super::gbuffer_defines(output, output % 2 == 1),
             )
             .unwrap();
         }

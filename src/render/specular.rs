@@ -18,6 +18,7 @@ use ash::vk;
 use glam::Vec3;
 
 use super::{Frame, SceneGpu};
+use crate::gpu::layout::ShaderIds;
 use crate::gpu::{self, Buffer, Context, GpuError, HwPath, Image, ImageDesc, Resource, layout};
 use crate::ndf::NdfMaps;
 
@@ -53,7 +54,8 @@ impl NormalFilter {
         }
     }
 
-    /// `SHVIS_SPECULAR` of glsl/include/specular.glsl.
+    /// `SHVIS_SPECULAR` of glsl/include/specular.glsl, named there by [`filter_ids`]
+    /// (undefined where the scene has no specular term).
     pub fn shader_value(self) -> u32 {
         match self {
             NormalFilter::Mip => 1,
@@ -61,6 +63,35 @@ impl NormalFilter {
             NormalFilter::NdfNormalized => 3,
         }
     }
+
+    /// The name of its id (`SHVIS_SPECULAR_MIP`, without `SHVIS_`).
+    fn id_name(self) -> &'static str {
+        match self {
+            NormalFilter::Mip => "SPECULAR_MIP",
+            NormalFilter::Ndf => "SPECULAR_NDF",
+            NormalFilter::NdfNormalized => "SPECULAR_NDFN",
+        }
+    }
+}
+
+/// `SHVIS_SPECULAR`'s ids (glsl/include/specular.glsl): one per filtering.
+pub fn filter_ids() -> ShaderIds {
+    ShaderIds {
+        selector: "SPECULAR",
+        ids: NormalFilter::ALL
+            .iter()
+            .map(|&filter| (filter.id_name(), filter.shader_value()))
+            .collect(),
+    }
+}
+
+/// The macros of the specular term's own frame (glsl/ndf/specular.frag) on `path`.
+pub fn frame_defines(filter: NormalFilter, path: HwPath) -> Vec<(&'static str, u32)> {
+    let mut defines = path.shader_defines().to_vec();
+    defines.push(("SPECULAR", filter.shader_value()));
+    defines.push(("GBUFFER", 1));
+    defines.extend(filter_ids().ids);
+    defines
 }
 
 impl std::str::FromStr for NormalFilter {
@@ -91,10 +122,11 @@ pub struct SpecularTerm {
     pub sigma: f32,
 }
 
-/// Uniform block `SpecularParams` of `glsl/include/specular.glsl` (std140).
+/// Uniform block `SpecularParams` of `glsl/include/specular.glsl` (std140); public for
+/// its layout (`GlslBlock`) alone.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-struct SpecularParams {
+pub struct SpecularParams {
     light_dir: [f32; 4],
     light_radiance: [f32; 4],
     sigma: f32,
@@ -102,6 +134,12 @@ struct SpecularParams {
     _pad: [f32; 2],
 }
 const _: () = assert!(std::mem::offset_of!(SpecularParams, sigma) == 32);
+crate::gpu::layout::glsl_block!(SpecularParams = "SpecularParams" {
+    light_dir,
+    light_radiance,
+    sigma,
+    kappa0,
+});
 
 impl SpecularParams {
     fn new(light: &SpecularLight, maps: &NdfMaps) -> Self {
@@ -275,12 +313,7 @@ pub fn render_specular(
     let fragment = gpu::compile_glsl(
         "ndf/specular.frag",
         gpu::ShaderStage::Fragment,
-        &[
-            path.shader_defines()[0],
-            path.shader_defines()[1],
-            ("SPECULAR", filter.shader_value()),
-            ("GBUFFER", 1),
-        ],
+        &frame_defines(filter, path),
     )?;
     let mut resources = scene.common_resources();
     resources.extend(specular_resources(scene, &params, filter, images));

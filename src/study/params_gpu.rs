@@ -17,6 +17,7 @@ use glam::DVec3;
 use gpu_allocator::MemoryLocation;
 
 use super::params::StudyError;
+use crate::gpu::layout::ShaderIds;
 use crate::gpu::{
     Buffer, ComputePipeline, ComputePipelineDesc, Context, GpuError, Image, ImageDesc, Resource,
     Sampler, SamplerKind, ShaderStage, compile_glsl,
@@ -27,6 +28,32 @@ use crate::sphere::{Parameterization, SphereMap};
 
 /// Work-group size of glsl/study/reconstruct.comp.
 const LOCAL_SIZE: u32 = 64;
+
+/// `SHVIS_STUDY_PARAM`'s ids (glsl/study/reconstruct.comp): the parameterization sampled,
+/// its index in `Parameterization::ALL`.
+pub fn param_ids() -> ShaderIds {
+    let name = |kind: Parameterization| match kind {
+        Parameterization::DualOrtho => "PARAM_DUAL_ORTHO",
+        Parameterization::DualParaboloid => "PARAM_DUAL_PARABOLOID",
+        Parameterization::CubeDx9 => "PARAM_CUBE_DX9",
+        Parameterization::CubeDx10 => "PARAM_CUBE_DX10",
+    };
+    ShaderIds {
+        selector: "STUDY_PARAM",
+        ids: Parameterization::ALL
+            .iter()
+            .map(|&kind| name(kind))
+            .zip(0..)
+            .collect(),
+    }
+}
+
+/// The macros of the reconstruction shader for `Parameterization::ALL[index]`.
+fn reconstruct_defines(index: u32) -> Vec<(&'static str, u32)> {
+    let mut defines = vec![("STUDY_PARAM", index)];
+    defines.extend(param_ids().ids);
+    defines
+}
 
 /// One parameterization × resolution measured on the GPU.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -127,7 +154,7 @@ pub fn run_gpu_study(
         let spirv = compile_glsl(
             "study/reconstruct.comp",
             ShaderStage::Compute,
-            &[("STUDY_PARAM", param_index)],
+            &reconstruct_defines(param_index),
         )?;
         let pipeline = ComputePipeline::new(
             ctx,
@@ -283,7 +310,7 @@ mod tests {
             compile_glsl(
                 "study/reconstruct.comp",
                 ShaderStage::Compute,
-                &[("STUDY_PARAM", param)],
+                &super::reconstruct_defines(param),
             )
             .unwrap();
         }

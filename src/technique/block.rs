@@ -30,6 +30,10 @@
 //! Techniques whose per-texel data is not a set of values (cluster indices), is rebuilt for
 //! each lighting (`nmprt*`) or absent (per-vertex PCA) have no `dx11` row: each family's
 //! `form_on` says so, and names its codec where it has one.
+//!
+//! The codec is a shader id (`gpu::layout::ShaderIds`, [`codec_ids`]); this module also
+//! gathers the macros every compile of a technique's shader takes: the path's, the
+//! codec, and every id a technique shader selects by ([`path_defines`], [`shader_ids`]).
 
 use std::sync::Arc;
 
@@ -39,6 +43,7 @@ use half::f16;
 use super::texels::{ImageBytes, TexelGroups, VALUES_PER_TEXEL};
 use super::{HwPath, Technique, TechniqueError};
 use crate::bake::block::{self as bc, Bc6hQuality, Bc7Quality, Clamped};
+use crate::gpu::layout::ShaderIds;
 use crate::gpu::{Context, Image, ImageDesc};
 
 /// How a technique's per-texel data is stored on `dx11` (module doc).
@@ -73,7 +78,8 @@ impl NormColours {
 }
 
 impl BlockCodec {
-    /// The value of the shader macro `SHVIS_PER_TEXEL_CODEC` (glsl/include/per_texel.glsl).
+    /// The value of the shader macro `SHVIS_PER_TEXEL_CODEC` (glsl/include/per_texel.glsl),
+    /// named there by [`codec_ids`].
     pub fn shader_value(self) -> u32 {
         match self {
             BlockCodec::Bc4 => 1,
@@ -82,6 +88,44 @@ impl BlockCodec {
             BlockCodec::Ratio(NormColours::GroupRgb) => 4,
         }
     }
+}
+
+/// `SHVIS_PER_TEXEL_CODEC` where the per-texel data is stored as dx10 stores it.
+const NO_CODEC: u32 = 0;
+
+/// `SHVIS_PER_TEXEL_CODEC`'s ids: none (dx9, dx10, and dx11 without a block form) and each
+/// [`BlockCodec`]'s.
+pub fn codec_ids() -> ShaderIds {
+    let ratio = |colours: NormColours| BlockCodec::Ratio(colours).shader_value();
+    ShaderIds {
+        selector: "PER_TEXEL_CODEC",
+        ids: vec![
+            ("CODEC_NONE", NO_CODEC),
+            ("CODEC_BC4", BlockCodec::Bc4.shader_value()),
+            ("CODEC_RATIO_ONE", ratio(NormColours::One)),
+            ("CODEC_RATIO_TRIPLETS", ratio(NormColours::Triplets)),
+            ("CODEC_RATIO_GROUP_RGB", ratio(NormColours::GroupRgb)),
+        ],
+    }
+}
+
+/// Every id set a technique's shaders select by: the per-texel codec, the engine SH
+/// bases, the `rnm` weights, the clustered decode's count paths (the cost model's builds)
+/// and the scene's specular filtering.
+pub fn shader_ids() -> Vec<ShaderIds> {
+    vec![
+        codec_ids(),
+        super::sh_variant::basis_ids(),
+        super::rnm::variant_ids(),
+        super::cluster::count_path_ids(),
+        crate::render::specular::filter_ids(),
+    ]
+}
+
+/// Every id of [`shader_ids`] as a define (`CODEC_BC4`, 1): [`path_defines`] gives them to
+/// every compile of a technique's shader.
+pub fn shader_id_defines() -> Vec<(&'static str, u32)> {
+    shader_ids().into_iter().flat_map(|set| set.ids).collect()
 }
 
 /// How `technique`'s per-texel data is block-compressed on `dx11`, or the error of a row
@@ -99,16 +143,18 @@ pub fn dx11_codec(technique: Technique, label: &str) -> Result<BlockCodec, Techn
     })
 }
 
-/// The shader macros of `technique` on `path`: the path's, and the codec's
-/// (`SHVIS_PER_TEXEL_CODEC`, 0 where the path stores the data as dx10 does).
+/// The shader macros of `technique` on `path`: the path's, the codec's
+/// (`SHVIS_PER_TEXEL_CODEC`: on `dx11` the technique's, else `CODEC_NONE`, the data stored
+/// as dx10 stores it) and every shader id ([`shader_id_defines`]).
 pub fn path_defines(technique: Technique, path: HwPath) -> Vec<(&'static str, u32)> {
     let codec = technique
         .form_on(path)
         .ok()
         .and_then(|form| form.codec())
-        .map_or(0, BlockCodec::shader_value);
+        .map_or(NO_CODEC, BlockCodec::shader_value);
     let mut defines = path.shader_defines().to_vec();
     defines.push(("PER_TEXEL_CODEC", codec));
+    defines.extend(shader_id_defines());
     defines
 }
 

@@ -31,6 +31,7 @@ use crate::bake::cluster::Clustering;
 use crate::bake::cluster::{ClusteredModel, QuantizedClusters};
 use crate::cost::{CountPlan, CountVariant};
 use crate::gpu::Context;
+use crate::gpu::layout::ShaderIds;
 use crate::sh::Order;
 use std::sync::Arc;
 
@@ -84,16 +85,39 @@ pub fn reads(m: u32, seams: SeamMode) -> ShaderReads {
     }
 }
 
+/// `SHVIS_COUNT_PATH` of the count shader glsl/cost/cluster.frag: which part of the decode
+/// a count build keeps ([`count_plan`]).
+const COUNT_INSIDE: u32 = 1;
+const COUNT_ACROSS: u32 = 2;
+const COUNT_MEASURE: u32 = 3;
+const COUNT_BEFORE_BRANCH: u32 = 4;
+const COUNT_ACROSS_LOOP_CUT: u32 = 5;
+
+/// `SHVIS_COUNT_PATH`'s ids (glsl/cost/cluster.frag).
+pub fn count_path_ids() -> ShaderIds {
+    ShaderIds {
+        selector: "COUNT_PATH",
+        ids: vec![
+            ("COUNT_INSIDE", COUNT_INSIDE),
+            ("COUNT_ACROSS", COUNT_ACROSS),
+            ("COUNT_MEASURE", COUNT_MEASURE),
+            ("COUNT_BEFORE_BRANCH", COUNT_BEFORE_BRANCH),
+            ("COUNT_ACROSS_LOOP_CUT", COUNT_ACROSS_LOOP_CUT),
+        ],
+    }
+}
+
 /// How the cost model counts the shader ([`CountPlan`]): its decode runs once where the
 /// bilinear footprint lies inside one cluster and four times where it straddles clusters
 /// (blended seams), so its counts are the inside path's (the count shader
-/// glsl/cost/cluster.frag, `SHVIS_COUNT_PATH` 1, loops unrolled) plus, for the measured share of fragments whose
-/// subgroup takes the boundary path, the boundary path's (2) less the work before the
-/// branch (4), counted once already; the naive shader runs one path. Where no lane of a
-/// batch takes the boundary path, its straight-line code — the boundary path with its
-/// loops cut (5), less the work before the branch — is untaken work (on lavapipe, which
-/// runs it masked and skips a loop no lane enters, measured: vq256 14.8 ms with the branch
-/// taken out, 28.0 with it there and never taken; cpca8_7 39.8 and 53.5).
+/// glsl/cost/cluster.frag, `COUNT_INSIDE`, loops unrolled) plus, for the measured share of
+/// fragments whose subgroup takes the boundary path (`COUNT_MEASURE`), the boundary path's
+/// (`COUNT_ACROSS`) less the work before the branch (`COUNT_BEFORE_BRANCH`), counted once
+/// already; the naive shader runs one path. Where no lane of a batch takes the boundary
+/// path, its straight-line code — the boundary path with its loops cut
+/// (`COUNT_ACROSS_LOOP_CUT`), less the work before the branch — is untaken work (on
+/// lavapipe, which runs it masked and skips a loop no lane enters, measured: vq256 14.8 ms
+/// with the branch taken out, 28.0 with it there and never taken; cpca8_7 39.8 and 53.5).
 pub fn count_plan(seams: SeamMode) -> CountPlan {
     const COUNT_SHADER: &str = "cost/cluster.frag";
     let variant = |path, share, share_per_measured| CountVariant {
@@ -110,17 +134,17 @@ pub fn count_plan(seams: SeamMode) -> CountPlan {
         SeamMode::Naive => CountPlan {
             shader: COUNT_SHADER,
             measure_defines: None,
-            variants: vec![variant(1, 1.0, 0.0)],
+            variants: vec![variant(COUNT_INSIDE, 1.0, 0.0)],
         },
         SeamMode::Blended => CountPlan {
             shader: COUNT_SHADER,
-            measure_defines: Some(vec![("COUNT_PATH", 3)]),
+            measure_defines: Some(vec![("COUNT_PATH", COUNT_MEASURE)]),
             variants: vec![
-                variant(1, 1.0, 0.0),
-                variant(2, 0.0, 1.0),
-                variant(4, 0.0, -1.0),
-                untaken(5, 1.0, -1.0),
-                untaken(4, -1.0, 1.0),
+                variant(COUNT_INSIDE, 1.0, 0.0),
+                variant(COUNT_ACROSS, 0.0, 1.0),
+                variant(COUNT_BEFORE_BRANCH, 0.0, -1.0),
+                untaken(COUNT_ACROSS_LOOP_CUT, 1.0, -1.0),
+                untaken(COUNT_BEFORE_BRANCH, -1.0, 1.0),
             ],
         },
     }
@@ -232,6 +256,7 @@ mod tests {
                     for vote in plan.measure_defines.iter().flat_map(|_| [0, 1]) {
                         let mut defines = fragment_shader(8, m, seams).defines;
                         defines.extend(path.shader_defines());
+                        defines.extend(super::super::block::shader_id_defines());
                         defines.push(("MATERIAL_LEVEL0", 0));
                         defines.push(("SUBGROUP_VOTE", vote));
                         defines.extend(plan.measure_defines.iter().flatten().copied());
@@ -245,6 +270,7 @@ mod tests {
                     for variant in plan.variants {
                         let mut defines = fragment_shader(8, m, seams).defines;
                         defines.extend(path.shader_defines());
+                        defines.extend(super::super::block::shader_id_defines());
                         defines.push(("MATERIAL_LEVEL0", 0));
                         defines.extend_from_slice(&variant.defines);
                         let spirv = crate::gpu::compile_glsl(

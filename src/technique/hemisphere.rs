@@ -52,6 +52,7 @@ pub struct SgParams {
     /// Lobe axes (tangent space) in .xyz, sharpness in .w.
     pub lobes: [[f32; 4]; SG_MAX_LOBES],
 }
+crate::gpu::layout::glsl_block!(SgParams = "SgParams" { unscale, lobes });
 
 /// vec4s per face in [`dice_face_table`].
 pub const DICE_FACE_VEC4S: usize = 7;
@@ -70,6 +71,7 @@ pub struct DiceParams {
     /// [`dice_face_table`], a face per entry.
     pub faces: [[[f32; 4]; DICE_FACE_VEC4S]; DICE_MAX_FACES],
 }
+crate::gpu::layout::glsl_block!(DiceParams = "DiceParams" { unscale, atlas, faces });
 
 /// The faces for the shader, 7 vec4s each: the centre (xyz); per vertex i its dual vector
 /// (xyz; barycentric λ_i = dual_i · m) with the stored vertex's index in w; per vertex i

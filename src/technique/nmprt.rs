@@ -620,6 +620,7 @@ pub struct NmprtPixelParams {
     /// Colour c, group k at `c·16 + k`: lighting coefficients 4k … 4k+3.
     pub light: [[f32; 4]; 3 * PIXEL_MAX_ROW_GROUPS],
 }
+crate::gpu::layout::glsl_block!(NmprtPixelParams = "NmprtPixelParams" { unscale, light });
 
 /// No per-texel bake data (the lighting's per-texel images replace it) and the recipe.
 pub(crate) fn prepare(

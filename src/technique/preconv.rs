@@ -29,6 +29,7 @@ pub struct PreconvParams {
     pub irradiance_sh: [[f32; 4]; 9],
 }
 const _: () = assert!(std::mem::size_of::<PreconvParams>() == 144);
+crate::gpu::layout::glsl_block!(PreconvParams = "PreconvParams" { irradiance_sh });
 
 /// The fragment shader of `preconv`.
 pub fn fragment_shader() -> ShaderVariant {

@@ -37,10 +37,28 @@ use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
 use super::{Inputs, ShaderVariant, TechniqueError};
 use super::{ShaderReads, Technique};
 use crate::bake::ssbump::{SsBumpMaps, SsBumpStorage};
+use crate::gpu::layout::ShaderIds;
 use crate::gpu::{Context, Image, ImageDesc};
 
 /// Lightmaps per texel (one RGBA group each).
 pub const RNM_LIGHTMAPS: usize = 3;
+
+/// `SHVIS_RNM_VARIANT`'s ids (glsl/technique/rnm.frag): each variant's
+/// `RnmVariant::shader_value`, named.
+pub fn variant_ids() -> ShaderIds {
+    let name = |variant: RnmVariant| match variant {
+        RnmVariant::NormalMap => "RNM_NORMAL_MAP",
+        RnmVariant::NormalMapAo => "RNM_NORMAL_MAP_AO",
+        RnmVariant::SelfShadowed => "RNM_SELF_SHADOWED",
+    };
+    ShaderIds {
+        selector: "RNM_VARIANT",
+        ids: RnmVariant::ALL
+            .iter()
+            .map(|&variant| (name(variant), variant.shader_value()))
+            .collect(),
+    }
+}
 
 /// The fragment shader of a variant.
 pub fn fragment_shader(variant: RnmVariant) -> ShaderVariant {

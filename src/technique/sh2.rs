@@ -42,6 +42,7 @@ pub struct Sh2Params {
     pub lighting_sh: [[f32; 4]; 9],
 }
 const _: () = assert!(std::mem::size_of::<Sh2Params>() == 144);
+crate::gpu::layout::glsl_block!(Sh2Params = "Sh2Params" { lighting_sh });
 
 /// The fragment shader of `sh2`.
 pub fn fragment_shader() -> ShaderVariant {

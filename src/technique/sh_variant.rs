@@ -33,6 +33,7 @@ use super::texels::{TexelGroups, VALUES_PER_TEXEL};
 use super::{Inputs, ShaderReads, ShaderVariant, Technique, TechniqueError};
 use crate::bake::shlmap::ShLightmap;
 use crate::gpu::Context;
+use crate::gpu::layout::ShaderIds;
 use crate::sh::bases::ShBasis;
 
 /// RGBA groups per texel of `basis`.
@@ -41,7 +42,8 @@ pub fn groups(basis: ShVariantBasis) -> usize {
 }
 
 /// The value of the shader macro `SHVIS_ENGINE_SH_BASIS` (glsl/include/sh_bases.glsl) that
-/// reconstructs `basis`; 5 (L2, `sh_irradiance_order3`) for both L2s.
+/// reconstructs `basis`, named there by [`basis_ids`]; L2's (`sh_irradiance_order3`) for
+/// both L2s.
 pub fn shader_value(basis: ShBasis) -> u32 {
     match basis {
         ShBasis::L1 => 0,
@@ -50,6 +52,24 @@ pub fn shader_value(basis: ShBasis) -> u32 {
         ShBasis::Zh3 => 3,
         ShBasis::L1Luminance => 4,
         ShBasis::L2 | ShBasis::L2Deringed => 5,
+    }
+}
+
+/// `SHVIS_ENGINE_SH_BASIS`'s ids: one per reconstruction of sh_bases.glsl.
+pub fn basis_ids() -> ShaderIds {
+    ShaderIds {
+        selector: "ENGINE_SH_BASIS",
+        ids: vec![
+            ("SH_BASIS_L1", shader_value(ShBasis::L1)),
+            ("SH_BASIS_L1_GEOMERICS", shader_value(ShBasis::L1Geomerics)),
+            (
+                "SH_BASIS_L1_ZH3_HALLUCINATED",
+                shader_value(ShBasis::L1Zh3Hallucinated),
+            ),
+            ("SH_BASIS_ZH3", shader_value(ShBasis::Zh3)),
+            ("SH_BASIS_L1_LUMINANCE", shader_value(ShBasis::L1Luminance)),
+            ("SH_BASIS_L2", shader_value(ShBasis::L2)),
+        ],
     }
 }
 

@@ -32,14 +32,16 @@ use crate::bake::shlmap::{SH_LIGHTMAP_COEFFS, ShLightmap};
 /// RGBA groups per texel: ⌈27 / 4⌉.
 pub const SHLMAP_GROUPS: usize = (3 * SH_LIGHTMAP_COEFFS).div_ceil(VALUES_PER_TEXEL);
 
-/// Uniforms of glsl/technique/shlmap.frag, block `ShLightmapParams` (std140), and of
-/// glsl/technique/rnm.frag's `RnmParams` (the same layout).
+/// Uniforms of glsl/technique/shlmap.frag, block `ShLightmapParams` (std140), and of the
+/// blocks of the same layout: engine_sh.frag's and hbasis.frag's (the same name),
+/// rnm.frag's `RnmParams` and nmprtsvd.frag's `NmprtParams`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ShLightmapParams {
     /// x: factor undoing the f16 range scaling.
     pub unscale: [f32; 4],
 }
+crate::gpu::layout::glsl_block!(ShLightmapParams = "ShLightmapParams" { unscale });
 
 /// The fragment shader of `shlmap`.
 pub fn fragment_shader() -> ShaderVariant {

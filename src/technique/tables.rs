@@ -68,6 +68,7 @@ pub struct TableParams {
     /// x: 1/scale of the tables' f16 range scaling; y: table texels per side.
     pub unscale_res: [f32; 4],
 }
+crate::gpu::layout::glsl_block!(TableParams = "GroupedParams" { unscale_res });
 
 /// The L×H table of visibility order `v_order` for `radiance_sh` over `build`'s map
 /// (`bake::lxh`: product matrices, then the symmetric build), or an input error when the
