@@ -677,9 +677,9 @@ fn argument_cases(suite: &mut Suite) {
         vec!["unc6.dx9", "--path dx10 or dx11"],
     ));
     table.push((
-        vec!["export", "--technique", "rnm", "--out", &out],
+        vec!["export", "--technique", "rnmao", "--out", &out],
         1,
-        vec!["rnm", "material-space"],
+        vec!["rnmao", "material-space"],
     ));
     for (flag, v) in [
         ("--frames", "0"),

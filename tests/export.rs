@@ -33,6 +33,8 @@ fn every_file_reads_back_as_the_texels_the_renderer_uploads() {
         ("unc6", HwPath::Dx11),
         ("unc6", HwPath::Dx10),
         ("preconv", HwPath::Dx11),
+        ("rnm", HwPath::Dx10),
+        ("rnm", HwPath::Dx11),
     ] {
         let t: Technique = name.parse().unwrap();
         let label = format!("{t}.{path}");
@@ -115,6 +117,8 @@ fn the_decode_snippet_draws_the_techniques_image() {
         ("shlmap", HwPath::Dx11),
         ("unc6", HwPath::Dx11),
         ("unc6", HwPath::Dx10),
+        ("rnm", HwPath::Dx10),
+        ("rnm", HwPath::Dx11),
     ] {
         let t: Technique = name.parse().unwrap();
         let out = export(prepared, t, path).unwrap();

@@ -2,7 +2,7 @@
 // the hybrid cubic Bézier (1)–(2) and the YCoCg variant). The includer defines
 //   SHVIS_DICE_FACES    faces in the table,
 //   SHVIS_DICE_YCOCG    1: Y hybrid, Co and Cg linear; 0: RGB hybrid,
-//   DICE_FACE(k)        vec4 k of the face table (src/technique/local.rs, dice_face_table),
+//   DICE_FACE(k)        vec4 k of the face table (src/technique/hemisphere.rs, dice_face_table),
 //   DICE_READ(g)        vec4 group g of the texel's stored values (computed g),
 // and gets dice_irradiance(m) at a tangent-space direction m.
 #ifndef SHVIS_DICE_GLSL

@@ -1,7 +1,7 @@
 // The engine lightmap bases' irradiance reconstructions (src/sh/bases.rs, equations
 // (1)–(8) of its module doc), for the stored layout of ShBasis::encode: v[3k + c] is colour c
 // of stored coefficient k. SHVIS_ENGINE_SH_BASIS selects one (ids SHVIS_SH_BASIS_*, from
-// src/technique/engine_sh.rs):
+// src/technique/sh_variant.rs):
 //   L1: L1 linear (1)   L1_GEOMERICS: L1 Geomerics (2)
 //   L1_ZH3_HALLUCINATED: L1 + hallucinated ZH3 (5)   ZH3: ZH3 stored (4)
 //   L1_LUMINANCE: L1 luminance (6)

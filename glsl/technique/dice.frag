@@ -1,4 +1,4 @@
-// dice, dicey: Ambient Dice lightmaps (src/technique/local.rs). Per texel the stored values
+// dice, dicey: Ambient Dice lightmaps (src/technique/hemisphere.rs). Per texel the stored values
 // of ten icosahedron vertices (9 or 5 each) in RGBA groups; the shader reads only the three
 // vertices of the face holding the normal map's tangent-space normal
 // (glsl/include/dice.glsl): dx10 and dx11 at computed array layers, dx9 at computed tiles of one

@@ -1,4 +1,4 @@
-// l1, l1geo, l1zh3, zh3, l1lum: the SH lightmaps engines ship (src/technique/engine_sh.rs).
+// l1, l1geo, l1zh3, zh3, l1lum: the SH lightmaps engines ship (src/technique/sh_variant.rs).
 // Per texel SHVIS_ENGINE_SH_GROUPS RGBA groups of stored values (ShBasis::encode's layout),
 // reconstructed at the shading normal by glsl/include/sh_bases.glsl;
 // radiance = albedo/π · max(0, E(n)).

@@ -1,4 +1,4 @@
-// hb4, hb6: H-basis lightmaps (src/technique/local.rs). Per texel SHVIS_HBASIS_GROUPS RGBA
+// hb4, hb6: H-basis lightmaps (src/technique/hemisphere.rs). Per texel SHVIS_HBASIS_GROUPS RGBA
 // groups of SHVIS_HBASIS_COUNT RGB coefficients (value 3i + c), evaluated at the normal
 // map's tangent-space normal by glsl/include/hbasis.glsl; radiance = albedo/π · max(0, E).
 #version 450

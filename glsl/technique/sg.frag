@@ -1,4 +1,4 @@
-// sgN: spherical Gaussian lightmaps (src/technique/local.rs). Per texel SHVIS_SG_GROUPS
+// sgN: spherical Gaussian lightmaps (src/technique/hemisphere.rs). Per texel SHVIS_SG_GROUPS
 // RGBA groups of SHVIS_SG_LOBES RGB amplitudes (value 3k + c); the lobes' tangent-space axes
 // and sharpness in the uniform block; E(m) = Σ_k a_k ∫ G_k max(0, m·ω) dω at the normal
 // map's tangent-space normal (glsl/include/sg.glsl); radiance = albedo/π · max(0, E).

@@ -21,7 +21,7 @@
 //!
 //! # Fits
 //!
-//! Both read the texel's order-3 RGB radiance SH, as the other local bases do: E(T m) is
+//! Both read the texel's order-3 RGB radiance SH, as the hemisphere bases do: E(T m) is
 //! the irradiance at the world normal T m / |T m| ([`crate::sh::hbasis::irradiance_in_frame`];
 //! T = [tangent, bitangent, normal], the texel's normal-map frame).
 //!

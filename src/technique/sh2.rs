@@ -200,23 +200,21 @@ impl Family for Sh2 {
 
     fn prepare(
         self,
-        path: HwPath,
+        _: HwPath,
         inputs: &Inputs<'_>,
         _: &(),
         label: &str,
     ) -> Result<(TexelGroups, Recipe), TechniqueError> {
-        let _ = path;
         prepare(inputs, label)
     }
 
     fn extra_slot(
         self,
-        ctx: &Arc<Context>,
-        path: HwPath,
-        inputs: &Inputs<'_>,
-        label: &str,
+        _: &Arc<Context>,
+        _: HwPath,
+        _: &Inputs<'_>,
+        _: &str,
     ) -> Result<Option<TextureSlot>, TechniqueError> {
-        let _ = (ctx, path, inputs, label);
         Ok(None)
     }
 
