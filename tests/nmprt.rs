@@ -232,9 +232,20 @@ fn the_pixel_shader_form_renders_the_per_texel_form() {
     assert!(worst <= 1e-2 * largest, "{worst} of {largest}");
     let technique: Technique = "nmprtsvd4p".parse().unwrap();
     assert!(!technique.runs_on(HwPath::Dx9) && technique.runs_on(HwPath::Dx10));
+    assert_eq!(
+        technique.form_on(HwPath::Dx9),
+        Err(technique::Refusal::Dx9Textures)
+    );
+    // The build refuses it by its form, before any upload.
     match technique::build(&ctx, &scene, technique, HwPath::Dx9, &inputs) {
-        Err(technique::TechniqueError::Dx9Rule { detail, .. }) => println!("dx9: {detail}"),
-        Err(e) => panic!("dx9: refused for another reason: {e}"),
+        Err(e) => {
+            let e = e.to_string();
+            let why = technique::Refusal::Dx9Textures.to_string();
+            assert!(
+                e.contains("cannot run on dx9") && e.contains(&why),
+                "dx9: {e}"
+            );
+        }
         Ok(_) => panic!("dx9: built with more than 16 textures"),
     }
     common::assert_validation_clean(&ctx, "nmprtsvd4p");
