@@ -22,7 +22,9 @@ use crate::files::ktx2::{Ktx2Image, encode};
 use crate::prepare::Prepared;
 use crate::technique::block::{BlockCodec, NormColours, compress_cached, dx11_codec, path_defines};
 use crate::technique::texels::TexelGroups;
-use crate::technique::{HwPath, LightingRecipe, Technique, TechniqueError, per_texel_data};
+use crate::technique::{
+    HwPath, LightingData, LightingRecipe, Technique, TechniqueError, per_texel_data,
+};
 
 /// Errors of an export.
 #[derive(Debug, thiserror::Error)]
@@ -132,94 +134,15 @@ pub fn export(
     let recipe = LightingRecipe::new(technique, path, &inputs)?;
     let lighting = recipe.build(inputs.radiance_sh, inputs.irradiance_sh)?;
     let mut files = Vec::new();
-    let values = texels.groups.len() * crate::technique::texels::VALUES_PER_TEXEL;
-    let per_texel = match path {
-        HwPath::Dx11 => {
-            let codec = dx11_codec(technique, &label)?;
-            let block = compress_cached(&texels, codec, &label, inputs.cache_dir)?;
-            let images = block.image_levels();
-            let mut names = Vec::new();
-            for (k, (desc, levels, _)) in images.iter().enumerate() {
-                let name = if k == 0 {
-                    "per_texel.ktx2"
-                } else {
-                    "per_texel_norms.ktx2"
-                };
-                let data: Vec<u8> = levels[0].concat();
-                files.push((
-                    name.to_string(),
-                    ktx2(
-                        &Ktx2Image {
-                            format: desc.format,
-                            width: desc.width,
-                            height: desc.height,
-                            layers: desc.layers,
-                            faces: 1,
-                            data: &data,
-                        },
-                        &label,
-                    )?,
-                ));
-                names.push(json!({"file": name, "format": format!("{:?}", desc.format), "layers": desc.layers}));
-            }
-            json!({
-                "files": names,
-                "res": texels.res,
-                "layers": texels.groups.len(),
-                "values_per_texel": values,
-                "codec": codec_json(codec),
-                "bytes_per_texel": block.bytes_per_texel(),
-            })
-        }
-        HwPath::Dx9 | HwPath::Dx10 => {
-            files.push(("per_texel.ktx2".into(), dx10_per_texel(&texels, &label)?));
-            json!({
-                "files": [{"file": "per_texel.ktx2", "format": format!("{:?}", texels.format), "layers": texels.groups.len()}],
-                "res": texels.res,
-                "layers": texels.groups.len(),
-                "values_per_texel": values,
-                "codec": {"name": "plain", "decode": "value_j = channel j mod 4 of layer j div 4 (RGBA8 as unorm)"},
-            })
-        }
-    };
-    let mut tables = Vec::new();
-    if let Some(data) = &lighting.tables {
-        for (i, image) in data.images.iter().enumerate() {
-            let desc = image.desc;
-            let cube = matches!(
-                desc.view_type,
-                ash::vk::ImageViewType::CUBE | ash::vk::ImageViewType::CUBE_ARRAY
-            );
-            let (layers, faces) = if cube {
-                (desc.layers / 6, 6)
-            } else {
-                (desc.layers, 1)
-            };
-            let bytes: Vec<u8> = data.image_levels(i)[0].concat();
-            let name = format!("table_{i}.ktx2");
-            files.push((
-                name.clone(),
-                ktx2(
-                    &Ktx2Image {
-                        format: desc.format,
-                        width: desc.width,
-                        height: desc.height,
-                        layers,
-                        faces,
-                        data: &bytes,
-                    },
-                    &label,
-                )?,
-            ));
-            tables.push(json!({
-                "file": name,
-                "format": format!("{:?}", desc.format),
-                "kind": if cube { "cube array (+X −X +Y −Y +Z −Z per layer)" } else { "2D array" },
-                "layers": layers,
-                "unscale": data.unscale,
-            }));
-        }
-    }
+    let per_texel = per_texel_files(
+        technique,
+        path,
+        &texels,
+        &label,
+        inputs.cache_dir,
+        &mut files,
+    )?;
+    let tables = table_files(&lighting, &label, &mut files)?;
     files.push(("params.bin".into(), lighting.params.clone()));
     let shader = technique.fragment_shader();
     let mut defines = path_defines(technique, path);
@@ -263,6 +186,117 @@ pub fn export(
         serde_json::to_vec_pretty(&manifest).map_err(|e| refused(format!("manifest: {e}")))?;
     files.push(("manifest.json".into(), manifest));
     Ok(Export { files })
+}
+
+/// Adds the per-texel files of `texels` on `path` to `files` (dx11: the technique's block
+/// codec; else the plain 2D array) and returns their manifest entry.
+fn per_texel_files(
+    technique: Technique,
+    path: HwPath,
+    texels: &TexelGroups,
+    label: &str,
+    cache_dir: Option<&Path>,
+    files: &mut Vec<(String, Vec<u8>)>,
+) -> Result<serde_json::Value, ExportError> {
+    let values = texels.groups.len() * crate::technique::texels::VALUES_PER_TEXEL;
+    let per_texel = match path {
+        HwPath::Dx11 => {
+            let codec = dx11_codec(technique, label)?;
+            let block = compress_cached(texels, codec, label, cache_dir)?;
+            let images = block.image_levels();
+            let mut names = Vec::new();
+            for (k, (desc, levels, _)) in images.iter().enumerate() {
+                let name = if k == 0 {
+                    "per_texel.ktx2"
+                } else {
+                    "per_texel_norms.ktx2"
+                };
+                let data: Vec<u8> = levels[0].concat();
+                files.push((
+                    name.to_string(),
+                    ktx2(
+                        &Ktx2Image {
+                            format: desc.format,
+                            width: desc.width,
+                            height: desc.height,
+                            layers: desc.layers,
+                            faces: 1,
+                            data: &data,
+                        },
+                        label,
+                    )?,
+                ));
+                names.push(json!({"file": name, "format": format!("{:?}", desc.format), "layers": desc.layers}));
+            }
+            json!({
+                "files": names,
+                "res": texels.res,
+                "layers": texels.groups.len(),
+                "values_per_texel": values,
+                "codec": codec_json(codec),
+                "bytes_per_texel": block.bytes_per_texel(),
+            })
+        }
+        HwPath::Dx9 | HwPath::Dx10 => {
+            files.push(("per_texel.ktx2".into(), dx10_per_texel(texels, label)?));
+            json!({
+                "files": [{"file": "per_texel.ktx2", "format": format!("{:?}", texels.format), "layers": texels.groups.len()}],
+                "res": texels.res,
+                "layers": texels.groups.len(),
+                "values_per_texel": values,
+                "codec": {"name": "plain", "decode": "value_j = channel j mod 4 of layer j div 4 (RGBA8 as unorm)"},
+            })
+        }
+    };
+    Ok(per_texel)
+}
+
+/// Adds each of `lighting`'s normal-indexed tables to `files` as `table_{i}.ktx2` and
+/// returns their manifest entries.
+fn table_files(
+    lighting: &LightingData,
+    label: &str,
+    files: &mut Vec<(String, Vec<u8>)>,
+) -> Result<Vec<serde_json::Value>, ExportError> {
+    let mut tables = Vec::new();
+    if let Some(data) = &lighting.tables {
+        for (i, image) in data.images.iter().enumerate() {
+            let desc = image.desc;
+            let cube = matches!(
+                desc.view_type,
+                ash::vk::ImageViewType::CUBE | ash::vk::ImageViewType::CUBE_ARRAY
+            );
+            let (layers, faces) = if cube {
+                (desc.layers / 6, 6)
+            } else {
+                (desc.layers, 1)
+            };
+            let bytes: Vec<u8> = data.image_levels(i)[0].concat();
+            let name = format!("table_{i}.ktx2");
+            files.push((
+                name.clone(),
+                ktx2(
+                    &Ktx2Image {
+                        format: desc.format,
+                        width: desc.width,
+                        height: desc.height,
+                        layers,
+                        faces,
+                        data: &bytes,
+                    },
+                    label,
+                )?,
+            ));
+            tables.push(json!({
+                "file": name,
+                "format": format!("{:?}", desc.format),
+                "kind": if cube { "cube array (+X −X +Y −Y +Z −Z per layer)" } else { "2D array" },
+                "layers": layers,
+                "unscale": data.unscale,
+            }));
+        }
+    }
+    Ok(tables)
 }
 
 impl Export {

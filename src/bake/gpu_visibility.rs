@@ -51,6 +51,7 @@ use super::{BakeStats, progress_bar};
 use crate::gpu::visibility_sim::{self, DirectionView, SimulationJob};
 use crate::gpu::{Context, GpuError};
 use crate::scene::Mesh;
+use crate::sh::Order;
 use crate::sh::basis::eval_basis;
 
 /// Largest depth map side the simulator accepts.
@@ -120,32 +121,7 @@ pub fn bake_visibility_gpu(
     }
     let corners = || triangles.iter().flat_map(|(_, p)| *p);
     let epsilon = ray_epsilon_of(corners());
-    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for v in corners() {
-        (lo, hi) = (lo.min(v), hi.max(v));
-    }
-    let centre = 0.5 * (lo + hi);
-    let half = (0.5 * (hi - lo)).max(Vec3::splat(1e-6));
-    let box_corners: Vec<Vec3> = (0..8)
-        .map(|k| {
-            let sign = Vec3::new(
-                if k & 1 == 0 { -1.0 } else { 1.0 },
-                if k & 2 == 0 { -1.0 } else { 1.0 },
-                if k & 4 == 0 { -1.0 } else { 1.0 },
-            );
-            sign * half
-        })
-        .collect();
-    // The window and sky range of direction d: the box's projection, with a margin that
-    // keeps every corner strictly inside.
-    let fit = |axis: Vec3| {
-        let (mut a, mut b) = (f32::INFINITY, f32::NEG_INFINITY);
-        for q in &box_corners {
-            (a, b) = (a.min(q.dot(axis)), b.max(q.dot(axis)));
-        }
-        let margin = 0.01 * (b - a) + 1e-6;
-        (a - margin, b + margin)
-    };
+    let scene_box = SceneBox::around(corners());
 
     let positions: Vec<[f32; 3]> = corners().map(|v| v.to_array()).collect();
     let points: Vec<[f32; 4]> = covered
@@ -159,43 +135,15 @@ pub fn bake_visibility_gpu(
     let dirs = DirectionSet::new(settings.rays, settings.seed);
     let n2 = settings.order.coeff_count();
     let mask_words = dirs.len().div_ceil(32) as u32;
-    let weight = dirs.weight();
-    let mut basis = vec![0.0f64; n2];
-    let mut weighted_basis = Vec::with_capacity(dirs.len() * n2);
-    for d in dirs.dirs() {
-        eval_basis(settings.order, d.as_dvec3().normalize(), &mut basis);
-        weighted_basis.extend(basis.iter().map(|&y| (weight * y) as f32));
-    }
-    let views: Vec<DirectionView> = dirs
-        .dirs()
-        .iter()
-        .enumerate()
-        .map(|(r, &d)| {
-            let (u, v) = d.any_orthonormal_pair();
-            let ((u0, u1), (v0, v1), (d0, d1)) = (fit(u), fit(v), fit(d));
-            // The larger texel side sets the bias.
-            let texel = (u1 - u0).max(v1 - v0) / gpu.depth_res as f32;
-            DirectionView {
-                axis_u: u.extend(0.5 * (u0 + u1)).to_array(),
-                axis_v: v.extend(0.5 * (v0 + v1)).to_array(),
-                axis_d: d.extend(d1).to_array(),
-                centre: centre.extend(gpu.bias_texels * texel).to_array(),
-                window: [
-                    0.5 * (u1 - u0),
-                    0.5 * (v1 - v0),
-                    d1 - d0,
-                    gpu.slope_bias_texels * texel,
-                ],
-                res: gpu.depth_res,
-                direction: r as u32,
-                point_count: covered.len() as u32,
-                mask_words,
-                t_min: 1e-3 * epsilon,
-                epsilon,
-                pad: [0; 2],
-            }
-        })
-        .collect();
+    let weighted_basis = quadrature_basis(&dirs, settings.order);
+    let views = direction_views(
+        &dirs,
+        &scene_box,
+        gpu,
+        covered.len() as u32,
+        mask_words,
+        epsilon,
+    );
     let directions: Vec<[f32; 4]> = dirs
         .dirs()
         .iter()
@@ -219,18 +167,7 @@ pub fn bake_visibility_gpu(
     )?;
     bar.finish_and_clear();
 
-    let res = texels.res as usize;
-    let mut coeffs = vec![0.0f32; res * res * n2];
-    let mut ao = vec![1.0f32; res * res];
-    let mut rays_traced = 0u64;
-    for (k, &i) in covered.iter().enumerate() {
-        let i = i as usize;
-        coeffs[i * n2..(i + 1) * n2].copy_from_slice(&result.coeffs[k * n2..(k + 1) * n2]);
-        ao[i] = result.ao[k];
-        let n = texels.normal[i];
-        rays_traced += dirs.dirs().iter().filter(|&&d| above_horizon(n, d)).count() as u64;
-    }
-    dilate_visibility(&mut coeffs, n2, &mut ao, texels);
+    let (coeffs, ao, rays_traced) = texel_results(texels, &covered, &dirs, &result, n2);
     let map = VisibilityMap {
         res: texels.res,
         order: settings.order,
@@ -255,6 +192,125 @@ pub fn bake_visibility_gpu(
         gpu_ms: result.gpu_ms,
         setup_s: result.setup_s,
     })
+}
+
+/// The scene's bounding box: its centre, and its corners relative to the centre.
+struct SceneBox {
+    centre: Vec3,
+    corners: Vec<Vec3>,
+}
+
+impl SceneBox {
+    /// The box around `points`, each half-extent at least 1e-6.
+    fn around(points: impl Iterator<Item = Vec3>) -> SceneBox {
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for v in points {
+            (lo, hi) = (lo.min(v), hi.max(v));
+        }
+        let centre = 0.5 * (lo + hi);
+        let half = (0.5 * (hi - lo)).max(Vec3::splat(1e-6));
+        let corners: Vec<Vec3> = (0..8)
+            .map(|k| {
+                let sign = Vec3::new(
+                    if k & 1 == 0 { -1.0 } else { 1.0 },
+                    if k & 2 == 0 { -1.0 } else { 1.0 },
+                    if k & 4 == 0 { -1.0 } else { 1.0 },
+                );
+                sign * half
+            })
+            .collect();
+        SceneBox { centre, corners }
+    }
+
+    /// The window and sky range along `axis`: the box's projection, with a margin that
+    /// keeps every corner strictly inside.
+    fn fit(&self, axis: Vec3) -> (f32, f32) {
+        let (mut a, mut b) = (f32::INFINITY, f32::NEG_INFINITY);
+        for q in &self.corners {
+            (a, b) = (a.min(q.dot(axis)), b.max(q.dot(axis)));
+        }
+        let margin = 0.01 * (b - a) + 1e-6;
+        (a - margin, b + margin)
+    }
+}
+
+/// Per direction of `dirs` the order-`order` SH basis times the direction's weight, f32.
+fn quadrature_basis(dirs: &DirectionSet, order: Order) -> Vec<f32> {
+    let n2 = order.coeff_count();
+    let weight = dirs.weight();
+    let mut basis = vec![0.0f64; n2];
+    let mut weighted = Vec::with_capacity(dirs.len() * n2);
+    for d in dirs.dirs() {
+        eval_basis(order, d.as_dvec3().normalize(), &mut basis);
+        weighted.extend(basis.iter().map(|&y| (weight * y) as f32));
+    }
+    weighted
+}
+
+/// Per direction of `dirs` its orthographic view of `scene_box` (module doc): window and
+/// sky range fitted to the box, biases in texels of a `gpu.depth_res`² map.
+fn direction_views(
+    dirs: &DirectionSet,
+    scene_box: &SceneBox,
+    gpu: &GpuVisibilitySettings,
+    point_count: u32,
+    mask_words: u32,
+    epsilon: f32,
+) -> Vec<DirectionView> {
+    dirs.dirs()
+        .iter()
+        .enumerate()
+        .map(|(r, &d)| {
+            let (u, v) = d.any_orthonormal_pair();
+            let ((u0, u1), (v0, v1), (d0, d1)) =
+                (scene_box.fit(u), scene_box.fit(v), scene_box.fit(d));
+            // The larger texel side sets the bias.
+            let texel = (u1 - u0).max(v1 - v0) / gpu.depth_res as f32;
+            DirectionView {
+                axis_u: u.extend(0.5 * (u0 + u1)).to_array(),
+                axis_v: v.extend(0.5 * (v0 + v1)).to_array(),
+                axis_d: d.extend(d1).to_array(),
+                centre: scene_box.centre.extend(gpu.bias_texels * texel).to_array(),
+                window: [
+                    0.5 * (u1 - u0),
+                    0.5 * (v1 - v0),
+                    d1 - d0,
+                    gpu.slope_bias_texels * texel,
+                ],
+                res: gpu.depth_res,
+                direction: r as u32,
+                point_count,
+                mask_words,
+                t_min: 1e-3 * epsilon,
+                epsilon,
+                pad: [0; 2],
+            }
+        })
+        .collect()
+}
+
+/// The simulator's per-point coefficients and AO written to their texels (zero and one
+/// elsewhere), gutters dilated, and the rays above each texel's horizon counted.
+fn texel_results(
+    texels: &LightmapTexels,
+    covered: &[u32],
+    dirs: &DirectionSet,
+    result: &visibility_sim::SimulationResult,
+    n2: usize,
+) -> (Vec<f32>, Vec<f32>, u64) {
+    let res = texels.res as usize;
+    let mut coeffs = vec![0.0f32; res * res * n2];
+    let mut ao = vec![1.0f32; res * res];
+    let mut rays_traced = 0u64;
+    for (k, &i) in covered.iter().enumerate() {
+        let i = i as usize;
+        coeffs[i * n2..(i + 1) * n2].copy_from_slice(&result.coeffs[k * n2..(k + 1) * n2]);
+        ao[i] = result.ao[k];
+        let n = texels.normal[i];
+        rays_traced += dirs.dirs().iter().filter(|&&d| above_horizon(n, d)).count() as u64;
+    }
+    dilate_visibility(&mut coeffs, n2, &mut ao, texels);
+    (coeffs, ao, rays_traced)
 }
 
 /// How a bake `b` differs from a reference bake `a` of the same texels.

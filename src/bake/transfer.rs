@@ -301,6 +301,24 @@ fn channel_of<'a>(
     }
 }
 
+/// What every pass of one transfer bake reads: the texels and their rays, the matrices'
+/// shape and the counter of traced rays.
+struct TransferPass<'a> {
+    tracer: &'a Tracer,
+    texels: &'a LightmapTexels,
+    dirs: &'a DirectionSet,
+    /// The covered texels' indices, the order of every per-texel buffer.
+    covered: &'a [u32],
+    /// N, the columns of each matrix.
+    n: usize,
+    per_channel: usize,
+    per_texel: usize,
+    /// The quadrature weight of one direction.
+    weight: f64,
+    progress: bool,
+    rays_done: &'a AtomicU64,
+}
+
 /// Bakes the transfer matrices of `scene` over `texels` (module doc).
 pub fn bake_transfer(
     scene: &Scene,
@@ -315,28 +333,105 @@ pub fn bake_transfer(
     let per_texel = 3 * per_channel;
     let dirs = DirectionSet::new(settings.rays, settings.seed);
     let weight = dirs.weight();
-    // Per direction: the 9 rows' basis values, then the N columns'.
-    let basis: Vec<(Vec<f64>, Vec<f64>)> = dirs
-        .dirs()
-        .iter()
-        .map(|d| {
-            let d = d.as_dvec3().normalize();
-            let mut rows = vec![0.0; TRANSFER_ROWS];
-            eval_basis(Order::THREE, d, &mut rows);
-            let mut cols = vec![0.0; n];
-            eval_basis(settings.lighting_order, d, &mut cols);
-            (rows, cols)
-        })
-        .collect();
+    let basis = direction_basis(&dirs, settings.lighting_order, n);
     let surfaces = SurfaceReader::new(scene);
     let covered: Vec<u32> = (0..res * res)
         .filter(|&i| texels.covered[i])
         .map(|i| i as u32)
         .collect();
     let rays_done = AtomicU64::new(0);
+    let pass = TransferPass {
+        tracer,
+        texels,
+        dirs: &dirs,
+        covered: &covered,
+        n,
+        per_channel,
+        per_texel,
+        weight,
+        progress: settings.progress,
+        rays_done: &rays_done,
+    };
 
     // Eq. (1): the unbounced matrix, one for the three channels.
-    let bar = progress_bar(settings.progress, covered.len(), "transfer direct");
+    let direct = bake_direct(&pass, &basis);
+
+    // The bounces' gathers read the rows' basis in f32.
+    let rows_f32: Vec<[f32; TRANSFER_ROWS]> = basis
+        .iter()
+        .map(|(rows, _)| std::array::from_fn(|i| rows[i] as f32))
+        .collect();
+    let dilation = DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES);
+    let a: Vec<f64> = (0..TRANSFER_ROWS)
+        .map(|i| zonal::clamped_cosine_convolution((i as f64).sqrt() as u32))
+        .collect();
+    // M^k per covered texel, three channels; `None`: M⁰, the same for every channel.
+    let mut current: Option<Vec<f32>> = None;
+    for bounce in 1..=settings.bounces {
+        let irradiance = gather_irradiance(&pass, current.as_deref(), &direct, &a, &dilation);
+        let next = bake_bounce(&pass, &surfaces, &rows_f32, &irradiance, &direct, bounce);
+        current = Some(next);
+    }
+
+    let matrices = assemble_matrices(&pass, current.as_deref(), &direct, &dilation);
+    let map = TransferMap {
+        res: texels.res,
+        lighting_order: settings.lighting_order,
+        bounces: settings.bounces,
+        matrices,
+        covered: texels.covered.clone(),
+        frames: texel_frames(texels),
+        stats: BakeStats {
+            rays_traced: rays_done.into_inner(),
+            seconds: start.elapsed().as_secs_f64(),
+        },
+    };
+    log::info!(
+        "transfer bake: {} texels × {} directions, 9 × {n} matrices, {} bounces: {}",
+        covered.len(),
+        settings.rays,
+        settings.bounces,
+        map.stats
+    );
+    map
+}
+
+/// Per direction of `dirs`: the 9 rows' basis values, then the N columns' (order
+/// `lighting_order`, N = `n`).
+fn direction_basis(
+    dirs: &DirectionSet,
+    lighting_order: Order,
+    n: usize,
+) -> Vec<(Vec<f64>, Vec<f64>)> {
+    dirs.dirs()
+        .iter()
+        .map(|d| {
+            let d = d.as_dvec3().normalize();
+            let mut rows = vec![0.0; TRANSFER_ROWS];
+            eval_basis(Order::THREE, d, &mut rows);
+            let mut cols = vec![0.0; n];
+            eval_basis(lighting_order, d, &mut cols);
+            (rows, cols)
+        })
+        .collect()
+}
+
+/// Eq. (1) per covered texel: the unbounced matrix M⁰, summed in f64 over the escaping
+/// directions of `basis` (one for the three channels).
+fn bake_direct(pass: &TransferPass<'_>, basis: &[(Vec<f64>, Vec<f64>)]) -> Vec<f32> {
+    let TransferPass {
+        tracer,
+        texels,
+        dirs,
+        covered,
+        n,
+        per_channel,
+        weight,
+        progress,
+        rays_done,
+        ..
+    } = *pass;
+    let bar = progress_bar(progress, covered.len(), "transfer direct");
     let mut direct = vec![0.0f32; covered.len() * per_channel];
     direct
         .par_chunks_mut(per_channel)
@@ -369,114 +464,155 @@ pub fn bake_transfer(
             bar.inc(1);
         });
     bar.finish_and_clear();
+    direct
+}
 
-    // The bounces' gathers read the rows' basis in f32.
-    let rows_f32: Vec<[f32; TRANSFER_ROWS]> = basis
-        .iter()
-        .map(|(rows, _)| std::array::from_fn(|i| rows[i] as f32))
-        .collect();
-    let dilation = DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES);
-    let a: Vec<f64> = (0..TRANSFER_ROWS)
-        .map(|i| zonal::clamped_cosine_convolution((i as f64).sqrt() as u32))
-        .collect();
-    // M^k per covered texel, three channels; `None`: M⁰, the same for every channel.
-    let mut current: Option<Vec<f32>> = None;
-    for bounce in 1..=settings.bounces {
-        // Eq. (2) at every texel: 3 × N irradiance row vectors, dilated into the gutters.
-        let mut gathered = vec![0.0f32; covered.len() * 3 * n];
-        gathered
-            .par_chunks_mut(3 * n)
-            .enumerate()
-            .with_min_len(64)
-            .for_each(|(k, out)| {
-                let nd = texels.normal[covered[k] as usize].as_dvec3().normalize();
-                let mut y = [0.0f64; TRANSFER_ROWS];
-                eval_basis(Order::THREE, nd, &mut y);
-                let mut e = vec![0.0f64; n];
-                for c in 0..3 {
-                    let m = channel_of(current.as_deref(), &direct, k, c, per_channel);
-                    e.iter_mut().for_each(|v| *v = 0.0);
-                    for row in 0..TRANSFER_ROWS {
-                        let ay = a[row] * y[row];
-                        for (ej, &mij) in e.iter_mut().zip(&m[row * n..(row + 1) * n]) {
-                            *ej += ay * f64::from(mij);
-                        }
-                    }
-                    for (o, &v) in out[c * n..(c + 1) * n].iter_mut().zip(&e) {
-                        *o = v as f32;
+/// Eq. (2) at every texel: 3 × N irradiance row vectors of M^k (`current`, or `direct`
+/// for every channel), written to the lightmap and dilated into the gutters.
+fn gather_irradiance(
+    pass: &TransferPass<'_>,
+    current: Option<&[f32]>,
+    direct: &[f32],
+    a: &[f64],
+    dilation: &DilationPlan,
+) -> Vec<f32> {
+    let TransferPass {
+        texels,
+        covered,
+        n,
+        per_channel,
+        ..
+    } = *pass;
+    let res = texels.res as usize;
+    let mut gathered = vec![0.0f32; covered.len() * 3 * n];
+    gathered
+        .par_chunks_mut(3 * n)
+        .enumerate()
+        .with_min_len(64)
+        .for_each(|(k, out)| {
+            let nd = texels.normal[covered[k] as usize].as_dvec3().normalize();
+            let mut y = [0.0f64; TRANSFER_ROWS];
+            eval_basis(Order::THREE, nd, &mut y);
+            let mut e = vec![0.0f64; n];
+            for c in 0..3 {
+                let m = channel_of(current, direct, k, c, per_channel);
+                e.iter_mut().for_each(|v| *v = 0.0);
+                for row in 0..TRANSFER_ROWS {
+                    let ay = a[row] * y[row];
+                    for (ej, &mij) in e.iter_mut().zip(&m[row * n..(row + 1) * n]) {
+                        *ej += ay * f64::from(mij);
                     }
                 }
-            });
-        let mut irradiance = vec![0.0f32; res * res * 3 * n];
-        for (k, &i) in covered.iter().enumerate() {
-            let i = i as usize;
-            irradiance[i * 3 * n..(i + 1) * 3 * n].copy_from_slice(&gathered[k * 3 * n..][..3 * n]);
-        }
-        drop(gathered);
-        dilation.apply_vectors(&mut irradiance, 3 * n);
-        let bar = progress_bar(
-            settings.progress,
-            covered.len(),
-            &format!("transfer bounce {bounce}"),
-        );
-        // Eq. (3), the hits' sums in f32 per texel (in ray order).
-        let mut next = vec![0.0f32; covered.len() * per_texel];
-        next.par_chunks_mut(per_texel)
-            .enumerate()
-            .with_min_len(16)
-            .for_each(|(k, out)| {
-                let i = covered[k] as usize;
-                let normal = texels.normal[i];
-                let origin = tracer.offset_origin(texels.position[i], normal);
-                let mut m = vec![0.0f32; per_texel];
-                let rays = for_each_front_hit(
-                    tracer,
-                    &surfaces,
-                    &dirs,
-                    normal,
-                    origin,
-                    |r, _, surface| {
-                        let t = texels.texel_index(surface.uv_lightmap.into());
-                        let rows = &rows_f32[r];
-                        for c in 0..3 {
-                            let albedo = surface.albedo[c] / std::f32::consts::PI;
-                            let e = &irradiance[(t * 3 + c) * n..(t * 3 + c + 1) * n];
-                            for (row, &yi) in rows.iter().enumerate() {
-                                let s = yi * albedo;
-                                let acc = &mut m[(c * TRANSFER_ROWS + row) * n..][..n];
-                                for (o, &ej) in acc.iter_mut().zip(e) {
-                                    *o += s * ej;
-                                }
+                for (o, &v) in out[c * n..(c + 1) * n].iter_mut().zip(&e) {
+                    *o = v as f32;
+                }
+            }
+        });
+    let mut irradiance = vec![0.0f32; res * res * 3 * n];
+    for (k, &i) in covered.iter().enumerate() {
+        let i = i as usize;
+        irradiance[i * 3 * n..(i + 1) * 3 * n].copy_from_slice(&gathered[k * 3 * n..][..3 * n]);
+    }
+    drop(gathered);
+    dilation.apply_vectors(&mut irradiance, 3 * n);
+    irradiance
+}
+
+/// Eq. (3) for bounce `bounce`: per covered texel M⁰ (`direct`) plus the hits' sums in
+/// f32 (in ray order) of `irradiance` read at the hit texel, weighted by its albedo.
+fn bake_bounce(
+    pass: &TransferPass<'_>,
+    surfaces: &SurfaceReader<'_>,
+    rows_f32: &[[f32; TRANSFER_ROWS]],
+    irradiance: &[f32],
+    direct: &[f32],
+    bounce: u32,
+) -> Vec<f32> {
+    let TransferPass {
+        tracer,
+        texels,
+        dirs,
+        covered,
+        n,
+        per_channel,
+        per_texel,
+        weight,
+        progress,
+        rays_done,
+    } = *pass;
+    let bar = progress_bar(
+        progress,
+        covered.len(),
+        &format!("transfer bounce {bounce}"),
+    );
+    // Eq. (3), the hits' sums in f32 per texel (in ray order).
+    let mut next = vec![0.0f32; covered.len() * per_texel];
+    next.par_chunks_mut(per_texel)
+        .enumerate()
+        .with_min_len(16)
+        .for_each(|(k, out)| {
+            let i = covered[k] as usize;
+            let normal = texels.normal[i];
+            let origin = tracer.offset_origin(texels.position[i], normal);
+            let mut m = vec![0.0f32; per_texel];
+            let rays =
+                for_each_front_hit(tracer, surfaces, dirs, normal, origin, |r, _, surface| {
+                    let t = texels.texel_index(surface.uv_lightmap.into());
+                    let rows = &rows_f32[r];
+                    for c in 0..3 {
+                        let albedo = surface.albedo[c] / std::f32::consts::PI;
+                        let e = &irradiance[(t * 3 + c) * n..(t * 3 + c + 1) * n];
+                        for (row, &yi) in rows.iter().enumerate() {
+                            let s = yi * albedo;
+                            let acc = &mut m[(c * TRANSFER_ROWS + row) * n..][..n];
+                            for (o, &ej) in acc.iter_mut().zip(e) {
+                                *o += s * ej;
                             }
                         }
-                    },
-                );
-                let weight = weight as f32;
-                for c in 0..3 {
-                    let d0 = &direct[k * per_channel..][..per_channel];
-                    let bounced = &m[c * per_channel..][..per_channel];
-                    for ((o, &d), &v) in out[c * per_channel..][..per_channel]
-                        .iter_mut()
-                        .zip(d0)
-                        .zip(bounced)
-                    {
-                        *o = d + weight * v;
                     }
+                });
+            let weight = weight as f32;
+            for c in 0..3 {
+                let d0 = &direct[k * per_channel..][..per_channel];
+                let bounced = &m[c * per_channel..][..per_channel];
+                for ((o, &d), &v) in out[c * per_channel..][..per_channel]
+                    .iter_mut()
+                    .zip(d0)
+                    .zip(bounced)
+                {
+                    *o = d + weight * v;
                 }
-                rays_done.fetch_add(rays, Ordering::Relaxed);
-                bar.inc(1);
-            });
-        bar.finish_and_clear();
-        current = Some(next);
-    }
+            }
+            rays_done.fetch_add(rays, Ordering::Relaxed);
+            bar.inc(1);
+        });
+    bar.finish_and_clear();
+    next
+}
 
+/// Every texel's three channels' matrices in the lightmap — M^k (`current`) or M⁰
+/// (`direct`) for each channel — dilated into the gutters.
+fn assemble_matrices(
+    pass: &TransferPass<'_>,
+    current: Option<&[f32]>,
+    direct: &[f32],
+    dilation: &DilationPlan,
+) -> Vec<f32> {
+    let TransferPass {
+        texels,
+        covered,
+        per_channel,
+        per_texel,
+        ..
+    } = *pass;
+    let res = texels.res as usize;
     let mut matrices = vec![0.0f32; res * res * per_texel];
     for (k, &i) in covered.iter().enumerate() {
         let out = &mut matrices[i as usize * per_texel..][..per_texel];
         for c in 0..3 {
             out[c * per_channel..][..per_channel].copy_from_slice(channel_of(
-                current.as_deref(),
-                &direct,
+                current,
+                direct,
                 k,
                 c,
                 per_channel,
@@ -484,33 +620,21 @@ pub fn bake_transfer(
         }
     }
     dilation.apply_vectors(&mut matrices, per_texel);
-    let map = TransferMap {
-        res: texels.res,
-        lighting_order: settings.lighting_order,
-        bounces: settings.bounces,
-        matrices,
-        covered: texels.covered.clone(),
-        frames: (0..res * res)
-            .map(|i| {
-                if !texels.covered[i] {
-                    return [glam::Vec3::ZERO; 3];
-                }
-                let n = texels.shading_normal[i].normalize_or(texels.normal[i]);
-                let t = crate::scene::tangent::orthonormalize(n, texels.tangent[i]);
-                [t.truncate(), n.cross(t.truncate()) * t.w, n]
-            })
-            .collect(),
-        stats: BakeStats {
-            rays_traced: rays_done.into_inner(),
-            seconds: start.elapsed().as_secs_f64(),
-        },
-    };
-    log::info!(
-        "transfer bake: {} texels × {} directions, 9 × {n} matrices, {} bounces: {}",
-        covered.len(),
-        settings.rays,
-        settings.bounces,
-        map.stats
-    );
-    map
+    matrices
+}
+
+/// The normal map's frame at each texel centre, world space (zero where not covered):
+/// tangent, bitangent with the tangent's handedness, shading normal.
+fn texel_frames(texels: &LightmapTexels) -> Vec<[glam::Vec3; 3]> {
+    let res = texels.res as usize;
+    (0..res * res)
+        .map(|i| {
+            if !texels.covered[i] {
+                return [glam::Vec3::ZERO; 3];
+            }
+            let n = texels.shading_normal[i].normalize_or(texels.normal[i]);
+            let t = crate::scene::tangent::orthonormalize(n, texels.tangent[i]);
+            [t.truncate(), n.cross(t.truncate()) * t.w, n]
+        })
+        .collect()
 }

@@ -89,22 +89,55 @@ struct Shape {
     units16: u32,
 }
 
+/// What the walk over a module has recorded (types, pointers, constants) and counted so
+/// far.
+#[derive(Default)]
+struct Walk {
+    counts: OpCounts,
+    shapes: HashMap<u32, Shape>,
+    /// Pointer type id → (storage class, pointee type id).
+    pointer_types: HashMap<u32, (u32, u32)>,
+    /// Value id → its type id (variables, access chains, values).
+    value_types: HashMap<u32, u32>,
+    /// 32-bit constant id → its value (array lengths).
+    constants: HashMap<u32, u32>,
+    /// Access chains with a non-constant index on their way (module doc).
+    indexed_pointers: HashSet<u32>,
+}
+
+/// The shape of type `t`, the default one where `t` is unknown.
+fn shape_of(shapes: &HashMap<u32, Shape>, t: u32) -> Shape {
+    shapes.get(&t).copied().unwrap_or_default()
+}
+
 /// Counts the operations of one invocation of `spirv` (module doc). Malformed input ends
 /// the walk where it stops making sense; the counts so far are returned.
 pub fn count(spirv: &[u32]) -> OpCounts {
-    let mut counts = OpCounts::default();
-    let mut shapes: HashMap<u32, Shape> = HashMap::new();
-    // Pointer type id → (storage class, pointee type id).
-    let mut pointer_types: HashMap<u32, (u32, u32)> = HashMap::new();
-    // Value id → its type id (variables, access chains, values).
-    let mut value_types: HashMap<u32, u32> = HashMap::new();
-    // 32-bit constant id → its value (array lengths).
-    let mut constants: HashMap<u32, u32> = HashMap::new();
-    // Access chains with a non-constant index on their way (module doc).
-    let mut indexed_pointers: HashSet<u32> = HashSet::new();
+    let mut walk = Walk::default();
     for (op, w) in crate::gpu::reflect::instructions(spirv) {
-        let shape_of =
-            |shapes: &HashMap<u32, Shape>, t: u32| shapes.get(&t).copied().unwrap_or_default();
+        if !walk.record_declaration(op, w) {
+            walk.count_operation(op, w);
+        }
+        // Every value instruction: remember its result type (word 1 = type, word 2 = id).
+        if has_result_type(op) && w.len() >= 2 {
+            walk.value_types.entry(w[1]).or_insert(w[0]);
+        }
+    }
+    walk.counts
+}
+
+impl Walk {
+    /// Records a type, constant, pointer type, variable or access chain (operands `w`);
+    /// false where `op` (with these operands) is none of them.
+    fn record_declaration(&mut self, op: u32, w: &[u32]) -> bool {
+        let Walk {
+            shapes,
+            pointer_types,
+            value_types,
+            constants,
+            indexed_pointers,
+            ..
+        } = self;
         match op {
             OP_TYPE_FLOAT if !w.is_empty() => {
                 shapes.insert(
@@ -116,9 +149,10 @@ pub fn count(spirv: &[u32]) -> OpCounts {
                         units16: 1,
                     },
                 );
+                true
             }
             OP_TYPE_VECTOR if w.len() >= 3 => {
-                let c = shape_of(&shapes, w[1]);
+                let c = shape_of(shapes, w[1]);
                 shapes.insert(
                     w[0],
                     Shape {
@@ -128,9 +162,10 @@ pub fn count(spirv: &[u32]) -> OpCounts {
                         units16: 1,
                     },
                 );
+                true
             }
             OP_TYPE_MATRIX if w.len() >= 3 => {
-                let c = shape_of(&shapes, w[1]);
+                let c = shape_of(shapes, w[1]);
                 shapes.insert(
                     w[0],
                     Shape {
@@ -140,15 +175,17 @@ pub fn count(spirv: &[u32]) -> OpCounts {
                         units16: w[2],
                     },
                 );
+                true
             }
             OP_CONSTANT if w.len() >= 3 => {
                 constants.insert(w[1], w[2]);
+                true
             }
             // A whole array or struct loaded at once (the optimizer loads a uniform array
             // with one OpLoad and extracts from it): its size is the sum of its parts.
             OP_TYPE_ARRAY if w.len() >= 3 => {
                 let (e, n) = (
-                    shape_of(&shapes, w[1]),
+                    shape_of(shapes, w[1]),
                     constants.get(&w[2]).copied().unwrap_or(1),
                 );
                 shapes.insert(
@@ -160,9 +197,10 @@ pub fn count(spirv: &[u32]) -> OpCounts {
                         units16: e.units16.max(1) * n,
                     },
                 );
+                true
             }
             OP_TYPE_STRUCT if !w.is_empty() => {
-                let members = w[1..].iter().map(|&m| shape_of(&shapes, m));
+                let members = w[1..].iter().map(|&m| shape_of(shapes, m));
                 let (floats, units16) =
                     members.fold((0, 0), |(f, u), m| (f + m.floats, u + m.units16.max(1)));
                 shapes.insert(
@@ -174,9 +212,11 @@ pub fn count(spirv: &[u32]) -> OpCounts {
                         units16,
                     },
                 );
+                true
             }
             OP_TYPE_POINTER if w.len() >= 3 => {
                 pointer_types.insert(w[0], (w[1], w[2]));
+                true
             }
             OP_VARIABLE | OP_ACCESS_CHAIN | OP_IN_BOUNDS_ACCESS_CHAIN if w.len() >= 2 => {
                 value_types.insert(w[1], w[0]);
@@ -187,14 +227,31 @@ pub fn count(spirv: &[u32]) -> OpCounts {
                 {
                     indexed_pointers.insert(w[1]);
                 }
+                true
             }
+            _ => false,
+        }
+    }
+
+    /// Counts what instruction `op` (operands `w`) costs: memory reads, loops, samples and
+    /// float operations.
+    fn count_operation(&mut self, op: u32, w: &[u32]) {
+        let Walk {
+            counts,
+            shapes,
+            pointer_types,
+            value_types,
+            indexed_pointers,
+            ..
+        } = self;
+        match op {
             OP_LOAD if w.len() >= 3 => {
                 value_types.insert(w[1], w[0]);
                 let storage = value_types
                     .get(&w[2])
                     .and_then(|t| pointer_types.get(t))
                     .map(|&(s, _)| s);
-                let loaded = shape_of(&shapes, w[0]);
+                let loaded = shape_of(shapes, w[0]);
                 match storage {
                     Some(STORAGE_UNIFORM | STORAGE_STORAGE_BUFFER | STORAGE_PUSH_CONSTANT) => {
                         if indexed_pointers.contains(&w[2]) {
@@ -221,11 +278,11 @@ pub fn count(spirv: &[u32]) -> OpCounts {
                 || op == OP_MATRIX_TIMES_SCALAR =>
             {
                 if let Some(&t) = w.first() {
-                    counts.float_ops += shape_of(&shapes, t).floats;
+                    counts.float_ops += shape_of(shapes, t).floats;
                 }
             }
             OP_DOT if w.len() >= 3 => {
-                let operand = value_types.get(&w[2]).map(|&t| shape_of(&shapes, t));
+                let operand = value_types.get(&w[2]).map(|&t| shape_of(shapes, t));
                 counts.float_ops += operand.map_or(4, |s| s.floats);
                 value_types.insert(w[1], w[0]);
             }
@@ -236,14 +293,14 @@ pub fn count(spirv: &[u32]) -> OpCounts {
                 if w.len() >= 2 =>
             {
                 // One multiply-add per product term: result components × the inner size.
-                let result = shape_of(&shapes, w[0]);
+                let result = shape_of(shapes, w[0]);
                 let inner = match op {
                     OP_OUTER_PRODUCT => 1,
                     _ => w
                         .get(2)
                         .and_then(|a| value_types.get(a))
                         .map_or(result.rows, |&t| {
-                            let s = shape_of(&shapes, t);
+                            let s = shape_of(shapes, t);
                             if op == OP_MATRIX_TIMES_VECTOR {
                                 s.columns
                             } else {
@@ -254,11 +311,11 @@ pub fn count(spirv: &[u32]) -> OpCounts {
                 counts.float_ops += result.floats * inner.max(1);
             }
             OP_EXT_INST if w.len() >= 4 => {
-                let result = shape_of(&shapes, w[0]);
+                let result = shape_of(shapes, w[0]);
                 let operand = w
                     .get(4)
                     .and_then(|a| value_types.get(a))
-                    .map_or(result, |&t| shape_of(&shapes, t));
+                    .map_or(result, |&t| shape_of(shapes, t));
                 counts.float_ops += match w[3] {
                     GLSL_NORMALIZE => 3 * operand.floats,
                     GLSL_LENGTH | GLSL_DISTANCE => 2 * operand.floats,
@@ -270,12 +327,7 @@ pub fn count(spirv: &[u32]) -> OpCounts {
             }
             _ => {}
         }
-        // Every value instruction: remember its result type (word 1 = type, word 2 = id).
-        if has_result_type(op) && w.len() >= 2 {
-            value_types.entry(w[1]).or_insert(w[0]);
-        }
     }
-    counts
 }
 
 /// Whether instructions of `op` start with (result type, result id): all but the

@@ -160,32 +160,7 @@ impl Presenter {
             ctx.set_name(*image, &format!("view.swapchain[{i}]"));
         }
         ctx.set_name(swapchain, "view.swapchain");
-        // SAFETY: a plain object creation on the live device.
-        let acquired = unsafe {
-            ctx.device()
-                .create_fence(&vk::FenceCreateInfo::default(), None)
-        }
-        .map_err(|e| GpuError::vulkan("vkCreateFence", what, e))?;
-        ctx.set_name(acquired, "view.acquired");
-        let bytes = u64::from(extent.width) * u64::from(extent.height) * 4;
-        let staging = Buffer::new(
-            ctx,
-            bytes,
-            vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::CpuToGpu,
-            "view.staging",
-        )?;
-        let readback = if readable {
-            Some(Buffer::new(
-                ctx,
-                bytes,
-                vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuToCpu,
-                "view.readback",
-            )?)
-        } else {
-            None
-        };
+        let (acquired, staging, readback) = create_frame_objects(ctx, extent, readable, what)?;
         log::info!(
             "swapchain: {}×{} {:?}, {} images, {:?}",
             extent.width,
@@ -279,100 +254,7 @@ impl Presenter {
         let staging = self.staging.raw();
         let extent = self.extent;
         self.ctx.one_shot("view.present", |cmd| {
-            let range = vk::ImageSubresourceRange::default()
-                .aspect_mask(vk::ImageAspectFlags::COLOR)
-                .level_count(1)
-                .layer_count(1);
-            // One layout transition of the image, recorded at once.
-            let transition =
-                |from,
-                 to,
-                 access: (vk::AccessFlags, vk::AccessFlags),
-                 stages: (vk::PipelineStageFlags, vk::PipelineStageFlags)| {
-                    let barrier = vk::ImageMemoryBarrier::default()
-                        .old_layout(from)
-                        .new_layout(to)
-                        .src_access_mask(access.0)
-                        .dst_access_mask(access.1)
-                        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                        .image(image)
-                        .subresource_range(range);
-                    // SAFETY: recording into one_shot's command buffer; the image was acquired
-                    // and its acquire fence waited for above.
-                    unsafe {
-                        device.cmd_pipeline_barrier(
-                            cmd,
-                            stages.0,
-                            stages.1,
-                            vk::DependencyFlags::empty(),
-                            &[],
-                            &[],
-                            &[barrier],
-                        );
-                    }
-                };
-            let region = vk::BufferImageCopy::default()
-                .image_subresource(
-                    vk::ImageSubresourceLayers::default()
-                        .aspect_mask(vk::ImageAspectFlags::COLOR)
-                        .layer_count(1),
-                )
-                .image_extent(vk::Extent3D {
-                    width: extent.width,
-                    height: extent.height,
-                    depth: 1,
-                });
-            transition(
-                vk::ImageLayout::UNDEFINED,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                (vk::AccessFlags::empty(), vk::AccessFlags::TRANSFER_WRITE),
-                (
-                    vk::PipelineStageFlags::TOP_OF_PIPE,
-                    vk::PipelineStageFlags::TRANSFER,
-                ),
-            );
-            // SAFETY: as above; the staging buffer holds the frame.
-            unsafe {
-                device.cmd_copy_buffer_to_image(
-                    cmd,
-                    staging,
-                    image,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    &[region],
-                );
-            }
-            let mut layout = vk::ImageLayout::TRANSFER_DST_OPTIMAL;
-            if let Some(buffer) = read {
-                transition(
-                    layout,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    (
-                        vk::AccessFlags::TRANSFER_WRITE,
-                        vk::AccessFlags::TRANSFER_READ,
-                    ),
-                    (
-                        vk::PipelineStageFlags::TRANSFER,
-                        vk::PipelineStageFlags::TRANSFER,
-                    ),
-                );
-                layout = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
-                // SAFETY: as above; the readback buffer is as large as the image.
-                unsafe { device.cmd_copy_image_to_buffer(cmd, image, layout, buffer, &[region]) };
-                super::buffer::record_transfer_to_host(device, cmd, buffer);
-            }
-            transition(
-                layout,
-                vk::ImageLayout::PRESENT_SRC_KHR,
-                (
-                    vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::TRANSFER_READ,
-                    vk::AccessFlags::empty(),
-                ),
-                (
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                ),
-            );
+            record_present_copy(device, cmd, image, staging, read, extent);
         })?;
         let shot = match (&self.readback, screenshot) {
             (Some(b), true) => Some(
@@ -400,6 +282,150 @@ impl Presenter {
             .map_err(|e| GpuError::vulkan("vkQueuePresentKHR", "view.swapchain", e))?;
         Ok(shot)
     }
+}
+
+/// The acquire fence, the staging buffer for a frame of `extent` and, where the images
+/// are `readable`, the screenshot's readback buffer.
+fn create_frame_objects(
+    ctx: &Arc<Context>,
+    extent: vk::Extent2D,
+    readable: bool,
+    what: &str,
+) -> Result<(vk::Fence, Buffer, Option<Buffer>), GpuError> {
+    // SAFETY: a plain object creation on the live device.
+    let acquired = unsafe {
+        ctx.device()
+            .create_fence(&vk::FenceCreateInfo::default(), None)
+    }
+    .map_err(|e| GpuError::vulkan("vkCreateFence", what, e))?;
+    ctx.set_name(acquired, "view.acquired");
+    let bytes = u64::from(extent.width) * u64::from(extent.height) * 4;
+    let staging = Buffer::new(
+        ctx,
+        bytes,
+        vk::BufferUsageFlags::TRANSFER_SRC,
+        MemoryLocation::CpuToGpu,
+        "view.staging",
+    )?;
+    let readback = if readable {
+        Some(Buffer::new(
+            ctx,
+            bytes,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+            "view.readback",
+        )?)
+    } else {
+        None
+    };
+    Ok((acquired, staging, readback))
+}
+
+/// Records a present's commands into `cmd`: the acquired `image` to transfer layout, the
+/// frame copied in from `staging`, with `read` the image copied out to that readback
+/// buffer, then the image to present layout.
+fn record_present_copy(
+    device: &ash::Device,
+    cmd: vk::CommandBuffer,
+    image: vk::Image,
+    staging: vk::Buffer,
+    read: Option<vk::Buffer>,
+    extent: vk::Extent2D,
+) {
+    let range = vk::ImageSubresourceRange::default()
+        .aspect_mask(vk::ImageAspectFlags::COLOR)
+        .level_count(1)
+        .layer_count(1);
+    // One layout transition of the image, recorded at once.
+    let transition =
+        |from,
+         to,
+         access: (vk::AccessFlags, vk::AccessFlags),
+         stages: (vk::PipelineStageFlags, vk::PipelineStageFlags)| {
+            let barrier = vk::ImageMemoryBarrier::default()
+                .old_layout(from)
+                .new_layout(to)
+                .src_access_mask(access.0)
+                .dst_access_mask(access.1)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .image(image)
+                .subresource_range(range);
+            // SAFETY: recording into one_shot's command buffer; `Presenter::present`
+            // acquired the image and waited for its acquire fence before recording.
+            unsafe {
+                device.cmd_pipeline_barrier(
+                    cmd,
+                    stages.0,
+                    stages.1,
+                    vk::DependencyFlags::empty(),
+                    &[],
+                    &[],
+                    &[barrier],
+                );
+            }
+        };
+    let region = vk::BufferImageCopy::default()
+        .image_subresource(
+            vk::ImageSubresourceLayers::default()
+                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                .layer_count(1),
+        )
+        .image_extent(vk::Extent3D {
+            width: extent.width,
+            height: extent.height,
+            depth: 1,
+        });
+    transition(
+        vk::ImageLayout::UNDEFINED,
+        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+        (vk::AccessFlags::empty(), vk::AccessFlags::TRANSFER_WRITE),
+        (
+            vk::PipelineStageFlags::TOP_OF_PIPE,
+            vk::PipelineStageFlags::TRANSFER,
+        ),
+    );
+    // SAFETY: as above; the staging buffer holds the frame.
+    unsafe {
+        device.cmd_copy_buffer_to_image(
+            cmd,
+            staging,
+            image,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            &[region],
+        );
+    }
+    let mut layout = vk::ImageLayout::TRANSFER_DST_OPTIMAL;
+    if let Some(buffer) = read {
+        transition(
+            layout,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            (
+                vk::AccessFlags::TRANSFER_WRITE,
+                vk::AccessFlags::TRANSFER_READ,
+            ),
+            (
+                vk::PipelineStageFlags::TRANSFER,
+                vk::PipelineStageFlags::TRANSFER,
+            ),
+        );
+        layout = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
+        // SAFETY: as above; the readback buffer is as large as the image.
+        unsafe { device.cmd_copy_image_to_buffer(cmd, image, layout, buffer, &[region]) };
+        super::buffer::record_transfer_to_host(device, cmd, buffer);
+    }
+    transition(
+        layout,
+        vk::ImageLayout::PRESENT_SRC_KHR,
+        (
+            vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::TRANSFER_READ,
+            vk::AccessFlags::empty(),
+        ),
+        (
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+        ),
+    );
 }
 
 impl Drop for Presenter {

@@ -195,56 +195,104 @@ pub struct TooManyCharts {
 /// # Errors
 /// [`TooManyCharts`] when the charts do not fit even at one texel each.
 pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCharts> {
-    let tri_count = mesh.triangle_count();
+    // Geometric normals (unit or zero) and areas.
+    let (normals, areas) = triangle_normals_and_areas(mesh);
+    let adjacency = EdgeAdjacency::new(mesh);
+    let (chart_of, charts) = grow_charts(&normals, &areas, &adjacency);
+    let projected = project_charts(mesh, &charts, &normals, &areas);
+
+    let packing = pack_charts(&projected.sizes, res).ok_or(TooManyCharts {
+        charts: charts.len(),
+    })?;
+
+    let (vertices, indices) = split_vertices(mesh, &chart_of, &projected, &packing, res);
+    mesh.vertices = vertices;
+    mesh.indices = indices;
+    Ok(GeneratedCharts {
+        charts: charts.len(),
+        density_per_m: packing.density as u64,
+    })
+}
+
+/// Per triangle of `mesh`: its geometric normal (unit or zero) and its area.
+fn triangle_normals_and_areas(mesh: &Mesh) -> (Vec<DVec3>, Vec<f64>) {
     let corner = |t: usize, k: usize| mesh.indices[3 * t + k] as usize;
     let pos = |i: usize| DVec3::from(mesh.vertices[i].position.map(f64::from));
-    // Geometric normals (unit or zero) and areas.
-    let (normals, areas): (Vec<DVec3>, Vec<f64>) = (0..tri_count)
+    (0..mesh.triangle_count())
         .map(|t| {
             let [a, b, c] = [0, 1, 2].map(|k| pos(corner(t, k)));
             let cross = (b - a).cross(c - a);
             (cross.normalize_or_zero(), 0.5 * cross.length())
         })
-        .unzip();
+        .unzip()
+}
 
-    // Weld corners by exact position, then map each undirected edge to its triangles.
-    let mut weld: FxHashMap<[u32; 3], u32> = FxHashMap::default();
-    let welded: Vec<u32> = mesh
-        .vertices
-        .iter()
-        .map(|v| {
-            let next = weld.len() as u32;
-            *weld.entry(v.position.map(f32::to_bits)).or_insert(next)
-        })
-        .collect();
-    // (edge key, triangle, corner) sorted: an edge's triangles are one run, in triangle
-    // order; `edge_run[3t + k]` is the run of triangle t's edge from corner k (one pass
-    // over the runs instead of a binary search per edge visit).
-    let edge_key = |a: u32, b: u32| (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
-    let mut edge_triangles: Vec<(u64, u32, u32)> = Vec::with_capacity(3 * tri_count);
-    for t in 0..tri_count {
-        for k in 0..3 {
-            let (a, b) = (welded[corner(t, k)], welded[corner(t, (k + 1) % 3)]);
-            if a != b {
-                edge_triangles.push((edge_key(a, b), t as u32, k as u32));
+/// The triangles across each edge of a mesh, corners welded by exact position.
+struct EdgeAdjacency {
+    /// (edge key, triangle, corner) sorted: an edge's triangles are one run, in triangle
+    /// order.
+    edge_triangles: Vec<(u64, u32, u32)>,
+    /// `edge_run[3t + k]`: the run (first, count) of triangle t's edge from corner k (one
+    /// pass over the runs instead of a binary search per edge visit).
+    edge_run: Vec<(u32, u32)>,
+}
+
+impl EdgeAdjacency {
+    /// Welds `mesh`'s corners by exact position, then maps each undirected edge to its
+    /// triangles.
+    fn new(mesh: &Mesh) -> EdgeAdjacency {
+        let tri_count = mesh.triangle_count();
+        let corner = |t: usize, k: usize| mesh.indices[3 * t + k] as usize;
+        let mut weld: FxHashMap<[u32; 3], u32> = FxHashMap::default();
+        let welded: Vec<u32> = mesh
+            .vertices
+            .iter()
+            .map(|v| {
+                let next = weld.len() as u32;
+                *weld.entry(v.position.map(f32::to_bits)).or_insert(next)
+            })
+            .collect();
+        let edge_key = |a: u32, b: u32| (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
+        let mut edge_triangles: Vec<(u64, u32, u32)> = Vec::with_capacity(3 * tri_count);
+        for t in 0..tri_count {
+            for k in 0..3 {
+                let (a, b) = (welded[corner(t, k)], welded[corner(t, (k + 1) % 3)]);
+                if a != b {
+                    edge_triangles.push((edge_key(a, b), t as u32, k as u32));
+                }
             }
         }
-    }
-    edge_triangles.sort_unstable();
-    let mut edge_run = vec![(0u32, 0u32); 3 * tri_count];
-    let mut first = 0;
-    for run in edge_triangles.chunk_by(|x, y| x.0 == y.0) {
-        for &(_, t, k) in run {
-            edge_run[3 * t as usize + k as usize] = (first as u32, run.len() as u32);
+        edge_triangles.sort_unstable();
+        let mut edge_run = vec![(0u32, 0u32); 3 * tri_count];
+        let mut first = 0;
+        for run in edge_triangles.chunk_by(|x, y| x.0 == y.0) {
+            for &(_, t, k) in run {
+                edge_run[3 * t as usize + k as usize] = (first as u32, run.len() as u32);
+            }
+            first += run.len();
         }
-        first += run.len();
+        EdgeAdjacency {
+            edge_triangles,
+            edge_run,
+        }
     }
-    let edge_neighbours = |t: usize, k: usize| {
-        let (first, count) = edge_run[3 * t + k];
-        &edge_triangles[first as usize..(first + count) as usize]
-    };
 
-    // Flood fill from the largest unassigned triangle.
+    /// The (edge key, triangle, corner) entries sharing triangle `t`'s edge from corner `k`
+    /// (`t` among them).
+    fn neighbours(&self, t: usize, k: usize) -> &[(u64, u32, u32)] {
+        let (first, count) = self.edge_run[3 * t + k];
+        &self.edge_triangles[first as usize..(first + count) as usize]
+    }
+}
+
+/// Charts by flood fill from the largest unassigned triangle (module doc): each
+/// triangle's chart id, and each chart's triangles.
+fn grow_charts(
+    normals: &[DVec3],
+    areas: &[f64],
+    adjacency: &EdgeAdjacency,
+) -> (Vec<u32>, Vec<Vec<usize>>) {
+    let tri_count = normals.len();
     let cos_max = CHART_MAX_ANGLE_DEG.to_radians().cos();
     let mut by_area: Vec<usize> = (0..tri_count).collect();
     by_area.sort_by(|&a, &b| areas[b].total_cmp(&areas[a]).then(a.cmp(&b)));
@@ -263,7 +311,7 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
             let t = members[next];
             next += 1;
             for k in 0..3 {
-                for &(_, o, _) in edge_neighbours(t, k) {
+                for &(_, o, _) in adjacency.neighbours(t, k) {
                     let o = o as usize;
                     if chart_of[o] == u32::MAX && normals[o].dot(n_seed) >= cos_max {
                         chart_of[o] = id;
@@ -274,14 +322,34 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
         }
         charts.push(members);
     }
+    (chart_of, charts)
+}
 
-    // Project each chart; record its 2D corner coordinates and bounding rectangle.
-    // Each triangle corner's chart-local 2D position (a vertex projects alike in every
-    // triangle of its chart).
-    let mut local = vec![DVec2::ZERO; 3 * tri_count];
+/// The charts projected to their planes ([`project_charts`]).
+struct ProjectedCharts {
+    /// Each triangle corner's chart-local 2D position (a vertex projects alike in every
+    /// triangle of its chart).
+    local: Vec<DVec2>,
+    /// Per chart its bounding rectangle's size, metres (uniform density).
+    sizes: Vec<ChartSize>,
+    /// Per chart its bounding rectangle's lower corner in chart-local coordinates.
+    mins: Vec<DVec2>,
+}
+
+/// Projects each chart onto the plane of its area-weighted mean normal, rotated to the
+/// principal axes of its corners; records the 2D corners and bounding rectangles.
+fn project_charts(
+    mesh: &Mesh,
+    charts: &[Vec<usize>],
+    normals: &[DVec3],
+    areas: &[f64],
+) -> ProjectedCharts {
+    let corner = |t: usize, k: usize| mesh.indices[3 * t + k] as usize;
+    let pos = |i: usize| DVec3::from(mesh.vertices[i].position.map(f64::from));
+    let mut local = vec![DVec2::ZERO; 3 * mesh.triangle_count()];
     let mut sizes = Vec::with_capacity(charts.len());
     let mut mins = Vec::with_capacity(charts.len());
-    for members in &charts {
+    for members in charts {
         let mean = members
             .iter()
             .map(|&t| normals[t] * areas[t])
@@ -323,12 +391,20 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
         });
         mins.push(lo);
     }
+    ProjectedCharts { local, sizes, mins }
+}
 
-    let packing = pack_charts(&sizes, res).ok_or(TooManyCharts {
-        charts: charts.len(),
-    })?;
-
-    // Split vertices per chart and write the lightmap UVs.
+/// `mesh`'s vertices split per chart, each with its lightmap UV in the chart's packed
+/// rectangle, and the triangles' indices into them.
+fn split_vertices(
+    mesh: &Mesh,
+    chart_of: &[u32],
+    projected: &ProjectedCharts,
+    packing: &Packing,
+    res: u32,
+) -> (Vec<Vertex>, Vec<u32>) {
+    let ProjectedCharts { local, sizes, mins } = projected;
+    let corner = |t: usize, k: usize| mesh.indices[3 * t + k] as usize;
     let inv_res = 1.0 / f64::from(res);
     // The new index of (old vertex, chart): most vertices lie in one chart, kept per
     // vertex; a vertex's further charts go to a map.
@@ -375,12 +451,7 @@ pub fn generate(mesh: &mut Mesh, res: u32) -> Result<GeneratedCharts, TooManyCha
             indices.push(index);
         }
     }
-    mesh.vertices = vertices;
-    mesh.indices = indices;
-    Ok(GeneratedCharts {
-        charts: charts.len(),
-        density_per_m: packing.density as u64,
-    })
+    (vertices, indices)
 }
 
 #[cfg(test)]

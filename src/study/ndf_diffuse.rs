@@ -303,68 +303,121 @@ pub fn run(
             .fold(0.0f32, f32::max)
             .max(1e-12);
         let inputs = prepared.inputs();
+        let view = SceneView {
+            name,
+            env: &env,
+            tag: &tag,
+            gpu: &gpu,
+            reference: &reference.frame,
+            covered: &covered,
+            minified: &minified,
+            magnified: &magnified,
+            peak,
+        };
         for &base in &bases {
             for &path in &s.paths {
-                let pair = [
-                    base.technique(),
-                    Technique::Ndf(crate::technique::Ndf { base }),
-                ];
-                let mut frames = Vec::new();
-                let mut lookups = [0; 2];
-                for (k, &t) in pair.iter().enumerate() {
-                    let tech = technique::build(ctx, &gpu, t, path, &inputs)?;
-                    lookups[k] = tech.stats.lookups_per_pixel;
-                    frames.push(tech.render(&gpu, 0, 1)?);
-                }
-                let pick = |m: &[bool]| -> [f64; 2] {
-                    [0, 1].map(|k| rel_rmse(&frames[k], &reference.frame, m))
-                };
-                let truth_tech = technique::build(ctx, &level0, base.technique(), path, &inputs)?;
-                let truth = own_footprint(&mut level0, &truth_tech, s.strata_side)?;
-                let own_mask: Vec<bool> = minified
-                    .iter()
-                    .zip(&truth.rgba)
-                    .map(|(&m, t)| m && t[3] > 0.5)
-                    .collect();
-                let own = [0, 1].map(|k| rel_rmse(&frames[k], &truth, &own_mask));
-                if let Some(dir) = &s.image_dir {
-                    let stem = format!("diffuse_{tag}_{}.{path}", base.technique());
-                    for (frame, kind) in [(&frames[0], "mip"), (&frames[1], "ndf"), (&truth, "own")]
-                    {
-                        crate::report::image::write_exr(
-                            &dir.join(format!("{stem}_{kind}.exr")),
-                            frame,
-                        )?;
-                    }
-                }
-                let change = frames[0]
-                    .rgba
-                    .iter()
-                    .zip(&frames[1].rgba)
-                    .zip(&magnified)
-                    .filter(|(_, m)| **m)
-                    .flat_map(|((a, b), _)| (0..3).map(move |c| (a[c] - b[c]).abs()))
-                    .fold(0.0f32, f32::max);
-                rows.push(DiffuseRow {
-                    scene: name.clone(),
-                    env: env.clone(),
-                    technique: base.technique(),
+                rows.push(compare_pair(
+                    ctx,
+                    &view,
+                    &mut level0,
+                    &inputs,
+                    base,
                     path,
-                    minified: pick(&minified),
-                    magnified: pick(&magnified),
-                    all: pick(&covered),
-                    magnified_max_change: f64::from(change / peak),
-                    own_footprint_minified: own,
-                    own_footprint_blocks: [0, 1]
-                        .map(|k| block_rel_rmse(&frames[k], &truth, &own_mask)),
-                    reference_blocks: [0, 1]
-                        .map(|k| block_rel_rmse(&frames[k], &reference.frame, &minified)),
-                    lookups,
-                });
+                    s,
+                )?);
             }
         }
     }
     Ok((scenes, rows))
+}
+
+/// What each technique pair on one scene is measured against: the scene's GPU scene, its
+/// footprint reference and pixel masks, and the names its rows and images carry.
+struct SceneView<'a> {
+    name: &'a str,
+    env: &'a str,
+    /// The scene's image name ([`DiffuseSettings::image_dir`]).
+    tag: &'a str,
+    gpu: &'a SceneGpu,
+    reference: &'a Frame,
+    covered: &'a [bool],
+    minified: &'a [bool],
+    magnified: &'a [bool],
+    /// The reference's largest channel value (at least 1e-12).
+    peak: f32,
+}
+
+/// Renders `base`'s technique and its NDF variant on `path` and measures both against the
+/// footprint reference and the technique's own footprint truth (rendered on `level0`),
+/// writing the images where `s` asks; one row.
+fn compare_pair(
+    ctx: &Arc<Context>,
+    view: &SceneView<'_>,
+    level0: &mut SceneGpu,
+    inputs: &technique::Inputs<'_>,
+    base: NdfBase,
+    path: HwPath,
+    s: &DiffuseSettings,
+) -> Result<DiffuseRow, DiffuseStudyError> {
+    let SceneView {
+        name,
+        env,
+        tag,
+        gpu,
+        reference,
+        covered,
+        minified,
+        magnified,
+        peak,
+    } = *view;
+    let pair = [
+        base.technique(),
+        Technique::Ndf(crate::technique::Ndf { base }),
+    ];
+    let mut frames = Vec::new();
+    let mut lookups = [0; 2];
+    for (k, &t) in pair.iter().enumerate() {
+        let tech = technique::build(ctx, gpu, t, path, inputs)?;
+        lookups[k] = tech.stats.lookups_per_pixel;
+        frames.push(tech.render(gpu, 0, 1)?);
+    }
+    let pick = |m: &[bool]| -> [f64; 2] { [0, 1].map(|k| rel_rmse(&frames[k], reference, m)) };
+    let truth_tech = technique::build(ctx, level0, base.technique(), path, inputs)?;
+    let truth = own_footprint(level0, &truth_tech, s.strata_side)?;
+    let own_mask: Vec<bool> = minified
+        .iter()
+        .zip(&truth.rgba)
+        .map(|(&m, t)| m && t[3] > 0.5)
+        .collect();
+    let own = [0, 1].map(|k| rel_rmse(&frames[k], &truth, &own_mask));
+    if let Some(dir) = &s.image_dir {
+        let stem = format!("diffuse_{tag}_{}.{path}", base.technique());
+        for (frame, kind) in [(&frames[0], "mip"), (&frames[1], "ndf"), (&truth, "own")] {
+            crate::report::image::write_exr(&dir.join(format!("{stem}_{kind}.exr")), frame)?;
+        }
+    }
+    let change = frames[0]
+        .rgba
+        .iter()
+        .zip(&frames[1].rgba)
+        .zip(magnified)
+        .filter(|(_, m)| **m)
+        .flat_map(|((a, b), _)| (0..3).map(move |c| (a[c] - b[c]).abs()))
+        .fold(0.0f32, f32::max);
+    Ok(DiffuseRow {
+        scene: name.to_string(),
+        env: env.to_string(),
+        technique: base.technique(),
+        path,
+        minified: pick(minified),
+        magnified: pick(magnified),
+        all: pick(covered),
+        magnified_max_change: f64::from(change / peak),
+        own_footprint_minified: own,
+        own_footprint_blocks: [0, 1].map(|k| block_rel_rmse(&frames[k], &truth, &own_mask)),
+        reference_blocks: [0, 1].map(|k| block_rel_rmse(&frames[k], reference, minified)),
+        lookups,
+    })
 }
 
 /// "before → after" of an (unfiltered, NDF) pair.

@@ -311,81 +311,9 @@ pub fn summary_markdown(points: &[StudyPoint]) -> String {
             .filter(|(_, c)| !c.is_empty())
             .collect();
         let _ = writeln!(md, "## Order {order} ({} basis functions)\n", order * order);
-        // Table: one row per resolution step, one column per parameterization.
-        let _ = write!(md, "| step |");
-        for (k, _) in &curves {
-            let _ = write!(md, " {k}: res · samples · MSE |");
-        }
-        let _ = write!(md, "\n|---|");
-        for _ in &curves {
-            let _ = write!(md, "---|");
-        }
-        let _ = writeln!(md);
-        let steps = curves.iter().map(|(_, c)| c.len()).max().unwrap_or(0);
-        for s in 0..steps {
-            let _ = write!(md, "| {s} |");
-            for (_, c) in &curves {
-                match c.get(s) {
-                    Some(p) => {
-                        let _ = write!(md, " {} · {} · {:.3e} |", p.res, p.samples, p.mse);
-                    }
-                    None => md.push_str(" |"),
-                }
-            }
-            let _ = writeln!(md);
-        }
+        write_mse_table(&mut md, &curves);
 
-        // Ranking at common sample counts: the cube counts inside every curve's range.
-        let lo = curves
-            .iter()
-            .filter_map(|(_, c)| c.first().map(|p| p.samples))
-            .max()
-            .unwrap_or(0);
-        let hi = curves
-            .iter()
-            .filter_map(|(_, c)| c.last().map(|p| p.samples))
-            .min()
-            .unwrap_or(0);
-        let targets: Vec<usize> = CUBE_RES
-            .iter()
-            .map(|r| 6 * (*r as usize) * (*r as usize))
-            .filter(|&s| s >= lo && s <= hi)
-            .collect();
-        let _ = writeln!(
-            md,
-            "\n### Ranking at equal sample count (log–log interpolation), lowest MSE first\n"
-        );
-        let _ = writeln!(
-            md,
-            "| samples | 1st | 2nd | 3rd | 4th |\n|---|---|---|---|---|"
-        );
-        let mut dx10_best = 0;
-        let mut dx9_worst = 0;
-        let mut first_rank_of_dx9 = None;
-        for &t in &targets {
-            let mut ranked: Vec<(Parameterization, f64)> = curves
-                .iter()
-                .filter_map(|(k, c)| mse_at(c, t as f64).map(|m| (*k, m)))
-                .collect();
-            ranked.sort_by(|a, b| a.1.total_cmp(&b.1));
-            let _ = write!(md, "| {t} |");
-            for (k, m) in &ranked {
-                let _ = write!(md, " {k} ({m:.3e}) |");
-            }
-            let _ = writeln!(md);
-            if ranked.first().map(|r| r.0) == Some(Parameterization::CubeDx10) {
-                dx10_best += 1;
-            }
-            if ranked.last().map(|r| r.0) == Some(Parameterization::CubeDx9) {
-                dx9_worst += 1;
-            }
-            if first_rank_of_dx9.is_none() {
-                first_rank_of_dx9 = ranked
-                    .iter()
-                    .position(|r| r.0 == Parameterization::CubeDx9)
-                    .map(|p| (t, p + 1));
-            }
-        }
+        let ranking = write_ranking(&mut md, &curves);
 
         let _ = writeln!(
             md,
@@ -401,51 +329,166 @@ pub fn summary_markdown(points: &[StudyPoint]) -> String {
             "\n(Smooth bilinear reconstruction gives −2; a seam band gives −1.5.)\n"
         );
 
-        let _ = writeln!(md, "### The paper's claims\n");
-        let _ = writeln!(
-            md,
-            "- *DX10 (seamless) cube has the lowest MSE at equal sample count*: lowest at \
-             {dx10_best} of {} common sample counts — {}.",
-            targets.len(),
-            if dx10_best == targets.len() && !targets.is_empty() {
-                "holds"
-            } else {
-                "does not hold everywhere"
-            }
-        );
-        if let Some((t, rank)) = first_rank_of_dx9 {
-            // DX9/DX10 MSE ratio at the smallest and largest common counts.
-            let ratio = |t: usize| {
-                let at = |k| {
-                    curves
-                        .iter()
-                        .find(|(c, _)| *c == k)
-                        .and_then(|(_, c)| mse_at(c, t as f64))
-                };
-                at(Parameterization::CubeDx9)
-                    .zip(at(Parameterization::CubeDx10))
-                    .map(|(a, b)| a / b)
-            };
-            let last = targets.last().copied().unwrap_or(t);
-            let verdict = if rank == curves.len() {
-                "holds in MSE"
-            } else {
-                "not in MSE terms: its flaw is the seam (not C0), which a mean hides"
-            };
-            let _ = writeln!(
-                md,
-                "- *DX9 (per-face) cube is the worst at low resolution*: {verdict}. At the \
-                 smallest common count ({t} samples) it ranks {rank} of {}, with {:.2}× the \
-                 DX10 cube's MSE ({:.2}× at {last}); it is the worst of the four at {dx9_worst} \
-                 of {} counts.\n",
-                curves.len(),
-                ratio(t).unwrap_or(f64::NAN),
-                ratio(last).unwrap_or(f64::NAN),
-                targets.len()
-            );
-        }
+        write_claims(&mut md, &curves, ranking);
     }
     md
+}
+
+/// One order's curves, each with its parameterization.
+type Curves = [(Parameterization, Vec<StudyPoint>)];
+
+/// Writes the MSE table of `curves`: one row per resolution step, one column per
+/// parameterization.
+fn write_mse_table(md: &mut String, curves: &Curves) {
+    let _ = write!(md, "| step |");
+    for (k, _) in curves {
+        let _ = write!(md, " {k}: res · samples · MSE |");
+    }
+    let _ = write!(md, "\n|---|");
+    for _ in curves {
+        let _ = write!(md, "---|");
+    }
+    let _ = writeln!(md);
+    let steps = curves.iter().map(|(_, c)| c.len()).max().unwrap_or(0);
+    for s in 0..steps {
+        let _ = write!(md, "| {s} |");
+        for (_, c) in curves {
+            match c.get(s) {
+                Some(p) => {
+                    let _ = write!(md, " {} · {} · {:.3e} |", p.res, p.samples, p.mse);
+                }
+                None => md.push_str(" |"),
+            }
+        }
+        let _ = writeln!(md);
+    }
+}
+
+/// The ranking of one order's parameterizations at common sample counts.
+struct Ranking {
+    /// The common sample counts ranked at.
+    targets: Vec<usize>,
+    /// At how many of them the DX10 cube ranks first.
+    dx10_best: usize,
+    /// At how many of them the DX9 cube ranks last.
+    dx9_worst: usize,
+    /// The first count with the DX9 cube ranked, and its rank there (1 = lowest MSE).
+    first_rank_of_dx9: Option<(usize, usize)>,
+}
+
+/// Writes the ranking table of `curves` at the cube counts inside every curve's range
+/// (log–log interpolation) and returns what the claims read off it.
+fn write_ranking(md: &mut String, curves: &Curves) -> Ranking {
+    // Ranking at common sample counts: the cube counts inside every curve's range.
+    let lo = curves
+        .iter()
+        .filter_map(|(_, c)| c.first().map(|p| p.samples))
+        .max()
+        .unwrap_or(0);
+    let hi = curves
+        .iter()
+        .filter_map(|(_, c)| c.last().map(|p| p.samples))
+        .min()
+        .unwrap_or(0);
+    let targets: Vec<usize> = CUBE_RES
+        .iter()
+        .map(|r| 6 * (*r as usize) * (*r as usize))
+        .filter(|&s| s >= lo && s <= hi)
+        .collect();
+    let _ = writeln!(
+        md,
+        "\n### Ranking at equal sample count (log–log interpolation), lowest MSE first\n"
+    );
+    let _ = writeln!(
+        md,
+        "| samples | 1st | 2nd | 3rd | 4th |\n|---|---|---|---|---|"
+    );
+    let mut dx10_best = 0;
+    let mut dx9_worst = 0;
+    let mut first_rank_of_dx9 = None;
+    for &t in &targets {
+        let mut ranked: Vec<(Parameterization, f64)> = curves
+            .iter()
+            .filter_map(|(k, c)| mse_at(c, t as f64).map(|m| (*k, m)))
+            .collect();
+        ranked.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let _ = write!(md, "| {t} |");
+        for (k, m) in &ranked {
+            let _ = write!(md, " {k} ({m:.3e}) |");
+        }
+        let _ = writeln!(md);
+        if ranked.first().map(|r| r.0) == Some(Parameterization::CubeDx10) {
+            dx10_best += 1;
+        }
+        if ranked.last().map(|r| r.0) == Some(Parameterization::CubeDx9) {
+            dx9_worst += 1;
+        }
+        if first_rank_of_dx9.is_none() {
+            first_rank_of_dx9 = ranked
+                .iter()
+                .position(|r| r.0 == Parameterization::CubeDx9)
+                .map(|p| (t, p + 1));
+        }
+    }
+    Ranking {
+        targets,
+        dx10_best,
+        dx9_worst,
+        first_rank_of_dx9,
+    }
+}
+
+/// Writes the paper's claims checked against `ranking` of `curves`.
+fn write_claims(md: &mut String, curves: &Curves, ranking: Ranking) {
+    let Ranking {
+        targets,
+        dx10_best,
+        dx9_worst,
+        first_rank_of_dx9,
+    } = ranking;
+    let _ = writeln!(md, "### The paper's claims\n");
+    let _ = writeln!(
+        md,
+        "- *DX10 (seamless) cube has the lowest MSE at equal sample count*: lowest at \
+         {dx10_best} of {} common sample counts — {}.",
+        targets.len(),
+        if dx10_best == targets.len() && !targets.is_empty() {
+            "holds"
+        } else {
+            "does not hold everywhere"
+        }
+    );
+    if let Some((t, rank)) = first_rank_of_dx9 {
+        // DX9/DX10 MSE ratio at the smallest and largest common counts.
+        let ratio = |t: usize| {
+            let at = |k| {
+                curves
+                    .iter()
+                    .find(|(c, _)| *c == k)
+                    .and_then(|(_, c)| mse_at(c, t as f64))
+            };
+            at(Parameterization::CubeDx9)
+                .zip(at(Parameterization::CubeDx10))
+                .map(|(a, b)| a / b)
+        };
+        let last = targets.last().copied().unwrap_or(t);
+        let verdict = if rank == curves.len() {
+            "holds in MSE"
+        } else {
+            "not in MSE terms: its flaw is the seam (not C0), which a mean hides"
+        };
+        let _ = writeln!(
+            md,
+            "- *DX9 (per-face) cube is the worst at low resolution*: {verdict}. At the \
+             smallest common count ({t} samples) it ranks {rank} of {}, with {:.2}× the \
+             DX10 cube's MSE ({:.2}× at {last}); it is the worst of the four at {dx9_worst} \
+             of {} counts.\n",
+            curves.len(),
+            ratio(t).unwrap_or(f64::NAN),
+            ratio(last).unwrap_or(f64::NAN),
+            targets.len()
+        );
+    }
 }
 
 /// Line colours per parameterization, in [`Parameterization::ALL`] order.
