@@ -11,7 +11,7 @@
 
 use std::cell::Cell;
 use std::f64::consts::PI;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Vec3};
 use shvis::bake::cache::{
@@ -668,19 +668,82 @@ fn different_settings_or_scene_change_the_key() {
     assert_ne!(key, visibility_key(&reindexed, 16, &s));
 }
 
+/// The one layer of the OpenEXR file at `path`: its size and each channel's name and f32
+/// samples (row-major), channels in the file's (alphabetical) order. Fails the test for a
+/// file of more than one layer or a channel not stored as f32.
+fn read_exr_channels(path: &Path) -> ((usize, usize), Vec<(String, Vec<f32>)>) {
+    use exr::prelude::{FlatSamples, read_all_flat_layers_from_file};
+    let image =
+        read_all_flat_layers_from_file(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!(image.layer_data.len(), 1, "{}: layers", path.display());
+    let layer = &image.layer_data[0];
+    let channels = layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| match &c.sample_data {
+            FlatSamples::F32(samples) => (c.name.to_string(), samples.clone()),
+            _ => panic!("{}: channel {} is not f32", path.display(), c.name),
+        })
+        .collect();
+    ((layer.size.0, layer.size.1), channels)
+}
+
+/// `visibility_{k}.exr` holds coefficients 4k..4k+3 in R, G, B, A (zero past order²) and
+/// `ao.exr` the AO in Y, as f32 under lossless RLE: read back, every sample is the baked
+/// value bit for bit. Order 3 leaves three zero channels in its last layer; order 6 fills
+/// all nine.
 #[test]
-fn exr_layers_are_written() {
-    let dir = temp_dir("exr");
-    let (_, map) = bake(&small_plane(), 16, &settings(64, 1));
-    write_exr_layers(&dir, &map, serde_json::json!({"test": true})).expect("EXR written");
-    for k in 0..9 {
+fn exr_layers_read_back_as_written() {
+    for order in [Order::THREE, Order::SIX] {
+        let dir = temp_dir(&format!("exr-{order}"));
+        let s = VisibilitySettings {
+            order,
+            ..settings(64, 1)
+        };
+        let (_, map) = bake(&small_plane(), 16, &s);
+        write_exr_layers(&dir, &map, serde_json::json!({"test": true})).expect("EXR written");
+        let res = map.res as usize;
+        let n2 = order.coeff_count();
+        let layers = n2.div_ceil(4);
+        for k in 0..layers {
+            let path = dir.join(format!("visibility_{k}.exr"));
+            let (size, channels) = read_exr_channels(&path);
+            assert_eq!(size, (res, res), "{}: size", path.display());
+            let names: Vec<&str> = channels.iter().map(|(n, _)| n.as_str()).collect();
+            assert_eq!(names, ["A", "B", "G", "R"], "{}: channels", path.display());
+            for (name, samples) in &channels {
+                let j = "RGBA".find(name.as_str()).expect("an RGBA channel");
+                let i = 4 * k + j;
+                for (t, &got) in samples.iter().enumerate() {
+                    let want = if i < n2 { map.coeffs[t * n2 + i] } else { 0.0 };
+                    assert_eq!(
+                        got.to_bits(),
+                        want.to_bits(),
+                        "{} {name} (coefficient {i}), texel {t}: {got} against {want}",
+                        path.display()
+                    );
+                }
+            }
+        }
         assert!(
-            dir.join(format!("visibility_{k}.exr")).is_file(),
-            "visibility_{k}.exr"
+            !dir.join(format!("visibility_{layers}.exr")).exists(),
+            "order {order}: {layers} layers, no more"
         );
+        let path = dir.join("ao.exr");
+        let (size, channels) = read_exr_channels(&path);
+        assert_eq!(size, (res, res), "{}: size", path.display());
+        let names: Vec<&str> = channels.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["Y"], "{}: channels", path.display());
+        for (t, (&got, &want)) in channels[0].1.iter().zip(&map.ao).enumerate() {
+            assert_eq!(
+                got.to_bits(),
+                want.to_bits(),
+                "ao.exr texel {t}: {got} against {want}"
+            );
+        }
+        let _ = std::fs::remove_dir_all(&dir);
     }
-    assert!(dir.join("ao.exr").is_file());
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 // ---------------------------------------------------------------- throughput
