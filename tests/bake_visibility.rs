@@ -28,9 +28,6 @@ use common::{FULL_UV, NO_UV, quad};
 use shvis::sh::basis::eval_basis;
 use shvis::sh::{Order, gauss_legendre};
 
-#[path = "../bench/bake_scenes.rs"]
-mod bake_scenes;
-
 /// Directions of the analytic tests.
 const RAYS: u32 = 1024;
 
@@ -744,80 +741,6 @@ fn exr_layers_read_back_as_written() {
         }
         let _ = std::fs::remove_dir_all(&dir);
     }
-}
-
-// ---------------------------------------------------------------- throughput
-
-/// CPU seconds (user + system) of this process so far, from /proc/self/stat (Linux; 0
-/// elsewhere), at the kernel's 100 Hz tick.
-fn cpu_seconds() -> f64 {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    let after_name = stat.rsplit(')').next().unwrap_or("");
-    let fields: Vec<&str> = after_name.split_whitespace().collect();
-    let ticks = |i: usize| {
-        fields
-            .get(i)
-            .and_then(|f| f.parse::<f64>().ok())
-            .unwrap_or(0.0)
-    };
-    (ticks(11) + ticks(12)) / 100.0 // utime, stime: fields 14 and 15 of stat(5)
-}
-
-/// Throughput report (release, rayon's default threads): `cargo test --release --test
-/// bake_visibility -- --ignored --nocapture throughput`. Besides wall-clock rays/s it
-/// prints the rate per CPU-second × threads, what the bake would reach with the cores to
-/// itself (other processes' load inflates wall-clock time, not CPU time).
-#[test]
-#[ignore]
-fn throughput_report() {
-    use rayon::prelude::*;
-    let threads = rayon::current_num_threads();
-    let report = |name: &str, mesh: &Mesh, res: u32, rays: u32| {
-        let texels = rasterize(mesh, res);
-        let tracer = Tracer::new(mesh);
-        let cpu = cpu_seconds();
-        let map = bake_visibility(&tracer, &texels, &settings(rays, 1));
-        let cpu = cpu_seconds() - cpu;
-        eprintln!(
-            "{name}: {} tris, {res}² × {rays} rays, {} texels: {:.3} s, {:.1} Mrays/s traced \
-             ({threads} threads); CPU {cpu:.2} s → {:.1} Mrays/s on {threads} idle cores",
-            tracer.triangle_count(),
-            texels.covered_count(),
-            map.stats.seconds,
-            map.stats.rays_per_second() * 1e-6,
-            map.stats.rays_traced as f64 / cpu.max(1e-9) * threads as f64 * 1e-6,
-        );
-        // The same rays one by one (Tracer::occluded), trace only, same parallelism.
-        let dirs = DirectionSet::new(rays, 1);
-        let start = std::time::Instant::now();
-        let cpu = cpu_seconds();
-        let traced: u64 = (0..texels.covered.len())
-            .into_par_iter()
-            .filter(|&t| texels.covered[t])
-            .map(|t| {
-                let n = texels.normal[t];
-                let o = tracer.offset_origin(texels.position[t], n);
-                let mut traced = 0u64;
-                for &d in dirs.dirs() {
-                    if above_horizon(n, d) {
-                        traced += 1;
-                        std::hint::black_box(tracer.occluded(o, d, f32::INFINITY));
-                    }
-                }
-                traced
-            })
-            .sum();
-        let s = start.elapsed().as_secs_f64();
-        let cpu = cpu_seconds() - cpu;
-        eprintln!(
-            "{name}: single-ray trace only: {s:.3} s, {:.1} Mrays/s; CPU {cpu:.2} s → {:.1} Mrays/s",
-            traced as f64 / s * 1e-6,
-            traced as f64 / cpu.max(1e-9) * threads as f64 * 1e-6
-        );
-    };
-    let house = house::build(512).expect("house builds");
-    report("house", &house.mesh, 512, 1024);
-    report("grid", &bake_scenes::displaced_grid(320), 128, 1024);
 }
 
 // ---------------------------------------------------------------- GPU simulator
