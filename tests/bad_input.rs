@@ -10,7 +10,8 @@
 //! Always: the process exits by itself within [`CASE_TIMEOUT`] (no hang), with an exit
 //! code (no abort or signal), and nothing on stderr reads like a panic or a failed
 //! allocation. Files are generated here; nothing large is checked in. The kill-9 test
-//! (`killed_bakes_rerun_to_identical_outputs`) interrupts a bake at its five writes.
+//! (`killed_bakes_rerun_to_identical_outputs`, feature `test-hooks`) interrupts a bake at
+//! its five writes.
 
 use std::collections::BTreeMap;
 use std::io::Read;
@@ -2273,7 +2274,9 @@ fn bad_input_suite() {
 
 /// `kill -9` at each of a bake's five writes (three visibility layers, AO, the cache file),
 /// then a rerun: its outputs are byte-identical to an uninterrupted run's, the killed run's
-/// directory was detectably incomplete, and no temporary is left.
+/// directory was detectably incomplete, and no temporary is left. The kill is a hook of the
+/// `test-hooks` feature (`files::KILL_WHILE_WRITING_ENV`).
+#[cfg(feature = "test-hooks")]
 #[test]
 fn killed_bakes_rerun_to_identical_outputs() {
     let dir = std::env::temp_dir().join(format!("shvis-kill9-{}", std::process::id()));
@@ -2431,6 +2434,8 @@ fn killed_bakes_rerun_to_identical_outputs() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Copies the files of `from` into `to` (created), for the kill-9 test.
+#[cfg(feature = "test-hooks")]
 fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
     for e in std::fs::read_dir(from).unwrap().flatten() {
