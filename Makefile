@@ -2,7 +2,8 @@
 .PHONY: deps test bench bench-full build clean device-kit
 
 # Tests run on lavapipe with the validation layer; keep tests single-binary-parallel
-# but not one Vulkan instance per core more than the machine has.
+# but not one Vulkan instance per core more than the machine has. The `test-hooks` feature
+# compiles the hooks the interruption and suspect-row tests drive (Cargo.toml).
 TEST_THREADS ?= 2
 BENCH_OUT ?= bench-out
 
@@ -13,7 +14,7 @@ build: deps
 	cargo build --release --locked
 
 test: deps
-	cargo test --locked -- --test-threads=$(TEST_THREADS)
+	cargo test --locked --features test-hooks -- --test-threads=$(TEST_THREADS)
 
 # The overcast probe of the rnm study, when the shared assets are present.
 OVERCAST ?= ../shared/assets/env/potsdamer_platz_1k.exr

@@ -1,8 +1,6 @@
-//! Generated scenes for the bake's benches and throughput reports (included by
-//! `bench/bake.rs` and `tests/bake_visibility.rs` with `#[path]`): a displaced grid of
-//! ≥ 200k triangles whose lightmap UVs are its grid coordinates, so the real raster →
-//! trace → project path runs on it.
-#![allow(dead_code)] // each includer uses a subset
+//! Generated scenes for the bake's benches (included by `bench/bake.rs` with `#[path]`): a
+//! displaced grid of ≥ 200k triangles whose lightmap UVs are its grid coordinates, so the
+//! real raster → trace → project path runs on it.
 
 use glam::Vec3;
 use shvis::scene::{Mesh, Vertex};

@@ -10,8 +10,9 @@
 //! client of techniques, asked by the bench and the probe, never part of building one.
 //!
 //! Unsafe code is denied everywhere but in [`UNSAFE_MODULES`]: `gpu` (Vulkan), the bake's
-//! SIMD ray traversal (`bake::trace`) and `files` (a test hook that kills the process
-//! mid-write); each block says why it is sound (`// SAFETY:`).
+//! SIMD ray traversal (`bake::trace`) and `files` (the SIGINT/SIGTERM handler that removes
+//! temporaries, and with the `test-hooks` feature the hooks that kill or interrupt the
+//! process mid-write); each block says why it is sound (`// SAFETY:`).
 #![deny(unsafe_code)]
 
 pub mod attribution;

@@ -9,8 +9,14 @@
 //!
 //! Always: the process exits by itself within [`CASE_TIMEOUT`] (no hang), with an exit
 //! code (no abort or signal), and nothing on stderr reads like a panic or a failed
-//! allocation. Files are generated here; nothing large is checked in. The kill-9 test
-//! (`killed_bakes_rerun_to_identical_outputs`) interrupts a bake at its five writes.
+//! allocation. Files are generated here; nothing large is checked in.
+//!
+//! Each class of cases ([`Kind`]) is one test in a folder of its own (`arguments`, `budget`,
+//! `values`, `env_files`, `scene_files`, `output_locations`, `bake_caches`,
+//! `design_hard_cases`), so a failure names its class and `cargo test --test bad_input
+//! values` runs one class alone; `every_class_has_cases` counts the whole suite. The kill-9
+//! test (`killed_bakes_rerun_to_identical_outputs`, feature `test-hooks`) interrupts a bake
+//! at its five writes.
 
 use std::collections::BTreeMap;
 use std::io::Read;
@@ -132,16 +138,17 @@ impl Suite {
         self.cases.last_mut().unwrap()
     }
 
-    /// Runs every case; returns the number per kind. Panics listing every failure.
-    fn run(self) -> BTreeMap<Kind, usize> {
-        let mut failures = Vec::new();
-        let mut counts = BTreeMap::new();
-        for case in &self.cases {
-            *counts.entry(case.kind).or_insert(0) += 1;
-            if let Err(e) = run_case(case) {
-                failures.push(format!("[{:?}] {}: {e}", case.kind, case.name));
-            }
-        }
+    /// Runs every case; panics listing every failure.
+    fn run(self) {
+        let failures: Vec<String> = self
+            .cases
+            .iter()
+            .filter_map(|case| {
+                run_case(case)
+                    .err()
+                    .map(|e| format!("[{:?}] {}: {e}", case.kind, case.name))
+            })
+            .collect();
         assert!(
             failures.is_empty(),
             "{} of {} cases failed:\n{}",
@@ -150,8 +157,6 @@ impl Suite {
             failures.join("\n")
         );
         let _ = std::fs::remove_dir_all(&self.dir);
-        println!("cases per kind: {counts:?}");
-        counts
     }
 }
 
@@ -2252,28 +2257,129 @@ fn hard_cases(suite: &mut Suite) {
     }
 }
 
-#[test]
-fn bad_input_suite() {
+// ---- One test per class -----------------------------------------------------------------
+
+impl Kind {
+    /// Every class, in the order of the enum.
+    const ALL: [Kind; 8] = [
+        Kind::Arguments,
+        Kind::Budget,
+        Kind::Values,
+        Kind::EnvFiles,
+        Kind::SceneFiles,
+        Kind::Outputs,
+        Kind::Cache,
+        Kind::HardCases,
+    ];
+
+    /// The generator of this class's cases.
+    fn cases(self) -> fn(&mut Suite) {
+        match self {
+            Kind::Arguments => argument_cases,
+            Kind::Budget => budget_cases,
+            Kind::Values => value_cases,
+            Kind::EnvFiles => env_file_cases,
+            Kind::SceneFiles => scene_file_cases,
+            Kind::Outputs => output_cases,
+            Kind::Cache => cache_cases,
+            Kind::HardCases => hard_cases,
+        }
+    }
+}
+
+/// Generates the cases of `kind` in a suite of its own (its own folder) and runs them: each
+/// meets its expectation (module doc), or the test fails listing every case that did not.
+fn run_class(kind: Kind) {
     let started = Instant::now();
-    let mut suite = Suite::new("suite");
-    argument_cases(&mut suite);
-    budget_cases(&mut suite);
-    value_cases(&mut suite);
-    env_file_cases(&mut suite);
-    scene_file_cases(&mut suite);
-    output_cases(&mut suite);
-    cache_cases(&mut suite);
-    hard_cases(&mut suite);
+    let mut suite = Suite::new(&format!("{kind:?}"));
+    kind.cases()(&mut suite);
     let total = suite.cases.len();
-    let counts = suite.run();
-    println!("{total} cases in {:.1} s", started.elapsed().as_secs_f64());
+    assert!(total > 0, "{kind:?}: no cases");
+    let strays: Vec<&str> = suite
+        .cases
+        .iter()
+        .filter(|c| c.kind != kind)
+        .map(|c| c.name.as_str())
+        .collect();
+    assert!(
+        strays.is_empty(),
+        "{kind:?} generates cases of another class: {strays:?}"
+    );
+    suite.run();
+    println!(
+        "{kind:?}: {total} cases in {:.1} s",
+        started.elapsed().as_secs_f64()
+    );
+}
+
+#[test]
+fn arguments() {
+    run_class(Kind::Arguments);
+}
+
+#[test]
+fn budget() {
+    run_class(Kind::Budget);
+}
+
+#[test]
+fn values() {
+    run_class(Kind::Values);
+}
+
+#[test]
+fn env_files() {
+    run_class(Kind::EnvFiles);
+}
+
+#[test]
+fn scene_files() {
+    run_class(Kind::SceneFiles);
+}
+
+#[test]
+fn output_locations() {
+    run_class(Kind::Outputs);
+}
+
+#[test]
+fn bake_caches() {
+    run_class(Kind::Cache);
+}
+
+#[test]
+fn design_hard_cases() {
+    run_class(Kind::HardCases);
+}
+
+/// The suite as a whole, generated and not run (the class tests run it): some two hundred
+/// cases, every class with some.
+#[test]
+fn every_class_has_cases() {
+    let mut suite = Suite::new("count");
+    for kind in Kind::ALL {
+        kind.cases()(&mut suite);
+    }
+    let mut per_class = BTreeMap::new();
+    for case in &suite.cases {
+        *per_class.entry(case.kind).or_insert(0usize) += 1;
+    }
+    let total = suite.cases.len();
+    println!("{total} cases: {per_class:?}");
+    let _ = std::fs::remove_dir_all(&suite.dir);
     assert!(total >= 150, "only {total} cases");
-    assert_eq!(counts.len(), 8, "every kind has cases: {counts:?}");
+    assert_eq!(
+        per_class.len(),
+        Kind::ALL.len(),
+        "every class has cases: {per_class:?}"
+    );
 }
 
 /// `kill -9` at each of a bake's five writes (three visibility layers, AO, the cache file),
 /// then a rerun: its outputs are byte-identical to an uninterrupted run's, the killed run's
-/// directory was detectably incomplete, and no temporary is left.
+/// directory was detectably incomplete, and no temporary is left. The kill is a hook of the
+/// `test-hooks` feature (`files::KILL_WHILE_WRITING_ENV`).
+#[cfg(feature = "test-hooks")]
 #[test]
 fn killed_bakes_rerun_to_identical_outputs() {
     let dir = std::env::temp_dir().join(format!("shvis-kill9-{}", std::process::id()));
@@ -2431,6 +2537,8 @@ fn killed_bakes_rerun_to_identical_outputs() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Copies the files of `from` into `to` (created), for the kill-9 test.
+#[cfg(feature = "test-hooks")]
 fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
     for e in std::fs::read_dir(from).unwrap().flatten() {

@@ -11,7 +11,7 @@
 
 use std::cell::Cell;
 use std::f64::consts::PI;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Vec3};
 use shvis::bake::cache::{
@@ -27,9 +27,6 @@ mod common;
 use common::{FULL_UV, NO_UV, quad};
 use shvis::sh::basis::eval_basis;
 use shvis::sh::{Order, gauss_legendre};
-
-#[path = "../bench/bake_scenes.rs"]
-mod bake_scenes;
 
 /// Directions of the analytic tests.
 const RAYS: u32 = 1024;
@@ -668,93 +665,82 @@ fn different_settings_or_scene_change_the_key() {
     assert_ne!(key, visibility_key(&reindexed, 16, &s));
 }
 
-#[test]
-fn exr_layers_are_written() {
-    let dir = temp_dir("exr");
-    let (_, map) = bake(&small_plane(), 16, &settings(64, 1));
-    write_exr_layers(&dir, &map, serde_json::json!({"test": true})).expect("EXR written");
-    for k in 0..9 {
-        assert!(
-            dir.join(format!("visibility_{k}.exr")).is_file(),
-            "visibility_{k}.exr"
-        );
-    }
-    assert!(dir.join("ao.exr").is_file());
-    let _ = std::fs::remove_dir_all(&dir);
+/// The one layer of the OpenEXR file at `path`: its size and each channel's name and f32
+/// samples (row-major), channels in the file's (alphabetical) order. Fails the test for a
+/// file of more than one layer or a channel not stored as f32.
+fn read_exr_channels(path: &Path) -> ((usize, usize), Vec<(String, Vec<f32>)>) {
+    use exr::prelude::{FlatSamples, read_all_flat_layers_from_file};
+    let image =
+        read_all_flat_layers_from_file(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!(image.layer_data.len(), 1, "{}: layers", path.display());
+    let layer = &image.layer_data[0];
+    let channels = layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| match &c.sample_data {
+            FlatSamples::F32(samples) => (c.name.to_string(), samples.clone()),
+            _ => panic!("{}: channel {} is not f32", path.display(), c.name),
+        })
+        .collect();
+    ((layer.size.0, layer.size.1), channels)
 }
 
-// ---------------------------------------------------------------- throughput
-
-/// CPU seconds (user + system) of this process so far, from /proc/self/stat (Linux; 0
-/// elsewhere), at the kernel's 100 Hz tick.
-fn cpu_seconds() -> f64 {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    let after_name = stat.rsplit(')').next().unwrap_or("");
-    let fields: Vec<&str> = after_name.split_whitespace().collect();
-    let ticks = |i: usize| {
-        fields
-            .get(i)
-            .and_then(|f| f.parse::<f64>().ok())
-            .unwrap_or(0.0)
-    };
-    (ticks(11) + ticks(12)) / 100.0 // utime, stime: fields 14 and 15 of stat(5)
-}
-
-/// Throughput report (release, rayon's default threads): `cargo test --release --test
-/// bake_visibility -- --ignored --nocapture throughput`. Besides wall-clock rays/s it
-/// prints the rate per CPU-second × threads, what the bake would reach with the cores to
-/// itself (other processes' load inflates wall-clock time, not CPU time).
+/// `visibility_{k}.exr` holds coefficients 4k..4k+3 in R, G, B, A (zero past order²) and
+/// `ao.exr` the AO in Y, as f32 under lossless RLE: read back, every sample is the baked
+/// value bit for bit. Order 3 leaves three zero channels in its last layer; order 6 fills
+/// all nine.
 #[test]
-#[ignore]
-fn throughput_report() {
-    use rayon::prelude::*;
-    let threads = rayon::current_num_threads();
-    let report = |name: &str, mesh: &Mesh, res: u32, rays: u32| {
-        let texels = rasterize(mesh, res);
-        let tracer = Tracer::new(mesh);
-        let cpu = cpu_seconds();
-        let map = bake_visibility(&tracer, &texels, &settings(rays, 1));
-        let cpu = cpu_seconds() - cpu;
-        eprintln!(
-            "{name}: {} tris, {res}² × {rays} rays, {} texels: {:.3} s, {:.1} Mrays/s traced \
-             ({threads} threads); CPU {cpu:.2} s → {:.1} Mrays/s on {threads} idle cores",
-            tracer.triangle_count(),
-            texels.covered_count(),
-            map.stats.seconds,
-            map.stats.rays_per_second() * 1e-6,
-            map.stats.rays_traced as f64 / cpu.max(1e-9) * threads as f64 * 1e-6,
-        );
-        // The same rays one by one (Tracer::occluded), trace only, same parallelism.
-        let dirs = DirectionSet::new(rays, 1);
-        let start = std::time::Instant::now();
-        let cpu = cpu_seconds();
-        let traced: u64 = (0..texels.covered.len())
-            .into_par_iter()
-            .filter(|&t| texels.covered[t])
-            .map(|t| {
-                let n = texels.normal[t];
-                let o = tracer.offset_origin(texels.position[t], n);
-                let mut traced = 0u64;
-                for &d in dirs.dirs() {
-                    if above_horizon(n, d) {
-                        traced += 1;
-                        std::hint::black_box(tracer.occluded(o, d, f32::INFINITY));
-                    }
+fn exr_layers_read_back_as_written() {
+    for order in [Order::THREE, Order::SIX] {
+        let dir = temp_dir(&format!("exr-{order}"));
+        let s = VisibilitySettings {
+            order,
+            ..settings(64, 1)
+        };
+        let (_, map) = bake(&small_plane(), 16, &s);
+        write_exr_layers(&dir, &map, serde_json::json!({"test": true})).expect("EXR written");
+        let res = map.res as usize;
+        let n2 = order.coeff_count();
+        let layers = n2.div_ceil(4);
+        for k in 0..layers {
+            let path = dir.join(format!("visibility_{k}.exr"));
+            let (size, channels) = read_exr_channels(&path);
+            assert_eq!(size, (res, res), "{}: size", path.display());
+            let names: Vec<&str> = channels.iter().map(|(n, _)| n.as_str()).collect();
+            assert_eq!(names, ["A", "B", "G", "R"], "{}: channels", path.display());
+            for (name, samples) in &channels {
+                let j = "RGBA".find(name.as_str()).expect("an RGBA channel");
+                let i = 4 * k + j;
+                for (t, &got) in samples.iter().enumerate() {
+                    let want = if i < n2 { map.coeffs[t * n2 + i] } else { 0.0 };
+                    assert_eq!(
+                        got.to_bits(),
+                        want.to_bits(),
+                        "{} {name} (coefficient {i}), texel {t}: {got} against {want}",
+                        path.display()
+                    );
                 }
-                traced
-            })
-            .sum();
-        let s = start.elapsed().as_secs_f64();
-        let cpu = cpu_seconds() - cpu;
-        eprintln!(
-            "{name}: single-ray trace only: {s:.3} s, {:.1} Mrays/s; CPU {cpu:.2} s → {:.1} Mrays/s",
-            traced as f64 / s * 1e-6,
-            traced as f64 / cpu.max(1e-9) * threads as f64 * 1e-6
+            }
+        }
+        assert!(
+            !dir.join(format!("visibility_{layers}.exr")).exists(),
+            "order {order}: {layers} layers, no more"
         );
-    };
-    let house = house::build(512).expect("house builds");
-    report("house", &house.mesh, 512, 1024);
-    report("grid", &bake_scenes::displaced_grid(320), 128, 1024);
+        let path = dir.join("ao.exr");
+        let (size, channels) = read_exr_channels(&path);
+        assert_eq!(size, (res, res), "{}: size", path.display());
+        let names: Vec<&str> = channels.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["Y"], "{}: channels", path.display());
+        for (t, (&got, &want)) in channels[0].1.iter().zip(&map.ao).enumerate() {
+            assert_eq!(
+                got.to_bits(),
+                want.to_bits(),
+                "ao.exr texel {t}: {got} against {want}"
+            );
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }
 
 // ---------------------------------------------------------------- GPU simulator

@@ -422,7 +422,9 @@ fn errors_name_the_input_and_what_is_wrong() {
 }
 
 /// SIGINT while a file is being written: the temporary is removed and the process exits
-/// with 130, leaving no output and no `.NAME.tmp-*` behind.
+/// with 130, leaving no output and no `.NAME.tmp-*` behind. The interruption is a hook of
+/// the `test-hooks` feature (`files::INTERRUPT_WHILE_WRITING_ENV`).
+#[cfg(feature = "test-hooks")]
 #[test]
 fn an_interrupted_write_leaves_no_temporary() {
     let dir = Scratch::new("reliability", "sigint");

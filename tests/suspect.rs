@@ -1,7 +1,8 @@
 //! A bench row whose image cannot be right is marked suspect with its reason in table.md
 //! and table.json, and `bench --strict` exits non-zero on it (`report::metrics::
 //! suspect_reason`). The absurd row is planted: `SHVIS_PLANT_ABSURD_ROW=ssbump.dx9` scales
-//! that row's image ×100 before it is measured.
+//! that row's image ×100 before it is measured, a hook of the `test-hooks` feature (this
+//! file needs it: Cargo.toml's `required-features`).
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -42,7 +43,7 @@ fn absurd_rows_are_marked_and_strict_fails() {
         ])
         .arg(&out)
         .env("SHVIS_CACHE_DIR", root.join("cache"))
-        .env("SHVIS_PLANT_ABSURD_ROW", "ssbump.dx9")
+        .env(shvis::bench::rows::PLANT_ABSURD_ROW_ENV, "ssbump.dx9")
         .env("RUST_LOG", "warn");
         if strict {
             cmd.arg("--strict");

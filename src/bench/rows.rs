@@ -172,8 +172,9 @@ fn measure_row(
         tech.time(scene, w, n)
     })?;
     // The image: one more frame, read back (its time is not kept).
-    let mut frame = tech.render(scene, 0, 1)?;
-    plant_absurd_row(&tech.label(), &mut frame);
+    let frame = tech.render(scene, 0, 1)?;
+    #[cfg(feature = "test-hooks")]
+    let frame = plant_absurd_row(&tech.label(), frame);
     let frame_ms: Vec<f64> = segments.iter().flat_map(|s| s.ms.iter().copied()).collect();
     clock.split(|p| &mut p.render);
     let specular = scene.specular().map(|s| s.term.filter);
@@ -272,11 +273,16 @@ fn measure_row(
     Ok((row, frame, segments))
 }
 
-/// The environment variable that plants an absurd row, for the tests of the suspect
-/// marker and `--strict` (`tests/suspect.rs`): `technique.path`, whose image is scaled ×100.
+/// Test hook of the `test-hooks` feature, not a user setting: the environment variable that
+/// plants an absurd row, for the tests of the suspect marker and `--strict`
+/// (`tests/suspect.rs`): `technique.path`, whose image is scaled ×100.
+#[cfg(feature = "test-hooks")]
 pub const PLANT_ABSURD_ROW_ENV: &str = "SHVIS_PLANT_ABSURD_ROW";
 
-fn plant_absurd_row(label: &str, frame: &mut Frame) {
+/// `frame`, its image scaled ×100 when [`PLANT_ABSURD_ROW_ENV`] names `label` (feature
+/// `test-hooks`).
+#[cfg(feature = "test-hooks")]
+fn plant_absurd_row(label: &str, mut frame: Frame) -> Frame {
     if std::env::var(PLANT_ABSURD_ROW_ENV).is_ok_and(|v| v == label) {
         log::warn!("{label}: image scaled ×100 ({PLANT_ABSURD_ROW_ENV})");
         for p in &mut frame.rgba {
@@ -285,4 +291,5 @@ fn plant_absurd_row(label: &str, frame: &mut Frame) {
             }
         }
     }
+    frame
 }

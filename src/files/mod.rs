@@ -15,6 +15,10 @@
 //! - A [`Manifest`] (`manifest.json`, written last) lists a directory's files with their
 //!   sizes and [`hash64`]: a directory without one, or whose
 //!   files do not match it, is incomplete ([`Manifest::verify`]).
+//! - Built with the `test-hooks` feature (`make test`), [`write_atomic`] reads two test
+//!   hooks from the environment that kill or interrupt the process halfway through a named
+//!   file (`KILL_WHILE_WRITING_ENV`, `INTERRUPT_WHILE_WRITING_ENV`); other builds have
+//!   neither.
 //!
 //! OpenEXR: the `exr` crate's default encoding writes tiles in whatever order its worker
 //! threads finish (`LineOrder::Unspecified`), so two runs with identical pixels give
@@ -40,13 +44,15 @@ pub const EXR_ENCODING: Encoding = Encoding {
     ..Encoding::FAST_LOSSLESS
 };
 
-/// Test hook, not a user setting: when a file whose name equals this variable's value is
-/// being written by [`write_atomic`], the process kills itself with SIGKILL after writing
-/// half of the bytes (the kill-9 test of `tests/bad_input.rs`).
+/// Test hook of the `test-hooks` feature, not a user setting: when a file whose name equals
+/// this variable's value is being written by [`write_atomic`], the process kills itself with
+/// SIGKILL after writing half of the bytes (the kill-9 test of `tests/bad_input.rs`).
+#[cfg(feature = "test-hooks")]
 pub const KILL_WHILE_WRITING_ENV: &str = "SHVIS_TEST_KILL_WHILE_WRITING";
 
-/// Test hook, not a user setting: as [`KILL_WHILE_WRITING_ENV`], but the process sends
-/// itself SIGINT (the interrupted-write test of `tests/reliability.rs`).
+/// Test hook of the `test-hooks` feature, not a user setting: as [`KILL_WHILE_WRITING_ENV`],
+/// but the process sends itself SIGINT (the interrupted-write test of `tests/reliability.rs`).
+#[cfg(feature = "test-hooks")]
 pub const INTERRUPT_WHILE_WRITING_ENV: &str = "SHVIS_TEST_INTERRUPT_WHILE_WRITING";
 
 /// Name of a bake output directory's manifest.
@@ -291,20 +297,8 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
             .write(true)
             .create_new(true)
             .open(&tmp)?;
-        match std::env::var_os(KILL_WHILE_WRITING_ENV) {
-            Some(v) if v.to_string_lossy() == name => {
-                file.write_all(&bytes[..bytes.len() / 2])?;
-                file.sync_all()?;
-                kill_self();
-            }
-            _ => {}
-        }
-        if std::env::var_os(INTERRUPT_WHILE_WRITING_ENV)
-            .is_some_and(|v| v.to_string_lossy() == name)
-        {
-            file.write_all(&bytes[..bytes.len() / 2])?;
-            interrupt::raise_sigint();
-        }
+        #[cfg(feature = "test-hooks")]
+        interrupt_while_writing(&mut file, &name, bytes)?;
         file.write_all(bytes)?;
         file.sync_all()?;
         fs::rename(&tmp, path)
@@ -411,6 +405,8 @@ mod interrupt {
         }
     }
 
+    /// SIGINT to this thread, for the interrupted-write hook (feature `test-hooks`).
+    #[cfg(feature = "test-hooks")]
     pub(super) fn raise_sigint() {
         // SAFETY: raise(3) on this thread; the handler runs and exits the process.
         unsafe {
@@ -419,7 +415,28 @@ mod interrupt {
     }
 }
 
+/// The test hooks of [`write_atomic`] (feature `test-hooks`): with `name` in
+/// [`KILL_WHILE_WRITING_ENV`], writes half of `bytes` to `file`, syncs it and kills the
+/// process; with `name` in [`INTERRUPT_WHILE_WRITING_ENV`], writes half of `bytes` and
+/// raises SIGINT (the handler of [`remove_temporaries_on_interrupt`] then exits). Otherwise
+/// does nothing.
+#[cfg(feature = "test-hooks")]
+fn interrupt_while_writing(file: &mut File, name: &str, bytes: &[u8]) -> io::Result<()> {
+    let names = |var: &str| std::env::var_os(var).is_some_and(|v| v.to_string_lossy() == name);
+    if names(KILL_WHILE_WRITING_ENV) {
+        file.write_all(&bytes[..bytes.len() / 2])?;
+        file.sync_all()?;
+        kill_self();
+    }
+    if names(INTERRUPT_WHILE_WRITING_ENV) {
+        file.write_all(&bytes[..bytes.len() / 2])?;
+        interrupt::raise_sigint();
+    }
+    Ok(())
+}
+
 /// SIGKILL to this process ([`KILL_WHILE_WRITING_ENV`]): no destructors, no flushing.
+#[cfg(feature = "test-hooks")]
 #[allow(unsafe_code)]
 fn kill_self() -> ! {
     #[cfg(target_os = "linux")]

@@ -680,22 +680,50 @@ mod tests {
         assert_eq!(String::from_utf8_lossy(&csv).lines().count(), a.len() + 1);
     }
 
-    /// The full experiment as `shvis study params` runs it, with its outputs in the
-    /// system temp folder; prints the runtime and the summary. Slow in debug builds: run
-    /// `cargo test --release --lib full_study -- --ignored --nocapture`.
+    /// `write_report` writes what `shvis study params --out DIR` promises, in order: the
+    /// CSV, the points as JSON, the summary and both plots, each holding what its writer
+    /// makes of the points.
     #[test]
-    #[ignore]
-    fn full_study() {
-        let start = std::time::Instant::now();
-        let points = run_study(DEFAULT_DIRECTIONS, DEFAULT_SEED);
-        let secs = start.elapsed().as_secs_f64();
-        let dir = std::env::temp_dir().join("shvis_study_params");
-        let files = write_report(&points, &dir).expect("temp folder is writable");
-        println!(
-            "run_study({DEFAULT_DIRECTIONS}) took {secs:.2} s on {} threads",
-            rayon::current_num_threads()
+    fn write_report_writes_every_output_of_the_points() {
+        let points = run_study(CHUNK + 1, 42);
+        let dir = std::env::temp_dir().join(format!("shvis-study-params-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let written = write_report(&points, &dir).expect("temp folder is writable");
+        let names: Vec<&str> = written
+            .iter()
+            .map(|p| p.file_name().and_then(|n| n.to_str()).unwrap_or(""))
+            .collect();
+        assert_eq!(
+            names,
+            [
+                "params.csv",
+                "params.json",
+                "params.md",
+                "params_mse.svg",
+                "params_mse.png"
+            ]
         );
-        println!("{}", summary_markdown(&points));
-        println!("wrote {files:?}");
+        assert!(
+            written.iter().all(|p| p.parent() == Some(dir.as_path())),
+            "{written:?}"
+        );
+        let read = |name: &str| std::fs::read(dir.join(name)).expect(name);
+        let mut csv = Vec::new();
+        write_csv(&points, &mut csv).expect("write to memory");
+        assert_eq!(read("params.csv"), csv);
+        let json: serde_json::Value =
+            serde_json::from_slice(&read("params.json")).expect("params.json parses");
+        assert_eq!(
+            json,
+            serde_json::to_value(&points).expect("points serialize")
+        );
+        assert_eq!(read("params.md"), summary_markdown(&points).into_bytes());
+        let svg = String::from_utf8(read("params_mse.svg")).expect("SVG is text");
+        assert!(svg.contains("<svg"), "params_mse.svg: {svg:.200}");
+        assert!(
+            read("params_mse.png").starts_with(b"\x89PNG\r\n\x1a\n"),
+            "params_mse.png is not a PNG"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }
