@@ -665,10 +665,13 @@ fn different_settings_or_scene_change_the_key() {
     assert_ne!(key, visibility_key(&reindexed, 16, &s));
 }
 
+/// An EXR layer's channels: (name, samples).
+type Channels = Vec<(String, Vec<f32>)>;
+
 /// The one layer of the OpenEXR file at `path`: its size and each channel's name and f32
 /// samples (row-major), channels in the file's (alphabetical) order. Fails the test for a
 /// file of more than one layer or a channel not stored as f32.
-fn read_exr_channels(path: &Path) -> ((usize, usize), Vec<(String, Vec<f32>)>) {
+fn read_exr_channels(path: &Path) -> ((usize, usize), Channels) {
     use exr::prelude::{FlatSamples, read_all_flat_layers_from_file};
     let image =
         read_all_flat_layers_from_file(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
