@@ -30,7 +30,7 @@ space := $(empty) $(empty)
 BASES_ENVS = $(subst $(space),$(comma),$(strip sky sky:15 sky:60 $(PROBES)))
 # The engine bases beside shlmap under the overcast probe (the default sky's rows are in
 # the main bench).
-ENGINE_SH_ROWS = shlmap,unc6,l1,l1geo,l1zh3,zh3,l1lum,shlmapw,hb4,hb6,sg6,sg9,sg12,dice,dicey
+ENGINE_SH_ROWS = shlmap,unc6,l1,l1geo,l1zh3,zh3,l1lum,shlmapw,hb4,hb6,sg6,sg9,sg12,dice,dicey,acube,acubels
 # Normal mapping for PRT against unc6 under the sun turned 90° after the bake.
 NMPRT_ROWS = unc6,preconv,shlmap,nmprt,nmprtsvd4,nmprtsvd6,nmprthl2,nmprtratio
 
