@@ -6,6 +6,7 @@ use std::time::Instant;
 use anyhow::{Context as _, Result, bail};
 use clap::{Args, Subcommand};
 
+use shvis::study::report::StudyReport;
 use shvis::technique::{HwPath, Technique};
 
 use super::args::{GpuArgs, SceneArgs, finite_f32};
@@ -343,10 +344,12 @@ fn run_nmprt_svd(a: StudyNmprtSvdArgs) -> Result<()> {
     create_dir(&a.out)?;
     let markdown = shvis::study::nmprt_svd_report::report(a.side as usize, a.quadrature as usize);
     println!("{markdown}");
-    let path = a.out.join("nmprt_svd.md");
-    shvis::files::write(&path, &markdown)
-        .with_context(|| format!("{}: cannot write", path.display()))?;
-    println!("wrote {}", path.display());
+    let report = StudyReport {
+        stem: "nmprt_svd",
+        markdown,
+        json: None,
+    };
+    print_written(&shvis::study::report::write(&a.out, &report)?);
     Ok(())
 }
 
@@ -375,14 +378,15 @@ fn run_bases(a: StudyBasesArgs) -> Result<()> {
     create_dir(&a.out)?;
     let started = Instant::now();
     let study = shvis::study::bases::run(&envs, a.quadrature as usize, true)?;
-    let markdown = shvis::study::bases::markdown(&study);
-    let md = a.out.join("bases.md");
-    shvis::files::write(&md, &markdown)?;
-    let json = a.out.join("bases.json");
-    shvis::files::write(&json, serde_json::to_string_pretty(&study)?)?;
+    let report = StudyReport {
+        stem: "bases",
+        markdown: shvis::study::bases::markdown(&study),
+        json: Some(serde_json::to_string_pretty(&study)?),
+    };
+    shvis::study::report::write(&a.out, &report).map_err(|e| e.source)?;
     let plots = shvis::study::bases::write_plot(&study, &a.out)
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.out.join("bases_error.svg").display()))?;
-    print_table(&markdown, &a.out, "bases.md, bases.json", started);
+    print_table(&report.markdown, &a.out, "bases.md, bases.json", started);
     print_written(&plots);
     Ok(())
 }
@@ -410,16 +414,16 @@ fn run_block(a: StudyBlockArgs) -> Result<()> {
         &prepared,
         &["unc6", "pca8"].map(|n| n.parse().expect("technique names")),
     )?;
-    let markdown =
-        shvis::study::block::markdown(&study) + &shvis::study::block::tables_markdown(&table_rows);
-    shvis::files::write(a.out.join("block.md"), &markdown)?;
-    shvis::files::write(
-        a.out.join("block.json"),
-        serde_json::to_string_pretty(
+    let report = StudyReport {
+        stem: "block",
+        markdown: shvis::study::block::markdown(&study)
+            + &shvis::study::block::tables_markdown(&table_rows),
+        json: Some(serde_json::to_string_pretty(
             &serde_json::json!({"lightmap": study, "tables": table_rows}),
-        )?,
-    )?;
-    print_table(&markdown, &a.out, "block.md, block.json", started);
+        )?),
+    };
+    shvis::study::report::write(&a.out, &report).map_err(|e| e.source)?;
+    print_table(&report.markdown, &a.out, "block.md, block.json", started);
     Ok(())
 }
 

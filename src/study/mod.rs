@@ -1,6 +1,10 @@
 //! Studies: CPU experiments that reproduce the paper's measurements outside the renderer
 //! and write their data, a markdown summary and plots (DESIGN §4, `shvis study …`).
 //!
+//! Each study's report is a [`report::StudyReport`]: its markdown summary and its data as
+//! JSON, written as `<stem>.md` and `<stem>.json` by the one writer [`report::write`]
+//! (atomically); the study writes its figures, plots and other files beside them itself.
+//!
 //! - [`params`]: Iwanicki–Sloan App. A, Figure 8 — how well each sphere parameterization
 //!   of [`crate::sphere`] reconstructs SH basis functions under hardware bilinear
 //!   filtering, as MSE against total texel count (`shvis study params`).
@@ -36,6 +40,7 @@ pub mod normalmap;
 pub mod normalmap_report;
 pub mod params;
 pub mod params_gpu;
+pub mod report;
 pub mod rnm;
 pub mod rnm_report;
 pub mod seams;

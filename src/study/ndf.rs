@@ -20,6 +20,7 @@ use glam::{Vec3, Vec4};
 use serde::Serialize;
 
 use super::ndf_diffuse::{DiffuseRow, DiffuseScene};
+use super::report::{StudyReport, pretty_json};
 use crate::gpu::TimingStats;
 use crate::gpu::{Context, GpuError};
 use crate::ndf::{self, NdfMaps};
@@ -303,8 +304,8 @@ pub fn run(ctx: &Arc<Context>, s: &NdfStudySettings) -> Result<(NdfStudy, Frame)
     ))
 }
 
-/// Writes `ndf.md`, `ndf.json` and `fig1_ndf_{scene}.png` per specular study into `dir`;
-/// returns their paths.
+/// Writes `fig1_ndf_{scene}.png` per specular study, then the report `ndf.md`, `ndf.json`
+/// ([`super::report::write`]) into `dir`; returns their paths.
 pub fn write_report(
     studies: &[(NdfStudy, Frame)],
     diffuse: Option<&(Vec<DiffuseScene>, Vec<DiffuseRow>)>,
@@ -368,14 +369,19 @@ pub fn write_report(
         md.push_str(&super::ndf_diffuse::markdown(scenes, rows));
     }
     let specular: Vec<&NdfStudy> = studies.iter().map(|(s, _)| s).collect();
-    written.push(crate::report::write_text(dir, "ndf.md", &md)?);
-    written.push(crate::report::write_json(
+    let json = pretty_json(
         dir,
-        "ndf.json",
+        "ndf",
         &serde_json::json!({
             "specular": specular,
             "diffuse": diffuse.map(|(scenes, rows)| serde_json::json!({"scenes": scenes, "rows": rows})),
         }),
-    )?);
+    )?;
+    let study_report = StudyReport {
+        stem: "ndf",
+        markdown: md,
+        json: Some(json),
+    };
+    written.extend(super::report::write(dir, &study_report)?);
     Ok(written)
 }

@@ -21,6 +21,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use super::report::{StudyReport, pretty_json};
 use crate::gpu::Context;
 use crate::normalmap::cpu::{self, RayDirection};
 use crate::normalmap::simplify::{simplify, sphere_high, sphere_low};
@@ -390,7 +391,8 @@ fn stats_cell(s: &Option<AngleStats>) -> String {
     })
 }
 
-/// Writes `normalmap.md` and `normalmap.json` into `dir`; returns their paths.
+/// Writes the report `normalmap.md` and `normalmap.json` into `dir`
+/// ([`super::report::write`]); returns their paths.
 pub fn write_report(study: &NormalMapStudy, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
     let mut md = format!(
         "# GPU normal-map generation\n\nDevice: {}. Times are medians; \"GPU total\" is the whole bake \
@@ -462,8 +464,10 @@ pub fn write_report(study: &NormalMapStudy, dir: &Path) -> Result<Vec<PathBuf>, 
             ));
         }
     }
-    Ok(vec![
-        crate::report::write_text(dir, "normalmap.md", &md)?,
-        crate::report::write_json(dir, "normalmap.json", study)?,
-    ])
+    let study_report = StudyReport {
+        stem: "normalmap",
+        json: Some(pretty_json(dir, "normalmap", study)?),
+        markdown: md,
+    };
+    Ok(super::report::write(dir, &study_report)?)
 }

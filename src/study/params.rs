@@ -43,6 +43,7 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 use rayon::prelude::*;
 
+use super::report::{StudyReport, StudyReportError};
 use crate::sh::Order;
 use crate::sh::basis::eval_basis;
 use crate::sphere::{Parameterization, SphereMap};
@@ -599,8 +600,9 @@ pub fn write_plots(points: &[StudyPoint], dir: &Path) -> Result<Vec<PathBuf>, St
 }
 
 /// Writes everything `shvis study params --out DIR` produces into `dir` (created if
-/// missing): `params.csv` ([`write_csv`]), `params.json` (the points), `params.md`
-/// ([`summary_markdown`]) and the plots ([`write_plots`]). Returns the paths written.
+/// missing): `params.csv` ([`write_csv`]), the report `params.md` ([`summary_markdown`])
+/// and `params.json` (the points) through [`super::report::write`], and the plots
+/// ([`write_plots`]). Returns the paths written: the CSV, the JSON, the markdown, the plots.
 ///
 /// # Errors
 /// [`StudyError::Io`] naming the file that could not be written, or [`StudyError::Plot`]
@@ -615,17 +617,30 @@ pub fn write_report(points: &[StudyPoint], dir: &Path) -> Result<Vec<PathBuf>, S
     let mut buf = Vec::new();
     write_csv(points, &mut buf).map_err(io(&csv))?;
     crate::files::write(&csv, buf).map_err(io(&csv))?;
-    let json = dir.join("params.json");
-    let text = serde_json::to_string_pretty(points).map_err(|e| StudyError::Io {
-        path: json.clone(),
+    let json = serde_json::to_string_pretty(points).map_err(|e| StudyError::Io {
+        path: dir.join("params.json"),
         source: e.into(),
     })?;
-    crate::files::write(&json, text).map_err(io(&json))?;
-    let md = dir.join("params.md");
-    crate::files::write(&md, summary_markdown(points)).map_err(io(&md))?;
-    let mut written = vec![csv, json, md];
+    let study_report = StudyReport {
+        stem: "params",
+        markdown: summary_markdown(points),
+        json: Some(json),
+    };
+    let mut written = vec![csv];
+    // params.json before params.md: the order the command lists them in.
+    written.extend(super::report::write(dir, &study_report)?.into_iter().rev());
     written.extend(write_plots(points, dir)?);
     Ok(written)
+}
+
+/// A report file that could not be written, as the study's other files fail.
+impl From<StudyReportError> for StudyError {
+    fn from(e: StudyReportError) -> StudyError {
+        StudyError::Io {
+            path: e.path,
+            source: e.source,
+        }
+    }
 }
 
 #[cfg(test)]

@@ -17,6 +17,7 @@ use glam::DVec3;
 use gpu_allocator::MemoryLocation;
 
 use super::params::StudyError;
+use super::report::StudyReport;
 use crate::gpu::layout::ShaderIds;
 use crate::gpu::{
     Buffer, ComputePipeline, ComputePipelineDesc, Context, GpuError, Image, ImageDesc, Resource,
@@ -269,7 +270,9 @@ pub fn gpu_summary_markdown(points: &[GpuStudyPoint], device: &str, directions: 
 
 /// The GPU half of `shvis study params`: reconstructs every parameterization × resolution
 /// on `ctx` at the first `gpu_directions` of the study's `directions` (same `seed`), writes
-/// `gpu.csv` into `dir` and appends the summary to its `params.md`. Returns the CSV path.
+/// `gpu.csv` into `dir` and appends the summary to its `params.md` (the report's markdown,
+/// through [`super::report::write`]; `params.json` stays as the CPU half wrote it).
+/// Returns the CSV path.
 ///
 /// # Errors
 /// The GPU's, or [`StudyError::Io`] when a file cannot be written.
@@ -293,10 +296,16 @@ pub fn run_and_write(
     };
     let csv_path = dir.join("gpu.csv");
     crate::files::write(&csv_path, gpu_csv(&points)).map_err(io(&csv_path))?;
-    let md_path = dir.join("params.md");
-    let mut md = std::fs::read_to_string(&md_path).unwrap_or_default();
+    let mut md = std::fs::read_to_string(dir.join("params.md")).unwrap_or_default();
     md += &gpu_summary_markdown(&points, ctx.device_name(), dirs.len());
-    crate::files::write(&md_path, md).map_err(io(&md_path))?;
+    super::report::write(
+        dir,
+        &StudyReport {
+            stem: "params",
+            markdown: md,
+            json: None,
+        },
+    )?;
     Ok(csv_path)
 }
 

@@ -23,6 +23,7 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
+use super::report::{StudyReport, pretty_json};
 use crate::gpu::{Context, GpuError};
 use crate::prepare::{PrepareError, PrepareSettings, prepare};
 use crate::reference::{ReferenceImage, ReferenceSettings, render_reference};
@@ -210,7 +211,8 @@ pub fn env_stem(env: &str) -> String {
         .collect()
 }
 
-/// Writes `rnm.md`, `rnm.json` and the Fig. 1 composites into `dir`; returns the paths.
+/// Writes the Fig. 1 composites, then the report `rnm.md`, `rnm.json`
+/// ([`super::report::write`]) into `dir`; returns the paths.
 pub fn write_report(
     results: &[EnvResult],
     settings: &RnmStudySettings,
@@ -256,8 +258,12 @@ pub fn write_report(
             written.push(path);
         }
     }
-    written.push(crate::report::write_text(dir, "rnm.md", &md)?);
-    written.push(crate::report::write_json(dir, "rnm.json", &results)?);
+    let study_report = StudyReport {
+        stem: "rnm",
+        json: Some(pretty_json(dir, "rnm", &results)?),
+        markdown: md,
+    };
+    written.extend(super::report::write(dir, &study_report)?);
     Ok(written)
 }
 

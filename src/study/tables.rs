@@ -9,6 +9,7 @@ use crate::gpu::Context;
 use crate::prepare::Prepared;
 use crate::technique::{HwPath, Technique, TechniqueError};
 
+use super::report::{self, StudyReport};
 use super::{compression, seams};
 
 /// Errors of the table studies.
@@ -17,7 +18,7 @@ pub enum TableStudyError {
     /// Writing one of the files failed; `name` is its file name.
     #[error("{name}")]
     Write {
-        name: &'static str,
+        name: String,
         source: std::io::Error,
     },
     #[error(transparent)]
@@ -31,19 +32,27 @@ pub enum TableStudyError {
     Invalid(String),
 }
 
-/// Writes `markdown` as `dir/{stem}.md` and `rows` as `dir/{stem}.json`.
+/// Writes `markdown` as `dir/{stem}.md` and `rows` as `dir/{stem}.json` (pretty, with a
+/// final newline) through [`report::write`].
 fn write_md_json(
     dir: &Path,
-    (md, json): (&'static str, &'static str),
+    stem: &'static str,
     markdown: &str,
     rows: &impl serde::Serialize,
 ) -> Result<(), TableStudyError> {
-    let write = |name: &'static str, text: &str| {
-        crate::files::write(dir.join(name), text)
-            .map_err(|source| TableStudyError::Write { name, source })
+    let study_report = StudyReport {
+        stem,
+        markdown: markdown.to_string(),
+        json: Some(serde_json::to_string_pretty(rows)? + "\n"),
     };
-    write(md, markdown)?;
-    write(json, &(serde_json::to_string_pretty(rows)? + "\n"))
+    report::write(dir, &study_report).map_err(|e| TableStudyError::Write {
+        name: e
+            .path
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
+        source: e.source,
+    })?;
+    Ok(())
 }
 
 /// The visibility error against storage of every default configuration fitted to
@@ -63,12 +72,7 @@ pub fn compression_tables(
         Some(&prepared.cache_dir),
     )?;
     let markdown = compression::to_markdown(&rows, prepared.visibility.res, table_res);
-    write_md_json(
-        dir,
-        ("compression.md", "compression.json"),
-        &markdown,
-        &rows,
-    )?;
+    write_md_json(dir, "compression", &markdown, &rows)?;
     Ok(markdown)
 }
 
@@ -85,7 +89,7 @@ pub fn compression_screen(
 ) -> Result<String, TableStudyError> {
     let screen = compression::screen_errors(ctx, prepared, techniques, paths, width, height)?;
     let markdown = compression::screen_markdown(&screen, env, width, height);
-    write_md_json(dir, ("screen.md", "screen.json"), &markdown, &screen)?;
+    write_md_json(dir, "screen", &markdown, &screen)?;
     Ok(markdown)
 }
 
@@ -118,6 +122,6 @@ pub fn seams_table(
         }
     }
     let markdown = seams::to_markdown(&rows, width, height);
-    write_md_json(dir, ("seams.md", "seams.json"), &markdown, &rows)?;
+    write_md_json(dir, "seams", &markdown, &rows)?;
     Ok(markdown)
 }
