@@ -41,12 +41,12 @@ pub struct StudyReportError {
 /// [`StudyReportError`] naming the first file that could not be written (the ones before
 /// it are in place).
 pub fn write(dir: &Path, report: &StudyReport) -> Result<Vec<PathBuf>, StudyReportError> {
+    let mut files = vec![("md", &report.markdown)];
+    if let Some(json) = &report.json {
+        files.push(("json", json));
+    }
     let mut written = Vec::new();
-    for (ext, text) in [
-        ("md", Some(&report.markdown)),
-        ("json", report.json.as_ref()),
-    ] {
-        let Some(text) = text else { continue };
+    for (ext, text) in files {
         let path = dir.join(format!("{}.{ext}", report.stem));
         crate::files::write(&path, text).map_err(|source| StudyReportError {
             path: path.clone(),
