@@ -125,7 +125,7 @@ pub fn stats(
 /// Makes `technique` on `path` drawable with `sets` copies of its lighting data (1, or 2
 /// for double-buffered dynamic lighting, `super::lighting`): checks the path rules, uploads
 /// each copy's uniform block and tables, compiles the fragment shader
-/// ([`super::fragment_shader`], unless `own_fragment` gives SPIR-V in its place) once and builds one pipeline per copy over the per-texel
+/// ([`Technique::fragment_shader`], unless `own_fragment` gives SPIR-V in its place) once and builds one pipeline per copy over the per-texel
 /// images (binding TEXTURE0: the bake's, shared by the copies, or — when the lighting data
 /// has per-texel images — that copy's), the technique's extra slot if it has one (material
 /// textures, a normal basis; the next binding) and that copy's tables (the bindings after
@@ -267,7 +267,7 @@ pub(crate) fn add_specular_stats(scene: &SceneGpu, path: HwPath, stats: &mut Tec
     }
 }
 
-/// `technique`'s fragment shader ([`super::fragment_shader`]) compiled for `path`, reading
+/// `technique`'s fragment shader ([`Technique::fragment_shader`]) compiled for `path`, reading
 /// the material textures at full resolution for a `material_level0` scene and adding the
 /// scene's specular term when it has one.
 pub(crate) fn compile_fragment(
