@@ -25,6 +25,11 @@
 
 use std::collections::{HashMap, HashSet};
 
+use crate::gpu::reflect::{
+    OP_CONSTANT, OP_TYPE_ARRAY, OP_TYPE_FLOAT, OP_TYPE_MATRIX, OP_TYPE_POINTER, OP_TYPE_STRUCT,
+    OP_TYPE_VECTOR, OP_VARIABLE, STORAGE_PUSH_CONSTANT, STORAGE_UNIFORM,
+};
+
 /// Per-invocation operation counts of a shader ([`count`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct OpCounts {
@@ -39,16 +44,8 @@ pub struct OpCounts {
 
 /// Loop Control mask bit (SPIR-V unified specification, §3.23).
 const LOOP_CONTROL_DONT_UNROLL: u32 = 0x2;
-// Opcodes (SPIR-V unified specification, §3.52).
+// Opcodes (SPIR-V unified specification, §3.52) the reflection does not read.
 const OP_EXT_INST: u32 = 12;
-const OP_TYPE_FLOAT: u32 = 22;
-const OP_TYPE_VECTOR: u32 = 23;
-const OP_TYPE_MATRIX: u32 = 24;
-const OP_TYPE_ARRAY: u32 = 28;
-const OP_TYPE_STRUCT: u32 = 30;
-const OP_TYPE_POINTER: u32 = 32;
-const OP_CONSTANT: u32 = 43;
-const OP_VARIABLE: u32 = 59;
 const OP_LOAD: u32 = 61;
 const OP_ACCESS_CHAIN: u32 = 65;
 const OP_IN_BOUNDS_ACCESS_CHAIN: u32 = 66;
@@ -67,8 +64,6 @@ const OP_DOT: u32 = 148;
 
 // Storage classes (§3.7).
 const STORAGE_INPUT: u32 = 1;
-const STORAGE_UNIFORM: u32 = 2;
-const STORAGE_PUSH_CONSTANT: u32 = 9;
 const STORAGE_STORAGE_BUFFER: u32 = 12;
 
 // GLSL.std.450 instructions that cost more than one operation per component.

@@ -23,14 +23,14 @@ use super::layout::BlockLayout;
 const OP_NAME: u32 = 5;
 const OP_MEMBER_NAME: u32 = 6;
 const OP_TYPE_INT: u32 = 21;
-const OP_TYPE_FLOAT: u32 = 22;
-const OP_TYPE_VECTOR: u32 = 23;
-const OP_TYPE_MATRIX: u32 = 24;
-const OP_TYPE_ARRAY: u32 = 28;
-const OP_TYPE_STRUCT: u32 = 30;
-const OP_TYPE_POINTER: u32 = 32;
-const OP_CONSTANT: u32 = 43;
-const OP_VARIABLE: u32 = 59;
+pub(crate) const OP_TYPE_FLOAT: u32 = 22;
+pub(crate) const OP_TYPE_VECTOR: u32 = 23;
+pub(crate) const OP_TYPE_MATRIX: u32 = 24;
+pub(crate) const OP_TYPE_ARRAY: u32 = 28;
+pub(crate) const OP_TYPE_STRUCT: u32 = 30;
+pub(crate) const OP_TYPE_POINTER: u32 = 32;
+pub(crate) const OP_CONSTANT: u32 = 43;
+pub(crate) const OP_VARIABLE: u32 = 59;
 const OP_DECORATE: u32 = 71;
 const OP_MEMBER_DECORATE: u32 = 72;
 
@@ -44,8 +44,8 @@ const DECORATION_DESCRIPTOR_SET: u32 = 34;
 const DECORATION_OFFSET: u32 = 35;
 
 // Storage classes (§3.7).
-const STORAGE_UNIFORM: u32 = 2;
-const STORAGE_PUSH_CONSTANT: u32 = 9;
+pub(crate) const STORAGE_UNIFORM: u32 = 2;
+pub(crate) const STORAGE_PUSH_CONSTANT: u32 = 9;
 
 /// The instructions of `spirv` after its header, as (opcode, operands). The walk ends
 /// where the stream stops making sense (a zero length, or one past the end).
