@@ -1,16 +1,17 @@
-//! The ladder recipe of `vqK` and `cpcaK_M`: visibility order, the cluster compression and
-//! the shared compression rungs, then the stored lightmap as the shader reads it.
+//! The rungs the clustered techniques share (`vqK`, `cpcaK_M`; their recipes are
+//! `vq.rs` and `cpca.rs`): visibility order, the cluster compression and the shared
+//! compression rungs, then the stored lightmap as the shader reads it.
 
 use super::{
-    AttributionKind, LadderRecipe, RowLadder, Rung, SeamMode, lightmap_bilinear, lightmap_taps,
-    shade, texel_index_of,
+    AttributionKind, RowLadder, Rung, SeamMode, lightmap_bilinear, lightmap_taps, shade,
+    texel_index_of,
 };
 use crate::technique::{ClusterNeed, TechniqueError};
 
 impl<'a> RowLadder<'a> {
     /// `vq*` and `cpca*`'s rungs: visibility order, the cluster compression and the rungs
     /// of [`compression_rungs`], then the stored lightmap as the shader reads it.
-    fn clustered(
+    pub(super) fn clustered(
         &self,
         rungs: &mut Vec<Rung>,
         need: ClusterNeed,
@@ -70,17 +71,5 @@ impl<'a> RowLadder<'a> {
             &|| px.image(|k| shade(&lxh, px.normal[k], &stored(k))),
         );
         Ok(())
-    }
-}
-
-impl LadderRecipe for crate::technique::cluster::Vq {
-    fn rungs(self, row: &RowLadder<'_>, rungs: &mut Vec<Rung>) -> Result<(), TechniqueError> {
-        row.clustered(rungs, self.cluster_need(), self.seams)
-    }
-}
-
-impl LadderRecipe for crate::technique::cluster::Cpca {
-    fn rungs(self, row: &RowLadder<'_>, rungs: &mut Vec<Rung>) -> Result<(), TechniqueError> {
-        row.clustered(rungs, self.cluster_need(), self.seams)
     }
 }

@@ -41,20 +41,8 @@
 //! lavapipe; `pca*` reach ≈ 3·10⁻³ there, differences of about one 8-bit weight step that
 //! llvmpipe's filtering of the RGBA8 weight textures adds (README, "Error attribution").
 
-mod ambient_cube;
 mod cluster;
 pub mod exact_light;
-mod hemisphere;
-mod ndf;
-mod nmprt;
-mod pca;
-mod preconv;
-mod rnm;
-mod sh2;
-mod sh_variant;
-mod shlmap;
-mod unc;
-mod vertex;
 
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
@@ -451,8 +439,16 @@ trait LadderRecipe {
     fn rungs(self, row: &RowLadder<'_>, rungs: &mut Vec<Rung>) -> Result<(), TechniqueError>;
 }
 
+/// `mod` of every family's recipe, one file per family named as its technique module.
+macro_rules! declare_ladder_modules {
+    ($($variant:ident: $module:ident::$family:ident,)*) => {
+        $(mod $module;)*
+    };
+}
+crate::technique::registry::with_families!(declare_ladder_modules);
+
 macro_rules! define_family_rungs {
-    ($($variant:ident: $family:ty,)*) => {
+    ($($variant:ident: $module:ident::$family:ident,)*) => {
         /// `technique`'s rungs, by its family's [`LadderRecipe`].
         fn family_rungs(
             technique: Technique,

@@ -25,8 +25,8 @@ use crate::gpu::Context;
 use crate::prepare::Prepared;
 use crate::reference::render_point_gbuffer;
 use crate::render::{Frame, FrameSettings, SceneGpu};
-use crate::technique::cluster::{Cpca, Vq};
 use crate::technique::{self, HwPath, SeamMode, Technique, TechniqueError};
+use crate::technique::{Cpca, Vq};
 
 /// Discontinuity statistics of one set of pixel pairs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]

@@ -1,4 +1,5 @@
-//! `vqK` and `cpcaK_M`: VQ and iterative CPCA of the order-6 visibility (`bake::cluster`,
+//! What `vqK` and `cpcaK_M` share (their families are `super::vq` and `super::cpca`): VQ and
+//! iterative CPCA of the order-6 visibility (`bake::cluster`,
 //! after the PRT course) on both paths.
 //!
 //! Per texel: M 8-bit UNORM weights in the cluster's quantized basis, then the cluster index
@@ -19,21 +20,16 @@
 
 use ash::vk;
 
-use super::Technique;
-use super::family::{Description, Family, Form, Refusal};
-use super::finish::TextureSlot;
+use super::family::{Form, Refusal};
 use super::lighting::{LightingData, Recipe};
-use super::spec::{BakeNeeds, ClusterNeed, HwPath, ReferenceModel};
+use super::spec::{BakeNeeds, ClusterNeed, HwPath};
 use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
 use super::{Inputs, ShaderVariant, TechniqueError};
 use super::{PerTexelTaps, ShaderReads};
-use crate::bake::cluster::Clustering;
 use crate::bake::cluster::{ClusteredModel, QuantizedClusters};
 use crate::cost::{CountPlan, CountVariant};
-use crate::gpu::Context;
 use crate::gpu::layout::ShaderIds;
 use crate::sh::Order;
-use std::sync::Arc;
 
 /// The fragment shader of `vqK` / `cpcaK_M`.
 pub fn fragment_shader(k: u32, m: u32, seams: SeamMode) -> ShaderVariant {
@@ -335,7 +331,7 @@ pub enum SeamMode {
 impl SeamMode {
     pub const ALL: [SeamMode; 2] = [SeamMode::Blended, SeamMode::Naive];
 
-    fn suffix(self) -> &'static str {
+    pub(crate) fn suffix(self) -> &'static str {
         match self {
             SeamMode::Blended => "",
             SeamMode::Naive => "n",
@@ -359,54 +355,8 @@ pub fn clusters_fit_uniforms(k: u32, m: u32) -> bool {
     k * (m + 1) * 9 <= CLUSTER_UNIFORM_VEC4S
 }
 
-/// The `vqK` / `vqKn` family: each texel's order-6 visibility replaced by its k-means
-/// cluster's mean (VQ, PRT course); a cluster index per texel, per cluster SH(μ_C·L) in
-/// uniforms.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct Vq {
-    pub k: u32,
-    pub seams: SeamMode,
-}
-
-impl Vq {
-    /// The clustered model it reads.
-    pub fn cluster_need(self) -> ClusterNeed {
-        ClusterNeed {
-            k: self.k,
-            m: 0,
-            clustering: Clustering::KMeans,
-        }
-    }
-}
-
-/// The `cpcaK_M` family: iterative CPCA, K clusters of M vectors (PRT course); `cpcaK_Ms`
-/// (`iterative: false`): static CPCA (k-means clusters, then a PCA each). A cluster index
-/// and M 8-bit weights per texel, per cluster and vector SH(B_C,k·L) in uniforms.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct Cpca {
-    pub k: u32,
-    pub m: u32,
-    pub iterative: bool,
-    pub seams: SeamMode,
-}
-
-impl Cpca {
-    /// The clustered model it reads.
-    pub fn cluster_need(self) -> ClusterNeed {
-        ClusterNeed {
-            k: self.k,
-            m: self.m,
-            clustering: if self.iterative {
-                Clustering::Iterative
-            } else {
-                Clustering::KMeans
-            },
-        }
-    }
-}
-
 /// What both clustered families read from the bake.
-fn clustered_needs(need: ClusterNeed) -> BakeNeeds {
+pub(crate) fn clustered_needs(need: ClusterNeed) -> BakeNeeds {
     BakeNeeds {
         visibility: Some(Order::SIX),
         clusters: Some(need),
@@ -414,225 +364,8 @@ fn clustered_needs(need: ClusterNeed) -> BakeNeeds {
     }
 }
 
-impl Family for Vq {
-    type Options = ();
-    const DESCRIPTION: Description = Description {
-        names: "vqK, vqKn",
-        what: "k-means cluster of the visibility per texel, per-cluster lighting in uniforms (n: naive seams)",
-        paper: "Sloan et al., PRT course (CPCA)",
-        in_paper_table: false,
-    };
-    const EXAMPLE: Vq = Vq {
-        k: 256,
-        seams: SeamMode::Blended,
-    };
-
-    fn members() -> Vec<Vq> {
-        VQ_CLUSTERS
-            .iter()
-            .flat_map(|&k| SeamMode::ALL.map(|seams| Vq { k, seams }))
-            .collect()
-    }
-
-    fn table_rows() -> Vec<Vq> {
-        vec![Vq::EXAMPLE]
-    }
-
-    fn headline(path: HwPath) -> Vec<Vq> {
-        match path {
-            HwPath::Dx9 | HwPath::Dx10 => vec![Vq {
-                k: 64,
-                seams: SeamMode::Blended,
-            }],
-            HwPath::Dx11 => Vec::new(),
-        }
-    }
-
-    fn name(self) -> String {
-        format!("vq{}{}", self.k, self.seams.suffix())
-    }
-
-    fn paper_ms(self) -> Option<f64> {
-        None
-    }
-
-    fn needs(self) -> BakeNeeds {
-        clustered_needs(self.cluster_need())
-    }
-
-    fn reference(self) -> ReferenceModel {
-        ReferenceModel::Direct
-    }
-
-    fn dynamic_lighting(self) -> bool {
-        true
-    }
-
-    fn ndf_variant(self) -> Option<Technique> {
-        None
-    }
-
-    fn form_on(self, path: HwPath) -> Result<Form, Refusal> {
-        clustered_form(path)
-    }
-
-    fn prepare(
-        self,
-        _: HwPath,
-        inputs: &Inputs<'_>,
-        _: &(),
-        label: &str,
-    ) -> Result<(TexelGroups, Recipe), TechniqueError> {
-        prepare(self.cluster_need(), inputs, label)
-    }
-
-    fn extra_slot(
-        self,
-        _: &Arc<Context>,
-        _: HwPath,
-        _: &Inputs<'_>,
-        _: &str,
-    ) -> Result<Option<TextureSlot>, TechniqueError> {
-        Ok(None)
-    }
-
-    fn fragment_shader(self) -> ShaderVariant {
-        fragment_shader(self.k, 0, self.seams)
-    }
-
-    fn reads(self) -> ShaderReads {
-        reads(0, self.seams)
-    }
-
-    fn options_tag(self, _: &()) -> Option<String> {
-        None
-    }
-}
-
-impl Family for Cpca {
-    type Options = ();
-    const DESCRIPTION: Description = Description {
-        names: "cpcaK_M, cpcaK_Ms, …n",
-        what: "clustered PCA: a cluster and M weights per texel (s: static clusters; n: naive seams)",
-        paper: "Sloan et al., CPCA for PRT (SIGGRAPH 2003)",
-        in_paper_table: false,
-    };
-    const EXAMPLE: Cpca = Cpca {
-        k: 8,
-        m: 11,
-        iterative: true,
-        seams: SeamMode::Blended,
-    };
-
-    fn members() -> Vec<Cpca> {
-        CPCA_CLUSTERS
-            .iter()
-            .flat_map(|&k| CPCA_VECTORS.iter().map(move |&m| (k, m)))
-            .filter(|&(k, m)| clusters_fit_uniforms(k, m))
-            .flat_map(|(k, m)| {
-                [true, false].into_iter().flat_map(move |iterative| {
-                    SeamMode::ALL.map(|seams| Cpca {
-                        k,
-                        m,
-                        iterative,
-                        seams,
-                    })
-                })
-            })
-            .collect()
-    }
-
-    fn table_rows() -> Vec<Cpca> {
-        let cpca = |m, iterative, seams| Cpca {
-            k: 8,
-            m,
-            iterative,
-            seams,
-        };
-        vec![
-            cpca(7, true, SeamMode::Blended),
-            cpca(11, true, SeamMode::Blended),
-            cpca(11, false, SeamMode::Blended),
-            cpca(11, true, SeamMode::Naive),
-        ]
-    }
-
-    fn headline(path: HwPath) -> Vec<Cpca> {
-        match path {
-            HwPath::Dx9 | HwPath::Dx10 => vec![Cpca::EXAMPLE],
-            HwPath::Dx11 => Vec::new(),
-        }
-    }
-
-    fn name(self) -> String {
-        format!(
-            "cpca{}_{}{}{}",
-            self.k,
-            self.m,
-            if self.iterative { "" } else { "s" },
-            self.seams.suffix()
-        )
-    }
-
-    fn paper_ms(self) -> Option<f64> {
-        None
-    }
-
-    fn needs(self) -> BakeNeeds {
-        clustered_needs(self.cluster_need())
-    }
-
-    fn reference(self) -> ReferenceModel {
-        ReferenceModel::Direct
-    }
-
-    fn dynamic_lighting(self) -> bool {
-        true
-    }
-
-    fn ndf_variant(self) -> Option<Technique> {
-        None
-    }
-
-    fn form_on(self, path: HwPath) -> Result<Form, Refusal> {
-        clustered_form(path)
-    }
-
-    fn prepare(
-        self,
-        _: HwPath,
-        inputs: &Inputs<'_>,
-        _: &(),
-        label: &str,
-    ) -> Result<(TexelGroups, Recipe), TechniqueError> {
-        prepare(self.cluster_need(), inputs, label)
-    }
-
-    fn extra_slot(
-        self,
-        _: &Arc<Context>,
-        _: HwPath,
-        _: &Inputs<'_>,
-        _: &str,
-    ) -> Result<Option<TextureSlot>, TechniqueError> {
-        Ok(None)
-    }
-
-    fn fragment_shader(self) -> ShaderVariant {
-        fragment_shader(self.k, self.m, self.seams)
-    }
-
-    fn reads(self) -> ShaderReads {
-        reads(self.m, self.seams)
-    }
-
-    fn options_tag(self, _: &()) -> Option<String> {
-        None
-    }
-}
-
 /// Cluster indices cannot be filtered or block-compressed: textures on dx9 and dx10 only.
-fn clustered_form(path: HwPath) -> Result<Form, Refusal> {
+pub(crate) fn clustered_form(path: HwPath) -> Result<Form, Refusal> {
     match path {
         HwPath::Dx9 | HwPath::Dx10 => Ok(Form::TEXTURES),
         HwPath::Dx11 => Err(Refusal::ClusterIndices),

@@ -4,10 +4,11 @@
 //!   reference, lighting, form on each path ([`Form`], [`Refusal`]), preparation, shader and
 //!   reads; [`registry`]: the one list of families, from which [`Technique`] and its
 //!   dispatch are generated.
-//! - one module per family: [`unc`], [`pca`], [`shlmap`], [`preconv`], [`sh2`], [`cluster`]
-//!   (`vqK`, `cpcaK_M`), [`vertex`] (`pcaMv`), [`rnm`], [`ndf_diffuse`], [`nmprt`],
-//!   [`sh_variant`] (the SH lightmaps engines ship), [`hemisphere`] (bases over the
-//!   tangent-frame hemisphere).
+//! - one module per family, declared from the registry's list: [`unc`], [`pca`],
+//!   [`shlmap`], [`preconv`], [`sh2`], [`vq`] and [`cpca`] (sharing [`cluster`]), [`vertex`]
+//!   (`pcaMv`), [`rnm`], [`ndf_diffuse`], [`nmprt`], [`sh_variant`] (the SH lightmaps
+//!   engines ship), [`hemisphere`] (bases over the tangent-frame hemisphere),
+//!   [`ambient_cube`].
 //! - [`spec`]: the GPU-free vocabulary (what a technique needs from the bake, its reference)
 //!   and name parsing; [`catalog`]: the named sets and `shvis techniques`' listing.
 //! - [`texels`] (per-texel groups), [`tables`] (normal-indexed tables) and [`block`] (the
@@ -20,33 +21,24 @@
 //!
 //! docs/design.md, "How to add a technique", lists what a new family writes.
 
-pub mod ambient_cube;
 pub mod block;
 pub mod catalog;
 pub mod cluster;
 pub mod cost;
 pub mod family;
 pub mod finish;
-pub mod hemisphere;
 pub mod lighting;
-pub mod ndf_diffuse;
-pub mod nmprt;
-pub mod pca;
-pub mod preconv;
 pub mod registry;
-pub mod rnm;
-pub mod sh2;
-pub mod sh_variant;
-pub mod shlmap;
+use registry::declare_family_modules;
+registry::with_families!(declare_family_modules);
 pub mod spec;
 pub mod tables;
 pub mod texels;
-pub mod unc;
-pub mod vertex;
 
 use std::sync::Arc;
 
-pub use cluster::{Cpca, SeamMode, Vq};
+pub use cluster::SeamMode;
+pub use cpca::Cpca;
 pub use family::{Family, Form, Refusal, Storage};
 pub use hemisphere::{Hemisphere, HemisphereBasis};
 pub use lighting::{LightingData, LightingRecipe};
@@ -63,6 +55,7 @@ pub use spec::{
 };
 pub use unc::Unc;
 pub use vertex::PcaVertex;
+pub use vq::Vq;
 
 use lighting::LightingSet;
 

@@ -13,32 +13,45 @@ use super::spec::{BakeNeeds, HwPath, ReferenceModel};
 use super::texels::TexelGroups;
 use super::{Inputs, ShaderReads, ShaderVariant, TechniqueError};
 
-/// Calls `$then!` with the registry: `Variant: family type` per family, in the cost
-/// table's order.
+/// Calls `$then!` with the registry: `Variant: module::Family` per family, in the cost
+/// table's order. `module` is the family's module in `src/technique/` and its ladder
+/// recipe's in `src/attribution/`; both are declared from this list
+/// ([`declare_family_modules`], `attribution`'s `declare_ladder_modules`).
 macro_rules! with_families {
     ($then:ident) => {
         $then! {
-            Unc: $crate::technique::unc::Unc,
-            Pca: $crate::technique::pca::Pca,
-            Shlmap: $crate::technique::shlmap::Shlmap,
-            Preconv: $crate::technique::preconv::Preconv,
-            Sh2: $crate::technique::sh2::Sh2,
-            Vq: $crate::technique::cluster::Vq,
-            Cpca: $crate::technique::cluster::Cpca,
-            PcaVertex: $crate::technique::vertex::PcaVertex,
-            Rnm: $crate::technique::rnm::Rnm,
-            Ndf: $crate::technique::ndf_diffuse::Ndf,
-            Nmprt: $crate::technique::nmprt::Nmprt,
-            ShVariant: $crate::technique::sh_variant::ShVariant,
-            Hemisphere: $crate::technique::hemisphere::Hemisphere,
-            AmbientCube: $crate::technique::ambient_cube::AmbientCube,
+            Unc: unc::Unc,
+            Pca: pca::Pca,
+            Shlmap: shlmap::Shlmap,
+            Preconv: preconv::Preconv,
+            Sh2: sh2::Sh2,
+            Vq: vq::Vq,
+            Cpca: cpca::Cpca,
+            PcaVertex: vertex::PcaVertex,
+            Rnm: rnm::Rnm,
+            Ndf: ndf_diffuse::Ndf,
+            Nmprt: nmprt::Nmprt,
+            ShVariant: sh_variant::ShVariant,
+            Hemisphere: hemisphere::Hemisphere,
+            AmbientCube: ambient_cube::AmbientCube,
         }
     };
 }
 pub(crate) use with_families;
 
+/// `pub mod` of every family's module, expanded in `technique/mod.rs`.
+macro_rules! declare_family_modules {
+    ($($variant:ident: $module:ident::$family:ident,)*) => {
+        $(pub mod $module;)*
+    };
+}
+pub(crate) use declare_family_modules;
+
 macro_rules! define_technique {
-    ($($variant:ident: $family:ty,)*) => {
+    ($($variant:ident: $module:ident::$family:ident,)*) => {
+        define_technique!(@types $($variant: $crate::technique::$module::$family,)*);
+    };
+    (@types $($variant:ident: $family:ty,)*) => {
         /// A technique: a family of the registry and its parameters.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
         pub enum Technique {
