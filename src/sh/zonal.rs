@@ -86,7 +86,7 @@ pub fn irradiance_from_radiance(radiance: &[[f64; 3]], order: Order) -> Vec<[f64
 
 /// Irradiance (RGB) at unit direction `n` under order-3 RGB radiance SH `radiance`:
 /// Σ_lm A_l L_l^m y_l^m(n), without forming the irradiance coefficients (the per-node
-/// kernel of the tangent-space fits, `sh::hbasis` and `sh::ambient_cube`).
+/// kernel of the tangent-space fits, `sh::hbasis` and `technique::ambient_cube`).
 ///
 /// # Panics
 /// If `radiance` holds fewer than 9 coefficients.
