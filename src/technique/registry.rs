@@ -33,6 +33,7 @@ macro_rules! with_families {
             Nmprt: nmprt::Nmprt,
             ShVariant: sh_variant::ShVariant,
             Hemisphere: hemisphere::Hemisphere,
+            AmbientCube: ambient_cube::AmbientCube,
         }
     };
 }
