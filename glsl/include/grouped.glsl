@@ -8,7 +8,7 @@
 // array (cube c·GROUPS + g, mean at 3·GROUPS). Groups are unrolled, so every sampler-array
 // index is a constant.
 //
-// SHVIS_NDF_DIFFUSE (unc only, `uncOndf`; src/ndf/diffuse.rs): the L×H tables filtered by
+// SHVIS_NDF_DIFFUSE (unc only, `uncOndf`; src/technique/ndf_diffuse.rs): the L×H tables filtered by
 // the isotropic NDF of the pixel's normals, (1 − a_2) T0 + (a_2 + a_1)/2 T(n) +
 // (a_2 − a_1)/2 T(−n): the mean moment at binding TEXTURE0 + 1 (the tables move one on),
 // every table fetched at ±n, T0 per group and colour in the uniform block.

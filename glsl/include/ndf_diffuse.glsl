@@ -1,4 +1,4 @@
-// Diffuse shading under NDF filtering (Olano & North; src/ndf/diffuse.rs has the
+// Diffuse shading under NDF filtering (Olano & North; src/technique/ndf_diffuse.rs has the
 // derivation): the weight of the filter and the zonal attenuation of SH bands 1 and 2.
 // Needs common.glsl (normal_tex, in_uv_material, frame).
 #ifndef SHVIS_NDF_DIFFUSE_GLSL

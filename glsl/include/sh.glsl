@@ -26,7 +26,7 @@ void sh_eval_order3(vec3 d, out float y[9]) {
 
 // E[y_i(x)] of the order-3 basis over a distribution of unit directions with mean u and
 // second moments m = E[xxᵀ]: each y_i is a polynomial of degree ≤ 2, so substituting the
-// moments is exact (src/ndf/diffuse.rs, expected_sh_order3).
+// moments is exact (src/technique/ndf_diffuse.rs, expected_sh_order3).
 void sh_expect_order3(vec3 u, mat3 m, out float y[9]) {
     y[0] = SH_K00;
     y[1] = -SH_K1 * u.y;

@@ -1,5 +1,5 @@
 // The specular material term of a directional light under three normal-map filterings
-// (Olano & North; src/ndf/render.rs): L = k_s E · D(h) where n·l > 0 and n·v > 0
+// (Olano & North; src/render/specular.rs): L = k_s E · D(h) where n·l > 0 and n·v > 0
 // (n the interpolated normal; no shadowing or masking, as in the paper).
 // SHVIS_SPECULAR, where defined, is one of the ids of src/render/specular.rs:
 //   SHVIS_SPECULAR_MIP:  the MIP chain of averaged normals, renormalized, base lobe

@@ -1,6 +1,6 @@
 // The normal map's level of detail at each pixel (textureQueryLod's unclamped λ; ≤ 0:
 // magnified, k: 2^k texels per pixel), for the minified / magnified masks of
-// `shvis study ndf` (src/ndf/render.rs, normal_map_lod).
+// `shvis study ndf` (src/render/specular.rs, normal_map_lod).
 #version 450
 #extension GL_GOOGLE_include_directive : require
 #define SHVIS_FRAGMENT 1

@@ -1,5 +1,5 @@
 // The specular term alone (glsl/include/specular.glsl), for `study ndf`: its three
-// filterings against their footprint reference (src/ndf/render.rs).
+// filterings against their footprint reference (src/render/specular.rs).
 #version 450
 #extension GL_GOOGLE_include_directive : require
 #define SHVIS_FRAGMENT 1

@@ -1,4 +1,4 @@
-// Counts shaded fragments (src/render.rs, SceneGpu::shading_load): with additive blending
+// Counts shaded fragments (src/render/mod.rs, SceneGpu::shading_load): with additive blending
 // every fragment that passes the depth test adds 1 to its pixel's red — and to its green
 // its share of the subgroup it ran in (SHVIS_SUBGROUP_BALLOT: the subgroup's size over the
 // fragments in it, helper lanes excluded; else 1), so that green sums to the lanes the draw

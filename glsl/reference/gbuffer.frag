@@ -1,4 +1,4 @@
-// G-buffer passes of the reference renderer (src/reference.rs): the same rasterization,
+// G-buffer passes of the reference renderer (src/reference/mod.rs): the same rasterization,
 // normal mapping and texture sampling as the techniques, one quantity per pass into an
 // RGBA32F target. SHVIS_GBUFFER_OUTPUT (ids SHVIS_GBUFFER_*, from src/reference/mod.rs):
 // POSITION world position, NORMAL shading normal (normal-mapped), ALBEDO linear albedo,

@@ -3,7 +3,7 @@
 // radiance = albedo/π · AO · E(n), E from SH irradiance coefficients (already multiplied
 // by the clamped-cosine factors A_l) in uniforms.
 //
-// SHVIS_NDF_DIFFUSE (`preconvndf`; src/ndf/diffuse.rs): E averaged over the pixel's
+// SHVIS_NDF_DIFFUSE (`preconvndf`; src/technique/ndf_diffuse.rs): E averaged over the pixel's
 // normals exactly, E[E(n)] = Σ E_i E[y_i(n)] from the NDF maps' nine moments turned into
 // the world frame, blended with E(n) by the filter's weight (0 where magnified).
 #version 450

@@ -14,7 +14,7 @@
 //!
 //! so averaging the nine moments (no renormalisation) *is* the filter, in the box MIP chain
 //! and in the hardware's trilinear interpolation alike. They are stored as three RGBA32F
-//! textures (dx9) or the three layers of one array (dx10): (E[x], E[y], E[z], 1/N),
+//! textures (dx9) or the three layers of one array (dx10, dx11): (E[x], E[y], E[z], 1/N),
 //! (E[xx], E[yy], E[zz], 0), (E[xy], E[xz], E[yz], 0) in the normal map's tangent space.
 //! RGBA32F, not the paper's 16 bits: S = E[xxᵀ] − uuᵀ cancels to σ² ≈ 10⁻² against terms
 //! of ≈ 1, and f16's 2⁻¹¹ relative step would be a 5–20 % error in S for σ = 0.1–0.05.
@@ -38,7 +38,7 @@ use rayon::prelude::*;
 
 use crate::scene::{HeightField, Texture8, decode_normal};
 
-/// The moment maps' texel format on the GPU (both paths; the cost model prices lookups
+/// The moment maps' texel format on the GPU (every path; the cost model prices lookups
 /// into it as `cost::Kind::TrilinearWide`).
 pub const MOMENT_FORMAT: ash::vk::Format = ash::vk::Format::R32G32B32A32_SFLOAT;
 

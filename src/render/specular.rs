@@ -185,7 +185,7 @@ fn specular_resources<'a>(
 }
 
 /// A scene's specular material term on the GPU (`SceneGpu::add_specular`): the NDF maps
-/// of its normal map, their images for both paths (NDF filterings only) and the block.
+/// of its normal map, their images for dx9 and for dx10/dx11 (NDF filterings only) and the block.
 pub struct SceneSpecular {
     pub term: SpecularTerm,
     pub maps: NdfMaps,

@@ -1,6 +1,7 @@
 //! What `vqK` and `cpcaK_M` share (their families are `super::vq` and `super::cpca`): VQ and
 //! iterative CPCA of the order-6 visibility (`bake::cluster`,
-//! after the PRT course) on both paths.
+//! after the PRT course) on dx9 and dx10 (dx11 refuses them:
+//! `Refusal::ClusterIndices`).
 //!
 //! Per texel: M 8-bit UNORM weights in the cluster's quantized basis, then the cluster index
 //! as UNORM8 (K ≤ 256), packed 4 values per RGBA8 texel (`super::texels`; VQ, M = 0, is
@@ -15,7 +16,7 @@
 //! cluster and blends the results (glsl/technique/cluster.frag), [`SeamMode::Naive`]
 //! shows the artifact.
 //!
-//! Both paths take the per-cluster block as uniforms ([`CLUSTER_UNIFORM_VEC4S`], 64
+//! dx9 and dx10 take the per-cluster block as uniforms ([`CLUSTER_UNIFORM_VEC4S`], 64
 //! KiB); dx9's constant-register budget is not modelled, as for `pcaMw`.
 
 use ash::vk;

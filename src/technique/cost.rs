@@ -6,10 +6,10 @@
 //! once over the scene).
 //!
 //! Lookup kinds: material textures trilinear (the albedo's sRGB and the NDF moment maps'
-//! RGBA32F each a kind of their own), per-texel data bilinear 2D (dx9) or 2D array (dx10)
-//! or, where a shader reads its taps one by one, texel fetches (priced as 2D fetches on both
-//! paths: the probe has no array fetch), normal-indexed tables dependent 2D (dx9) or cube
-//! array (dx10), a normal basis dependent 2D (dx9) or 2D array (dx10), the specular term's
+//! RGBA32F each a kind of their own), per-texel data bilinear 2D (dx9) or 2D array (dx10, dx11)
+//! or, where a shader reads its taps one by one, texel fetches (priced as 2D fetches on every
+//! path: the probe has no array fetch), normal-indexed tables dependent 2D (dx9) or cube
+//! array (dx10, dx11), a normal basis dependent 2D (dx9) or 2D array (dx10, dx11), the specular term's
 //! moment maps trilinear RGBA32F.
 
 use std::sync::Arc;

@@ -7,6 +7,7 @@
 //!       or, for a shader that picks its groups per pixel, one atlas of the groups as
 //!       res × res tiles, row-major, `columns` wide (sampler2D per_texel_atlas)
 //! dx10: one 2D array, layer g = group g      (sampler2DArray per_texel_tex)
+//! dx11: dx10's layout, block-compressed      (`super::block`)
 //! ```
 //!
 //! The atlas is how DX9-class hardware indexes data by a computed number: sampler arrays

@@ -4,8 +4,8 @@
 //! shader is `pcaMw`'s (glsl/technique/pcaw.frag with SHVIS_VERTEX_WEIGHTS) over the same
 //! uniform block, so `pcaMv` against `pcaMw` is vertices against lightmap texels and
 //! nothing else. The technique draws its own (possibly subdivided) mesh of the same
-//! surface. Vertex streams and uniforms exist on both paths; no texture is bound beyond the
-//! material's.
+//! surface. Vertex streams and uniforms exist on dx9 and dx10 (dx11 refuses it:
+//! `Refusal::VertexStream`); no texture is bound beyond the material's.
 
 use std::sync::Arc;
 
