@@ -45,7 +45,7 @@ pub struct PrepareSettings {
     pub progress: bool,
     /// SH order of the visibility bake (techniques use its first coefficients).
     pub order: Order,
-    /// L×H table texels per hemisphere (dx9) / cube face (dx10) side.
+    /// L×H table texels per hemisphere (dx9) / cube face (dx10, dx11) side.
     pub table_res: u32,
     /// Order of the clamped cosine in the L×H product (the paper's 3).
     pub h_order: Order,

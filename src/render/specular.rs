@@ -256,7 +256,7 @@ pub fn check_moment_filtering(ctx: &Context) -> Result<ash::vk::Format, GpuError
     Ok(format)
 }
 
-/// The NDF images for `path`: three 2D textures (dx9) or one 3-layer array (dx10), each
+/// The NDF images for `path`: three 2D textures (dx9) or one 3-layer array (dx10, dx11), each
 /// with the full MIP chain.
 pub fn upload_maps(
     ctx: &Arc<Context>,

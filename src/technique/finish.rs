@@ -25,7 +25,7 @@ pub enum SlotKind {
     /// Values per lightmap texel (`super::texels`): each layer is one fetch per pixel.
     PerTexel,
     /// Normal-indexed tables (`super::tables`): each sphere (dx9: two hemisphere squares
-    /// side by side; dx10: one cube of a cube array) is one dependent fetch per pixel.
+    /// side by side; dx10, dx11: one cube of a cube array) is one dependent fetch per pixel.
     NormalTable,
     /// Material-space textures of the technique (`ssbump`'s SSBump / AO, the NDF moments of
     /// `uncOndf` / `preconvndf`), sampled with the material sampler: one fetch per layer; like albedo and normal map its bytes are

@@ -123,7 +123,7 @@ pub fn ambient_block(radiance_sh: &[[f64; 3]], order: Order) -> Vec<[f32; 4]> {
 }
 
 /// The moment images a technique on `base` binds: `unc` the first moments only (one 2D
-/// texture), `preconv` all three (dx9: three 2D textures; dx10: a 3-layer array); each
+/// texture), `preconv` all three (dx9: three 2D textures; dx10, dx11: a 3-layer array); each
 /// with the full MIP chain.
 pub fn upload(
     ctx: &Arc<Context>,
