@@ -303,10 +303,7 @@ impl Family for AmbientCube {
     }
 
     fn needs(self) -> BakeNeeds {
-        BakeNeeds {
-            sh_lightmap: true,
-            ..BakeNeeds::default()
-        }
+        BakeNeeds::SH_LIGHTMAP
     }
 
     fn reference(self) -> ReferenceModel {

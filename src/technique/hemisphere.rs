@@ -424,10 +424,7 @@ impl Family for Hemisphere {
     }
 
     fn needs(self) -> BakeNeeds {
-        BakeNeeds {
-            sh_lightmap: true,
-            ..BakeNeeds::default()
-        }
+        BakeNeeds::SH_LIGHTMAP
     }
 
     fn reference(self) -> ReferenceModel {

@@ -259,9 +259,8 @@ impl Family for Rnm {
 
     fn needs(self) -> BakeNeeds {
         BakeNeeds {
-            sh_lightmap: true,
             ssbump: self.variant.needs_height(),
-            ..BakeNeeds::default()
+            ..BakeNeeds::SH_LIGHTMAP
         }
     }
 

@@ -232,10 +232,7 @@ impl Family for ShVariant {
     }
 
     fn needs(self) -> BakeNeeds {
-        BakeNeeds {
-            sh_lightmap: true,
-            ..BakeNeeds::default()
-        }
+        BakeNeeds::SH_LIGHTMAP
     }
 
     fn reference(self) -> ReferenceModel {

@@ -171,10 +171,7 @@ impl Family for Shlmap {
     }
 
     fn needs(self) -> BakeNeeds {
-        BakeNeeds {
-            sh_lightmap: true,
-            ..BakeNeeds::default()
-        }
+        BakeNeeds::SH_LIGHTMAP
     }
 
     fn reference(self) -> ReferenceModel {

@@ -46,6 +46,19 @@ pub struct BakeNeeds {
 }
 
 impl BakeNeeds {
+    /// The SH lightmap alone: what `shlmap` and the bases fitted from its bake read.
+    pub const SH_LIGHTMAP: BakeNeeds = BakeNeeds {
+        visibility: None,
+        pca_vectors: None,
+        sh_lightmap: true,
+        ao: false,
+        clusters: None,
+        ssbump: false,
+        ndf_moments: false,
+        transfer: false,
+        vertex_pca: None,
+    };
+
     /// Whether it bakes inter-reflection (the SH lightmap or transfer matrices), so its
     /// error is against the inter-reflected reference.
     pub fn inter_reflection(&self) -> bool {
