@@ -4,9 +4,8 @@
 
 use super::{LadderRecipe, RowLadder, Rung};
 use crate::technique::TechniqueError;
-use crate::technique::ambient_cube::{
-    AmbientCube, FACES, STORED_VALUES, irradiance, project_irradiance, stored_texels,
-};
+use crate::sh::ambient_cube::{FACES, STORED_VALUES, irradiance, project_irradiance};
+use crate::technique::ambient_cube::{AmbientCube, stored_texels};
 
 impl LadderRecipe for AmbientCube {
     fn rungs(self, row: &RowLadder<'_>, rungs: &mut Vec<Rung>) -> Result<(), TechniqueError> {

@@ -406,6 +406,27 @@ impl Dice {
         out
     }
 
+    /// The fit's response to the irradiance of a single direction: row r of the hybrid
+    /// fit (`3·STORED_VERTICES` rows: vertex v's value, du, dv at 3v, 3v + 1, 3v + 2)
+    /// applied to E(m_q) = max(0, m_q·ω) at the nodes, so that a fit of sampled radiance
+    /// is Σ_s w_s L_s · kernel(ω_s) (`sh::samples`).
+    pub fn hybrid_kernel(&self, omega: DVec3) -> Vec<f64> {
+        self.kernel(&self.pinv_hybrid, 3 * STORED_VERTICES, omega)
+    }
+
+    /// [`Self::hybrid_kernel`] for the linear fit of the chroma (`STORED_VERTICES` rows).
+    pub fn linear_kernel(&self, omega: DVec3) -> Vec<f64> {
+        self.kernel(&self.pinv_linear, STORED_VERTICES, omega)
+    }
+
+    fn kernel(&self, pinv: &[f64], rows: usize, omega: DVec3) -> Vec<f64> {
+        let q = self.nodes.len();
+        let e: Vec<f64> = self.nodes.iter().map(|&(m, _)| m.dot(omega).max(0.0)).collect();
+        (0..rows)
+            .map(|r| pinv[r * q..(r + 1) * q].iter().zip(&e).map(|(p, e)| p * e).sum())
+            .collect()
+    }
+
     /// The fitting nodes (tangent space) and weights.
     pub fn nodes(&self) -> &[(DVec3, f64)] {
         &self.nodes

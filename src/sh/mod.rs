@@ -42,6 +42,7 @@
 //!   reconstruction.
 //! - [`gauss_legendre`]: quadrature nodes used by projections and tests.
 
+pub mod ambient_cube;
 pub mod bases;
 pub mod basis;
 pub mod dice;
@@ -49,6 +50,7 @@ pub mod hbasis;
 pub mod product;
 pub mod project;
 pub mod rotate;
+pub mod samples;
 pub mod sg;
 pub mod window;
 pub mod zonal;

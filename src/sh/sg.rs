@@ -37,6 +37,16 @@
 //! conditioned, but the solve stays stable whatever the lobes. Negative amplitudes of the
 //! unconstrained fits are counted ([`FitStats`]).
 //!
+//! # Fitting from samples ([`SgBasis::fit_samples`])
+//!
+//! The same five solvers on a texel's radiance samples (directions ω_s, solid-angle weights
+//! w_s, those with z > 0) in place of the nodes: projection and the normal equations
+//! H = Σ_s w_s G_s G_sᵀ, c = Σ_s w_s G_s L_s are the sums above over the samples; least
+//! squares solves H a = c by SVD (singular values below 10⁻¹⁰ of the largest dropped), NNLS
+//! runs on the same H and c; the running average makes one pass over the samples in a fixed
+//! scrambled order (a stride coprime to their count), as a path tracer's stream would,
+//! with ⟨G_k²⟩ from the hemisphere rule.
+//!
 //! # Diffuse evaluation
 //!
 //! E(n) = Σ_k a_k ∫ G_k(ω) max(0, n·ω) dω, each term by Hill's fitted approximation of the
@@ -123,6 +133,19 @@ pub const LOBE_COUNTS: [usize; 4] = [5, 6, 9, 12];
 
 /// Gauss–Legendre nodes per unit of z of the fitting rule: 8 × 16 = 128 nodes.
 pub const FIT_N: usize = 8;
+
+/// The basis of `n` lobes, built once per n and shared.
+pub fn shared_basis(n: usize) -> std::sync::Arc<SgBasis> {
+    static BASES: std::sync::Mutex<Vec<std::sync::Arc<SgBasis>>> =
+        std::sync::Mutex::new(Vec::new());
+    let mut bases = BASES.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(b) = bases.iter().find(|b| b.len() == n) {
+        return b.clone();
+    }
+    let b = std::sync::Arc::new(SgBasis::new(n));
+    bases.push(b.clone());
+    b
+}
 
 /// N fixed lobes and everything the solvers precompute for them (module doc).
 #[derive(Clone, Debug)]
@@ -244,30 +267,99 @@ impl SgBasis {
 
     /// Lawson–Hanson active-set NNLS on the weighted system (module doc).
     fn nnls(&self, radiance: &[f64]) -> Vec<f64> {
-        let (n, q) = (self.len(), self.nodes.len());
+        let n = self.len();
         let w: Vec<f64> = self.nodes.iter().map(|&(_, w)| w).collect();
         // Normal equations in f64: H = Gᵀ W G, c = Gᵀ W L; NNLS on ½aᵀHa − cᵀa.
-        let mut h = vec![0.0; n * n];
-        let mut c = vec![0.0; n];
-        for i in 0..q {
-            let row = &self.g[i * n..(i + 1) * n];
-            for k in 0..n {
-                c[k] += w[i] * row[k] * radiance[i];
-                for j in 0..n {
-                    h[k * n + j] += w[i] * row[k] * row[j];
-                }
-            }
-        }
+        let h = normal_matrix(&self.g, &w, n);
+        let c = normal_rhs(&self.g, &w, radiance, n);
         nnls_normal(&h, &c, n)
     }
 
     fn running_average(&self, radiance: &[f64], non_negative: bool) -> Vec<f64> {
-        let (n, q) = (self.len(), self.nodes.len());
-        let mut a = vec![0.0; n];
-        // Each lobe's mean of G² over the hemisphere, known in advance here (the progressive
-        // form estimates it from the samples so far, which makes its first steps large).
+        let w: Vec<f64> = self.nodes.iter().map(|&(_, w)| w).collect();
+        running_average(
+            &self.g,
+            &w,
+            radiance,
+            self.mean_g2(),
+            RUNNING_PASSES,
+            non_negative,
+        )
+    }
+
+    /// Amplitudes (RGB, one per lobe) fitting radiance samples: unit tangent-space
+    /// directions `dirs`, solid-angle weights `weights`, RGB `radiance` (module doc, Fitting
+    /// from samples). Samples at z ≤ 0 are left out (the lobes cover the upper hemisphere).
+    ///
+    /// # Panics
+    /// If the three slices differ in length (a bug of the caller).
+    pub fn fit_samples(
+        &self,
+        dirs: &[DVec3],
+        weights: &[f64],
+        radiance: &[[f64; 3]],
+        solver: Solver,
+        stats: &mut FitStats,
+    ) -> Vec<[f64; 3]> {
+        assert!(dirs.len() == weights.len() && dirs.len() == radiance.len());
+        let n = self.len();
+        let upper: Vec<usize> = (0..dirs.len()).filter(|&s| dirs[s].z > 0.0).collect();
+        let g: Vec<f64> = upper
+            .iter()
+            .flat_map(|&s| self.axes.iter().map(move |&mu| lobe(mu, self.sharpness, dirs[s])))
+            .collect();
+        let w: Vec<f64> = upper.iter().map(|&s| weights[s]).collect();
+        let l: Vec<[f64; 3]> = upper.iter().map(|&s| radiance[s]).collect();
+        let channel = |c: usize| -> Vec<f64> { l.iter().map(|v| v[c]).collect() };
+        let per_colour: [Vec<f64>; 3] = match solver {
+            Solver::Projection => std::array::from_fn(|c| {
+                let lc = channel(c);
+                (0..n)
+                    .map(|k| {
+                        let (mut num, mut den) = (0.0, 0.0);
+                        for (i, &wi) in w.iter().enumerate() {
+                            num += wi * lc[i] * g[i * n + k];
+                            den += wi * g[i * n + k];
+                        }
+                        if den > 0.0 { num / den } else { 0.0 }
+                    })
+                    .collect()
+            }),
+            Solver::LeastSquares | Solver::NonNegative => {
+                let h = normal_matrix(&g, &w, n);
+                let rhs: [Vec<f64>; 3] = std::array::from_fn(|c| normal_rhs(&g, &w, &channel(c), n));
+                if solver == Solver::NonNegative {
+                    rhs.map(|c| nnls_normal(&h, &c, n))
+                } else {
+                    let hm = nalgebra::DMatrix::from_row_slice(n, n, &h);
+                    let svd = hm.svd(true, true);
+                    let tol = 1e-10 * svd.singular_values.max();
+                    rhs.map(|c| {
+                        svd.solve(&nalgebra::DVector::from_vec(c), tol)
+                            .map(|a| a.iter().copied().collect())
+                            .unwrap_or_else(|_| vec![0.0; n])
+                    })
+                }
+            }
+            Solver::RunningAverage | Solver::RunningAverageNonNegative => {
+                let non_negative = solver == Solver::RunningAverageNonNegative;
+                std::array::from_fn(|c| {
+                    running_average(&g, &w, &channel(c), self.mean_g2(), 1, non_negative)
+                })
+            }
+        };
+        stats.amplitudes += 3 * n as u64;
+        stats.negative += per_colour.iter().flatten().filter(|&&v| v < 0.0).count() as u64;
+        (0..n)
+            .map(|k| std::array::from_fn(|c| per_colour[c][k]))
+            .collect()
+    }
+
+    /// Each lobe's mean of G² over the hemisphere (by the fitting rule).
+    fn mean_g2(&self) -> Vec<f64> {
+        let n = self.len();
         let area: f64 = self.nodes.iter().map(|&(_, w)| w).sum();
-        let mean_g2: Vec<f64> = (0..n)
+        (0..n)
             .map(|k| {
                 self.nodes
                     .iter()
@@ -276,35 +368,7 @@ impl SgBasis {
                     .sum::<f64>()
                     / area
             })
-            .collect();
-        let mut total = 0.0;
-        // The progressive fit expects samples in random order: the nodes are visited with a
-        // stride coprime to their count (a fixed scramble), RUNNING_PASSES times over.
-        let stride = (0..q)
-            .map(|s| (q * 5 / 8 + s) | 1)
-            .find(|&s| gcd(s, q) == 1)
-            .unwrap_or(1);
-        for step in 0..RUNNING_PASSES * q {
-            let i = (step * stride) % q;
-            let w = self.nodes[i].1;
-            total += w;
-            let g = &self.g[i * n..(i + 1) * n];
-            let estimate: f64 = a.iter().zip(g).map(|(a, g)| a * g).sum();
-            for k in 0..n {
-                if mean_g2[k] < RUNNING_MIN_WEIGHT {
-                    continue;
-                }
-                // The value this sample asks of lobe k given the others' current
-                // contribution, averaged in with the sample's share of the weight so far.
-                let others = estimate - a[k] * g[k];
-                let wanted = (radiance[i] - others) * g[k] / mean_g2[k];
-                a[k] += (wanted - a[k]) * w / total;
-                if non_negative {
-                    a[k] = a[k].max(0.0);
-                }
-            }
-        }
-        a
+            .collect()
     }
 
     /// Σ_k a_k G_k(m) at tangent-space `m`, one colour.
@@ -325,6 +389,81 @@ impl SgBasis {
             .map(|(&mu, a)| a * cosine_integral_fitted(mu.dot(n), self.sharpness))
             .sum()
     }
+}
+
+/// H = Gᵀ W G (n × n, row-major) of the lobe values `g` (sample-major, n per sample).
+fn normal_matrix(g: &[f64], w: &[f64], n: usize) -> Vec<f64> {
+    let mut h = vec![0.0; n * n];
+    for (i, &wi) in w.iter().enumerate() {
+        let row = &g[i * n..(i + 1) * n];
+        for k in 0..n {
+            for j in 0..n {
+                h[k * n + j] += wi * row[k] * row[j];
+            }
+        }
+    }
+    h
+}
+
+/// c = Gᵀ W L.
+fn normal_rhs(g: &[f64], w: &[f64], radiance: &[f64], n: usize) -> Vec<f64> {
+    let mut c = vec![0.0; n];
+    for (i, (&wi, &l)) in w.iter().zip(radiance).enumerate() {
+        for k in 0..n {
+            c[k] += wi * g[i * n + k] * l;
+        }
+    }
+    c
+}
+
+/// The running average (module doc) over samples with lobe values `g` (sample-major, n
+/// per sample), weights `w` and one colour's `radiance`, `passes` times over in a fixed
+/// scrambled order (a stride coprime to the count).
+fn running_average(
+    g: &[f64],
+    w: &[f64],
+    radiance: &[f64],
+    mean_g2: Vec<f64>,
+    passes: usize,
+    non_negative: bool,
+) -> Vec<f64> {
+    let n = mean_g2.len();
+    let q = w.len();
+    let mut a = vec![0.0; n];
+    if q == 0 {
+        return a;
+    }
+    let mut total = 0.0;
+    // The progressive fit expects samples in random order: they are visited with a stride
+    // coprime to their count (a fixed scramble).
+    let stride = (0..q)
+        .map(|s| (q * 5 / 8 + s) | 1)
+        .find(|&s| gcd(s, q) == 1)
+        .unwrap_or(1);
+    for step in 0..passes * q {
+        let i = (step * stride) % q;
+        let wi = w[i];
+        if wi <= 0.0 {
+            continue;
+        }
+        total += wi;
+        let gi = &g[i * n..(i + 1) * n];
+        let estimate: f64 = a.iter().zip(gi).map(|(a, g)| a * g).sum();
+        for k in 0..n {
+            if mean_g2[k] < RUNNING_MIN_WEIGHT {
+                continue;
+            }
+            // The value this sample asks of lobe k given the others' current
+            // contribution, averaged in with the sample's share of the weight so far.
+            let others = estimate - a[k] * gi[k];
+            let wanted = (radiance[i] - others) * gi[k] / mean_g2[k];
+            a[k] += (wanted - a[k]) * wi / total;
+            if non_negative {
+                a[k] = a[k].max(0.0);
+            }
+        }
+    }
+    a
 }
 
 /// G(d; μ, λ).

@@ -156,15 +156,7 @@ pub fn fragment_shader(basis: HemisphereBasis) -> ShaderVariant {
 
 /// The lobes of an `sgN` basis (shared, built once per N).
 pub fn sg_basis(lobes: u32) -> std::sync::Arc<SgBasis> {
-    static BASES: std::sync::Mutex<Vec<std::sync::Arc<SgBasis>>> =
-        std::sync::Mutex::new(Vec::new());
-    let mut bases = BASES.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some(b) = bases.iter().find(|b| b.len() == lobes as usize) {
-        return b.clone();
-    }
-    let b = std::sync::Arc::new(SgBasis::new(lobes as usize));
-    bases.push(b.clone());
-    b
+    crate::sh::sg::shared_basis(lobes as usize)
 }
 
 /// The amplitudes (RGB, lobe-major) fitting order-3 RGB radiance `radiance` over the
