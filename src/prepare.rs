@@ -55,6 +55,9 @@ pub struct PrepareSettings {
     pub cache_dir: Option<PathBuf>,
     /// Bake the SH lightmap (`shlmap`) with this many bounces; `None`: skip it.
     pub sh_lightmap_bounces: Option<u32>,
+    /// The bases its bake fits from each texel's radiance samples (`Technique::sample_fit`
+    /// of the run's techniques).
+    pub sample_fits: Vec<crate::sh::samples::SampleFit>,
     /// Bake transfer matrices (`nmprt*`) with this many bounces; `None`: skip them.
     pub transfer_bounces: Option<u32>,
     /// Their lighting order (≤ `LIGHTING_ORDER`).
@@ -79,11 +82,27 @@ impl Default for PrepareSettings {
             options: crate::technique::FamilyOptions::default(),
             cache_dir: None,
             sh_lightmap_bounces: None,
+            sample_fits: Vec::new(),
             transfer_bounces: None,
             transfer_order: transfer::DEFAULT_LIGHTING_ORDER,
             height_map: None,
         }
     }
+}
+
+/// The bases the SH lightmap bake must fit from its samples for `techniques` under
+/// `options`, each once, in the techniques' order.
+pub fn sample_fits_for(
+    techniques: &[crate::technique::Technique],
+    options: &crate::technique::FamilyOptions,
+) -> Vec<crate::sh::samples::SampleFit> {
+    let mut fits = Vec::new();
+    for fit in techniques.iter().filter_map(|t| t.sample_fit(options)) {
+        if !fits.contains(&fit) {
+            fits.push(fit);
+        }
+    }
+    fits
 }
 
 /// Baked and lighting data for one scene and environment.
@@ -530,6 +549,7 @@ pub fn prepare_with(
                 bounces,
                 progress: settings.progress,
             },
+            &settings.sample_fits,
         )
     });
     let transfer = settings.transfer_bounces.map(|bounces| {

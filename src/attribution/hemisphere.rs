@@ -51,7 +51,7 @@ impl<'a> RowLadder<'a> {
     fn sg(&self, rungs: &mut Vec<Rung>, lobes: u32) {
         use crate::technique::hemisphere::{fit_sg, sg_basis, sg_irradiance, sg_stored_texels};
         let basis = sg_basis(lobes);
-        let solver = self.prepared.options.Hemisphere;
+        let solver = self.prepared.options.Hemisphere.solver;
         let rgb = |v: &[f64]| -> Vec<[f64; 3]> {
             (0..lobes as usize)
                 .map(|i| [v[3 * i], v[3 * i + 1], v[3 * i + 2]])

@@ -89,8 +89,9 @@ pub struct LadderPixels {
     frame: Vec<[DVec3; 3]>,
     /// Visibility (bake order) and AO at each pixel.
     vis: PointVisibility,
-    /// `shlmap`'s incident-radiance SH at each pixel, gathered on first use.
-    sh_radiance: std::sync::OnceLock<Vec<[[f64; 3]; 9]>>,
+    /// `shlmap`'s incident-radiance SH at each pixel and the bases its bake fitted from
+    /// samples, fitted at each pixel from the same rays; gathered on first use.
+    sh_radiance: std::sync::OnceLock<crate::bake::shlmap::GatheredPoints>,
     exact: ExactLightTable,
     /// Rung images by stem, kept between rows ([`LadderPixels::rung`]).
     rung_cache: Mutex<VecDeque<(String, Frame)>>,
@@ -583,14 +584,14 @@ impl<'a> RowLadder<'a> {
         lxh
     }
 
-    /// The first rung of the lightmap families: incident radiance with inter-reflection
-    /// gathered at each pixel as the bake gathers a texel, to order 3 (cosine exact, eq. (2)
-    /// at the shading normal). Returns the SH lightmap and the gathered SH, `None` without
-    /// an SH lightmap bake.
-    fn push_radiance_order(
+    /// The SH lightmap and what its rays gather at each pixel (eq. (1)'s SH and the bake's
+    /// sample fits), traced on first use; `None` without an SH lightmap bake.
+    fn gathered(
         &self,
-        rungs: &mut Vec<Rung>,
-    ) -> Option<(&'a crate::bake::shlmap::ShLightmap, &'a [[[f64; 3]; 9]])> {
+    ) -> Option<(
+        &'a crate::bake::shlmap::ShLightmap,
+        &'a crate::bake::shlmap::GatheredPoints,
+    )> {
         let (px, prepared) = (self.px, self.prepared);
         let map = prepared.sh_lightmap.as_ref()?;
         let settings = ShLightmapSettings {
@@ -609,15 +610,32 @@ impl<'a> RowLadder<'a> {
                 &settings,
                 &px.position,
                 &px.normal_g,
+                &px.frame,
             )
         });
+        Some((map, gathered))
+    }
+
+    /// The first rung of the lightmap families: incident radiance with inter-reflection
+    /// gathered at each pixel as the bake gathers a texel, to order 3 (cosine exact, eq. (2)
+    /// at the shading normal). Returns the SH lightmap and the gathered points, `None`
+    /// without an SH lightmap bake.
+    fn push_radiance_order(
+        &self,
+        rungs: &mut Vec<Rung>,
+    ) -> Option<(
+        &'a crate::bake::shlmap::ShLightmap,
+        &'a crate::bake::shlmap::GatheredPoints,
+    )> {
+        let px = self.px;
+        let (map, gathered) = self.gathered()?;
         self.push(
             rungs,
             AttributionKind::RadianceOrder,
             "shlmap.radiance_order".into(),
             &|| {
                 px.image(|k| {
-                    ShBasis::L2.irradiance(&ShBasis::L2.encode(&gathered[k], None), px.normal[k])
+                    ShBasis::L2.irradiance(&ShBasis::L2.encode(&gathered.sh[k], None), px.normal[k])
                 })
             },
         );
@@ -676,10 +694,14 @@ impl<'a> RowLadder<'a> {
         }
     }
 
-    /// The rungs of a basis over the tangent frame (the hemisphere bases, the ambient cube): the pixel's gathered radiance,
-    /// then the basis fitted to it through the pixel's own frame and evaluated at its
-    /// tangent-space normal (`fit_eval`; rung `{basis_label}.basis`), then the lightmap's
-    /// f16 values (`stored`, fitted through each texel's frame; `eval` reads them).
+    /// The rungs of a basis over the tangent frame (the hemisphere bases, the ambient
+    /// cube): the pixel's gathered radiance, then the basis fitted to it through the pixel's
+    /// own frame and evaluated at its tangent-space normal (rung `{basis_label}.basis`),
+    /// then the lightmap's f16 values (`eval` reads them). Where the run fits the bases
+    /// from samples (`--basis-fit samples`), the basis rung is the fit of the pixel's own
+    /// radiance samples (the bake's rays traced from the pixel) and the lightmap holds the
+    /// bake's fits; otherwise (`l2`) the basis is fitted to the pixel's order-3 SH
+    /// (`fit_eval`) and the lightmap to each texel's (`stored`).
     fn tangent_basis(
         &self,
         rungs: &mut Vec<Rung>,
@@ -690,18 +712,51 @@ impl<'a> RowLadder<'a> {
         eval: &(dyn Fn(&[f64], glam::DVec3) -> [f64; 3] + Sync),
     ) {
         let px = self.px;
-        let Some((map, gathered)) = self.push_radiance_order(rungs) else {
+        // The run's fit from samples, where the bake made it.
+        let sampled = self.technique.sample_fit(&self.prepared.options).filter(|&fit| {
+            let map = self.prepared.sh_lightmap.as_ref();
+            map.is_some_and(|m| m.fitted(fit).is_some())
+        });
+        let gathered = match sampled {
+            // From samples: straight from the incident radiance, no order-3 SH between.
+            Some(_) => self.gathered(),
+            None => self.push_radiance_order(rungs),
+        };
+        let Some((map, gathered)) = gathered else {
             return;
         };
-        self.push(
+        match sampled {
+            Some(fit) => self.push(
+                rungs,
+                AttributionKind::SampledBasis,
+                format!("{basis_label}.basis.samples"),
+                &|| {
+                    px.image(|k| {
+                        // The pixels are fitted with every fit of the bake.
+                        let values = gathered.fitted_at(fit, k).unwrap_or_default();
+                        let v: Vec<f64> = values.iter().map(|&x| f64::from(x)).collect();
+                        eval(&v, px.tangent_normal[k])
+                    })
+                },
+            ),
+            None => self.push(
+                rungs,
+                AttributionKind::Basis,
+                format!("{basis_label}.basis"),
+                &|| px.image(|k| fit_eval(&gathered.sh[k], px.frame[k], px.tangent_normal[k])),
+            ),
+        }
+        let fitted = sampled.and_then(|fit| map.fitted(fit));
+        self.push_lightmap_values(
             rungs,
-            AttributionKind::Basis,
-            format!("{basis_label}.basis"),
-            &|| px.image(|k| fit_eval(&gathered[k], px.frame[k], px.tangent_normal[k])),
+            map,
+            per_texel,
+            &|| match fitted {
+                Some(f) => f.values.clone(),
+                None => stored(map),
+            },
+            &|v, k| eval(v, px.tangent_normal[k]),
         );
-        self.push_lightmap_values(rungs, map, per_texel, &|| stored(map), &|v, k| {
-            eval(v, px.tangent_normal[k])
-        });
     }
 }
 

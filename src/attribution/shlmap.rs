@@ -57,7 +57,7 @@ impl<'a> RowLadder<'a> {
             format!("{}.basis", linear.label().replace(' ', "_").to_lowercase()),
             &|| {
                 px.image(|k| {
-                    linear.irradiance(&basis.encode(&gathered[k], shaded(k)), px.normal[k])
+                    linear.irradiance(&basis.encode(&gathered.sh[k], shaded(k)), px.normal[k])
                 })
             },
         );
@@ -68,7 +68,7 @@ impl<'a> RowLadder<'a> {
                 format!("{technique}.reconstruction"),
                 &|| {
                     px.image(|k| {
-                        basis.irradiance(&basis.encode(&gathered[k], shaded(k)), px.normal[k])
+                        basis.irradiance(&basis.encode(&gathered.sh[k], shaded(k)), px.normal[k])
                     })
                 },
             );

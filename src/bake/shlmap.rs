@@ -83,11 +83,13 @@ use rayon::prelude::*;
 
 use super::directions::{DirectionSet, above_horizon};
 use super::raster::{DilationPlan, LightmapTexels, texel_index_of};
-use super::surface::{SurfaceReader, for_each_front_hit};
+use super::surface::{RayEnd, SurfaceReader, for_each_front_hit, for_each_ray};
 use super::trace::Tracer;
 use super::visibility::DILATION_PASSES;
 use super::{BakeStats, progress_bar};
 use crate::scene::Scene;
+use crate::sh::samples::{Sample, SampleFit};
+use crate::sh::sg::FitStats;
 use crate::sh::{Order, basis::eval_basis, zonal};
 
 /// Coefficients per texel and colour (order 3).
@@ -131,11 +133,29 @@ pub struct ShLightmap {
     /// directions, rescaled to the flat irradiance (dilated like `coeffs`): the `rnm`
     /// lightmaps.
     pub basis_irradiance: Vec<[Vec3; 3]>,
+    /// The tangent-frame bases fitted from each texel's radiance samples (eq. (5)), in the
+    /// order asked for, dilated like `coeffs`.
+    pub fitted: Vec<FittedBasis>,
     /// Rays and time of the bake, all bounces.
     pub stats: BakeStats,
 }
 
+/// One basis fitted from every texel's samples (eq. (5)).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FittedBasis {
+    pub fit: SampleFit,
+    /// Texel-major, `fit.stored_values()` per texel; zeros where nothing reached.
+    pub values: Vec<f32>,
+    /// Amplitudes the SG solver made negative, over the covered texels.
+    pub stats: FitStats,
+}
+
 impl ShLightmap {
+    /// The values of `fit` per texel, if the bake fitted it.
+    pub fn fitted(&self, fit: SampleFit) -> Option<&FittedBasis> {
+        self.fitted.iter().find(|f| f.fit == fit)
+    }
+
     /// The 9 RGB coefficients of texel `index` (row-major y·res + x).
     pub fn texel(&self, index: usize) -> &[[f32; 3]] {
         &self.coeffs[index * SH_LIGHTMAP_COEFFS..(index + 1) * SH_LIGHTMAP_COEFFS]
@@ -162,13 +182,42 @@ pub fn irradiance_at(coeffs: &[[f32; 3]], n: Vec3) -> Vec3 {
 /// The lobe axes of texel `i` in world space: the three HL2 basis directions of eq. (3),
 /// then the shading normal n_s of eq. (4).
 pub fn world_basis(texels: &LightmapTexels, i: usize) -> [DVec3; RNM_LOBES] {
-    let n = texels.shading_normal[i].normalize_or(texels.normal[i]);
-    let t = crate::scene::tangent::orthonormalize(n, texels.tangent[i]);
-    let b = n.cross(t.truncate()) * t.w;
-    let (n, t, b) = (n.as_dvec3(), t.truncate().as_dvec3(), b.as_dvec3());
+    let [t, b, n] = texel_frame(texels, i);
     let [b0, b1, b2] =
         super::ssbump::hl2_basis().map(|v| (t * v.x + b * v.y + n * v.z).normalize());
     [b0, b1, b2, n]
+}
+
+/// Texel `i`'s normal-map frame [tangent, bitangent, normal] (orthonormal), as
+/// `glsl/include/common.glsl` builds it from the interpolated normal and tangent.
+pub fn texel_frame(texels: &LightmapTexels, i: usize) -> [DVec3; 3] {
+    let n = texels.shading_normal[i].normalize_or(texels.normal[i]);
+    let t = crate::scene::tangent::orthonormalize(n, texels.tangent[i]);
+    let b = n.cross(t.truncate()) * t.w;
+    [t.truncate().as_dvec3(), b.as_dvec3(), n.as_dvec3()]
+}
+
+/// A ray's sample in the texel's frame (eq. (5)).
+fn sample_in(frame: &[DVec3; 3], d: Vec3, weight: f64, radiance: [f64; 3]) -> Sample {
+    let d = d.as_dvec3();
+    Sample {
+        dir: DVec3::new(frame[0].dot(d), frame[1].dot(d), frame[2].dot(d)),
+        weight,
+        radiance,
+    }
+}
+
+/// Eq. (5): every basis of `fits` fitted from `samples`, concatenated in f32, and per fit
+/// the amplitudes its SG solver made negative.
+fn fit_samples(fits: &[SampleFit], samples: &[Sample]) -> (Vec<f32>, Vec<FitStats>) {
+    let mut values = Vec::new();
+    let mut stats = Vec::with_capacity(fits.len());
+    for fit in fits {
+        let (v, s) = fit.fit(samples);
+        values.extend(v.into_iter().map(|x| x as f32));
+        stats.push(s);
+    }
+    (values, stats)
 }
 
 /// Lobes gathered per texel: three basis directions and the flat normal (eqs. (3)–(4)).
@@ -187,13 +236,15 @@ fn normalized_to_flat(lobes: &[Vec3; GATHERED_LOBES]) -> [Vec3; 3] {
 }
 
 /// Bakes the SH lightmap of `scene` under the environment whose radiance SH (RGB, any
-/// order ≥ 1) is `radiance_sh` (see the module doc).
+/// order ≥ 1) is `radiance_sh` (see the module doc), fitting each basis of `fits` from
+/// every texel's samples in the last pass.
 pub fn bake_sh_lightmap(
     scene: &Scene,
     tracer: &Tracer,
     texels: &LightmapTexels,
     radiance_sh: &[[f64; 3]],
     settings: &ShLightmapSettings,
+    fits: &[SampleFit],
 ) -> ShLightmap {
     let start = Instant::now();
     let res = texels.res as usize;
@@ -206,10 +257,13 @@ pub fn bake_sh_lightmap(
         .map(|i| i as u32)
         .collect();
     let rays_done = AtomicU64::new(0);
+    // The fits see the full radiance of each ray, known in the last pass only.
+    let fits_in = |pass: u32| if pass == settings.bounces { fits } else { &[] };
 
     // Bounce 0: direct light through the visible directions (any-hit rays).
     let bar = progress_bar(settings.progress, covered.len(), "SH lightmap direct");
-    let direct: Vec<(Sh9Rgb, BasisIrradiance)> = covered
+    let direct_fits = fits_in(0);
+    let direct: Vec<(Sh9Rgb, BasisIrradiance, (Vec<f32>, Vec<FitStats>))> = covered
         .par_iter()
         .with_min_len(64)
         .map(|&i| {
@@ -219,17 +273,23 @@ pub fn bake_sh_lightmap(
                 tracer.offset_origin(texels.position[i], texels.normal[i]),
             );
             let lobes = world_basis(texels, i);
+            let frame = texel_frame(texels, i);
+            let mut samples = Vec::new();
             let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
             let mut rnm = [DVec3::ZERO; GATHERED_LOBES];
             let mut rays = 0u64;
             for (r, &d) in dirs.dirs().iter().enumerate() {
-                if !above_horizon(n, d) {
-                    continue;
+                let mut radiance = [0.0; 3];
+                if above_horizon(n, d) {
+                    rays += 1;
+                    if !tracer.occluded(origin, d, f32::INFINITY) {
+                        radiance = env[r];
+                        accumulate(&mut sum, &basis[r], radiance);
+                        accumulate_lobes(&mut rnm, &lobes, d, radiance);
+                    }
                 }
-                rays += 1;
-                if !tracer.occluded(origin, d, f32::INFINITY) {
-                    accumulate(&mut sum, &basis[r], env[r]);
-                    accumulate_lobes(&mut rnm, &lobes, d, env[r]);
+                if !direct_fits.is_empty() {
+                    samples.push(sample_in(&frame, d, weight, radiance));
                 }
             }
             rays_done.fetch_add(rays, Ordering::Relaxed);
@@ -237,10 +297,13 @@ pub fn bake_sh_lightmap(
             (
                 Sh9Rgb::from_sums(&sum, weight),
                 BasisIrradiance::from_sums(&rnm, weight),
+                fit_samples(direct_fits, &samples),
             )
         })
         .collect();
     bar.finish_and_clear();
+    let (direct, mut fitted): (Vec<(Sh9Rgb, BasisIrradiance)>, Vec<(Vec<f32>, Vec<FitStats>)>) =
+        direct.into_iter().map(|(sh, rnm, fit)| ((sh, rnm), fit)).unzip();
     let mut current = direct.clone();
     let mut bounce_source = Vec::new();
     let dilation = DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES);
@@ -258,7 +321,8 @@ pub fn bake_sh_lightmap(
             covered.len(),
             &format!("SH lightmap bounce {bounce}"),
         );
-        current = covered
+        let pass_fits = fits_in(bounce);
+        let pass: Vec<((Sh9Rgb, BasisIrradiance), (Vec<f32>, Vec<FitStats>))> = covered
             .par_iter()
             .with_min_len(64)
             .zip(direct.par_iter())
@@ -269,22 +333,60 @@ pub fn bake_sh_lightmap(
                 let lobes = world_basis(texels, i);
                 let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
                 let mut rnm = [DVec3::ZERO; GATHERED_LOBES];
-                let rays =
-                    for_each_front_hit(tracer, &surfaces, &dirs, n, origin, |r, d, surface| {
-                        let e = irradiance[texels.texel_index(surface.uv_lightmap.into())];
-                        let radiance = (surface.albedo * e / std::f32::consts::PI).as_dvec3();
-                        accumulate(&mut sum, &basis[r], radiance.into());
-                        accumulate_lobes(&mut rnm, &lobes, d, radiance.into());
+                let bounced = |surface: &super::surface::SurfacePoint| {
+                    let e = irradiance[texels.texel_index(surface.uv_lightmap.into())];
+                    (surface.albedo * e / std::f32::consts::PI).as_dvec3().into()
+                };
+                let (rays, fit) = if pass_fits.is_empty() {
+                    let rays =
+                        for_each_front_hit(tracer, &surfaces, &dirs, n, origin, |r, d, surface| {
+                            let radiance = bounced(surface);
+                            accumulate(&mut sum, &basis[r], radiance);
+                            accumulate_lobes(&mut rnm, &lobes, d, radiance);
+                        });
+                    (rays, (Vec::new(), Vec::new()))
+                } else {
+                    // Every direction is a sample: escaped rays carry the environment
+                    // (gathered in the direct pass), front hits the bounce, the rest nothing.
+                    let frame = texel_frame(texels, i);
+                    let mut radiance = vec![[0.0; 3]; dirs.dirs().len()];
+                    let rays = for_each_ray(tracer, &surfaces, &dirs, n, origin, |r, d, end| {
+                        radiance[r] = match end {
+                            RayEnd::Escaped => env[r],
+                            RayEnd::Front(surface) => {
+                                let l = bounced(surface);
+                                accumulate(&mut sum, &basis[r], l);
+                                accumulate_lobes(&mut rnm, &lobes, d, l);
+                                l
+                            }
+                            RayEnd::Back => [0.0; 3],
+                        };
                     });
+                    let samples: Vec<Sample> = dirs
+                        .dirs()
+                        .iter()
+                        .zip(&radiance)
+                        .map(|(&d, &l)| sample_in(&frame, d, weight, l))
+                        .collect();
+                    (rays, fit_samples(pass_fits, &samples))
+                };
                 rays_done.fetch_add(rays, Ordering::Relaxed);
                 bar.inc(1);
                 (
-                    direct.0 + Sh9Rgb::from_sums(&sum, weight),
-                    direct.1 + BasisIrradiance::from_sums(&rnm, weight),
+                    (
+                        direct.0 + Sh9Rgb::from_sums(&sum, weight),
+                        direct.1 + BasisIrradiance::from_sums(&rnm, weight),
+                    ),
+                    fit,
                 )
             })
             .collect();
         bar.finish_and_clear();
+        let (pass, pass_fitted): (Vec<_>, Vec<_>) = pass.into_iter().unzip();
+        current = pass;
+        if !pass_fits.is_empty() {
+            fitted = pass_fitted;
+        }
         bounce_source = irradiance;
     }
 
@@ -296,6 +398,7 @@ pub fn bake_sh_lightmap(
     }
     dilation.apply(&mut planes);
     dilation.apply(&mut rnm);
+    let fitted = place_fits(fits, &fitted, &covered, res * res, &dilation);
     let mut normal = texels.normal.clone();
     dilation.apply(&mut normal);
     let mut frame: Vec<glam::Mat3> = (0..res * res)
@@ -303,9 +406,8 @@ pub fn bake_sh_lightmap(
             if !texels.covered[i] {
                 return glam::Mat3::ZERO;
             }
-            let n = texels.shading_normal[i].normalize_or(texels.normal[i]);
-            let t = crate::scene::tangent::orthonormalize(n, texels.tangent[i]);
-            glam::Mat3::from_cols(t.truncate(), n.cross(t.truncate()) * t.w, n)
+            let [t, b, n] = texel_frame(texels, i).map(|c| c.as_vec3());
+            glam::Mat3::from_cols(t, b, n)
         })
         .collect();
     dilation.apply(&mut frame);
@@ -318,29 +420,101 @@ pub fn bake_sh_lightmap(
         frame,
         bounce_source,
         basis_irradiance: rnm.iter().map(|b| normalized_to_flat(&b.0)).collect(),
+        fitted,
         stats: BakeStats {
             rays_traced: rays_done.into_inner(),
             seconds: start.elapsed().as_secs_f64(),
         },
     };
     log::info!(
-        "SH lightmap bake: {} texels × {} directions, {} bounces: {}",
+        "SH lightmap bake: {} texels × {} directions, {} bounces, {} bases fitted from samples: {}",
         covered.len(),
         settings.rays,
         settings.bounces,
+        fits.len(),
         map.stats
     );
     map
+}
+
+/// The per-texel fits (covered texels in order, every fit's values concatenated) as one
+/// texel-major array per fit over all `texels`, dilated into the gutters.
+fn place_fits(
+    fits: &[SampleFit],
+    per_texel: &[(Vec<f32>, Vec<FitStats>)],
+    covered: &[u32],
+    texels: usize,
+    dilation: &DilationPlan,
+) -> Vec<FittedBasis> {
+    let total: usize = fits.iter().map(|f| f.stored_values()).sum();
+    if total == 0 {
+        return Vec::new();
+    }
+    let mut all = vec![0.0f32; texels * total];
+    let mut stats = vec![FitStats::default(); fits.len()];
+    for ((values, s), &i) in per_texel.iter().zip(covered) {
+        let i = i as usize;
+        all[i * total..(i + 1) * total].copy_from_slice(values);
+        for (sum, s) in stats.iter_mut().zip(s) {
+            sum.amplitudes += s.amplitudes;
+            sum.negative += s.negative;
+        }
+    }
+    dilation.apply_vectors(&mut all, total);
+    let mut offset = 0;
+    fits.iter()
+        .zip(stats)
+        .map(|(&fit, stats)| {
+            let n = fit.stored_values();
+            let values = (0..texels)
+                .flat_map(|t| all[t * total + offset..t * total + offset + n].iter().copied())
+                .collect();
+            offset += n;
+            FittedBasis { fit, values, stats }
+        })
+        .collect()
+}
+
+/// What [`radiance_at_points`] gathers at each point.
+pub struct GatheredPoints {
+    /// Eq. (1)'s 9 RGB coefficients per point.
+    pub sh: Vec<[[f64; 3]; SH_LIGHTMAP_COEFFS]>,
+    /// The fits asked for, and per point their values concatenated in that order (eq. (5)).
+    pub fits: Vec<SampleFit>,
+    pub fitted: Vec<f32>,
+}
+
+impl GatheredPoints {
+    /// Values per point of all the fits.
+    pub fn fitted_per_point(&self) -> usize {
+        self.fits.iter().map(|f| f.stored_values()).sum()
+    }
+
+    /// The values of `fit` at point `k`, if gathered.
+    pub fn fitted_at(&self, fit: SampleFit, k: usize) -> Option<&[f32]> {
+        let mut offset = 0;
+        for f in &self.fits {
+            if *f == fit {
+                let base = k * self.fitted_per_point() + offset;
+                return Some(&self.fitted[base..base + f.stored_values()]);
+            }
+            offset += f.stored_values();
+        }
+        None
+    }
 }
 
 /// Eq. (1) at arbitrary points `position[i]` with unit geometric normals `normal[i]`, as
 /// the last pass of the bake that made `map` gathers it at a texel: the same directions
 /// (`settings`' rays and seed), the environment's SH at each direction, and light bounced
 /// off the surfaces hit read from `map.bounce_source` (the error ladder's per-pixel
-/// `shlmap` rung, `crate::attribution`). Returns the 9 RGB coefficients per point.
+/// `shlmap` rung, `crate::attribution`). With the same rays, every basis the bake fitted
+/// (`map.fitted`) is fitted at each point from its samples in `frame[i]` (tangent,
+/// bitangent, normal; orthonormalised here as [`texel_frame`] does).
 ///
 /// # Panics
 /// If the slices differ in length (a bug of the caller).
+#[allow(clippy::too_many_arguments)]
 pub fn radiance_at_points(
     scene: &Scene,
     tracer: &Tracer,
@@ -349,46 +523,77 @@ pub fn radiance_at_points(
     settings: &ShLightmapSettings,
     position: &[Vec3],
     normal: &[Vec3],
-) -> Vec<[[f64; 3]; SH_LIGHTMAP_COEFFS]> {
+    frame: &[[DVec3; 3]],
+) -> GatheredPoints {
     assert_eq!(position.len(), normal.len(), "one normal per point");
+    assert_eq!(position.len(), frame.len(), "one frame per point");
     let dirs = DirectionSet::new(settings.rays, settings.seed);
     let weight = dirs.weight();
     let (basis, env) = direction_tables(&dirs, radiance_sh);
     let surfaces = SurfaceReader::new(scene);
     let bounced = !map.bounce_source.is_empty();
-    position
+    let fits: Vec<SampleFit> = map.fitted.iter().map(|f| f.fit).collect();
+    let per_point: Vec<([[f64; 3]; SH_LIGHTMAP_COEFFS], Vec<f32>)> = position
         .par_iter()
         .zip(normal)
+        .zip(frame)
         .with_min_len(64)
-        .map(|(&p, &n)| {
+        .map(|((&p, &n), frame)| {
             let origin = tracer.offset_origin(p, n);
+            let frame = orthonormal_frame(frame);
             let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
+            let mut samples = Vec::new();
             for (r, &d) in dirs.dirs().iter().enumerate() {
-                if !above_horizon(n, d) {
-                    continue;
-                }
-                if !bounced {
-                    if !tracer.occluded(origin, d, f32::INFINITY) {
-                        accumulate(&mut sum, &basis[r], env[r]);
-                    }
-                    continue;
-                }
-                match tracer.closest_hit(origin, d) {
-                    None => accumulate(&mut sum, &basis[r], env[r]),
-                    Some(hit) => {
-                        let surface = surfaces.at(&hit, origin, d);
-                        if surface.front_face {
-                            let t = texel_index_of(map.res, surface.uv_lightmap.into());
-                            let radiance =
-                                surface.albedo * map.bounce_source[t] / std::f32::consts::PI;
-                            accumulate(&mut sum, &basis[r], radiance.as_dvec3().into());
+                let mut radiance = [0.0; 3];
+                if above_horizon(n, d) {
+                    if !bounced {
+                        if !tracer.occluded(origin, d, f32::INFINITY) {
+                            radiance = env[r];
+                        }
+                    } else {
+                        match tracer.closest_hit(origin, d) {
+                            None => radiance = env[r],
+                            Some(hit) => {
+                                let surface = surfaces.at(&hit, origin, d);
+                                if surface.front_face {
+                                    let t = texel_index_of(map.res, surface.uv_lightmap.into());
+                                    let l = surface.albedo * map.bounce_source[t]
+                                        / std::f32::consts::PI;
+                                    radiance = l.as_dvec3().into();
+                                }
+                            }
                         }
                     }
+                    accumulate(&mut sum, &basis[r], radiance);
+                }
+                if !fits.is_empty() {
+                    samples.push(sample_in(&frame, d, weight, radiance));
                 }
             }
-            sum.map(|c| c.map(|v| v * weight))
+            let (fitted, _) = fit_samples(&fits, &samples);
+            (sum.map(|c| c.map(|v| v * weight)), fitted)
         })
-        .collect()
+        .collect();
+    let mut gathered = GatheredPoints {
+        sh: Vec::with_capacity(per_point.len()),
+        fitted: Vec::new(),
+        fits,
+    };
+    gathered.fitted.reserve(per_point.len() * gathered.fitted_per_point());
+    for (sh, fitted) in per_point {
+        gathered.sh.push(sh);
+        gathered.fitted.extend(fitted);
+    }
+    gathered
+}
+
+/// `frame` (tangent, bitangent, normal) made orthonormal about its normal, the
+/// bitangent's handedness kept.
+fn orthonormal_frame(frame: &[DVec3; 3]) -> [DVec3; 3] {
+    let n = frame[2].normalize_or(DVec3::Z);
+    let t = (frame[0] - n * n.dot(frame[0])).normalize_or(n.any_orthonormal_vector());
+    let sign = if frame[1].dot(n.cross(t)) < 0.0 { -1.0 } else { 1.0 };
+    [t, n.cross(t) * sign, n]
 }
 
 /// Per direction of `dirs`: the 9 order-3 basis values and the environment's radiance from

@@ -133,16 +133,26 @@ impl LinearTexture {
     }
 }
 
-/// The bounce gather of the lightmap bakes (`super::shlmap`, `super::transfer`): for each
-/// direction `r` of `dirs` above the horizon of `normal`, the ray from `origin` is traced;
-/// `f(r, d, surface)` is called when it hits the front of a surface. Returns the rays traced.
-pub(crate) fn for_each_front_hit(
+/// Where a traced ray of [`for_each_ray`] ended.
+pub(crate) enum RayEnd<'a> {
+    /// It left the scene: the environment's radiance arrives along it.
+    Escaped,
+    /// It hit the front of a surface.
+    Front(&'a SurfacePoint),
+    /// It hit the back of a surface: nothing arrives along it.
+    Back,
+}
+
+/// The gather of the lightmap bakes (`super::shlmap`, `super::transfer`): for each direction
+/// `r` of `dirs` above the horizon of `normal`, the ray from `origin` is traced and
+/// `f(r, d, end)` called with where it ended. Returns the rays traced.
+pub(crate) fn for_each_ray(
     tracer: &super::trace::Tracer,
     surfaces: &SurfaceReader<'_>,
     dirs: &super::directions::DirectionSet,
     normal: Vec3,
     origin: Vec3,
-    mut f: impl FnMut(usize, Vec3, &SurfacePoint),
+    mut f: impl FnMut(usize, Vec3, RayEnd<'_>),
 ) -> u64 {
     let mut rays = 0u64;
     for (r, &d) in dirs.dirs().iter().enumerate() {
@@ -151,14 +161,34 @@ pub(crate) fn for_each_front_hit(
         }
         rays += 1;
         let Some(hit) = tracer.closest_hit(origin, d) else {
+            f(r, d, RayEnd::Escaped);
             continue;
         };
         let surface = surfaces.at(&hit, origin, d);
         if surface.front_face {
-            f(r, d, &surface);
+            f(r, d, RayEnd::Front(&surface));
+        } else {
+            f(r, d, RayEnd::Back);
         }
     }
     rays
+}
+
+/// [`for_each_ray`] calling `f(r, d, surface)` only where the ray hits the front of a
+/// surface (the bounce gather).
+pub(crate) fn for_each_front_hit(
+    tracer: &super::trace::Tracer,
+    surfaces: &SurfaceReader<'_>,
+    dirs: &super::directions::DirectionSet,
+    normal: Vec3,
+    origin: Vec3,
+    mut f: impl FnMut(usize, Vec3, &SurfacePoint),
+) -> u64 {
+    for_each_ray(tracer, surfaces, dirs, normal, origin, |r, d, end| {
+        if let RayEnd::Front(surface) = end {
+            f(r, d, surface);
+        }
+    })
 }
 
 #[cfg(test)]

@@ -81,6 +81,11 @@ pub(super) struct SceneArgs {
     /// nnls (non-negative least squares), running (running average), running-nn.
     #[arg(long = "sg-solve", default_value_t = shvis::sh::sg::DEFAULT_SOLVER)]
     pub(super) sg_solve: shvis::sh::sg::Solver,
+    /// What the tangent-frame bases (hb4, hb6, sgN, dice, dicey, acube, acubels) are
+    /// fitted from: samples (each texel's radiance samples, the bake's rays) or l2 (the
+    /// texel's order-3 SH).
+    #[arg(long = "basis-fit", default_value_t = shvis::sh::samples::BasisFit::Samples)]
+    pub(super) basis_fit: shvis::sh::samples::BasisFit,
     /// Lighting order O of the transfer matrices of the nmprt* techniques (9 × O² per
     /// texel and colour): at most the prepared lighting's order 8.
     #[arg(long, default_value_t = shvis::bake::transfer::DEFAULT_LIGHTING_ORDER.get(), value_parser = clap::value_parser!(u32).range(1..=shvis::prepare::LIGHTING_ORDER as i64))]

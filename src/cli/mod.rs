@@ -275,6 +275,15 @@ fn prepare_settings(
     let needs = |f: fn(&shvis::technique::BakeNeeds) -> bool| {
         techniques.iter().any(|t| f(&t.needs())).then_some(bounces)
     };
+    let options = shvis::technique::FamilyOptions {
+        Hemisphere: shvis::technique::HemisphereOptions {
+            solver: scene.sg_solve,
+            fit: scene.basis_fit,
+        },
+        AmbientCube: scene.basis_fit,
+        ..Default::default()
+    };
+    let sample_fits = shvis::prepare::sample_fits_for(techniques, &options);
     let settings = PrepareSettings {
         scene: scene.scene.clone(),
         env: env.to_string(),
@@ -285,12 +294,10 @@ fn prepare_settings(
         order: shvis::sh::Order::new(scene.order).context("--order")?,
         table_res: scene.table_res,
         h_order: shvis::sh::Order::new(scene.h_order).context("--h-order")?,
-        options: shvis::technique::FamilyOptions {
-            Hemisphere: scene.sg_solve,
-            ..Default::default()
-        },
+        options,
         cache_dir: None,
         sh_lightmap_bounces: needs(|n| n.sh_lightmap),
+        sample_fits,
         transfer_bounces: needs(|n| n.transfer),
         transfer_order: shvis::sh::Order::new(scene.transfer_order).context("--transfer-order")?,
         height_map: scene

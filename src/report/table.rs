@@ -67,6 +67,10 @@ pub enum AttributionKind {
     /// (L1 for the L1 family; ZH3, luminance L1, deringed L2 as themselves); the H-basis:
     /// the pixel's irradiance projected through its own frame, at its tangent-space normal.
     Basis,
+    /// The tangent-frame bases fitted from samples (`--basis-fit samples`): incident
+    /// radiance with inter-reflection → the basis fitted from the pixel's radiance samples
+    /// (the bake's rays traced from the pixel), at its tangent-space normal.
+    SampledBasis,
     /// The non-linear L1 reconstructions (Geomerics, hallucinated ZH3) against the linear
     /// one of the same data.
     Reconstruction,
@@ -100,6 +104,7 @@ impl AttributionKind {
             AttributionKind::IrradianceOrder => "irradiance → order 3",
             AttributionKind::RadianceOrder => "incident radiance → order-3 SH",
             AttributionKind::Basis => "order-3 SH → stored basis",
+            AttributionKind::SampledBasis => "incident radiance → stored basis",
             AttributionKind::Reconstruction => "linear → non-linear reconstruction",
             AttributionKind::NormalTable => "normal table",
             AttributionKind::LightmapTexels => "lightmap texels",

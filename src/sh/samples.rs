@@ -44,7 +44,6 @@
 use std::sync::OnceLock;
 
 use glam::{DVec2, DVec3};
-use rayon::prelude::*;
 
 use super::ambient_cube::{self, CubeFit, FACES, UPPER_FACES};
 use super::basis::eval_basis;
@@ -265,11 +264,12 @@ pub struct KernelTable {
 
 impl KernelTable {
     /// Tabulates `kernel` (returning `rows` values) at `res` intervals per side.
-    pub fn new(rows: usize, res: usize, kernel: impl Fn(DVec3) -> Vec<f64> + Sync) -> Self {
+    pub fn new(rows: usize, res: usize, kernel: impl Fn(DVec3) -> Vec<f64>) -> Self {
         let side = res + 1;
+        // Sequential: a table is built inside `OnceLock`s that parallel fits reach, and a
+        // rayon worker waiting inside the build could steal a task that waits on it.
         let values: Vec<f32> = (0..side * side)
-            .into_par_iter()
-            .flat_map_iter(|i| {
+            .flat_map(|i| {
                 let uv = DVec2::new(
                     -1.0 + 2.0 * (i % side) as f64 / res as f64,
                     -1.0 + 2.0 * (i / side) as f64 / res as f64,

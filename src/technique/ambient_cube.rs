@@ -28,6 +28,7 @@ use crate::bake::shlmap::ShLightmap;
 use crate::gpu::Context;
 pub use crate::sh::ambient_cube::{CubeFit, FACES, STORED_VALUES};
 use crate::sh::ambient_cube::project_irradiance;
+use crate::sh::samples::{BasisFit, SampleFit};
 
 /// Every texel's cube (texel-major, [`STORED_VALUES`] each, face-major RGB) before the f16
 /// range scale; zeros where the lightmap has no frame.
@@ -48,7 +49,7 @@ pub struct AmbientCube {
 }
 
 impl Family for AmbientCube {
-    type Options = ();
+    type Options = BasisFit;
     const DESCRIPTION: Description = Description {
         names: "acube, acubels",
         what: "Valve's ambient cube over the tangent frame: six RGB values per texel blended by the squared normal; fitted at the axes (ls: least squares over the hemisphere)",
@@ -110,11 +111,17 @@ impl Family for AmbientCube {
         self,
         _: HwPath,
         inputs: &Inputs<'_>,
-        _: &(),
+        fit: &BasisFit,
         label: &str,
     ) -> Result<(TexelGroups, Recipe), TechniqueError> {
         let map = super::shlmap::baked_map(inputs, label)?;
-        let stored = stored_texels(map, self.fit);
+        let stored = match fit {
+            BasisFit::Samples => {
+                let fit = SampleFit::AmbientCube(self.fit);
+                super::hemisphere::fitted_values(map, fit, label)?.values.clone()
+            }
+            BasisFit::L2 => stored_texels(map, self.fit),
+        };
         let name = format!("{label}.ambient_cube");
         let (texels, recipe, _) =
             super::shlmap::baked_values(&stored, STORED_VALUES, map.res, name, label)?;
@@ -145,7 +152,11 @@ impl Family for AmbientCube {
         ShaderReads::PLAIN
     }
 
-    fn options_tag(self, _: &()) -> Option<String> {
-        None
+    fn options_tag(self, fit: &BasisFit) -> Option<String> {
+        Some(fit.to_string())
+    }
+
+    fn sample_fit(self, fit: &BasisFit) -> Option<SampleFit> {
+        (*fit == BasisFit::Samples).then_some(SampleFit::AmbientCube(self.fit))
     }
 }

@@ -179,4 +179,8 @@ pub trait Family: Copy + Eq + std::hash::Hash + std::fmt::Debug + Into<Technique
 
     /// What its options change in its data, for labels and cache keys (`None`: nothing).
     fn options_tag(self, options: &Self::Options) -> Option<String>;
+
+    /// The basis the SH lightmap bake fits from each texel's radiance samples for it
+    /// (`crate::sh::samples`; `None`: it reads no such fit).
+    fn sample_fit(self, options: &Self::Options) -> Option<crate::sh::samples::SampleFit>;
 }

@@ -38,6 +38,7 @@ use crate::bake::shlmap::ShLightmap;
 use crate::gpu::Context;
 use crate::sh::dice::{self, DiceVariant};
 use crate::sh::hbasis::{self, HBasisSize};
+use crate::sh::samples::{BasisFit, SampleFit};
 use crate::sh::sg::{FitStats, SgBasis, Solver};
 
 /// Largest lobe count (the uniform block's array).
@@ -257,17 +258,53 @@ pub fn stored_texels(map: &ShLightmap, size: HBasisSize) -> Vec<f32> {
     })
 }
 
+/// The fit of `basis` the bake makes from each texel's samples.
+pub fn sample_fit(basis: HemisphereBasis, solver: Solver) -> SampleFit {
+    match basis {
+        HemisphereBasis::HBasis(size) => SampleFit::HBasis(size),
+        HemisphereBasis::Sg { lobes } => SampleFit::Sg { lobes, solver },
+        HemisphereBasis::Dice(variant) => SampleFit::Dice(variant),
+    }
+}
+
+/// The values the bake fitted from the samples for `fit`, or the error of a technique
+/// (`label`) whose bake did not fit it.
+pub(crate) fn fitted_values<'a>(
+    map: &'a ShLightmap,
+    fit: SampleFit,
+    label: &str,
+) -> Result<&'a crate::bake::shlmap::FittedBasis, TechniqueError> {
+    map.fitted(fit).ok_or_else(|| TechniqueError::Input {
+        label: label.into(),
+        detail: format!("the SH lightmap bake did not fit {fit:?} from its samples"),
+    })
+}
+
 /// The stored values, range-scaled into f16, and the recipe of their baked-in lighting.
 pub(crate) fn prepare(
     basis: HemisphereBasis,
     inputs: &Inputs<'_>,
-    solver: Solver,
+    options: HemisphereOptions,
     label: &str,
 ) -> Result<(TexelGroups, Recipe), TechniqueError> {
     let map = super::shlmap::baked_map(inputs, label)?;
-    let stored = match basis {
-        HemisphereBasis::HBasis(size) => stored_texels(map, size),
-        HemisphereBasis::Sg { lobes } => {
+    let solver = options.solver;
+    let stored = match (basis, options.fit) {
+        (_, BasisFit::Samples) => {
+            let fitted = fitted_values(map, sample_fit(basis, solver), label)?;
+            if let HemisphereBasis::Sg { .. } = basis {
+                let stats = fitted.stats;
+                log::info!(
+                    "{label}: {solver} fit from samples, {} of {} amplitudes negative ({:.2} %)",
+                    stats.negative,
+                    stats.amplitudes,
+                    100.0 * stats.negative as f64 / stats.amplitudes.max(1) as f64
+                );
+            }
+            fitted.values.clone()
+        }
+        (HemisphereBasis::HBasis(size), BasisFit::L2) => stored_texels(map, size),
+        (HemisphereBasis::Sg { lobes }, BasisFit::L2) => {
             let (stored, stats) = sg_stored_texels(map, lobes, solver);
             log::info!(
                 "{label}: {} fit, {} of {} amplitudes negative ({:.2} %)",
@@ -278,7 +315,7 @@ pub(crate) fn prepare(
             );
             stored
         }
-        HemisphereBasis::Dice(variant) => dice_stored_texels(map, variant),
+        (HemisphereBasis::Dice(variant), BasisFit::L2) => dice_stored_texels(map, variant),
     };
     let name = format!("{label}.{}", Hemisphere { basis }.name());
     let (texel_groups, recipe, scale) =
@@ -340,14 +377,24 @@ pub enum HemisphereBasis {
 /// bake as `shlmap`, indexed by the tangent-space normal: `hb4`, `hb6` — the H-basis (Habel
 /// & Wimmer 2010; `crate::sh::hbasis`); `sg5`, `sg6`, `sg9`, `sg12` — spherical Gaussians
 /// (`crate::sh::sg`); `dice`, `dicey` — Ambient Dice (Iwanicki & Sloan 2017;
-/// `crate::sh::dice`). Its option is the SG solver (`--sg-solve`).
+/// `crate::sh::dice`). Its options are the SG solver (`--sg-solve`) and the fits' source
+/// (`--basis-fit`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Hemisphere {
     pub basis: HemisphereBasis,
 }
 
+/// The hemisphere family's run options.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct HemisphereOptions {
+    /// How `sgN` fits its amplitudes (`--sg-solve`).
+    pub solver: Solver,
+    /// What every basis is fitted from (`--basis-fit`).
+    pub fit: BasisFit,
+}
+
 impl Family for Hemisphere {
-    type Options = Solver;
+    type Options = HemisphereOptions;
     const DESCRIPTION: Description = Description {
         names: "hb4, hb6, sgN, dice, dicey",
         what: "bases over the tangent-frame hemisphere, read at the tangent-space normal: the H-basis; N spherical Gaussians fitted by --sg-solve; Ambient Dice (icosahedron vertices, hybrid Bézier; YCoCg)",
@@ -445,10 +492,10 @@ impl Family for Hemisphere {
         self,
         _: HwPath,
         inputs: &Inputs<'_>,
-        solver: &Solver,
+        options: &HemisphereOptions,
         label: &str,
     ) -> Result<(TexelGroups, Recipe), TechniqueError> {
-        prepare(self.basis, inputs, *solver, label)
+        prepare(self.basis, inputs, *options, label)
     }
 
     fn extra_slot(
@@ -478,8 +525,15 @@ impl Family for Hemisphere {
         }
     }
 
-    fn options_tag(self, solver: &Solver) -> Option<String> {
-        matches!(self.basis, HemisphereBasis::Sg { .. }).then(|| solver.to_string())
+    fn options_tag(self, options: &HemisphereOptions) -> Option<String> {
+        Some(match self.basis {
+            HemisphereBasis::Sg { .. } => format!("{}.{}", options.solver, options.fit),
+            _ => options.fit.to_string(),
+        })
+    }
+
+    fn sample_fit(self, options: &HemisphereOptions) -> Option<SampleFit> {
+        (options.fit == BasisFit::Samples).then(|| sample_fit(self.basis, options.solver))
     }
 }
 

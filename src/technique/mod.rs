@@ -40,7 +40,7 @@ use std::sync::Arc;
 pub use cluster::SeamMode;
 pub use cpca::Cpca;
 pub use family::{Family, Form, Refusal, Storage};
-pub use hemisphere::{Hemisphere, HemisphereBasis};
+pub use hemisphere::{Hemisphere, HemisphereBasis, HemisphereOptions};
 pub use lighting::{LightingData, LightingRecipe};
 pub use ndf_diffuse::{Ndf, NdfBase};
 pub use nmprt::{Nmprt, NmprtVariant};

@@ -848,6 +848,10 @@ impl Family for Nmprt {
     fn options_tag(self, _: &()) -> Option<String> {
         None
     }
+
+    fn sample_fit(self, _: &()) -> Option<crate::sh::samples::SampleFit> {
+        None
+    }
 }
 
 #[cfg(test)]

@@ -189,6 +189,14 @@ macro_rules! define_technique {
                 }
             }
 
+            /// The basis the SH lightmap bake fits from the samples for it under the run's
+            /// options ([`Family::sample_fit`]).
+            pub fn sample_fit(self, options: &FamilyOptions) -> Option<crate::sh::samples::SampleFit> {
+                match self {
+                    $(Technique::$variant(member) => member.sample_fit(&options.$variant),)*
+                }
+            }
+
             pub(crate) fn prepare_data(
                 self,
                 path: HwPath,

@@ -326,4 +326,8 @@ impl Family for Rnm {
     fn options_tag(self, _: &()) -> Option<String> {
         None
     }
+
+    fn sample_fit(self, _: &()) -> Option<crate::sh::samples::SampleFit> {
+        None
+    }
 }

@@ -229,4 +229,8 @@ impl Family for Sh2 {
     fn options_tag(self, _: &()) -> Option<String> {
         None
     }
+
+    fn sample_fit(self, _: &()) -> Option<crate::sh::samples::SampleFit> {
+        None
+    }
 }

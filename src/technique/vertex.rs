@@ -393,4 +393,8 @@ impl Family for PcaVertex {
     fn options_tag(self, _: &()) -> Option<String> {
         None
     }
+
+    fn sample_fit(self, _: &()) -> Option<crate::sh::samples::SampleFit> {
+        None
+    }
 }

@@ -129,4 +129,8 @@ impl Family for Vq {
     fn options_tag(self, _: &()) -> Option<String> {
         None
     }
+
+    fn sample_fit(self, _: &()) -> Option<crate::sh::samples::SampleFit> {
+        None
+    }
 }

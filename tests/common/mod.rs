@@ -28,6 +28,7 @@ pub fn house() -> &'static Prepared {
             table_res: TEST_TABLE_RES,
             cache_dir: Some(concat!(env!("CARGO_TARGET_TMPDIR"), "/bake-cache").into()),
             sh_lightmap_bounces: Some(shvis::bake::shlmap::DEFAULT_BOUNCES),
+            sample_fits: shvis::prepare::sample_fits_for(Technique::all(), &Default::default()),
             transfer_bounces: Some(shvis::bake::shlmap::DEFAULT_BOUNCES),
             ..PrepareSettings::default()
         })
