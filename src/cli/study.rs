@@ -41,9 +41,12 @@ pub(super) enum StudyCommand {
     /// Energy captured by the first M = 1…9 singular values of normal mapping for PRT's
     /// normal basis (PRT course), uniform and cosine-weighted, beside the course's.
     NmprtSvd(StudyNmprtSvdArgs),
-    /// Irradiance error over all normals of each lightmap basis (L1 linear, Geomerics,
-    /// hallucinated and stored ZH3, luminance L1, L2, deringed L2) against exact irradiance,
-    /// per environment, with the values each stores.
+    /// Irradiance error over all normals of each engine lightmap basis (L1 linear,
+    /// Geomerics, hallucinated and stored ZH3, luminance L1, L2, deringed L2) against exact
+    /// irradiance, per environment; and on a floor under each environment every lightmap
+    /// basis (SH L1–L4, the engine bases, H-basis, Ambient Dice, ambient cube, SG) fitted
+    /// from the environment's pixels and from its order-8 SH: irradiance and radiance
+    /// error against bytes per texel.
     Bases(StudyBasesArgs),
     /// The SH lightmap block-compressed (BC6H, BC7) under each packing of its signed
     /// coefficients — raw, offset, band-0 ratios — and BC6H's encoder settings against
@@ -72,10 +75,12 @@ pub(super) struct StudyBasesArgs {
     /// `sh:FILE` (SH coefficients as `shvis sh project` prints them).
     #[arg(long, value_delimiter = ',', default_value = "sky,sky:15,sky:60")]
     envs: Vec<String>,
-    /// Normals: an exact sphere quadrature of Q × 2Q nodes.
+    /// Normals: an exact sphere quadrature of Q × 2Q nodes (the sphere table) and a
+    /// hemisphere rule of Q × 2Q nodes (the floor table).
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(4..=256))]
     quadrature: u32,
-    /// Output directory: bases.md, bases.json, bases_error.svg/.png.
+    /// Output directory: bases.md, bases.json, bases_error.svg/.png,
+    /// bases_hemisphere.svg/.png.
     #[arg(short, long, default_value = "study-out/bases")]
     out: PathBuf,
 }
@@ -370,6 +375,8 @@ fn run_bases(a: StudyBasesArgs) -> Result<()> {
         "bases.json",
         "bases_error.svg",
         "bases_error.png",
+        "bases_hemisphere.svg",
+        "bases_hemisphere.png",
     ]
     .iter()
     .map(|f| ("--out".to_string(), a.out.join(f)))

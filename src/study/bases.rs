@@ -1,9 +1,15 @@
-//! `shvis study bases`: Probulator's experiment with this tool's truth — per environment, the
-//! irradiance over all normals reconstructed by each lightmap basis (`sh::bases`: L1 linear,
-//! Geomerics, hallucinated and stored ZH3, luminance L1, L2 and deringed L2) against exact
-//! irradiance.
+//! `shvis study bases`: Probulator's experiment with this tool's truth, in two tables.
 //!
-//! # What is measured
+//! The sphere table (this module): per environment, the irradiance over all normals
+//! reconstructed by each engine lightmap basis (`sh::bases`: L1 linear, Geomerics,
+//! hallucinated and stored ZH3, luminance L1, L2 and deringed L2) from the environment's
+//! order-3 radiance SH, against exact irradiance. The hemisphere table
+//! ([`super::bases_hemisphere`]): a lightmap texel on a floor under the environment, every
+//! basis — SH L1–L4, the engine bases, H-basis, Ambient Dice, the ambient cube, spherical
+//! Gaussians — fitted from the same radiance samples, the environment's pixels and its
+//! order-8 SH, against the pixels' irradiance and radiance.
+//!
+//! # What the sphere table measures
 //!
 //! Normals n_j are the nodes of an exact sphere quadrature (weights w_j, Σ w_j = 4π). Exact
 //! irradiance E(n) = ∫ L(ω) max(0, n·ω) dω is a quadrature over the map's texels
@@ -11,25 +17,24 @@
 //! environment given by SH coefficients (`sh:FILE`) it is the coefficients convolved with the
 //! clamped cosine at their own order (exact for that radiance; clamped at 0 like the
 //! reconstructions, so a truncated SH that dips negative is compared as displayed). Each
-//! basis encodes the
-//! environment's order-3 radiance SH and reconstructs Ê(n), clamped at 0 as its shader
-//! does. On luminance, with E_max = max_j E(n_j) the peak irradiance:
+//! basis encodes the environment's order-3 radiance SH and reconstructs Ê(n), clamped at 0
+//! as its shader does. On luminance, with E_max = max_j E(n_j) the peak irradiance:
 //!
 //! ```text
-//! RMS      √(Σ w (Ê − E)²) / √(Σ w E²)
-//! mean     Σ w |Ê − E| / (Σ w · E_max)
-//! max      max_j |Ê − E| / E_max
-//! vs L2    √(Σ w (Ê − Ê_L2)²) / √(Σ w Ê_L2²)   (the published figures' measure)
+//! RMS      √(Σ w (Ê − E)²) / √(Σ w E²)                                                  (1)
+//! mean     Σ w |Ê − E| / (Σ w · E_max)                                                  (2)
+//! max      max_j |Ê − E| / E_max                                                        (3)
+//! vs L2    √(Σ w (Ê − Ê_L2)²) / √(Σ w Ê_L2²)   (the published figures' measure)         (4)
 //! ```
 //!
-//! "mean" and "max" are Ramamoorthi & Hanrahan's average and maximum error, relative to the
+//! (2) and (3) are Ramamoorthi & Hanrahan's average and maximum error, relative to the
 //! peak irradiance as their bound is: a single direction's order-3 irradiance
 //! 1/4 + t/2 + (5/16)P_2(t) misses max(0, t) by 0.094 at t = 0, 9.4 % of its peak of 1 —
 //! the 9 % bound.
 //!
 //! Also reported: the share of normals where the basis' unclamped reconstruction is
-//! negative. Lightmap
-//! texels see a hemisphere; a probe here is lit from the whole sphere, as in Probulator.
+//! negative. A probe here is lit from the whole sphere, as in Probulator; the hemisphere
+//! table is the lightmap texel's view.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -37,6 +42,7 @@ use std::time::Instant;
 use glam::DVec3;
 use rayon::prelude::*;
 
+use super::bases_hemisphere::{self, HemisphereStudy, LATLONG, Normals, Source};
 use crate::env::{self, EnvError};
 use crate::sh::Order;
 use crate::sh::bases::{ShBasis, luminance};
@@ -61,215 +67,82 @@ pub struct BasisRow {
     pub negative_share: f64,
 }
 
-/// One basis of the floor table: a texel facing up under the environment.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct FloorRow {
-    pub env: String,
-    /// "L2", "H6", "SG9 nnls"…
-    pub basis: String,
-    /// Values stored (RGB counted three times).
-    pub coefficients: usize,
-    /// RMS of irradiance over the upper hemisphere of normals, relative to the reference.
-    pub rms_rel: f64,
-    /// For SG: the share of amplitudes the solver made negative.
-    pub negative_amplitudes: Option<f64>,
-}
-
 /// The study's results.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct BasesStudy {
     /// Normals over the sphere.
     pub normals: usize,
     pub rows: Vec<BasisRow>,
-    /// Normals over the floor's hemisphere.
-    pub floor_normals: usize,
-    pub floor: Vec<FloorRow>,
+    /// The floor under each environment ([`bases_hemisphere`]).
+    pub hemisphere: HemisphereStudy,
 }
 
-/// Runs the study on `envs` (`env::resolve` names, `sh:FILE` included) with
-/// `quadrature`² · 2 normals; `progress` prints a line per environment.
+/// Runs the study on `envs` (`env::resolve` names, `sh:FILE` included): the sphere table
+/// with `quadrature`² · 2 normals, the hemisphere table with `quadrature`² · 2 normals over
+/// the hemisphere; `progress` prints a line per environment.
 ///
 /// # Errors
 /// An environment that does not load.
 pub fn run(envs: &[String], quadrature: usize, progress: bool) -> Result<BasesStudy, EnvError> {
     let nodes = sphere_quadrature(quadrature);
-    let floor_nodes = crate::sh::hbasis::hemisphere_quadrature(quadrature / 2);
+    let normals = Normals::new(quadrature);
     let mut rows = Vec::new();
-    let mut floor = Vec::new();
+    let mut hemisphere = HemisphereStudy {
+        normals: normals.normals.len(),
+        latlong: LATLONG,
+        ..HemisphereStudy::default()
+    };
     for (i, name) in envs.iter().enumerate() {
         let started = Instant::now();
-        let (radiance, exact) = environment(name, &nodes)?;
+        let source = Source::load(name)?;
+        let (radiance, exact) = environment(&source, &nodes);
         rows.extend(measure(name, &radiance, &exact, &nodes));
-        floor.extend(measure_floor(
-            name,
-            &high_order_radiance(name)?,
-            &floor_nodes,
-        ));
+        let (info, floor) = bases_hemisphere::measure(name, &source, &normals);
         if progress {
             eprintln!(
-                "study bases: [{}/{}] {name} in {:.1} s",
+                "study bases: [{}/{}] {name} in {:.1} s ({} samples from the {})",
                 i + 1,
                 envs.len(),
-                started.elapsed().as_secs_f64()
+                started.elapsed().as_secs_f64(),
+                info.full_samples,
+                info.full_kind
             );
         }
+        hemisphere.envs.push(info);
+        hemisphere.rows.extend(floor);
     }
     Ok(BasesStudy {
         normals: nodes.len(),
         rows,
-        floor_normals: floor_nodes.len(),
-        floor,
+        hemisphere,
     })
 }
 
-/// Order of the radiance SH the floor table starts from (the bake's lighting order).
-const FLOOR_LIGHTING_ORDER: u32 = 8;
-
-/// The environment's radiance SH at [`FLOOR_LIGHTING_ORDER`] (an `sh:FILE` as given).
-fn high_order_radiance(name: &str) -> Result<Vec<[f64; 3]>, EnvError> {
-    if let Some(path) = name.strip_prefix(env::SH_PREFIX) {
-        return env::sh_file::load(Path::new(path));
-    }
-    let map = env::resolve(name)?;
-    let order = Order::new(FLOOR_LIGHTING_ORDER).expect("a valid order");
-    Ok(env::project::project_sh(&map, order))
-}
-
-/// The floor table of one environment (module doc): a texel facing +Y sees the radiance
-/// above its plane; each basis stores what its technique stores for that texel and is
-/// compared, over the hemisphere of normals, with the irradiance of that radiance.
-fn measure_floor(env: &str, radiance: &[[f64; 3]], normals: &[(DVec3, f64)]) -> Vec<FloorRow> {
-    use crate::sh::dice::DiceVariant;
-    use crate::sh::hbasis::{self, HBasisSize};
-    use crate::sh::sg::{FitStats, LOBE_COUNTS, Solver};
-    use crate::technique::hemisphere::{fit_sg, sg_basis, sg_irradiance};
-    let order = Order::new((radiance.len() as f64).sqrt().round() as u32).expect("n² coefficients");
-    // Tangent frame of the floor: tangent +X, bitangent −Z, normal +Y (t × b = n).
-    let frame = [DVec3::X, DVec3::NEG_Z, DVec3::Y];
-    let to_world = |m: DVec3| frame[0] * m.x + frame[1] * m.y + frame[2] * m.z;
-    // The radiance above the plane on a fine hemisphere rule: the reference irradiance and
-    // the texel's order-3 SH (what the bake stores) both come from it.
-    let fine = hbasis::hemisphere_quadrature(48);
-    let mut y = vec![0.0; order.coeff_count()];
-    let above: Vec<(DVec3, f64, [f64; 3])> = fine
-        .iter()
-        .map(|&(m, w)| {
-            let d = to_world(m);
-            crate::sh::basis::eval_basis(order, d, &mut y);
-            let l = std::array::from_fn(|c| radiance.iter().zip(&y).map(|(k, y)| k[c] * y).sum());
-            (d, w, l)
-        })
-        .collect();
-    let mut sh3 = vec![[0.0; 3]; 9];
-    let mut y3 = [0.0; 9];
-    for &(d, w, l) in &above {
-        crate::sh::basis::eval_basis(Order::THREE, d, &mut y3);
-        for k in 0..9 {
-            for c in 0..3 {
-                sh3[k][c] += w * l[c] * y3[k];
-            }
+/// The order-3 radiance SH of `source` and its exact irradiance (luminance) at `nodes`.
+fn environment(source: &Source, nodes: &[(DVec3, f64)]) -> (Vec<[f64; 3]>, Vec<f64>) {
+    match source {
+        Source::Sh(coeffs) => {
+            let order = env::sh_file::order_of(coeffs);
+            let irradiance = zonal::irradiance_from_radiance(coeffs, order);
+            let exact = nodes
+                .iter()
+                .map(|&(n, _)| {
+                    luminance(zonal::eval_rgb(&irradiance, order, n).map(|v| v.max(0.0)))
+                })
+                .collect();
+            let mut radiance = coeffs.clone();
+            radiance.resize(Order::THREE.coeff_count().max(radiance.len()), [0.0; 3]);
+            (radiance, exact)
+        }
+        Source::Map(map) => {
+            let radiance = env::project::project_sh(map, Order::THREE);
+            let exact = nodes
+                .iter()
+                .map(|&(n, _)| luminance(env::project::irradiance_brute_force(map, n)))
+                .collect();
+            (radiance, exact)
         }
     }
-    let reference: Vec<f64> = normals
-        .iter()
-        .map(|&(m, _)| {
-            let n = to_world(m);
-            luminance(std::array::from_fn(|c| {
-                above
-                    .iter()
-                    .map(|&(d, w, l)| w * l[c] * n.dot(d).max(0.0))
-                    .sum()
-            }))
-        })
-        .collect();
-    let ref_sq: f64 = normals
-        .iter()
-        .zip(&reference)
-        .map(|(&(_, w), e)| w * e * e)
-        .sum();
-    let rms = |e: &dyn Fn(DVec3) -> [f64; 3]| -> f64 {
-        let se: f64 = normals
-            .iter()
-            .zip(&reference)
-            .map(|(&(m, w), r)| w * (luminance(e(m).map(|v| v.max(0.0))) - r).powi(2))
-            .sum();
-        if ref_sq > 0.0 {
-            (se / ref_sq).sqrt()
-        } else {
-            0.0
-        }
-    };
-    let row = |basis: String, coefficients: usize, rms_rel: f64, negative: Option<f64>| FloorRow {
-        env: env.to_string(),
-        basis,
-        coefficients,
-        rms_rel,
-        negative_amplitudes: negative,
-    };
-    let mut rows = Vec::new();
-    for basis in [ShBasis::L1, ShBasis::Zh3, ShBasis::L2] {
-        let stored = basis.encode(&sh3, Some(DVec3::Y));
-        let e = |m: DVec3| basis.irradiance(&stored, to_world(m));
-        rows.push(row(
-            basis.label().into(),
-            basis.stored_values(),
-            rms(&e),
-            None,
-        ));
-    }
-    for (size, label) in [(HBasisSize::H4, "H4"), (HBasisSize::H6, "H6")] {
-        let h = hbasis::project_irradiance(&sh3, frame, size);
-        let e = |m: DVec3| hbasis::irradiance(&h, m);
-        rows.push(row(label.into(), 3 * size.count(), rms(&e), None));
-    }
-    for (variant, label) in [
-        (DiceVariant::Rgb, "Dice"),
-        (DiceVariant::YCoCg, "Dice YCoCg"),
-    ] {
-        let basis = crate::sh::dice::dice();
-        let x = basis.project_irradiance(variant, &sh3, frame);
-        let e = |m: DVec3| basis.irradiance(variant, &x, m);
-        rows.push(row(label.into(), variant.stored_values(), rms(&e), None));
-    }
-    for n in LOBE_COUNTS {
-        let basis = sg_basis(n as u32);
-        for solver in Solver::ALL {
-            let mut stats = FitStats::default();
-            let a = fit_sg(&basis, &sh3, frame, solver, &mut stats);
-            let e = |m: DVec3| sg_irradiance(&basis, &a, m);
-            let negative = stats.negative as f64 / stats.amplitudes.max(1) as f64;
-            rows.push(row(
-                format!("SG{n} {solver}"),
-                3 * n,
-                rms(&e),
-                Some(negative),
-            ));
-        }
-    }
-    rows
-}
-
-/// The order-3 radiance SH of `name` and its exact irradiance (luminance) at `nodes`.
-fn environment(name: &str, nodes: &[(DVec3, f64)]) -> Result<(Vec<[f64; 3]>, Vec<f64>), EnvError> {
-    if let Some(path) = name.strip_prefix(env::SH_PREFIX) {
-        let coeffs = env::sh_file::load(Path::new(path))?;
-        let order = env::sh_file::order_of(&coeffs);
-        let irradiance = zonal::irradiance_from_radiance(&coeffs, order);
-        let exact = nodes
-            .iter()
-            .map(|&(n, _)| luminance(zonal::eval_rgb(&irradiance, order, n).map(|v| v.max(0.0))))
-            .collect();
-        let mut radiance = coeffs;
-        radiance.resize(Order::THREE.coeff_count().max(radiance.len()), [0.0; 3]);
-        return Ok((radiance, exact));
-    }
-    let map = env::resolve(name)?;
-    let radiance = env::project::project_sh(&map, Order::THREE);
-    let exact = nodes
-        .iter()
-        .map(|&(n, _)| luminance(env::project::irradiance_brute_force(&map, n)))
-        .collect();
-    Ok((radiance, exact))
 }
 
 /// Every basis' row for one environment.
@@ -345,8 +218,9 @@ pub const RH_AVERAGE: f64 = 0.01;
 pub const RH_MAX_PRACTICE: f64 = 0.05;
 pub const RH_MAX_BOUND: f64 = 0.09;
 
-/// bases.md: the table per environment, L2 against Ramamoorthi & Hanrahan, the L1 family
-/// against the published figures.
+/// bases.md: the sphere table per environment, L2 against Ramamoorthi & Hanrahan, the L1
+/// family against the published figures; then the hemisphere table
+/// ([`super::bases_hemisphere_report::markdown`]).
 pub fn markdown(study: &BasesStudy) -> String {
     let mut s = format!(
         "# Lightmap bases: irradiance error against exact irradiance\n\n\
@@ -395,27 +269,6 @@ pub fn markdown(study: &BasesStudy) -> String {
             yes(r.max_rel < RH_MAX_BOUND)
         );
     }
-    s += &format!(
-        "\n## A floor under each environment: the local bases and the SG solvers\n\n\
-         A texel facing up (+Y) sees the radiance above its plane (the environment's order-8 \
-         SH there); each basis stores what its technique stores for that texel — from the \
-         texel's order-3 SH, as the bake gives it — and is compared over the {} normals of \
-         the upper hemisphere with the irradiance of that radiance. RMS relative to it; for SG, \
-         the share of amplitudes the solver made negative.\n\n\
-         | environment | basis | values | RMS | negative amplitudes |\n|---|---|---:|---:|---:|\n",
-        study.floor_normals
-    );
-    for r in &study.floor {
-        s += &format!(
-            "| {} | {} | {} | {:.2} % | {} |\n",
-            r.env,
-            r.basis,
-            r.coefficients,
-            100.0 * r.rms_rel,
-            r.negative_amplitudes
-                .map_or_else(|| "—".to_string(), |v| format!("{:.1} %", 100.0 * v))
-        );
-    }
     s += "\n## The L1 family beside the published figures\n\n\
           RMS relative to L2, here per environment and as published (four well-known probes).\n\n\
           | basis | here (min – max) | published |\n|---|---|---|\n";
@@ -437,11 +290,16 @@ pub fn markdown(study: &BasesStudy) -> String {
             100.0 * hi
         );
     }
-    s
+    s + &super::bases_hemisphere_report::markdown(&study.hemisphere)
 }
 
-/// bases_error.svg / .png: RMS against exact irradiance over stored values, a series per
-/// environment. Returns the files written.
+/// bases_error.svg / .png: the sphere table's RMS against exact irradiance over stored
+/// values, a series per environment; bases_hemisphere.svg / .png: the hemisphere table's
+/// irradiance error against bytes per texel
+/// ([`super::bases_hemisphere_report::write_plot`]). Returns the files written.
+///
+/// # Errors
+/// A message when plotters fails or no font is found for the labels.
 pub fn write_plot(study: &BasesStudy, dir: &Path) -> Result<Vec<PathBuf>, String> {
     use crate::report::plot::{register_plot_font, write_png_plot, write_svg_plot};
     register_plot_font()?;
@@ -449,7 +307,12 @@ pub fn write_plot(study: &BasesStudy, dir: &Path) -> Result<Vec<PathBuf>, String
     let png = dir.join("bases_error.png");
     write_svg_plot(&svg, (900, 560), |root| draw(root, study))?;
     write_png_plot(&png, (900, 560), |root| draw(root, study))?;
-    Ok(vec![svg, png])
+    let mut written = vec![svg, png];
+    written.extend(super::bases_hemisphere_report::write_plot(
+        &study.hemisphere,
+        dir,
+    )?);
+    Ok(written)
 }
 
 fn draw<DB: plotters::prelude::DrawingBackend>(
@@ -544,5 +407,11 @@ mod tests {
         assert!(row(ShBasis::Zh3).rms_rel <= row(ShBasis::L1).rms_rel);
         let md = markdown(&study);
         assert!(md.contains("| L2 |") && md.contains("published"), "{md}");
+        // The hemisphere table: every basis, both sources, the Dice verdict.
+        let hemisphere = &study.hemisphere;
+        assert_eq!(hemisphere.envs.len(), 1);
+        assert_eq!(hemisphere.normals, 12 * 24);
+        assert!(hemisphere.rows.iter().any(|r| r.basis == "Dice YCoCg"));
+        assert!(md.contains("Ambient Dice against L2, L3 and L4"), "{md}");
     }
 }

@@ -21,14 +21,20 @@
 //! - [`nmprt_svd`]: the energy of normal mapping for PRT's "normal basis" (the
 //!   SVD of the hemisphere-clamped quadratic SH over normals), `shvis study nmprt-svd`.
 //! - [`bases`]: irradiance error of each engine lightmap basis (L1, Geomerics, ZH3,
-//!   luminance L1, L2, deringed L2) against exact irradiance per environment
-//!   (`shvis study bases`).
+//!   luminance L1, L2, deringed L2) against exact irradiance per environment; and
+//!   [`bases_hemisphere`] (its rows in [`bases_hemisphere_fits`], its report in
+//!   [`bases_hemisphere_report`]): a floor texel under each environment, every lightmap
+//!   basis fitted from the same radiance samples — the pixels and the order-8 SH — against
+//!   the pixels' irradiance and radiance, with bytes per texel (`shvis study bases`).
 //! - [`block`]: the SH lightmap block-compressed (BC6H, BC7) under each packing of its
 //!   signed coefficients, and the encoder's settings against time (`shvis study block`).
 //! - [`ndf`]: the specular term under naive MIP and normal-distribution filtering
 //!   on the receding bumpy plane against its footprint reference (`shvis study ndf`).
 
 pub mod bases;
+pub mod bases_hemisphere;
+pub mod bases_hemisphere_fits;
+pub mod bases_hemisphere_report;
 pub mod block;
 pub mod compression;
 pub mod ndf;
