@@ -90,6 +90,7 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
             probe_fresh: false,
             probe_frames: 5,
             relight_degrees: None,
+            ladder: true,
             dx11_rows: None,
         },
     )

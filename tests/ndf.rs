@@ -375,6 +375,7 @@ fn the_bench_measures_the_specular_filterings_side_by_side() {
             probe_fresh: false,
             probe_frames: 5,
             relight_degrees: None,
+            ladder: true,
             dx11_rows: None,
         },
     )

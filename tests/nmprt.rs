@@ -81,6 +81,7 @@ fn nmprt_renders_the_sh_lightmap_of_the_same_bake_on_both_paths() {
             bounces: transfer.bounces,
             progress: false,
         },
+        &[],
     );
     let irradiance = irradiance_from_radiance(&l[..9], Order::THREE);
     let inputs = Inputs {

@@ -70,6 +70,7 @@ fn bake(scene: &Scene, env: &EnvMap) -> ShLightmap {
             bounces: 0,
             progress: false,
         },
+        &[],
     )
 }
 
@@ -207,6 +208,7 @@ fn rnm_lightmaps_stay_bounded_where_the_sky_rings() {
             bounces: 2,
             progress: false,
         },
+        &[],
     );
     let largest = map
         .basis_irradiance

@@ -125,6 +125,7 @@ fn bake(scene: &Scene, res: u32, bounces: u32) -> ShLightmap {
             bounces,
             progress: false,
         },
+        &[],
     )
 }
 
@@ -321,4 +322,73 @@ fn shlmap_tracks_strong_inter_reflection() {
         assert!(beyond_noise < 0.05, "{beyond_noise}");
     }
     common::assert_validation_clean(&ctx, "wall scene shlmap");
+}
+
+/// Fitting the tangent-frame bases from the samples (`--basis-fit samples`) changes nothing
+/// the bake already made, gives every covered texel each fit, and agrees with the same fit
+/// made from the texel's SH (`l2`) where the light is smooth: on the floor of the wall
+/// scene, away from the wall, the irradiance at +z from either fit is within a few percent.
+#[test]
+fn the_bases_fitted_from_samples_leave_the_bake_as_it_was() {
+    use shvis::sh::ambient_cube::CubeFit;
+    use shvis::sh::hbasis::{self, HBasisSize};
+    use shvis::sh::samples::SampleFit;
+    let scene = wall_scene(32);
+    let texels = rasterize(&scene.mesh, 32);
+    let tracer = Tracer::new(&scene.mesh);
+    let radiance = shvis::env::project::project_sh(&sun_env(), Order::new(8).unwrap());
+    let settings = ShLightmapSettings {
+        rays: 1024,
+        seed: 5,
+        bounces: 1,
+        progress: false,
+    };
+    let fits = [
+        SampleFit::HBasis(HBasisSize::H6),
+        SampleFit::AmbientCube(CubeFit::Projection),
+    ];
+    let plain = bake_sh_lightmap(&scene, &tracer, &texels, &radiance, &settings, &[]);
+    let fitted = bake_sh_lightmap(&scene, &tracer, &texels, &radiance, &settings, &fits);
+    assert_eq!(plain.coeffs, fitted.coeffs);
+    assert_eq!(plain.basis_irradiance, fitted.basis_irradiance);
+    assert!(plain.fitted.is_empty());
+    assert_eq!(fitted.fitted.len(), 2);
+    let h6 = fitted.fitted(fits[0]).expect("the H6 fit");
+    let cube = fitted.fitted(fits[1]).expect("the cube fit");
+    assert_eq!(h6.values.len(), 32 * 32 * 18);
+    assert_eq!(cube.values.len(), 32 * 32 * 18);
+    let mut compared = 0;
+    for t in 0..32 * 32 {
+        if !fitted.covered[t] || fitted.frame[t].z_axis.y < 0.99 {
+            continue;
+        }
+        let frame = [
+            fitted.frame[t].x_axis,
+            fitted.frame[t].y_axis,
+            fitted.frame[t].z_axis,
+        ]
+        .map(|c| c.as_dvec3());
+        let sh: Vec<[f64; 3]> = fitted.texel(t).iter().map(|c| c.map(f64::from)).collect();
+        let from_sh = hbasis::irradiance(
+            &hbasis::project_irradiance(&sh, frame, HBasisSize::H6),
+            glam::DVec3::Z,
+        )[0];
+        let v = &h6.values[t * 18..(t + 1) * 18];
+        let h: Vec<[f64; 3]> = (0..6)
+            .map(|i| std::array::from_fn(|c| f64::from(v[3 * i + c])))
+            .collect();
+        let from_samples = hbasis::irradiance(&h, glam::DVec3::Z)[0];
+        // The cube's +z face is the irradiance at the normal, which the SH holds to 9 %.
+        let cube_z = f64::from(cube.values[t * 18 + 12]);
+        assert!(
+            (from_samples - from_sh).abs() <= 0.1 * from_sh.abs().max(1e-3),
+            "texel {t}: H6 at +z {from_samples} from samples, {from_sh} from the SH"
+        );
+        assert!(
+            (cube_z - from_sh).abs() <= 0.1 * from_sh.abs().max(1e-3),
+            "texel {t}: cube +z {cube_z}, H6 from the SH {from_sh}"
+        );
+        compared += 1;
+    }
+    assert!(compared > 50, "{compared} floor texels compared");
 }

@@ -70,6 +70,7 @@ fn transfer_times_lighting_equals_the_sh_lightmap() {
                 bounces,
                 progress: false,
             },
+            &[],
         );
         let transfer = house.transfer(order, bounces);
         let (mut worst, mut scale, mut texels_compared) = (0.0f64, 0.0f64, 0usize);

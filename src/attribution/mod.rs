@@ -713,10 +713,13 @@ impl<'a> RowLadder<'a> {
     ) {
         let px = self.px;
         // The run's fit from samples, where the bake made it.
-        let sampled = self.technique.sample_fit(&self.prepared.options).filter(|&fit| {
-            let map = self.prepared.sh_lightmap.as_ref();
-            map.is_some_and(|m| m.fitted(fit).is_some())
-        });
+        let sampled = self
+            .technique
+            .sample_fit(&self.prepared.options)
+            .filter(|&fit| {
+                let map = self.prepared.sh_lightmap.as_ref();
+                map.is_some_and(|m| m.fitted(fit).is_some())
+            });
         let gathered = match sampled {
             // From samples: straight from the incident radiance, no order-3 SH between.
             Some(_) => self.gathered(),

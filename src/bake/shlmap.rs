@@ -302,8 +302,13 @@ pub fn bake_sh_lightmap(
         })
         .collect();
     bar.finish_and_clear();
-    let (direct, mut fitted): (Vec<(Sh9Rgb, BasisIrradiance)>, Vec<(Vec<f32>, Vec<FitStats>)>) =
-        direct.into_iter().map(|(sh, rnm, fit)| ((sh, rnm), fit)).unzip();
+    let (direct, mut fitted): (
+        Vec<(Sh9Rgb, BasisIrradiance)>,
+        Vec<(Vec<f32>, Vec<FitStats>)>,
+    ) = direct
+        .into_iter()
+        .map(|(sh, rnm, fit)| ((sh, rnm), fit))
+        .unzip();
     let mut current = direct.clone();
     let mut bounce_source = Vec::new();
     let dilation = DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES);
@@ -335,7 +340,9 @@ pub fn bake_sh_lightmap(
                 let mut rnm = [DVec3::ZERO; GATHERED_LOBES];
                 let bounced = |surface: &super::surface::SurfacePoint| {
                     let e = irradiance[texels.texel_index(surface.uv_lightmap.into())];
-                    (surface.albedo * e / std::f32::consts::PI).as_dvec3().into()
+                    (surface.albedo * e / std::f32::consts::PI)
+                        .as_dvec3()
+                        .into()
                 };
                 let (rays, fit) = if pass_fits.is_empty() {
                     let rays =
@@ -446,29 +453,20 @@ fn place_fits(
     texels: usize,
     dilation: &DilationPlan,
 ) -> Vec<FittedBasis> {
-    let total: usize = fits.iter().map(|f| f.stored_values()).sum();
-    if total == 0 {
-        return Vec::new();
-    }
-    let mut all = vec![0.0f32; texels * total];
-    let mut stats = vec![FitStats::default(); fits.len()];
-    for ((values, s), &i) in per_texel.iter().zip(covered) {
-        let i = i as usize;
-        all[i * total..(i + 1) * total].copy_from_slice(values);
-        for (sum, s) in stats.iter_mut().zip(s) {
-            sum.amplitudes += s.amplitudes;
-            sum.negative += s.negative;
-        }
-    }
-    dilation.apply_vectors(&mut all, total);
     let mut offset = 0;
     fits.iter()
-        .zip(stats)
-        .map(|(&fit, stats)| {
+        .enumerate()
+        .map(|(k, &fit)| {
             let n = fit.stored_values();
-            let values = (0..texels)
-                .flat_map(|t| all[t * total + offset..t * total + offset + n].iter().copied())
-                .collect();
+            let mut values = vec![0.0f32; texels * n];
+            let mut stats = FitStats::default();
+            for ((fitted, fit_stats), &i) in per_texel.iter().zip(covered) {
+                let i = i as usize;
+                values[i * n..(i + 1) * n].copy_from_slice(&fitted[offset..offset + n]);
+                stats.amplitudes += fit_stats[k].amplitudes;
+                stats.negative += fit_stats[k].negative;
+            }
+            dilation.apply_vectors(&mut values, n);
             offset += n;
             FittedBasis { fit, values, stats }
         })
@@ -532,57 +530,74 @@ pub fn radiance_at_points(
     let (basis, env) = direction_tables(&dirs, radiance_sh);
     let surfaces = SurfaceReader::new(scene);
     let bounced = !map.bounce_source.is_empty();
-    let fits: Vec<SampleFit> = map.fitted.iter().map(|f| f.fit).collect();
-    let per_point: Vec<([[f64; 3]; SH_LIGHTMAP_COEFFS], Vec<f32>)> = position
-        .par_iter()
-        .zip(normal)
-        .zip(frame)
-        .with_min_len(64)
-        .map(|((&p, &n), frame)| {
-            let origin = tracer.offset_origin(p, n);
-            let frame = orthonormal_frame(frame);
-            let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
-            let mut samples = Vec::new();
-            for (r, &d) in dirs.dirs().iter().enumerate() {
-                let mut radiance = [0.0; 3];
-                if above_horizon(n, d) {
-                    if !bounced {
-                        if !tracer.occluded(origin, d, f32::INFINITY) {
-                            radiance = env[r];
-                        }
-                    } else {
-                        match tracer.closest_hit(origin, d) {
-                            None => radiance = env[r],
-                            Some(hit) => {
-                                let surface = surfaces.at(&hit, origin, d);
-                                if surface.front_face {
-                                    let t = texel_index_of(map.res, surface.uv_lightmap.into());
-                                    let l = surface.albedo * map.bounce_source[t]
-                                        / std::f32::consts::PI;
-                                    radiance = l.as_dvec3().into();
-                                }
-                            }
-                        }
-                    }
-                    accumulate(&mut sum, &basis[r], radiance);
+    // The radiance arriving along ray r from `origin`: the environment where it escapes,
+    // light bounced off a front face, nothing off a back face.
+    let arriving = |r: usize, origin: Vec3, d: Vec3| -> [f64; 3] {
+        if !bounced {
+            return if tracer.occluded(origin, d, f32::INFINITY) {
+                [0.0; 3]
+            } else {
+                env[r]
+            };
+        }
+        match tracer.closest_hit(origin, d) {
+            None => env[r],
+            Some(hit) => {
+                let surface = surfaces.at(&hit, origin, d);
+                if !surface.front_face {
+                    return [0.0; 3];
                 }
-                if !fits.is_empty() {
-                    samples.push(sample_in(&frame, d, weight, radiance));
-                }
+                let t = texel_index_of(map.res, surface.uv_lightmap.into());
+                let l = surface.albedo * map.bounce_source[t] / std::f32::consts::PI;
+                l.as_dvec3().into()
             }
-            let (fitted, _) = fit_samples(&fits, &samples);
-            (sum.map(|c| c.map(|v| v * weight)), fitted)
-        })
-        .collect();
+        }
+    };
+    let fits: Vec<SampleFit> = map.fitted.iter().map(|f| f.fit).collect();
     let mut gathered = GatheredPoints {
-        sh: Vec::with_capacity(per_point.len()),
+        sh: vec![[[0.0; 3]; SH_LIGHTMAP_COEFFS]; position.len()],
         fitted: Vec::new(),
         fits,
     };
-    gathered.fitted.reserve(per_point.len() * gathered.fitted_per_point());
-    for (sh, fitted) in per_point {
-        gathered.sh.push(sh);
-        gathered.fitted.extend(fitted);
+    let per_point = gathered.fitted_per_point();
+    // Points in chunks of 64, each point's values written in place (one slot per point
+    // where nothing is fitted, so that both sides have a chunk per 64 points).
+    const CHUNK: usize = 64;
+    let slot = per_point.max(1);
+    let mut fitted = vec![0.0f32; position.len() * slot];
+    let fits = &gathered.fits;
+    gathered
+        .sh
+        .par_chunks_mut(CHUNK)
+        .zip(fitted.par_chunks_mut(CHUNK * slot))
+        .enumerate()
+        .for_each(|(chunk, (sh_out, fitted_out))| {
+            for (j, sh_point) in sh_out.iter_mut().enumerate() {
+                let k = chunk * CHUNK + j;
+                let (p, n) = (position[k], normal[k]);
+                let origin = tracer.offset_origin(p, n);
+                let frame = orthonormal_frame(&frame[k]);
+                let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
+                let mut samples = Vec::new();
+                for (r, &d) in dirs.dirs().iter().enumerate() {
+                    let mut radiance = [0.0; 3];
+                    if above_horizon(n, d) {
+                        radiance = arriving(r, origin, d);
+                        accumulate(&mut sum, &basis[r], radiance);
+                    }
+                    if !fits.is_empty() {
+                        samples.push(sample_in(&frame, d, weight, radiance));
+                    }
+                }
+                *sh_point = sum.map(|c| c.map(|v| v * weight));
+                if per_point > 0 {
+                    let (values, _) = fit_samples(fits, &samples);
+                    fitted_out[j * per_point..(j + 1) * per_point].copy_from_slice(&values);
+                }
+            }
+        });
+    if per_point > 0 {
+        gathered.fitted = fitted;
     }
     gathered
 }
@@ -592,7 +607,11 @@ pub fn radiance_at_points(
 fn orthonormal_frame(frame: &[DVec3; 3]) -> [DVec3; 3] {
     let n = frame[2].normalize_or(DVec3::Z);
     let t = (frame[0] - n * n.dot(frame[0])).normalize_or(n.any_orthonormal_vector());
-    let sign = if frame[1].dot(n.cross(t)) < 0.0 { -1.0 } else { 1.0 };
+    let sign = if frame[1].dot(n.cross(t)) < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
     [t, n.cross(t) * sign, n]
 }
 

@@ -38,6 +38,7 @@ impl Ladder {
                 );
                 None
             }
+            Some(_) if !settings.ladder => None,
             Some(_) if settings.specular.is_some() => {
                 log::info!("error ladder: left out with --specular (its CPU rungs are diffuse)");
                 None

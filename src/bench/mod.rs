@@ -75,6 +75,8 @@ pub struct BenchSettings {
     pub probe_fresh: bool,
     /// Timed frames per microbenchmark of the probe.
     pub probe_frames: u32,
+    /// Run the error ladder where there is a point reference (`crate::attribution`).
+    pub ladder: bool,
     /// The techniques measured on `dx11` where `paths` has it (`None`: every one with a
     /// dx11 form; the `headline` set: `catalog::headline_on(HwPath::Dx11)`).
     pub dx11_rows: Option<Vec<Technique>>,

@@ -186,6 +186,7 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
         probe_fresh: a.probe == ProbeMode::Fresh,
         probe_frames: a.probe_frames.unwrap_or(a.frames.clamp(5, 30)),
         relight_degrees: a.relight_rotate,
+        ladder: true,
         dx11_rows: (a.techniques.trim() == "headline")
             .then(|| shvis::technique::catalog::headline_on(HwPath::Dx11)),
     };

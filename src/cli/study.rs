@@ -48,6 +48,9 @@ pub(super) enum StudyCommand {
     /// from the environment's pixels and from its order-8 SH: irradiance and radiance
     /// error against bytes per texel.
     Bases(StudyBasesArgs),
+    /// Each lightmap basis' error against the rays per texel of its bake (64 … 4096) and
+    /// against its bytes per texel, against the inter-reflected footprint reference.
+    Rays(StudyRaysArgs),
     /// The SH lightmap block-compressed (BC6H, BC7) under each packing of its signed
     /// coefficients — raw, offset, band-0 ratios — and BC6H's encoder settings against
     /// time: irradiance error and bytes per texel.
@@ -83,6 +86,54 @@ pub(super) struct StudyBasesArgs {
     /// bases_hemisphere.svg/.png.
     #[arg(short, long, default_value = "study-out/bases")]
     out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub(super) struct StudyRaysArgs {
+    /// Environment the lightmap is baked under (as for `render`).
+    #[arg(long, default_value = "sky")]
+    env: String,
+    /// Rows, comma-separated (any lightmap technique).
+    #[arg(long, default_value = "shlmap,l1,zh3,hb4,sg9,sg12,dice,acube")]
+    techniques: String,
+    /// Paths, comma-separated.
+    #[arg(long, default_value = "dx10,dx11")]
+    paths: String,
+    /// Rays per texel of each bake, comma-separated.
+    #[arg(long = "ray-counts", value_delimiter = ',', default_value = "64,256,1024,4096", value_parser = clap::value_parser!(u32).range(shvis::bake::MIN_RAYS as i64..=shvis::bake::MAX_RAYS as i64))]
+    ray_counts: Vec<u32>,
+    /// `house` (built-in), `patio` (built-in brick corner) or a .gltf/.glb file.
+    #[arg(long, default_value = "house")]
+    scene: String,
+    /// Lightmap texels per side.
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    vis_res: u32,
+    /// Seed of the bake's sample patterns.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// How sgN techniques fit their lobes' amplitudes (as for `bench`).
+    #[arg(long = "sg-solve", default_value_t = shvis::sh::sg::DEFAULT_SOLVER)]
+    sg_solve: shvis::sh::sg::Solver,
+    /// What the tangent-frame bases are fitted from: samples or l2 (as for `bench`).
+    #[arg(long = "basis-fit", default_value_t = shvis::sh::samples::BasisFit::Samples)]
+    basis_fit: shvis::sh::samples::BasisFit,
+    /// Reflections baked into the lightmap and in the reference.
+    #[arg(long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
+    bounces: u32,
+    /// Image width.
+    #[arg(long, default_value_t = 640, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    width: u32,
+    /// Image height.
+    #[arg(long, default_value_t = 400, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    height: u32,
+    /// Samples per pixel of the footprint reference.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    ref_spp: u32,
+    /// Output directory: rays.md, rays.json, rays.svg/.png, and each bake's bench in rays-N/.
+    #[arg(short, long, default_value = "study-out/rays")]
+    out: PathBuf,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 #[derive(Args, Debug)]
@@ -307,6 +358,7 @@ pub(super) fn run_study(c: StudyCommand) -> Result<()> {
         StudyCommand::Ndf(a) => run_ndf(a).context("study ndf"),
         StudyCommand::NmprtSvd(a) => run_nmprt_svd(a).context("study nmprt-svd"),
         StudyCommand::Bases(a) => run_bases(a).context("study bases"),
+        StudyCommand::Rays(a) => run_rays(a).context("study rays"),
         StudyCommand::Block(a) => run_block(a).context("study block"),
         StudyCommand::Normalmap(a) => run_normalmap(a).context("study normalmap"),
     }
@@ -355,6 +407,77 @@ fn run_nmprt_svd(a: StudyNmprtSvdArgs) -> Result<()> {
         json: None,
     };
     print_written(&shvis::study::report::write(&a.out, &report)?);
+    Ok(())
+}
+
+fn run_rays(a: StudyRaysArgs) -> Result<()> {
+    let techniques = super::parse_techniques(&a.techniques)?;
+    let paths = super::parse_list(&a.paths, HwPath::ALL)?;
+    super::check_rows(&a.techniques, &techniques, &paths, false)?;
+    if let Some(t) = techniques.iter().find(|t| !t.needs().sh_lightmap) {
+        bail!(
+            "--techniques: {t} is not a lightmap technique (it does not read the SH lightmap bake)"
+        );
+    }
+    let ray_counts = super::parse_each_once::<u32>(
+        &a.ray_counts
+            .iter()
+            .map(u32::to_string)
+            .collect::<Vec<_>>()
+            .join(","),
+    )?;
+    let scene = SceneArgs {
+        scene: a.scene.clone(),
+        vis_res: a.vis_res,
+        rays: ray_counts[0],
+        seed: a.seed,
+        order: 6,
+        table_res: 32,
+        h_order: 3,
+        sg_solve: a.sg_solve,
+        basis_fit: a.basis_fit,
+        transfer_order: shvis::bake::transfer::DEFAULT_LIGHTING_ORDER.get(),
+        height_map: None,
+        height_scale: 1.0,
+    };
+    let mut prepare = prepare_settings(&scene, &a.env, &techniques, a.bounces)?;
+    prepare.progress = false;
+    for &rays in &ray_counts {
+        shvis::prepare::check_settings(&shvis::prepare::PrepareSettings {
+            rays,
+            ..prepare.clone()
+        })?;
+    }
+    create_dir(&a.out)?;
+    let started = Instant::now();
+    let bench = shvis::bench::BenchSettings {
+        techniques,
+        paths,
+        frames: 3,
+        warmup: 1,
+        width: a.width,
+        height: a.height,
+        exposure: DEFAULT_EXPOSURE_EV,
+        ref_spp: a.ref_spp,
+        bounces: a.bounces,
+        footprint_reference: true,
+        seed: a.seed,
+        specular: None,
+        out: a.out.clone(),
+        probe: false,
+        probe_fresh: false,
+        probe_frames: 5,
+        relight_degrees: None,
+        ladder: false,
+        dx11_rows: None,
+    };
+    with_gpu(&a.gpu, |ctx| {
+        let study = shvis::study::rays::run(ctx, &prepare, &bench, &ray_counts, &mut say)?;
+        let written = shvis::study::rays::write(&study, &a.out)?;
+        print_written(&written);
+        Ok(())
+    })?;
+    println!("study rays: {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
 }
 

@@ -421,9 +421,19 @@ impl Dice {
 
     fn kernel(&self, pinv: &[f64], rows: usize, omega: DVec3) -> Vec<f64> {
         let q = self.nodes.len();
-        let e: Vec<f64> = self.nodes.iter().map(|&(m, _)| m.dot(omega).max(0.0)).collect();
+        let e: Vec<f64> = self
+            .nodes
+            .iter()
+            .map(|&(m, _)| m.dot(omega).max(0.0))
+            .collect();
         (0..rows)
-            .map(|r| pinv[r * q..(r + 1) * q].iter().zip(&e).map(|(p, e)| p * e).sum())
+            .map(|r| {
+                pinv[r * q..(r + 1) * q]
+                    .iter()
+                    .zip(&e)
+                    .map(|(p, e)| p * e)
+                    .sum()
+            })
             .collect()
     }
 

@@ -45,12 +45,12 @@ use std::sync::OnceLock;
 
 use glam::{DVec2, DVec3};
 
+use super::Order;
 use super::ambient_cube::{self, CubeFit, FACES, UPPER_FACES};
 use super::basis::eval_basis;
 use super::dice::{self, DiceVariant, STORED_VERTICES, rgb_to_ycocg};
 use super::hbasis::{self, HBasisSize};
 use super::sg::{FitStats, SgBasis, Solver};
-use super::Order;
 
 /// Where a run's tangent-frame bases are fitted from (`--basis-fit`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
@@ -311,10 +311,7 @@ pub fn octahedral_encode(d: DVec3) -> DVec2 {
     if p.z >= 0.0 {
         DVec2::new(p.x, p.y)
     } else {
-        DVec2::new(
-            (1.0 - p.y.abs()) * sign(p.x),
-            (1.0 - p.x.abs()) * sign(p.y),
-        )
+        DVec2::new((1.0 - p.y.abs()) * sign(p.x), (1.0 - p.x.abs()) * sign(p.y))
     }
 }
 
@@ -324,7 +321,10 @@ pub fn octahedral_decode(uv: DVec2) -> DVec3 {
     let (x, y) = if z >= 0.0 {
         (uv.x, uv.y)
     } else {
-        ((1.0 - uv.y.abs()) * sign(uv.x), (1.0 - uv.x.abs()) * sign(uv.y))
+        (
+            (1.0 - uv.y.abs()) * sign(uv.x),
+            (1.0 - uv.x.abs()) * sign(uv.y),
+        )
     };
     DVec3::new(x, y, z).normalize()
 }
@@ -335,9 +335,7 @@ fn sign(v: f64) -> f64 {
 
 fn hbasis_table() -> &'static KernelTable {
     static TABLE: OnceLock<KernelTable> = OnceLock::new();
-    TABLE.get_or_init(|| {
-        KernelTable::new(6, TABLE_RES, |d| hbasis::irradiance_kernel(d).to_vec())
-    })
+    TABLE.get_or_init(|| KernelTable::new(6, TABLE_RES, |d| hbasis::irradiance_kernel(d).to_vec()))
 }
 
 fn dice_hybrid_table() -> &'static KernelTable {
@@ -352,7 +350,9 @@ fn dice_hybrid_table() -> &'static KernelTable {
 fn dice_linear_table() -> &'static KernelTable {
     static TABLE: OnceLock<KernelTable> = OnceLock::new();
     TABLE.get_or_init(|| {
-        KernelTable::new(STORED_VERTICES, TABLE_RES, |d| dice::dice().linear_kernel(d))
+        KernelTable::new(STORED_VERTICES, TABLE_RES, |d| {
+            dice::dice().linear_kernel(d)
+        })
     })
 }
 
@@ -430,7 +430,10 @@ mod tests {
     }
 
     fn scale(values: &[f64]) -> f64 {
-        values.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300)
+        values
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+            .max(1e-300)
     }
 
     #[test]
@@ -566,10 +569,18 @@ mod tests {
                 .zip(&want)
                 .map(|(g, w)| (g - w).abs())
                 .fold(0.0, f64::max);
-            assert!(err < 5e-3 * scale(&want), "{fit:?}: {err} of {}", scale(&want));
+            assert!(
+                err < 5e-3 * scale(&want),
+                "{fit:?}: {err} of {}",
+                scale(&want)
+            );
         }
         // SG: the nodes see the function on the hemisphere, the samples too.
-        for solver in [Solver::Projection, Solver::LeastSquares, Solver::NonNegative] {
+        for solver in [
+            Solver::Projection,
+            Solver::LeastSquares,
+            Solver::NonNegative,
+        ] {
             let basis = crate::sh::sg::shared_basis(9);
             let want: Vec<f64> = {
                 let mut stats = FitStats::default();
@@ -577,7 +588,10 @@ mod tests {
                     let l: Vec<f64> = basis.nodes().iter().map(|&(m, _)| eval(m)[c]).collect();
                     basis.fit(&l, solver, &mut stats)
                 });
-                (0..9).flat_map(|k| (0..3).map(move |c| (k, c))).map(|(k, c)| per[c][k]).collect()
+                (0..9)
+                    .flat_map(|k| (0..3).map(move |c| (k, c)))
+                    .map(|(k, c)| per[c][k])
+                    .collect()
             };
             let (got, _) = SampleFit::Sg { lobes: 9, solver }.fit(&samples);
             let err = got
@@ -585,7 +599,11 @@ mod tests {
                 .zip(&want)
                 .map(|(g, w)| (g - w).abs())
                 .fold(0.0, f64::max);
-            assert!(err < 2e-2 * scale(&want), "sg9 {solver}: {err} of {}", scale(&want));
+            assert!(
+                err < 2e-2 * scale(&want),
+                "sg9 {solver}: {err} of {}",
+                scale(&want)
+            );
         }
     }
 
@@ -596,7 +614,11 @@ mod tests {
         for (d, _) in directions(500) {
             dice_hybrid_table().read(d, &mut k);
             let exact = dice::dice().hybrid_kernel(d);
-            worst = worst.max((0..k.len()).map(|i| (k[i] - exact[i]).abs()).fold(0.0, f64::max));
+            worst = worst.max(
+                (0..k.len())
+                    .map(|i| (k[i] - exact[i]).abs())
+                    .fold(0.0, f64::max),
+            );
         }
         let scale = directions(500)
             .iter()

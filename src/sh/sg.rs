@@ -306,7 +306,11 @@ impl SgBasis {
         let upper: Vec<usize> = (0..dirs.len()).filter(|&s| dirs[s].z > 0.0).collect();
         let g: Vec<f64> = upper
             .iter()
-            .flat_map(|&s| self.axes.iter().map(move |&mu| lobe(mu, self.sharpness, dirs[s])))
+            .flat_map(|&s| {
+                self.axes
+                    .iter()
+                    .map(move |&mu| lobe(mu, self.sharpness, dirs[s]))
+            })
             .collect();
         let w: Vec<f64> = upper.iter().map(|&s| weights[s]).collect();
         let l: Vec<[f64; 3]> = upper.iter().map(|&s| radiance[s]).collect();
@@ -327,7 +331,8 @@ impl SgBasis {
             }),
             Solver::LeastSquares | Solver::NonNegative => {
                 let h = normal_matrix(&g, &w, n);
-                let rhs: [Vec<f64>; 3] = std::array::from_fn(|c| normal_rhs(&g, &w, &channel(c), n));
+                let rhs: [Vec<f64>; 3] =
+                    std::array::from_fn(|c| normal_rhs(&g, &w, &channel(c), n));
                 if solver == Solver::NonNegative {
                     rhs.map(|c| nnls_normal(&h, &c, n))
                 } else {

@@ -642,6 +642,7 @@ mod tests {
             frame: vec![glam::Mat3::IDENTITY; texels],
             bounce_source: Vec::new(),
             basis_irradiance: Vec::new(),
+            fitted: Vec::new(),
             stats: Default::default(),
         }
     }

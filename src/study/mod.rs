@@ -46,6 +46,7 @@ pub mod normalmap;
 pub mod normalmap_report;
 pub mod params;
 pub mod params_gpu;
+pub mod rays;
 pub mod report;
 pub mod rnm;
 pub mod rnm_report;
