@@ -755,7 +755,7 @@ impl<'a> RowLadder<'a> {
             map,
             per_texel,
             &|| match fitted {
-                Some(f) => f.values.clone(),
+                Some(f) => f.texel_values(),
                 None => stored(map),
             },
             &|v, k| eval(v, px.tangent_normal[k]),

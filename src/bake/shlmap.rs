@@ -69,6 +69,25 @@
 //! which cancels in the signed sums, would add its positive half (rnm 1.7× too bright on
 //! the same house).
 //!
+//! # Bases fitted from the samples (`--basis-fit samples`)
+//!
+//! The last pass knows each ray's whole radiance — the environment where it escapes (the
+//! direct pass gathered it into (1)), the bounce where it hits a front face, nothing off a
+//! back face or below the horizon — so there every tangent-frame basis the run asks for is
+//! fitted from the texel's samples,
+//!
+//! ```text
+//! S(x) = {(Tᵀ ω_r, w, L_in(x, ω_r)) : r < R},   L_in = 0 below n_g's horizon            (5)
+//! ```
+//!
+//! T the texel's orthonormal normal-map frame ([`texel_frame`]), by `crate::sh::samples`
+//! (the H-basis, SG under each solver, Ambient Dice, the ambient cube): the same rays as
+//! (1), no basis fitted from another. A texel's samples live only while it is fitted; the
+//! fits are stored per texel ([`FittedBasis`]) and dilated like the coefficients.
+//! L_env is the environment's order-8 SH at the ray's direction, as for (1): what every
+//! basis sees of the sky (`shvis study bases` measures, per basis, what the full-resolution
+//! environment would change on a floor texel).
+//!
 //! Texels are independent within a pass and sum their rays in a fixed order, so a bake is
 //! bit-identical for any thread count. Results are dilated [`DILATION_PASSES`] texels
 //! into the gutters, as the visibility bake's are.
@@ -133,27 +152,88 @@ pub struct ShLightmap {
     /// directions, rescaled to the flat irradiance (dilated like `coeffs`): the `rnm`
     /// lightmaps.
     pub basis_irradiance: Vec<[Vec3; 3]>,
-    /// The tangent-frame bases fitted from each texel's radiance samples (eq. (5)), in the
-    /// order asked for, dilated like `coeffs`.
-    pub fitted: Vec<FittedBasis>,
+    /// The tangent-frame bases fitted from each texel's radiance samples (eq. (5)).
+    pub fitted: FittedBases,
     /// Rays and time of the bake, all bounces.
     pub stats: BakeStats,
 }
 
-/// One basis fitted from every texel's samples (eq. (5)).
-#[derive(Clone, Debug, PartialEq)]
-pub struct FittedBasis {
-    pub fit: SampleFit,
-    /// Texel-major, `fit.stored_values()` per texel; zeros where nothing reached.
+/// The bases fitted from every covered texel's samples (eq. (5)), stored compactly: covered
+/// texels in row-major order, each fit's values one after another.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FittedBases {
+    /// The fits, in the order asked for.
+    pub fits: Vec<SampleFit>,
+    /// Per fit, the amplitudes its SG solver made negative over the covered texels.
+    pub negative: Vec<u64>,
+    /// Σ `fit.stored_values()` per covered texel.
     pub values: Vec<f32>,
-    /// Amplitudes the SG solver made negative, over the covered texels.
-    pub stats: FitStats,
+}
+
+impl FittedBases {
+    /// Values per covered texel, all fits.
+    pub fn per_texel(&self) -> usize {
+        self.fits.iter().map(|f| f.stored_values()).sum()
+    }
+}
+
+/// One basis of [`FittedBases`], read back per texel.
+#[derive(Clone, Copy, Debug)]
+pub struct FittedBasis<'a> {
+    pub fit: SampleFit,
+    /// Its values' offset within a covered texel's.
+    offset: usize,
+    map: &'a ShLightmap,
+}
+
+impl FittedBasis<'_> {
+    /// What the solver did: amplitudes counted over every covered texel, and how many were
+    /// negative.
+    pub fn stats(&self) -> FitStats {
+        let covered = self.map.covered.iter().filter(|&&c| c).count() as u64;
+        let k = self.map.fitted.fits.iter().position(|f| *f == self.fit);
+        FitStats {
+            amplitudes: match self.fit {
+                SampleFit::Sg { .. } => covered * self.fit.stored_values() as u64,
+                _ => 0,
+            },
+            negative: k.map_or(0, |k| self.map.fitted.negative[k]),
+        }
+    }
+
+    /// The values of every texel (texel-major, `fit.stored_values()` each), dilated into
+    /// the gutters as the SH coefficients are; zeros where nothing reached.
+    pub fn texel_values(&self) -> Vec<f32> {
+        let map = self.map;
+        let n = self.fit.stored_values();
+        let per_texel = map.fitted.per_texel();
+        let texels = (map.res * map.res) as usize;
+        let mut values = vec![0.0f32; texels * n];
+        let covered = (0..texels).filter(|&t| map.covered[t]);
+        for (k, t) in covered.enumerate() {
+            let src = k * per_texel + self.offset;
+            values[t * n..(t + 1) * n].copy_from_slice(&map.fitted.values[src..src + n]);
+        }
+        DilationPlan::new(&map.covered, map.res, DILATION_PASSES).apply_vectors(&mut values, n);
+        values
+    }
 }
 
 impl ShLightmap {
     /// The values of `fit` per texel, if the bake fitted it.
-    pub fn fitted(&self, fit: SampleFit) -> Option<&FittedBasis> {
-        self.fitted.iter().find(|f| f.fit == fit)
+    pub fn fitted(&self, fit: SampleFit) -> Option<FittedBasis<'_>> {
+        let mut offset = 0;
+        for f in &self.fitted.fits {
+            if *f == fit {
+                return Some(FittedBasis {
+                    fit,
+                    offset,
+                    map: self,
+                });
+            }
+            offset += f.stored_values();
+        }
+        None
     }
 
     /// The 9 RGB coefficients of texel `index` (row-major y·res + x).
@@ -207,17 +287,18 @@ fn sample_in(frame: &[DVec3; 3], d: Vec3, weight: f64, radiance: [f64; 3]) -> Sa
     }
 }
 
-/// Eq. (5): every basis of `fits` fitted from `samples`, concatenated in f32, and per fit
-/// the amplitudes its SG solver made negative.
-fn fit_samples(fits: &[SampleFit], samples: &[Sample]) -> (Vec<f32>, Vec<FitStats>) {
-    let mut values = Vec::new();
-    let mut stats = Vec::with_capacity(fits.len());
-    for fit in fits {
+/// Eq. (5): every basis of `fits` fitted from `samples`, written in f32 one after another
+/// into `out`; each fit's negative amplitudes added to `negative` (one counter per fit).
+fn fit_samples(fits: &[SampleFit], samples: &[Sample], out: &mut [f32], negative: &[AtomicU64]) {
+    let mut offset = 0;
+    for (fit, negative) in fits.iter().zip(negative) {
         let (v, s) = fit.fit(samples);
-        values.extend(v.into_iter().map(|x| x as f32));
-        stats.push(s);
+        for (o, x) in out[offset..offset + v.len()].iter_mut().zip(v) {
+            *o = x as f32;
+        }
+        offset += fit.stored_values();
+        negative.fetch_add(s.negative, Ordering::Relaxed);
     }
-    (values, stats)
 }
 
 /// Lobes gathered per texel: three basis directions and the flat normal (eqs. (3)–(4)).
@@ -257,16 +338,22 @@ pub fn bake_sh_lightmap(
         .map(|i| i as u32)
         .collect();
     let rays_done = AtomicU64::new(0);
-    // The fits see the full radiance of each ray, known in the last pass only.
+    // The fits see the full radiance of each ray, known in the last pass only; they are
+    // written in place, covered texel after covered texel (one slot each without fits).
     let fits_in = |pass: u32| if pass == settings.bounces { fits } else { &[] };
+    let per_texel: usize = fits.iter().map(|f| f.stored_values()).sum();
+    let slot = per_texel.max(1);
+    let mut fit_values = vec![0.0f32; covered.len() * slot];
+    let negative: Vec<AtomicU64> = fits.iter().map(|_| AtomicU64::new(0)).collect();
 
     // Bounce 0: direct light through the visible directions (any-hit rays).
     let bar = progress_bar(settings.progress, covered.len(), "SH lightmap direct");
     let direct_fits = fits_in(0);
-    let direct: Vec<(Sh9Rgb, BasisIrradiance, (Vec<f32>, Vec<FitStats>))> = covered
+    let direct: Vec<(Sh9Rgb, BasisIrradiance)> = covered
         .par_iter()
+        .zip(fit_values.par_chunks_mut(slot))
         .with_min_len(64)
-        .map(|&i| {
+        .map(|(&i, fit_out)| {
             let i = i as usize;
             let (n, origin) = (
                 texels.normal[i],
@@ -292,23 +379,16 @@ pub fn bake_sh_lightmap(
                     samples.push(sample_in(&frame, d, weight, radiance));
                 }
             }
+            fit_samples(direct_fits, &samples, fit_out, &negative);
             rays_done.fetch_add(rays, Ordering::Relaxed);
             bar.inc(1);
             (
                 Sh9Rgb::from_sums(&sum, weight),
                 BasisIrradiance::from_sums(&rnm, weight),
-                fit_samples(direct_fits, &samples),
             )
         })
         .collect();
     bar.finish_and_clear();
-    let (direct, mut fitted): (
-        Vec<(Sh9Rgb, BasisIrradiance)>,
-        Vec<(Vec<f32>, Vec<FitStats>)>,
-    ) = direct
-        .into_iter()
-        .map(|(sh, rnm, fit)| ((sh, rnm), fit))
-        .unzip();
     let mut current = direct.clone();
     let mut bounce_source = Vec::new();
     let dilation = DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES);
@@ -327,11 +407,12 @@ pub fn bake_sh_lightmap(
             &format!("SH lightmap bounce {bounce}"),
         );
         let pass_fits = fits_in(bounce);
-        let pass: Vec<((Sh9Rgb, BasisIrradiance), (Vec<f32>, Vec<FitStats>))> = covered
+        current = covered
             .par_iter()
-            .with_min_len(64)
             .zip(direct.par_iter())
-            .map(|(&i, direct)| {
+            .zip(fit_values.par_chunks_mut(slot))
+            .with_min_len(64)
+            .map(|((&i, direct), fit_out)| {
                 let i = i as usize;
                 let n = texels.normal[i];
                 let origin = tracer.offset_origin(texels.position[i], n);
@@ -344,14 +425,14 @@ pub fn bake_sh_lightmap(
                         .as_dvec3()
                         .into()
                 };
-                let (rays, fit) = if pass_fits.is_empty() {
+                let rays = if pass_fits.is_empty() {
                     let rays =
                         for_each_front_hit(tracer, &surfaces, &dirs, n, origin, |r, d, surface| {
                             let radiance = bounced(surface);
                             accumulate(&mut sum, &basis[r], radiance);
                             accumulate_lobes(&mut rnm, &lobes, d, radiance);
                         });
-                    (rays, (Vec::new(), Vec::new()))
+                    rays
                 } else {
                     // Every direction is a sample: escaped rays carry the environment
                     // (gathered in the direct pass), front hits the bounce, the rest nothing.
@@ -375,25 +456,18 @@ pub fn bake_sh_lightmap(
                         .zip(&radiance)
                         .map(|(&d, &l)| sample_in(&frame, d, weight, l))
                         .collect();
-                    (rays, fit_samples(pass_fits, &samples))
+                    fit_samples(pass_fits, &samples, fit_out, &negative);
+                    rays
                 };
                 rays_done.fetch_add(rays, Ordering::Relaxed);
                 bar.inc(1);
                 (
-                    (
-                        direct.0 + Sh9Rgb::from_sums(&sum, weight),
-                        direct.1 + BasisIrradiance::from_sums(&rnm, weight),
-                    ),
-                    fit,
+                    direct.0 + Sh9Rgb::from_sums(&sum, weight),
+                    direct.1 + BasisIrradiance::from_sums(&rnm, weight),
                 )
             })
             .collect();
         bar.finish_and_clear();
-        let (pass, pass_fitted): (Vec<_>, Vec<_>) = pass.into_iter().unzip();
-        current = pass;
-        if !pass_fits.is_empty() {
-            fitted = pass_fitted;
-        }
         bounce_source = irradiance;
     }
 
@@ -405,7 +479,15 @@ pub fn bake_sh_lightmap(
     }
     dilation.apply(&mut planes);
     dilation.apply(&mut rnm);
-    let fitted = place_fits(fits, &fitted, &covered, res * res, &dilation);
+    let fitted = FittedBases {
+        fits: fits.to_vec(),
+        negative: negative.into_iter().map(AtomicU64::into_inner).collect(),
+        values: if per_texel > 0 {
+            fit_values
+        } else {
+            Vec::new()
+        },
+    };
     let mut normal = texels.normal.clone();
     dilation.apply(&mut normal);
     let mut frame: Vec<glam::Mat3> = (0..res * res)
@@ -442,35 +524,6 @@ pub fn bake_sh_lightmap(
         map.stats
     );
     map
-}
-
-/// The per-texel fits (covered texels in order, every fit's values concatenated) as one
-/// texel-major array per fit over all `texels`, dilated into the gutters.
-fn place_fits(
-    fits: &[SampleFit],
-    per_texel: &[(Vec<f32>, Vec<FitStats>)],
-    covered: &[u32],
-    texels: usize,
-    dilation: &DilationPlan,
-) -> Vec<FittedBasis> {
-    let mut offset = 0;
-    fits.iter()
-        .enumerate()
-        .map(|(k, &fit)| {
-            let n = fit.stored_values();
-            let mut values = vec![0.0f32; texels * n];
-            let mut stats = FitStats::default();
-            for ((fitted, fit_stats), &i) in per_texel.iter().zip(covered) {
-                let i = i as usize;
-                values[i * n..(i + 1) * n].copy_from_slice(&fitted[offset..offset + n]);
-                stats.amplitudes += fit_stats[k].amplitudes;
-                stats.negative += fit_stats[k].negative;
-            }
-            dilation.apply_vectors(&mut values, n);
-            offset += n;
-            FittedBasis { fit, values, stats }
-        })
-        .collect()
 }
 
 /// What [`radiance_at_points`] gathers at each point.
@@ -553,7 +606,8 @@ pub fn radiance_at_points(
             }
         }
     };
-    let fits: Vec<SampleFit> = map.fitted.iter().map(|f| f.fit).collect();
+    let fits: Vec<SampleFit> = map.fitted.fits.clone();
+    let negative: Vec<AtomicU64> = fits.iter().map(|_| AtomicU64::new(0)).collect();
     let mut gathered = GatheredPoints {
         sh: vec![[[0.0; 3]; SH_LIGHTMAP_COEFFS]; position.len()],
         fitted: Vec::new(),
@@ -591,8 +645,8 @@ pub fn radiance_at_points(
                 }
                 *sh_point = sum.map(|c| c.map(|v| v * weight));
                 if per_point > 0 {
-                    let (values, _) = fit_samples(fits, &samples);
-                    fitted_out[j * per_point..(j + 1) * per_point].copy_from_slice(&values);
+                    let out = &mut fitted_out[j * per_point..(j + 1) * per_point];
+                    fit_samples(fits, &samples, out, &negative);
                 }
             }
         });

@@ -343,14 +343,22 @@ fn bake_names(prepare: &PrepareSettings, techniques: &[Technique]) -> Vec<&'stat
 }
 
 /// The bakes' seconds on a 2-core machine (the house at 512² texels × 1024 rays: visibility
-/// 0.5 s, the SH lightmap 11 s and the transfer matrices 44 s with 2 bounces, k-means
-/// 0.13 s per cluster, a CPCA fit 5 s), scaled by texels × rays.
+/// 0.5 s, the SH lightmap 11 s and the transfer matrices 44 s with 2 bounces, each basis
+/// fitted from the samples [`SECONDS_PER_SAMPLE_FIT`], k-means 0.13 s per cluster, a CPCA
+/// fit 5 s), scaled by texels × rays.
 fn default_bake_seconds(prepare: &PrepareSettings, techniques: &[Technique]) -> f64 {
     let scale =
         f64::from(prepare.vis_res).powi(2) * f64::from(prepare.rays) / (512.0 * 512.0 * 1024.0);
     let passes = |bounces: Option<u32>| bounces.map_or(0.0, |b| f64::from(1 + b) / 3.0);
-    let mut seconds =
-        0.5 + 11.0 * passes(prepare.sh_lightmap_bounces) + 44.0 * passes(prepare.transfer_bounces);
+    let fits = if prepare.sh_lightmap_bounces.is_some() {
+        prepare.sample_fits.len() as f64
+    } else {
+        0.0
+    };
+    let mut seconds = 0.5
+        + 11.0 * passes(prepare.sh_lightmap_bounces)
+        + SECONDS_PER_SAMPLE_FIT * fits
+        + 44.0 * passes(prepare.transfer_bounces);
     for t in techniques {
         if let Some(c) = t.needs().clusters {
             seconds += if c.m == 0 { 0.13 * f64::from(c.k) } else { 5.0 };
@@ -358,6 +366,11 @@ fn default_bake_seconds(prepare: &PrepareSettings, techniques: &[Technique]) -> 
     }
     seconds * scale
 }
+
+/// Seconds one basis fitted from the samples adds to the SH lightmap bake of the house at
+/// 512² texels × 1024 rays on 2 cores (the nine tangent-frame bases of the table together,
+/// over nine).
+pub const SECONDS_PER_SAMPLE_FIT: f64 = 4.0;
 
 /// Progress over the rows' timing rounds with an ETA from the pace so far.
 pub(crate) struct Progress {

@@ -20,9 +20,11 @@
 //!
 //! # Fits
 //!
-//! Both read the texel's order-3 RGB radiance SH, as the hemisphere bases do: E(T m) is
-//! the irradiance at the world normal T m / |T m| ([`crate::sh::hbasis::irradiance_in_frame`];
-//! T = [tangent, bitangent, normal], the texel's normal-map frame).
+//! Both fit the texel's irradiance E(T m) at the world normal T m / |T m| (T = [tangent,
+//! bitangent, normal], the texel's normal-map frame): from its order-3 RGB radiance SH here
+//! ([`crate::sh::hbasis::irradiance_in_frame`], `--basis-fit l2`), or from its radiance
+//! samples through each fit's kernel ([`least_squares_kernel`]; `crate::sh::samples`, the
+//! default).
 //!
 //! [`CubeFit::Projection`], Valve's definition: each face holds the irradiance of a normal
 //! along its axis,

@@ -58,8 +58,9 @@
 //!
 //! The stored data minimise the hemisphere's squared irradiance error,
 //! Σ_q w_q (Σ_k x_k B_k(m_q) − E(T m_q))², over the Gauss–Legendre × azimuth rule of
-//! [`FIT_N`] (`hbasis::hemisphere_quadrature`), E the texel's irradiance from its order-3
-//! radiance SH (`sh::zonal`) and T its normal-map frame. The design is the same for every
+//! [`FIT_N`] (`hbasis::hemisphere_quadrature`), E the texel's irradiance — from its order-3
+//! radiance SH (`sh::zonal`), or from its radiance samples through the fit's kernels
+//! ([`Dice::hybrid_kernel`], `crate::sh::samples`) — and T its normal-map frame. The design is the same for every
 //! texel, so its weighted pseudo-inverse is computed once by SVD (f64, singular values below
 //! 1e-10 of the largest dropped — the lowest vertices' data barely reach z ≥ 0); a fit
 //! is then one matrix product per colour.

@@ -20,8 +20,9 @@
 //!
 //! # Projection
 //!
-//! A texel stores h_i = ∫_{z ≥ 0} E(T m) H_i(m) dω(m), E the irradiance it receives (here
-//! order-3 SH, `sh::zonal`), T the texel's normal-map frame (tangent, bitangent, normal; the
+//! A texel stores h_i = ∫_{z ≥ 0} E(T m) H_i(m) dω(m), E the irradiance it receives (from
+//! its order-3 SH here, `sh::zonal`; from its radiance samples through
+//! [`irradiance_kernel`] in `crate::sh::samples`), T the texel's normal-map frame (tangent, bitangent, normal; the
 //! world normal of tangent-space m is T m normalised, as the shader builds it), by a
 //! Gauss–Legendre × azimuth rule over the hemisphere ([`hemisphere_quadrature`]; with an
 //! orthonormal T, E(T m) has degree 2 and the products degree 4, so [`PROJECTION_N`] = 4

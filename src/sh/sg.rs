@@ -109,9 +109,10 @@ impl std::str::FromStr for Solver {
     }
 }
 
-/// The solver `--sg-solve` defaults to: the best of `shvis study bases`' SG rows on average
-/// over the built-in skies and the shared probes (least squares within 1.5 %).
-pub const DEFAULT_SOLVER: Solver = Solver::RunningAverage;
+/// The solver `--sg-solve` defaults to: the best of `shvis study bases`' SG rows fitted from
+/// the pixels, on average over the built-in skies and the shared probes (the one-pass
+/// running average from samples diverges on some of them).
+pub const DEFAULT_SOLVER: Solver = Solver::LeastSquares;
 
 impl Default for Solver {
     fn default() -> Solver {

@@ -642,7 +642,7 @@ mod tests {
             frame: vec![glam::Mat3::IDENTITY; texels],
             bounce_source: Vec::new(),
             basis_irradiance: Vec::new(),
-            fitted: Vec::new(),
+            fitted: Default::default(),
             stats: Default::default(),
         }
     }

@@ -118,7 +118,7 @@ impl Family for AmbientCube {
         let stored = match fit {
             BasisFit::Samples => {
                 let fit = SampleFit::AmbientCube(self.fit);
-                super::hemisphere::fitted_values(map, fit, label)?.values.clone()
+                super::hemisphere::fitted_values(map, fit, label)?.texel_values()
             }
             BasisFit::L2 => stored_texels(map, self.fit),
         };

@@ -1,6 +1,8 @@
 //! The hemisphere lightmap bases, from `shlmap`'s bake, over each texel's tangent-frame
 //! hemisphere and read at the normal map's tangent-space normal m (no frame, no SH per
-//! pixel); the lighting is baked in. Values per texel (RGB, value 3i + c) are range-scaled
+//! pixel); the lighting is baked in. Each is fitted from the texel's radiance samples — the
+//! bake's rays, `crate::sh::samples`, the default — or, with `--basis-fit l2`, from the
+//! texel's order-3 SH read through its frame at the fit's nodes. Values per texel (RGB, value 3i + c) are range-scaled
 //! into f16 as `shlmap`'s are and packed 4 per RGBA16F texel.
 //!
 //! - `hb4`, `hb6`: the H-basis (Habel & Wimmer 2010; `crate::sh::hbasis`, whose module doc
@@ -8,8 +10,7 @@
 //!   hemisphere, 12 values in 3 groups (24 bytes) / 18 in 5 (40 bytes); the shader
 //!   (`glsl/technique/hbasis.frag`, `glsl/include/hbasis.glsl`) evaluates Σ h_i H_i(m).
 //! - `sgN`: N spherical Gaussians (`crate::sh::sg`): per texel the RGB amplitudes fitted to
-//!   the texel's incident radiance over its hemisphere (its order-3 SH, read through its
-//!   frame at the fitting nodes) by the run's solver, 3N values in ⌈3N/4⌉ groups (sg9: 27
+//!   the texel's incident radiance over its hemisphere by the run's solver, 3N values in ⌈3N/4⌉ groups (sg9: 27
 //!   values, 7 groups, 56 bytes); the lobes' axes and sharpness go in the uniform block and
 //!   the shader (`glsl/technique/sg.frag`, `glsl/include/sg.glsl`) sums Hill's fitted
 //!   SG–cosine integral of each lobe at m.
@@ -273,7 +274,7 @@ pub(crate) fn fitted_values<'a>(
     map: &'a ShLightmap,
     fit: SampleFit,
     label: &str,
-) -> Result<&'a crate::bake::shlmap::FittedBasis, TechniqueError> {
+) -> Result<crate::bake::shlmap::FittedBasis<'a>, TechniqueError> {
     map.fitted(fit).ok_or_else(|| TechniqueError::Input {
         label: label.into(),
         detail: format!("the SH lightmap bake did not fit {fit:?} from its samples"),
@@ -293,7 +294,7 @@ pub(crate) fn prepare(
         (_, BasisFit::Samples) => {
             let fitted = fitted_values(map, sample_fit(basis, solver), label)?;
             if let HemisphereBasis::Sg { .. } = basis {
-                let stats = fitted.stats;
+                let stats = fitted.stats();
                 log::info!(
                     "{label}: {solver} fit from samples, {} of {} amplitudes negative ({:.2} %)",
                     stats.negative,
@@ -301,7 +302,7 @@ pub(crate) fn prepare(
                     100.0 * stats.negative as f64 / stats.amplitudes.max(1) as f64
                 );
             }
-            fitted.values.clone()
+            fitted.texel_values()
         }
         (HemisphereBasis::HBasis(size), BasisFit::L2) => stored_texels(map, size),
         (HemisphereBasis::Sg { lobes }, BasisFit::L2) => {
