@@ -79,7 +79,7 @@ pub(super) struct StudyBasesArgs {
     #[arg(long, value_delimiter = ',', default_value = "sky,sky:15,sky:60")]
     envs: Vec<String>,
     /// Normals: an exact sphere quadrature of Q × 2Q nodes (the sphere table) and a
-    /// hemisphere rule of Q × 2Q nodes (the floor table).
+    /// hemisphere rule of Q × 2Q nodes (the hemisphere table).
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(4..=256))]
     quadrature: u32,
     /// Output directory: bases.md, bases.json, bases_error.svg/.png,
