@@ -181,9 +181,9 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
                 .image
                 .ends_with("shlmap.radiance_order.exr")
         );
-        // The lightmap bases share shlmap's first rung, then add their basis (and, for the
-        // non-linear L1 curves, their reconstruction) rung.
-        for name in ["l1geo", "zh3", "hb6", "dice"] {
+        // The SH lightmap bases share shlmap's first rung, then add their basis (and, for
+        // the non-linear L1 curves, their reconstruction) rung.
+        for name in ["l1geo", "zh3"] {
             let r = row(name, path);
             assert_eq!(
                 step(r, AttributionKind::RadianceOrder),
@@ -191,6 +191,26 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
                 "{name}"
             );
             assert!(step(r, AttributionKind::Basis) > 0.0, "{name}");
+        }
+        // The tangent-frame bases, fitted from the samples by default, go from the point
+        // reference straight to the basis fitted from each pixel's own samples: no order-3
+        // SH between.
+        for name in ["hb6", "dice"] {
+            let r = row(name, path);
+            assert!(
+                r.attribution
+                    .iter()
+                    .all(|s| s.step != AttributionKind::RadianceOrder
+                        && s.step != AttributionKind::Basis),
+                "{name}: {:?}",
+                r.attribution
+            );
+            assert!(step(r, AttributionKind::SampledBasis) > 0.0, "{name}");
+            assert!(
+                r.attribution[1].image.ends_with(".basis.samples.exr"),
+                "{name}: {}",
+                r.attribution[1].image
+            );
         }
         assert!(step(row("l1geo", path), AttributionKind::Reconstruction) > 0.0);
         // sh2's product is exact for order-3 lighting and order-2 visibility (the clamped

@@ -28,7 +28,14 @@ pub fn house() -> &'static Prepared {
             table_res: TEST_TABLE_RES,
             cache_dir: Some(concat!(env!("CARGO_TARGET_TMPDIR"), "/bake-cache").into()),
             sh_lightmap_bounces: Some(shvis::bake::shlmap::DEFAULT_BOUNCES),
-            sample_fits: shvis::prepare::sample_fits_for(Technique::all(), &Default::default()),
+            // Every member of every family (`sg5` and the rest beyond the table's rows).
+            sample_fits: shvis::prepare::sample_fits_for(
+                &Technique::families()
+                    .into_iter()
+                    .flat_map(|(_, members, _)| members)
+                    .collect::<Vec<_>>(),
+                &Default::default(),
+            ),
             transfer_bounces: Some(shvis::bake::shlmap::DEFAULT_BOUNCES),
             ..PrepareSettings::default()
         })
