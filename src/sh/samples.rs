@@ -38,8 +38,9 @@
 //! octahedral square of the sphere and read bilinearly: the octahedral map is continuous on
 //! the square (its folds meet at z = 0 from both sides), κ is continuous, so the table
 //! converges as 1/res² away from κ's kinks (the great circles m_q·ω = 0) and as 1/res
-//! across them. At 256 the table's fit differs from (1) evaluated exactly by under 10⁻³ of
-//! the fit's scale (a test checks), far below the sampling noise of a few thousand rays.
+//! across them. At 256 a test reads the Dice table at 500 directions within 2 % of the
+//! exact kernels' scale, and fits from the tables of a smooth sky's 16 384 samples match the
+//! `l2` path's quadrature fits of the same function within 0.5 % of their scale.
 
 use std::sync::OnceLock;
 
