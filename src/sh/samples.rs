@@ -430,6 +430,13 @@ mod tests {
             .collect()
     }
 
+    fn max_difference(a: &[f64], b: &[f64]) -> f64 {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
+    }
+
     fn scale(values: &[f64]) -> f64 {
         values
             .iter()
@@ -565,11 +572,7 @@ mod tests {
         ];
         for (fit, want) in cases {
             let (got, _) = fit.fit(&samples);
-            let err = got
-                .iter()
-                .zip(&want)
-                .map(|(g, w)| (g - w).abs())
-                .fold(0.0, f64::max);
+            let err = max_difference(&got, &want);
             assert!(
                 err < 5e-3 * scale(&want),
                 "{fit:?}: {err} of {}",
@@ -595,11 +598,7 @@ mod tests {
                     .collect()
             };
             let (got, _) = SampleFit::Sg { lobes: 9, solver }.fit(&samples);
-            let err = got
-                .iter()
-                .zip(&want)
-                .map(|(g, w)| (g - w).abs())
-                .fold(0.0, f64::max);
+            let err = max_difference(&got, &want);
             assert!(
                 err < 2e-2 * scale(&want),
                 "sg9 {solver}: {err} of {}",

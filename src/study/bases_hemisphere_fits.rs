@@ -236,10 +236,7 @@ pub(crate) fn fit(spec: Spec, samples: &[Sample], sh: &[[f64; 3]]) -> (Fitted, O
 }
 
 /// Builds what the fits share (the kernel tables of `sh::samples`, the lobe bases) before a
-/// parallel loop asks for it: `sh::samples` tabulates its kernels in parallel inside a
-/// `OnceLock`, and a rayon worker that builds a table there may pick up another job that
-/// waits for the same table. Called outside any parallel loop, it makes every later call a
-/// read.
+/// parallel loop asks for it, so that no fit in the loop waits on a build.
 pub(crate) fn warm_up() {
     for spec in specs() {
         if let Spec::Fit(fit) = spec {

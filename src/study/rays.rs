@@ -224,20 +224,19 @@ fn ray_counts(study: &RaysStudy) -> Vec<u32> {
 }
 
 fn paths(study: &RaysStudy) -> Vec<String> {
-    let mut out: Vec<String> = Vec::new();
-    for r in &study.rows {
-        if !out.contains(&r.path) {
-            out.push(r.path.clone());
-        }
-    }
-    out
+    distinct(study.rows.iter().map(|r| &r.path))
 }
 
 fn techniques(study: &RaysStudy) -> Vec<String> {
+    distinct(study.rows.iter().map(|r| &r.technique))
+}
+
+/// The distinct values of `values`, in first-seen order.
+fn distinct<'a>(values: impl Iterator<Item = &'a String>) -> Vec<String> {
     let mut out: Vec<String> = Vec::new();
-    for r in &study.rows {
-        if !out.contains(&r.technique) {
-            out.push(r.technique.clone());
+    for v in values {
+        if !out.contains(v) {
+            out.push(v.clone());
         }
     }
     out
