@@ -227,6 +227,23 @@ pub fn check_settings(settings: &PrepareSettings) -> Result<(), PrepareError> {
             "lower --vis-res",
         )?;
     }
+    if settings.sh_lightmap_bounces.is_some() && !settings.sample_fits.is_empty() {
+        let per_texel: usize = settings.sample_fits.iter().map(|f| f.stored_values()).sum();
+        let texels = u64::from(settings.vis_res) * u64::from(settings.vis_res);
+        // The fitted values (f32 per covered texel, at most every texel) and one basis'
+        // values spread over the lightmap and dilated when a technique reads them.
+        let widest = settings.sample_fits.iter().map(|f| f.stored_values()).max();
+        let bytes = texels.saturating_mul(4 * (per_texel + widest.unwrap_or(0)) as u64);
+        crate::limits::check_memory(
+            format_args!(
+                "--vis-res {}: {} bases fitted from the SH lightmap's samples",
+                settings.vis_res,
+                settings.sample_fits.len()
+            ),
+            bytes,
+            "lower --vis-res or fit from the order-3 SH (--basis-fit l2)",
+        )?;
+    }
     warn_if_few_rays(settings.rays, settings.order);
     Ok(())
 }
