@@ -102,7 +102,7 @@ use rayon::prelude::*;
 
 use super::directions::{DirectionSet, above_horizon};
 use super::raster::{DilationPlan, LightmapTexels, texel_index_of};
-use super::surface::{RayEnd, SurfaceReader, for_each_front_hit, for_each_ray};
+use super::surface::{RayEnd, SurfaceReader, for_each_ray};
 use super::trace::Tracer;
 use super::visibility::DILATION_PASSES;
 use super::{BakeStats, progress_bar};
@@ -425,31 +425,28 @@ pub fn bake_sh_lightmap(
                         .as_dvec3()
                         .into()
                 };
-                let rays = if pass_fits.is_empty() {
-                    let rays =
-                        for_each_front_hit(tracer, &surfaces, &dirs, n, origin, |r, d, surface| {
-                            let radiance = bounced(surface);
-                            accumulate(&mut sum, &basis[r], radiance);
-                            accumulate_lobes(&mut rnm, &lobes, d, radiance);
-                        });
-                    rays
-                } else {
-                    // Every direction is a sample: escaped rays carry the environment
-                    // (gathered in the direct pass), front hits the bounce, the rest nothing.
+                // With fits every direction is a sample: escaped rays carry the environment
+                // (gathered into (1) in the direct pass), front hits the bounce, the rest
+                // nothing.
+                let fitting = !pass_fits.is_empty();
+                let mut radiance = vec![[0.0; 3]; if fitting { dirs.dirs().len() } else { 0 }];
+                let rays = for_each_ray(tracer, &surfaces, &dirs, n, origin, |r, d, end| {
+                    let l = match end {
+                        RayEnd::Escaped => env[r],
+                        RayEnd::Front(surface) => {
+                            let l = bounced(surface);
+                            accumulate(&mut sum, &basis[r], l);
+                            accumulate_lobes(&mut rnm, &lobes, d, l);
+                            l
+                        }
+                        RayEnd::Back => [0.0; 3],
+                    };
+                    if fitting {
+                        radiance[r] = l;
+                    }
+                });
+                if fitting {
                     let frame = texel_frame(texels, i);
-                    let mut radiance = vec![[0.0; 3]; dirs.dirs().len()];
-                    let rays = for_each_ray(tracer, &surfaces, &dirs, n, origin, |r, d, end| {
-                        radiance[r] = match end {
-                            RayEnd::Escaped => env[r],
-                            RayEnd::Front(surface) => {
-                                let l = bounced(surface);
-                                accumulate(&mut sum, &basis[r], l);
-                                accumulate_lobes(&mut rnm, &lobes, d, l);
-                                l
-                            }
-                            RayEnd::Back => [0.0; 3],
-                        };
-                    });
                     let samples: Vec<Sample> = dirs
                         .dirs()
                         .iter()
@@ -457,8 +454,7 @@ pub fn bake_sh_lightmap(
                         .map(|(&d, &l)| sample_in(&frame, d, weight, l))
                         .collect();
                     fit_samples(pass_fits, &samples, fit_out, &negative);
-                    rays
-                };
+                }
                 rays_done.fetch_add(rays, Ordering::Relaxed);
                 bar.inc(1);
                 (
