@@ -83,7 +83,8 @@
 //! T the texel's orthonormal normal-map frame ([`texel_frame`]), by `crate::sh::samples`
 //! (the H-basis, SG under each solver, Ambient Dice, the ambient cube): the same rays as
 //! (1), no basis fitted from another. A texel's samples live only while it is fitted; the
-//! fits are stored per texel ([`FittedBasis`]) and dilated like the coefficients.
+//! fits are stored per texel ([`FittedBasis`], f16 under a power-of-two scale per texel and
+//! basis: [`BlockF16`]) and dilated like the coefficients.
 //! L_env is the environment's order-8 SH at the ray's direction, as for (1): what every
 //! basis sees of the sky (`shvis study bases` measures, per basis, what the full-resolution
 //! environment would change on a floor texel).
@@ -159,15 +160,19 @@ pub struct ShLightmap {
 }
 
 /// The bases fitted from every covered texel's samples (eq. (5)), stored compactly: covered
-/// texels in row-major order, each fit's values one after another.
+/// texels in row-major order, each fit's values one after another, as a block of f16
+/// mantissas under one power-of-two scale per texel and fit ([`BlockF16`]).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FittedBases {
     /// The fits, in the order asked for.
     pub fits: Vec<SampleFit>,
     /// Per fit, the amplitudes its SG solver made negative over the covered texels.
     pub negative: Vec<u64>,
-    /// Σ `fit.stored_values()` per covered texel.
-    pub values: Vec<f32>,
+    /// Σ `fit.stored_values()` per covered texel, each `f16` of a value over its block's
+    /// scale.
+    values: Vec<half::f16>,
+    /// `fits.len()` per covered texel: each block's power-of-two scale.
+    scales: Vec<f32>,
 }
 
 impl FittedBases {
@@ -177,11 +182,44 @@ impl FittedBases {
     }
 }
 
+/// One block of values kept as f16 under a shared power-of-two scale 2^e, the smallest with
+/// every |v| ≤ 2^e: a value keeps f16's 11-bit precision down to 2^−14 of its block's
+/// largest (the f16 textures the techniques store keep the same 11 bits), and the
+/// sun-sized values f16 alone would overflow stay finite. Half the bytes of f32.
+pub struct BlockF16;
+
+impl BlockF16 {
+    /// `block` written into `out` (same length); its scale.
+    pub fn encode(block: &[f32], out: &mut [half::f16]) -> f32 {
+        let largest = block
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold(0.0f32, |m, v| m.max(v.abs()));
+        let scale = if largest > 0.0 {
+            2.0f32.powi(largest.log2().ceil() as i32)
+        } else {
+            1.0
+        };
+        for (o, v) in out.iter_mut().zip(block) {
+            *o = half::f16::from_f32(v / scale);
+        }
+        scale
+    }
+
+    /// The values of a block (into `out`, same length).
+    pub fn decode(block: &[half::f16], scale: f32, out: &mut [f32]) {
+        for (o, v) in out.iter_mut().zip(block) {
+            *o = v.to_f32() * scale;
+        }
+    }
+}
+
 /// One basis of [`FittedBases`], read back per texel.
 #[derive(Clone, Copy, Debug)]
 pub struct FittedBasis<'a> {
     pub fit: SampleFit,
-    /// Its values' offset within a covered texel's.
+    /// Its place among the fits, and its values' offset within a covered texel's.
+    index: usize,
     offset: usize,
     map: &'a ShLightmap,
 }
@@ -191,13 +229,12 @@ impl FittedBasis<'_> {
     /// negative.
     pub fn stats(&self) -> FitStats {
         let covered = self.map.covered.iter().filter(|&&c| c).count() as u64;
-        let k = self.map.fitted.fits.iter().position(|f| *f == self.fit);
         FitStats {
             amplitudes: match self.fit {
                 SampleFit::Sg { .. } => covered * self.fit.stored_values() as u64,
                 _ => 0,
             },
-            negative: k.map_or(0, |k| self.map.fitted.negative[k]),
+            negative: self.map.fitted.negative[self.index],
         }
     }
 
@@ -206,13 +243,18 @@ impl FittedBasis<'_> {
     pub fn texel_values(&self) -> Vec<f32> {
         let map = self.map;
         let n = self.fit.stored_values();
-        let per_texel = map.fitted.per_texel();
+        let fitted = &map.fitted;
+        let (per_texel, fits) = (fitted.per_texel(), fitted.fits.len());
         let texels = (map.res * map.res) as usize;
         let mut values = vec![0.0f32; texels * n];
         let covered = (0..texels).filter(|&t| map.covered[t]);
         for (k, t) in covered.enumerate() {
             let src = k * per_texel + self.offset;
-            values[t * n..(t + 1) * n].copy_from_slice(&map.fitted.values[src..src + n]);
+            BlockF16::decode(
+                &fitted.values[src..src + n],
+                fitted.scales[k * fits + self.index],
+                &mut values[t * n..(t + 1) * n],
+            );
         }
         DilationPlan::new(&map.covered, map.res, DILATION_PASSES).apply_vectors(&mut values, n);
         values
@@ -223,10 +265,11 @@ impl ShLightmap {
     /// The values of `fit` per texel, if the bake fitted it.
     pub fn fitted(&self, fit: SampleFit) -> Option<FittedBasis<'_>> {
         let mut offset = 0;
-        for f in &self.fitted.fits {
+        for (index, f) in self.fitted.fits.iter().enumerate() {
             if *f == fit {
                 return Some(FittedBasis {
                     fit,
+                    index,
                     offset,
                     map: self,
                 });
@@ -301,6 +344,25 @@ fn fit_samples(fits: &[SampleFit], samples: &[Sample], out: &mut [f32], negative
     }
 }
 
+/// A texel's slots in [`FittedBases`]: its values and its blocks' scales.
+type TexelSlots<'a> = (&'a mut [half::f16], &'a mut [f32]);
+
+/// Eq. (5) at one texel: [`fit_samples`] kept as one [`BlockF16`] per fit in `slots`.
+fn fit_texel(fits: &[SampleFit], samples: &[Sample], slots: TexelSlots, negative: &[AtomicU64]) {
+    if fits.is_empty() {
+        return;
+    }
+    let (values, scales) = slots;
+    let mut fitted = vec![0.0f32; values.len()];
+    fit_samples(fits, samples, &mut fitted, negative);
+    let mut offset = 0;
+    for (fit, scale) in fits.iter().zip(scales) {
+        let n = fit.stored_values();
+        *scale = BlockF16::encode(&fitted[offset..offset + n], &mut values[offset..offset + n]);
+        offset += n;
+    }
+}
+
 /// Lobes gathered per texel: three basis directions and the flat normal (eqs. (3)–(4)).
 pub const RNM_LOBES: usize = 4;
 
@@ -342,8 +404,9 @@ pub fn bake_sh_lightmap(
     // written in place, covered texel after covered texel (one slot each without fits).
     let fits_in = |pass: u32| if pass == settings.bounces { fits } else { &[] };
     let per_texel: usize = fits.iter().map(|f| f.stored_values()).sum();
-    let slot = per_texel.max(1);
-    let mut fit_values = vec![0.0f32; covered.len() * slot];
+    let (slot, scale_slot) = (per_texel.max(1), fits.len().max(1));
+    let mut fit_values = vec![half::f16::ZERO; covered.len() * slot];
+    let mut fit_scales = vec![0.0f32; covered.len() * scale_slot];
     let negative: Vec<AtomicU64> = fits.iter().map(|_| AtomicU64::new(0)).collect();
 
     // Bounce 0: direct light through the visible directions (any-hit rays).
@@ -351,7 +414,11 @@ pub fn bake_sh_lightmap(
     let direct_fits = fits_in(0);
     let direct: Vec<(Sh9Rgb, BasisIrradiance)> = covered
         .par_iter()
-        .zip(fit_values.par_chunks_mut(slot))
+        .zip(
+            fit_values
+                .par_chunks_mut(slot)
+                .zip(fit_scales.par_chunks_mut(scale_slot)),
+        )
         .with_min_len(64)
         .map(|(&i, fit_out)| {
             let i = i as usize;
@@ -379,7 +446,7 @@ pub fn bake_sh_lightmap(
                     samples.push(sample_in(&frame, d, weight, radiance));
                 }
             }
-            fit_samples(direct_fits, &samples, fit_out, &negative);
+            fit_texel(direct_fits, &samples, fit_out, &negative);
             rays_done.fetch_add(rays, Ordering::Relaxed);
             bar.inc(1);
             (
@@ -410,7 +477,11 @@ pub fn bake_sh_lightmap(
         current = covered
             .par_iter()
             .zip(direct.par_iter())
-            .zip(fit_values.par_chunks_mut(slot))
+            .zip(
+                fit_values
+                    .par_chunks_mut(slot)
+                    .zip(fit_scales.par_chunks_mut(scale_slot)),
+            )
             .with_min_len(64)
             .map(|((&i, direct), fit_out)| {
                 let i = i as usize;
@@ -453,7 +524,7 @@ pub fn bake_sh_lightmap(
                         .zip(&radiance)
                         .map(|(&d, &l)| sample_in(&frame, d, weight, l))
                         .collect();
-                    fit_samples(pass_fits, &samples, fit_out, &negative);
+                    fit_texel(pass_fits, &samples, fit_out, &negative);
                 }
                 rays_done.fetch_add(rays, Ordering::Relaxed);
                 bar.inc(1);
@@ -480,6 +551,11 @@ pub fn bake_sh_lightmap(
         negative: negative.into_iter().map(AtomicU64::into_inner).collect(),
         values: if per_texel > 0 {
             fit_values
+        } else {
+            Vec::new()
+        },
+        scales: if per_texel > 0 {
+            fit_scales
         } else {
             Vec::new()
         },
@@ -790,5 +866,32 @@ mod tests {
         );
         // Facing away: the hemisphere's irradiance at −z is 0.
         assert!(irradiance_at(&c, -Vec3::Z).abs().max_element() < 1e-5);
+    }
+
+    fn round_trip(block: &[f32]) -> Vec<f32> {
+        let mut packed = vec![half::f16::ZERO; block.len()];
+        let scale = BlockF16::encode(block, &mut packed);
+        let mut out = vec![0.0; block.len()];
+        BlockF16::decode(&packed, scale, &mut out);
+        out
+    }
+
+    #[test]
+    fn a_block_keeps_f16_precision_relative_to_its_largest_value() {
+        // A sun of 1e5 beside sky-sized and ringing negative values: f16 alone would
+        // overflow the first.
+        let block = [1.0e5f32, -3.2e4, 17.5, 0.25, -0.031, 12.0, 0.0];
+        for (a, b) in block.iter().zip(round_trip(&block)) {
+            assert!(b.is_finite());
+            let tolerance = a.abs() * 2f32.powi(-11) + 1.0e5 * 2f32.powi(-24);
+            assert!((a - b).abs() <= tolerance, "{a} → {b}");
+        }
+    }
+
+    #[test]
+    fn zero_and_exact_blocks_come_back_exactly() {
+        assert_eq!(round_trip(&[0.0; 5]), vec![0.0; 5]);
+        let exact = [0.5f32, -1.0, 1024.0, 3.0];
+        assert_eq!(round_trip(&exact), exact.to_vec());
     }
 }
