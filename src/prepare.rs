@@ -16,7 +16,9 @@ use crate::bake::cache::{default_cache_dir, load_or_bake_visibility, load_or_fit
 use crate::bake::cluster::{self, ClusteredModel};
 use crate::bake::pca::{PcaModel, fit};
 use crate::bake::raster::{LightmapTexels, rasterize};
-use crate::bake::shlmap::{ShLightmap, ShLightmapSettings, bake_sh_lightmap};
+use crate::bake::shlmap::{
+    BakeEnv, BakeLighting, ShLightmap, ShLightmapSettings, bake_sh_lightmap,
+};
 use crate::bake::ssbump::{self, SsBumpMaps};
 use crate::bake::trace::Tracer;
 use crate::bake::transfer::{self, TransferMap, TransferSettings, bake_transfer};
@@ -58,6 +60,8 @@ pub struct PrepareSettings {
     /// The bases its bake fits from each texel's radiance samples (`Technique::sample_fit`
     /// of the run's techniques).
     pub sample_fits: Vec<crate::sh::samples::SampleFit>,
+    /// What its rays read of the environment (`--bake-env`).
+    pub bake_env: crate::bake::shlmap::BakeEnv,
     /// Bake transfer matrices (`nmprt*`) with this many bounces; `None`: skip them.
     pub transfer_bounces: Option<u32>,
     /// Their lighting order (≤ `LIGHTING_ORDER`).
@@ -83,6 +87,7 @@ impl Default for PrepareSettings {
             cache_dir: None,
             sh_lightmap_bounces: None,
             sample_fits: Vec::new(),
+            bake_env: crate::bake::shlmap::BakeEnv::Sh,
             transfer_bounces: None,
             transfer_order: transfer::DEFAULT_LIGHTING_ORDER,
             height_map: None,
@@ -559,7 +564,10 @@ pub fn prepare_with(
             &scene,
             geometry.tracer(),
             geometry.texels(),
-            &radiance_sh,
+            &match settings.bake_env {
+                BakeEnv::Sh => BakeLighting::Sh(&radiance_sh),
+                BakeEnv::Pixels => BakeLighting::Pixels(&env),
+            },
             &ShLightmapSettings {
                 rays,
                 seed: settings.seed,

@@ -13,7 +13,7 @@ use std::sync::Arc;
 use glam::DVec3;
 use shvis::bake::lxh::LxhMatrices;
 use shvis::bake::raster::rasterize;
-use shvis::bake::shlmap::{ShLightmapSettings, bake_sh_lightmap};
+use shvis::bake::shlmap::{BakeLighting, ShLightmapSettings, bake_sh_lightmap};
 use shvis::bake::trace::Tracer;
 use shvis::bake::transfer::{DEFAULT_LIGHTING_ORDER, TransferSettings, bake_transfer};
 use shvis::env::project::project_sh;
@@ -74,7 +74,7 @@ fn nmprt_renders_the_sh_lightmap_of_the_same_bake_on_both_paths() {
         &prepared.scene,
         &tracer,
         &texels,
-        &l,
+        &BakeLighting::Sh(&l),
         &ShLightmapSettings {
             rays: settings.rays,
             seed: settings.seed,

@@ -8,7 +8,7 @@ mod common;
 
 use glam::{DVec3, Vec3};
 use shvis::bake::raster::rasterize;
-use shvis::bake::shlmap::{ShLightmap, ShLightmapSettings, bake_sh_lightmap};
+use shvis::bake::shlmap::{BakeLighting, ShLightmap, ShLightmapSettings, bake_sh_lightmap};
 use shvis::bake::ssbump::{SsBumpMaps, SsBumpStorage};
 use shvis::bake::trace::Tracer;
 use shvis::env::EnvMap;
@@ -63,7 +63,7 @@ fn bake(scene: &Scene, env: &EnvMap) -> ShLightmap {
         scene,
         &Tracer::new(&scene.mesh),
         &texels,
-        &radiance,
+        &BakeLighting::Sh(&radiance),
         &ShLightmapSettings {
             rays: 4096,
             seed: 3,
@@ -201,7 +201,7 @@ fn rnm_lightmaps_stay_bounded_where_the_sky_rings() {
         &scene,
         &Tracer::new(&scene.mesh),
         &rasterize(&scene.mesh, 128),
-        &radiance,
+        &BakeLighting::Sh(&radiance),
         &ShLightmapSettings {
             rays: 256,
             seed: 0,

@@ -7,7 +7,7 @@ mod common;
 
 use glam::{DVec3, Vec3};
 use shvis::bake::raster::rasterize;
-use shvis::bake::shlmap::{ShLightmap, ShLightmapSettings, bake_sh_lightmap};
+use shvis::bake::shlmap::{BakeLighting, ShLightmap, ShLightmapSettings, bake_sh_lightmap};
 use shvis::bake::trace::Tracer;
 use shvis::env::EnvMap;
 use shvis::report::metrics::image_error;
@@ -35,6 +35,11 @@ fn quad(mesh: &mut Mesh, corners: [[f32; 3]; 4], normal: [f32; 3], tint: f32) {
 /// A 12 m square floor (albedo 0.3) and a 6 m long, 3 m high, 0.4 m thick white (0.8)
 /// wall along x at z = 0; lightmap UVs generated for `res`.
 fn wall_scene(res: u32) -> Scene {
+    scene(res, true)
+}
+
+/// The floor of [`wall_scene`], with its wall if `wall`.
+fn scene(res: u32, wall: bool) -> Scene {
     let mut mesh = Mesh {
         vertices: vec![],
         indices: vec![],
@@ -46,38 +51,40 @@ fn wall_scene(res: u32) -> Scene {
         [0.0, 1.0, 0.0],
         0.3,
     );
-    let w = 0.8;
-    // +Z (sunlit) and −Z faces, the two ends, the top.
-    quad(
-        &mut mesh,
-        [[-l, 0.0, t], [l, 0.0, t], [l, h, t], [-l, h, t]],
-        [0.0, 0.0, 1.0],
-        w,
-    );
-    quad(
-        &mut mesh,
-        [[l, 0.0, -t], [-l, 0.0, -t], [-l, h, -t], [l, h, -t]],
-        [0.0, 0.0, -1.0],
-        w,
-    );
-    quad(
-        &mut mesh,
-        [[l, 0.0, t], [l, 0.0, -t], [l, h, -t], [l, h, t]],
-        [1.0, 0.0, 0.0],
-        w,
-    );
-    quad(
-        &mut mesh,
-        [[-l, 0.0, -t], [-l, 0.0, t], [-l, h, t], [-l, h, -t]],
-        [-1.0, 0.0, 0.0],
-        w,
-    );
-    quad(
-        &mut mesh,
-        [[-l, h, t], [l, h, t], [l, h, -t], [-l, h, -t]],
-        [0.0, 1.0, 0.0],
-        w,
-    );
+    if wall {
+        let w = 0.8;
+        // +Z (sunlit) and −Z faces, the two ends, the top.
+        quad(
+            &mut mesh,
+            [[-l, 0.0, t], [l, 0.0, t], [l, h, t], [-l, h, t]],
+            [0.0, 0.0, 1.0],
+            w,
+        );
+        quad(
+            &mut mesh,
+            [[l, 0.0, -t], [-l, 0.0, -t], [-l, h, -t], [l, h, -t]],
+            [0.0, 0.0, -1.0],
+            w,
+        );
+        quad(
+            &mut mesh,
+            [[l, 0.0, t], [l, 0.0, -t], [l, h, -t], [l, h, t]],
+            [1.0, 0.0, 0.0],
+            w,
+        );
+        quad(
+            &mut mesh,
+            [[-l, 0.0, -t], [-l, 0.0, t], [-l, h, t], [-l, h, -t]],
+            [-1.0, 0.0, 0.0],
+            w,
+        );
+        quad(
+            &mut mesh,
+            [[-l, h, t], [l, h, t], [l, h, -t], [-l, h, -t]],
+            [0.0, 1.0, 0.0],
+            w,
+        );
+    }
     lightmap_uv::generate(&mut mesh, res).expect("charts fit");
     let texture = common::solid_texture;
     Scene {
@@ -118,7 +125,7 @@ fn bake(scene: &Scene, res: u32, bounces: u32) -> ShLightmap {
         scene,
         &tracer,
         &texels,
-        &radiance,
+        &BakeLighting::Sh(&radiance),
         &ShLightmapSettings {
             rays: 512,
             seed: 5,
@@ -347,11 +354,25 @@ fn the_bases_fitted_from_samples_leave_the_bake_as_it_was() {
         SampleFit::HBasis(HBasisSize::H6),
         SampleFit::AmbientCube(CubeFit::Projection),
     ];
-    let plain = bake_sh_lightmap(&scene, &tracer, &texels, &radiance, &settings, &[]);
-    let fitted = bake_sh_lightmap(&scene, &tracer, &texels, &radiance, &settings, &fits);
+    let plain = bake_sh_lightmap(
+        &scene,
+        &tracer,
+        &texels,
+        &BakeLighting::Sh(&radiance),
+        &settings,
+        &[],
+    );
+    let fitted = bake_sh_lightmap(
+        &scene,
+        &tracer,
+        &texels,
+        &BakeLighting::Sh(&radiance),
+        &settings,
+        &fits,
+    );
     assert_eq!(plain.coeffs, fitted.coeffs);
     assert_eq!(plain.basis_irradiance, fitted.basis_irradiance);
-    assert!(plain.fitted.fits.is_empty() && plain.fitted.values.is_empty());
+    assert!(plain.fitted.fits.is_empty() && plain.fitted.per_texel() == 0);
     assert_eq!(fitted.fitted.fits.len(), 2);
     let h6 = fitted.fitted(fits[0]).expect("the H6 fit");
     let cube = fitted.fitted(fits[1]).expect("the cube fit");
@@ -392,4 +413,66 @@ fn the_bases_fitted_from_samples_leave_the_bake_as_it_was() {
         compared += 1;
     }
     assert!(compared > 50, "{compared} floor texels compared");
+}
+
+/// A black sky with a sun disc of 2° radius from +Z at 30° elevation (radiance 1000): too
+/// small for the shared directions or for an order-8 SH.
+fn small_sun_env() -> EnvMap {
+    let sun = DVec3::new(0.0, 0.5, 0.75f64.sqrt());
+    let cos_radius = 2f64.to_radians().cos();
+    EnvMap::from_fn(512, 256, |d| {
+        [if d.dot(sun) > cos_radius { 1000.0 } else { 0.0 }; 3]
+    })
+}
+
+/// A direct-only bake of `scene` from the full-resolution `env` (eq. (6)).
+fn bake_from_pixels(scene: &Scene, env: &EnvMap, res: u32) -> ShLightmap {
+    bake_sh_lightmap(
+        scene,
+        &Tracer::new(&scene.mesh),
+        &rasterize(&scene.mesh, res),
+        &BakeLighting::Pixels(env),
+        &ShLightmapSettings {
+            rays: 512,
+            seed: 5,
+            bounces: 0,
+            progress: false,
+        },
+        &[],
+    )
+}
+
+/// Under a uniform sky of radiance 1 an open floor receives π: the shared and the
+/// importance-sampled rays' weights (eq. (6)) add up to the sphere, not to more.
+#[test]
+fn a_bake_from_the_pixels_weighs_its_two_kinds_of_ray_to_the_map_itself() {
+    let scene = scene(32, false);
+    let env = EnvMap::from_fn(64, 32, |_| [1.0; 3]);
+    let map = bake_from_pixels(&scene, &env, 32);
+    assert_eq!(map.env, shvis::bake::shlmap::BakeEnv::Pixels);
+    let e = mean_floor_irradiance(&scene, &map, (-5.0, 5.0));
+    let pi = std::f64::consts::PI;
+    assert!((e - pi).abs() < 0.01 * pi, "{e}");
+}
+
+/// A 2° sun that the shared directions would miss lights the open floor with what the
+/// map's own order-3 SH gives there, and the wall's shadow stays dark.
+#[test]
+fn a_small_sun_from_the_pixels_lights_the_open_floor_and_not_the_shadow() {
+    let res = 64;
+    let scene = wall_scene(res);
+    let env = small_sun_env();
+    let map = bake_from_pixels(&scene, &env, res);
+    let sh3: Vec<[f32; 3]> = shvis::env::project::project_sh(&env, Order::THREE)
+        .iter()
+        .map(|c| c.map(|v| v as f32))
+        .collect();
+    let expected = shvis::bake::shlmap::irradiance_at(&sh3, Vec3::Y).x as f64;
+    let lit = mean_floor_irradiance(&scene, &map, (2.5, 5.5));
+    let shadow = mean_floor_irradiance(&scene, &map, (-3.0, -0.5));
+    assert!(
+        (lit - expected).abs() < 0.02 * expected,
+        "{lit} against {expected}"
+    );
+    assert!(shadow.abs() < 0.01 * expected, "{shadow} in the shadow");
 }

@@ -4,7 +4,7 @@
 //! and the bounces must change M.
 
 use shvis::bake::raster::rasterize;
-use shvis::bake::shlmap::{ShLightmapSettings, bake_sh_lightmap};
+use shvis::bake::shlmap::{BakeLighting, ShLightmapSettings, bake_sh_lightmap};
 use shvis::bake::trace::Tracer;
 use shvis::bake::transfer::{TransferMap, TransferSettings, bake_transfer};
 use shvis::env::project::project_sh;
@@ -63,7 +63,7 @@ fn transfer_times_lighting_equals_the_sh_lightmap() {
             scene,
             tracer,
             texels,
-            &l,
+            &BakeLighting::Sh(&l),
             &ShLightmapSettings {
                 rays: 64,
                 seed: 3,

@@ -55,7 +55,7 @@ use rayon::prelude::*;
 use crate::bake::lxh::{LxhMatrices, build_table};
 use crate::bake::pca::QuantizedPca;
 use crate::bake::raster::texel_index_of;
-use crate::bake::shlmap::{ShLightmapSettings, radiance_at_points};
+use crate::bake::shlmap::{BakeEnv, BakeLighting, ShLightmapSettings, radiance_at_points};
 use crate::bake::visibility::{PointVisibility, bake_points};
 use crate::gpu::{Context, GpuError};
 use crate::prepare::Prepared;
@@ -606,7 +606,10 @@ impl<'a> RowLadder<'a> {
                 &prepared.scene,
                 &tracer,
                 map,
-                &prepared.radiance_sh,
+                &match map.env {
+                    BakeEnv::Sh => BakeLighting::Sh(&prepared.radiance_sh),
+                    BakeEnv::Pixels => BakeLighting::Pixels(&prepared.env),
+                },
                 &settings,
                 &px.position,
                 &px.normal_g,

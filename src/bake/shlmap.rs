@@ -103,10 +103,12 @@ use rayon::prelude::*;
 
 use super::directions::{DirectionSet, above_horizon};
 use super::raster::{DilationPlan, LightmapTexels, texel_index_of};
-use super::surface::{RayEnd, SurfaceReader, for_each_ray};
+use super::surface::{RayEnd, SurfaceReader, trace_ray};
 use super::trace::Tracer;
 use super::visibility::DILATION_PASSES;
 use super::{BakeStats, progress_bar};
+use crate::env::EnvMap;
+use crate::env::sampler::{EnvSampler, Pcg32};
 use crate::scene::Scene;
 use crate::sh::samples::{Sample, SampleFit};
 use crate::sh::sg::FitStats;
@@ -155,6 +157,8 @@ pub struct ShLightmap {
     pub basis_irradiance: Vec<[Vec3; 3]>,
     /// The tangent-frame bases fitted from each texel's radiance samples (eq. (5)).
     pub fitted: FittedBases,
+    /// What its rays read of the environment (eq. (1) or (6)).
+    pub env: BakeEnv,
     /// Rays and time of the bake, all bounces.
     pub stats: BakeStats,
 }
@@ -378,14 +382,13 @@ fn normalized_to_flat(lobes: &[Vec3; GATHERED_LOBES]) -> [Vec3; 3] {
     [lobes[0] * k, lobes[1] * k, lobes[2] * k]
 }
 
-/// Bakes the SH lightmap of `scene` under the environment whose radiance SH (RGB, any
-/// order ≥ 1) is `radiance_sh` (see the module doc), fitting each basis of `fits` from
-/// every texel's samples in the last pass.
+/// Bakes the SH lightmap of `scene` under `lighting` (see the module doc), fitting each
+/// basis of `fits` from every texel's samples in the last pass.
 pub fn bake_sh_lightmap(
     scene: &Scene,
     tracer: &Tracer,
     texels: &LightmapTexels,
-    radiance_sh: &[[f64; 3]],
+    lighting: &BakeLighting<'_>,
     settings: &ShLightmapSettings,
     fits: &[SampleFit],
 ) -> ShLightmap {
@@ -393,7 +396,7 @@ pub fn bake_sh_lightmap(
     let res = texels.res as usize;
     let dirs = DirectionSet::new(settings.rays, settings.seed);
     let weight = dirs.weight();
-    let (basis, env) = direction_tables(&dirs, radiance_sh);
+    let rays_of = RaySet::new(&dirs, lighting, settings.seed);
     let surfaces = SurfaceReader::new(scene);
     let covered: Vec<u32> = (0..res * res)
         .filter(|&i| texels.covered[i])
@@ -432,18 +435,19 @@ pub fn bake_sh_lightmap(
             let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
             let mut rnm = [DVec3::ZERO; GATHERED_LOBES];
             let mut rays = 0u64;
-            for (r, &d) in dirs.dirs().iter().enumerate() {
+            let own = rays_of.own(i as u64);
+            for ray in rays_of.shared.iter().chain(&own) {
                 let mut radiance = [0.0; 3];
-                if above_horizon(n, d) {
+                if above_horizon(n, ray.d) {
                     rays += 1;
-                    if !tracer.occluded(origin, d, f32::INFINITY) {
-                        radiance = env[r];
-                        accumulate(&mut sum, &basis[r], radiance);
-                        accumulate_lobes(&mut rnm, &lobes, d, radiance);
+                    if !tracer.occluded(origin, ray.d, f32::INFINITY) {
+                        radiance = ray.env;
+                        accumulate(&mut sum, &ray.y, ray.scaled(radiance));
+                        accumulate_lobes(&mut rnm, &lobes, ray.d, ray.scaled(radiance));
                     }
                 }
                 if !direct_fits.is_empty() {
-                    samples.push(sample_in(&frame, d, weight, radiance));
+                    samples.push(sample_in(&frame, ray.d, ray.weight, radiance));
                 }
             }
             fit_texel(direct_fits, &samples, fit_out, &negative);
@@ -500,30 +504,30 @@ pub fn bake_sh_lightmap(
                 // (gathered into (1) in the direct pass), front hits the bounce, the rest
                 // nothing.
                 let fitting = !pass_fits.is_empty();
-                let mut radiance = vec![[0.0; 3]; if fitting { dirs.dirs().len() } else { 0 }];
-                let rays = for_each_ray(tracer, &surfaces, &dirs, n, origin, |r, d, end| {
-                    let l = match end {
-                        RayEnd::Escaped => env[r],
-                        RayEnd::Front(surface) => {
-                            let l = bounced(surface);
-                            accumulate(&mut sum, &basis[r], l);
-                            accumulate_lobes(&mut rnm, &lobes, d, l);
-                            l
-                        }
-                        RayEnd::Back => [0.0; 3],
-                    };
-                    if fitting {
-                        radiance[r] = l;
+                let frame = texel_frame(texels, i);
+                let mut samples = Vec::new();
+                let mut rays = 0u64;
+                let own = rays_of.own(i as u64);
+                for ray in rays_of.shared.iter().chain(&own) {
+                    let mut l = [0.0; 3];
+                    if above_horizon(n, ray.d) {
+                        rays += 1;
+                        l = trace_ray(tracer, &surfaces, origin, ray.d, |end| match end {
+                            RayEnd::Escaped => ray.env,
+                            RayEnd::Front(surface) => {
+                                let l = bounced(surface);
+                                accumulate(&mut sum, &ray.y, ray.scaled(l));
+                                accumulate_lobes(&mut rnm, &lobes, ray.d, ray.scaled(l));
+                                l
+                            }
+                            RayEnd::Back => [0.0; 3],
+                        });
                     }
-                });
+                    if fitting {
+                        samples.push(sample_in(&frame, ray.d, ray.weight, l));
+                    }
+                }
                 if fitting {
-                    let frame = texel_frame(texels, i);
-                    let samples: Vec<Sample> = dirs
-                        .dirs()
-                        .iter()
-                        .zip(&radiance)
-                        .map(|(&d, &l)| sample_in(&frame, d, weight, l))
-                        .collect();
                     fit_texel(pass_fits, &samples, fit_out, &negative);
                 }
                 rays_done.fetch_add(rays, Ordering::Relaxed);
@@ -582,15 +586,17 @@ pub fn bake_sh_lightmap(
         bounce_source,
         basis_irradiance: rnm.iter().map(|b| normalized_to_flat(&b.0)).collect(),
         fitted,
+        env: lighting.env(),
         stats: BakeStats {
             rays_traced: rays_done.into_inner(),
             seconds: start.elapsed().as_secs_f64(),
         },
     };
     log::info!(
-        "SH lightmap bake: {} texels × {} directions, {} bounces, {} bases fitted from samples: {}",
+        "SH lightmap bake: {} texels × {} directions ({} per texel from the environment's pixels), {} bounces, {} bases fitted from samples: {}",
         covered.len(),
         settings.rays,
+        rays_of.env_rays,
         settings.bounces,
         fits.len(),
         map.stats
@@ -629,7 +635,8 @@ impl GatheredPoints {
 
 /// Eq. (1) at arbitrary points `position[i]` with unit geometric normals `normal[i]`, as
 /// the last pass of the bake that made `map` gathers it at a texel: the same directions
-/// (`settings`' rays and seed), the environment's SH at each direction, and light bounced
+/// (`settings`' rays and seed) and `lighting` (with `pixels`, each point's own
+/// environment-importance rays, eq. (6)), and light bounced
 /// off the surfaces hit read from `map.bounce_source` (the error ladder's per-pixel
 /// `shlmap` rung, `crate::attribution`). With the same rays, every basis the bake fitted
 /// (`map.fitted`) is fitted at each point from its samples in `frame[i]` (tangent,
@@ -642,7 +649,7 @@ pub fn radiance_at_points(
     scene: &Scene,
     tracer: &Tracer,
     map: &ShLightmap,
-    radiance_sh: &[[f64; 3]],
+    lighting: &BakeLighting<'_>,
     settings: &ShLightmapSettings,
     position: &[Vec3],
     normal: &[Vec3],
@@ -652,31 +659,28 @@ pub fn radiance_at_points(
     assert_eq!(position.len(), frame.len(), "one frame per point");
     let dirs = DirectionSet::new(settings.rays, settings.seed);
     let weight = dirs.weight();
-    let (basis, env) = direction_tables(&dirs, radiance_sh);
+    let rays_of = RaySet::new(&dirs, lighting, settings.seed);
     let surfaces = SurfaceReader::new(scene);
     let bounced = !map.bounce_source.is_empty();
-    // The radiance arriving along ray r from `origin`: the environment where it escapes,
+    // The radiance arriving along `ray` from `origin`: the environment where it escapes,
     // light bounced off a front face, nothing off a back face.
-    let arriving = |r: usize, origin: Vec3, d: Vec3| -> [f64; 3] {
+    let arriving = |ray: &Ray, origin: Vec3| -> [f64; 3] {
         if !bounced {
-            return if tracer.occluded(origin, d, f32::INFINITY) {
+            return if tracer.occluded(origin, ray.d, f32::INFINITY) {
                 [0.0; 3]
             } else {
-                env[r]
+                ray.env
             };
         }
-        match tracer.closest_hit(origin, d) {
-            None => env[r],
-            Some(hit) => {
-                let surface = surfaces.at(&hit, origin, d);
-                if !surface.front_face {
-                    return [0.0; 3];
-                }
+        trace_ray(tracer, &surfaces, origin, ray.d, |end| match end {
+            RayEnd::Escaped => ray.env,
+            RayEnd::Front(surface) => {
                 let t = texel_index_of(map.res, surface.uv_lightmap.into());
                 let l = surface.albedo * map.bounce_source[t] / std::f32::consts::PI;
                 l.as_dvec3().into()
             }
-        }
+            RayEnd::Back => [0.0; 3],
+        })
     };
     let fits: Vec<SampleFit> = map.fitted.fits.clone();
     let negative: Vec<AtomicU64> = fits.iter().map(|_| AtomicU64::new(0)).collect();
@@ -705,14 +709,15 @@ pub fn radiance_at_points(
                 let frame = orthonormal_frame(&frame[k]);
                 let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
                 let mut samples = Vec::new();
-                for (r, &d) in dirs.dirs().iter().enumerate() {
+                let own = rays_of.own(k as u64);
+                for ray in rays_of.shared.iter().chain(&own) {
                     let mut radiance = [0.0; 3];
-                    if above_horizon(n, d) {
-                        radiance = arriving(r, origin, d);
-                        accumulate(&mut sum, &basis[r], radiance);
+                    if above_horizon(n, ray.d) {
+                        radiance = arriving(ray, origin);
+                        accumulate(&mut sum, &ray.y, ray.scaled(radiance));
                     }
                     if !fits.is_empty() {
-                        samples.push(sample_in(&frame, d, weight, radiance));
+                        samples.push(sample_in(&frame, ray.d, ray.weight, radiance));
                     }
                 }
                 *sh_point = sum.map(|c| c.map(|v| v * weight));
@@ -741,22 +746,161 @@ fn orthonormal_frame(frame: &[DVec3; 3]) -> [DVec3; 3] {
     [t, n.cross(t) * sign, n]
 }
 
-/// Per direction of `dirs`: the 9 order-3 basis values and the environment's radiance from
-/// its SH `radiance_sh` (any order ≥ 1).
-fn direction_tables(
-    dirs: &DirectionSet,
-    radiance_sh: &[[f64; 3]],
-) -> (Vec<[f64; SH_LIGHTMAP_COEFFS]>, Vec<[f64; 3]>) {
-    let lighting_order = Order::new((radiance_sh.len() as f64).sqrt() as u32).unwrap_or(Order::ONE);
-    dirs.dirs()
-        .iter()
-        .map(|d| {
-            let d = d.as_dvec3().normalize();
-            let mut y = [0.0; SH_LIGHTMAP_COEFFS];
-            eval_basis(Order::THREE, d, &mut y);
-            (y, zonal::eval_rgb(radiance_sh, lighting_order, d))
-        })
-        .unzip()
+/// What the bake's rays read of the environment where they escape (`--bake-env`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum BakeEnv {
+    /// Its SH at the lighting order, evaluated at each shared direction (eq. (1)).
+    #[default]
+    Sh,
+    /// The full-resolution map, importance-sampled beside the shared directions (eq. (6)).
+    Pixels,
+}
+
+impl BakeEnv {
+    pub const ALL: [BakeEnv; 2] = [BakeEnv::Sh, BakeEnv::Pixels];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            BakeEnv::Sh => "sh",
+            BakeEnv::Pixels => "pixels",
+        }
+    }
+}
+
+impl std::fmt::Display for BakeEnv {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for BakeEnv {
+    type Err = String;
+    fn from_str(s: &str) -> Result<BakeEnv, String> {
+        BakeEnv::ALL
+            .into_iter()
+            .find(|b| b.name() == s)
+            .ok_or_else(|| format!("unknown bake environment '{s}' (sh, pixels)"))
+    }
+}
+
+/// The environment a bake's rays see: its SH, or the map itself (`BakeEnv`).
+#[derive(Clone, Copy, Debug)]
+pub enum BakeLighting<'a> {
+    /// Radiance SH, RGB, any order ≥ 1.
+    Sh(&'a [[f64; 3]]),
+    /// The map at full resolution.
+    Pixels(&'a EnvMap),
+}
+
+impl BakeLighting<'_> {
+    pub fn env(&self) -> BakeEnv {
+        match self {
+            BakeLighting::Sh(_) => BakeEnv::Sh,
+            BakeLighting::Pixels(_) => BakeEnv::Pixels,
+        }
+    }
+}
+
+/// Shared directions per environment-importance ray of a texel with `pixels` (M = R / 4).
+pub const SHARED_RAYS_PER_ENV_RAY: u32 = 4;
+
+/// One ray of a gather: its direction, the order-3 SH basis there, the environment's
+/// radiance if it escapes, and its weight w(ω) of eq. (6) in sr.
+struct Ray {
+    d: Vec3,
+    y: [f64; SH_LIGHTMAP_COEFFS],
+    env: [f64; 3],
+    weight: f64,
+    /// w(ω) over the shared rays' 4π/R, by which its radiance enters the sums that are
+    /// scaled by 4π/R at the end (exactly 1 with `sh`).
+    ratio: f64,
+}
+
+impl Ray {
+    fn scaled(&self, radiance: [f64; 3]) -> [f64; 3] {
+        radiance.map(|c| c * self.ratio)
+    }
+}
+
+/// The rays of eq. (6): the shared directions, and with `pixels` each texel's own
+/// environment-importance directions (the same in every pass, drawn from a stream of the
+/// seed and the texel).
+struct RaySet<'a> {
+    shared: Vec<Ray>,
+    sampler: Option<EnvSampler<'a>>,
+    /// M, environment-importance rays per texel (0 with `sh` or a black map).
+    env_rays: u32,
+    /// 4π/R.
+    weight: f64,
+    seed: u64,
+}
+
+impl<'a> RaySet<'a> {
+    fn new(dirs: &DirectionSet, lighting: &BakeLighting<'a>, seed: u64) -> RaySet<'a> {
+        let weight = dirs.weight();
+        let sampler = match *lighting {
+            BakeLighting::Sh(_) => None,
+            BakeLighting::Pixels(map) => Some(EnvSampler::new(map)).filter(|s| s.total() > 0.0),
+        };
+        let env_rays = if sampler.is_some() {
+            (dirs.len() as u32 / SHARED_RAYS_PER_ENV_RAY).max(1)
+        } else {
+            0
+        };
+        let mut set = RaySet {
+            shared: Vec::new(),
+            sampler,
+            env_rays,
+            weight,
+            seed,
+        };
+        set.shared = dirs
+            .dirs()
+            .iter()
+            .map(|&d| {
+                let env = match *lighting {
+                    BakeLighting::Sh(radiance_sh) => {
+                        let order = Order::new((radiance_sh.len() as f64).sqrt() as u32)
+                            .unwrap_or(Order::ONE);
+                        zonal::eval_rgb(radiance_sh, order, d.as_dvec3().normalize())
+                    }
+                    BakeLighting::Pixels(map) => map.radiance_at(d.as_dvec3()).map(f64::from),
+                };
+                let pdf = set.sampler.as_ref().map_or(0.0, |s| s.pdf(d));
+                set.ray(d, env, pdf)
+            })
+            .collect();
+        set
+    }
+
+    /// The ray along `d` bringing `env` where it escapes, drawn by the environment's
+    /// sampler with density `pdf`: w(ω) = 1 / (R/4π + M pdf(ω)) (eq. (6)).
+    fn ray(&self, d: Vec3, env: [f64; 3], pdf: f64) -> Ray {
+        let ratio = 1.0 / (1.0 + f64::from(self.env_rays) * pdf * self.weight);
+        let mut y = [0.0; SH_LIGHTMAP_COEFFS];
+        eval_basis(Order::THREE, d.as_dvec3().normalize(), &mut y);
+        Ray {
+            d,
+            y,
+            env,
+            weight: self.weight * ratio,
+            ratio,
+        }
+    }
+
+    /// The environment-importance rays of texel (or point) `stream`; none with `sh`.
+    fn own(&self, stream: u64) -> Vec<Ray> {
+        let Some(sampler) = &self.sampler else {
+            return Vec::new();
+        };
+        let mut rng = Pcg32::new(self.seed ^ 0x454E_5652_4159, stream); // "ENVRAY"
+        (0..self.env_rays)
+            .map(|_| {
+                let (d, radiance, pdf) = sampler.sample(&mut rng);
+                self.ray(d, radiance.map(f64::from), pdf)
+            })
+            .collect()
+    }
 }
 
 fn accumulate(

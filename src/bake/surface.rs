@@ -160,18 +160,28 @@ pub(crate) fn for_each_ray(
             continue;
         }
         rays += 1;
-        let Some(hit) = tracer.closest_hit(origin, d) else {
-            f(r, d, RayEnd::Escaped);
-            continue;
-        };
-        let surface = surfaces.at(&hit, origin, d);
-        if surface.front_face {
-            f(r, d, RayEnd::Front(&surface));
-        } else {
-            f(r, d, RayEnd::Back);
-        }
+        trace_ray(tracer, surfaces, origin, d, |end| f(r, d, end));
     }
     rays
+}
+
+/// One ray of [`for_each_ray`] from `origin` along `d`: `f` called with where it ended.
+pub(crate) fn trace_ray<T>(
+    tracer: &super::trace::Tracer,
+    surfaces: &SurfaceReader<'_>,
+    origin: Vec3,
+    d: Vec3,
+    f: impl FnOnce(RayEnd<'_>) -> T,
+) -> T {
+    let Some(hit) = tracer.closest_hit(origin, d) else {
+        return f(RayEnd::Escaped);
+    };
+    let surface = surfaces.at(&hit, origin, d);
+    if surface.front_face {
+        f(RayEnd::Front(&surface))
+    } else {
+        f(RayEnd::Back)
+    }
 }
 
 /// [`for_each_ray`] calling `f(r, d, surface)` only where the ray hits the front of a

@@ -86,6 +86,11 @@ pub(super) struct SceneArgs {
     /// texel's order-3 SH).
     #[arg(long = "basis-fit", default_value_t = shvis::sh::samples::BasisFit::Samples)]
     pub(super) basis_fit: shvis::sh::samples::BasisFit,
+    /// What the SH lightmap bake's rays read of the environment where they escape: sh (its
+    /// order-8 SH at each shared direction) or pixels (the full-resolution map, with a
+    /// quarter as many rays again per texel importance-sampled from it).
+    #[arg(long = "bake-env", default_value_t = shvis::bake::shlmap::BakeEnv::Sh)]
+    pub(super) bake_env: shvis::bake::shlmap::BakeEnv,
     /// Lighting order O of the transfer matrices of the nmprt* techniques (9 × O² per
     /// texel and colour): at most the prepared lighting's order 8.
     #[arg(long, default_value_t = shvis::bake::transfer::DEFAULT_LIGHTING_ORDER.get(), value_parser = clap::value_parser!(u32).range(1..=shvis::prepare::LIGHTING_ORDER as i64))]

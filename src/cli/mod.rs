@@ -298,6 +298,7 @@ fn prepare_settings(
         cache_dir: None,
         sh_lightmap_bounces: needs(|n| n.sh_lightmap),
         sample_fits,
+        bake_env: scene.bake_env,
         transfer_bounces: needs(|n| n.transfer),
         transfer_order: shvis::sh::Order::new(scene.transfer_order).context("--transfer-order")?,
         height_map: scene

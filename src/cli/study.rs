@@ -117,6 +117,9 @@ pub(super) struct StudyRaysArgs {
     /// What the tangent-frame bases are fitted from: samples or l2 (as for `bench`).
     #[arg(long = "basis-fit", default_value_t = shvis::sh::samples::BasisFit::Samples)]
     basis_fit: shvis::sh::samples::BasisFit,
+    /// What the bake's escaped rays read of the environment: sh or pixels (as for `bench`).
+    #[arg(long = "bake-env", default_value_t = shvis::bake::shlmap::BakeEnv::Sh)]
+    bake_env: shvis::bake::shlmap::BakeEnv,
     /// Reflections baked into the lightmap and in the reference.
     #[arg(long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
     bounces: u32,
@@ -436,6 +439,7 @@ fn run_rays(a: StudyRaysArgs) -> Result<()> {
         h_order: 3,
         sg_solve: a.sg_solve,
         basis_fit: a.basis_fit,
+        bake_env: a.bake_env,
         transfer_order: shvis::bake::transfer::DEFAULT_LIGHTING_ORDER.get(),
         height_map: None,
         height_scale: 1.0,

@@ -1,6 +1,6 @@
 //! Distant lighting environments: equirectangular radiance maps, their loading
 //! ([`equirect`]), the built-in procedural sky ([`sky`]) and their SH projection
-//! ([`project`]).
+//! ([`project`]), and their importance sampling ([`sampler`]).
 //!
 //! # Conventions (DESIGN §1)
 //!
@@ -33,6 +33,7 @@
 pub mod angular;
 pub mod equirect;
 pub mod project;
+pub mod sampler;
 pub mod schedule;
 pub mod sh_file;
 pub mod sky;
@@ -210,6 +211,21 @@ impl EnvMap {
             "texel ({x}, {y}) outside"
         );
         self.texels[y as usize * self.width as usize + x as usize]
+    }
+
+    /// Row-major index of the texel whose solid angle holds direction `d` (non-zero).
+    pub fn texel_index(&self, d: DVec3) -> usize {
+        let uv = Self::dir_to_uv(d);
+        let (w, h) = (self.width as usize, self.height as usize);
+        let x = ((uv.x * w as f64) as usize).min(w - 1);
+        let y = ((uv.y * h as f64) as usize).min(h - 1);
+        y * w + x
+    }
+
+    /// Radiance in direction `d` (non-zero) read as piecewise constant: the texel that
+    /// holds it (how `sampler` and `project` read the map).
+    pub fn radiance_at(&self, d: DVec3) -> [f32; 3] {
+        self.texels[self.texel_index(d)]
     }
 
     /// Bilinearly filtered radiance in direction `d` (non-zero), between texel centres;

@@ -49,6 +49,7 @@ use rayon::prelude::*;
 use crate::bake::surface::SurfaceReader;
 use crate::bake::trace::Tracer;
 use crate::env::EnvMap;
+use crate::env::sampler::{EnvSampler, Pcg32};
 use crate::gpu::layout::ShaderIds;
 use crate::gpu::{Context, GpuError, ShaderStage, compile_glsl};
 use crate::render::{Frame, FrameSettings, SceneGpu};
@@ -588,93 +589,6 @@ fn cosine_sample(n: Vec3, rng: &mut Pcg32) -> Vec3 {
     let (t, b) = n.any_orthonormal_pair();
     let z = (1.0 - u1).max(0.0).sqrt();
     (t * (r * phi.cos()) as f32 + b * (r * phi.sin()) as f32 + n * z as f32).normalize()
-}
-
-/// Importance sampling of an equirect map by luminance × texel solid angle.
-pub struct EnvSampler<'a> {
-    env: &'a EnvMap,
-    /// Cumulative weights over texels (row-major), last = total.
-    cdf: Vec<f64>,
-}
-
-impl<'a> EnvSampler<'a> {
-    pub fn new(env: &'a EnvMap) -> Self {
-        let mut cdf = Vec::with_capacity(env.texels.len());
-        let mut total = 0.0;
-        for y in 0..env.height {
-            let omega = env.texel_solid_angle(y);
-            for x in 0..env.width {
-                let [r, g, b] = env.texel(x, y);
-                total +=
-                    (0.2126 * r as f64 + 0.7152 * g as f64 + 0.0722 * b as f64).max(0.0) * omega;
-                cdf.push(total);
-            }
-        }
-        EnvSampler { env, cdf }
-    }
-
-    /// (direction, radiance, pdf per steradian) of one sample.
-    fn sample(&self, rng: &mut Pcg32) -> (Vec3, [f32; 3], f64) {
-        let total = *self.cdf.last().unwrap_or(&0.0);
-        if total <= 0.0 {
-            return (Vec3::Y, [0.0; 3], 0.0);
-        }
-        let target = rng.next_f64() * total;
-        let t = self
-            .cdf
-            .partition_point(|&c| c <= target)
-            .min(self.cdf.len() - 1);
-        let (w, h) = (self.env.width as usize, self.env.height as usize);
-        let (x, y) = (t % w, t / w);
-        let p_texel = (self.cdf[t] - if t > 0 { self.cdf[t - 1] } else { 0.0 }) / total;
-        let omega = self.env.texel_solid_angle(y as u32);
-        // Uniform in solid angle within the texel: φ uniform, cos θ uniform.
-        let pi = std::f64::consts::PI;
-        let (theta0, theta1) = (pi * y as f64 / h as f64, pi * (y + 1) as f64 / h as f64);
-        let cos_theta = theta0.cos() + rng.next_f64() * (theta1.cos() - theta0.cos());
-        let u = (x as f64 + rng.next_f64()) / w as f64;
-        let phi = 2.0 * pi * (u - 0.5);
-        let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-        let dir = Vec3::new(
-            (sin_theta * phi.sin()) as f32,
-            cos_theta as f32,
-            (-sin_theta * phi.cos()) as f32,
-        );
-        (dir, self.env.texels[t], p_texel / omega)
-    }
-}
-
-/// PCG32 (O'Neill), one stream per pixel.
-struct Pcg32 {
-    state: u64,
-    inc: u64,
-}
-
-impl Pcg32 {
-    fn new(seed: u64, stream: u64) -> Self {
-        let mut rng = Pcg32 {
-            state: 0,
-            inc: (stream << 1) | 1,
-        };
-        rng.next_u32();
-        rng.state = rng.state.wrapping_add(seed ^ 0x853C_49E6_748F_EA9B);
-        rng.next_u32();
-        rng
-    }
-    fn next_u32(&mut self) -> u32 {
-        let old = self.state;
-        self.state = old
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(self.inc);
-        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
-        xorshifted.rotate_right((old >> 59) as u32)
-    }
-    /// Uniform in [0, 1) with 53 bits.
-    fn next_f64(&mut self) -> f64 {
-        let hi = (self.next_u32() >> 5) as u64;
-        let lo = (self.next_u32() >> 6) as u64;
-        ((hi << 26) | lo) as f64 / (1u64 << 53) as f64
-    }
 }
 
 #[cfg(test)]

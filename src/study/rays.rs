@@ -61,6 +61,8 @@ pub struct RaysStudy {
     pub env: String,
     pub vis_res: u32,
     pub basis_fit: String,
+    /// What the bake's escaped rays read of the environment (`--bake-env`).
+    pub bake_env: String,
     pub bounces: u32,
     pub rows: Vec<RaysRow>,
     pub bakes: Vec<RaysBake>,
@@ -96,6 +98,7 @@ pub fn run(
         env: prepare_settings.env.clone(),
         vis_res: prepare_settings.vis_res,
         basis_fit: prepare_settings.options.AmbientCube.to_string(),
+        bake_env: prepare_settings.bake_env.to_string(),
         bounces: bench.bounces,
         rows: Vec::new(),
         bakes: Vec::new(),
@@ -157,8 +160,9 @@ pub fn markdown(study: &RaysStudy) -> String {
         "# Error against rays per texel: {} under `{}`\n\n\
          Each row's relative RMSE against the inter-reflected footprint reference ({} \
          bounces), the lightmap baked at {}² texels with N rays per texel; tangent-frame \
-         bases fitted from `{}`. Bytes per texel: the row's lightmap bytes over its texels.\n\n",
-        study.scene, study.env, study.bounces, study.vis_res, study.basis_fit
+         bases fitted from `{}`; escaped rays read the environment's `{}` (`--bake-env`). \
+         Bytes per texel: the row's lightmap bytes over its texels.\n\n",
+        study.scene, study.env, study.bounces, study.vis_res, study.basis_fit, study.bake_env
     );
     let counts = ray_counts(study);
     for path in paths(study) {
@@ -412,6 +416,7 @@ mod tests {
             env: "sky".into(),
             vis_res: 128,
             basis_fit: "samples".into(),
+            bake_env: "sh".into(),
             bounces: 2,
             rows: vec![
                 row("hb4", 64, 0.4),
