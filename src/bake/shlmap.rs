@@ -20,8 +20,9 @@
 //! (gutters dilated, so hits near chart borders read their chart). `bounces` = N gives
 //! light that has reflected up to N times before reaching x. L_env is the environment's SH
 //! at the lighting order (8), the same smooth lighting the `unc*` tables use, evaluated at
-//! each ray direction: a small sun is not aliased by the shared directions. ρ is the
-//! surface's albedo ([`super::surface`]).
+//! each ray direction: a small sun is not aliased by the shared directions (or, with
+//! `--bake-env pixels`, the map itself, eq. (6)). ρ is the surface's albedo
+//! ([`super::surface`]).
 //!
 //! Shading (`glsl/technique/shlmap.frag`) convolves the 9 coefficients with the clamped
 //! cosine (A_l: π, 2π/3, π/4) and evaluates at the normal-mapped normal — the paper's
@@ -85,9 +86,27 @@
 //! (1), no basis fitted from another. A texel's samples live only while it is fitted; the
 //! fits are stored per texel ([`FittedBasis`], f16 under a power-of-two scale per texel and
 //! basis: [`BlockF16`]) and dilated like the coefficients.
-//! L_env is the environment's order-8 SH at the ray's direction, as for (1): what every
-//! basis sees of the sky (`shvis study bases` measures, per basis, what the full-resolution
-//! environment would change on a floor texel).
+//! L_env is what the bake's lighting gives at the ray's direction, as for (1).
+//!
+//! # The environment the rays see (`--bake-env`)
+//!
+//! With `sh` (the default) L_env is the environment's SH at the lighting order (8) at each
+//! shared direction: the smooth lighting the PRT techniques see, so every row of a table is
+//! lit alike; a small sun is not aliased, it is blurred and rings. With `pixels` it is the
+//! full-resolution map (piecewise constant, `crate::env::sampler`), and each texel traces
+//! M = R/4 rays of its own drawn from the map in proportion to luminance × solid angle
+//! (pdf_env, the same in every pass: a stream of the seed and the texel). The shared
+//! directions (uniform, pdf 1/4π) and the texel's own are combined by the balance
+//! heuristic (Veach & Guibas 1995): every ray s, of either kind, carries its whole L_in and
+//! enters (1), (3)–(5) with the weight
+//!
+//! ```text
+//! w(ω_s) = 1 / (R/4π + M · pdf_env(ω_s))                                                 (6)
+//! ```
+//!
+//! in place of 4π/R, which keeps each sum unbiased for its integral: a sun that the shared
+//! directions would miss, or hit at 4π/R each, is reached by the texel's own rays and
+//! weighed by their density. With `sh` M = 0 and (6) is 4π/R.
 //!
 //! Texels are independent within a pass and sum their rays in a fixed order, so a bake is
 //! bit-identical for any thread count. Results are dilated [`DILATION_PASSES`] texels

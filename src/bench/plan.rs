@@ -345,7 +345,8 @@ fn bake_names(prepare: &PrepareSettings, techniques: &[Technique]) -> Vec<&'stat
 /// The bakes' seconds on a 2-core machine (the house at 512² texels × 1024 rays: visibility
 /// 0.5 s, the SH lightmap 11 s and the transfer matrices 44 s with 2 bounces, each basis
 /// fitted from the samples [`SECONDS_PER_SAMPLE_FIT`], k-means 0.13 s per cluster, a CPCA
-/// fit 5 s), scaled by texels × rays.
+/// fit 5 s), scaled by texels × rays; the SH lightmap's rays and fits by 1 + 1/4 with
+/// `--bake-env pixels` (each texel's own rays).
 fn default_bake_seconds(prepare: &PrepareSettings, techniques: &[Technique]) -> f64 {
     let scale =
         f64::from(prepare.vis_res).powi(2) * f64::from(prepare.rays) / (512.0 * 512.0 * 1024.0);
@@ -355,9 +356,14 @@ fn default_bake_seconds(prepare: &PrepareSettings, techniques: &[Technique]) -> 
     } else {
         0.0
     };
+    let own_rays = match prepare.bake_env {
+        crate::bake::shlmap::BakeEnv::Sh => 1.0,
+        crate::bake::shlmap::BakeEnv::Pixels => {
+            1.0 + 1.0 / f64::from(crate::bake::shlmap::SHARED_RAYS_PER_ENV_RAY)
+        }
+    };
     let mut seconds = 0.5
-        + 11.0 * passes(prepare.sh_lightmap_bounces)
-        + SECONDS_PER_SAMPLE_FIT * fits
+        + (11.0 * passes(prepare.sh_lightmap_bounces) + SECONDS_PER_SAMPLE_FIT * fits) * own_rays
         + 44.0 * passes(prepare.transfer_bounces);
     for t in techniques {
         if let Some(c) = t.needs().clusters {
