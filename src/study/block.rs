@@ -643,6 +643,7 @@ mod tests {
             bounce_source: Vec::new(),
             basis_irradiance: Vec::new(),
             fitted: Default::default(),
+            env: Default::default(),
             stats: Default::default(),
         }
     }
