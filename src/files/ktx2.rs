@@ -5,9 +5,15 @@
 //! ```text
 //! identifier · header (vkFormat, typeSize, width, height, depth 0, layers, faces, levels 1,
 //! supercompression 0) · index (DFD, key/value data, no global data) · level index ·
-//! DFD · key/value data ("KTXwriter") · level 0, aligned to lcm(block bytes, 4):
-//! layer-major, then face, then rows
+//! DFD · key/value data ("KTXorientation", "KTXwriter") · level 0, aligned to
+//! lcm(block bytes, 4): layer-major, then face, then rows
 //! ```
+//!
+//! The DFD is the one libktx writes for the format (Khronos `dfdutils`, `createDFDPacked`
+//! and `createDFDCompressed`): BT.709 primaries, linear transfer, straight alpha, and each
+//! sample's bounds as libktx sets them — 0 … 2^bits − 1 for UNORM, 0 … 0xFFFFFFFF for a
+//! UNORM block (BC4, BC7), −1.0 … 1.0 for SFLOAT and 0.0 … 1.0 for a UFLOAT block (BC6H), as
+//! f32 bits. Rows run down from the image's top-left texel (v = 0 first): orientation "rd".
 
 use ash::vk;
 
@@ -15,6 +21,9 @@ use ash::vk;
 pub const IDENTIFIER: [u8; 12] = [
     0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A,
 ];
+
+/// The `KTXorientation` of every file: rows run right and down from the first texel.
+pub const ORIENTATION: &str = "rd";
 
 /// What one KTX2 file holds: `layers` array layers (0: not an array) of `faces` faces (1,
 /// or 6 for a cube) of `width` × `height` texels of `format`, in `data` (level 0).
@@ -77,7 +86,7 @@ fn describe(format: vk::Format) -> Option<(u8, u8, u8, u32, Vec<Sample>)> {
                 .collect(),
         ),
         vk::Format::BC4_UNORM_BLOCK => (BC4, 4, 8, 1, vec![(0, 63, 0, 0, u32::MAX)]),
-        vk::Format::BC6H_UFLOAT_BLOCK => (BC6H, 4, 16, 1, vec![(0, 127, FLOAT, 0, 0x7F80_0000)]),
+        vk::Format::BC6H_UFLOAT_BLOCK => (BC6H, 4, 16, 1, vec![(0, 127, FLOAT, 0, one)]),
         vk::Format::BC7_UNORM_BLOCK => (BC7, 4, 16, 1, vec![(0, 127, 0, 0, u32::MAX)]),
         _ => return None,
     })
@@ -112,11 +121,18 @@ pub fn encode(image: &Ktx2Image<'_>) -> Option<Vec<u8>> {
         dfd.extend_from_slice(&upper.to_le_bytes());
     }
 
+    // Pairs sorted by key, each padded to 4 bytes (KTX 2.0 §3.11).
     let mut kvd = Vec::new();
-    let pair = format!("KTXwriter\0shvis {}\0", env!("CARGO_PKG_VERSION"));
-    kvd.extend_from_slice(&(pair.len() as u32).to_le_bytes());
-    kvd.extend_from_slice(pair.as_bytes());
-    kvd.resize(kvd.len().next_multiple_of(4), 0);
+    let writer = format!("shvis {}", env!("CARGO_PKG_VERSION"));
+    for (key, value) in [
+        ("KTXorientation", ORIENTATION),
+        ("KTXwriter", writer.as_str()),
+    ] {
+        let pair = format!("{key}\0{value}\0");
+        kvd.extend_from_slice(&(pair.len() as u32).to_le_bytes());
+        kvd.extend_from_slice(pair.as_bytes());
+        kvd.resize(kvd.len().next_multiple_of(4), 0);
+    }
 
     let level_index_at = 80usize;
     let dfd_at = level_index_at + 24;
@@ -193,6 +209,11 @@ mod tests {
         assert_eq!(offset % 16, 0);
         assert_eq!(&bytes[offset..offset + length], &data[..]);
         assert_eq!(bytes.len(), offset + length);
+        let (kvd_at, kvd_len) = (u32_at(56) as usize, u32_at(60) as usize);
+        let kvd = &bytes[kvd_at..kvd_at + kvd_len];
+        let first = u32::from_le_bytes(kvd[..4].try_into().unwrap()) as usize;
+        assert_eq!(&kvd[4..4 + first], b"KTXorientation\0rd\0");
+        assert!(kvd.windows(10).any(|w| w == b"KTXwriter\0"));
         assert!(
             encode(&Ktx2Image {
                 format: vk::Format::D32_SFLOAT,
@@ -204,5 +225,25 @@ mod tests {
             })
             .is_none()
         );
+    }
+
+    /// Each sample's lower and upper bound as libktx writes them for the format.
+    #[test]
+    fn sample_bounds_are_libktx_s() {
+        let (zero, one, minus_one) = (0u32, 1f32.to_bits(), (-1f32).to_bits());
+        for (format, lower, upper) in [
+            (vk::Format::BC6H_UFLOAT_BLOCK, zero, one),
+            (vk::Format::BC7_UNORM_BLOCK, zero, u32::MAX),
+            (vk::Format::BC4_UNORM_BLOCK, zero, u32::MAX),
+            (vk::Format::R16G16B16A16_SFLOAT, minus_one, one),
+            (vk::Format::R32G32B32A32_SFLOAT, minus_one, one),
+            (vk::Format::R16_SFLOAT, minus_one, one),
+            (vk::Format::R8G8B8A8_UNORM, zero, 255),
+        ] {
+            let (.., samples) = describe(format).unwrap();
+            for (.., l, u) in samples {
+                assert_eq!((l, u), (lower, upper), "{format:?}");
+            }
+        }
     }
 }
