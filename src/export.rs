@@ -300,19 +300,19 @@ fn table_files(
 }
 
 impl Export {
-    /// Writes every file into `dir` (created if missing), each atomically.
+    /// Writes the export into `dir` as one run ([`crate::files::replace_dir`]): the files
+    /// of an earlier export there are replaced all at once, never mixed with these; a
+    /// folder holding anything but an earlier export is refused.
     ///
     /// # Errors
-    /// A file that cannot be written.
+    /// A file that cannot be written, or a `dir` that is not an earlier export.
     pub fn write(&self, dir: &Path) -> Result<(), ExportError> {
-        std::fs::create_dir_all(dir).map_err(|cause| crate::files::FileError::Io {
-            path: dir.to_path_buf(),
-            action: "create the directory",
-            cause,
+        crate::files::replace_dir(dir, "--out", is_export, |tmp| {
+            for (name, bytes) in &self.files {
+                crate::files::write_atomic(&tmp.join(name), bytes)?;
+            }
+            Ok(())
         })?;
-        for (name, bytes) in &self.files {
-            crate::files::write_atomic(&dir.join(name), bytes)?;
-        }
         Ok(())
     }
 
@@ -323,4 +323,12 @@ impl Export {
             .find(|(n, _)| n == name)
             .map(|(_, b)| b.as_slice())
     }
+}
+
+/// Whether `dir` holds an export: its `manifest.json` says `shvis_export`.
+fn is_export(dir: &Path) -> bool {
+    crate::files::read_bounded(&dir.join("manifest.json"), 1 << 20, "an export manifest")
+        .ok()
+        .and_then(|bytes| serde_json::from_slice::<serde_json::Value>(&bytes).ok())
+        .is_some_and(|m| m.get("shvis_export").is_some())
 }

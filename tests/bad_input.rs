@@ -2545,3 +2545,102 @@ fn copy_dir(from: &Path, to: &Path) {
         std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
     }
 }
+
+/// `shvis export` writes its folder as one run (`files::replace_dir`): an export killed
+/// halfway through a file (`files::KILL_WHILE_WRITING_ENV`) leaves the earlier export
+/// whole, file for file; the next export replaces it whole (a file only the earlier folder
+/// had is gone) and removes the killed run's temporary; a folder that is not an export, or
+/// one holding an input of the run, is refused.
+#[cfg(feature = "test-hooks")]
+#[test]
+fn an_export_replaces_the_earlier_one_whole_or_not_at_all() {
+    let dir = std::env::temp_dir().join(format!("shvis-export-run-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("export");
+    let export = |seed: &str, env: &str, out: &Path, kill_at: Option<&str>| {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_shvis"));
+        cmd.args([
+            "export",
+            "--technique",
+            "shlmap",
+            "--path",
+            "dx10",
+            "--vis-res",
+            "64",
+            "--rays",
+            "16",
+            "--seed",
+            seed,
+            "--env",
+            env,
+            "--out",
+            &s(out),
+        ])
+        .env("SHVIS_CACHE_DIR", dir.join("cache"))
+        .env("RUST_LOG", "off");
+        if let Some(file) = kill_at {
+            cmd.env(shvis::files::KILL_WHILE_WRITING_ENV, file);
+        }
+        cmd.output().unwrap()
+    };
+    let read_dir = |d: &Path| -> BTreeMap<String, Vec<u8>> {
+        std::fs::read_dir(d)
+            .unwrap()
+            .flatten()
+            .map(|e| {
+                (
+                    e.file_name().to_string_lossy().into_owned(),
+                    std::fs::read(e.path()).unwrap(),
+                )
+            })
+            .collect()
+    };
+    let first = export("0", "sky", &out, None);
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    std::fs::write(out.join("only-in-the-earlier-export.txt"), "old").unwrap();
+    let earlier = read_dir(&out);
+    let killed = export("1", "sky", &out, Some("per_texel.ktx2"));
+    assert!(!killed.status.success(), "the hook kills the export");
+    assert_eq!(read_dir(&out), earlier, "the earlier export is left whole");
+    let temporaries = |d: &Path| {
+        std::fs::read_dir(d)
+            .unwrap()
+            .flatten()
+            .filter(|e| e.file_name().to_string_lossy().contains(".tmp-"))
+            .count()
+    };
+    assert_eq!(temporaries(&dir), 1, "the killed run's temporary folder");
+    let next = export("1", "sky", &out, None);
+    assert!(
+        next.status.success(),
+        "{}",
+        String::from_utf8_lossy(&next.stderr)
+    );
+    let replaced = read_dir(&out);
+    assert!(!replaced.contains_key("only-in-the-earlier-export.txt"));
+    assert_ne!(replaced["per_texel.ktx2"], earlier["per_texel.ktx2"]);
+    assert_eq!(temporaries(&dir), 0, "the stale temporary is removed");
+
+    let other = dir.join("notes");
+    std::fs::create_dir_all(&other).unwrap();
+    std::fs::write(other.join("notes.txt"), "mine").unwrap();
+    let refused = export("0", "sky", &other, None);
+    assert_eq!(refused.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("not an earlier run's"));
+    assert_eq!(std::fs::read(other.join("notes.txt")).unwrap(), b"mine");
+
+    let env = out.join("probe.exr");
+    let mut probe = shvis::env::EnvMap::from_fn(8, 4, |_| [1.0; 3]);
+    probe.texels[0] = [2.0; 3];
+    probe.save_exr(&env).unwrap();
+    let refused = export("0", &s(&env), &out, None);
+    assert_eq!(refused.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("--env input"));
+    assert!(env.exists(), "the input survives");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -29,8 +29,9 @@ pub(super) struct ExportArgs {
     /// Bounces of inter-reflection baked for shlmap and the bases derived from it.
     #[arg(long, default_value_t = shvis::bake::shlmap::DEFAULT_BOUNCES, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
     bounces: u32,
-    /// Output folder (created if missing): the KTX2 files, params.bin, decode.glsl and
-    /// manifest.json.
+    /// Output folder: the KTX2 files, params.bin, decode.glsl and manifest.json, written as
+    /// one run (an earlier export there is replaced whole; any other non-empty folder is
+    /// refused).
     #[arg(short, long)]
     out: PathBuf,
     #[command(flatten)]
@@ -48,6 +49,17 @@ pub(super) fn run_export(a: ExportArgs) -> Result<()> {
             a.technique
         );
     }
+    // The export replaces --out whole: no input may lie inside it.
+    let env = ["angular:", "sh:"]
+        .iter()
+        .find_map(|prefix| a.env.strip_prefix(prefix))
+        .unwrap_or(&a.env);
+    let (env, scene) = (PathBuf::from(env), PathBuf::from(&a.scene.scene));
+    let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--env", &env), ("--scene", &scene)];
+    if let Some(h) = &a.scene.height_map {
+        inputs.push(("--height-map", h));
+    }
+    shvis::files::check_inputs_outside(&a.out, "--out", &inputs)?;
     let settings = prepare_settings(&a.scene, &a.env, &[a.technique], a.bounces)?;
     let mut prepared = shvis::prepare::prepare(&settings)?;
     prepared.prepare_techniques(&[a.technique])?;

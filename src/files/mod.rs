@@ -10,6 +10,11 @@
 //!   temporaries being written are removed before the process exits (130 or 143;
 //!   [`remove_temporaries_on_interrupt`]); [`remove_stale_temps`] deletes those of runs that
 //!   were killed outright (their process is gone).
+//! - **Folders written as one run** go through [`replace_dir`]: every file is written into a
+//!   temporary folder `.NAME.tmp-PID-N` beside the output folder, which then takes the
+//!   output's place in one rename (an atomic exchange where an earlier output is there), so
+//!   a kill at any point leaves the earlier folder whole or the new one whole, and no file
+//!   of an earlier run survives beside a new one's.
 //! - [`check_writable_dir`] creates a directory and a probe file in it before any work, so
 //!   an unwritable `--out` or cache is reported before a bake, not after.
 //! - A [`Manifest`] (`manifest.json`, written last) lists a directory's files with their
@@ -178,6 +183,30 @@ pub fn check_outputs_spare_inputs(
     Ok(())
 }
 
+/// Refuses a run that replaces the folder `dir` whole ([`replace_dir`]) while one of its
+/// inputs lies inside it (links followed): the replacement would delete it. `inputs` pair
+/// each path with the option that names it; `output` names the folder's option.
+///
+/// # Errors
+/// [`FileError::OutputIsInput`] for the first input inside `dir`.
+pub fn check_inputs_outside(
+    dir: &Path,
+    output: &str,
+    inputs: &[(&str, &Path)],
+) -> Result<(), FileError> {
+    let dir = resolved(dir);
+    for &(option, path) in inputs {
+        if path.exists() && resolved(path).starts_with(&dir) {
+            return Err(FileError::OutputIsInput {
+                path: path.to_path_buf(),
+                output: format!("{output} (a folder replaced whole)"),
+                input: format!("the {option} input"),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// The bytes of the regular file at `path` (links followed), if it holds at most `limit`
 /// bytes; `what` names the kind of input in the error.
 ///
@@ -318,6 +347,147 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
     Ok(())
 }
 
+/// Writes the output folder `dir` as one run ([`write_atomic`]'s guarantee for a folder): a
+/// temporary folder `.NAME.tmp-PID-N` beside `dir` is created, `fill` writes every file
+/// into it, and it takes `dir`'s place in one step — `rename` where `dir` does not exist,
+/// an atomic exchange (`renameat2(RENAME_EXCHANGE)`) where it does, after which the
+/// earlier folder is removed. A kill at any point leaves the earlier folder whole or the
+/// new one whole; the temporary a killed run leaves is removed by the next run in the
+/// same parent ([`remove_stale_temps`]). An existing `dir` is replaced only when it is
+/// empty or `replaceable(dir)` (an earlier run's folder): anything else is refused. Through
+/// a symbolic link to a folder, the link's target is replaced and the link kept. `what`
+/// names the option in errors.
+///
+/// # Errors
+/// [`FileError::Unwritable`] for a `dir` that is not a folder or holds other files;
+/// `fill`'s error (the temporary folder removed); [`FileError::Io`] for a step that fails.
+pub fn replace_dir(
+    dir: &Path,
+    what: &str,
+    replaceable: impl Fn(&Path) -> bool,
+    fill: impl FnOnce(&Path) -> Result<(), FileError>,
+) -> Result<(), FileError> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let unwritable = |path: &Path, why: &str| FileError::Unwritable {
+        path: path.to_path_buf(),
+        what: what.to_string(),
+        cause: io::Error::other(why.to_string()),
+    };
+    let io_error = |path: &Path, action: &'static str| {
+        let path = path.to_path_buf();
+        move |cause| FileError::Io {
+            path,
+            action,
+            cause,
+        }
+    };
+    let linked = fs::symlink_metadata(dir)
+        .is_ok_and(|m| m.file_type().is_symlink())
+        .then(|| fs::canonicalize(dir).ok())
+        .flatten();
+    let dir = linked.as_deref().unwrap_or(dir);
+    let exists = match fs::symlink_metadata(dir) {
+        Ok(m) if m.is_dir() => true,
+        Ok(_) => return Err(unwritable(dir, "it exists and is not a folder")),
+        Err(_) => false,
+    };
+    if exists {
+        let empty = fs::read_dir(dir).is_ok_and(|mut entries| entries.next().is_none());
+        if !empty && !replaceable(dir) {
+            return Err(unwritable(
+                dir,
+                "it holds files that are not an earlier run's; choose a new or empty folder",
+            ));
+        }
+    }
+    let parent = match dir.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    fs::create_dir_all(parent).map_err(io_error(parent, "create the directory"))?;
+    remove_stale_temps(parent);
+    let name = dir
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".to_string());
+    let tmp = parent.join(format!(
+        ".{name}.tmp-{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    fs::create_dir(&tmp).map_err(io_error(&tmp, "create the directory"))?;
+    let filled = fill(&tmp).and_then(|()| {
+        File::open(&tmp)
+            .and_then(|d| d.sync_all())
+            .map_err(io_error(&tmp, "write"))
+    });
+    if let Err(e) = filled {
+        let _ = fs::remove_dir_all(&tmp); // best effort: the error below is what matters
+        return Err(e);
+    }
+    let placed = if exists {
+        exchange(&tmp, dir).or_else(|e| match e.raw_os_error() {
+            // A file system without the exchange: the earlier folder steps aside first.
+            Some(libc::EINVAL | libc::ENOSYS | libc::ENOTSUP) => {
+                let aside = parent.join(format!(
+                    ".{name}.tmp-{}-{}",
+                    std::process::id(),
+                    COUNTER.fetch_add(1, Ordering::Relaxed)
+                ));
+                fs::rename(dir, &aside)?;
+                fs::rename(&tmp, dir)?;
+                fs::rename(&aside, &tmp)
+            }
+            _ => Err(e),
+        })
+    } else {
+        fs::rename(&tmp, dir)
+    };
+    if let Err(cause) = placed {
+        let _ = fs::remove_dir_all(&tmp);
+        return Err(FileError::Io {
+            path: dir.to_path_buf(),
+            action: "replace",
+            cause,
+        });
+    }
+    if exists {
+        // The temporary's name now holds the earlier folder.
+        let _ = fs::remove_dir_all(&tmp);
+    }
+    if let Ok(d) = File::open(parent) {
+        let _ = d.sync_all();
+    }
+    Ok(())
+}
+
+/// Swaps the names `a` and `b` in one step (Linux `renameat2` with `RENAME_EXCHANGE`).
+#[allow(unsafe_code)]
+fn exchange(a: &Path, b: &Path) -> io::Result<()> {
+    use std::os::unix::ffi::OsStrExt;
+    let c = |p: &Path| {
+        std::ffi::CString::new(p.as_os_str().as_bytes())
+            .map_err(|_| io::Error::other("NUL in path"))
+    };
+    let (a, b) = (c(a)?, c(b)?);
+    // SAFETY: both pointers are NUL-terminated strings that outlive the call; renameat2
+    // reads them and touches no other memory of ours.
+    let r = unsafe {
+        libc::renameat2(
+            libc::AT_FDCWD,
+            a.as_ptr(),
+            libc::AT_FDCWD,
+            b.as_ptr(),
+            libc::RENAME_EXCHANGE,
+        )
+    };
+    if r == 0 {
+        Ok(())
+    } else {
+        Err(io::Error::last_os_error())
+    }
+}
+
 /// [`write_atomic`] with the plain I/O error (for callers that name the file themselves):
 /// the drop-in replacement of `std::fs::write` in shvis.
 ///
@@ -447,7 +617,8 @@ fn kill_self() -> ! {
     std::process::abort();
 }
 
-/// Removes temporaries `.NAME.tmp-PID-N` in `dir` left by processes that no longer run
+/// Removes temporaries `.NAME.tmp-PID-N` (files, or [`replace_dir`]'s folders) in `dir` left
+/// by processes that no longer run
 /// (on systems without `/proc`, those older than a day); returns how many were removed.
 /// Best effort: unreadable directories and entries are skipped.
 pub fn remove_stale_temps(dir: &Path) -> usize {
@@ -463,7 +634,13 @@ pub fn remove_stale_temps(dir: &Path) -> usize {
         if pid == std::process::id() || process_alive(pid, &entry) {
             continue;
         }
-        if fs::remove_file(entry.path()).is_ok() {
+        let is_dir = entry.file_type().is_ok_and(|t| t.is_dir());
+        let gone = if is_dir {
+            fs::remove_dir_all(entry.path())
+        } else {
+            fs::remove_file(entry.path())
+        };
+        if gone.is_ok() {
             log::info!("removed {} (left by a killed run)", entry.path().display());
             removed += 1;
         }
