@@ -7,6 +7,8 @@
 //! table_{i}.ktx2         the normal-indexed tables: cube arrays (faces 6) of RGBA16F
 //! params.bin             the uniform block, std140, as the shader declares it
 //! decode.glsl            the technique's fragment shader as one self-contained file
+//! scene.gltf, scene.bin  the scene the lightmap was baked for, with its lightmap UVs
+//! albedo.png, normal.png   (TEXCOORD_1) and material (`scene::gltf::write`)
 //! manifest.json          what each file holds, the decode, the conventions
 //! ```
 //!
@@ -151,6 +153,9 @@ pub fn export(
     defines.extend_from_slice(&lighting.defines);
     let glsl = crate::gpu::flattened_glsl(shader.path, &defines)?;
     files.push(("decode.glsl".into(), glsl.into_bytes()));
+    let geometry = crate::scene::gltf::write::write_gltf(&prepared.scene)
+        .map_err(|e| refused(format!("the scene's glTF: {e}")))?;
+    files.extend(geometry);
     let layout = crate::gpu::layout::SHADER_MACROS
         .iter()
         .map(|(n, v)| (format!("SHVIS_{n}"), json!(v)))
@@ -162,6 +167,17 @@ pub fn export(
         "family": crate::technique::catalog::family_of(technique),
         "per_texel": per_texel,
         "tables": tables,
+        "geometry": {
+            "gltf": crate::scene::gltf::write::GLTF_FILE,
+            "files": [
+                crate::scene::gltf::write::BIN_FILE,
+                crate::scene::gltf::write::ALBEDO_FILE,
+                crate::scene::gltf::write::NORMAL_FILE,
+            ],
+            "lightmap_uv": "TEXCOORD_1 (the UVs the lightmap was baked with; origin top left, texel centres at (i + ½)/res)",
+            "material_uv": "TEXCOORD_0",
+            "albedo_tint": "COLOR_0 (linear RGB, multiplied into the base colour)",
+        },
         "uniform_block": {
             "file": "params.bin",
             "bytes": lighting.params.len(),

@@ -148,3 +148,73 @@ fn the_decode_snippet_draws_the_techniques_image() {
     drop(scene);
     common::assert_validation_clean(&ctx, "export snippets");
 }
+
+/// The export's glTF (`scene::gltf::write`) is valid to the `gltf` crate and loads back
+/// through shvis' own loader to the scene the lightmap was baked for: the same triangles,
+/// positions, normals, tangents, both UV sets (TEXCOORD_1 taken as given), tints, textures
+/// and camera.
+#[test]
+fn the_exported_gltf_loads_back_to_the_baked_scene() {
+    let prepared = common::house();
+    let out = export(prepared, "shlmap".parse().unwrap(), HwPath::Dx10).unwrap();
+    let dir = std::env::temp_dir().join(format!("shvis-export-gltf-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, bytes) in &out.files {
+        std::fs::write(dir.join(name), bytes).unwrap();
+    }
+    let gltf = gltf::Gltf::from_slice(out.file("scene.gltf").unwrap()).expect("valid glTF");
+    let primitive = gltf.meshes().next().unwrap().primitives().next().unwrap();
+    for semantic in [
+        "POSITION",
+        "NORMAL",
+        "TANGENT",
+        "TEXCOORD_0",
+        "TEXCOORD_1",
+        "COLOR_0",
+    ] {
+        assert!(
+            primitive
+                .attributes()
+                .any(|(s, _)| s.to_string() == semantic),
+            "{semantic}"
+        );
+    }
+    let manifest: serde_json::Value =
+        serde_json::from_slice(out.file("manifest.json").unwrap()).unwrap();
+    assert_eq!(manifest["geometry"]["gltf"], "scene.gltf");
+
+    let baked = &prepared.scene;
+    let res = prepared.visibility.res;
+    let loaded = shvis::scene::gltf::load(&dir.join("scene.gltf"), res).unwrap();
+    assert_eq!(loaded.mesh.indices, baked.mesh.indices);
+    assert_eq!(loaded.mesh.vertices.len(), baked.mesh.vertices.len());
+    for (a, b) in loaded.mesh.vertices.iter().zip(&baked.mesh.vertices) {
+        assert_eq!(a.position, b.position);
+        assert_eq!(a.uv_material, b.uv_material);
+        assert_eq!(a.uv_lightmap, b.uv_lightmap);
+        assert_eq!(a.albedo_tint, b.albedo_tint);
+        let close = |x: &[f32], y: &[f32]| x.iter().zip(y).all(|(p, q)| (p - q).abs() < 1e-5);
+        assert!(close(&a.normal, &b.normal), "{:?} {:?}", a.normal, b.normal);
+        assert!(
+            close(&a.tangent, &b.tangent),
+            "{:?} {:?}",
+            a.tangent,
+            b.tangent
+        );
+    }
+    for (a, b) in [
+        (&loaded.material.albedo, &baked.material.albedo),
+        (&loaded.material.normal, &baked.material.normal),
+    ] {
+        assert_eq!((a.width, a.height), (b.width, b.height));
+        assert!(a.texels == b.texels);
+    }
+    assert_eq!(loaded.material.normal_scale, baked.material.normal_scale);
+    let (c, d) = (loaded.camera, baked.camera);
+    assert!((c.position - d.position).length() < 1e-4);
+    let forward = |cam: shvis::scene::Camera| (cam.target - cam.position).normalize();
+    assert!(forward(c).dot(forward(d)) > 0.9999);
+    assert!((c.fov_y - d.fov_y).abs() < 1e-6);
+    let _ = std::fs::remove_dir_all(&dir);
+}

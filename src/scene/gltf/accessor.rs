@@ -18,6 +18,8 @@ pub(super) struct PrimitiveData {
     pub(super) tangents: Option<Vec<f32>>,
     pub(super) uv0: Option<Vec<f32>>,
     pub(super) uv1: Option<Vec<f32>>,
+    /// COLOR_0 as RGB (alpha dropped), `count` × 3.
+    pub(super) colors: Option<Vec<f32>>,
     pub(super) indices: Vec<u32>,
 }
 
@@ -45,11 +47,22 @@ pub(super) fn read_primitive(
     let tangents = attr(Semantic::Tangents, 4)?;
     let uv0 = attr(Semantic::TexCoords(0), 2)?;
     let uv1 = attr(Semantic::TexCoords(1), 2)?;
+    let colors = match prim.get(&Semantic::Colors(0)).map(|acc| acc.dimensions()) {
+        None => None,
+        Some(Dimensions::Vec3) => attr(Semantic::Colors(0), 3)?,
+        Some(Dimensions::Vec4) => attr(Semantic::Colors(0), 4)?.map(|rgba| {
+            rgba.chunks_exact(4)
+                .flat_map(|c| [c[0], c[1], c[2]])
+                .collect()
+        }),
+        Some(other) => return Err(format!("COLOR_0 is {other:?}, not VEC3 or VEC4")),
+    };
     for (name, values, dims) in [
         ("NORMAL", &normals, 3),
         ("TANGENT", &tangents, 4),
         ("TEXCOORD_0", &uv0, 2),
         ("TEXCOORD_1", &uv1, 2),
+        ("COLOR_0", &colors, 3),
     ] {
         if let Some(v) = values.as_ref().filter(|v| v.len() / dims != count) {
             return Err(format!(
@@ -81,6 +94,7 @@ pub(super) fn read_primitive(
         tangents,
         uv0,
         uv1,
+        colors,
         indices,
     })
 }
@@ -92,6 +106,7 @@ fn semantic_name(semantic: &Semantic) -> String {
         Semantic::Normals => "NORMAL".into(),
         Semantic::Tangents => "TANGENT".into(),
         Semantic::TexCoords(n) => format!("TEXCOORD_{n}"),
+        Semantic::Colors(n) => format!("COLOR_{n}"),
         other => format!("{other:?}"),
     }
 }

@@ -20,7 +20,8 @@
 //! - Material: shvis renders one albedo and one normal texture per scene, so the first
 //!   primitive with a base-colour texture supplies the albedo, the first with a normal
 //!   texture the normal map and its `scale`; different textures on other primitives are
-//!   ignored with one warning. Each primitive's base-colour factor (linear RGB) becomes its
+//!   ignored with one warning. Each primitive's base-colour factor (linear RGB) times its
+//!   COLOR_0 (RGB of a VEC3 or VEC4 accessor, as glTF multiplies them) becomes its
 //!   vertices' `albedo_tint`. Missing textures: 1×1 white albedo, 1×1 flat normal.
 //!   Images are decoded to RGBA8, row 0 at the top (glTF's image origin). Only these two
 //!   images are decoded.
@@ -53,10 +54,12 @@
 //! filtered and appended in named steps, the lightmap UVs, the material and the camera.
 //! Beside it, `accessor` decodes accessors and buffer views (checked offsets and strides,
 //! normalized and sparse values, index buffers) into a primitive's checked attributes and
-//! indices, and `uri` holds the URI policy above and reads what it allows.
+//! indices, and `uri` holds the URI policy above and reads what it allows; `write` writes a
+//! scene back as glTF (`shvis export`'s geometry).
 
 mod accessor;
 mod uri;
+pub mod write;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -552,6 +555,7 @@ impl Loader {
             tangents,
             uv0,
             uv1,
+            colors,
             indices,
         } = read_primitive(prim, buffers).map_err(err)?;
 
@@ -597,14 +601,20 @@ impl Loader {
             }
         };
 
-        let tint = prim.material().pbr_metallic_roughness().base_color_factor();
+        let factor = prim.material().pbr_metallic_roughness().base_color_factor();
+        let tint = |k: usize| -> [f32; 3] {
+            let c = colors
+                .as_ref()
+                .map_or([1.0; 3], |c| [c[3 * k], c[3 * k + 1], c[3 * k + 2]]);
+            [factor[0] * c[0], factor[1] * c[1], factor[2] * c[2]]
+        };
         let vertex = |k: usize, t: Vec4| Vertex {
             position: p[k].to_array(),
             normal: n[k].to_array(),
             tangent: t.to_array(),
             uv_material: uv0_v[k].to_array(),
             uv_lightmap: uv1_v[k].to_array(),
-            albedo_tint: [tint[0], tint[1], tint[2]],
+            albedo_tint: tint(k),
         };
         append_corners(mesh, p.len(), &flat, &corner_tangents, vertex);
         Ok(())
