@@ -218,3 +218,101 @@ fn the_exported_gltf_loads_back_to_the_baked_scene() {
     assert!((c.fov_y - d.fov_y).abs() < 1e-6);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Every exported file read as an engine's tools read it, with nothing of shvis
+/// (`tests/engine/check_export.mjs`, npm packages pinned by its lockfile): each KTX2 file
+/// through ktx-parse — the format, size, layers and faces the manifest names, one level,
+/// no supercompression, BT.709 linear, the sample bounds libktx writes, `KTXorientation`
+/// "rd" and a `KTXwriter` — and the glTF through the Khronos glTF validator: no errors, no
+/// warnings.
+#[test]
+fn ktx_parse_and_the_gltf_validator_read_every_export() {
+    let prepared = common::house();
+    let res = prepared.visibility.res;
+    for (name, path) in [
+        ("shlmap", HwPath::Dx10),
+        ("shlmap", HwPath::Dx11),
+        ("unc6", HwPath::Dx10),
+        ("preconv", HwPath::Dx11),
+    ] {
+        let t: Technique = name.parse().unwrap();
+        let label = format!("{t}.{path}");
+        let out = export(prepared, t, path).unwrap();
+        let dir = std::env::temp_dir().join(format!(
+            "shvis-export-engine-{}-{label}",
+            std::process::id()
+        ));
+        out.write(&dir).unwrap();
+        let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/engine/check_export.mjs");
+        let run = std::process::Command::new("node")
+            .arg(script)
+            .arg(&dir)
+            .output()
+            .expect("node (scripts/install-deps.sh installs it)");
+        assert!(
+            run.status.success(),
+            "{label}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+        let gltf = &report["gltf"];
+        assert_eq!(gltf["numErrors"], 0, "{label}: {gltf}");
+        assert_eq!(gltf["numWarnings"], 0, "{label}: {gltf}");
+
+        let manifest: serde_json::Value =
+            serde_json::from_slice(out.file("manifest.json").unwrap()).unwrap();
+        let files = report["ktx2"].as_array().unwrap();
+        let named = out
+            .files
+            .iter()
+            .filter(|(f, _)| f.ends_with(".ktx2"))
+            .count();
+        assert_eq!(files.len(), named, "{label}: ktx-parse read every file");
+        for file in files {
+            let f = file["file"].as_str().unwrap();
+            let format = ash::vk::Format::from_raw(file["vkFormat"].as_i64().unwrap() as i32);
+            assert!(
+                manifest.to_string().contains(&format!("{format:?}")),
+                "{label}/{f}: the manifest names {format:?}"
+            );
+            assert_eq!(file["levelCount"], 1, "{label}/{f}");
+            assert_eq!(file["supercompressionScheme"], 0, "{label}/{f}");
+            assert_eq!(file["pixelDepth"], 0, "{label}/{f}");
+            assert_eq!(
+                (
+                    file["colorPrimaries"].clone(),
+                    file["transferFunction"].clone()
+                ),
+                (1.into(), 1.into())
+            );
+            if f.starts_with("per_texel") {
+                assert_eq!(file["pixelWidth"], res, "{label}/{f}");
+                assert_eq!(file["pixelHeight"], res, "{label}/{f}");
+            }
+            assert_eq!(file["keyValue"]["KTXorientation"], "rd", "{label}/{f}");
+            assert!(
+                file["keyValue"]["KTXwriter"]
+                    .as_str()
+                    .is_some_and(|w| w.starts_with("shvis ")),
+                "{label}/{f}"
+            );
+            let (one, minus_one) = (1f32.to_bits(), (-1f32).to_bits());
+            let bounds = match format {
+                ash::vk::Format::BC6H_UFLOAT_BLOCK => (0, one),
+                ash::vk::Format::BC7_UNORM_BLOCK | ash::vk::Format::BC4_UNORM_BLOCK => {
+                    (0, u32::MAX)
+                }
+                ash::vk::Format::R8G8B8A8_UNORM => (0, 255),
+                _ => (minus_one, one),
+            };
+            for sample in file["samples"].as_array().unwrap() {
+                assert_eq!(
+                    (sample["lower"].as_u64(), sample["upper"].as_u64()),
+                    (Some(bounds.0.into()), Some(bounds.1.into())),
+                    "{label}/{f}: {sample}"
+                );
+            }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
