@@ -41,8 +41,8 @@ pub enum ExportError {
     File(#[from] crate::files::FileError),
 }
 
-/// Version of the manifest's layout.
-pub const MANIFEST_VERSION: u32 = 1;
+/// Version of the manifest's layout (`manifest_version`; docs/export.md).
+pub const MANIFEST_VERSION: u32 = 2;
 
 /// An export: each file's name and bytes, the manifest last.
 pub struct Export {
@@ -151,8 +151,8 @@ pub fn export(
     defines.push(("MATERIAL_LEVEL0", 0));
     defines.extend_from_slice(&shader.defines);
     defines.extend_from_slice(&lighting.defines);
-    let glsl = crate::gpu::flattened_glsl(shader.path, &defines)?;
-    files.push(("decode.glsl".into(), glsl.into_bytes()));
+    let glsl_text = crate::gpu::flattened_glsl(shader.path, &defines)?;
+    files.push(("decode.glsl".into(), glsl_text.clone().into_bytes()));
     let geometry = crate::scene::gltf::write::write_gltf(&prepared.scene)
         .map_err(|e| refused(format!("the scene's glTF: {e}")))?;
     files.extend(geometry);
@@ -161,7 +161,8 @@ pub fn export(
         .map(|(n, v)| (format!("SHVIS_{n}"), json!(v)))
         .collect::<serde_json::Map<_, _>>();
     let manifest = json!({
-        "shvis_export": MANIFEST_VERSION,
+        "shvis_export": env!("CARGO_PKG_VERSION"),
+        "manifest_version": MANIFEST_VERSION,
         "technique": technique.name(),
         "path": path.name(),
         "family": crate::technique::catalog::family_of(technique),
@@ -178,11 +179,7 @@ pub fn export(
             "material_uv": "TEXCOORD_0",
             "albedo_tint": "COLOR_0 (linear RGB, multiplied into the base colour)",
         },
-        "uniform_block": {
-            "file": "params.bin",
-            "bytes": lighting.params.len(),
-            "layout": "std140; its declaration is the first uniform block of decode.glsl",
-        },
+        "uniform_block": uniform_block(&glsl_text, &lighting.params),
         "shader": {
             "file": "decode.glsl",
             "stage": "fragment",
@@ -341,10 +338,122 @@ impl Export {
     }
 }
 
-/// Whether `dir` holds an export: its `manifest.json` says `shvis_export`.
+/// Whether `dir` holds an export: its `manifest.json` has `shvis_export` (every version).
 fn is_export(dir: &Path) -> bool {
     crate::files::read_bounded(&dir.join("manifest.json"), 1 << 20, "an export manifest")
         .ok()
         .and_then(|bytes| serde_json::from_slice::<serde_json::Value>(&bytes).ok())
         .is_some_and(|m| m.get("shvis_export").is_some())
+}
+
+/// The manifest's `uniform_block`: `params.bin` as the technique's block in `glsl` declares
+/// it (the block at `SHVIS_BINDING_TECHNIQUE_PARAMS`, every member with an explicit
+/// std140 `layout(offset = …)`), each field with its offset, type, element count and the
+/// values `params` holds there (floats for float types, integers for integer types);
+/// members that start past `params`' end are those the build's `#if`s leave out.
+fn uniform_block(glsl: &str, params: &[u8]) -> serde_json::Value {
+    let mut entry = json!({
+        "file": "params.bin",
+        "bytes": params.len(),
+        "layout": "std140, little-endian",
+    });
+    let Some(start) = glsl.find("binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform ") else {
+        return entry;
+    };
+    let rest = &glsl[start..];
+    let name = rest["binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform ".len()..]
+        .split(|c: char| !c.is_alphanumeric() && c != '_')
+        .next()
+        .unwrap_or_default();
+    let body = rest
+        .split_once('{')
+        .and_then(|(_, b)| b.split_once('}'))
+        .map_or("", |(b, _)| b);
+    let define = |symbol: &str| -> Option<usize> {
+        symbol.parse().ok().or_else(|| {
+            glsl.lines().find_map(|l| {
+                let mut words = l.split_whitespace();
+                (words.next() == Some("#define") && words.next() == Some(symbol))
+                    .then(|| words.next()?.parse().ok())
+                    .flatten()
+            })
+        })
+    };
+    let mut fields = Vec::new();
+    for line in body.lines() {
+        let code = line.split("//").next().unwrap_or_default().trim();
+        let Some(rest) = code.strip_prefix("layout(offset = ") else {
+            continue;
+        };
+        let Some((offset, decl)) = rest.split_once(')') else {
+            continue;
+        };
+        let Ok(offset) = offset.trim().parse::<usize>() else {
+            continue;
+        };
+        let Some((ty, member)) = decl.trim().trim_end_matches(';').split_once(' ') else {
+            continue;
+        };
+        let member = member.trim();
+        let (member, count) = match member.split_once('[') {
+            // A length such as `7 * 12` or `3 * GROUPS`: a product of numbers and defines.
+            Some((m, n)) => {
+                let factors: Option<Vec<usize>> = n
+                    .trim_end_matches(']')
+                    .split('*')
+                    .map(|f| define(f.trim()))
+                    .collect();
+                match factors {
+                    Some(f) => (m, f.iter().product()),
+                    None => continue,
+                }
+            }
+            None => (member, 1),
+        };
+        let (components, integer, stride) = match ty {
+            "float" => (1, false, 16),
+            "int" | "uint" => (1, true, 16),
+            "vec2" => (2, false, 16),
+            "vec4" => (4, false, 16),
+            "ivec4" | "uvec4" => (4, true, 16),
+            "mat4" => (16, false, 64),
+            _ => continue,
+        };
+        // A member past the block's bytes is one the technique's build leaves out (an
+        // `#if` branch of the declaration).
+        if offset >= params.len() {
+            continue;
+        }
+        let element = |k: usize| -> Vec<serde_json::Value> {
+            (0..components)
+                .map(|c| {
+                    let at = offset + k * stride + 4 * c;
+                    let word = params
+                        .get(at..at + 4)
+                        .map_or([0; 4], |b| [b[0], b[1], b[2], b[3]]);
+                    if integer {
+                        json!(i32::from_le_bytes(word))
+                    } else {
+                        json!(f32::from_le_bytes(word))
+                    }
+                })
+                .collect()
+        };
+        let values: Vec<serde_json::Value> = if count == 1 && components == 1 {
+            element(0)
+        } else {
+            (0..count).map(|k| json!(element(k))).collect()
+        };
+        fields.push(json!({
+            "name": member,
+            "offset": offset,
+            "type": ty,
+            "count": count,
+            "array_stride": if count > 1 { json!(stride) } else { json!(null) },
+            "values": values,
+        }));
+    }
+    entry["block"] = json!(name);
+    entry["fields"] = json!(fields);
+    entry
 }

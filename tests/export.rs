@@ -316,3 +316,43 @@ fn ktx_parse_and_the_gltf_validator_read_every_export() {
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
+
+/// The manifest spells out `params.bin`: the technique's uniform block by name, every field
+/// with its std140 offset, type, count and values, covering the file byte for byte.
+#[test]
+fn the_manifest_spells_out_the_uniform_block() {
+    let prepared = common::house();
+    for name in ["shlmap", "sg9", "dice", "unc6"] {
+        let out = export(prepared, name.parse().unwrap(), HwPath::Dx10).unwrap();
+        let params = out.file("params.bin").unwrap();
+        let manifest: serde_json::Value =
+            serde_json::from_slice(out.file("manifest.json").unwrap()).unwrap();
+        let block = &manifest["uniform_block"];
+        assert_eq!(block["bytes"], params.len(), "{name}");
+        assert!(
+            block["block"]
+                .as_str()
+                .is_some_and(|b| b.ends_with("Params"))
+        );
+        let fields = block["fields"].as_array().unwrap();
+        assert!(!fields.is_empty(), "{name}");
+        let mut rebuilt = vec![0u8; params.len()];
+        let mut end = 0;
+        for field in fields {
+            assert_eq!(field["type"], "vec4", "{name}: {field}");
+            let offset = field["offset"].as_u64().unwrap() as usize;
+            let count = field["count"].as_u64().unwrap() as usize;
+            assert_eq!(offset, end, "{name}: fields follow each other");
+            for (k, element) in field["values"].as_array().unwrap().iter().enumerate() {
+                for (c, v) in element.as_array().unwrap().iter().enumerate() {
+                    let at = offset + 16 * k + 4 * c;
+                    rebuilt[at..at + 4]
+                        .copy_from_slice(&(v.as_f64().unwrap() as f32).to_le_bytes());
+                }
+            }
+            end = offset + 16 * count;
+        }
+        assert_eq!(end, params.len(), "{name}: the fields cover params.bin");
+        assert_eq!(rebuilt, params, "{name}: the values are params.bin's");
+    }
+}
