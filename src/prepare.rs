@@ -12,7 +12,10 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::bake::ao::{AoMap, AoSettings, bake_ao};
-use crate::bake::cache::{default_cache_dir, load_or_bake_visibility, load_or_fit_clusters};
+use crate::bake::cache::{
+    default_cache_dir, load_or_bake_sh_lightmap, load_or_bake_visibility, load_or_fit_clusters,
+    sh_lightmap_key,
+};
 use crate::bake::cluster::{self, ClusteredModel};
 use crate::bake::pca::{PcaModel, fit};
 use crate::bake::raster::{LightmapTexels, rasterize};
@@ -559,24 +562,41 @@ pub fn prepare_with(
         env.height,
         t.elapsed().as_secs_f64() * 1e3
     );
-    let sh_lightmap = settings.sh_lightmap_bounces.map(|bounces| {
-        bake_sh_lightmap(
-            &scene,
-            geometry.tracer(),
-            geometry.texels(),
-            &match settings.bake_env {
+    // Through the bake cache: a second run of the same scene, lighting and settings (an
+    // export after a bench, say) reads it back.
+    let sh_lightmap = match settings.sh_lightmap_bounces {
+        None => None,
+        Some(bounces) => {
+            let lighting = match settings.bake_env {
                 BakeEnv::Sh => BakeLighting::Sh(&radiance_sh),
                 BakeEnv::Pixels => BakeLighting::Pixels(&env),
-            },
-            &ShLightmapSettings {
+            };
+            let sh_settings = ShLightmapSettings {
                 rays,
                 seed: settings.seed,
                 bounces,
                 progress: settings.progress,
-            },
-            &settings.sample_fits,
-        )
-    });
+            };
+            let fits = &settings.sample_fits;
+            let key = sh_lightmap_key(&scene, settings.vis_res, &lighting, &sh_settings, fits);
+            Some(load_or_bake_sh_lightmap(
+                &cache_dir,
+                key,
+                settings.vis_res,
+                fits,
+                || {
+                    bake_sh_lightmap(
+                        &scene,
+                        geometry.tracer(),
+                        geometry.texels(),
+                        &lighting,
+                        &sh_settings,
+                        fits,
+                    )
+                },
+            )?)
+        }
+    };
     let transfer = settings.transfer_bounces.map(|bounces| {
         Arc::new(bake_transfer(
             &scene,

@@ -27,6 +27,11 @@
 //! Kind 2 holds a VQ / CPCA fit of a visibility map ([`load_or_fit_clusters`], key over the
 //! map's content, the fit's parameters and `cluster::FIT_VERSION`).
 //!
+//! Kind 4 holds an SH lightmap bake with the bases fitted from its samples
+//! ([`load_or_bake_sh_lightmap`]; key over the mesh, the albedo texture, the lighting by
+//! content — its SH coefficients or its map's texels —, the lightmap resolution, rays, seed,
+//! bounces and the fits; payload in [`encode_sh_lightmap`]).
+//!
 //! Bump [`CACHE_FORMAT_VERSION`] whenever the layout *or the bake's results* change.
 //!
 
@@ -37,10 +42,12 @@ use rayon::prelude::*;
 
 use super::BakeError;
 use super::cluster::{self, ClusteredModel, Clustering};
+use super::shlmap::{BakeEnv, BakeLighting, FittedBases, ShLightmap, ShLightmapSettings};
 use super::visibility::{VisibilityMap, VisibilitySettings};
 use crate::files::{self, Hasher64, hash64};
-use crate::scene::{Mesh, Vertex};
+use crate::scene::{Mesh, Scene, Vertex};
 use crate::sh::Order;
+use crate::sh::samples::SampleFit;
 
 /// Version of the cache layout and of the bake results it stores (2: rays with −0.0
 /// direction components are canonicalized, `bake::trace::canonical_direction`).
@@ -59,6 +66,8 @@ const KIND_VISIBILITY: u32 = 1;
 const KIND_CLUSTERS: u32 = 2;
 /// Kind tag of a derived product's bytes ([`load_or_build_blob`]).
 const KIND_BLOB: u32 = 3;
+/// Kind tag of SH lightmap bakes.
+const KIND_SH_LIGHTMAP: u32 = 4;
 
 /// The cache directory: `$SHVIS_CACHE_DIR` when set and not empty, else `.shvis-cache`
 /// in the current directory.
@@ -116,6 +125,221 @@ pub fn load_or_bake_visibility(
         || Ok(bake()),
         |map| encode_visibility(map, key),
     )
+}
+
+/// Cache key of the SH lightmap bake of `scene` at `res`² texels under `lighting` with
+/// `settings`, fitting `fits` (module doc; `settings.progress` does not enter).
+pub fn sh_lightmap_key(
+    scene: &Scene,
+    res: u32,
+    lighting: &BakeLighting<'_>,
+    settings: &ShLightmapSettings,
+    fits: &[SampleFit],
+) -> u64 {
+    let mut h = Hasher64::default();
+    h.write(b"shvis bake cache");
+    h.write_u64(u64::from(CACHE_FORMAT_VERSION));
+    h.write(b"sh lightmap");
+    for v in [res, settings.rays, settings.bounces] {
+        h.write_u64(u64::from(v));
+    }
+    h.write_u64(settings.seed);
+    let mesh = &scene.mesh;
+    h.write_u64(mesh.vertices.len() as u64);
+    h.write(bytemuck::cast_slice::<Vertex, u8>(&mesh.vertices));
+    h.write_u64(mesh.indices.len() as u64);
+    h.write(bytemuck::cast_slice::<u32, u8>(&mesh.indices));
+    let albedo = &scene.material.albedo;
+    h.write_u64(u64::from(albedo.width));
+    h.write_u64(u64::from(albedo.height));
+    h.write(bytemuck::cast_slice::<[u8; 4], u8>(&albedo.texels));
+    match lighting {
+        BakeLighting::Sh(coeffs) => {
+            h.write(b"sh");
+            h.write_u64(coeffs.len() as u64);
+            for c in coeffs.iter().flatten() {
+                h.write(&c.to_le_bytes());
+            }
+        }
+        BakeLighting::Pixels(map) => {
+            h.write(b"pixels");
+            h.write_u64(u64::from(map.width));
+            h.write_u64(u64::from(map.height));
+            h.write(bytemuck::cast_slice::<[f32; 3], u8>(&map.texels));
+        }
+    }
+    h.write_u64(fits.len() as u64);
+    for fit in fits {
+        h.write(format!("{fit:?};").as_bytes());
+    }
+    h.finish()
+}
+
+/// The SH lightmap under `key` (its `res`² texels, fitting `fits`) from the cache in
+/// `cache_dir` when a valid file is there, else from `bake()`, which is then written to the
+/// cache (module doc: a missing file is silent, a damaged or mismatching one a warning and
+/// a rebake).
+///
+/// # Errors
+/// The cache file cannot be written.
+pub fn load_or_bake_sh_lightmap(
+    cache_dir: &Path,
+    key: u64,
+    res: u32,
+    fits: &[SampleFit],
+    bake: impl FnOnce() -> ShLightmap,
+) -> Result<ShLightmap, BakeError> {
+    let path = cache_dir.join(format!("shlmap-{key:016x}.bin"));
+    load_or_build(
+        &path,
+        "SH lightmap",
+        |bytes| decode_sh_lightmap(bytes, key, res, fits),
+        || Ok(bake()),
+        |map| encode_sh_lightmap(map, key),
+    )
+}
+
+/// The bytes of a cache file holding `map` under `key`. Payload, little-endian: res,
+/// bounces, environment (0 sh, 1 pixels) as u32; rays traced u64, seconds f64; then
+/// res² × 27 coefficients, res² covered (u8), res² × 3 normal, res² × 9 frame (columns),
+/// the bounce source (u64 count, × 3), the RNM lobes (u64 count, × 9), all f32; the fits'
+/// negative counts (u64 count, u64 each), values (u64 count, f16 bits) and scales (u64
+/// count, f32).
+pub fn encode_sh_lightmap(map: &ShLightmap, key: u64) -> Vec<u8> {
+    let mut p = Vec::new();
+    let env = match map.env {
+        BakeEnv::Sh => 0u32,
+        BakeEnv::Pixels => 1,
+    };
+    for v in [map.res, map.bounces, env] {
+        p.extend_from_slice(&v.to_le_bytes());
+    }
+    p.extend_from_slice(&map.stats.rays_traced.to_le_bytes());
+    p.extend_from_slice(&map.stats.seconds.to_le_bytes());
+    let floats = |p: &mut Vec<u8>, values: &mut dyn Iterator<Item = f32>| {
+        for v in values {
+            p.extend_from_slice(&v.to_le_bytes());
+        }
+    };
+    floats(&mut p, &mut map.coeffs.iter().flatten().copied());
+    p.extend(map.covered.iter().map(|&c| u8::from(c)));
+    floats(&mut p, &mut map.normal.iter().flat_map(|n| n.to_array()));
+    floats(
+        &mut p,
+        &mut map.frame.iter().flat_map(|f| f.to_cols_array()),
+    );
+    p.extend_from_slice(&(map.bounce_source.len() as u64).to_le_bytes());
+    floats(
+        &mut p,
+        &mut map.bounce_source.iter().flat_map(|e| e.to_array()),
+    );
+    p.extend_from_slice(&(map.basis_irradiance.len() as u64).to_le_bytes());
+    floats(
+        &mut p,
+        &mut map
+            .basis_irradiance
+            .iter()
+            .flat_map(|b| b.iter().flat_map(|e| e.to_array())),
+    );
+    let fitted = &map.fitted;
+    p.extend_from_slice(&(fitted.negative.len() as u64).to_le_bytes());
+    for n in &fitted.negative {
+        p.extend_from_slice(&n.to_le_bytes());
+    }
+    p.extend_from_slice(&(fitted.values.len() as u64).to_le_bytes());
+    for v in &fitted.values {
+        p.extend_from_slice(&v.to_bits().to_le_bytes());
+    }
+    p.extend_from_slice(&(fitted.scales.len() as u64).to_le_bytes());
+    floats(&mut p, &mut fitted.scales.iter().copied());
+    with_header(KIND_SH_LIGHTMAP, key, &p)
+}
+
+/// Parses an SH lightmap cache file of `res`² texels fitting `fits`; `Err` says what is
+/// wrong, in a few words.
+pub fn decode_sh_lightmap(
+    bytes: &[u8],
+    key: u64,
+    res: u32,
+    fits: &[SampleFit],
+) -> Result<ShLightmap, String> {
+    let mut r = Reader {
+        bytes: payload_of(bytes, KIND_SH_LIGHTMAP, "SH lightmap", key)?,
+    };
+    let (stored_res, bounces, env) = (r.u32()?, r.u32()?, r.u32()?);
+    if stored_res != res {
+        return Err(format!("resolution {stored_res}, expected {res}"));
+    }
+    let env = match env {
+        0 => BakeEnv::Sh,
+        1 => BakeEnv::Pixels,
+        other => return Err(format!("environment tag {other}")),
+    };
+    let rays_traced = r.u64()?;
+    let seconds = f64::from_bits(r.u64()?);
+    let texels = (res as usize).pow(2);
+    let coeffs = r.f32s(texels * 27)?;
+    let covered = r.take(texels)?.iter().map(|&c| c != 0).collect();
+    let normal = r.f32s(texels * 3)?;
+    let frame = r.f32s(texels * 9)?;
+    let count = |r: &mut Reader<'_>, limit: usize| -> Result<usize, String> {
+        let n = r.u64()?;
+        usize::try_from(n)
+            .ok()
+            .filter(|&n| n <= limit)
+            .ok_or_else(|| format!("count {n} is more than {limit}"))
+    };
+    let n = count(&mut r, texels)?;
+    let bounce_source = r.f32s(n * 3)?;
+    let n = count(&mut r, texels)?;
+    let basis_irradiance = r.f32s(n * 9)?;
+    let n = count(&mut r, fits.len())?;
+    if n != fits.len() {
+        return Err(format!("{n} fits, expected {}", fits.len()));
+    }
+    let negative = (0..n).map(|_| r.u64()).collect::<Result<Vec<_>, _>>()?;
+    let per_texel: usize = fits.iter().map(|f| f.stored_values()).sum();
+    let n = count(&mut r, texels * per_texel)?;
+    let values = r
+        .take(n * 2)?
+        .chunks_exact(2)
+        .map(|b| half::f16::from_bits(u16::from_le_bytes([b[0], b[1]])))
+        .collect();
+    let n = count(&mut r, texels * fits.len())?;
+    let scales = r.f32s(n)?;
+    if !r.bytes.is_empty() {
+        return Err(format!("{} bytes after the payload", r.bytes.len()));
+    }
+    Ok(ShLightmap {
+        res,
+        bounces,
+        coeffs: coeffs.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        covered,
+        normal: normal.chunks_exact(3).map(glam::Vec3::from_slice).collect(),
+        frame: frame
+            .chunks_exact(9)
+            .map(glam::Mat3::from_cols_slice)
+            .collect(),
+        bounce_source: bounce_source
+            .chunks_exact(3)
+            .map(glam::Vec3::from_slice)
+            .collect(),
+        basis_irradiance: basis_irradiance
+            .chunks_exact(9)
+            .map(|b| [0, 1, 2].map(|k| glam::Vec3::from_slice(&b[3 * k..3 * k + 3])))
+            .collect(),
+        fitted: FittedBases {
+            fits: fits.to_vec(),
+            negative,
+            values,
+            scales,
+        },
+        env,
+        stats: super::BakeStats {
+            rays_traced,
+            seconds,
+        },
+    })
 }
 
 /// A derived product's bytes (`what`: "dx11 blocks") cached under `key` in `cache_dir`
@@ -673,6 +897,141 @@ mod tests {
         for (a, b) in files[0].iter().zip(&files[1]) {
             assert_eq!(a.0, b.0);
             assert!(a.1 == b.1, "{} differs between 1 and 3 threads", a.0);
+        }
+    }
+
+    /// An SH lightmap with every field filled (two fits), 4² texels.
+    fn sh_lightmap() -> ShLightmap {
+        use crate::sh::hbasis::HBasisSize;
+        let texels = 16;
+        let fits = vec![
+            SampleFit::HBasis(HBasisSize::H4),
+            SampleFit::AmbientCube(crate::sh::ambient_cube::CubeFit::Projection),
+        ];
+        let per_texel: usize = fits.iter().map(|f| f.stored_values()).sum();
+        let covered: Vec<bool> = (0..texels).map(|t| t % 3 != 0).collect();
+        let covered_count = covered.iter().filter(|&&c| c).count();
+        ShLightmap {
+            res: 4,
+            bounces: 2,
+            coeffs: (0..texels * 9).map(|i| [i as f32, -0.5, 1e5]).collect(),
+            covered,
+            normal: vec![glam::Vec3::Y; texels],
+            frame: vec![glam::Mat3::from_cols_array(&[1., 2., 3., 4., 5., 6., 7., 8., 9.]); texels],
+            bounce_source: (0..texels).map(|t| glam::Vec3::splat(t as f32)).collect(),
+            basis_irradiance: vec![[glam::Vec3::X, glam::Vec3::Y, glam::Vec3::Z]; texels],
+            fitted: FittedBases {
+                fits,
+                negative: vec![3, 0],
+                values: (0..covered_count * per_texel)
+                    .map(|i| half::f16::from_f32(i as f32 / 7.0))
+                    .collect(),
+                scales: (0..covered_count * 2)
+                    .map(|i| (1 << (i % 5)) as f32)
+                    .collect(),
+            },
+            env: BakeEnv::Pixels,
+            stats: super::super::BakeStats {
+                rays_traced: 12345,
+                seconds: 1.5,
+            },
+        }
+    }
+
+    #[test]
+    fn sh_lightmaps_round_trip_and_a_damaged_or_foreign_file_is_rejected() {
+        let map = sh_lightmap();
+        let fits = map.fitted.fits.clone();
+        let bytes = encode_sh_lightmap(&map, 42);
+        assert_eq!(decode_sh_lightmap(&bytes, 42, 4, &fits), Ok(map.clone()));
+        assert!(
+            decode_sh_lightmap(&bytes, 43, 4, &fits).is_err(),
+            "another key"
+        );
+        assert!(
+            decode_sh_lightmap(&bytes, 42, 8, &fits).is_err(),
+            "another resolution"
+        );
+        assert!(
+            decode_sh_lightmap(&bytes, 42, 4, &fits[..1]).is_err(),
+            "other fits"
+        );
+        let mut damaged = bytes.clone();
+        let last = damaged.len() - 1;
+        damaged[last] ^= 1;
+        assert!(
+            decode_sh_lightmap(&damaged, 42, 4, &fits).is_err(),
+            "checksum"
+        );
+        assert!(decode_sh_lightmap(&bytes[..bytes.len() - 4], 42, 4, &fits).is_err());
+        // A payload that lies about its counts, re-checksummed so only the parse can tell.
+        let payload = &bytes[HEADER_BYTES..];
+        let mut lying = payload.to_vec();
+        // After res, bounces, env (u32), rays (u64), seconds (f64) and the per-texel arrays.
+        let at = 28 + 16 * 27 * 4 + 16 + 16 * 12 + 16 * 36;
+        lying[at..at + 8].copy_from_slice(&u64::MAX.to_le_bytes());
+        let forged = with_header(KIND_SH_LIGHTMAP, 42, &lying);
+        assert!(
+            decode_sh_lightmap(&forged, 42, 4, &fits).is_err(),
+            "a count past the texels"
+        );
+    }
+
+    /// The key follows what the bake reads: the lighting, the fits, the settings.
+    #[test]
+    fn the_sh_lightmap_key_changes_with_the_lighting_fits_and_settings() {
+        let scene = crate::scene::patio::build(64).unwrap();
+        let settings = ShLightmapSettings {
+            rays: 64,
+            seed: 0,
+            bounces: 1,
+            progress: false,
+        };
+        let sh = vec![[1.0f64; 3]; 9];
+        let mut other = sh.clone();
+        other[4][1] = 1.5;
+        let fit = [SampleFit::HBasis(crate::sh::hbasis::HBasisSize::H4)];
+        let key = |l: &BakeLighting<'_>, s: &ShLightmapSettings, f: &[SampleFit]| {
+            sh_lightmap_key(&scene, 64, l, s, f)
+        };
+        let base = key(&BakeLighting::Sh(&sh), &settings, &fit);
+        assert_eq!(
+            base,
+            key(
+                &BakeLighting::Sh(&sh),
+                &ShLightmapSettings {
+                    progress: true,
+                    ..settings
+                },
+                &fit
+            )
+        );
+        for changed in [
+            key(&BakeLighting::Sh(&other), &settings, &fit),
+            key(&BakeLighting::Sh(&sh), &settings, &[]),
+            key(
+                &BakeLighting::Sh(&sh),
+                &ShLightmapSettings {
+                    bounces: 2,
+                    ..settings
+                },
+                &fit,
+            ),
+            key(
+                &BakeLighting::Sh(&sh),
+                &ShLightmapSettings {
+                    seed: 1,
+                    ..settings
+                },
+                &fit,
+            ),
+            key(
+                &BakeLighting::Pixels(&crate::env::EnvMap::from_fn(8, 4, |_| [1.0; 3])),
+                &settings,
+                &fit,
+            ),
+        ] {
+            assert_ne!(base, changed);
         }
     }
 

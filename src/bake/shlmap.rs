@@ -193,9 +193,9 @@ pub struct FittedBases {
     pub negative: Vec<u64>,
     /// Σ `fit.stored_values()` per covered texel, each `f16` of a value over its block's
     /// scale.
-    values: Vec<half::f16>,
+    pub(crate) values: Vec<half::f16>,
     /// `fits.len()` per covered texel: each block's power-of-two scale.
-    scales: Vec<f32>,
+    pub(crate) scales: Vec<f32>,
 }
 
 impl FittedBases {
