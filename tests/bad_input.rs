@@ -550,6 +550,20 @@ fn s(p: &Path) -> String {
     p.display().to_string()
 }
 
+/// Every file of folder `d` by name, with its bytes.
+fn files_of(d: &Path) -> BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(d)
+        .unwrap()
+        .flatten()
+        .map(|e| {
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                std::fs::read(e.path()).unwrap(),
+            )
+        })
+        .collect()
+}
+
 // ---- The cases --------------------------------------------------------------------------
 
 /// Options of every command: each bound, non-numbers, non-finite floats. All refused by
@@ -2405,18 +2419,6 @@ fn killed_bakes_rerun_to_identical_outputs() {
         }
         cmd.output().unwrap()
     };
-    let read_dir = |d: &Path| -> BTreeMap<String, Vec<u8>> {
-        std::fs::read_dir(d)
-            .unwrap()
-            .flatten()
-            .map(|e| {
-                (
-                    e.file_name().to_string_lossy().into_owned(),
-                    std::fs::read(e.path()).unwrap(),
-                )
-            })
-            .collect()
-    };
     let clean_out = dir.join("clean");
     let clean_cache = dir.join("clean-cache");
     let run = bake(&clean_out, &clean_cache, None);
@@ -2425,7 +2427,7 @@ fn killed_bakes_rerun_to_identical_outputs() {
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
-    let clean = read_dir(&clean_out);
+    let clean = files_of(&clean_out);
     assert_eq!(
         clean.keys().cloned().collect::<Vec<_>>(),
         [
@@ -2436,7 +2438,7 @@ fn killed_bakes_rerun_to_identical_outputs() {
             "visibility_2.exr"
         ]
     );
-    let cache_name = read_dir(&clean_cache).into_keys().next().unwrap();
+    let cache_name = files_of(&clean_cache).into_keys().next().unwrap();
     // An earlier, complete output of other settings (seed 1) that each killed run writes
     // over: the hard case, where new, truncated and old layers would mix.
     let old_out = dir.join("old");
@@ -2464,7 +2466,7 @@ fn killed_bakes_rerun_to_identical_outputs() {
         String::from_utf8_lossy(&old.stderr)
     );
     assert_ne!(
-        read_dir(&old_out)["visibility_0.exr"],
+        files_of(&old_out)["visibility_0.exr"],
         clean["visibility_0.exr"]
     );
     for point in [
@@ -2514,7 +2516,7 @@ fn killed_bakes_rerun_to_identical_outputs() {
             "{point}: {}",
             String::from_utf8_lossy(&rerun.stderr)
         );
-        let got = read_dir(&out);
+        let got = files_of(&out);
         assert_eq!(
             got.keys().collect::<Vec<_>>(),
             clean.keys().collect::<Vec<_>>(),
@@ -2526,7 +2528,7 @@ fn killed_bakes_rerun_to_identical_outputs() {
                 "{point}: {name} differs from the uninterrupted run's"
             );
         }
-        let cache_files: Vec<String> = read_dir(&cache).into_keys().collect();
+        let cache_files: Vec<String> = files_of(&cache).into_keys().collect();
         assert_eq!(
             cache_files,
             std::slice::from_ref(&cache_name),
@@ -2584,18 +2586,6 @@ fn an_export_replaces_the_earlier_one_whole_or_not_at_all() {
         }
         cmd.output().unwrap()
     };
-    let read_dir = |d: &Path| -> BTreeMap<String, Vec<u8>> {
-        std::fs::read_dir(d)
-            .unwrap()
-            .flatten()
-            .map(|e| {
-                (
-                    e.file_name().to_string_lossy().into_owned(),
-                    std::fs::read(e.path()).unwrap(),
-                )
-            })
-            .collect()
-    };
     let first = export("0", "sky", &out, None);
     assert!(
         first.status.success(),
@@ -2603,10 +2593,10 @@ fn an_export_replaces_the_earlier_one_whole_or_not_at_all() {
         String::from_utf8_lossy(&first.stderr)
     );
     std::fs::write(out.join("only-in-the-earlier-export.txt"), "old").unwrap();
-    let earlier = read_dir(&out);
+    let earlier = files_of(&out);
     let killed = export("1", "sky", &out, Some("per_texel.ktx2"));
     assert!(!killed.status.success(), "the hook kills the export");
-    assert_eq!(read_dir(&out), earlier, "the earlier export is left whole");
+    assert_eq!(files_of(&out), earlier, "the earlier export is left whole");
     let temporaries = |d: &Path| {
         std::fs::read_dir(d)
             .unwrap()
@@ -2621,7 +2611,7 @@ fn an_export_replaces_the_earlier_one_whole_or_not_at_all() {
         "{}",
         String::from_utf8_lossy(&next.stderr)
     );
-    let replaced = read_dir(&out);
+    let replaced = files_of(&out);
     assert!(!replaced.contains_key("only-in-the-earlier-export.txt"));
     assert_ne!(replaced["per_texel.ktx2"], earlier["per_texel.ktx2"]);
     assert_eq!(temporaries(&dir), 0, "the stale temporary is removed");
