@@ -1,5 +1,6 @@
-//! Three jobs: the link fix for Debian's shaderc (see README "Set-up"), the registry of
-//! embedded GLSL sources (`embed_glsl_sources`), and the commit `shvis --version` names.
+//! Four jobs: the link fix for Debian's shaderc (see README "Set-up"), the registry of
+//! embedded GLSL sources (`embed_glsl_sources`), the commit `shvis --version` names, and a
+//! hash of the bake's sources that the SH lightmap cache keys on (`embed_bake_source_hash`).
 //!
 //! Debian's `libshaderc.so` is under-linked and its `libshaderc_combined.a` does not contain
 //! glslang or SPIRV-Tools, so shaderc-sys (feature `prefer-static-linking`, with
@@ -10,6 +11,42 @@ fn main() {
     link_shaderc();
     embed_glsl_sources();
     embed_git_commit();
+    embed_bake_source_hash();
+}
+
+/// Sets `SHVIS_BAKE_SOURCE_HASH`: FNV-1a (64-bit) over the paths and contents of every file
+/// under `src/bake`, `src/sh` and `src/env`, so a cached SH lightmap from other bake code
+/// is never believed (`bake::cache::sh_lightmap_key`).
+fn embed_bake_source_hash() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    let mut dirs: Vec<_> = ["bake", "sh", "env"].iter().map(|d| root.join(d)).collect();
+    while let Some(dir) = dirs.pop() {
+        println!("cargo:rerun-if-changed={}", dir.display());
+        for entry in std::fs::read_dir(&dir).expect("src/ is readable") {
+            let path = entry.expect("src/ entry").path();
+            if path.is_dir() {
+                dirs.push(path);
+            } else {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    for path in &files {
+        println!("cargo:rerun-if-changed={}", path.display());
+        let rel = path
+            .strip_prefix(&root)
+            .expect("under src/")
+            .to_string_lossy()
+            .into_owned();
+        let bytes = std::fs::read(path).expect("a source file");
+        for &b in rel.as_bytes().iter().chain(&[0]).chain(&bytes) {
+            hash = (hash ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+    println!("cargo:rustc-env=SHVIS_BAKE_SOURCE_HASH={hash:016x}");
 }
 
 /// Sets `SHVIS_GIT_COMMIT` (the checkout's commit; "unknown" outside git) for

@@ -28,9 +28,10 @@
 //! map's content, the fit's parameters and `cluster::FIT_VERSION`).
 //!
 //! Kind 4 holds an SH lightmap bake with the bases fitted from its samples
-//! ([`load_or_bake_sh_lightmap`]; key over the mesh, the albedo texture, the lighting by
-//! content — its SH coefficients or its map's texels —, the lightmap resolution, rays, seed,
-//! bounces and the fits; payload in [`encode_sh_lightmap`]).
+//! ([`load_or_bake_sh_lightmap`]; key over the bake's own sources — `SHVIS_BAKE_SOURCE_HASH`
+//! from build.rs, so other bake code never reads it —, the mesh, the albedo texture, the
+//! lighting by content — its SH coefficients or its map's texels —, the lightmap
+//! resolution, rays, seed, bounces and the fits; payload in [`encode_sh_lightmap`]).
 //!
 //! Bump [`CACHE_FORMAT_VERSION`] whenever the layout *or the bake's results* change.
 //!
@@ -140,6 +141,7 @@ pub fn sh_lightmap_key(
     h.write(b"shvis bake cache");
     h.write_u64(u64::from(CACHE_FORMAT_VERSION));
     h.write(b"sh lightmap");
+    h.write(env!("SHVIS_BAKE_SOURCE_HASH").as_bytes());
     for v in [res, settings.rays, settings.bounces] {
         h.write_u64(u64::from(v));
     }
