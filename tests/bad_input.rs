@@ -2634,3 +2634,86 @@ fn an_export_replaces_the_earlier_one_whole_or_not_at_all() {
     assert!(env.exists(), "the input survives");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Twenty exports killed with SIGKILL at points spread over an export's run, each over an
+/// earlier export of other settings: every time the folder holds one whole export, the
+/// earlier one or the new one, file for file, and its manifest names every file beside it.
+#[cfg(feature = "test-hooks")]
+#[test]
+fn exports_killed_at_any_point_leave_one_whole_export() {
+    let dir = std::env::temp_dir().join(format!("shvis-export-kill-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let command = |seed: &str, out: &Path| {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_shvis"));
+        cmd.args([
+            "export",
+            "--technique",
+            "zh3",
+            "--path",
+            "dx11",
+            "--vis-res",
+            "64",
+            "--rays",
+            "16",
+            "--seed",
+            seed,
+            "--out",
+            &s(out),
+        ])
+        .env("SHVIS_CACHE_DIR", dir.join("cache"))
+        .env("RUST_LOG", "off")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null());
+        cmd
+    };
+    let run = |seed: &str, out: &Path| {
+        assert!(command(seed, out).status().unwrap().success());
+        files_of(out)
+    };
+    // Both settings baked once (and cached), so every export below is the same work.
+    let earlier = run("0", &dir.join("earlier"));
+    let new = run("1", &dir.join("new"));
+    assert_ne!(earlier, new);
+    // How long an export takes once its bake is cached: the kills spread over it.
+    let started = Instant::now();
+    assert_eq!(
+        run("1", &dir.join("new")),
+        new,
+        "a second export is identical"
+    );
+    let span = started.elapsed();
+    let out = dir.join("export");
+    let mut outcomes = BTreeMap::new();
+    for k in 0..20u32 {
+        if !out.exists() || files_of(&out) != earlier {
+            let _ = std::fs::remove_dir_all(&out);
+            run("0", &out);
+        }
+        let mut child = command("1", &out).spawn().unwrap();
+        std::thread::sleep(span * k / 19);
+        let _ = child.kill();
+        let _ = child.wait();
+        let found = files_of(&out);
+        let which = if found == earlier {
+            "earlier"
+        } else if found == new {
+            "new"
+        } else {
+            panic!(
+                "kill {k}: the folder mixes exports: {:?}",
+                found.keys().collect::<Vec<_>>()
+            )
+        };
+        *outcomes.entry(which).or_insert(0) += 1;
+        let manifest: Value = serde_json::from_slice(&found["manifest.json"]).unwrap();
+        for name in found.keys().filter(|n| *n != "manifest.json") {
+            assert!(
+                manifest.to_string().contains(name.as_str()),
+                "kill {k}: {name}"
+            );
+        }
+    }
+    assert_eq!(outcomes.values().sum::<u32>(), 20, "{outcomes:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
