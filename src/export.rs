@@ -188,7 +188,23 @@ pub fn export(
             "bindings": layout,
             "inputs": "the lightmap UV (in_uv_lightmap), the material UV, the tangent frame and the normal map, as glsl/include/common.glsl declares them",
         },
+        "lightmap": {
+            "orientation": crate::files::ktx2::ORIENTATION,
+            "orientation_meaning": "KTXorientation: texel (0, 0) is the lightmap's top-left, at uv (0, 0); rows run down (+v)",
+            "texel_centre": "uv = (i + 0.5) / res",
+            "colour_space": "linear (no sRGB transfer)",
+            "gutter_dilation_texels": crate::bake::visibility::DILATION_PASSES,
+            "filtering": "bilinear, clamped to the edge",
+        },
         "conventions": {
+            "sh_basis": {
+                "normalisation": "orthonormal over the sphere",
+                "condon_shortley_phase": true,
+                "index": "l * (l + 1) + m",
+                "frame": "world",
+                "pole_axis": "+Z",
+                "band_1": ["-sqrt(3/4pi) y", "sqrt(3/4pi) z", "-sqrt(3/4pi) x"],
+            },
             "sh": "real SH, Sloan's graphics convention with the Condon–Shortley phase (y1-1 = −√(3/4π)·y, y10 = √(3/4π)·z, y11 = −√(3/4π)·x), flat index l(l+1)+m; order n = bands l < n",
             "space": "right-handed, +Y up; tangent space z = the surface normal (glTF tangents)",
             "lightmap_uv": "the scene's lightmap UVs: glTF TEXCOORD_1, or generated where a file has none; texel centres at (i + ½)/res",

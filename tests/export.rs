@@ -265,6 +265,11 @@ fn ktx_parse_and_the_gltf_validator_read_every_export() {
 
         let manifest: serde_json::Value =
             serde_json::from_slice(out.file("manifest.json").unwrap()).unwrap();
+        assert_eq!(manifest["lightmap"]["orientation"], "rd", "{label}");
+        assert_eq!(
+            manifest["conventions"]["sh_basis"]["pole_axis"], "+Z",
+            "{label}"
+        );
         let files = report["ktx2"].as_array().unwrap();
         let named = out
             .files
