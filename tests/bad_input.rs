@@ -550,6 +550,14 @@ fn s(p: &Path) -> String {
     p.display().to_string()
 }
 
+/// An empty folder `NAME-PID` in the system's temporary directory.
+fn scratch_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
 /// Every file of folder `d` by name, with its bytes.
 fn files_of(d: &Path) -> BTreeMap<String, Vec<u8>> {
     std::fs::read_dir(d)
@@ -2396,9 +2404,7 @@ fn every_class_has_cases() {
 #[cfg(feature = "test-hooks")]
 #[test]
 fn killed_bakes_rerun_to_identical_outputs() {
-    let dir = std::env::temp_dir().join(format!("shvis-kill9-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("shvis-kill9");
     let bake = |out: &Path, cache: &Path, kill_at: Option<&str>| {
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_shvis"));
         cmd.args([
@@ -2556,9 +2562,7 @@ fn copy_dir(from: &Path, to: &Path) {
 #[cfg(feature = "test-hooks")]
 #[test]
 fn an_export_replaces_the_earlier_one_whole_or_not_at_all() {
-    let dir = std::env::temp_dir().join(format!("shvis-export-run-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("shvis-export-run");
     let out = dir.join("export");
     let export = |seed: &str, env: &str, out: &Path, kill_at: Option<&str>| {
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_shvis"));
@@ -2641,9 +2645,7 @@ fn an_export_replaces_the_earlier_one_whole_or_not_at_all() {
 #[cfg(feature = "test-hooks")]
 #[test]
 fn exports_killed_at_any_point_leave_one_whole_export() {
-    let dir = std::env::temp_dir().join(format!("shvis-export-kill-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("shvis-export-kill");
     let command = |seed: &str, out: &Path| {
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_shvis"));
         cmd.args([
