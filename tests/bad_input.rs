@@ -550,6 +550,30 @@ fn s(p: &Path) -> String {
     p.display().to_string()
 }
 
+/// `shvis export` of `technique` on `path` at a small lightmap (64², 16 rays) with `seed`
+/// into `out`, baking through `cache`, quiet.
+fn small_export(technique: &str, path: &str, seed: &str, out: &Path, cache: &Path) -> Command {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_shvis"));
+    cmd.args([
+        "export",
+        "--technique",
+        technique,
+        "--path",
+        path,
+        "--vis-res",
+        "64",
+        "--rays",
+        "16",
+        "--seed",
+        seed,
+        "--out",
+        &s(out),
+    ])
+    .env("SHVIS_CACHE_DIR", cache)
+    .env("RUST_LOG", "off");
+    cmd
+}
+
 /// An empty folder `NAME-PID` in the system's temporary directory.
 fn scratch_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
@@ -2565,26 +2589,8 @@ fn an_export_replaces_the_earlier_one_whole_or_not_at_all() {
     let dir = scratch_dir("shvis-export-run");
     let out = dir.join("export");
     let export = |seed: &str, env: &str, out: &Path, kill_at: Option<&str>| {
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_shvis"));
-        cmd.args([
-            "export",
-            "--technique",
-            "shlmap",
-            "--path",
-            "dx10",
-            "--vis-res",
-            "64",
-            "--rays",
-            "16",
-            "--seed",
-            seed,
-            "--env",
-            env,
-            "--out",
-            &s(out),
-        ])
-        .env("SHVIS_CACHE_DIR", dir.join("cache"))
-        .env("RUST_LOG", "off");
+        let mut cmd = small_export("shlmap", "dx10", seed, out, &dir.join("cache"));
+        cmd.args(["--env", env]);
         if let Some(file) = kill_at {
             cmd.env(shvis::files::KILL_WHILE_WRITING_ENV, file);
         }
@@ -2647,26 +2653,8 @@ fn an_export_replaces_the_earlier_one_whole_or_not_at_all() {
 fn exports_killed_at_any_point_leave_one_whole_export() {
     let dir = scratch_dir("shvis-export-kill");
     let command = |seed: &str, out: &Path| {
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_shvis"));
-        cmd.args([
-            "export",
-            "--technique",
-            "zh3",
-            "--path",
-            "dx11",
-            "--vis-res",
-            "64",
-            "--rays",
-            "16",
-            "--seed",
-            seed,
-            "--out",
-            &s(out),
-        ])
-        .env("SHVIS_CACHE_DIR", dir.join("cache"))
-        .env("RUST_LOG", "off")
-        .stdout(Stdio::null())
-        .stderr(Stdio::null());
+        let mut cmd = small_export("zh3", "dx11", seed, out, &dir.join("cache"));
+        cmd.stdout(Stdio::null()).stderr(Stdio::null());
         cmd
     };
     let run = |seed: &str, out: &Path| {
