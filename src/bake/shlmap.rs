@@ -873,15 +873,19 @@ impl<'a> RaySet<'a> {
             weight,
             seed,
         };
+        let sh_order = match *lighting {
+            BakeLighting::Sh(radiance_sh) => {
+                Order::new((radiance_sh.len() as f64).sqrt() as u32).unwrap_or(Order::ONE)
+            }
+            BakeLighting::Pixels(_) => Order::ONE,
+        };
         set.shared = dirs
             .dirs()
             .iter()
             .map(|&d| {
                 let env = match *lighting {
                     BakeLighting::Sh(radiance_sh) => {
-                        let order = Order::new((radiance_sh.len() as f64).sqrt() as u32)
-                            .unwrap_or(Order::ONE);
-                        zonal::eval_rgb(radiance_sh, order, d.as_dvec3().normalize())
+                        zonal::eval_rgb(radiance_sh, sh_order, d.as_dvec3().normalize())
                     }
                     BakeLighting::Pixels(map) => map.radiance_at(d.as_dvec3()).map(f64::from),
                 };
