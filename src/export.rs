@@ -65,6 +65,42 @@ pub fn refusal(technique: Technique, path: HwPath) -> Option<ExportError> {
     }
 }
 
+/// The fragment inputs `decode.glsl` reads (glsl/include/common.glsl, fed by
+/// glsl/scene/mesh.vert), each with the glTF attribute of `scene.gltf` it carries:
+/// (name, GLSL type, glTF attribute, meaning).
+pub const SHADER_INPUTS: [(&str, &str, &str, &str); 5] = [
+    (
+        "in_normal_world",
+        "vec3",
+        "NORMAL",
+        "the vertex normal, world space",
+    ),
+    (
+        "in_tangent_world",
+        "vec4",
+        "TANGENT",
+        "the glTF tangent (xyz world space, w the bitangent's sign)",
+    ),
+    (
+        "in_uv_material",
+        "vec2",
+        "TEXCOORD_0",
+        "the material UV (albedo and normal textures)",
+    ),
+    (
+        "in_uv_lightmap",
+        "vec2",
+        "TEXCOORD_1",
+        "the lightmap UV (per-texel data)",
+    ),
+    (
+        "in_albedo_tint",
+        "vec3",
+        "COLOR_0",
+        "the linear tint multiplied into the base colour",
+    ),
+];
+
 fn ktx2(image: &Ktx2Image<'_>, label: &str) -> Result<Vec<u8>, ExportError> {
     encode(image).ok_or_else(|| ExportError::Refused {
         label: label.into(),
@@ -186,7 +222,7 @@ pub fn export(
             "source": format!("glsl/{}", shader.path),
             "defines": defines.iter().map(|(n, v)| (format!("SHVIS_{n}"), json!(v))).collect::<serde_json::Map<_, _>>(),
             "bindings": layout,
-            "inputs": "the lightmap UV (in_uv_lightmap), the material UV, the tangent frame and the normal map, as glsl/include/common.glsl declares them",
+            "inputs": SHADER_INPUTS.iter().map(|(name, ty, gltf, meaning)| json!({"name": name, "type": ty, "gltf": gltf, "meaning": meaning})).collect::<Vec<_>>(),
         },
         "lightmap": {
             "orientation": crate::files::ktx2::ORIENTATION,
@@ -276,6 +312,11 @@ fn per_texel_files(
                 "codec": {"name": "plain", "decode": "value_j = channel j mod 4 of layer j div 4 (RGBA8 as unorm)"},
             })
         }
+    };
+    let mut per_texel = per_texel;
+    per_texel["values"] = match technique.values() {
+        Some(map) => map.to_json(values),
+        None => json!(null),
     };
     Ok(per_texel)
 }

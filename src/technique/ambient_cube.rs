@@ -159,4 +159,35 @@ impl Family for AmbientCube {
     fn sample_fit(self, fit: &BasisFit) -> Option<SampleFit> {
         (*fit == BasisFit::Samples).then_some(SampleFit::AmbientCube(self.fit))
     }
+
+    fn values(self) -> Option<super::values::ValueMap> {
+        use super::values::{self, Step, ValueMap};
+        let names: Vec<String> = ["+x", "-x", "+y", "-y", "+z", "-z"]
+            .iter()
+            .map(|f| format!("face {f}"))
+            .collect();
+        Some(ValueMap {
+            stored: match self.fit {
+                CubeFit::Projection => "irradiance along each axis of the texel's tangent frame (Valve's projection)",
+                CubeFit::LeastSquares => "the ambient cube least-squares fitted to the irradiance over the texel's hemisphere",
+            },
+            basis: serde_json::json!({
+                "name": "ambient cube",
+                "reference": "McTaggart, Half-Life 2 / Valve Source Shading, GDC 2004",
+                "frame": "tangent (x along +u, y image up, z the surface normal)",
+            }),
+            values: values::triplets(&names),
+            steps: [
+                Step(serde_json::json!({
+                    "op": "evaluate",
+                    "at": values::TANGENT_NORMAL,
+                    "gives": "E(m) = m.x^2 C[+x or -x] + m.y^2 C[+y or -y] + m.z^2 C[+z or -z], each axis' face chosen by the sign of its component, per colour",
+                })),
+                values::unscale(),
+            ]
+            .into_iter()
+            .chain(values::diffuse_ending())
+            .collect(),
+        })
+    }
 }

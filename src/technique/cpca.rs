@@ -168,4 +168,8 @@ impl Family for Cpca {
     fn sample_fit(self, _: &()) -> Option<crate::sh::samples::SampleFit> {
         None
     }
+
+    fn values(self) -> Option<super::values::ValueMap> {
+        None
+    }
 }

@@ -177,6 +177,10 @@ pub trait Family: Copy + Eq + std::hash::Hash + std::fmt::Debug + Into<Technique
     /// What its fragment shader reads per pixel (the cost model's input).
     fn reads(self) -> ShaderReads;
 
+    /// What its per-texel values are, as data for engines (`super::values`); `None` where
+    /// only its shader says it.
+    fn values(self) -> Option<super::values::ValueMap>;
+
     /// What its options change in its data, for labels and cache keys (`None`: nothing).
     fn options_tag(self, options: &Self::Options) -> Option<String>;
 

@@ -536,6 +536,128 @@ impl Family for Hemisphere {
     fn sample_fit(self, options: &HemisphereOptions) -> Option<SampleFit> {
         (options.fit == BasisFit::Samples).then(|| sample_fit(self.basis, options.solver))
     }
+
+    fn values(self) -> Option<super::values::ValueMap> {
+        Some(value_map(self.basis))
+    }
+}
+
+/// The H-basis functions at a tangent-space direction m (`glsl/include/hbasis.glsl`).
+const H_BASIS_FUNCTIONS: [&str; 6] = [
+                        "H_0 = 1 / sqrt(2 pi)",
+                        "H_1 = sqrt(3 / (2 pi)) m.y",
+                        "H_2 = sqrt(3 / (2 pi)) (2 m.z - 1)",
+                        "H_3 = sqrt(3 / (2 pi)) m.x",
+                        "H_4 = sqrt(15 / (2 pi)) m.x m.y",
+                        "H_5 = sqrt(15 / (2 pi)) (m.x^2 - m.y^2) / 2",
+                    ];
+
+/// What the values of `basis` are ([`Family::values`]).
+fn value_map(basis: HemisphereBasis) -> super::values::ValueMap {
+    use super::values::{self, Colour, Step, Value, ValueMap};
+    let ending = |evaluate: String| -> Vec<Step> {
+        [
+            Step(serde_json::json!({"op": "evaluate", "at": values::TANGENT_NORMAL, "gives": evaluate})),
+            values::unscale(),
+        ]
+        .into_iter()
+        .chain(values::diffuse_ending())
+        .collect()
+    };
+    let v3 = |v: glam::DVec3| [v.x, v.y, v.z];
+    match basis {
+        HemisphereBasis::HBasis(size) => {
+            let names: Vec<String> = (0..size.count()).map(|i| format!("H_{i}")).collect();
+            ValueMap {
+                stored: "irradiance over the texel's hemisphere, fitted in the H-basis",
+                basis: serde_json::json!({
+                    "name": "h-basis",
+                    "reference": "Habel & Wimmer 2010",
+                    "frame": "tangent (x along +u, y image up, z the surface normal)",
+                    "functions": &H_BASIS_FUNCTIONS[..size.count()],
+                }),
+                values: values::triplets(&names),
+                steps: ending("E(m) = sum over i of h_i H_i(m), per colour".into()),
+            }
+        }
+        HemisphereBasis::Sg { lobes } => {
+            let sg = sg_basis(lobes);
+            let names: Vec<String> = (0..lobes).map(|k| format!("lobe_{k}")).collect();
+            ValueMap {
+                stored: "amplitudes of spherical Gaussian lobes fitted to the incident radiance over the texel's hemisphere (by --sg-solve)",
+                basis: serde_json::json!({
+                    "name": "spherical gaussians",
+                    "frame": "tangent (x along +u, y image up, z the surface normal)",
+                    "lobe": "G_k(w) = exp(lambda (mu_k . w - 1))",
+                    "axes": sg.axes.iter().map(|&a| v3(a)).collect::<Vec<_>>(),
+                    "sharpness": sg.sharpness,
+                    "parameters": "also in the uniform block: lobes[k].xyz = mu_k, lobes[k].w = lambda",
+                }),
+                values: values::triplets(&names),
+                steps: ending(
+                    "E(m) = sum over k of a_k I(mu_k . m, lambda), per colour; I(t, lambda) = the lobe's integral against max(0, m . w), Hill's fit: e = exp(-lambda), e2 = e^2, r = 1 / lambda, scale = 1 + 2 e2 - r, bias = (e - e2) r - e2, x = sqrt(max(1 - scale, 0)), x0 = 0.36 t, x1 = x / (4 * 0.36), y = (x0 + x1)^2 / x if |x0| <= x1 else clamp(t, 0, 1), I = (scale y + bias) 2 pi (1 - exp(-2 lambda)) r".into(),
+                ),
+            }
+        }
+        HemisphereBasis::Dice(variant) => {
+            let d = dice::dice();
+            let mut list = Vec::new();
+            for v in 0..dice::STORED_VERTICES {
+                let parts = ["value", "du", "dv"];
+                match variant {
+                    DiceVariant::Rgb => {
+                        for (k, part) in parts.iter().enumerate() {
+                            for c in 0..3 {
+                                list.push(Value {
+                                    coefficient: format!("vertex_{v}.{part}"),
+                                    index: 3 * v + k,
+                                    colour: Colour::Channel(c as u8),
+                                });
+                            }
+                        }
+                    }
+                    DiceVariant::YCoCg => {
+                        for (k, part) in parts.iter().enumerate() {
+                            list.push(Value {
+                                coefficient: format!("vertex_{v}.{part}"),
+                                index: 3 * v + k,
+                                colour: Colour::Component("Y"),
+                            });
+                        }
+                        for chroma in ["Co", "Cg"] {
+                            list.push(Value {
+                                coefficient: format!("vertex_{v}.value"),
+                                index: 3 * v,
+                                colour: Colour::Component(chroma),
+                            });
+                        }
+                    }
+                }
+            }
+            let colour = match variant {
+                DiceVariant::Rgb => "each colour by the hybrid patch",
+                DiceVariant::YCoCg => {
+                    "Y = R/4 + G/2 + B/4 by the hybrid patch; Co = (R - B)/2 and Cg = (2G - R - B)/4 by the linear interpolation sum b_i c_i; RGB = (Y + Co - Cg, Y + Cg, Y - Co - Cg)"
+                }
+            };
+            ValueMap {
+                stored: "irradiance over the texel's hemisphere, least-squares fitted as Ambient Dice vertex data (value and directional derivatives)",
+                basis: serde_json::json!({
+                    "name": "ambient dice",
+                    "reference": "Iwanicki & Sloan, Ambient Dice, EGSR 2017",
+                    "frame": "tangent (x along +u, y image up, z the surface normal)",
+                    "vertices": d.vertices.iter().map(|&v| v3(v)).collect::<Vec<_>>(),
+                    "vertex_tangents": d.vertex_tangents.iter().map(|t| [v3(t[0]), v3(t[1])]).collect::<Vec<_>>(),
+                    "faces": "uniform_block.faces: per face 7 vec4s: the centre (xyz); per corner i its dual vector (xyz, barycentric lambda_i = dual_i . m) with the stored vertex index in w; per corner i the edge factors (t_u,i . v_j, t_v,i . v_j) toward its two other corners j in increasing order (xy, zw)",
+                    "colour": colour,
+                }),
+                values: list,
+                steps: ending(format!(
+                    "m' = (m.x, m.y, max(m.z, 0)) normalised; the face whose centre is nearest m'; b = lambda / sum(lambda); the cubic Bezier triangle in b with corners f_i, edge points f_i + (du_i e_u,ij + dv_i e_v,ij) / 3 and Farin's hybrid centre (c111 candidates 1/4 (c021 + c012) + 1/2 (c120 + c102) - 1/4 (c030 + c003) and cyclically, blended by b_j b_k / (b0 b1 + b1 b2 + b2 b0)); {colour}"
+                )),
+            }
+        }
+    }
 }
 
 /// The shared SG evaluation the ladder and the tests use: E at tangent-space `m` from

@@ -34,6 +34,7 @@ registry::with_families!(declare_family_modules);
 pub mod spec;
 pub mod tables;
 pub mod texels;
+pub mod values;
 
 use std::sync::Arc;
 

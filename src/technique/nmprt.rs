@@ -852,6 +852,10 @@ impl Family for Nmprt {
     fn sample_fit(self, _: &()) -> Option<crate::sh::samples::SampleFit> {
         None
     }
+
+    fn values(self) -> Option<super::values::ValueMap> {
+        None
+    }
 }
 
 #[cfg(test)]

@@ -419,4 +419,8 @@ impl Family for Pca {
     fn sample_fit(self, _: &()) -> Option<crate::sh::samples::SampleFit> {
         None
     }
+
+    fn values(self) -> Option<super::values::ValueMap> {
+        None
+    }
 }

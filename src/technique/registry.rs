@@ -181,6 +181,13 @@ macro_rules! define_technique {
                 }
             }
 
+            /// What its per-texel values are, as data ([`Family::values`]).
+            pub fn values(self) -> Option<super::values::ValueMap> {
+                match self {
+                    $(Technique::$variant(member) => member.values(),)*
+                }
+            }
+
             /// What the run's options change in its data ("running" for an `sgN` fitted
             /// by the running average), for labels and cache keys.
             pub fn options_tag(self, options: &FamilyOptions) -> Option<String> {

@@ -330,4 +330,8 @@ impl Family for Rnm {
     fn sample_fit(self, _: &()) -> Option<crate::sh::samples::SampleFit> {
         None
     }
+
+    fn values(self) -> Option<super::values::ValueMap> {
+        None
+    }
 }

@@ -293,4 +293,74 @@ impl Family for ShVariant {
     fn sample_fit(self, _: &()) -> Option<crate::sh::samples::SampleFit> {
         None
     }
+
+    fn values(self) -> Option<super::values::ValueMap> {
+        use super::values::{self, Colour, Step, Value, ValueMap};
+        let linear = "E_lin(n) = pi K_00 c_00 + (2 pi / 3) K_1 d . n per colour, d = (-c_11, -c_1-1, c_10), K_00 = 1 / (2 sqrt(pi)), K_1 = sqrt(3 / (4 pi))";
+        let (names, evaluate): (Vec<String>, String) = match self.basis {
+            ShVariantBasis::L2Deringed => {
+                return Some(super::shlmap::value_map(
+                    "the clamped cosine's convolution windowed to be non-negative over the texel's hemisphere: A_l per texel folded into the stored values, so evaluate with A_l = (pi, 2 pi / 3, pi / 4)",
+                ));
+            }
+            ShVariantBasis::L1 => (values::sh_coefficient_names(2), linear.into()),
+            ShVariantBasis::L1Geomerics => (
+                values::sh_coefficient_names(2),
+                "Geomerics' non-linear L1, per colour: r0 = pi K_00 c_00, r1 = (pi / 3) K_1 d; if r0 <= 0: 0; if |r1| = 0: r0; else r = min(|r1| / r0, 1), q = clamp((1 + n . r1 / |r1|) / 2, 0, 1), p = 1 + 2 r, a = (1 - r) / (1 + r), E = r0 (a + (1 - a) (p + 1) q^p)".into(),
+            ),
+            ShVariantBasis::L1Zh3 => (
+                values::sh_coefficient_names(2),
+                format!("{linear}; plus (pi / 4) z Y_20(axis . n) per colour, axis = the luminance-weighted d (0.2126, 0.7152, 0.0722) normalised (none: E_lin), Y_20(t) = sqrt(5 / (16 pi)) (3 t^2 - 1), z = c_00 (0.08 r + 0.6 r^2) with r = min(|d . axis| / c_00, sqrt(3)) (0 where c_00 <= 0)"),
+            ),
+            ShVariantBasis::Zh3 => {
+                let mut names = values::sh_coefficient_names(2);
+                names.push("zh_2 (about the luminance axis)".into());
+                (
+                    names,
+                    format!("{linear}; plus (pi / 4) z Y_20(axis . n) per colour, z = coefficient 4 (stored), axis = the luminance-weighted d (0.2126, 0.7152, 0.0722) normalised (none: E_lin), Y_20(t) = sqrt(5 / (16 pi)) (3 t^2 - 1)"),
+                )
+            }
+            ShVariantBasis::L1Luminance => {
+                let names = values::sh_coefficient_names(2);
+                let mut v = values::triplets(&names[..1]);
+                v.extend((1..4).map(|k| Value {
+                    coefficient: names[k].clone(),
+                    index: k,
+                    colour: Colour::Shared,
+                }));
+                return Some(ValueMap {
+                    stored: "incident radiance with inter-reflection: RGB order-1 SH and the luminance's order-2 band (luminance 0.2126 R + 0.7152 G + 0.0722 B)",
+                    basis: serde_json::json!({"name": "sh", "order": 2, "frame": "world", "convention": "conventions.sh_basis"}),
+                    values: v,
+                    steps: [
+                        Step(serde_json::json!({
+                            "op": "evaluate",
+                            "at": values::WORLD_NORMAL,
+                            "gives": "E(n) = pi K_00 c_00 + c_00 (2 pi / 3) K_1 (e . n) / lum(c_00) per colour, e = (-e_11, -e_1-1, e_10) clamped to |e| <= sqrt(3) lum(c_00); 0 for the directional part where lum(c_00) <= 0",
+                        })),
+                        values::unscale(),
+                    ]
+                    .into_iter()
+                    .chain(values::diffuse_ending())
+                    .collect(),
+                });
+            }
+        };
+        Some(ValueMap {
+            stored: "incident radiance with inter-reflection, projected into SH (order 2, and for zh3 a zonal band-2 coefficient)",
+            basis: serde_json::json!({"name": "sh", "order": 2, "frame": "world", "convention": "conventions.sh_basis"}),
+            values: values::triplets(&names),
+            steps: [
+                Step(serde_json::json!({
+                    "op": "evaluate",
+                    "at": values::WORLD_NORMAL,
+                    "gives": evaluate,
+                })),
+                values::unscale(),
+            ]
+            .into_iter()
+            .chain(values::diffuse_ending())
+            .collect(),
+        })
+    }
 }

@@ -26,6 +26,7 @@ use crate::gpu::Context;
 use std::sync::Arc;
 
 use super::texels::{TexelGroups, VALUES_PER_TEXEL, pack_groups};
+use super::values::{self, Step, ValueMap};
 use super::{Inputs, ShaderVariant, TechniqueError};
 use crate::bake::shlmap::{SH_LIGHTMAP_COEFFS, ShLightmap};
 
@@ -224,5 +225,39 @@ impl Family for Shlmap {
 
     fn sample_fit(self, _: &()) -> Option<crate::sh::samples::SampleFit> {
         None
+    }
+
+    fn values(self) -> Option<ValueMap> {
+        Some(value_map(
+            "the clamped cosine's convolution: A_l = (pi, 2 pi / 3, pi / 4) for l = 0, 1, 2",
+        ))
+    }
+}
+
+/// The values of an order-3 RGB SH lightmap of incident radiance (`shlmap`, and `shlmapw`
+/// with its own `convolution`): value 3k + c is colour c of coefficient k, shaded as
+/// E(n) = Σ_lm A_l L_lm y_lm(n).
+pub fn value_map(convolution: &'static str) -> ValueMap {
+    ValueMap {
+        stored: "incident radiance with inter-reflection, projected into order-3 SH",
+        basis: serde_json::json!({
+            "name": "sh",
+            "order": 3,
+            "frame": "world",
+            "convention": "conventions.sh_basis",
+        }),
+        values: values::triplets(&values::sh_coefficient_names(3)),
+        steps: [
+            Step(serde_json::json!({"op": "convolve", "with": convolution})),
+            Step(serde_json::json!({
+                "op": "evaluate",
+                "at": values::WORLD_NORMAL,
+                "gives": "E(n) = sum over l, m of A_l L_lm y_lm(n), per colour",
+            })),
+            values::unscale(),
+        ]
+        .into_iter()
+        .chain(values::diffuse_ending())
+        .collect(),
     }
 }

@@ -229,4 +229,39 @@ impl Family for Unc {
     fn sample_fit(self, _: &()) -> Option<crate::sh::samples::SampleFit> {
         None
     }
+
+    fn values(self) -> Option<super::values::ValueMap> {
+        use super::values::{self, Colour, Step, Value};
+        let names = values::sh_coefficient_names(self.order.coeff_count().isqrt());
+        Some(values::ValueMap {
+            stored: "visibility V(omega) (1 where the environment is seen, 0 where the scene blocks it), projected into SH",
+            basis: serde_json::json!({
+                "name": "sh",
+                "order": self.order.get(),
+                "frame": "world",
+                "convention": "conventions.sh_basis",
+            }),
+            values: names
+                .iter()
+                .enumerate()
+                .map(|(k, name)| Value {
+                    coefficient: name.clone(),
+                    index: k,
+                    colour: Colour::Shared,
+                })
+                .collect(),
+            steps: [
+                Step(serde_json::json!({
+                    "op": "dot",
+                    "with": "the L x H tables (manifest tables, in order) read at the world shading normal n: per colour, (L x H_n)_j for each value j, in the values' groups",
+                    "at": values::WORLD_NORMAL,
+                    "gives": "sum over j of V_j (L x H_n)_j, per colour (eq. (4) of Iwanicki & Sloan)",
+                })),
+                Step(serde_json::json!({"op": "multiply", "by": "uniform_block.unscale_res.x"})),
+            ]
+            .into_iter()
+            .chain(values::diffuse_ending())
+            .collect(),
+        })
+    }
 }

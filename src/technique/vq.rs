@@ -133,4 +133,8 @@ impl Family for Vq {
     fn sample_fit(self, _: &()) -> Option<crate::sh::samples::SampleFit> {
         None
     }
+
+    fn values(self) -> Option<super::values::ValueMap> {
+        None
+    }
 }
