@@ -2645,7 +2645,7 @@ fn an_export_replaces_the_earlier_one_whole_or_not_at_all() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Twenty exports killed with SIGKILL at points spread over an export's run, each over an
+/// Twenty exports killed with SIGKILL at random points over an export's run, each over an
 /// earlier export of other settings: every time the folder holds one whole export, the
 /// earlier one or the new one, file for file, and its manifest names every file beside it.
 #[cfg(feature = "test-hooks")]
@@ -2675,13 +2675,33 @@ fn exports_killed_at_any_point_leave_one_whole_export() {
     let span = started.elapsed();
     let out = dir.join("export");
     let mut outcomes = BTreeMap::new();
+    // Kill points drawn at random over the export's run (and a little past it), from a seed
+    // printed on failure; SHVIS_KILL_SEED repeats a run.
+    let seed: u64 = std::env::var("SHVIS_KILL_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| {
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .unwrap()
+                .as_nanos() as u64
+        });
+    let mut state = seed | 1;
+    let mut uniform = move || {
+        // xorshift64*: a uniform number in [0, 1).
+        state ^= state >> 12;
+        state ^= state << 25;
+        state ^= state >> 27;
+        (state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
+    };
     for k in 0..20u32 {
         if !out.exists() || files_of(&out) != earlier {
             let _ = std::fs::remove_dir_all(&out);
             run("0", &out);
         }
         let mut child = command("1", &out).spawn().unwrap();
-        std::thread::sleep(span * k / 19);
+        let at = span.mul_f64(1.1 * uniform());
+        std::thread::sleep(at);
         let _ = child.kill();
         let _ = child.wait();
         let found = files_of(&out);
@@ -2691,7 +2711,7 @@ fn exports_killed_at_any_point_leave_one_whole_export() {
             "new"
         } else {
             panic!(
-                "kill {k}: the folder mixes exports: {:?}",
+                "kill {k} at {at:?} (SHVIS_KILL_SEED={seed}): the folder mixes exports: {:?}",
                 found.keys().collect::<Vec<_>>()
             )
         };
@@ -2700,10 +2720,11 @@ fn exports_killed_at_any_point_leave_one_whole_export() {
         for name in found.keys().filter(|n| *n != "manifest.json") {
             assert!(
                 manifest.to_string().contains(name.as_str()),
-                "kill {k}: {name}"
+                "kill {k} at {at:?} (SHVIS_KILL_SEED={seed}): {name}"
             );
         }
     }
     assert_eq!(outcomes.values().sum::<u32>(), 20, "{outcomes:?}");
+    eprintln!("20 kills over a {span:?} export (SHVIS_KILL_SEED={seed}): {outcomes:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
