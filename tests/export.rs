@@ -184,6 +184,14 @@ fn the_exported_gltf_loads_back_to_the_baked_scene() {
         serde_json::from_slice(out.file("manifest.json").unwrap()).unwrap();
     assert_eq!(manifest["geometry"]["gltf"], "scene.gltf");
 
+    assert_reopens_as_baked(&dir, prepared);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// shvis' own loader reads the export's glTF in `dir` back to `prepared`'s scene: the same
+/// triangles, positions, normals, tangents, both UV sets (TEXCOORD_1 taken as given),
+/// tints, textures and camera.
+fn assert_reopens_as_baked(dir: &std::path::Path, prepared: &shvis::prepare::Prepared) {
     let baked = &prepared.scene;
     let res = prepared.visibility.res;
     let loaded = shvis::scene::gltf::load(&dir.join("scene.gltf"), res).unwrap();
@@ -216,7 +224,6 @@ fn the_exported_gltf_loads_back_to_the_baked_scene() {
     let forward = |cam: shvis::scene::Camera| (cam.target - cam.position).normalize();
     assert!(forward(c).dot(forward(d)) > 0.9999);
     assert!((c.fov_y - d.fov_y).abs() < 1e-6);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Every exportable technique on dx10 and dx11 but the clustered ones, its files read as an engine's tools read
@@ -475,132 +482,215 @@ fn read_f32_frame(path: &std::path::Path, width: u32, height: u32) -> shvis::ren
     }
 }
 
-/// An engine loads the export from its files alone: three.js (tests/engine/view.mjs, npm
-/// `three` and `ktx-parse` pinned by the lockfile) in headless Chromium reads the glTF, the
-/// KTX2 files, the manifest and decode.glsl, and draws the scene from the glTF's camera.
-/// Its linear image matches shvis' own render of the technique within 2 % relative RMSE,
-/// on dx10 data and on dx11 data (BC7/BC6H through EXT_texture_compression_bptc).
-///
-/// The two rasterizers (lavapipe, SwiftShader) place triangle edges a fraction of a pixel
-/// apart, so a few pixels along silhouettes see another surface in each image (a pillar in
-/// one, the wall behind it in the other). Those pixels are told apart by what they see —
-/// world position and vertex normal from both renderers — and counted, not compared; they
-/// may be at most 1 % of the covered pixels. Both images are written as PNGs beside the
-/// exports (target/tmp/engine_threejs).
-#[test]
-fn three_js_in_headless_chromium_draws_each_export_as_shvis_renders_it() {
-    let ctx = common::validated_context();
-    let prepared = common::house();
-    let (width, height) = (320, 200);
+/// What the three.js page drew against shvis' render of one export.
+struct EngineComparison {
+    label: String,
+    rel_rmse: f64,
+    compared: u64,
+    elsewhere: u64,
+}
+
+/// Exports each of `exports` from `prepared`, draws it with the three.js page
+/// (tests/engine/view.mjs) in headless Chromium at `width` × `height` and compares its
+/// linear image with shvis' own render of the technique. The two rasterizers (lavapipe,
+/// SwiftShader) place triangle edges a fraction of a pixel apart, so a few pixels along
+/// silhouettes see another surface in each image (a pillar in one, the wall behind it in the
+/// other, or a triangle across a mirrored-UV seam whose normal-map frame is flipped): those
+/// are told apart by what they see — world position, vertex normal and the normal map's
+/// bitangent from both renderers — and counted, not compared. Both images go to `root` as PNGs and as
+/// f32 RGBA (`LABEL.shvis.f32`, `LABEL.radiance.f32`).
+fn compare_in_three_js(
+    ctx: &std::sync::Arc<shvis::gpu::Context>,
+    prepared: &shvis::prepare::Prepared,
+    exports: &[(&str, HwPath)],
+    (width, height): (u32, u32),
+    root: &std::path::Path,
+) -> Vec<EngineComparison> {
     let settings = FrameSettings {
         width,
         height,
         ..FrameSettings::default()
     };
-    let scene = SceneGpu::new(&ctx, &prepared.scene, &settings).unwrap();
-    let seen =
-        shvis::reference::render_point_gbuffer(&ctx, &prepared.scene, width, height).unwrap();
+    let scene = SceneGpu::new(ctx, &prepared.scene, &settings).unwrap();
+    let seen = shvis::reference::render_point_gbuffer(ctx, &prepared.scene, width, height).unwrap();
     let eye = prepared.scene.camera.position;
-    let root = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("engine_threejs");
-    let _ = std::fs::remove_dir_all(&root);
-    std::fs::create_dir_all(&root).unwrap();
+    let _ = std::fs::remove_dir_all(root);
+    std::fs::create_dir_all(root).unwrap();
     let script = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/engine/render_in_chromium.mjs"
     );
-    let mut report = Vec::new();
-    let mut worst: Vec<(String, f64, u64, u64)> = Vec::new();
-    for name in ["shlmap", "l1", "zh3", "hb4", "sg9", "dice"] {
-        for path in [HwPath::Dx10, HwPath::Dx11] {
-            let t: Technique = name.parse().unwrap();
-            let label = format!("{t}.{path}");
-            let dir = root.join(&label);
-            export(prepared, t, path).unwrap().write(&dir).unwrap();
-            let own = technique::build(&ctx, &scene, t, path, &prepared.inputs()).unwrap();
-            let expected = own.render(&scene, 0, 1).unwrap();
-            drop(own);
-            let out = root.join(&label);
-            let run = std::process::Command::new("node")
-                .arg(script)
-                .arg(&dir)
-                .arg(width.to_string())
-                .arg(height.to_string())
-                .arg(&out)
-                .output()
-                .expect("node (scripts/install-deps.sh installs it)");
-            assert!(
-                run.status.success(),
-                "{label}: {}",
-                String::from_utf8_lossy(&run.stderr)
-            );
-            let offered: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
-            assert_eq!(
-                offered["bptc"], true,
-                "{label}: the browser exposes no EXT_texture_compression_bptc ({offered})"
-            );
-            let read = |kind: &str| {
-                read_f32_frame(&root.join(format!("{label}.{kind}.f32")), width, height)
-            };
-            let (got, position, normal) = (read("radiance"), read("position"), read("normal"));
-            let (mut squared_error, mut squared) = (0f64, 0f64);
-            let (mut compared, mut elsewhere) = (0u64, 0u64);
-            for p in 0..(width * height) as usize {
-                let (a, b) = (expected.rgba[p], got.rgba[p]);
-                match (a[3] > 0.5, b[3] > 0.5) {
-                    (false, false) => continue,
-                    (true, true) => {}
-                    _ => {
-                        elsewhere += 1;
-                        continue;
-                    }
-                }
-                let (pa, pb) = (seen.position.rgba[p], position.rgba[p]);
-                let (na, nb) = (seen.vertex_normal.rgba[p], normal.rgba[p]);
-                let gap =
-                    glam::Vec3::from_slice(&pa[..3]).distance(glam::Vec3::from_slice(&pb[..3]));
-                let distance = glam::Vec3::from_slice(&pa[..3]).distance(eye);
-                let facing = glam::Vec3::from_slice(&na[..3]).dot(glam::Vec3::from_slice(&nb[..3]));
-                if gap > 0.01 * distance || facing < 0.999 {
+    let mut results = Vec::new();
+    for &(name, path) in exports {
+        let t: Technique = name.parse().unwrap();
+        let label = format!("{t}.{path}");
+        let dir = root.join(&label);
+        export(prepared, t, path).unwrap().write(&dir).unwrap();
+        let own = technique::build(ctx, &scene, t, path, &prepared.inputs()).unwrap();
+        let expected = own.render(&scene, 0, 1).unwrap();
+        drop(own);
+        let run = std::process::Command::new("node")
+            .arg(script)
+            .arg(&dir)
+            .arg(width.to_string())
+            .arg(height.to_string())
+            .arg(root.join(&label))
+            .output()
+            .expect("node (scripts/install-deps.sh installs it)");
+        assert!(
+            run.status.success(),
+            "{label}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let offered: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+        assert_eq!(
+            offered["bptc"], true,
+            "{label}: the browser exposes no EXT_texture_compression_bptc ({offered})"
+        );
+        let read =
+            |kind: &str| read_f32_frame(&root.join(format!("{label}.{kind}.f32")), width, height);
+        let (got, position, normal) = (read("radiance"), read("position"), read("normal"));
+        let bitangent = read("bitangent");
+        let (mut squared_error, mut squared) = (0f64, 0f64);
+        let (mut compared, mut elsewhere) = (0u64, 0u64);
+        for p in 0..(width * height) as usize {
+            let (a, b) = (expected.rgba[p], got.rgba[p]);
+            match (a[3] > 0.5, b[3] > 0.5) {
+                (false, false) => continue,
+                (true, true) => {}
+                _ => {
                     elsewhere += 1;
                     continue;
                 }
-                compared += 1;
-                for c in 0..3 {
-                    squared_error += f64::from(a[c] - b[c]).powi(2);
-                    squared += f64::from(a[c]).powi(2);
-                }
             }
-            let rel_rmse = (squared_error / squared).sqrt();
-            for (frame, file) in [(&expected, "shvis"), (&got, "three")] {
-                shvis::report::image::write_png(
-                    &root.join(format!("{label}.{file}.png")),
-                    frame,
-                    0.0,
-                )
-                .unwrap();
+            let v3 = |f: &shvis::render::Frame| glam::Vec3::from_slice(&f.rgba[p][..3]);
+            let gap = v3(&seen.position).distance(v3(&position));
+            let distance = v3(&seen.position).distance(eye);
+            let facing = v3(&seen.vertex_normal).dot(v3(&normal));
+            let frame = v3(&seen.bitangent).dot(v3(&bitangent));
+            if gap > 0.01 * distance || facing < 0.999 || frame < 0.99 {
+                elsewhere += 1;
+                continue;
             }
-            report.push(format!(
-                "{label}: rel. RMSE {:.3} % over {compared} pixels; {elsewhere} pixels see another surface in each image ({})",
-                100.0 * rel_rmse,
-                offered["renderer"]
-            ));
-            worst.push((label, rel_rmse, compared, elsewhere));
+            compared += 1;
+            for c in 0..3 {
+                squared_error += f64::from(a[c] - b[c]).powi(2);
+                squared += f64::from(a[c]).powi(2);
+            }
         }
-    }
-    eprintln!("{}", report.join("\n"));
-    for (label, rel_rmse, compared, elsewhere) in worst {
-        assert!(
-            compared > u64::from(width * height) / 4,
-            "{label}: {compared} pixels compared"
+        let expected_bytes: Vec<u8> = expected
+            .rgba
+            .iter()
+            .flat_map(|p| p.iter().flat_map(|c| c.to_le_bytes()))
+            .collect();
+        std::fs::write(root.join(format!("{label}.shvis.f32")), expected_bytes).unwrap();
+        for (frame, file) in [(&expected, "shvis"), (&got, "three")] {
+            shvis::report::image::write_png(&root.join(format!("{label}.{file}.png")), frame, 0.0)
+                .unwrap();
+        }
+        let rel_rmse = (squared_error / squared).sqrt();
+        eprintln!(
+            "{label}: rel. RMSE {:.3} % over {compared} pixels; {elsewhere} pixels see another surface in each image ({})",
+            100.0 * rel_rmse,
+            offered["renderer"]
         );
-        assert!(
-            elsewhere * 100 <= compared,
-            "{label}: {elsewhere} pixels see another surface"
-        );
-        assert!(rel_rmse <= 0.02, "{label}: relative RMSE {rel_rmse}");
+        results.push(EngineComparison {
+            label,
+            rel_rmse,
+            compared,
+            elsewhere,
+        });
     }
     drop(scene);
+    results
+}
+
+/// The page's image matches shvis' within 2 % relative RMSE over the pixels both see alike,
+/// which are most of the frame; those that see another surface are at most 1 % of them.
+fn assert_engine_matches(results: &[EngineComparison], pixels: u32) {
+    for r in results {
+        let label = &r.label;
+        assert!(
+            r.compared > u64::from(pixels) / 16,
+            "{label}: {} pixels compared",
+            r.compared
+        );
+        assert!(
+            r.elsewhere * 100 <= r.compared,
+            "{label}: {} pixels see another surface",
+            r.elsewhere
+        );
+        assert!(r.rel_rmse <= 0.02, "{label}: relative RMSE {}", r.rel_rmse);
+    }
+}
+
+/// An engine loads the export from its files alone: three.js (tests/engine/view.mjs, npm
+/// `three` and `ktx-parse` pinned by the lockfile) in headless Chromium reads the glTF, the
+/// KTX2 files, the manifest and decode.glsl, and draws the scene from the glTF's camera. Its
+/// linear image matches shvis' own render of the technique within 2 % relative RMSE
+/// ([`compare_in_three_js`]), on dx10 data and on dx11 data (BC7/BC6H through
+/// EXT_texture_compression_bptc). The images are in target/tmp/engine_threejs.
+#[test]
+fn three_js_in_headless_chromium_draws_each_export_as_shvis_renders_it() {
+    let ctx = common::validated_context();
+    let exports: Vec<(&str, HwPath)> = ["shlmap", "l1", "zh3", "hb4", "sg9", "dice"]
+        .into_iter()
+        .flat_map(|t| [(t, HwPath::Dx10), (t, HwPath::Dx11)])
+        .collect();
+    let root = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("engine_threejs");
+    let size = (320, 200);
+    let results = compare_in_three_js(&ctx, common::house(), &exports, size, &root);
+    assert_engine_matches(&results, size.0 * size.1);
     common::assert_validation_clean(&ctx, "three.js comparison");
+}
+
+/// A glTF scene's export (NormalTangentMirrorTest, from ../shared/assets: no lightmap UVs
+/// of its own, so the export carries the ones shvis made) reopens in shvis as the scene it
+/// baked, and three.js draws it with the lightmap in place as shvis renders it (within 2 %
+/// relative RMSE, at 640 × 400: the model fills a small part of its camera's view).
+#[test]
+fn a_gltf_scene_exports_and_reopens_in_shvis_and_three_js() {
+    let model = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../shared/assets/models/NormalTangentMirrorTest/NormalTangentMirrorTest.gltf"
+    );
+    let root = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("engine_threejs_gltf");
+    let prepared = shvis::prepare::prepare(&shvis::prepare::PrepareSettings {
+        scene: model.into(),
+        vis_res: 128,
+        rays: 64,
+        cache_dir: Some(concat!(env!("CARGO_TARGET_TMPDIR"), "/bake-cache").into()),
+        sh_lightmap_bounces: Some(shvis::bake::shlmap::DEFAULT_BOUNCES),
+        sample_fits: shvis::prepare::sample_fits_for(
+            &["hb4".parse().unwrap()],
+            &Default::default(),
+        ),
+        ..Default::default()
+    })
+    .expect("the glTF prepares");
+    let reopened = root.join("reopened");
+    let _ = std::fs::remove_dir_all(&reopened);
+    export(&prepared, "shlmap".parse().unwrap(), HwPath::Dx10)
+        .unwrap()
+        .write(&reopened)
+        .unwrap();
+    assert_reopens_as_baked(&reopened, &prepared);
+
+    let ctx = common::validated_context();
+    let size = (640, 400);
+    let results = compare_in_three_js(
+        &ctx,
+        &prepared,
+        &[
+            ("shlmap", HwPath::Dx10),
+            ("shlmap", HwPath::Dx11),
+            ("hb4", HwPath::Dx11),
+        ],
+        size,
+        &root.join("three"),
+    );
+    assert_engine_matches(&results, size.0 * size.1);
+    common::assert_validation_clean(&ctx, "three.js comparison of a glTF scene");
 }
 
 /// The manifest maps every per-texel value (value j: coefficient, basis index, colour) for

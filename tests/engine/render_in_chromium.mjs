@@ -3,8 +3,9 @@
 //
 // Usage: node render_in_chromium.mjs EXPORT_DIR WIDTH HEIGHT OUT
 //
-// Writes OUT.radiance.f32, OUT.position.f32 and OUT.normal.f32: the linear radiance, the
-// world position and the vertex normal of each pixel, RGBA f32, the top row first.
+// Writes OUT.radiance.f32, OUT.position.f32, OUT.normal.f32 and OUT.bitangent.f32: the
+// linear radiance, the world position, the vertex normal and the normal map's bitangent of
+// each pixel, RGBA f32, the top row first.
 //
 // Serves this folder (the page and its npm packages) and EXPORT_DIR under /export/ on a
 // local port, starts Chromium on the page (WebGL 2 through SwiftShader, no GPU needed) and
@@ -73,7 +74,12 @@ const server = createServer(async (request, response) => {
     for await (const chunk of request) chunks.push(chunk);
     const body = Buffer.concat(chunks);
     response.end();
-    const kinds = { '/pixels': 'radiance', '/positions': 'position', '/normals': 'normal' };
+    const kinds = {
+      '/pixels': 'radiance',
+      '/positions': 'position',
+      '/normals': 'normal',
+      '/bitangents': 'bitangent',
+    };
     if (kinds[url.pathname]) {
       images[kinds[url.pathname]] = body;
       if (url.pathname === '/pixels') pixels = body;

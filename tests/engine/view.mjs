@@ -12,8 +12,8 @@
 //
 // The page renders into a float target (linear radiance, as shvis' renderer writes it),
 // reads it back and POSTs it to its server: /pixels (RGBA f32, the top row first), then the
-// world position and the vertex normal each pixel sees (/positions, /normals, the same
-// layout), then /done with what the browser offered ({renderer, bptc, rgtc}). Any failure
+// world position, the vertex normal and the normal map's bitangent (its frame's handedness
+// included) each pixel sees (/positions, /normals, /bitangents, the same layout), then /done with what the browser offered ({renderer, bptc, rgtc}). Any failure
 // POSTs /error.
 //
 // Query: ?export=URL-of-the-folder&width=W&height=H
@@ -308,7 +308,8 @@ async function run() {
     return flipped;
   };
   // What each pixel sees, for the comparison to tell the pixels where two rasterizers hit
-  // different surfaces: the world position and the interpolated vertex normal.
+  // different surfaces: the world position, the interpolated vertex normal and the normal
+  // map's bitangent w · cross(n, t) (the frame common.glsl's tangent_frame builds).
   const seen = (value) =>
     new THREE.RawShaderMaterial({
       glslVersion: THREE.GLSL3,
@@ -319,11 +320,14 @@ async function run() {
         'uniform mat4 projectionMatrix;',
         'in vec3 position;',
         'in vec3 normal;',
+        'in vec4 tangent;',
         'out vec3 world_position;',
         'out vec3 world_normal;',
+        'out vec4 world_tangent;',
         'void main() {',
         '  world_position = (modelMatrix * vec4(position, 1.0)).xyz;',
         '  world_normal = mat3(modelMatrix) * normal;',
+        '  world_tangent = vec4(mat3(modelMatrix) * tangent.xyz, tangent.w);',
         '  gl_Position = projectionMatrix * viewMatrix * vec4(world_position, 1.0);',
         '}',
       ].join('\n'),
@@ -331,14 +335,21 @@ async function run() {
         'precision highp float;',
         'in vec3 world_position;',
         'in vec3 world_normal;',
+        'in vec4 world_tangent;',
         'layout(location = 0) out vec4 out_value;',
-        `void main() { out_value = vec4(${value}, 1.0); }`,
+        'void main() {',
+        '  vec3 n = normalize(world_normal);',
+        '  vec3 t = world_tangent.xyz - n * dot(n, world_tangent.xyz);',
+        '  vec3 bitangent = length(t) > 1e-6 ? cross(n, normalize(t)) * world_tangent.w : vec3(0.0);',
+        `  out_value = vec4(${value}, 1.0);`,
+        '}',
       ].join('\n'),
       side: meshMaterial.side,
     });
   const radiance = image(material);
   const positions = image(seen('world_position'));
-  const normals = image(seen('normalize(world_normal)'));
+  const normals = image(seen('n'));
+  const bitangents = image(seen('bitangent'));
   renderer.setRenderTarget(null);
   renderer.render(gltf.scene, camera);
   const errorCheck = gl.getError();
@@ -346,6 +357,7 @@ async function run() {
   await fetch('/pixels', { method: 'POST', body: radiance.buffer });
   await fetch('/positions', { method: 'POST', body: positions.buffer });
   await fetch('/normals', { method: 'POST', body: normals.buffer });
+  await fetch('/bitangents', { method: 'POST', body: bitangents.buffer });
   await fetch('/done', { method: 'POST', body: JSON.stringify(info) });
 }
 
