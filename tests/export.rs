@@ -766,3 +766,112 @@ fn the_manifest_maps_every_value_and_the_padding_is_zero() {
         );
     }
 }
+
+/// docs/export.md's table of what each exported technique binds at run time (dx10, from
+/// the shared test house's exports; the clustered members the house fits no clusters for
+/// are counted below it): its per-texel data, its tables, its uniform block and whether it
+/// reads the normal map.
+fn run_time_table() -> String {
+    let prepared = common::house();
+    let short = |format: &str| {
+        format
+            .replace("R16G16B16A16_SFLOAT", "RGBA16F")
+            .replace("R8G8B8A8_UNORM", "RGBA8")
+            .replace("R16_SFLOAT", "R16F")
+    };
+    let mut table = String::from(
+        "| techniques | per-texel data | tables | uniform block (`params.bin`) | normal map |\n|---|---|---|---|---|\n",
+    );
+    let mut unfitted = Vec::new();
+    for (_, members, _) in Technique::families() {
+        let mut rows: Vec<(Vec<String>, [String; 4])> = Vec::new();
+        for t in members {
+            if shvis::export::refusal(t, HwPath::Dx10).is_some() {
+                continue;
+            }
+            let Ok(out) = export(prepared, t, HwPath::Dx10) else {
+                unfitted.push(format!("`{t}`"));
+                continue;
+            };
+            let m: serde_json::Value =
+                serde_json::from_slice(out.file("manifest.json").unwrap()).unwrap();
+            let per_texel = &m["per_texel"];
+            let layers = per_texel["layers"].as_u64().unwrap();
+            let data = format!(
+                "{layers} layer{} {}",
+                if layers == 1 { "" } else { "s" },
+                short(per_texel["files"][0]["format"].as_str().unwrap())
+            );
+            let tables: Vec<String> = m["tables"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|t| {
+                    let kind = if t["kind"].as_str().unwrap().starts_with("cube") {
+                        "cube array"
+                    } else {
+                        "2D array"
+                    };
+                    format!(
+                        "{kind}, {} layers {}",
+                        t["layers"],
+                        short(t["format"].as_str().unwrap())
+                    )
+                })
+                .collect();
+            let tables = if tables.is_empty() {
+                "none".to_string()
+            } else {
+                tables.join("; ")
+            };
+            let block = &m["uniform_block"];
+            let block = format!(
+                "`{}`, {} bytes",
+                block["block"].as_str().unwrap(),
+                block["bytes"]
+            );
+            let normal_map = if t.reads().reads_normal_map {
+                "yes"
+            } else {
+                "no"
+            }
+            .to_string();
+            let cells = [data, tables, block, normal_map];
+            match rows.iter_mut().find(|(_, c)| *c == cells) {
+                Some((names, _)) => names.push(format!("`{t}`")),
+                None => rows.push((vec![format!("`{t}`")], cells)),
+            }
+        }
+        for (names, cells) in rows {
+            table += &format!("| {} | {} |\n", names.join(", "), cells.join(" | "));
+        }
+    }
+    if !unfitted.is_empty() {
+        table += &format!(
+            "\nNot in the table: {} clustered members (the other `vq*` and `cpca*`). The table comes from the test suite's house, which fits only the cost table's clusters; `shvis export` fits a member's clusters and writes it like the `cpca` rows above.\n",
+            unfitted.len()
+        );
+    }
+    table
+}
+
+/// docs/export.md lists what each exported technique needs at run time, as its export
+/// binds it (regenerate with `cargo test --test export print_the_run_time_table -- --ignored
+/// --nocapture`).
+#[test]
+fn docs_list_what_each_export_needs_at_run_time() {
+    let docs =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/export.md")).unwrap();
+    let table = run_time_table();
+    assert!(
+        docs.contains(&table),
+        "docs/export.md's run-time table differs from the exports:\n{table}"
+    );
+}
+
+/// Prints docs/export.md's table of what each exported technique needs at run time.
+#[test]
+#[ignore]
+fn print_the_run_time_table() {
+    print!("{}", run_time_table());
+}
