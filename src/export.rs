@@ -133,6 +133,11 @@ fn codec_json(codec: BlockCodec) -> serde_json::Value {
         BlockCodec::Ratio(colours) => json!({
             "name": "ratio-to-norm",
             "decode": "value_j = (255 * s_j - 128) / 127 * n[colour(j)], s_j = channel j mod 4 of layer j div 4 of per_texel (BC7_UNORM), n = per_texel_norms layer 0 (BC6H_UFLOAT, RGB)",
+            "constants": {
+                "scale": 255.0,
+                "offset": crate::technique::block::RATIO_OFFSET,
+                "divisor": crate::technique::block::RATIO_DIVISOR,
+            },
             "colour": match colours {
                 NormColours::One => "0 for every value (n.r)",
                 NormColours::Triplets => "j mod 3 (values 3k + c are RGB triplets)",

@@ -694,8 +694,8 @@ fn a_gltf_scene_exports_and_reopens_in_shvis_and_three_js() {
 }
 
 /// The manifest maps every per-texel value (value j: coefficient, basis index, colour) for
-/// each technique that describes its values as data; the rest of the channels are padding,
-/// and padding is zero in every texel of the dx10 file.
+/// each technique that describes its values as data; the other channels are padding, and
+/// padding is zero in every texel of the dx10 file.
 #[test]
 fn the_manifest_maps_every_value_and_the_padding_is_zero() {
     let prepared = common::house();
@@ -721,19 +721,29 @@ fn the_manifest_maps_every_value_and_the_padding_is_zero() {
                 .iter()
                 .map(|p| p.as_u64().unwrap() as usize)
                 .collect();
-            assert_eq!(padding, (count..total).collect::<Vec<_>>(), "{t}");
             let map = values["map"].as_array().unwrap();
             assert_eq!(map.len(), count, "{t}");
+            let mut js: Vec<usize> = map
+                .iter()
+                .map(|e| e["j"].as_u64().unwrap() as usize)
+                .chain(padding.iter().copied())
+                .collect();
+            js.sort_unstable();
+            assert_eq!(
+                js,
+                (0..total).collect::<Vec<_>>(),
+                "{t}: values and padding cover each channel once"
+            );
             let mut seen = std::collections::HashSet::new();
-            for (j, entry) in map.iter().enumerate() {
-                assert_eq!(entry["j"], j, "{t}");
+            for entry in map {
                 let key = (
                     entry["index"].as_u64().unwrap(),
                     entry["colour"].to_string(),
                 );
                 assert!(
                     seen.insert(key),
-                    "{t}: value {j} maps what another value maps"
+                    "{t}: value {} maps what another value maps",
+                    entry["j"]
                 );
             }
             assert!(!values["shading"].as_array().unwrap().is_empty(), "{t}");
@@ -874,4 +884,76 @@ fn docs_list_what_each_export_needs_at_run_time() {
 #[ignore]
 fn print_the_run_time_table() {
     print!("{}", run_time_table());
+}
+
+/// The field paths of a manifest value: objects by key, list elements as `[]`; the maps
+/// keyed by names (`shader.defines`, `shader.bindings`), the basis' own parameters and the
+/// shading steps' arguments stop at their own path.
+fn field_paths(
+    value: &serde_json::Value,
+    path: &str,
+    out: &mut std::collections::BTreeSet<String>,
+) {
+    let opaque = [
+        "shader.defines",
+        "shader.bindings",
+        "per_texel.values.basis",
+        "per_texel.values.shading[]",
+    ];
+    match value {
+        serde_json::Value::Object(map) if !opaque.contains(&path) => {
+            for (k, v) in map {
+                let p = if path.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{path}.{k}")
+                };
+                field_paths(v, &p, out);
+            }
+        }
+        serde_json::Value::Array(items) if items.first().is_some_and(|i| i.is_object()) => {
+            if opaque.contains(&path) {
+                out.insert(path.to_string());
+            }
+            for item in items {
+                field_paths(item, &format!("{path}[]"), out);
+            }
+        }
+        _ => {
+            out.insert(path.to_string());
+        }
+    }
+}
+
+/// docs/export.md's schema names every field the manifests of several techniques on both
+/// paths hold.
+#[test]
+fn the_docs_schema_names_every_manifest_field() {
+    let prepared = common::house();
+    let docs =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/export.md")).unwrap();
+    let schema = docs
+        .split("### Schema")
+        .nth(1)
+        .expect("docs/export.md has a schema section")
+        .split("\n## ")
+        .next()
+        .unwrap();
+    let mut fields = std::collections::BTreeSet::new();
+    for name in ["shlmap", "unc6", "pca8", "sg9", "dicey", "preconv"] {
+        for path in [HwPath::Dx10, HwPath::Dx11] {
+            let out = export(prepared, name.parse().unwrap(), path).unwrap();
+            let manifest: serde_json::Value =
+                serde_json::from_slice(out.file("manifest.json").unwrap()).unwrap();
+            field_paths(&manifest, "", &mut fields);
+        }
+    }
+    let missing: Vec<&String> = fields
+        .iter()
+        .filter(|f| !schema.contains(&format!("`{f}`")))
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "fields the schema does not name: {missing:?}"
+    );
 }

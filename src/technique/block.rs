@@ -228,14 +228,19 @@ fn fill_empty_norms(norms: &mut [[f32; 3]], res: u32) {
     }
 }
 
+/// The byte a ratio of 0 is stored as (module doc).
+pub const RATIO_OFFSET: f32 = 128.0;
+/// The bytes a ratio of 1 adds to [`RATIO_OFFSET`] (module doc).
+pub const RATIO_DIVISOR: f32 = 127.0;
+
 /// The ratio r ∈ [−1, 1] as the 8-bit value BC7 stores (module doc).
 fn ratio_byte(r: f32) -> u8 {
-    (128.0 + (127.0 * r.clamp(-1.0, 1.0)).round()) as u8
+    (RATIO_OFFSET + (RATIO_DIVISOR * r.clamp(-1.0, 1.0)).round()) as u8
 }
 
 /// The ratio an 8-bit (or filtered, ×255) stored value decodes to.
 pub fn byte_ratio(s: f32) -> f32 {
-    (s - 128.0) / 127.0
+    (s - RATIO_OFFSET) / RATIO_DIVISOR
 }
 
 /// Compresses `texels` with `codec` (module doc), the ratios at [`RATIO_QUALITY`]. `label`

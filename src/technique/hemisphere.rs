@@ -608,28 +608,28 @@ fn value_map(basis: HemisphereBasis) -> super::values::ValueMap {
                     DiceVariant::Rgb => {
                         for (k, part) in parts.iter().enumerate() {
                             for c in 0..3 {
-                                list.push(Value {
+                                list.push(Some(Value {
                                     coefficient: format!("vertex_{v}.{part}"),
                                     index: 3 * v + k,
                                     colour: Colour::Channel(c as u8),
-                                });
+                                }));
                             }
                         }
                     }
                     DiceVariant::YCoCg => {
                         for (k, part) in parts.iter().enumerate() {
-                            list.push(Value {
+                            list.push(Some(Value {
                                 coefficient: format!("vertex_{v}.{part}"),
                                 index: 3 * v + k,
                                 colour: Colour::Component("Y"),
-                            });
+                            }));
                         }
                         for chroma in ["Co", "Cg"] {
-                            list.push(Value {
+                            list.push(Some(Value {
                                 coefficient: format!("vertex_{v}.value"),
                                 index: 3 * v,
                                 colour: Colour::Component(chroma),
-                            });
+                            }));
                         }
                     }
                 }

@@ -163,6 +163,26 @@ impl Family for Preconv {
     }
 
     fn values(self) -> Option<super::values::ValueMap> {
-        None
+        use super::values::{self, Colour, Step, Value, ValueMap};
+        Some(ValueMap {
+            stored: "ambient occlusion: the texel's unoccluded fraction of the cosine-weighted hemisphere",
+            basis: serde_json::json!({"name": "scalar"}),
+            values: vec![Some(Value {
+                coefficient: "AO".into(),
+                index: 0,
+                colour: Colour::Shared,
+            })],
+            steps: [
+                Step(serde_json::json!({
+                    "op": "evaluate",
+                    "at": values::WORLD_NORMAL,
+                    "gives": "E(n) = sum over k < 9 of E_k y_k(n), per colour, E_k = uniform_block.irradiance_sh[k].rgb (order-3 SH of irradiance: the clamped cosine's A_l already folded in)",
+                })),
+                Step(serde_json::json!({"op": "multiply", "by": "AO"})),
+            ]
+            .into_iter()
+            .chain(values::diffuse_ending())
+            .collect(),
+        })
     }
 }

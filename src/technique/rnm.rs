@@ -332,6 +332,45 @@ impl Family for Rnm {
     }
 
     fn values(self) -> Option<super::values::ValueMap> {
-        None
+        use super::values::{self, Colour, Step, Value, ValueMap};
+        let basis = crate::bake::ssbump::hl2_basis();
+        // Three RGB groups, their alphas padding.
+        let values = (0..3)
+            .flat_map(|i| {
+                (0..4).map(move |c| {
+                    (c < 3).then(|| Value {
+                        coefficient: format!("E_{i}"),
+                        index: i,
+                        colour: Colour::Channel(c as u8),
+                    })
+                })
+            })
+            .collect();
+        let weights = match self.variant {
+            RnmVariant::NormalMap => "w_i = saturate(m . B_i)^2 / sum over j of saturate(m . B_j)^2",
+            RnmVariant::NormalMapAo => "w_i = saturate(m . B_i)^2 / sum over j of saturate(m . B_j)^2, times the height field's AO",
+            RnmVariant::SelfShadowed => "w_i = the SSBump texel's channel i (it replaces the normal map)",
+        };
+        Some(ValueMap {
+            stored: "irradiance about each of the three HL2 basis directions (the clamped-cosine lobe about B_i, with visibility and inter-reflection)",
+            basis: serde_json::json!({
+                "name": "radiosity normal mapping (HL2 basis)",
+                "reference": "Green, Efficient self-shadowed radiosity normal mapping, Valve",
+                "frame": "tangent (x along +u, y image up, z the surface normal)",
+                "directions": basis.map(|b| [b.x, b.y, b.z]),
+            }),
+            values,
+            steps: [
+                Step(serde_json::json!({
+                    "op": "evaluate",
+                    "at": values::TANGENT_NORMAL,
+                    "gives": format!("E = sum over i of w_i E_i, per colour; {weights}"),
+                })),
+                values::unscale(),
+            ]
+            .into_iter()
+            .chain(values::diffuse_ending())
+            .collect(),
+        })
     }
 }

@@ -235,6 +235,31 @@ impl Family for Sh2 {
     }
 
     fn values(self) -> Option<super::values::ValueMap> {
-        None
+        use super::values::{self, Step, ValueMap};
+        Some(ValueMap {
+            stored: "visibility V(omega) (1 where the environment is seen, 0 where the scene blocks it), projected into order-2 SH",
+            basis: serde_json::json!({"name": "sh", "order": 2, "frame": "world", "convention": "conventions.sh_basis"}),
+            values: values::shared(&values::sh_coefficient_names(2)),
+            steps: [
+                Step(serde_json::json!({
+                    "op": "multiply",
+                    "with": "uniform_block.lighting_sh (order-3 RGB radiance, .rgb)",
+                    "gives": "the SH product (L V)_k = sum over i < 9, j < 4 of L_i V_j T(i, j, k) for k < 9, T the real Gaunt tensor",
+                })),
+                Step(serde_json::json!({
+                    "op": "convolve",
+                    "with": "the clamped cosine",
+                    "constants": {"A_l": [std::f64::consts::PI, 2.0 * std::f64::consts::PI / 3.0, std::f64::consts::PI / 4.0]},
+                })),
+                Step(serde_json::json!({
+                    "op": "evaluate",
+                    "at": values::WORLD_NORMAL,
+                    "gives": "E(n) = sum over k of A_l(k) (L V)_k y_k(n), per colour",
+                })),
+            ]
+            .into_iter()
+            .chain(values::diffuse_ending())
+            .collect(),
+        })
     }
 }

@@ -323,10 +323,12 @@ impl Family for ShVariant {
             ShVariantBasis::L1Luminance => {
                 let names = values::sh_coefficient_names(2);
                 let mut v = values::triplets(&names[..1]);
-                v.extend((1..4).map(|k| Value {
-                    coefficient: names[k].clone(),
-                    index: k,
-                    colour: Colour::Shared,
+                v.extend((1..4).map(|k| {
+                    Some(Value {
+                        coefficient: names[k].clone(),
+                        index: k,
+                        colour: Colour::Shared,
+                    })
                 }));
                 return Some(ValueMap {
                     stored: "incident radiance with inter-reflection: RGB order-1 SH and the luminance's order-2 band (luminance 0.2126 R + 0.7152 G + 0.0722 B)",

@@ -248,7 +248,11 @@ pub fn value_map(convolution: &'static str) -> ValueMap {
         }),
         values: values::triplets(&values::sh_coefficient_names(3)),
         steps: [
-            Step(serde_json::json!({"op": "convolve", "with": convolution})),
+            Step(serde_json::json!({
+                "op": "convolve",
+                "with": convolution,
+                "constants": {"A_l": [std::f64::consts::PI, 2.0 * std::f64::consts::PI / 3.0, std::f64::consts::PI / 4.0]},
+            })),
             Step(serde_json::json!({
                 "op": "evaluate",
                 "at": values::WORLD_NORMAL,

@@ -231,7 +231,7 @@ impl Family for Unc {
     }
 
     fn values(self) -> Option<super::values::ValueMap> {
-        use super::values::{self, Colour, Step, Value};
+        use super::values::{self, Step};
         let names = values::sh_coefficient_names(self.order.coeff_count().isqrt());
         Some(values::ValueMap {
             stored: "visibility V(omega) (1 where the environment is seen, 0 where the scene blocks it), projected into SH",
@@ -241,15 +241,7 @@ impl Family for Unc {
                 "frame": "world",
                 "convention": "conventions.sh_basis",
             }),
-            values: names
-                .iter()
-                .enumerate()
-                .map(|(k, name)| Value {
-                    coefficient: name.clone(),
-                    index: k,
-                    colour: Colour::Shared,
-                })
-                .collect(),
+            values: values::shared(&names),
             steps: [
                 Step(serde_json::json!({
                     "op": "dot",

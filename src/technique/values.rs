@@ -40,7 +40,9 @@ pub struct ValueMap {
     pub stored: &'static str,
     /// The basis: its name, where it lives, its functions and parameters (JSON object).
     pub basis: serde_json::Value,
-    pub values: Vec<Value>,
+    /// Value j of the texel; `None`: a padding channel (zero) inside the data, as the alpha of
+    /// `rnm`'s RGB groups. Channels past the list are padding too.
+    pub values: Vec<Option<Value>>,
     pub steps: Vec<Step>,
 }
 
@@ -55,15 +57,32 @@ pub fn sh_coefficient_names(order: usize) -> Vec<String> {
 }
 
 /// RGB triplets: value 3k + c is colour c of coefficient k (`names[k]`).
-pub fn triplets(names: &[String]) -> Vec<Value> {
+pub fn triplets(names: &[String]) -> Vec<Option<Value>> {
     names
         .iter()
         .enumerate()
         .flat_map(|(k, name)| {
-            (0..3).map(move |c| Value {
+            (0..3).map(move |c| {
+                Some(Value {
+                    coefficient: name.clone(),
+                    index: k,
+                    colour: Colour::Channel(c),
+                })
+            })
+        })
+        .collect()
+}
+
+/// One value per coefficient that every colour shares: value k is `names[k]`.
+pub fn shared(names: &[String]) -> Vec<Option<Value>> {
+    names
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            Some(Value {
                 coefficient: name.clone(),
                 index: k,
-                colour: Colour::Channel(c),
+                colour: Colour::Shared,
             })
         })
         .collect()
@@ -100,6 +119,7 @@ impl ValueMap {
             .values
             .iter()
             .enumerate()
+            .filter_map(|(j, v)| Some((j, v.as_ref()?)))
             .map(|(j, v)| {
                 json!({
                     "j": j,
@@ -118,8 +138,10 @@ impl ValueMap {
         json!({
             "stored": self.stored,
             "basis": self.basis,
-            "count": self.values.len(),
-            "padding": (self.values.len()..total).collect::<Vec<_>>(),
+            "count": values.len(),
+            "padding": (0..total)
+                .filter(|&j| self.values.get(j).is_none_or(|v| v.is_none()))
+                .collect::<Vec<_>>(),
             "layout": "value j is channel j mod 4 (r, g, b, a) of layer j div 4; padding values are 0",
             "map": values,
             "shading": self.steps.iter().map(|s| s.0.clone()).collect::<Vec<_>>(),
@@ -142,10 +164,12 @@ mod tests {
 
     #[test]
     fn triplets_put_colour_c_of_coefficient_k_at_3k_plus_c() {
-        let values = triplets(&sh_coefficient_names(2));
+        let mut values = triplets(&sh_coefficient_names(2));
         assert_eq!(values.len(), 12);
-        assert_eq!(values[7].index, 2);
-        assert_eq!(values[7].colour, Colour::Channel(1));
+        let seventh = values[7].clone().unwrap();
+        assert_eq!(seventh.index, 2);
+        assert_eq!(seventh.colour, Colour::Channel(1));
+        values.insert(3, None);
         let map = ValueMap {
             stored: "x",
             basis: json!({}),
@@ -153,7 +177,9 @@ mod tests {
             steps: vec![unscale()],
         };
         let j = map.to_json(16);
-        assert_eq!(j["padding"], json!([12, 13, 14, 15]));
+        assert_eq!(j["count"], 12);
+        assert_eq!(j["padding"], json!([3, 13, 14, 15]));
+        assert_eq!(j["map"][7]["j"], 8);
         assert_eq!(j["map"][7]["colour"], "g");
     }
 }
