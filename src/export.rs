@@ -124,7 +124,8 @@ fn dx10_per_texel(texels: &TexelGroups, label: &str) -> Result<Vec<u8>, ExportEr
     )
 }
 
-fn codec_json(codec: BlockCodec) -> serde_json::Value {
+/// The manifest's codec entry for data of `values` values per texel.
+fn codec_json(codec: BlockCodec, values: usize) -> serde_json::Value {
     match codec {
         BlockCodec::Bc4 => json!({
             "name": "bc4",
@@ -143,6 +144,7 @@ fn codec_json(codec: BlockCodec) -> serde_json::Value {
                 NormColours::Triplets => "j mod 3 (values 3k + c are RGB triplets)",
                 NormColours::GroupRgb => "(j mod 4) mod 3 (an RGB triple per layer, alpha with red)",
             },
+            "norm_colour": (0..values).map(|j| colours.colour(j)).collect::<Vec<_>>(),
             "filtering": "filter s and n bilinearly apart, then decode (as decode.glsl does)",
         }),
     }
@@ -303,7 +305,7 @@ fn per_texel_files(
                 "res": texels.res,
                 "layers": texels.groups.len(),
                 "values_per_texel": values,
-                "codec": codec_json(codec),
+                "codec": codec_json(codec, values),
                 "bytes_per_texel": block.bytes_per_texel(),
             })
         }

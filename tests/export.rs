@@ -482,6 +482,14 @@ fn read_f32_frame(path: &std::path::Path, width: u32, height: u32) -> shvis::ren
     }
 }
 
+/// How the three.js page shades: with the export's decode.glsl, or with a shader it writes
+/// from the manifest's value map alone.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Shading {
+    DecodeGlsl,
+    Manifest,
+}
+
 /// What the three.js page drew against shvis' render of one export.
 struct EngineComparison {
     label: String,
@@ -491,8 +499,8 @@ struct EngineComparison {
 }
 
 /// Exports each of `exports` from `prepared`, draws it with the three.js page
-/// (tests/engine/view.mjs) in headless Chromium at `width` × `height` and compares its
-/// linear image with shvis' own render of the technique. The two rasterizers (lavapipe,
+/// (tests/engine/view.mjs) in headless Chromium at `width` × `height`, shaded as `shading`
+/// says, and compares its linear image with shvis' own render of the technique. The two rasterizers (lavapipe,
 /// SwiftShader) place triangle edges a fraction of a pixel apart, so a few pixels along
 /// silhouettes see another surface in each image (a pillar in one, the wall behind it in the
 /// other, or a triangle across a mirrored-UV seam whose normal-map frame is flipped): those
@@ -504,6 +512,7 @@ fn compare_in_three_js(
     prepared: &shvis::prepare::Prepared,
     exports: &[(&str, HwPath)],
     (width, height): (u32, u32),
+    shading: Shading,
     root: &std::path::Path,
 ) -> Vec<EngineComparison> {
     let settings = FrameSettings {
@@ -535,6 +544,7 @@ fn compare_in_three_js(
             .arg(width.to_string())
             .arg(height.to_string())
             .arg(root.join(&label))
+            .args((shading == Shading::Manifest).then_some("manifest"))
             .output()
             .expect("node (scripts/install-deps.sh installs it)");
         assert!(
@@ -639,7 +649,14 @@ fn three_js_in_headless_chromium_draws_each_export_as_shvis_renders_it() {
         .collect();
     let root = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("engine_threejs");
     let size = (320, 200);
-    let results = compare_in_three_js(&ctx, common::house(), &exports, size, &root);
+    let results = compare_in_three_js(
+        &ctx,
+        common::house(),
+        &exports,
+        size,
+        Shading::DecodeGlsl,
+        &root,
+    );
     assert_engine_matches(&results, size.0 * size.1);
     common::assert_validation_clean(&ctx, "three.js comparison");
 }
@@ -687,6 +704,7 @@ fn a_gltf_scene_exports_and_reopens_in_shvis_and_three_js() {
             ("hb4", HwPath::Dx11),
         ],
         size,
+        Shading::DecodeGlsl,
         &root.join("three"),
     );
     assert_engine_matches(&results, size.0 * size.1);
@@ -956,4 +974,31 @@ fn the_docs_schema_names_every_manifest_field() {
         missing.is_empty(),
         "fields the schema does not name: {missing:?}"
     );
+}
+
+/// The manifest is the whole contract for the SH, H-basis and SG rows: the three.js page
+/// writes its fragment shader from `per_texel.values`, `per_texel.codec` and
+/// `conventions.sh_basis` alone (`manifestShader` in tests/engine/view.mjs, no decode.glsl)
+/// and draws `shlmap`, `l1`, `hb4` and `sg9` from dx10 and dx11 exports as shvis renders
+/// them, within 2 % relative RMSE.
+#[test]
+fn three_js_shades_from_the_manifest_alone() {
+    let ctx = common::validated_context();
+    let exports: Vec<(&str, HwPath)> = ["shlmap", "l1", "hb4", "sg9"]
+        .into_iter()
+        .flat_map(|t| [(t, HwPath::Dx10), (t, HwPath::Dx11)])
+        .collect();
+    let root =
+        std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("engine_threejs_manifest");
+    let size = (320, 200);
+    let results = compare_in_three_js(
+        &ctx,
+        common::house(),
+        &exports,
+        size,
+        Shading::Manifest,
+        &root,
+    );
+    assert_engine_matches(&results, size.0 * size.1);
+    common::assert_validation_clean(&ctx, "three.js shading from the manifest");
 }

@@ -68,7 +68,7 @@ pub enum NormColours {
 
 impl NormColours {
     /// The colour (0, 1, 2) of value `j`.
-    fn colour(self, j: usize) -> usize {
+    pub fn colour(self, j: usize) -> usize {
         match self {
             NormColours::One => 0,
             NormColours::Triplets => j % 3,

@@ -300,10 +300,16 @@ impl Family for ShVariant {
         let (names, evaluate): (Vec<String>, String) = match self.basis {
             ShVariantBasis::L2Deringed => {
                 return Some(super::shlmap::value_map(
+                    3,
                     "the clamped cosine's convolution windowed to be non-negative over the texel's hemisphere: A_l per texel folded into the stored values, so evaluate with A_l = (pi, 2 pi / 3, pi / 4)",
                 ));
             }
-            ShVariantBasis::L1 => (values::sh_coefficient_names(2), linear.into()),
+            ShVariantBasis::L1 => {
+                return Some(super::shlmap::value_map(
+                    2,
+                    "the clamped cosine's convolution: A_l = (pi, 2 pi / 3) for l = 0, 1",
+                ));
+            }
             ShVariantBasis::L1Geomerics => (
                 values::sh_coefficient_names(2),
                 "Geomerics' non-linear L1, per colour: r0 = pi K_00 c_00, r1 = (pi / 3) K_1 d; if r0 <= 0: 0; if |r1| = 0: r0; else r = min(|r1| / r0, 1), q = clamp((1 + n . r1 / |r1|) / 2, 0, 1), p = 1 + 2 r, a = (1 - r) / (1 + r), E = r0 (a + (1 - a) (p + 1) q^p)".into(),

@@ -229,29 +229,32 @@ impl Family for Shlmap {
 
     fn values(self) -> Option<ValueMap> {
         Some(value_map(
+            3,
             "the clamped cosine's convolution: A_l = (pi, 2 pi / 3, pi / 4) for l = 0, 1, 2",
         ))
     }
 }
 
-/// The values of an order-3 RGB SH lightmap of incident radiance (`shlmap`, and `shlmapw`
-/// with its own `convolution`): value 3k + c is colour c of coefficient k, shaded as
-/// E(n) = Σ_lm A_l L_lm y_lm(n).
-pub fn value_map(convolution: &'static str) -> ValueMap {
+/// The values of an RGB SH lightmap of incident radiance of `order` (`shlmap` and `shlmapw`:
+/// 3; `l1`: 2), with the words for its `convolution`: value 3k + c is colour c of
+/// coefficient k, shaded as E(n) = Σ_lm A_l L_lm y_lm(n).
+pub fn value_map(order: usize, convolution: &'static str) -> ValueMap {
+    use std::f64::consts::PI;
+    let convolution_constants = &[PI, 2.0 * PI / 3.0, PI / 4.0][..order];
     ValueMap {
-        stored: "incident radiance with inter-reflection, projected into order-3 SH",
+        stored: "incident radiance with inter-reflection, projected into SH",
         basis: serde_json::json!({
             "name": "sh",
-            "order": 3,
+            "order": order,
             "frame": "world",
             "convention": "conventions.sh_basis",
         }),
-        values: values::triplets(&values::sh_coefficient_names(3)),
+        values: values::triplets(&values::sh_coefficient_names(order)),
         steps: [
             Step(serde_json::json!({
                 "op": "convolve",
                 "with": convolution,
-                "constants": {"A_l": [std::f64::consts::PI, 2.0 * std::f64::consts::PI / 3.0, std::f64::consts::PI / 4.0]},
+                "constants": {"A_l": convolution_constants},
             })),
             Step(serde_json::json!({
                 "op": "evaluate",

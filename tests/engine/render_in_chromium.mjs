@@ -1,7 +1,9 @@
 // Renders a `shvis export` folder with the three.js page (view.html, view.mjs) in headless
 // Chromium and writes what the page drew.
 //
-// Usage: node render_in_chromium.mjs EXPORT_DIR WIDTH HEIGHT OUT
+// Usage: node render_in_chromium.mjs EXPORT_DIR WIDTH HEIGHT OUT [manifest]
+//
+// `manifest`: the page shades from the manifest's value map instead of decode.glsl.
 //
 // Writes OUT.radiance.f32, OUT.position.f32, OUT.normal.f32 and OUT.bitangent.f32: the
 // linear radiance, the world position, the vertex normal and the normal map's bitangent of
@@ -19,7 +21,7 @@ import { join, normalize, extname, dirname } from 'node:path';
 import { tmpdir } from 'node:os';
 import { fileURLToPath } from 'node:url';
 
-const [exportDir, width, height, out] = process.argv.slice(2);
+const [exportDir, width, height, out, shading] = process.argv.slice(2);
 if (!out) {
   console.error('usage: node render_in_chromium.mjs EXPORT_DIR WIDTH HEIGHT OUT');
   process.exit(2);
@@ -120,7 +122,8 @@ const server = createServer(async (request, response) => {
 server.listen(0, '127.0.0.1', async () => {
   const { port } = server.address();
   profile = await mkdtemp(join(tmpdir(), 'shvis-chromium-'));
-  const page = `http://127.0.0.1:${port}/view.html?export=/export&width=${width}&height=${height}`;
+  const mode = shading === 'manifest' ? '&shading=manifest' : '';
+  const page = `http://127.0.0.1:${port}/view.html?export=/export&width=${width}&height=${height}${mode}`;
   browser = spawn(chromium(), [
     '--headless',
     '--no-sandbox',

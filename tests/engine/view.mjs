@@ -8,7 +8,9 @@
 // - the technique's fragment shader, decode.glsl, turned from Vulkan GLSL into GLSL ES 3.00
 //   (uniform blocks become uniform structs, `layout(binding)` goes) and bound by the
 //   manifest: its bindings name which texture each sampler reads, its uniform block's
-//   fields give the values, its inputs name the glTF attribute each varying carries.
+//   fields give the values, its inputs name the glTF attribute each varying carries;
+// - or, with shading=manifest, a fragment shader written from the manifest's value map
+//   alone (manifestShader), for the SH, H-basis and spherical Gaussian techniques.
 //
 // The page renders into a float target (linear radiance, as shvis' renderer writes it),
 // reads it back and POSTs it to its server: /pixels (RGBA f32, the top row first), then the
@@ -16,7 +18,7 @@
 // included) each pixel sees (/positions, /normals, /bitangents, the same layout), then /done with what the browser offered ({renderer, bptc, rgtc}). Any failure
 // POSTs /error.
 //
-// Query: ?export=URL-of-the-folder&width=W&height=H
+// Query: ?export=URL-of-the-folder&width=W&height=H[&shading=manifest]
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { read } from 'ktx-parse';
@@ -25,6 +27,9 @@ const query = new URLSearchParams(location.search);
 const base = (query.get('export') ?? 'export').replace(/\/$/, '') + '/';
 const width = Number(query.get('width') ?? 640);
 const height = Number(query.get('height') ?? 400);
+// shading=manifest: shade from the manifest's value map alone (manifestShader), not from
+// decode.glsl.
+const fromManifest = query.get('shading') === 'manifest';
 
 async function bytes(name) {
   const response = await fetch(base + name);
@@ -135,6 +140,137 @@ function toGlslEs(source, bindingValues) {
     'precision highp sampler2DArray;',
   ].join('\n');
   return { source: `${precision}\n${s}`, bindings };
+}
+
+// The fragment shader an engine writes from the manifest alone, without decode.glsl:
+// `per_texel.values` says which coefficient and colour each value is, the basis, and the
+// shading steps; `per_texel.codec` how a texel turns into values; `conventions.sh_basis` the
+// SH convention. This page knows the bases by name (SH, the H-basis, spherical Gaussians),
+// as an engine would; their parameters come from the manifest.
+function manifestShader(manifest) {
+  const perTexel = manifest.per_texel;
+  const values = perTexel.values;
+  if (!values) throw new Error(`${manifest.technique}: the manifest has no value map`);
+  const steps = values.shading;
+  const sh = manifest.conventions.sh_basis;
+  if (values.basis.name === 'sh' && (sh.normalisation !== 'orthonormal over the sphere' || !sh.condon_shortley_phase
+      || sh.index !== 'l * (l + 1) + m' || sh.pole_axis !== '+Z')) {
+    throw new Error('an SH convention this page does not evaluate');
+  }
+  const total = perTexel.values_per_texel;
+  const coefficients = 1 + Math.max(...values.map.map((e) => e.index));
+  const lines = [
+    'precision highp float;',
+    'precision highp sampler2DArray;',
+    'in vec3 in_normal_world;',
+    'in vec4 in_tangent_world;',
+    'in vec2 in_uv_material;',
+    'in vec2 in_uv_lightmap;',
+    'in vec3 in_albedo_tint;',
+    'uniform sampler2D albedo_tex;',
+    'uniform sampler2D normal_tex;',
+    'uniform float normal_scale;',
+    'uniform float unscale;',
+    perTexel.files.length > 1 ? 'uniform sampler2DArray per_texel_tex[2];' : 'uniform sampler2DArray per_texel_tex;',
+    'layout(location = 0) out vec4 out_radiance;',
+    'const float PI = 3.14159265358979;',
+    'void main() {',
+    // The normal map's tangent-space normal and the world shading normal (glTF frame).
+    '  vec3 m = vec3(0.0, 0.0, 1.0);',
+    '  if (normal_scale != 0.0) {',
+    '    vec3 t = texture(normal_tex, in_uv_material).xyz * 2.0 - 1.0;',
+    '    t.xy *= normal_scale;',
+    '    m = length(t) > 1e-6 ? normalize(t) : vec3(0.0, 0.0, 1.0);',
+    '  }',
+    '  vec3 nv = normalize(in_normal_world);',
+    '  vec3 tv = in_tangent_world.xyz - nv * dot(nv, in_tangent_world.xyz);',
+    '  vec3 n = length(tv) > 1e-6 ? normalize(normalize(tv) * m.x + cross(nv, normalize(tv)) * in_tangent_world.w * m.y + nv * m.z) : nv;',
+    `  float v[${total}];`,
+  ];
+  const layers = total / 4;
+  if (perTexel.codec.name === 'plain') {
+    for (let g = 0; g < layers; ++g) {
+      lines.push(`  { vec4 s = texture(per_texel_tex, vec3(in_uv_lightmap, ${g}.0)); v[${4 * g}] = s.x; v[${4 * g + 1}] = s.y; v[${4 * g + 2}] = s.z; v[${4 * g + 3}] = s.w; }`);
+    }
+  } else if (perTexel.codec.name === 'ratio-to-norm') {
+    const { scale, offset, divisor } = perTexel.codec.constants;
+    const f = (x) => Number(x).toFixed(6);
+    lines.push('  vec3 norms = texture(per_texel_tex[1], vec3(in_uv_lightmap, 0.0)).rgb;');
+    for (let g = 0; g < layers; ++g) {
+      lines.push(`  { vec4 s = (texture(per_texel_tex[0], vec3(in_uv_lightmap, ${g}.0)) * ${f(scale)} - ${f(offset)}) / ${f(divisor)};`);
+      for (let i = 0; i < 4; ++i) {
+        lines.push(`    v[${4 * g + i}] = s[${i}] * norms[${perTexel.codec.norm_colour[4 * g + i]}];`);
+      }
+      lines.push('  }');
+    }
+  } else {
+    throw new Error(`codec ${perTexel.codec.name}`);
+  }
+  // Coefficient k of colour c from the map.
+  lines.push(`  vec3 c[${coefficients}];`);
+  lines.push(`  for (int k = 0; k < ${coefficients}; ++k) c[k] = vec3(0.0);`);
+  const channel = { r: 0, g: 1, b: 2 };
+  for (const e of values.map) {
+    if (!(e.colour in channel)) throw new Error(`colour ${e.colour}: this page maps RGB values only`);
+    lines.push(`  c[${e.index}][${channel[e.colour]}] = v[${e.j}];`);
+  }
+  lines.push('  vec3 e = vec3(0.0);');
+  const basis = values.basis;
+  const fixed = (x) => Number(x).toFixed(9);
+  if (basis.name === 'sh') {
+    const convolve = steps.find((s) => s.op === 'convolve');
+    if (!convolve) throw new Error('an SH map without its convolution');
+    const a = convolve.constants.A_l;
+    // Orthonormal real SH, Condon–Shortley phase, index l(l+1)+m, pole on +Z.
+    const y = [
+      '0.28209479177',
+      '-0.4886025119 * n.y', '0.4886025119 * n.z', '-0.4886025119 * n.x',
+      '1.0925484306 * n.x * n.y', '-1.0925484306 * n.y * n.z', '0.31539156525 * (3.0 * n.z * n.z - 1.0)',
+      '-1.0925484306 * n.x * n.z', '0.54627421529 * (n.x * n.x - n.y * n.y)',
+    ];
+    if (basis.frame !== 'world' || basis.order > 3 || a.length !== basis.order) throw new Error('an SH basis this page does not evaluate');
+    for (let k = 0; k < basis.order * basis.order; ++k) {
+      const l = k < 1 ? 0 : k < 4 ? 1 : 2;
+      lines.push(`  e += ${fixed(a[l])} * (${y[k]}) * c[${k}];`);
+    }
+  } else if (basis.name === 'h-basis') {
+    const h = [
+      '1.0 / sqrt(2.0 * PI)',
+      'sqrt(3.0 / (2.0 * PI)) * m.y',
+      'sqrt(3.0 / (2.0 * PI)) * (2.0 * m.z - 1.0)',
+      'sqrt(3.0 / (2.0 * PI)) * m.x',
+      'sqrt(15.0 / (2.0 * PI)) * m.x * m.y',
+      '0.5 * sqrt(15.0 / (2.0 * PI)) * (m.x * m.x - m.y * m.y)',
+    ];
+    for (let i = 0; i < coefficients; ++i) lines.push(`  e += (${h[i]}) * c[${i}];`);
+  } else if (basis.name === 'spherical gaussians') {
+    // Each lobe's integral against the clamped cosine (Hill's fit, the manifest's formula).
+    const lambda = fixed(basis.sharpness);
+    lines.push(`  float lambda = ${lambda};`);
+    lines.push('  float ex = exp(-lambda), ex2 = ex * ex, r = 1.0 / lambda;');
+    lines.push('  float scale = 1.0 + 2.0 * ex2 - r, bias = (ex - ex2) * r - ex2;');
+    lines.push('  float x = sqrt(max(1.0 - scale, 0.0)), x1 = x / (4.0 * 0.36);');
+    lines.push('  float integral = 2.0 * PI * (1.0 - exp(-2.0 * lambda)) * r;');
+    basis.axes.forEach((axis, k) => {
+      lines.push(`  { float t = dot(vec3(${axis.map(fixed).join(', ')}), m); float x0 = 0.36 * t;`);
+      lines.push('    float y = abs(x0) <= x1 ? (x0 + x1) * (x0 + x1) / x : clamp(t, 0.0, 1.0);');
+      lines.push(`    e += c[${k}] * (scale * y + bias) * integral; }`);
+    });
+  } else {
+    throw new Error(`basis ${basis.name}: this page does not evaluate it from the manifest`);
+  }
+  for (const step of steps) {
+    if (step.op === 'multiply' && step.by === 'uniform_block.unscale.x') lines.push('  e *= unscale;');
+    else if (step.op === 'max') lines.push(`  e = max(e, vec3(${fixed(step.with)}));`);
+    else if (step.op === 'multiply' && step.by === 'albedo / pi') {
+      lines.push('  vec3 albedo = texture(albedo_tex, in_uv_material).rgb * in_albedo_tint;');
+      lines.push('  out_radiance = vec4(albedo / PI * e, 1.0);');
+    } else if (step.op !== 'convolve' && step.op !== 'evaluate') {
+      throw new Error(`shading step ${JSON.stringify(step)}: this page does not apply it`);
+    }
+  }
+  lines.push('}');
+  return lines.join('\n');
 }
 
 // The vertex stage the manifest's inputs ask for: each varying the glTF attribute it
@@ -274,14 +410,30 @@ async function run() {
       uniforms[uniform.name] = { value: perTexel.length > 1 ? perTexel : perTexel[0] };
     }
   }
-  const material = new THREE.RawShaderMaterial({
-    name: 'decode.glsl',
-    glslVersion: THREE.GLSL3,
-    vertexShader: vertexShader(manifest.shader.inputs),
-    fragmentShader: source,
-    uniforms,
-    side: meshMaterial.side,
-  });
+  const unscaleField = manifest.uniform_block.fields.find((f) => f.name === 'unscale');
+  const material = fromManifest
+    ? new THREE.RawShaderMaterial({
+      name: 'manifest',
+      glslVersion: THREE.GLSL3,
+      vertexShader: vertexShader(manifest.shader.inputs),
+      fragmentShader: manifestShader(manifest),
+      uniforms: {
+        albedo_tex: { value: meshMaterial.map },
+        normal_tex: { value: meshMaterial.normalMap },
+        normal_scale: { value: normalScale },
+        unscale: { value: unscaleField ? unscaleField.values[0][0] : 1 },
+        per_texel_tex: { value: perTexel.length > 1 ? perTexel : perTexel[0] },
+      },
+      side: meshMaterial.side,
+    })
+    : new THREE.RawShaderMaterial({
+      name: 'decode.glsl',
+      glslVersion: THREE.GLSL3,
+      vertexShader: vertexShader(manifest.shader.inputs),
+      fragmentShader: source,
+      uniforms,
+      side: meshMaterial.side,
+    });
   const target = new THREE.WebGLRenderTarget(width, height, {
     type: THREE.FloatType,
     format: THREE.RGBAFormat,
