@@ -226,9 +226,9 @@ fn assert_reopens_as_baked(dir: &std::path::Path, prepared: &shvis::prepare::Pre
     assert!((c.fov_y - d.fov_y).abs() < 1e-6);
 }
 
-/// Every exportable technique on dx10 and dx11 but the clustered ones, its files read as an engine's tools read
-/// them, with nothing of shvis (`tests/engine/check_export.mjs`, npm packages pinned by its
-/// lockfile): each KTX2 file
+/// Every exportable technique on dx10 and dx11 (of the clustered ones, those the test house
+/// fits clusters for), its files read as an engine's tools read them, with nothing of shvis
+/// (`tests/engine/check_export.mjs`, npm packages pinned by its lockfile): each KTX2 file
 /// through ktx-parse — the format, size, layers and faces the manifest names, one level,
 /// no supercompression, BT.709 linear, the sample bounds libktx writes, `KTXorientation`
 /// "rd" and a `KTXwriter` — and the glTF through the Khronos glTF validator: no errors, no
@@ -242,13 +242,21 @@ fn ktx_parse_and_the_gltf_validator_read_every_export() {
         .flat_map(|(_, members, _)| members)
         .flat_map(|t| [(t, HwPath::Dx10), (t, HwPath::Dx11)])
         .filter(|&(t, path)| shvis::export::refusal(t, path).is_none())
-        // The shared house has no cluster fits (`vq*`, `cpca*` need `fit_clusters`).
-        .filter(|(t, _)| t.needs().clusters.is_none())
         .collect();
     assert!(exportable.len() >= 40, "{} exports", exportable.len());
+    let (mut clustered, mut unfitted) = (0, 0);
     for (t, path) in exportable {
         let label = format!("{t}.{path}");
-        let out = export(prepared, t, path).unwrap();
+        let out = match export(prepared, t, path) {
+            Ok(out) => out,
+            // The shared house fits only the cost table's clusters.
+            Err(_) if t.needs().clusters.is_some() => {
+                unfitted += 1;
+                continue;
+            }
+            Err(e) => panic!("{label}: {e}"),
+        };
+        clustered += usize::from(t.needs().clusters.is_some());
         let dir = std::env::temp_dir().join(format!(
             "shvis-export-engine-{}-{label}",
             std::process::id()
@@ -331,6 +339,10 @@ fn ktx_parse_and_the_gltf_validator_read_every_export() {
         }
         let _ = std::fs::remove_dir_all(&dir);
     }
+    assert!(clustered >= 4, "{clustered} clustered exports read");
+    eprintln!(
+        "{clustered} clustered exports read; {unfitted} have no cluster fit on the test house"
+    );
 }
 
 /// The manifest spells out `params.bin`: the technique's uniform block by name, every field
@@ -662,9 +674,10 @@ fn three_js_in_headless_chromium_draws_each_export_as_shvis_renders_it() {
 }
 
 /// A glTF scene's export (NormalTangentMirrorTest, from ../shared/assets: no lightmap UVs
-/// of its own, so the export carries the ones shvis made) reopens in shvis as the scene it
-/// baked, and three.js draws it with the lightmap in place as shvis renders it (within 2 %
-/// relative RMSE, at 640 × 400: the model fills a small part of its camera's view).
+/// of its own, so the export carries the ones shvis made) passes the Khronos glTF validator
+/// (no errors, no warnings), reopens in shvis as the scene it baked, and three.js draws it
+/// with the lightmap in place as shvis renders it (within 2 % relative RMSE, at 640 × 400:
+/// the model fills a small part of its camera's view).
 #[test]
 fn a_gltf_scene_exports_and_reopens_in_shvis_and_three_js() {
     let model = concat!(
@@ -692,6 +705,20 @@ fn a_gltf_scene_exports_and_reopens_in_shvis_and_three_js() {
         .write(&reopened)
         .unwrap();
     assert_reopens_as_baked(&reopened, &prepared);
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/engine/check_export.mjs");
+    let run = std::process::Command::new("node")
+        .arg(script)
+        .arg(&reopened)
+        .output()
+        .expect("node (scripts/install-deps.sh installs it)");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    assert_eq!(report["gltf"]["numErrors"], 0, "{}", report["gltf"]);
+    assert_eq!(report["gltf"]["numWarnings"], 0, "{}", report["gltf"]);
 
     let ctx = common::validated_context();
     let size = (640, 400);

@@ -208,7 +208,27 @@ pub fn load_or_bake_sh_lightmap(
 /// negative counts (u64 count, u64 each), values (u64 count, f16 bits) and scales (u64
 /// count, f32).
 pub fn encode_sh_lightmap(map: &ShLightmap, key: u64) -> Vec<u8> {
-    let mut p = Vec::new();
+    // The file is built in one buffer of its exact size: the bake's largest allocation
+    // after the map itself, so it must not double while it grows.
+    let fitted = &map.fitted;
+    let float_count = map.coeffs.iter().map(|c| c.len()).sum::<usize>()
+        + 3 * map.normal.len()
+        + 9 * map.frame.len()
+        + 3 * map.bounce_source.len()
+        + map
+            .basis_irradiance
+            .iter()
+            .map(|b| 3 * b.len())
+            .sum::<usize>()
+        + fitted.scales.len();
+    let payload_bytes = 12
+        + 16
+        + 4 * float_count
+        + map.covered.len()
+        + 5 * 8
+        + 8 * fitted.negative.len()
+        + 2 * fitted.values.len();
+    let mut p = header_first(payload_bytes);
     let env = match map.env {
         BakeEnv::Sh => 0u32,
         BakeEnv::Pixels => 1,
@@ -243,7 +263,6 @@ pub fn encode_sh_lightmap(map: &ShLightmap, key: u64) -> Vec<u8> {
             .iter()
             .flat_map(|b| b.iter().flat_map(|e| e.to_array())),
     );
-    let fitted = &map.fitted;
     p.extend_from_slice(&(fitted.negative.len() as u64).to_le_bytes());
     for n in &fitted.negative {
         p.extend_from_slice(&n.to_le_bytes());
@@ -254,7 +273,8 @@ pub fn encode_sh_lightmap(map: &ShLightmap, key: u64) -> Vec<u8> {
     }
     p.extend_from_slice(&(fitted.scales.len() as u64).to_le_bytes());
     floats(&mut p, &mut fitted.scales.iter().copied());
-    with_header(KIND_SH_LIGHTMAP, key, &p)
+    debug_assert_eq!(p.len(), HEADER_BYTES + payload_bytes);
+    finish_header(KIND_SH_LIGHTMAP, key, p)
 }
 
 /// Parses an SH lightmap cache file of `res`² texels fitting `fits`; `Err` says what is
@@ -582,15 +602,32 @@ pub fn encode_visibility(map: &VisibilityMap, key: u64) -> Vec<u8> {
 
 /// A cache file: the header (module doc) of `kind` and `key`, then `payload`.
 fn with_header(kind: u32, key: u64, payload: &[u8]) -> Vec<u8> {
-    let mut out = Vec::with_capacity(HEADER_BYTES + payload.len());
-    out.extend_from_slice(&CACHE_MAGIC);
-    out.extend_from_slice(&CACHE_FORMAT_VERSION.to_le_bytes());
-    out.extend_from_slice(&kind.to_le_bytes());
-    out.extend_from_slice(&key.to_le_bytes());
-    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    out.extend_from_slice(&hash64(payload).to_le_bytes());
-    out.extend_from_slice(payload);
-    out
+    let mut file = header_first(payload.len());
+    file.extend_from_slice(payload);
+    finish_header(kind, key, file)
+}
+
+/// A cache file's buffer before its payload is appended: room for the header, then
+/// capacity for `payload_bytes`.
+fn header_first(payload_bytes: usize) -> Vec<u8> {
+    let mut file = Vec::with_capacity(HEADER_BYTES + payload_bytes);
+    file.resize(HEADER_BYTES, 0);
+    file
+}
+
+/// Fills in the header (module doc) of `file`, whose payload follows [`header_first`]'s room.
+fn finish_header(kind: u32, key: u64, mut file: Vec<u8>) -> Vec<u8> {
+    let payload = &file[HEADER_BYTES..];
+    let (length, hash) = (payload.len() as u64, hash64(payload));
+    let mut header = Vec::with_capacity(HEADER_BYTES);
+    header.extend_from_slice(&CACHE_MAGIC);
+    header.extend_from_slice(&CACHE_FORMAT_VERSION.to_le_bytes());
+    header.extend_from_slice(&kind.to_le_bytes());
+    header.extend_from_slice(&key.to_le_bytes());
+    header.extend_from_slice(&length.to_le_bytes());
+    header.extend_from_slice(&hash.to_le_bytes());
+    file[..HEADER_BYTES].copy_from_slice(&header);
+    file
 }
 
 /// Little-endian reader over a byte slice that reports short reads.
