@@ -2,7 +2,7 @@
 
 mod cli;
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write as _};
 use std::process::ExitCode;
 
 use clap::Parser;
@@ -18,7 +18,7 @@ fn main() -> ExitCode {
     // A panic is a bug, but even then the user sees one line, not a backtrace dump.
     std::panic::set_hook(Box::new(|info| {
         let msg = info.to_string().replace('\n', " ");
-        eprintln!("error: internal error (please report): {msg}");
+        error_line(format_args!("error: internal error (please report): {msg}"));
     }));
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("shvis=info,warn"))
         .format_timestamp(None)
@@ -40,11 +40,19 @@ fn main() -> ExitCode {
                     | ErrorKind::DisplayVersion
                     | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
             ) {
-                let _ = e.print();
-                return ExitCode::SUCCESS;
+                // Help or the version into a full device is not a success.
+                return match e.print().and_then(|()| std::io::stdout().flush()) {
+                    Ok(()) => ExitCode::SUCCESS,
+                    Err(cause) => {
+                        error_line(format_args!(
+                            "error: cannot write to standard output: {cause}"
+                        ));
+                        ExitCode::FAILURE
+                    }
+                };
             }
             if let Some(line) = negative_value_line(&e) {
-                eprintln!("{line}");
+                error_line(format_args!("{line}"));
                 return ExitCode::from(2);
             }
             // clap says what is wrong in its first paragraph (a missing argument's name on the
@@ -57,20 +65,35 @@ fn main() -> ExitCode {
                 .map(str::trim)
                 .collect();
             if what.is_empty() {
-                eprintln!("error: invalid arguments");
+                error_line(format_args!("error: invalid arguments"));
             } else {
-                eprintln!("{}", what.join(" "));
+                error_line(format_args!("{}", what.join(" ")));
             }
             return ExitCode::from(2);
         }
     };
     match cli::run(cli) {
-        Ok(()) => ExitCode::SUCCESS,
+        // A line a progress callback could not write fails the command too.
+        Ok(()) => match shvis::files::stdout::failure() {
+            None => ExitCode::SUCCESS,
+            Some(cause) => {
+                error_line(format_args!(
+                    "error: cannot write to standard output: {cause}"
+                ));
+                ExitCode::FAILURE
+            }
+        },
         Err(e) => {
-            eprintln!("error: {}", one_line(&e));
+            error_line(format_args!("error: {}", one_line(&e)));
             ExitCode::FAILURE
         }
     }
+}
+
+/// One line on standard error; where standard error cannot be written either (a full
+/// device), the exit status is all that is left to say it.
+fn error_line(line: std::fmt::Arguments<'_>) {
+    let _ = writeln!(std::io::stderr(), "{line}");
 }
 
 /// The error and its causes on one line, each cause once: a cause whose text its error's

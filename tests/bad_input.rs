@@ -2728,3 +2728,69 @@ fn exports_killed_at_any_point_leave_one_whole_export() {
     eprintln!("20 kills over a {span:?} export (SHVIS_KILL_SEED={seed}): {outcomes:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A full standard output never panics: each command whose stdout is `/dev/full` exits
+/// non-zero with one `error:` line on stderr that names standard output (`--help` and
+/// `--version` too, which are not a success there); with stderr full as well it still exits
+/// 1, not with a panic's or an abort's status. An export's files, written before its lines,
+/// stay whole.
+#[test]
+fn a_full_standard_output_is_an_error_not_a_panic() {
+    let dir = scratch_dir("shvis-full-stdout");
+    let export_out = dir.join("export");
+    let cache = dir.join("cache");
+    let export_args: Vec<String> = small_export("hb4", "dx10", "0", &export_out, &cache)
+        .get_args()
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect();
+    let commands: Vec<Vec<String>> = vec![
+        strings(&["techniques"]),
+        strings(&["techniques", "--json"]),
+        strings(&["devices"]),
+        strings(&["--help"]),
+        strings(&["--version"]),
+        strings(&["export", "--help"]),
+        strings(&["report", "--help"]),
+        export_args,
+    ];
+    let full = || {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap()
+    };
+    for args in &commands {
+        let run = Command::new(env!("CARGO_BIN_EXE_shvis"))
+            .args(args)
+            .stdout(full())
+            .stderr(Stdio::piped())
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        let errors: Vec<&str> = stderr.lines().filter(|l| l.contains("error")).collect();
+        assert_eq!(run.status.code(), Some(1), "{args:?}: {stderr}");
+        assert_eq!(errors.len(), 1, "{args:?}: {stderr}");
+        assert!(
+            errors[0].starts_with("error:") && errors[0].contains("standard output"),
+            "{args:?}: {stderr}"
+        );
+        assert!(!stderr.contains("internal error"), "{args:?}: {stderr}");
+
+        let silent = Command::new(env!("CARGO_BIN_EXE_shvis"))
+            .args(args)
+            .stdout(full())
+            .stderr(full())
+            .status()
+            .unwrap();
+        assert_eq!(silent.code(), Some(1), "{args:?} with stderr full too");
+    }
+    let manifest: Value =
+        serde_json::from_slice(&std::fs::read(export_out.join("manifest.json")).unwrap()).unwrap();
+    for (name, _) in files_of(&export_out) {
+        assert!(
+            name == "manifest.json" || manifest.to_string().contains(&name),
+            "{name}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -39,7 +39,7 @@ pub(super) struct BakeArgs {
 pub(super) fn run_bake(a: BakeArgs) -> Result<()> {
     if a.check {
         let manifest = shvis::files::Manifest::verify(&a.out).map_err(anyhow::Error::msg)?;
-        println!(
+        out!(
             "{}: complete, {} files, settings {}",
             a.out.display(),
             manifest.files.len(),

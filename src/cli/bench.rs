@@ -151,8 +151,8 @@ pub(super) fn run_probe(a: ProbeArgs) -> Result<()> {
                 frames: a.frames,
             },
         )?;
-        println!("{}", probe.to_markdown());
-        print_written(&shvis::report::write_probe(&probe, &a.out)?);
+        out!("{}", probe.to_markdown());
+        print_written(&shvis::report::write_probe(&probe, &a.out)?)?;
         Ok(())
     })
 }
@@ -256,7 +256,7 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
             &a.out,
             "table.md, table.json",
             started,
-        );
+        )?;
         let suspect: Vec<String> = table
             .results
             .iter()

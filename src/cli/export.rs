@@ -66,7 +66,7 @@ pub(super) fn run_export(a: ExportArgs) -> Result<()> {
     let export = shvis::export::export(&prepared, a.technique, a.path)?;
     export.write(&a.out)?;
     for (name, bytes) in &export.files {
-        println!("{:>10} bytes  {}", bytes.len(), a.out.join(name).display());
+        out!("{:>10} bytes  {}", bytes.len(), a.out.join(name).display());
     }
     Ok(())
 }

@@ -3,6 +3,14 @@
 //! library. `anyhow` lives here and in main.rs only; every failure becomes one `error: …`
 //! line and a non-zero exit.
 
+/// Prints a line on standard output (`shvis::files::stdout`); a line that cannot be written
+/// (a full device) is the command's error.
+macro_rules! out {
+    ($($arg:tt)*) => {
+        shvis::files::stdout::print_line(format_args!($($arg)*))
+            .map_err(|e| anyhow::anyhow!("cannot write to standard output: {e}"))?
+    };
+}
 mod args;
 mod bake;
 mod bench;
@@ -136,9 +144,10 @@ fn check_validation(validate: bool, errors: u32, warnings: u32) -> Result<()> {
     Ok(())
 }
 
-/// Prints a library progress line on stdout.
+/// Prints a library progress line on stdout; a failure to write it is remembered and fails
+/// the command at its end (`shvis::files::stdout::failure`).
 fn say(line: &str) {
-    println!("{line}");
+    let _ = shvis::files::stdout::print_line(format_args!("{line}"));
 }
 
 /// The frames' memory on the host, checked before any work: `bytes_per_pixel` covers the
@@ -153,20 +162,22 @@ fn check_frame_memory(width: u32, height: u32, bytes_per_pixel: u64) -> Result<(
 }
 
 /// Prints a run's markdown table and where its files went.
-fn print_table(markdown: &str, out: &Path, tables: &str, started: Instant) {
-    println!("{markdown}");
-    println!(
+fn print_table(markdown: &str, out: &Path, tables: &str, started: Instant) -> Result<()> {
+    out!("{markdown}");
+    out!(
         "wrote {}/{tables} and images in {:.1} s",
         out.display(),
         started.elapsed().as_secs_f64()
     );
+    Ok(())
 }
 
 /// Prints the files a run wrote, one `wrote PATH` line each.
-fn print_written(paths: &[std::path::PathBuf]) {
+fn print_written(paths: &[std::path::PathBuf]) -> Result<()> {
     for p in paths {
-        println!("wrote {}", p.display());
+        out!("wrote {}", p.display());
     }
+    Ok(())
 }
 
 /// Creates the `--out` directory and checks it takes files, before any work.

@@ -140,7 +140,7 @@ pub(super) fn run_render(a: RenderArgs) -> Result<()> {
         };
         Ok(single_frame::render_to_file(ctx, &prepared, &job)?)
     })?;
-    println!("wrote {} ({label})", a.out.display());
+    out!("wrote {} ({label})", a.out.display());
     Ok(())
 }
 
@@ -180,7 +180,7 @@ pub(super) fn run_reference(a: ReferenceArgs) -> Result<()> {
         1 if a.point => "point-sampled".to_string(),
         side => format!("footprint {side}×{side} strata"),
     };
-    println!(
+    out!(
         "reference: {} spp, {sampling}, {} bounces, {:.1} M rays in {:.1} s; noise (relative standard error of the image) {:.4}",
         a.spp,
         a.bounces,
@@ -188,6 +188,6 @@ pub(super) fn run_reference(a: ReferenceArgs) -> Result<()> {
         done.seconds,
         done.noise
     );
-    println!("wrote {}", a.out.display());
+    out!("wrote {}", a.out.display());
     Ok(())
 }

@@ -375,7 +375,7 @@ fn run_compression(a: StudyCompressionArgs) -> Result<()> {
     let markdown = tables::compression_tables(&prepared, a.scene.table_res, a.scene.seed, &a.out)?;
     if a.no_gpu {
         let files = "compression.md, compression.json";
-        print_table(&markdown, &a.out, files, started);
+        print_table(&markdown, &a.out, files, started)?;
         return Ok(());
     }
     with_gpu(&a.gpu, |ctx| {
@@ -395,7 +395,7 @@ fn run_compression(a: StudyCompressionArgs) -> Result<()> {
             &a.out,
             "compression.md, compression.json, screen.md, screen.json",
             started,
-        );
+        )?;
         Ok(())
     })
 }
@@ -403,13 +403,13 @@ fn run_compression(a: StudyCompressionArgs) -> Result<()> {
 fn run_nmprt_svd(a: StudyNmprtSvdArgs) -> Result<()> {
     create_dir(&a.out)?;
     let markdown = shvis::study::nmprt_svd_report::report(a.side as usize, a.quadrature as usize);
-    println!("{markdown}");
+    out!("{markdown}");
     let report = StudyReport {
         stem: "nmprt_svd",
         markdown,
         json: None,
     };
-    print_written(&shvis::study::report::write(&a.out, &report)?);
+    print_written(&shvis::study::report::write(&a.out, &report)?)?;
     Ok(())
 }
 
@@ -478,10 +478,10 @@ fn run_rays(a: StudyRaysArgs) -> Result<()> {
     with_gpu(&a.gpu, |ctx| {
         let study = shvis::study::rays::run(ctx, &prepare, &bench, &ray_counts, &mut say)?;
         let written = shvis::study::rays::write(&study, &a.out)?;
-        print_written(&written);
+        print_written(&written)?;
         Ok(())
     })?;
-    println!("study rays: {:.1} s", started.elapsed().as_secs_f64());
+    out!("study rays: {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
 }
 
@@ -520,8 +520,8 @@ fn run_bases(a: StudyBasesArgs) -> Result<()> {
     shvis::study::report::write(&a.out, &report).map_err(|e| e.source)?;
     let plots = shvis::study::bases::write_plot(&study, &a.out)
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.out.join("bases_error.svg").display()))?;
-    print_table(&report.markdown, &a.out, "bases.md, bases.json", started);
-    print_written(&plots);
+    print_table(&report.markdown, &a.out, "bases.md, bases.json", started)?;
+    print_written(&plots)?;
     Ok(())
 }
 
@@ -557,7 +557,7 @@ fn run_block(a: StudyBlockArgs) -> Result<()> {
         )?),
     };
     shvis::study::report::write(&a.out, &report).map_err(|e| e.source)?;
-    print_table(&report.markdown, &a.out, "block.md, block.json", started);
+    print_table(&report.markdown, &a.out, "block.md, block.json", started)?;
     Ok(())
 }
 
@@ -594,10 +594,10 @@ fn run_ndf(a: StudyNdfArgs) -> Result<()> {
         out: a.out,
     };
     with_gpu(&a.gpu, |ctx| {
-        print_written(&shvis::study::ndf_report::run(ctx, &settings, &mut say)?);
+        print_written(&shvis::study::ndf_report::run(ctx, &settings, &mut say)?)?;
         Ok(())
     })?;
-    println!("study ndf: {:.1} s", started.elapsed().as_secs_f64());
+    out!("study ndf: {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
 }
 
@@ -610,7 +610,7 @@ fn run_normalmap(a: StudyNormalmapArgs) -> Result<()> {
     with_gpu(&a.gpu, |ctx| {
         let model = a.model.clone();
         if model.is_none() {
-            println!("note: no --model: the real-model part is skipped");
+            out!("note: no --model: the real-model part is skipped");
         }
         let settings = shvis::study::normalmap::NormalMapStudySettings {
             repeats: a.repeats,
@@ -627,10 +627,10 @@ fn run_normalmap(a: StudyNormalmapArgs) -> Result<()> {
             paths: a.paths.clone(),
         };
         let written = shvis::study::normalmap_report::run(ctx, &settings, &a.out, &mut say)?;
-        print_written(&written);
+        print_written(&written)?;
         Ok(())
     })?;
-    println!("study normalmap: {:.1} s", started.elapsed().as_secs_f64());
+    out!("study normalmap: {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
 }
 
@@ -652,10 +652,10 @@ fn run_rnm(a: StudyRnmArgs) -> Result<()> {
     with_gpu(&a.gpu, |ctx| {
         let written =
             shvis::study::rnm_report::run(ctx, &a.envs, &settings, &a.out, a.exposure, &mut say)?;
-        print_written(&written);
+        print_written(&written)?;
         Ok(())
     })?;
-    println!("study rnm: {:.1} s", started.elapsed().as_secs_f64());
+    out!("study rnm: {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
 }
 
@@ -669,7 +669,7 @@ fn run_seams(a: StudySeamsArgs) -> Result<()> {
         prepared.prepare_techniques(&a.techniques)?;
         let size = (a.width, a.height);
         let markdown = tables::seams_table(ctx, &prepared, &a.techniques, &a.paths, size, &a.out)?;
-        print_table(&markdown, &a.out, "seams.md, seams.json", started);
+        print_table(&markdown, &a.out, "seams.md, seams.json", started)?;
         Ok(())
     })
 }
@@ -703,7 +703,7 @@ fn run_params(a: StudyParamsArgs) -> Result<()> {
             )?)
         })?);
     }
-    print_written(&written);
-    println!("study params: {:.1} s", started.elapsed().as_secs_f64());
+    print_written(&written)?;
+    out!("study params: {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
 }

@@ -46,7 +46,7 @@ pub(super) fn run_report(a: ReportArgs) -> Result<()> {
     let page = results::comparison_page(&tables, &shvis::files::clock::utc_date_today());
     shvis::files::write(&a.out, page)
         .with_context(|| format!("{}: cannot write", a.out.display()))?;
-    println!("wrote {}", a.out.display());
+    out!("wrote {}", a.out.display());
     Ok(())
 }
 
@@ -61,13 +61,13 @@ pub(super) struct TechniquesArgs {
 pub(super) fn run_techniques(a: TechniquesArgs) -> Result<()> {
     let families = shvis::technique::catalog::families();
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&families)?);
+        out!("{}", serde_json::to_string_pretty(&families)?);
         return Ok(());
     }
     for f in &families {
         let paths: Vec<String> = f.paths.iter().map(|p| p.to_string()).collect();
-        println!("{} — {}", f.names, f.what);
-        println!(
+        out!("{} — {}", f.names, f.what);
+        out!(
             "    {} · paths {} · bakes {} · names: {}",
             f.paper,
             paths.join(", "),
@@ -92,11 +92,11 @@ pub(super) fn run_devices(a: DevicesArgs) -> Result<()> {
     with_gpu(&a.gpu, |ctx| {
         let devices = ctx.devices();
         if a.json {
-            println!("{}", serde_json::to_string_pretty(&devices)?);
+            out!("{}", serde_json::to_string_pretty(&devices)?);
             return Ok(());
         }
         for d in &devices {
-            println!(
+            out!(
                 "{} {} ({}) · driver {} · Vulkan {} · timestamps {} bits × {} ns · subgroup {}",
                 if d.in_use { "*" } else { " " },
                 d.name,
@@ -263,7 +263,7 @@ pub(super) fn run_ssbump(a: SsbumpArgs) -> Result<()> {
     let started = Instant::now();
     let s = ssbump::run(&job)?;
     let [o0, o1, o2] = s.mean_occlusion;
-    println!(
+    out!(
         "ssbump {}×{}, {} rays per texel: mean occlusion {o0:.4} {o1:.4} {o2:.4}, mean AO {:.4}; wrote {} (+ .exr, _d, _ao) in {:.1} s",
         s.width,
         s.height,

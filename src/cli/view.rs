@@ -153,7 +153,7 @@ pub(super) fn run_view(a: ViewArgs) -> Result<()> {
             device: a.gpu.device.clone(),
         },
     )?;
-    print!("{}", report.summary());
+    out!("{}", report.summary().trim_end_matches('\n'));
     let (errors, warnings) = report.validation;
     check_validation(a.gpu.validate, errors, warnings)
 }
@@ -205,7 +205,7 @@ pub(super) fn run_relight(a: RelightArgs) -> Result<()> {
             &a.out,
             "relight.md, relight.json",
             started,
-        );
+        )?;
         Ok(())
     })
 }

@@ -33,6 +33,7 @@
 pub mod clock;
 pub mod hash;
 pub mod ktx2;
+pub mod stdout;
 
 pub use hash::{Hasher64, hash64, splitmix64};
 

@@ -187,7 +187,7 @@ pub fn timings(
 ) -> Result<Vec<TimingRow>, NormalMapStudyError> {
     let mut rows = Vec::new();
     let mut push = |row: TimingRow| {
-        println!(
+        let _ = crate::files::stdout::print_line(format_args!(
             "  {} high {} low {} {}² {:?} cull {}: gpu {:.3} s (execute {:.3} s), cpu {}",
             row.table,
             row.high_triangles,
@@ -198,7 +198,7 @@ pub fn timings(
             row.gpu_total_s,
             row.gpu_execute_s,
             row.cpu_total_s.map_or("-".into(), |c| format!("{c:.3} s"))
-        );
+        ));
         rows.push(row);
     };
     let highs: Vec<_> = [5, 6, 7].map(|l| sphere_high(l, 1.0)).into();
