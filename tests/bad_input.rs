@@ -2794,3 +2794,79 @@ fn a_full_standard_output_is_an_error_not_a_panic() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Errors that name the cause: a named set mixed with names is explained (a set is given
+/// alone), an empty entry of a list option is named by its place, an unknown technique's
+/// error lists the sets beside the names, and a `SHVIS_*` variable that does not parse stops
+/// the command instead of being ignored.
+#[test]
+fn sets_empty_entries_and_unparsable_variables_say_why() {
+    let out = scratch_dir("shvis-lists").join("out");
+    let out = out.to_string_lossy().into_owned();
+    let cases: Vec<(Vec<&str>, Vec<(&str, &str)>, Vec<&str>)> = vec![
+        (
+            vec!["bench", "--techniques", "headline,l1", "--out", &out],
+            vec![],
+            vec!["headline is a set", "given alone"],
+        ),
+        (
+            vec!["bench", "--techniques", "shlmap,,l1", "--out", &out],
+            vec![],
+            vec!["entry 2 is empty"],
+        ),
+        (
+            vec!["bench", "--techniques", "shlmap,", "--out", &out],
+            vec![],
+            vec!["entry 2 is empty"],
+        ),
+        (
+            vec!["bench", "--paths", "dx10,,dx11", "--out", &out],
+            vec![],
+            vec!["'dx10,,dx11'", "entry 2 is empty"],
+        ),
+        (
+            vec!["bench", "--techniques", "shlmapx", "--out", &out],
+            vec![],
+            vec![
+                "unknown technique 'shlmapx'",
+                "or a set, given alone: all, paper, headline",
+            ],
+        ),
+        (
+            vec!["techniques"],
+            vec![("SHVIS_TRACE_LANES", "abc")],
+            vec!["SHVIS_TRACE_LANES=\"abc\"", "4, 8, 16"],
+        ),
+        (
+            vec!["techniques"],
+            vec![("SHVIS_MEMORY_LIMIT", "lots")],
+            vec!["SHVIS_MEMORY_LIMIT=\"lots\"", "512M"],
+        ),
+    ];
+    for (args, env, needles) in cases {
+        let run = Command::new(env!("CARGO_BIN_EXE_shvis"))
+            .args(&args)
+            .envs(env.iter().copied())
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{args:?} {env:?}: {stderr}");
+        let line = stderr
+            .lines()
+            .find(|l| l.starts_with("error:"))
+            .unwrap_or_else(|| panic!("{args:?} {env:?}: no error line in {stderr}"));
+        for needle in needles {
+            assert!(line.contains(needle), "{args:?} {env:?}: {line}");
+        }
+        assert!(
+            !std::path::Path::new(&out).exists(),
+            "{args:?}: no work before the error"
+        );
+    }
+    let fine = Command::new(env!("CARGO_BIN_EXE_shvis"))
+        .arg("techniques")
+        .envs([("SHVIS_TRACE_LANES", "16"), ("SHVIS_MEMORY_LIMIT", "8G")])
+        .output()
+        .unwrap();
+    assert!(fine.status.success());
+}

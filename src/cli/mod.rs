@@ -101,6 +101,7 @@ enum Command {
 
 /// Parses the arguments and runs the command.
 pub fn run(cli: Cli) -> Result<()> {
+    check_environment()?;
     match cli.command {
         Command::Bake(a) => bake::run_bake(a).context("bake"),
         Command::Render(a) => render::run_render(a).context("render"),
@@ -180,6 +181,32 @@ fn print_written(paths: &[std::path::PathBuf]) -> Result<()> {
     Ok(())
 }
 
+/// The `SHVIS_*` variables that hold values, checked before any work: one that does not
+/// parse is an error, not ignored.
+fn check_environment() -> Result<()> {
+    use shvis::bake::trace::{LANES_ENV, LANES_VALUES};
+    use shvis::limits::{MEMORY_LIMIT_ENV, parse_bytes};
+    let value = |name: &str| match std::env::var(name) {
+        Ok(v) => Ok(Some(v)),
+        Err(std::env::VarError::NotPresent) => Ok(None),
+        Err(std::env::VarError::NotUnicode(v)) => Err(anyhow::anyhow!("{name}={v:?}: not text")),
+    };
+    if let Some(v) = value(MEMORY_LIMIT_ENV)?
+        && parse_bytes(&v).is_none()
+    {
+        bail!("{MEMORY_LIMIT_ENV}={v:?}: expected bytes, as 4096, 512M or 8G");
+    }
+    if let Some(v) = value(LANES_ENV)?
+        && !LANES_VALUES.contains(&v.trim())
+    {
+        bail!(
+            "{LANES_ENV}={v:?}: expected one of {} (SIMD lanes)",
+            LANES_VALUES.join(", ")
+        );
+    }
+    Ok(())
+}
+
 /// Creates the `--out` directory and checks it takes files, before any work.
 fn create_dir(dir: &Path) -> Result<()> {
     Ok(shvis::files::check_writable_dir(dir, "--out")?)
@@ -198,12 +225,29 @@ where
 }
 
 /// A `--techniques` value: a named set (`all`, `paper`, `headline`:
-/// `technique::catalog::named_set`) or a comma-separated list of names.
+/// `technique::catalog::named_set`) or a comma-separated list of names. A set is given
+/// alone; an unknown name's error lists the sets beside the names.
 fn parse_techniques(list: &str) -> Result<Vec<Technique>> {
-    match shvis::technique::catalog::named_set(list.trim()) {
-        Some(set) => Ok(set),
-        None => parse_each_once(list),
+    use shvis::technique::catalog::{SET_NAMES, named_set};
+    if let Some(set) = named_set(list.trim()) {
+        return Ok(set);
     }
+    if let Some(set) = list
+        .split(',')
+        .map(str::trim)
+        .find(|e| SET_NAMES.contains(e))
+    {
+        bail!(
+            "'{list}': {set} is a set of techniques and is given alone (--techniques {set}); to add others, list every technique by name (`shvis techniques` names them)"
+        );
+    }
+    parse_each_once(list).map_err(|e| {
+        if e.downcast_ref::<shvis::technique::ParseError>().is_some() {
+            anyhow::anyhow!("{e}; or a set, given alone: {}", SET_NAMES.join(", "))
+        } else {
+            e
+        }
+    })
 }
 
 /// A comma-separated list of names, each at most once.
@@ -213,7 +257,13 @@ where
     T::Err: std::error::Error + Send + Sync + 'static,
 {
     let mut items: Vec<T> = Vec::new();
-    for s in list.split(',') {
+    for (i, s) in list.split(',').enumerate() {
+        if s.trim().is_empty() {
+            bail!(
+                "'{list}': entry {} is empty (a comma too many, or none between two names)",
+                i + 1
+            );
+        }
         let item: T = s.trim().parse()?;
         if items.contains(&item) {
             bail!("'{list}': {item} is named twice");

@@ -105,7 +105,7 @@ impl Width {
     /// project's AMD EPYC the queries alone ran at 8 / 16 / 4 lanes: big 13.5–13.8 /
     /// 8.3–8.8 / 9.7–10.1 Mrays/s, house 69–78 / 54 / 50–52 (2 threads, 512² × 256).
     pub(super) fn detect() -> Width {
-        let cap: usize = std::env::var("SHVIS_TRACE_LANES")
+        let cap: usize = std::env::var(super::LANES_ENV)
             .ok()
             .and_then(|v| v.parse().ok())
             .unwrap_or(8);

@@ -63,6 +63,11 @@ use obvhs::{
 use crate::scene::Mesh;
 
 mod lanes;
+
+/// The variable that picks the tracer's SIMD width, and the widths it takes.
+pub const LANES_ENV: &str = "SHVIS_TRACE_LANES";
+/// The values [`LANES_ENV`] may hold.
+pub const LANES_VALUES: [&str; 3] = ["4", "8", "16"];
 use lanes::{RayLanes, Width};
 
 /// Normal offset of ray origins relative to the scene's bounding-box diagonal.
