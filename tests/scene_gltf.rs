@@ -734,7 +734,16 @@ fn bad_files_are_one_line_errors() {
     g.set("scenes", json!([{"nodes": [0]}]));
     let glb = g.glb();
     write_file(&truncated_glb, &glb[..glb.len() - 40]);
-    expect_error(&truncated_glb, "invalid glTF");
+    expect_error(&truncated_glb, "truncated .glb: its header gives");
+    // A truncated .glb whose header was rewritten to match still has a chunk past the end.
+    let mut cut = glb[..glb.len() - 40].to_vec();
+    let len = cut.len() as u32;
+    cut[8..12].copy_from_slice(&len.to_le_bytes());
+    write_file(&truncated_glb, &cut);
+    expect_error(&truncated_glb, "runs past the file's end");
+    let not_glb = dir.join("not-binary.glb");
+    write_file(&not_glb, b"PK\x03\x04 a zip file, not a glb");
+    expect_error(&not_glb, "not a binary glTF");
 
     // Bad lightmap resolution is its own error.
     assert!(matches!(

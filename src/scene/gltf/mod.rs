@@ -271,7 +271,8 @@ impl Loader {
 
     /// The document in `bytes` and its `.glb` BIN chunk, validated.
     fn parse(&self, bytes: &[u8]) -> Result<(gltf::Document, Option<Vec<u8>>), SceneError> {
-        check_glb_header(bytes).map_err(|m| self.err(m))?;
+        let named_glb = self.file.to_ascii_lowercase().ends_with(".glb");
+        check_glb_header(bytes, named_glb).map_err(|m| self.err(m))?;
         let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
             .map_err(|e| self.err(crate::files::decoder_error("glTF", e)))?;
         // gltf-json's own validation indexes POSITION accessors unchecked: check them first.
@@ -835,18 +836,56 @@ fn decode_texture(bytes: &[u8]) -> Result<image::RgbaImage, String> {
         .to_rgba8())
 }
 
-/// Rejects a `.glb` header the `gltf` crate would mishandle (length below the header).
-fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
+/// What is wrong with a binary glTF's framing, before the parser reads it: a file named
+/// `.glb` that does not start with `glTF`, a header length below the header's or past the
+/// file's end, a chunk that runs past the end. Text glTF (`named_glb` false, no magic)
+/// passes through.
+fn check_glb_header(bytes: &[u8], named_glb: bool) -> Result<(), String> {
     const HEADER: usize = 12;
     if !bytes.starts_with(b"glTF") {
+        if named_glb {
+            let start: String = bytes
+                .iter()
+                .take(4)
+                .map(|&b| std::ascii::escape_default(b).to_string())
+                .collect();
+            return Err(format!(
+                "not a binary glTF: a .glb starts with 'glTF', this file with '{start}'"
+            ));
+        }
         return Ok(());
     }
-    let length = bytes
-        .get(8..HEADER)
-        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
-        .ok_or("truncated .glb header")?;
+    let u32_at = |at: usize| {
+        bytes
+            .get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+    };
+    let length = u32_at(8).ok_or_else(|| {
+        format!("truncated .glb: {} bytes, less than its 12-byte header", bytes.len())
+    })?;
     if length < HEADER {
         return Err(format!(".glb header length {length} is below 12"));
+    }
+    if length > bytes.len() {
+        return Err(format!(
+            "truncated .glb: its header gives {length} bytes, the file holds {}",
+            bytes.len()
+        ));
+    }
+    let mut at = HEADER;
+    while let Some(chunk) = u32_at(at) {
+        if at + 8 + chunk > bytes.len() {
+            let kind: String = bytes[at + 4..(at + 8).min(bytes.len())]
+                .iter()
+                .filter(|b| b.is_ascii_alphanumeric())
+                .map(|&b| b as char)
+                .collect();
+            return Err(format!(
+                "truncated .glb: its {kind} chunk of {chunk} bytes runs past the file's end ({} bytes)",
+                bytes.len()
+            ));
+        }
+        at += 8 + chunk;
     }
     Ok(())
 }
