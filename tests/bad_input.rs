@@ -2870,3 +2870,60 @@ fn sets_empty_entries_and_unparsable_variables_say_why() {
         .unwrap();
     assert!(fine.status.success());
 }
+
+/// An OpenEXR file without R, G and B channels (a luminance-only `Y` image) says so, as an
+/// environment and as a height map, naming the channels it has.
+#[test]
+fn an_exr_without_rgb_says_so() {
+    use exr::prelude::*;
+    let dir = scratch_dir("shvis-exr-no-rgb");
+    let path = dir.join("luminance.exr");
+    let channel = AnyChannel::new("Y", FlatSamples::F32(vec![0.5f32; 8 * 4]));
+    let layer = Layer::new(
+        (8, 4),
+        LayerAttributes::named("luminance"),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(SmallVec::from_vec(vec![channel])),
+    );
+    Image::from_layer(layer).write().to_file(&path).unwrap();
+    let out = dir.join("out.png");
+    for args in [
+        vec![
+            "render",
+            "--technique",
+            "preconv",
+            "--env",
+            s(&path).as_str(),
+            "--out",
+            s(&out).as_str(),
+        ],
+        vec![
+            "render",
+            "--technique",
+            "rnmao",
+            "--height-map",
+            s(&path).as_str(),
+            "--out",
+            s(&out).as_str(),
+        ],
+    ] {
+        let run = Command::new(env!("CARGO_BIN_EXE_shvis"))
+            .args(&args)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{args:?}: {stderr}");
+        let line = stderr
+            .lines()
+            .find(|l| l.starts_with("error:"))
+            .unwrap_or_default();
+        assert!(
+            line.contains("luminance.exr")
+                && line.contains("no R, G and B channels")
+                && line.contains("Y"),
+            "{args:?}: {line}"
+        );
+        assert!(!out.exists());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -90,7 +90,12 @@ fn decode(bytes: &[u8], path: &Path, square: SquareLayout) -> Result<EnvMap, Env
     };
     let map = if bytes.starts_with(&EXR_MAGIC) {
         check_exr_header(bytes, path)?;
-        decode_exr(bytes).map_err(|e| format_err(crate::files::decoder_error("OpenEXR file", e)))?
+        decode_exr(bytes).map_err(|e| {
+            format_err(
+                missing_rgb(bytes)
+                    .unwrap_or_else(|| crate::files::decoder_error("OpenEXR file", e)),
+            )
+        })?
     } else if RADIANCE_MAGICS.iter().any(|m| bytes.starts_with(m)) {
         let meta = image::codecs::hdr::HdrDecoder::new(Cursor::new(bytes))
             .map_err(|e| format_err(crate::files::decoder_error("Radiance HDR file", e)))?
@@ -161,7 +166,34 @@ pub(crate) fn decode_exr_rgb(bytes: &[u8], path: &Path) -> Result<EnvMap, EnvErr
     check_exr_header(bytes, path)?;
     decode_exr(bytes).map_err(|e| EnvError::Format {
         path: path.to_owned(),
-        detail: format!("not an OpenEXR image with R, G and B channels: {e}"),
+        detail: missing_rgb(bytes)
+            .unwrap_or_else(|| format!("not an OpenEXR image with R, G and B channels: {e}")),
+    })
+}
+
+/// Where an OpenEXR file's header reads but no layer has R, G and B channels: that, with the
+/// channels it has.
+fn missing_rgb(bytes: &[u8]) -> Option<String> {
+    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).ok()?;
+    let channels: Vec<String> = meta
+        .headers
+        .iter()
+        .flat_map(|h| h.channels.list.iter().map(|c| c.name.to_string()))
+        .collect();
+    let has = |name: &str| {
+        channels
+            .iter()
+            .any(|c| c == name || c.ends_with(&format!(".{name}")))
+    };
+    (!(has("R") && has("G") && has("B"))).then(|| {
+        format!(
+            "an OpenEXR image with no R, G and B channels (it has {})",
+            if channels.is_empty() {
+                "none".to_string()
+            } else {
+                channels.join(", ")
+            }
+        )
     })
 }
 

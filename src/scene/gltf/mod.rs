@@ -861,7 +861,10 @@ fn check_glb_header(bytes: &[u8], named_glb: bool) -> Result<(), String> {
             .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
     };
     let length = u32_at(8).ok_or_else(|| {
-        format!("truncated .glb: {} bytes, less than its 12-byte header", bytes.len())
+        format!(
+            "truncated .glb: {} bytes, less than its 12-byte header",
+            bytes.len()
+        )
     })?;
     if length < HEADER {
         return Err(format!(".glb header length {length} is below 12"));
