@@ -85,6 +85,7 @@ fn describe(format: vk::Format) -> Option<(u8, u8, u8, u32, Vec<Sample>)> {
                 .map(|(i, &c)| (8 * i as u16, 7, c, 0, 255))
                 .collect(),
         ),
+        vk::Format::R8_UNORM => (RGBSDA, 1, 1, 1, vec![(0, 7, 0, 0, 255)]),
         vk::Format::BC4_UNORM_BLOCK => (BC4, 4, 8, 1, vec![(0, 63, 0, 0, u32::MAX)]),
         vk::Format::BC6H_UFLOAT_BLOCK => (BC6H, 4, 16, 1, vec![(0, 127, FLOAT, 0, one)]),
         vk::Format::BC7_UNORM_BLOCK => (BC7, 4, 16, 1, vec![(0, 127, 0, 0, u32::MAX)]),
@@ -239,6 +240,7 @@ mod tests {
             (vk::Format::R32G32B32A32_SFLOAT, minus_one, one),
             (vk::Format::R16_SFLOAT, minus_one, one),
             (vk::Format::R8G8B8A8_UNORM, zero, 255),
+            (vk::Format::R8_UNORM, zero, 255),
         ] {
             let (.., samples) = describe(format).unwrap();
             for (.., l, u) in samples {

@@ -2,7 +2,7 @@
 // (manifest.json, scene.gltf, the KTX2 files, params.bin, decode.glsl) with three.js:
 //
 // - the scene through GLTFLoader, drawn from the glTF's camera;
-// - each KTX2 file through ktx-parse into a three.js array texture (RGBA16F/R16F/RGBA8 as
+// - each KTX2 file through ktx-parse into a three.js array texture (RGBA16F/R16F/RGBA8/R8 as
 //   a DataArrayTexture; BC7, BC6H and BC4 as a CompressedArrayTexture through
 //   EXT_texture_compression_bptc / _rgtc), with the manifest's orientation and filtering;
 // - the technique's fragment shader, decode.glsl, turned from Vulkan GLSL into GLSL ES 3.00
@@ -39,6 +39,7 @@ async function bytes(name) {
 
 // Vulkan formats (VkFormat values, as KTX2's vkFormat) this page uploads.
 const VK = {
+  R8_UNORM: 9,
   R8G8B8A8_UNORM: 37,
   R16_SFLOAT: 76,
   R16G16B16A16_SFLOAT: 97,
@@ -72,6 +73,11 @@ function arrayTexture(file, container, lightmap) {
     case VK.R16_SFLOAT:
       texture = new THREE.DataArrayTexture(new Uint16Array(copy.buffer), w, h, layers);
       texture.type = THREE.HalfFloatType;
+      texture.format = THREE.RedFormat;
+      break;
+    case VK.R8_UNORM:
+      texture = new THREE.DataArrayTexture(copy, w, h, layers);
+      texture.type = THREE.UnsignedByteType;
       texture.format = THREE.RedFormat;
       break;
     case VK.R8G8B8A8_UNORM:
