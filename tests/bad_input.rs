@@ -2927,3 +2927,42 @@ fn an_exr_without_rgb_says_so() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `study normalmap --model` reads the model before its timings: a missing or broken model
+/// fails at once, naming `--model`, with no output folder made.
+#[test]
+fn study_normalmap_checks_its_model_first() {
+    let dir = scratch_dir("shvis-normalmap-model");
+    let broken = dir.join("broken.gltf");
+    write(&broken, b"{ not json");
+    for model in [dir.join("missing.gltf"), broken] {
+        let out = dir.join("out");
+        let run = Command::new(env!("CARGO_BIN_EXE_shvis"))
+            .args(["study", "normalmap", "--model"])
+            .arg(&model)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{stderr}");
+        let line = stderr
+            .lines()
+            .find(|l| l.starts_with("error:"))
+            .unwrap_or_default();
+        assert!(
+            line.contains("--model") && line.contains(&*model.to_string_lossy()),
+            "{line}"
+        );
+        assert!(
+            !out.exists(),
+            "{model:?}: no output folder before the model is read"
+        );
+        let stdout = String::from_utf8_lossy(&run.stdout);
+        assert!(
+            !stdout.contains("timings on"),
+            "no timing before the model is read: {stdout}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -601,9 +601,17 @@ fn run_ndf(a: StudyNdfArgs) -> Result<()> {
     Ok(())
 }
 
+/// The lightmap resolution `--model` is read at to check it before the study's work.
+const MODEL_CHECK_RES: u32 = 64;
+
 fn run_normalmap(a: StudyNormalmapArgs) -> Result<()> {
     if let Some(r) = a.ratios.iter().find(|&&r| !(r > 0.0 && r <= 1.0)) {
         bail!("--ratios: {r} is not a fraction in (0, 1] of the model's triangles");
+    }
+    // The model is read before the timings, which take minutes, so a bad one fails first.
+    if let Some(model) = &a.model {
+        shvis::scene::gltf::load(model, MODEL_CHECK_RES)
+            .with_context(|| format!("--model {}", model.display()))?;
     }
     create_dir(&a.out)?;
     let started = Instant::now();
