@@ -610,8 +610,7 @@ fn run_normalmap(a: StudyNormalmapArgs) -> Result<()> {
     }
     // The model is read before the timings, which take minutes, so a bad one fails first.
     if let Some(model) = &a.model {
-        shvis::scene::gltf::load(model, MODEL_CHECK_RES)
-            .with_context(|| format!("--model {}", model.display()))?;
+        shvis::scene::gltf::load(model, MODEL_CHECK_RES).context("--model")?;
     }
     create_dir(&a.out)?;
     let started = Instant::now();
