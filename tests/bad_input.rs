@@ -2966,3 +2966,35 @@ fn study_normalmap_checks_its_model_first() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `report` never writes its page over one of its tables: `--out` naming a table, or a
+/// link to one, is refused before anything is read or written, and the table is unchanged.
+#[test]
+fn report_never_writes_over_its_tables() {
+    let dir = scratch_dir("shvis-report-over-input");
+    let table = dir.join("table.json");
+    write(&table, b"{\"stands for\": \"a bench table\"}");
+    let link = dir.join("page.md");
+    std::os::unix::fs::symlink(&table, &link).unwrap();
+    for out in [&table, &link] {
+        let run = Command::new(env!("CARGO_BIN_EXE_shvis"))
+            .arg("report")
+            .arg(&table)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{out:?}: {stderr}");
+        assert!(
+            stderr.contains("--out would overwrite the table input"),
+            "{stderr}"
+        );
+        assert_eq!(
+            std::fs::read(&table).unwrap(),
+            b"{\"stands for\": \"a bench table\"}",
+            "{out:?}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -37,6 +37,9 @@ pub(super) fn run_report(a: ReportArgs) -> Result<()> {
             a.tables.len()
         );
     }
+    let inputs: Vec<(&str, &std::path::Path)> =
+        a.tables.iter().map(|t| ("table", t.as_path())).collect();
+    shvis::files::check_outputs_spare_inputs(&[("--out".to_string(), a.out.clone())], &inputs)?;
     let tables = a
         .tables
         .iter()
