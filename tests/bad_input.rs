@@ -2998,3 +2998,89 @@ fn report_never_writes_over_its_tables() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// An `sh:` file whose coefficients overflow the arithmetic is one clear error naming the
+/// file and the line, whichever command reads it (before: render and export said "the SH
+/// lightmap is not finite (non-finite lighting?)" or clipped most of the frame with a
+/// warning, and export wrote the files).
+#[test]
+fn sh_files_beyond_the_radiance_limit_are_refused_by_every_command() {
+    let dir = scratch_dir("shvis-sh-overflow");
+    let file = dir.join("overflow.sh");
+    write(&file, b"3e38 3e38 3e38\n1e30 0 0\n0 0 0\n0 0 0\n");
+    let env = format!("sh:{}", file.display());
+    let out = dir.join("out");
+    let o = s(&out);
+    let commands: Vec<Vec<&str>> = vec![
+        vec![
+            "render",
+            "--technique",
+            "shlmap",
+            "--env",
+            &env,
+            "--out",
+            "PNG",
+        ],
+        vec![
+            "export",
+            "--technique",
+            "shlmap",
+            "--path",
+            "dx10",
+            "--env",
+            &env,
+            "--out",
+            &o,
+        ],
+        vec![
+            "bench",
+            "--techniques",
+            "shlmap",
+            "--paths",
+            "dx10",
+            "--env",
+            &env,
+            "--out",
+            &o,
+        ],
+        vec!["study", "bases", "--envs", &env, "--out", &o],
+        vec![
+            "relight",
+            "--techniques",
+            "unc6",
+            "--fade-to",
+            &env,
+            "--out",
+            &o,
+        ],
+    ];
+    let png = s(&dir.join("r.png"));
+    for args in commands {
+        let args: Vec<&str> = args
+            .iter()
+            .map(|a| if *a == "PNG" { png.as_str() } else { a })
+            .collect();
+        let run = Command::new(env!("CARGO_BIN_EXE_shvis"))
+            .args(&args)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{args:?}: {stderr}");
+        let line = stderr
+            .lines()
+            .find(|l| l.starts_with("error:"))
+            .unwrap_or_default();
+        assert!(
+            line.contains("overflow.sh")
+                && line.contains("line 1: 3e38 is beyond the radiance limit"),
+            "{args:?}: {line}"
+        );
+        // bench and study check that --out takes files before any work: empty is allowed.
+        let written: Vec<_> = std::fs::read_dir(&out)
+            .map(|d| d.map(|e| e.unwrap().file_name()).collect())
+            .unwrap_or_default();
+        assert!(written.is_empty(), "{args:?}: wrote {written:?}");
+        assert!(!dir.join("r.png").exists(), "{args:?}: wrote r.png");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

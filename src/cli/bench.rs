@@ -49,8 +49,8 @@ pub(super) struct BenchArgs {
     #[arg(help_heading = "Rows", long, default_value = "sky")]
     env: String,
     /// A named set — `headline` (the paper's table and rows of each later family),
-    /// `paper` (the paper's table), `all` (every row) — or a comma-separated list of names
-    /// (`shvis techniques`).
+    /// `paper` (the paper's table), `all` (every row) — given alone, or a comma-separated list
+    /// of names (`shvis techniques`).
     #[arg(help_heading = "Rows", long, default_value = "headline")]
     techniques: String,
     /// Comma-separated hardware paths (`dx9`, `dx10`, `dx11`); with `--techniques

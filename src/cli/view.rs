@@ -59,8 +59,8 @@ pub(super) struct ViewArgs {
 pub(super) struct RelightArgs {
     #[arg(long, default_value = "sky")]
     env: String,
-    /// A named set (`headline`, `paper`, `all`) or a comma-separated list of technique
-    /// names (shlmap's lighting is baked in: it is reported, not run).
+    /// A named set (`headline`, `paper`, `all`), given alone, or a comma-separated list of
+    /// technique names (shlmap's lighting is baked in: it is reported, not run).
     #[arg(long, default_value = "unc3,unc4,unc6,pca4,pca16,pca16w,sh2,preconv")]
     techniques: String,
     #[arg(long, default_value = "dx9,dx10")]

@@ -3,7 +3,9 @@
 //!
 //! The file is what `shvis sh project` prints: one coefficient per line, "r g b" (RGB
 //! radiance, DESIGN §1's convention and flat index l(l+1)+m), n² lines for order n; blank
-//! lines and lines starting with `#` are skipped. As a map ([`environment`]) the radiance
+//! lines and lines starting with `#` are skipped. A coefficient beyond the radiance limit
+//! every environment has (`equirect::MAX_ENV_RADIANCE`) is refused at load, for every
+//! command alike: past it the bakes' sums and the f16 data overflow. As a map ([`environment`]) the radiance
 //! L(ω) = Σ c_i y_i(ω) is rasterised into an equirectangular image fine enough that
 //! projecting it back returns the coefficients (texel solid angles are exact; the error of
 //! the midpoint rule in θ is ~1/H² of the signal). A truncated SH may be negative somewhere:
@@ -26,7 +28,8 @@ const MAX_SH_FILE_BYTES: u64 = 1 << 20;
 ///
 /// # Errors
 /// [`EnvError::Io`] when it cannot be read; [`EnvError::Format`] for a line that is not
-/// three finite numbers, no coefficients, or a count that is not a square n² ≤ 30².
+/// three finite numbers within the radiance limit every environment has
+/// (`equirect::MAX_ENV_RADIANCE`), no coefficients, or a count that is not a square n² ≤ 30².
 pub fn load(path: &Path) -> Result<Vec<[f64; 3]>, EnvError> {
     let bytes = super::equirect::read_env_file(path, MAX_SH_FILE_BYTES, "an SH coefficient file")?;
     let format = |detail: String| EnvError::Format {
@@ -55,6 +58,13 @@ pub fn load(path: &Path) -> Result<Vec<[f64; 3]>, EnvError> {
         };
         if !(r.is_finite() && g.is_finite() && b.is_finite()) {
             return Err(format(format!("line {}: not finite: {line:?}", number + 1)));
+        }
+        let limit = super::equirect::MAX_ENV_RADIANCE;
+        if let Some(v) = [r, g, b].into_iter().find(|v| v.abs() > f64::from(limit)) {
+            return Err(format(format!(
+                "line {}: {v:e} is beyond the radiance limit {limit:e} every environment has (the bakes' f32 sums and the f16 data would overflow); scale the coefficients down",
+                number + 1
+            )));
         }
         coeffs.push([r, g, b]);
     }
@@ -170,6 +180,12 @@ mod tests {
             ("two.txt", "1 1\n", "2 values"),
             ("word.txt", "1 one 1\n", "not numbers"),
             ("nan.txt", "NaN 1 1\n", "not finite"),
+            (
+                "huge.txt",
+                "1 1 1\n3e38 0 0\n0 0 0\n0 0 0\n",
+                "line 2: 3e38 is beyond the radiance limit",
+            ),
+            ("negative.txt", "-2e12 1 1\n", "line 1: -2e12 is beyond"),
             ("empty.txt", "# nothing\n\n", "0 coefficients"),
         ] {
             let e = load(&write(name, text)).unwrap_err().to_string();
