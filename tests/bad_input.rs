@@ -2795,6 +2795,22 @@ fn a_full_standard_output_is_an_error_not_a_panic() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Runs `cmd`, which must fail with status 1, and returns its `error:` line and its stdout
+/// (`what` labels the failures).
+fn error_line(cmd: &mut Command, what: &str) -> (String, String) {
+    let run = cmd.output().unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{what}: {stderr}");
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("error:"))
+        .unwrap_or_else(|| panic!("{what}: no error line in {stderr}"));
+    (
+        line.to_string(),
+        String::from_utf8_lossy(&run.stdout).into_owned(),
+    )
+}
+
 /// Errors that name the cause: a named set mixed with names is explained (a set is given
 /// alone), an empty entry of a list option is named by its place, an unknown technique's
 /// error lists the sets beside the names, and a `SHVIS_*` variable that does not parse stops
@@ -2844,17 +2860,12 @@ fn sets_empty_entries_and_unparsable_variables_say_why() {
         ),
     ];
     for (args, env, needles) in cases {
-        let run = Command::new(env!("CARGO_BIN_EXE_shvis"))
-            .args(&args)
-            .envs(env.iter().copied())
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&run.stderr);
-        assert_eq!(run.status.code(), Some(1), "{args:?} {env:?}: {stderr}");
-        let line = stderr
-            .lines()
-            .find(|l| l.starts_with("error:"))
-            .unwrap_or_else(|| panic!("{args:?} {env:?}: no error line in {stderr}"));
+        let (line, _) = error_line(
+            Command::new(env!("CARGO_BIN_EXE_shvis"))
+                .args(&args)
+                .envs(env.iter().copied()),
+            &format!("{args:?} {env:?}"),
+        );
         for needle in needles {
             assert!(line.contains(needle), "{args:?} {env:?}: {line}");
         }
@@ -2907,16 +2918,10 @@ fn an_exr_without_rgb_says_so() {
             s(&out).as_str(),
         ],
     ] {
-        let run = Command::new(env!("CARGO_BIN_EXE_shvis"))
-            .args(&args)
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&run.stderr);
-        assert_eq!(run.status.code(), Some(1), "{args:?}: {stderr}");
-        let line = stderr
-            .lines()
-            .find(|l| l.starts_with("error:"))
-            .unwrap_or_default();
+        let (line, _) = error_line(
+            Command::new(env!("CARGO_BIN_EXE_shvis")).args(&args),
+            &format!("{args:?}"),
+        );
         assert!(
             line.contains("luminance.exr")
                 && line.contains("no R, G and B channels")
@@ -2937,19 +2942,14 @@ fn study_normalmap_checks_its_model_first() {
     write(&broken, b"{ not json");
     for model in [dir.join("missing.gltf"), broken] {
         let out = dir.join("out");
-        let run = Command::new(env!("CARGO_BIN_EXE_shvis"))
-            .args(["study", "normalmap", "--model"])
-            .arg(&model)
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&run.stderr);
-        assert_eq!(run.status.code(), Some(1), "{stderr}");
-        let line = stderr
-            .lines()
-            .find(|l| l.starts_with("error:"))
-            .unwrap_or_default();
+        let (line, stdout) = error_line(
+            Command::new(env!("CARGO_BIN_EXE_shvis"))
+                .args(["study", "normalmap", "--model"])
+                .arg(&model)
+                .arg("--out")
+                .arg(&out),
+            &format!("{model:?}"),
+        );
         assert!(
             line.contains("--model") && line.contains(&*model.to_string_lossy()),
             "{line}"
@@ -2958,7 +2958,6 @@ fn study_normalmap_checks_its_model_first() {
             !out.exists(),
             "{model:?}: no output folder before the model is read"
         );
-        let stdout = String::from_utf8_lossy(&run.stdout);
         assert!(
             !stdout.contains("timings on"),
             "no timing before the model is read: {stdout}"
@@ -2977,18 +2976,17 @@ fn report_never_writes_over_its_tables() {
     let link = dir.join("page.md");
     std::os::unix::fs::symlink(&table, &link).unwrap();
     for out in [&table, &link] {
-        let run = Command::new(env!("CARGO_BIN_EXE_shvis"))
-            .arg("report")
-            .arg(&table)
-            .arg("--out")
-            .arg(out)
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&run.stderr);
-        assert_eq!(run.status.code(), Some(1), "{out:?}: {stderr}");
+        let (line, _) = error_line(
+            Command::new(env!("CARGO_BIN_EXE_shvis"))
+                .arg("report")
+                .arg(&table)
+                .arg("--out")
+                .arg(out),
+            &format!("{out:?}"),
+        );
         assert!(
-            stderr.contains("--out would overwrite the table input"),
-            "{stderr}"
+            line.contains("--out would overwrite the table input"),
+            "{line}"
         );
         assert_eq!(
             std::fs::read(&table).unwrap(),
@@ -3060,16 +3058,10 @@ fn sh_files_beyond_the_radiance_limit_are_refused_by_every_command() {
             .iter()
             .map(|a| if *a == "PNG" { png.as_str() } else { a })
             .collect();
-        let run = Command::new(env!("CARGO_BIN_EXE_shvis"))
-            .args(&args)
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&run.stderr);
-        assert_eq!(run.status.code(), Some(1), "{args:?}: {stderr}");
-        let line = stderr
-            .lines()
-            .find(|l| l.starts_with("error:"))
-            .unwrap_or_default();
+        let (line, _) = error_line(
+            Command::new(env!("CARGO_BIN_EXE_shvis")).args(&args),
+            &format!("{args:?}"),
+        );
         assert!(
             line.contains("overflow.sh")
                 && line.contains("line 1: 3e38 is beyond the radiance limit"),

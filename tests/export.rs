@@ -226,6 +226,28 @@ fn assert_reopens_as_baked(dir: &std::path::Path, prepared: &shvis::prepare::Pre
     assert!((c.fov_y - d.fov_y).abs() < 1e-6);
 }
 
+/// The export in `dir` read with nothing of shvis (`tests/engine/check_export.mjs`): its
+/// report (every KTX2 file through ktx-parse, the glTF through the Khronos validator),
+/// after checking the validator found no error and no warning.
+fn read_with_engine_tools(dir: &std::path::Path, label: &str) -> serde_json::Value {
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/engine/check_export.mjs");
+    let run = std::process::Command::new("node")
+        .arg(script)
+        .arg(dir)
+        .output()
+        .expect("node (scripts/install-deps.sh installs it)");
+    assert!(
+        run.status.success(),
+        "{label}: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    let gltf = &report["gltf"];
+    assert_eq!(gltf["numErrors"], 0, "{label}: {gltf}");
+    assert_eq!(gltf["numWarnings"], 0, "{label}: {gltf}");
+    report
+}
+
 /// Every exportable technique on dx10 and dx11 (of the clustered ones, those the test house
 /// fits clusters for), its files read as an engine's tools read them, with nothing of shvis
 /// (`tests/engine/check_export.mjs`, npm packages pinned by its lockfile): each KTX2 file
@@ -262,21 +284,7 @@ fn ktx_parse_and_the_gltf_validator_read_every_export() {
             std::process::id()
         ));
         out.write(&dir).unwrap();
-        let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/engine/check_export.mjs");
-        let run = std::process::Command::new("node")
-            .arg(script)
-            .arg(&dir)
-            .output()
-            .expect("node (scripts/install-deps.sh installs it)");
-        assert!(
-            run.status.success(),
-            "{label}: {}",
-            String::from_utf8_lossy(&run.stderr)
-        );
-        let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
-        let gltf = &report["gltf"];
-        assert_eq!(gltf["numErrors"], 0, "{label}: {gltf}");
-        assert_eq!(gltf["numWarnings"], 0, "{label}: {gltf}");
+        let report = read_with_engine_tools(&dir, &label);
 
         let manifest: serde_json::Value =
             serde_json::from_slice(out.file("manifest.json").unwrap()).unwrap();
@@ -705,20 +713,7 @@ fn a_gltf_scene_exports_and_reopens_in_shvis_and_three_js() {
         .write(&reopened)
         .unwrap();
     assert_reopens_as_baked(&reopened, &prepared);
-    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/engine/check_export.mjs");
-    let run = std::process::Command::new("node")
-        .arg(script)
-        .arg(&reopened)
-        .output()
-        .expect("node (scripts/install-deps.sh installs it)");
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
-    assert_eq!(report["gltf"]["numErrors"], 0, "{}", report["gltf"]);
-    assert_eq!(report["gltf"]["numWarnings"], 0, "{}", report["gltf"]);
+    read_with_engine_tools(&reopened, "glTF scene");
 
     let ctx = common::validated_context();
     let size = (640, 400);
