@@ -662,23 +662,26 @@ fn assert_engine_matches(results: &[EngineComparison], pixels: u32) {
 /// EXT_texture_compression_bptc). The images are in target/tmp/engine_threejs.
 #[test]
 fn three_js_in_headless_chromium_draws_each_export_as_shvis_renders_it() {
-    let ctx = common::validated_context();
-    let exports: Vec<(&str, HwPath)> = ["shlmap", "l1", "zh3", "hb4", "sg9", "dice"]
-        .into_iter()
-        .flat_map(|t| [(t, HwPath::Dx10), (t, HwPath::Dx11)])
-        .collect();
-    let root = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("engine_threejs");
-    let size = (320, 200);
-    let results = compare_in_three_js(
-        &ctx,
-        common::house(),
-        &exports,
-        size,
+    three_js_draws_the_house(
+        &["shlmap", "l1", "zh3", "hb4", "sg9", "dice"],
         Shading::DecodeGlsl,
-        &root,
+        "engine_threejs",
     );
+}
+
+/// [`compare_in_three_js`] of `techniques` on dx10 and dx11 on the test house at 320 × 200,
+/// each within 2 % ([`assert_engine_matches`]); the images go to target/tmp/`folder`.
+fn three_js_draws_the_house(techniques: &[&str], shading: Shading, folder: &str) {
+    let ctx = common::validated_context();
+    let exports: Vec<(&str, HwPath)> = techniques
+        .iter()
+        .flat_map(|&t| [(t, HwPath::Dx10), (t, HwPath::Dx11)])
+        .collect();
+    let root = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(folder);
+    let size = (320, 200);
+    let results = compare_in_three_js(&ctx, common::house(), &exports, size, shading, &root);
     assert_engine_matches(&results, size.0 * size.1);
-    common::assert_validation_clean(&ctx, "three.js comparison");
+    common::assert_validation_clean(&ctx, folder);
 }
 
 /// A glTF scene's export (NormalTangentMirrorTest, from ../shared/assets: no lightmap UVs
@@ -1006,22 +1009,9 @@ fn the_docs_schema_names_every_manifest_field() {
 /// them, within 2 % relative RMSE.
 #[test]
 fn three_js_shades_from_the_manifest_alone() {
-    let ctx = common::validated_context();
-    let exports: Vec<(&str, HwPath)> = ["shlmap", "l1", "hb4", "sg9"]
-        .into_iter()
-        .flat_map(|t| [(t, HwPath::Dx10), (t, HwPath::Dx11)])
-        .collect();
-    let root =
-        std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("engine_threejs_manifest");
-    let size = (320, 200);
-    let results = compare_in_three_js(
-        &ctx,
-        common::house(),
-        &exports,
-        size,
+    three_js_draws_the_house(
+        &["shlmap", "l1", "hb4", "sg9"],
         Shading::Manifest,
-        &root,
+        "engine_threejs_manifest",
     );
-    assert_engine_matches(&results, size.0 * size.1);
-    common::assert_validation_clean(&ctx, "three.js shading from the manifest");
 }

@@ -161,7 +161,7 @@ impl Family for AmbientCube {
     }
 
     fn values(self) -> Option<super::values::ValueMap> {
-        use super::values::{self, Step, ValueMap};
+        use super::values::{self, ValueMap};
         let names: Vec<String> = ["+x", "-x", "+y", "-y", "+z", "-z"]
             .iter()
             .map(|f| format!("face {f}"))
@@ -177,17 +177,7 @@ impl Family for AmbientCube {
                 "frame": "tangent (x along +u, y image up, z the surface normal)",
             }),
             values: values::triplets(&names),
-            steps: [
-                Step(serde_json::json!({
-                    "op": "evaluate",
-                    "at": values::TANGENT_NORMAL,
-                    "gives": "E(m) = m.x^2 C[+x or -x] + m.y^2 C[+y or -y] + m.z^2 C[+z or -z], each axis' face chosen by the sign of its component, per colour",
-                })),
-                values::unscale(),
-            ]
-            .into_iter()
-            .chain(values::diffuse_ending())
-            .collect(),
+            steps: values::evaluated_and_unscaled(values::TANGENT_NORMAL, "E(m) = m.x^2 C[+x or -x] + m.y^2 C[+y or -y] + m.z^2 C[+z or -z], each axis' face chosen by the sign of its component, per colour"),
         })
     }
 }

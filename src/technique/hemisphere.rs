@@ -554,16 +554,9 @@ const H_BASIS_FUNCTIONS: [&str; 6] = [
 
 /// What the values of `basis` are ([`Family::values`]).
 fn value_map(basis: HemisphereBasis) -> super::values::ValueMap {
-    use super::values::{self, Colour, Step, Value, ValueMap};
-    let ending = |evaluate: String| -> Vec<Step> {
-        [
-            Step(serde_json::json!({"op": "evaluate", "at": values::TANGENT_NORMAL, "gives": evaluate})),
-            values::unscale(),
-        ]
-        .into_iter()
-        .chain(values::diffuse_ending())
-        .collect()
-    };
+    use super::values::{self, Colour, Value, ValueMap};
+    let ending =
+        |evaluate: String| values::evaluated_and_unscaled(values::TANGENT_NORMAL, &evaluate);
     let v3 = |v: glam::DVec3| [v.x, v.y, v.z];
     match basis {
         HemisphereBasis::HBasis(size) => {

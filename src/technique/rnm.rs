@@ -332,7 +332,7 @@ impl Family for Rnm {
     }
 
     fn values(self) -> Option<super::values::ValueMap> {
-        use super::values::{self, Colour, Step, Value, ValueMap};
+        use super::values::{self, Colour, Value, ValueMap};
         let basis = crate::bake::ssbump::hl2_basis();
         // Three RGB groups, their alphas padding.
         let values = (0..3)
@@ -360,17 +360,10 @@ impl Family for Rnm {
                 "directions": basis.map(|b| [b.x, b.y, b.z]),
             }),
             values,
-            steps: [
-                Step(serde_json::json!({
-                    "op": "evaluate",
-                    "at": values::TANGENT_NORMAL,
-                    "gives": format!("E = sum over i of w_i E_i, per colour; {weights}"),
-                })),
-                values::unscale(),
-            ]
-            .into_iter()
-            .chain(values::diffuse_ending())
-            .collect(),
+            steps: values::evaluated_and_unscaled(
+                values::TANGENT_NORMAL,
+                &format!("E = sum over i of w_i E_i, per colour; {weights}"),
+            ),
         })
     }
 }

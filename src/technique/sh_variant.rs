@@ -295,7 +295,7 @@ impl Family for ShVariant {
     }
 
     fn values(self) -> Option<super::values::ValueMap> {
-        use super::values::{self, Colour, Step, Value, ValueMap};
+        use super::values::{self, Colour, Value, ValueMap};
         let linear = "E_lin(n) = pi K_00 c_00 + (2 pi / 3) K_1 d . n per colour, d = (-c_11, -c_1-1, c_10), K_00 = 1 / (2 sqrt(pi)), K_1 = sqrt(3 / (4 pi))";
         let (names, evaluate): (Vec<String>, String) = match self.basis {
             ShVariantBasis::L2Deringed => {
@@ -340,17 +340,7 @@ impl Family for ShVariant {
                     stored: "incident radiance with inter-reflection: RGB order-1 SH and the luminance's order-2 band (luminance 0.2126 R + 0.7152 G + 0.0722 B)",
                     basis: serde_json::json!({"name": "sh", "order": 2, "frame": "world", "convention": "conventions.sh_basis"}),
                     values: v,
-                    steps: [
-                        Step(serde_json::json!({
-                            "op": "evaluate",
-                            "at": values::WORLD_NORMAL,
-                            "gives": "E(n) = pi K_00 c_00 + c_00 (2 pi / 3) K_1 (e . n) / lum(c_00) per colour, e = (-e_11, -e_1-1, e_10) clamped to |e| <= sqrt(3) lum(c_00); 0 for the directional part where lum(c_00) <= 0",
-                        })),
-                        values::unscale(),
-                    ]
-                    .into_iter()
-                    .chain(values::diffuse_ending())
-                    .collect(),
+                    steps: values::evaluated_and_unscaled(values::WORLD_NORMAL, "E(n) = pi K_00 c_00 + c_00 (2 pi / 3) K_1 (e . n) / lum(c_00) per colour, e = (-e_11, -e_1-1, e_10) clamped to |e| <= sqrt(3) lum(c_00); 0 for the directional part where lum(c_00) <= 0"),
                 });
             }
         };
@@ -358,17 +348,7 @@ impl Family for ShVariant {
             stored: "incident radiance with inter-reflection, projected into SH (order 2, and for zh3 a zonal band-2 coefficient)",
             basis: serde_json::json!({"name": "sh", "order": 2, "frame": "world", "convention": "conventions.sh_basis"}),
             values: values::triplets(&names),
-            steps: [
-                Step(serde_json::json!({
-                    "op": "evaluate",
-                    "at": values::WORLD_NORMAL,
-                    "gives": evaluate,
-                })),
-                values::unscale(),
-            ]
-            .into_iter()
-            .chain(values::diffuse_ending())
-            .collect(),
+            steps: values::evaluated_and_unscaled(values::WORLD_NORMAL, &evaluate),
         })
     }
 }

@@ -105,6 +105,18 @@ pub fn diffuse_ending() -> [Step; 2] {
     ]
 }
 
+/// The steps of a basis evaluated at the normal `at` (giving `gives`), then unscaled
+/// ([`unscale`]) and ended as every diffuse technique ends ([`diffuse_ending`]).
+pub fn evaluated_and_unscaled(at: &str, gives: &str) -> Vec<Step> {
+    [
+        Step(json!({"op": "evaluate", "at": at, "gives": gives})),
+        unscale(),
+    ]
+    .into_iter()
+    .chain(diffuse_ending())
+    .collect()
+}
+
 /// The normal every tangent-frame basis is evaluated at.
 pub const TANGENT_NORMAL: &str = "the normal map's tangent-space normal m (x along +u, y image up, z out; x and y scaled by the glTF normalTexture.scale, then normalised)";
 
