@@ -3076,3 +3076,33 @@ fn sh_files_beyond_the_radiance_limit_are_refused_by_every_command() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A probe forced to be read as angular (`angular:`) whose light lies partly outside the
+/// disk warns, naming the file and the share dropped, as the unforced read refuses it.
+#[test]
+fn a_forced_angular_probe_with_light_outside_its_disk_warns() {
+    let dir = scratch_dir("shvis-angular-outside");
+    // A 16 × 16 map: dim inside the disk, bright in the corners outside it.
+    let probe = exr(&dir.join("corners.exr"), 16, 16, |x, y| {
+        let (u, v) = ((x as f32 + 0.5) / 8.0 - 1.0, (y as f32 + 0.5) / 8.0 - 1.0);
+        if u * u + v * v > 1.0 {
+            [5.0; 3]
+        } else {
+            [0.5; 3]
+        }
+    });
+    let env = format!("angular:{}", probe.display());
+    let run = Command::new(env!("CARGO_BIN_EXE_shvis"))
+        .args(["sh", "project", "--order", "2", "--env", &env])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(
+        stderr.lines().any(|l| l.contains("WARN")
+            && l.contains("corners.exr")
+            && l.contains("outside the probe's disk and is dropped")),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

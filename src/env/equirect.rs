@@ -308,6 +308,13 @@ fn validate(mut map: EnvMap, path: &Path, square: SquareLayout) -> Result<EnvMap
                 detail: "read as an angular probe (angular:) it is black: over 99.9 % of its light lies outside the probe's disk".into(),
             });
         }
+        if square == SquareLayout::Angular && outside > MAX_LIGHT_OUTSIDE_DISK {
+            log::warn!(
+                "{}: read as an angular probe (angular:), {:.1} % of its light lies outside the probe's disk and is dropped",
+                path.display(),
+                100.0 * outside
+            );
+        }
         log::info!(
             "{}: {width}×{width} read as a Debevec angular probe, resampled to {}×{width} equirect",
             path.display(),
