@@ -226,14 +226,15 @@ fn assert_reopens_as_baked(dir: &std::path::Path, prepared: &shvis::prepare::Pre
     assert!((c.fov_y - d.fov_y).abs() < 1e-6);
 }
 
-/// The export in `dir` read with nothing of shvis (`tests/engine/check_export.mjs`): its
-/// report (every KTX2 file through ktx-parse, the glTF through the Khronos validator),
-/// after checking the validator found no error and no warning.
-fn read_with_engine_tools(dir: &std::path::Path, label: &str) -> serde_json::Value {
-    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/engine/check_export.mjs");
+/// Runs `tests/engine/SCRIPT` under node with `args`, which must succeed, and returns the
+/// JSON it prints on stdout (`label` names the failures).
+fn engine_script(script: &str, args: &[&std::ffi::OsStr], label: &str) -> serde_json::Value {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/engine")
+        .join(script);
     let run = std::process::Command::new("node")
-        .arg(script)
-        .arg(dir)
+        .arg(path)
+        .args(args)
         .output()
         .expect("node (scripts/install-deps.sh installs it)");
     assert!(
@@ -241,7 +242,14 @@ fn read_with_engine_tools(dir: &std::path::Path, label: &str) -> serde_json::Val
         "{label}: {}",
         String::from_utf8_lossy(&run.stderr)
     );
-    let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    serde_json::from_slice(&run.stdout).unwrap()
+}
+
+/// The export in `dir` read with nothing of shvis (`tests/engine/check_export.mjs`): its
+/// report (every KTX2 file through ktx-parse, the glTF through the Khronos validator),
+/// after checking the validator found no error and no warning.
+fn read_with_engine_tools(dir: &std::path::Path, label: &str) -> serde_json::Value {
+    let report = engine_script("check_export.mjs", &[dir.as_os_str()], label);
     let gltf = &report["gltf"];
     assert_eq!(gltf["numErrors"], 0, "{label}: {gltf}");
     assert_eq!(gltf["numWarnings"], 0, "{label}: {gltf}");
@@ -545,10 +553,6 @@ fn compare_in_three_js(
     let eye = prepared.scene.camera.position;
     let _ = std::fs::remove_dir_all(root);
     std::fs::create_dir_all(root).unwrap();
-    let script = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/engine/render_in_chromium.mjs"
-    );
     let mut results = Vec::new();
     for &(name, path) in exports {
         let t: Technique = name.parse().unwrap();
@@ -558,21 +562,18 @@ fn compare_in_three_js(
         let own = technique::build(ctx, &scene, t, path, &prepared.inputs()).unwrap();
         let expected = own.render(&scene, 0, 1).unwrap();
         drop(own);
-        let run = std::process::Command::new("node")
-            .arg(script)
-            .arg(&dir)
-            .arg(width.to_string())
-            .arg(height.to_string())
-            .arg(root.join(&label))
-            .args((shading == Shading::Manifest).then_some("manifest"))
-            .output()
-            .expect("node (scripts/install-deps.sh installs it)");
-        assert!(
-            run.status.success(),
-            "{label}: {}",
-            String::from_utf8_lossy(&run.stderr)
-        );
-        let offered: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+        let (width_arg, height_arg, out) =
+            (width.to_string(), height.to_string(), root.join(&label));
+        let mut args = vec![
+            dir.as_os_str(),
+            width_arg.as_ref(),
+            height_arg.as_ref(),
+            out.as_os_str(),
+        ];
+        if shading == Shading::Manifest {
+            args.push("manifest".as_ref());
+        }
+        let offered = engine_script("render_in_chromium.mjs", &args, &label);
         assert_eq!(
             offered["bptc"], true,
             "{label}: the browser exposes no EXT_texture_compression_bptc ({offered})"
