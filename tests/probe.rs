@@ -316,5 +316,56 @@ fn a_cached_probe_is_reused_and_fresh_measures_again() {
     );
     let (fresh, _) = shvis::probe::cache::run_cached(&ctx, &settings, &dir, true).unwrap();
     assert!(fresh.reused_from.is_none(), "fresh reused the cache");
+
+    // What a cached probe claims is checked before it is believed: a file that parses but
+    // holds what no measurement gives is measured over, and the file rewritten.
+    let file = shvis::probe::cache::path(&dir, &ctx, &settings);
+    let good: serde_json::Value = serde_json::from_slice(&std::fs::read(&file).unwrap()).unwrap();
+    assert_eq!(shvis::probe::cache::check(&fresh, &settings), Ok(()));
+    let lie = |edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut v = good.clone();
+        edit(&mut v);
+        v
+    };
+    let lies = [
+        (
+            lie(&|v| v["model"]["fixed_ms"] = (-1.0).into()),
+            "the model's fixed_ms is -1.0 ms",
+        ),
+        (
+            lie(&|v| v["model"]["per_unit_ms"][2] = 1e300.into()),
+            "the model's per_unit_ms is 1e300 ms",
+        ),
+        (
+            lie(&|v| v["model"]["untaken_share"] = 7.0.into()),
+            "untaken_share is 7",
+        ),
+        (
+            lie(&|v| v["states"]["main_state"] = 9.into()),
+            "speed states are not states",
+        ),
+        (
+            lie(&|v| v["points"][0]["ms_median"] = (-0.5).into()),
+            "point 0's median is -0.5 ms",
+        ),
+        (
+            lie(&|v| v["measured_at"] = "<script>".into()),
+            "measured_at \"<script>\" is not a UTC time",
+        ),
+        (lie(&|v| v["width"] = 4096.into()), "measured at 4096×32"),
+    ];
+    for (json, says) in &lies {
+        let probe: shvis::probe::Probe = serde_json::from_value(json.clone()).unwrap();
+        let why = shvis::probe::cache::check(&probe, &settings).unwrap_err();
+        assert!(why.contains(says), "{why} (expected {says})");
+    }
+    std::fs::write(&file, serde_json::to_vec(&lies[0].0).unwrap()).unwrap();
+    let (measured, _) = shvis::probe::cache::run_cached(&ctx, &settings, &dir, false).unwrap();
+    assert!(measured.reused_from.is_none(), "a lying cache was believed");
+    assert_eq!(shvis::probe::cache::check(&measured, &settings), Ok(()));
+    let rewritten: shvis::probe::Probe =
+        serde_json::from_slice(&std::fs::read(&file).unwrap()).unwrap();
+    assert_eq!(rewritten.measured_at, measured.measured_at, "rewritten");
+    assert!(rewritten.model.fixed_ms >= 0.0);
     common::assert_validation_clean(&ctx, "probe cache");
 }

@@ -364,27 +364,37 @@ pub fn decode_sh_lightmap(
     })
 }
 
-/// A derived product's bytes (`what`: "dx11 blocks") cached under `key` in `cache_dir`
-/// as `{prefix}-{key:016x}.bin`, with the header and checks of every cache file; `build`
-/// makes them when the file is missing or does not check.
+/// A derived product (`what`: "dx11 blocks") cached under `key` in `cache_dir` as
+/// `{prefix}-{key:016x}.bin`, `encode`'s bytes with the header and checks of every cache
+/// file; `decode` reads them back and checks what they claim. `build` makes the product
+/// when the file is missing or either check fails (a warning), and the file is rewritten.
 ///
 /// # Errors
 /// `build`'s, or the cache file cannot be written.
-pub fn load_or_build_blob(
+pub fn load_or_build_blob<T>(
     cache_dir: &Path,
     prefix: &str,
     what: &str,
     key: u64,
-    build: impl FnOnce() -> Result<Vec<u8>, BakeError>,
-) -> Result<Vec<u8>, BakeError> {
+    decode: impl FnOnce(&[u8]) -> Result<T, String>,
+    build: impl FnOnce() -> Result<T, BakeError>,
+    encode: impl FnOnce(&T) -> Vec<u8>,
+) -> Result<T, BakeError> {
     let path = cache_dir.join(format!("{prefix}-{key:016x}.bin"));
     load_or_build(
         &path,
         what,
-        |bytes| payload_of(bytes, KIND_BLOB, what, key).map(<[u8]>::to_vec),
+        |bytes| payload_of(bytes, KIND_BLOB, what, key).and_then(decode),
         build,
-        |bytes| with_header(KIND_BLOB, key, bytes),
+        |value| with_header(KIND_BLOB, key, &encode(value)),
     )
+}
+
+/// A blob cache file of `payload` under `key`, as [`load_or_build_blob`] writes it (tests
+/// that forge a file whose header checks but whose content lies).
+#[cfg(test)]
+pub(crate) fn blob_file(key: u64, payload: &[u8]) -> Vec<u8> {
+    with_header(KIND_BLOB, key, payload)
 }
 
 /// The value in the cache file at `path` when it decodes, else `build()`'s, written there

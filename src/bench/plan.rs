@@ -280,7 +280,7 @@ impl Plan {
 }
 
 /// A device's rates file.
-#[derive(Serialize, Deserialize)]
+#[derive(Clone, Serialize, Deserialize)]
 struct History {
     version: u64,
     /// When (UTC).
@@ -301,12 +301,64 @@ fn rates_file(ctx: &Context) -> PathBuf {
     crate::bake::cache::default_cache_dir().join(format!("bench-rates-{:016x}.json", h.finish()))
 }
 
+/// This device's rates file, if there is one to believe; one that is not believed is said,
+/// left unused, and rewritten by the bench's end.
 fn read_history(file: &Path) -> Option<History> {
     let bytes = crate::files::read_bounded(file, 1 << 20, "bench rates").ok()?;
-    serde_json::from_slice::<History>(&bytes)
-        .ok()
-        .filter(|h| h.version == RATES_VERSION)
+    let history = serde_json::from_slice::<History>(&bytes)
+        .map_err(|e| e.to_string())
+        .and_then(|h| h.check().map(|()| h));
+    match history {
+        Ok(h) => Some(h),
+        Err(why) => {
+            log::warn!(
+                "{}: bench rates not believed ({why}); the plan uses a 2-core lavapipe \
+                 machine's, and this bench measures them again",
+                file.display()
+            );
+            None
+        }
+    }
 }
+
+impl History {
+    /// Why the file cannot be believed, if it cannot: another version, a rate or the bakes'
+    /// seconds not finite, not positive or beyond a day, or a date that is not one.
+    fn check(&self) -> Result<(), String> {
+        if self.version != RATES_VERSION {
+            return Err(format!(
+                "version {}, this build reads {RATES_VERSION}",
+                self.version
+            ));
+        }
+        let r = &self.rates;
+        for (name, seconds) in [
+            ("probe", r.probe),
+            ("reference", r.reference),
+            ("build", r.build),
+            ("frame", r.frame),
+            ("ladder", r.ladder),
+            ("images", r.images),
+            ("bake_seconds", self.bake_seconds),
+        ] {
+            if !(seconds.is_finite() && seconds > 0.0 && seconds <= DAY_SECONDS) {
+                return Err(format!(
+                    "{name} is {seconds} s, not a duration between 0 and a day"
+                ));
+            }
+        }
+        if !crate::files::clock::is_utc_minute(&self.measured) {
+            return Err(format!(
+                "measured {:?} is not a UTC time \"YYYY-MM-DD HH:MM\"",
+                self.measured
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Longest any one rate or bake of a bench may take, seconds.
+const DAY_SECONDS: f64 = 86_400.0;
 
 /// What changes the bakes of a run: the prepare settings and the techniques' needs.
 fn bake_key(prepare: &PrepareSettings, techniques: &[Technique]) -> u64 {
@@ -475,5 +527,71 @@ mod tests {
         // No ladder work: the default rate stays.
         assert_eq!(r.ladder, Rates::LAVAPIPE.ladder);
         assert_eq!(r.images, 0.5);
+    }
+
+    #[test]
+    fn a_rates_file_that_cannot_be_a_measurement_is_not_believed() {
+        let dir = std::env::temp_dir().join(format!("shvis-rates-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("bench-rates.json");
+        let good = History {
+            version: RATES_VERSION,
+            measured: "2026-12-06 10:00".into(),
+            rates: Rates::LAVAPIPE,
+            bake_key: 1,
+            bake_seconds: 30.0,
+        };
+        let written = |h: &History| {
+            std::fs::write(&file, serde_json::to_vec(h).unwrap()).unwrap();
+            read_history(&file)
+        };
+        assert!(written(&good).is_some());
+        for (lie, says) in [
+            (
+                History {
+                    rates: Rates {
+                        frame: -0.1,
+                        ..Rates::LAVAPIPE
+                    },
+                    ..good.clone()
+                },
+                "frame is -0.1 s",
+            ),
+            (
+                History {
+                    rates: Rates {
+                        probe: 1e9,
+                        ..Rates::LAVAPIPE
+                    },
+                    ..good.clone()
+                },
+                "probe is 1000000000 s",
+            ),
+            (
+                History {
+                    bake_seconds: 0.0,
+                    ..good.clone()
+                },
+                "bake_seconds is 0 s",
+            ),
+            (
+                History {
+                    measured: "| x |".into(),
+                    ..good.clone()
+                },
+                "measured \"| x |\" is not a UTC time",
+            ),
+            (
+                History {
+                    version: 0,
+                    ..good.clone()
+                },
+                "version 0",
+            ),
+        ] {
+            assert!(written(&lie).is_none(), "{says}");
+            assert!(lie.check().unwrap_err().contains(says), "{says}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -24,6 +24,25 @@ pub fn utc_now() -> String {
     )
 }
 
+/// Whether `text` is a time as [`utc_now`] writes it, "YYYY-MM-DD HH:MM", with each field
+/// in its range (what a cache file claims is checked before it is shown).
+pub fn is_utc_minute(text: &str) -> bool {
+    let b = text.as_bytes();
+    let digits = |r: std::ops::Range<usize>| -> Option<u32> {
+        let s = text.get(r)?;
+        s.bytes()
+            .all(|c| c.is_ascii_digit())
+            .then(|| s.parse().ok())?
+    };
+    b.len() == 16
+        && (b[4], b[7], b[10], b[13]) == (b'-', b'-', b' ', b':')
+        && digits(0..4).is_some()
+        && digits(5..7).is_some_and(|m| (1..=12).contains(&m))
+        && digits(8..10).is_some_and(|d| (1..=31).contains(&d))
+        && digits(11..13).is_some_and(|h| h < 24)
+        && digits(14..16).is_some_and(|m| m < 60)
+}
+
 /// The civil date of day `days` after 1970-01-01.
 fn utc_date(days: u64) -> String {
     let z = days as i64 + 719_468;
@@ -48,5 +67,16 @@ mod tests {
         assert_eq!(utc_date(11_016), "2000-02-29");
         assert_eq!(utc_date(20_791), "2026-12-04");
         assert_eq!(utc_now().len(), "2026-12-04 20:40".len());
+        assert!(is_utc_minute(&utc_now()));
+        assert!(is_utc_minute("2026-12-04 20:40"));
+        for bad in [
+            "2026-13-04 20:40",
+            "2026-12-04 24:00",
+            "2026-12-04T20:40",
+            "<b>x</b>",
+            "",
+        ] {
+            assert!(!is_utc_minute(bad), "{bad}");
+        }
     }
 }

@@ -3,7 +3,11 @@
 //! (DESIGN §3) — as markdown for `docs/results/`, generated, never typed.
 //!
 //! A table is read as JSON values, not as [`super::table::BenchTable`], so pages can be made
-//! from tables of older builds that lack newer fields; what a table lacks is left blank.
+//! from tables of older builds that lack newer fields; what a table lacks is left blank. What
+//! it holds is checked before it is believed: every time, ratio, error and size the page
+//! could copy must be a finite number within physical bounds ([`NUMBER_FIELDS`]), and every
+//! text the page copies (labels, device, driver, technique and path names, file names) is
+//! escaped, so a table cannot break the page's markdown.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -52,8 +56,28 @@ impl ResultTable {
                 .unwrap_or("")
                 .to_string()
         };
-        let number = |k: &str| json.get(k).and_then(Value::as_u64).unwrap_or(0);
-        let (device, width, height) = (field("device"), number("width"), number("height"));
+        let size = |k: &str| match json.get(k) {
+            None | Some(Value::Null) => Ok(0),
+            Some(v) => v
+                .as_u64()
+                .filter(|n| (1..=MAX_FRAME_SIDE).contains(n))
+                .ok_or_else(|| {
+                    format(&format!(
+                        "\"{k}\" is {v}, not a frame size in pixels (1 to {MAX_FRAME_SIDE})"
+                    ))
+                }),
+        };
+        let (device, width, height) = (field("device"), size("width")?, size("height")?);
+        for (i, row) in rows.iter().enumerate() {
+            check_row(row).map_err(|detail| {
+                let text = |k: &str| row.get(k).and_then(Value::as_str).unwrap_or("?");
+                format(&format!(
+                    "results[{i}] ({} on {}): {detail}",
+                    text("technique"),
+                    text("path")
+                ))
+            })?;
+        }
         Ok(ResultTable {
             label: label.map_or_else(|| format!("{device} {width}×{height}"), str::to_string),
             path: path.to_path_buf(),
@@ -78,6 +102,116 @@ impl ResultTable {
 /// Largest `table.json` read (a bench's is tens of KiB).
 const MAX_TABLE_BYTES: u64 = 64 << 20;
 
+/// Largest frame side a table may claim (Vulkan's guaranteed image limits are far below).
+const MAX_FRAME_SIDE: u64 = 1 << 16;
+
+/// What a number of a row measures, and so what it may hold.
+#[derive(Clone, Copy, Debug)]
+enum Measure {
+    /// Milliseconds of a frame: under a quarter of an hour.
+    Milliseconds,
+    /// A ratio of two frame times.
+    Ratio,
+    /// A relative error (RMSE over the truth's RMS).
+    RelativeError,
+    /// Bytes of a technique's data: whole, under a tebibyte.
+    Bytes,
+}
+
+impl Measure {
+    fn name(self) -> &'static str {
+        match self {
+            Measure::Milliseconds => "time in ms",
+            Measure::Ratio => "ratio of times",
+            Measure::RelativeError => "relative error",
+            Measure::Bytes => "size in bytes",
+        }
+    }
+
+    fn largest(self) -> f64 {
+        match self {
+            Measure::Milliseconds => 1e6,
+            Measure::Ratio => 1e6,
+            Measure::RelativeError => 1e3,
+            Measure::Bytes => (1u64 << 40) as f64,
+        }
+    }
+}
+
+/// Every row field the page copies or a reader compares, with what it measures.
+const NUMBER_FIELDS: [(&str, Measure); 11] = [
+    ("ms_median", Measure::Milliseconds),
+    ("ms_min", Measure::Milliseconds),
+    ("ms_max", Measure::Milliseconds),
+    ("paper_ms", Measure::Milliseconds),
+    ("model_ms", Measure::Milliseconds),
+    ("ratio_to_preconv", Measure::Ratio),
+    ("paper_ratio_to_preconv", Measure::Ratio),
+    ("rel_rmse", Measure::RelativeError),
+    ("rel_rmse_bounced", Measure::RelativeError),
+    ("texel_bytes", Measure::Bytes),
+    ("table_bytes", Measure::Bytes),
+];
+
+/// Why `row` cannot be believed, if it cannot: a row is an object naming its technique and
+/// path, and each of its [`NUMBER_FIELDS`] is absent, null, or a number its measure allows.
+fn check_row(row: &Value) -> Result<(), String> {
+    let Some(object) = row.as_object() else {
+        return Err(format!("{row} is not a row (a JSON object)"));
+    };
+    for key in ["technique", "path"] {
+        if !object.get(key).is_some_and(Value::is_string) {
+            return Err(format!("\"{key}\" is missing or not text"));
+        }
+    }
+    for (key, measure) in NUMBER_FIELDS {
+        let value = match object.get(key) {
+            None | Some(Value::Null) => continue,
+            Some(v) => v,
+        };
+        let Some(x) = value.as_f64() else {
+            return Err(format!("\"{key}\" is {value}, not a number"));
+        };
+        let largest = measure.largest();
+        if x < 0.0 {
+            return Err(format!(
+                "\"{key}\" is {value}: a {} cannot be negative",
+                measure.name()
+            ));
+        }
+        if x > largest {
+            return Err(format!(
+                "\"{key}\" is {value}: beyond any {} a bench measures (at most {largest:e})",
+                measure.name()
+            ));
+        }
+        if matches!(measure, Measure::Bytes) && value.as_u64().is_none() {
+            return Err(format!("\"{key}\" is {value}: bytes are a whole number"));
+        }
+    }
+    Ok(())
+}
+
+/// `text` as markdown table text that shows as it is: markup characters are escaped, line
+/// breaks and other control characters become spaces, and `|` cannot end a cell.
+pub fn markdown_text(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '&' => out.push_str("&amp;"),
+            '\\' | '`' | '*' | '_' | '[' | ']' | '|' | '#' | '!' | '~' => {
+                out.push('\\');
+                out.push(c);
+            }
+            c if c.is_control() => out.push(' '),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
 /// The comparison page of `tables` (markdown), made on `date`.
 pub fn comparison_page(tables: &[ResultTable], date: &str) -> String {
     let mut md = String::from("# Cost table on real devices\n\n");
@@ -91,26 +225,26 @@ pub fn comparison_page(tables: &[ResultTable], date: &str) -> String {
     for t in tables {
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {}×{} | {} | `{}` |",
-            t.label,
-            t.device,
+            "| {} | {} | {} | {}×{} | {} | {} |",
+            markdown_text(&t.label),
+            markdown_text(&t.device),
             if t.driver.is_empty() {
-                "—"
+                "—".to_string()
             } else {
-                &t.driver
+                markdown_text(&t.driver)
             },
             t.width,
             t.height,
             t.rows.len(),
-            t.path.display()
+            markdown_text(&t.path.display().to_string())
         );
     }
     md.push_str("\n| technique | path | paper ms | paper ×preconv |");
     for t in tables {
         let _ = write!(
             md,
-            " {} ms | {} ×preconv | {} rel. RMSE |",
-            t.label, t.label, t.label
+            " {label} ms | {label} ×preconv | {label} rel. RMSE |",
+            label = markdown_text(&t.label)
         );
     }
     md.push_str("\n|---|---|---|---|");
@@ -125,7 +259,9 @@ pub fn comparison_page(tables: &[ResultTable], date: &str) -> String {
         };
         let _ = write!(
             md,
-            "| {technique} | {path} | {} | {} |",
+            "| {} | {} | {} | {} |",
+            markdown_text(&technique),
+            markdown_text(&path),
             number(first, "paper_ms", 3),
             number(first, "paper_ratio_to_preconv", 2)
         );
@@ -207,5 +343,97 @@ mod tests {
         );
         // The specular row is not a row of the comparison.
         assert_eq!(md.matches("| unc6 | dx9 |").count(), 1, "{md}");
+    }
+
+    /// Reads `json` as a table file of its own.
+    fn read_text(name: &str, json: &str) -> Result<ResultTable, ResultsError> {
+        let dir = std::env::temp_dir().join(format!("shvis-results-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(format!("{name}.json"));
+        std::fs::write(&path, json).unwrap();
+        ResultTable::read(&path, None)
+    }
+
+    #[test]
+    fn tables_with_impossible_numbers_are_refused_naming_the_row_and_field() {
+        let row = |extra: &str| {
+            format!(
+                r#"{{"device":"d","width":64,"height":32,"results":[
+                {{"technique":"preconv","path":"dx9","ms_median":0.5}},
+                {{"technique":"unc6","path":"dx10",{extra}}}]}}"#
+            )
+        };
+        for (name, extra, says) in [
+            (
+                "negative",
+                r#""ms_median":-1"#,
+                "\"ms_median\" is -1: a time in ms cannot be negative",
+            ),
+            (
+                "absurd",
+                r#""ms_median":1e9"#,
+                "beyond any time in ms a bench measures",
+            ),
+            (
+                "error",
+                r#""rel_rmse":-0.1"#,
+                "a relative error cannot be negative",
+            ),
+            (
+                "text",
+                r#""ratio_to_preconv":"fast""#,
+                "\"ratio_to_preconv\" is \"fast\", not a number",
+            ),
+            ("bytes", r#""texel_bytes":1.5"#, "bytes are a whole number"),
+            ("huge", r#""table_bytes":1e300"#, "beyond any size in bytes"),
+        ] {
+            let e = read_text(name, &row(extra)).unwrap_err().to_string();
+            assert!(
+                e.contains(&format!(
+                    "{name}.json: not a bench table.json: results[1] (unc6 on dx10): "
+                )),
+                "{e}"
+            );
+            assert!(e.contains(says), "{name}: {e}");
+        }
+        let e = read_text("nan", &row(r#""ms_median":1e999"#))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("nan.json: not a bench table.json"), "{e}");
+        let e = read_text("size", r#"{"width":-3,"results":[]}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("\"width\" is -3, not a frame size in pixels"),
+            "{e}"
+        );
+        let e = read_text("nameless", r#"{"results":[{"ms_median":1}]}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("\"technique\" is missing or not text"), "{e}");
+        assert!(read_text("fine", &row(r#""ms_median":0.7,"rel_rmse":null"#)).is_ok());
+    }
+
+    #[test]
+    fn text_copied_from_tables_cannot_break_the_page() {
+        let mut t = table(
+            "a|b\n# c",
+            serde_json::json!([
+                {"technique": "unc6<script>", "path": "dx9|x", "ms_median": 1.0}
+            ]),
+        );
+        t.device = "GPU `x` *bold* [link](y)".into();
+        let md = comparison_page(&[t], "2026-12-06");
+        let header = md.lines().find(|l| l.starts_with("| a")).unwrap();
+        assert_eq!(
+            header,
+            "| a\\|b \\# c | GPU \\`x\\` \\*bold\\* \\[link\\](y) | — | 1280×800 | 1 | a\\|b \\# c/table.json |"
+        );
+        assert!(md.contains("| unc6&lt;script&gt; | dx9\\|x |"), "{md}");
+        // Every table line keeps its number of cells.
+        for line in md.lines().filter(|l| l.starts_with('|')) {
+            let cells = line.replace("\\|", "").matches('|').count();
+            assert!(cells == 7 || cells == 8, "{line}");
+        }
     }
 }

@@ -610,27 +610,98 @@ pub fn compress_cached(
         id.extend_from_slice(g);
     }
     let key = crate::files::hash64(&id);
-    let mut built = None;
-    let bytes = crate::bake::cache::load_or_build_blob(dir, "blocks", "dx11 blocks", key, || {
-        let block = compress(texels, codec, label)
-            .map_err(|e| crate::bake::BakeError::Derived(e.to_string()))?;
-        let bytes = block.to_bytes();
-        built = Some(block);
-        Ok(bytes)
-    })
+    crate::bake::cache::load_or_build_blob(
+        dir,
+        "blocks",
+        "dx11 blocks",
+        key,
+        |bytes| {
+            let block = BlockTexels::from_bytes(bytes, codec, texels).ok_or_else(|| {
+                "the dx11 blocks do not fit the data (another layer count or size)".to_string()
+            })?;
+            block.verify(texels)?;
+            Ok(block)
+        },
+        || {
+            compress(texels, codec, label)
+                .map_err(|e| crate::bake::BakeError::Derived(e.to_string()))
+        },
+        BlockTexels::to_bytes,
+    )
     .map_err(|e| TechniqueError::Input {
         label: label.into(),
         detail: e.to_string(),
-    })?;
-    if let Some(block) = built {
-        return Ok(block);
-    }
-    match BlockTexels::from_bytes(&bytes, codec, texels) {
-        Some(block) => Ok(block),
-        None => {
-            log::warn!("{label}: the cached dx11 blocks do not fit the data; encoding again");
-            compress(texels, codec, label)
+    })
+}
+
+/// Largest error a decoded value may have, over the largest |value| of its 4 × 4 block: BC4
+/// keeps every value within half of one of its 7 steps of the block's range (1/14) plus the
+/// 8-bit rounding; a ratio block within the worst the encoder gives where two magnitudes
+/// share a block (module doc: 10–15 %) with room to spare.
+const BLOCK_ERROR_BOUND: [f32; 2] = [1.0 / 14.0 + 1.0 / 255.0, 0.5];
+
+/// Largest relative RMS error of a whole ratio-coded image (the house's bakes: 1–2 %;
+/// smooth noise with a phase per value, the encoder's hard case: 10 %).
+const IMAGE_RMS_BOUND: f64 = 0.25;
+
+impl BlockTexels {
+    /// Whether these blocks can be `texels`' (a cache file's claim, checked before use):
+    /// every decoded value finite and within [`BLOCK_ERROR_BOUND`] of its source value,
+    /// relative to its block's largest |value| (clamped to half float range as the norms
+    /// are), and the image's relative RMS error within [`IMAGE_RMS_BOUND`].
+    ///
+    /// # Errors
+    /// What fails, with the first texel where it does.
+    pub fn verify(&self, texels: &TexelGroups) -> Result<(), String> {
+        let (channels, groups) = group_values(texels, "cache").map_err(|e| e.to_string())?;
+        let decoded = self.decoded_values();
+        let res = self.res as usize;
+        let bound = match self.codec {
+            BlockCodec::Bc4 => BLOCK_ERROR_BOUND[0],
+            BlockCodec::Ratio(_) => BLOCK_ERROR_BOUND[1],
+        };
+        let source = |g: usize, t: usize, c: usize| -> f32 {
+            groups[g][channels * t + c].clamp(-f32::from(f16::MAX), f32::from(f16::MAX))
+        };
+        let (mut err2, mut sum2) = (0f64, 0f64);
+        for (by, bx) in
+            (0..res.div_ceil(4)).flat_map(|by| (0..res.div_ceil(4)).map(move |bx| (by, bx)))
+        {
+            let block_texels: Vec<usize> = (0..16)
+                .map(|i| (4 * by + i / 4, 4 * bx + i % 4))
+                .filter(|&(y, x)| y < res && x < res)
+                .map(|(y, x)| y * res + x)
+                .collect();
+            let all = || {
+                block_texels.iter().flat_map(|&t| {
+                    (0..groups.len()).flat_map(move |g| (0..channels).map(move |c| (g, t, c)))
+                })
+            };
+            let scale = all().fold(0f32, |m, (g, t, c)| m.max(source(g, t, c).abs()));
+            for (g, t, c) in all() {
+                let (d, v) = (decoded[g][VALUES_PER_TEXEL * t + c], source(g, t, c));
+                if !d.is_finite() || (d - v).abs() > bound * scale + 1e-6 {
+                    return Err(format!(
+                        "texel ({}, {}) of group {g} decodes to {d}, its value is {v}: beyond the encoder's bound ({bound} of its block's {scale})",
+                        t % res,
+                        t / res
+                    ));
+                }
+                err2 += f64::from(d - v).powi(2);
+                sum2 += f64::from(v).powi(2);
+            }
         }
+        let rms = if sum2 > 0.0 {
+            (err2 / sum2).sqrt()
+        } else {
+            0.0
+        };
+        if matches!(self.codec, BlockCodec::Ratio(_)) && rms > IMAGE_RMS_BOUND {
+            return Err(format!(
+                "the image's relative RMS error is {rms:.3}, beyond the encoder's {IMAGE_RMS_BOUND}"
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -844,7 +915,71 @@ mod tests {
             fresh
         );
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 2);
+        // A file whose header and checksum hold but whose blocks are the other data's: the
+        // decoded values are checked against the data, refused, rebuilt and rewritten.
+        let other_block = compress(&other, codec, "t").unwrap();
+        assert!(other_block.verify(&texels).is_err());
+        assert_eq!(fresh.verify(&texels), Ok(()));
+        let key = u64::from_str_radix(
+            files[0]
+                .file_stem()
+                .unwrap()
+                .to_str()
+                .unwrap()
+                .trim_start_matches("blocks-"),
+            16,
+        )
+        .unwrap();
+        std::fs::write(
+            &files[0],
+            crate::bake::cache::blob_file(key, &other_block.to_bytes()),
+        )
+        .unwrap();
+        assert_eq!(
+            compress_cached(&texels, codec, "t", Some(&dir)).unwrap(),
+            fresh,
+            "rebuilt"
+        );
+        assert_eq!(
+            std::fs::read(&files[0]).unwrap(),
+            crate::bake::cache::blob_file(key, &fresh.to_bytes()),
+            "rewritten"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn fresh_blocks_pass_their_own_check_and_shifted_ones_do_not() {
+        // The encoder's hardest case (two magnitudes in a block) and BC4 pass; the same
+        // blocks claimed for data scaled by 1.5 do not.
+        let res = 8;
+        let hard = rgba16f(res, 3, |t, j| {
+            let x = t % res as usize;
+            [0.0, 0.0, 50.0, 0.02][x % 4] * [1.0, -0.5, 0.25, 0.7][j % 4]
+        });
+        let block = compress(&hard, BlockCodec::Ratio(NormColours::GroupRgb), "t").unwrap();
+        assert_eq!(block.verify(&hard), Ok(()));
+        let ao = TexelGroups {
+            res,
+            format: vk::Format::R16_SFLOAT,
+            groups: vec![
+                (0..res * res)
+                    .flat_map(|t| f16::from_f32(t as f32 / 63.0).to_le_bytes())
+                    .collect(),
+            ],
+            name: "ao".into(),
+            dx9_atlas: None,
+        };
+        assert_eq!(
+            compress(&ao, BlockCodec::Bc4, "t").unwrap().verify(&ao),
+            Ok(())
+        );
+        let scaled = rgba16f(res, 2, |t, j| 2.0 * (t as f32 * 0.1 + j as f32).sin());
+        let plain = rgba16f(res, 2, |t, j| (t as f32 * 0.1 + j as f32).sin());
+        let e = compress(&plain, BlockCodec::Ratio(NormColours::One), "t")
+            .unwrap()
+            .verify(&scaled);
+        assert!(e.is_err(), "{e:?}");
     }
 
     #[test]
