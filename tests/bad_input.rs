@@ -2997,6 +2997,55 @@ fn report_never_writes_over_its_tables() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// An output that is a link to a character device is written into as `cp` would (an error
+/// on `/dev/full`, the bytes gone into `/dev/null`), never replaced by a file; a link to a
+/// regular file is written through and stays a link (before: the link was replaced by the
+/// page, exit 0).
+#[test]
+fn outputs_linked_to_devices_are_written_through_as_cp_does() {
+    let dir = scratch_dir("shvis-output-links");
+    let table = dir.join("table.json");
+    write(
+        &table,
+        br#"{"device":"d","width":8,"height":8,"results":[{"technique":"preconv","path":"dx10","ms_median":1.0}]}"#,
+    );
+    let page = dir.join("page.md");
+    write(&page, b"earlier");
+    let links = [
+        ("full.md", Path::new("/dev/full")),
+        ("null.md", Path::new("/dev/null")),
+        ("file.md", page.as_path()),
+    ];
+    for (name, target) in links {
+        std::os::unix::fs::symlink(target, dir.join(name)).unwrap();
+    }
+    let report = |out: &Path| {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_shvis"));
+        cmd.arg("report").arg(&table).arg("--out").arg(out);
+        cmd
+    };
+    let (line, _) = error_line(&mut report(&dir.join("full.md")), "full.md");
+    assert!(
+        line.contains("full.md: cannot write: No space left on device"),
+        "{line}"
+    );
+    for name in ["null.md", "file.md"] {
+        let out = report(&dir.join(name)).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    for (name, _) in links {
+        let m = std::fs::symlink_metadata(dir.join(name)).unwrap();
+        assert!(m.file_type().is_symlink(), "{name} was replaced");
+    }
+    let written = std::fs::read_to_string(&page).unwrap();
+    assert!(written.starts_with("# Cost table"), "{written}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// An `sh:` file whose coefficients overflow the arithmetic is one clear error naming the
 /// file and the line, whichever command reads it (before: render and export said "the SH
 /// lightmap is not finite (non-finite lighting?)" or clipped most of the frame with a

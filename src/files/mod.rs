@@ -6,7 +6,10 @@
 //! - **Writes** go through [`write_atomic`]: the bytes go to `.NAME.tmp-PID-N` in the same
 //!   directory, are fsynced and renamed over `NAME` (then a best-effort fsync of the
 //!   directory), so a killed or failed run leaves the old file or none, never a truncated
-//!   one, and a full disk is an error rather than a short file. On SIGINT or SIGTERM the
+//!   one, and a full disk is an error rather than a short file. A link to a regular file
+//!   is written through (the link stays); a character device, or a link to one, is written
+//!   into as `cp` does (an error on `/dev/full`); a block device, FIFO or socket is refused.
+//!   On SIGINT or SIGTERM the
 //!   temporaries being written are removed before the process exits (130 or 143;
 //!   [`remove_temporaries_on_interrupt`]); [`remove_stale_temps`] deletes those of runs that
 //!   were killed outright (their process is gone).
@@ -289,16 +292,23 @@ fn special_kind(_: &fs::Metadata) -> &'static str {
 /// # Errors
 /// [`FileError::Io`] naming `path` when any step fails (the temporary file is removed).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
+    use std::os::unix::fs::FileTypeExt;
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     // A symbolic link to a regular file is written through: that file is replaced and the
-    // link stays. A link to anything else (a device, a dangling name) is replaced itself.
+    // link stays. A character device, or a link to one, is written into as `cp` does (an
+    // error on /dev/full). A link to anything else (a dangling name) is replaced itself.
     let through_link = fs::symlink_metadata(path)
         .is_ok_and(|m| m.file_type().is_symlink())
         .then(|| fs::canonicalize(path).ok())
         .flatten()
-        .filter(|target| fs::metadata(target).is_ok_and(|m| m.is_file()));
+        .filter(|target| {
+            fs::metadata(target).is_ok_and(|m| m.is_file() || m.file_type().is_char_device())
+        });
     let path = through_link.as_deref().unwrap_or(path);
-    // Never rename over a device, FIFO or socket (as root that would replace /dev/zero).
+    if fs::metadata(path).is_ok_and(|m| m.file_type().is_char_device()) {
+        return write_into_device(path, bytes);
+    }
+    // Never rename over a block device, FIFO or socket.
     if let Ok(m) = fs::symlink_metadata(path) {
         let t = m.file_type();
         if !(t.is_file() || t.is_symlink() || t.is_dir()) {
@@ -346,6 +356,21 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
         let _ = d.sync_all(); // not supported everywhere; the rename is already done
     }
     Ok(())
+}
+
+/// Writes `bytes` into the character device `path` (`/dev/null`, `/dev/full`, a terminal)
+/// as `cp` does: no temporary, no rename, the device's error (ENOSPC) returned.
+fn write_into_device(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
+    let io = |cause| FileError::Io {
+        path: path.to_path_buf(),
+        action: "write",
+        cause,
+    };
+    let mut device = fs::OpenOptions::new().write(true).open(path).map_err(io)?;
+    device
+        .write_all(bytes)
+        .and_then(|()| device.flush())
+        .map_err(io)
 }
 
 /// Writes the output folder `dir` as one run ([`write_atomic`]'s guarantee for a folder): a
@@ -893,6 +918,22 @@ mod tests {
             assert_eq!(fs::read(&to_fifo).unwrap(), b"x");
             use std::os::unix::fs::FileTypeExt;
             assert!(fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+        }
+        // A character device, or a link to one, is written into as `cp` does: the link
+        // stays, /dev/full is an error, /dev/null takes the bytes.
+        let to_full = dir.join("to-full");
+        std::os::unix::fs::symlink("/dev/full", &to_full).unwrap();
+        let e = write_atomic(&to_full, b"x").unwrap_err();
+        assert!(e.to_string().contains("No space left on device"), "{e}");
+        let to_null = dir.join("to-null");
+        std::os::unix::fs::symlink("/dev/null", &to_null).unwrap();
+        write_atomic(&to_null, b"x").unwrap();
+        write_atomic(Path::new("/dev/null"), b"x").unwrap();
+        for link in [&to_full, &to_null] {
+            assert!(
+                fs::symlink_metadata(link).unwrap().file_type().is_symlink(),
+                "{link:?}"
+            );
         }
         let _ = fs::remove_dir_all(&dir);
     }
