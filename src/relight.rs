@@ -145,6 +145,10 @@ pub struct RelightRow {
     pub gpu_ms_min: Option<f64>,
     pub gpu_ms_max: Option<f64>,
     pub sampled: Vec<SampledFrame>,
+    /// Pixels the f16 target clipped at 65504 (or that were not finite), over every frame
+    /// of the run and the sampled frames' static images: the lighting is too bright for the
+    /// target, and the row's errors measure the clipping (a warning says so).
+    pub clipped_pixels: u64,
 }
 
 /// The run's table.
@@ -446,6 +450,7 @@ fn run_row(
     };
     let mut times = UpdateTimes::default();
     let (mut gpu_ms, mut frames_srgb, mut sampled_rows) = (Vec::new(), Vec::new(), Vec::new());
+    let mut clipped_pixels = 0u64;
     // The frame whose lighting the front set holds.
     let mut in_use = 0u32;
     std::thread::scope(|scope| -> Result<(), RelightError> {
@@ -489,6 +494,7 @@ fn run_row(
                 }
             }
             let frame = tech.render(scene, 0, 1)?;
+            clipped_pixels += frame.clipped_pixels();
             gpu_ms.extend_from_slice(&frame.ms);
             frames_srgb.push(to_srgb8(&frame, settings.exposure));
             if let Some(k) = sampled.iter().position(|&s| s == f) {
@@ -506,6 +512,7 @@ fn run_row(
                     &with_lighting(prepared, &radiance, &irradiance),
                 )?;
                 let static_frame = exact.render(scene, 0, 1)?;
+                clipped_pixels += static_frame.clipped_pixels();
                 let reference = &references[k];
                 sampled_rows.push(SampledFrame {
                     frame: f,
@@ -533,6 +540,11 @@ fn run_row(
         &frames_srgb,
     )?;
     let timing = TimingStats::from_ms(&gpu_ms);
+    if clipped_pixels > 0 {
+        log::warn!(
+            "{label}: {clipped_pixels} pixels clipped at the f16 target's 65504 (or not finite) over the run: the environment is too bright for this target; scale it down"
+        );
+    }
     log::info!("relight: {label} done");
     Ok(RelightRow {
         technique,
@@ -547,6 +559,7 @@ fn run_row(
         gpu_ms_min: timing.map(|t| t.ms_min),
         gpu_ms_max: timing.map(|t| t.ms_max),
         sampled: sampled_rows,
+        clipped_pixels,
     })
 }
 

@@ -3155,3 +3155,59 @@ fn a_forced_angular_probe_with_light_outside_its_disk_warns() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Lighting too bright for the f16 target says so in relight as render and bench do: a
+/// cross-fade to an `sh:` file of 1e10 warns with the clipped pixels, which relight.json
+/// records (before: errors of 1.0 in the table and no word).
+#[test]
+fn a_relight_too_bright_for_its_target_warns() {
+    let dir = scratch_dir("shvis-relight-bright");
+    let file = dir.join("bright.sh");
+    write(&file, b"1e10 1e10 1e10\n5e9 0 0\n0 0 0\n0 0 0\n");
+    let out = dir.join("out");
+    let run = Command::new(env!("CARGO_BIN_EXE_shvis"))
+        .args(["relight", "--techniques", "preconv", "--paths", "dx10"])
+        .args([
+            "--frames",
+            "4",
+            "--every",
+            "2",
+            "--error-frames",
+            "1",
+            "--ref-spp",
+            "2",
+        ])
+        .args([
+            "--width",
+            "64",
+            "--height",
+            "40",
+            "--vis-res",
+            "64",
+            "--rays",
+            "32",
+        ])
+        .arg("--fade-to")
+        .arg(format!("sh:{}", file.display()))
+        .arg("--out")
+        .arg(&out)
+        .env("SHVIS_CACHE_DIR", dir.join("cache"))
+        .env("RUST_LOG", "warn")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(
+        stderr.lines().any(|l| l.contains("WARN")
+            && l.contains("preconv.dx10")
+            && l.contains("pixels clipped at the f16 target's 65504")),
+        "{stderr}"
+    );
+    let table: Value =
+        serde_json::from_slice(&std::fs::read(out.join("relight.json")).unwrap()).unwrap();
+    assert!(
+        table["results"][0]["clipped_pixels"].as_u64().unwrap() > 0,
+        "{table}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
