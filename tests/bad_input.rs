@@ -3211,3 +3211,33 @@ fn a_relight_too_bright_for_its_target_warns() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `study rnm` checks its scene before any environment's bake and blames `--scene` (before:
+/// "--env sky:15: scene 'house' would need ≈ … triangles", after the bake).
+#[test]
+fn study_rnm_blames_the_scene_not_the_environment() {
+    let dir = scratch_dir("shvis-study-rnm-scene");
+    let missing = s(&dir.join("missing.gltf"));
+    for (scene, says) in [
+        ("house", "--scene house: scene 'house' would need"),
+        ("cornell", "--scene cornell: unknown scene 'cornell'"),
+        (missing.as_str(), "missing.gltf: cannot read"),
+    ] {
+        let (line, _) = error_line(
+            Command::new(env!("CARGO_BIN_EXE_shvis"))
+                .args(["study", "rnm", "--scene", scene, "--out"])
+                .arg(dir.join("out"))
+                .env("SHVIS_CACHE_DIR", dir.join("cache")),
+            scene,
+        );
+        assert!(
+            line.contains(says) && !line.contains("--env"),
+            "{scene}: {line}"
+        );
+        assert!(
+            !dir.join("cache").exists(),
+            "{scene}: baked before the check"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

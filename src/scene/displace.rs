@@ -64,12 +64,19 @@ pub fn metres_per_texel(scene: &Scene, field: &HeightField) -> Option<f64> {
     (texels > 0.0).then(|| (world / texels).sqrt())
 }
 
-/// `scene` with its height-mapped surfaces displaced into real geometry (module doc).
+/// Whether `scene` can be displaced: it has a height map, its material UVs have area, and
+/// its estimated triangles stay within [`MAX_DISPLACED_TRIANGLES`] (a cheap check, before
+/// any bake).
 ///
 /// # Errors
-/// [`DisplaceError`] when the scene has no height map, no UV area, or would need more than
-/// [`MAX_DISPLACED_TRIANGLES`].
-pub fn displace(scene: &Scene) -> Result<Scene, DisplaceError> {
+/// Which of those fails.
+pub fn displaceable(scene: &Scene) -> Result<(), DisplaceError> {
+    height_and_scale(scene).map(|_| ())
+}
+
+/// The height map of `scene` and its metres per texel, when it can be displaced
+/// ([`displaceable`]).
+fn height_and_scale(scene: &Scene) -> Result<(&HeightField, f64), DisplaceError> {
     let field = scene
         .material
         .height
@@ -91,6 +98,16 @@ pub fn displace(scene: &Scene) -> Result<Scene, DisplaceError> {
             triangles: estimate,
         });
     }
+    Ok((field, scale))
+}
+
+/// `scene` with its height-mapped surfaces displaced into real geometry (module doc).
+///
+/// # Errors
+/// [`DisplaceError`] when the scene has no height map, no UV area, or would need more than
+/// [`MAX_DISPLACED_TRIANGLES`].
+pub fn displace(scene: &Scene) -> Result<Scene, DisplaceError> {
+    let (field, scale) = height_and_scale(scene)?;
     let mut mesh = super::subdivide::subdivide(
         &scene.mesh,
         (scale * std::f64::consts::SQRT_2 * 1.0001) as f32,

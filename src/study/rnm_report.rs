@@ -12,6 +12,12 @@ use super::rnm::{RnmStudyError, RnmStudySettings, run_env, write_report};
 /// Errors of [`run`].
 #[derive(Debug, thiserror::Error)]
 pub enum RnmRunError {
+    /// The scene cannot be loaded or displaced (checked before any environment's bake).
+    #[error("--scene {scene}")]
+    Scene {
+        scene: String,
+        source: RnmStudyError,
+    },
     /// One environment failed.
     #[error("--env {env}")]
     Env { env: String, source: RnmStudyError },
@@ -29,6 +35,13 @@ pub fn run(
     exposure: f32,
     say: &mut dyn FnMut(&str),
 ) -> Result<Vec<PathBuf>, RnmRunError> {
+    let scene_error = |source: RnmStudyError| RnmRunError::Scene {
+        scene: settings.scene.clone(),
+        source,
+    };
+    let scene = crate::prepare::resolve_scene(&settings.scene, settings.vis_res)
+        .map_err(|e| scene_error(RnmStudyError::Prepare(e.into())))?;
+    crate::scene::displace::displaceable(&scene).map_err(|e| scene_error(e.into()))?;
     let mut results = Vec::new();
     for env in envs {
         let result = run_env(ctx, env, settings).map_err(|source| RnmRunError::Env {
