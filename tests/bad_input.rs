@@ -13,8 +13,12 @@
 //!
 //! Each class of cases ([`Kind`]) is one test in a folder of its own (`arguments`, `budget`,
 //! `values`, `env_files`, `scene_files`, `output_locations`, `bake_caches`,
-//! `design_hard_cases`), so a failure names its class and `cargo test --test bad_input
-//! values` runs one class alone; `every_class_has_cases` counts the whole suite. The kill-9
+//! `design_hard_cases`, `new_surfaces`), so a failure names its class and `cargo test --test bad_input
+//! values` runs one class alone; `every_class_has_cases` counts the whole suite. To count
+//! what another build gets wrong, `SHVIS_BAD_INPUT_BIN=<its binary>
+//! SHVIS_BAD_INPUT_TALLY=1 cargo test --test bad_input <class> -- --nocapture` runs the
+//! class against it and prints each failure and the totals by kind (panic, hang, silently
+//! wrong, unclear) instead of failing. The kill-9
 //! test (`killed_bakes_rerun_to_identical_outputs`, feature `test-hooks`) interrupts a bake
 //! at its five writes.
 
@@ -48,6 +52,11 @@ enum Kind {
     Cache,
     /// DESIGN §6 hard cases at the command line.
     HardCases,
+    /// The surfaces added since the classes above: export of every technique on dx10 and
+    /// dx11, `report` and its tables, `sh:` files in `study bases` and `render`, named sets
+    /// and list options, `SHVIS_*` variables, full standard output, links to devices,
+    /// binary glTF and EXR channels, `--sg-solve`, the dx11 path's refusals.
+    Surfaces,
 }
 
 #[derive(Clone, Debug)]
@@ -138,17 +147,32 @@ impl Suite {
         self.cases.last_mut().unwrap()
     }
 
-    /// Runs every case; panics listing every failure.
+    /// Runs every case; panics listing every failure. With `SHVIS_BAD_INPUT_TALLY` set it
+    /// prints each failure and the totals by [`classify`] instead, and passes.
     fn run(self) {
+        let mut totals: BTreeMap<&str, usize> = BTreeMap::new();
         let failures: Vec<String> = self
             .cases
             .iter()
             .filter_map(|case| {
-                run_case(case)
-                    .err()
-                    .map(|e| format!("[{:?}] {}: {e}", case.kind, case.name))
+                let problem = run_case(case).err()?;
+                *totals.entry(classify(&problem)).or_default() += 1;
+                Some(format!("[{:?}] {}: {problem}", case.kind, case.name))
             })
             .collect();
+        if std::env::var_os("SHVIS_BAD_INPUT_TALLY").is_some() {
+            for f in &failures {
+                println!("{f}");
+            }
+            println!(
+                "tally of {} ({} cases): {totals:?}, {} passed",
+                suite_binary(),
+                self.cases.len(),
+                self.cases.len() - failures.len()
+            );
+            let _ = std::fs::remove_dir_all(&self.dir);
+            return;
+        }
         assert!(
             failures.is_empty(),
             "{} of {} cases failed:\n{}",
@@ -160,9 +184,37 @@ impl Suite {
     }
 }
 
+/// The binary the suite runs: this build's, or the one `SHVIS_BAD_INPUT_BIN` names (to
+/// count what an earlier build got wrong: `SHVIS_BAD_INPUT_TALLY`).
+fn suite_binary() -> String {
+    std::env::var("SHVIS_BAD_INPUT_BIN").unwrap_or_else(|_| env!("CARGO_BIN_EXE_shvis").into())
+}
+
+/// What a failed case's problem is, for the tally: a panic (or abort), a hang, a silently
+/// wrong result (a case that must fail or warn exited 0 without a word, an output left, a
+/// check of what was written failed), or an unclear one (a refusal with the wrong code, not
+/// an `error:` line, or not naming the input).
+fn classify(problem: &str) -> &'static str {
+    if problem.contains("on stderr") || problem.contains("killed by a signal") {
+        "panic"
+    } else if problem.starts_with("hang") {
+        "hang"
+    } else if problem.starts_with("exit 0,")
+        || problem.starts_with("no warning")
+        || problem.contains("was written")
+        || problem.contains("output directory holds")
+        || problem.contains("temporary")
+        || problem.starts_with("check: ")
+    {
+        "silently wrong"
+    } else {
+        "unclear"
+    }
+}
+
 /// Runs the binary with `args` (under `shell` when given), killing it after the timeout.
 fn spawn(case: &Case) -> Result<(Option<i32>, String, String), String> {
-    let bin = env!("CARGO_BIN_EXE_shvis");
+    let bin = suite_binary();
     let rust_log = match case.expect {
         Expect::Error { .. } => "off",
         _ => "warn",
@@ -310,7 +362,7 @@ fn run_case(case: &Case) -> Result<(), String> {
         }
     }
     if let Some(check) = &case.check {
-        check(&stdout, &stderr)?;
+        check(&stdout, &stderr).map_err(|e| format!("check: {e}"))?;
     }
     Ok(())
 }
@@ -2307,7 +2359,7 @@ fn hard_cases(suite: &mut Suite) {
 
 impl Kind {
     /// Every class, in the order of the enum.
-    const ALL: [Kind; 8] = [
+    const ALL: [Kind; 9] = [
         Kind::Arguments,
         Kind::Budget,
         Kind::Values,
@@ -2316,6 +2368,7 @@ impl Kind {
         Kind::Outputs,
         Kind::Cache,
         Kind::HardCases,
+        Kind::Surfaces,
     ];
 
     /// The generator of this class's cases.
@@ -2329,8 +2382,712 @@ impl Kind {
             Kind::Outputs => output_cases,
             Kind::Cache => cache_cases,
             Kind::HardCases => hard_cases,
+            Kind::Surfaces => surface_cases,
         }
     }
+}
+
+/// The surfaces added since the other classes (see [`Kind::Surfaces`]): each refusal is one
+/// `error:` line naming what is wrong, before any work.
+fn surface_cases(suite: &mut Suite) {
+    use shvis::technique::{HwPath, Technique};
+    let d = suite.path("surfaces");
+    std::fs::create_dir_all(&d).unwrap();
+    let out = |name: &str| d.join(format!("out-{name}"));
+    let k = Kind::Surfaces;
+
+    // sh: files, malformed, in study bases and render (36 × 2).
+    let mut order31 = String::new();
+    for _ in 0..31 * 31 {
+        order31.push_str("1 0 0\n");
+    }
+    let mut sixteen = "1 1 1\n".repeat(15);
+    sixteen.push_str("x y z\n");
+    let sh_files: Vec<(&str, Vec<u8>)> = vec![
+        ("empty", vec![]),
+        ("comment", b"# only a comment\n".to_vec()),
+        ("blank", b"\n\n\n".to_vec()),
+        ("spaces", b"   \n\t\n".to_vec()),
+        ("two", b"1 2\n".to_vec()),
+        ("four", b"1 2 3 4\n".to_vec()),
+        ("text", b"a b c\n".to_vec()),
+        ("nan", b"nan 0 0\n".to_vec()),
+        ("inf", b"inf 0 0\n".to_vec()),
+        ("neginf", b"-inf 0 0\n".to_vec()),
+        ("plusinf", b"+inf 0 0\n".to_vec()),
+        ("e13", b"1e13 0 0\n".to_vec()),
+        ("nege13", b"-1e13 0 0\n".to_vec()),
+        ("e38", b"3e38 0 0\n".to_vec()),
+        ("e400", b"1e400 0 0\n".to_vec()),
+        ("e30green", b"0 1e30 0\n".to_vec()),
+        ("justover", b"1.000001e12 0 0\n".to_vec()),
+        ("lines2", b"1 1 1\n0 0 0\n".to_vec()),
+        ("lines3", b"1 1 1\n0 0 0\n0 0 0\n".to_vec()),
+        ("lines5", "1 1 1\n".repeat(5).into_bytes()),
+        ("order31", order31.into_bytes()),
+        ("binary", vec![0, 0xff, 1, 2, b'\n']),
+        ("latin1", b"1 1 \xff\n".to_vec()),
+        ("commas", b"1,1,1\n".to_vec()),
+        ("hex", b"0x1 0 0\n".to_vec()),
+        ("minus", "\u{2212}1 0 0\n".as_bytes().to_vec()),
+        ("junk", b"1 1 1 x\n".to_vec()),
+        ("semicolon", b"1 1 1;\n".to_vec()),
+        ("line16", sixteen.into_bytes()),
+        ("nanmid", b"-0 nan 1\n".to_vec()),
+        ("bigfile", "# padding\n".repeat(120_000).into_bytes()),
+        ("inf4", b"1 1 1\n0 0 0\n0 inf 0\n0 0 0\n".to_vec()),
+    ];
+    let mut sh_paths: Vec<(String, PathBuf)> = sh_files
+        .into_iter()
+        .map(|(name, bytes)| {
+            let path = d.join(format!("{name}.sh"));
+            write(&path, &bytes);
+            (name.to_string(), path)
+        })
+        .collect();
+    let dir_sh = d.join("folder.sh");
+    std::fs::create_dir_all(&dir_sh).unwrap();
+    sh_paths.push(("folder".into(), dir_sh));
+    sh_paths.push(("missing".into(), d.join("missing.sh")));
+    let zero_sh = d.join("zero.sh");
+    std::os::unix::fs::symlink("/dev/zero", &zero_sh).unwrap();
+    sh_paths.push(("zero".into(), zero_sh));
+    let fifo_sh = d.join("fifo.sh");
+    let _ = Command::new("mkfifo").arg(&fifo_sh).status();
+    sh_paths.push(("fifo".into(), fifo_sh));
+    for (name, path) in &sh_paths {
+        let env = format!("sh:{}", path.display());
+        let file = path.file_name().unwrap().to_string_lossy().into_owned();
+        let o = out(&format!("study-{name}"));
+        suite.add(
+            k,
+            &format!("study bases sh:{name}"),
+            &["study", "bases", "--envs", &env, "--out", &s(&o)],
+            Some(o),
+            error(1, &[&file]),
+        );
+        let png = d.join(format!("render-{name}.png"));
+        suite.add(
+            k,
+            &format!("render sh:{name}"),
+            &[
+                "render",
+                "--technique",
+                "preconv",
+                "--env",
+                &env,
+                "--out",
+                &s(&png),
+            ],
+            Some(png),
+            error(1, &[&file]),
+        );
+    }
+
+    // export of every technique on dx10 and dx11 with an environment that is not there:
+    // a technique with no export there says why in its terms, any other names the file.
+    let missing_env = s(&d.join("no-such-sky.exr"));
+    for &t in Technique::all() {
+        for path in [HwPath::Dx10, HwPath::Dx11] {
+            let name = format!("{t}.{path}");
+            let o = out(&format!("export-{name}"));
+            let expect = match shvis::export::refusal(t, path) {
+                None => error(1, &["no-such-sky.exr"]),
+                Some(why) => error(1, &[&why.to_string()]),
+            };
+            suite.add(
+                k,
+                &format!("export {name}, missing --env"),
+                &[
+                    "export",
+                    "--technique",
+                    &t.to_string(),
+                    "--path",
+                    &path.to_string(),
+                    "--env",
+                    &missing_env,
+                    "--out",
+                    &s(&o),
+                ],
+                Some(o),
+                expect,
+            );
+        }
+    }
+
+    // report: tables that cannot be believed, outputs that would be wrong.
+    let row = |extra: &str| {
+        format!(
+            r#"{{"device":"d","width":64,"height":32,"results":[{{"technique":"unc6","path":"dx10"{extra}}}]}}"#
+        )
+    };
+    let tables: Vec<(&str, String, &str)> = vec![
+        ("empty", String::new(), "not a bench table.json"),
+        ("not-json", "table".into(), "not a bench table.json"),
+        ("array", "[]".into(), "no \"results\" array"),
+        (
+            "no-results",
+            r#"{"device":"d"}"#.into(),
+            "no \"results\" array",
+        ),
+        (
+            "results-object",
+            r#"{"results":{}}"#.into(),
+            "no \"results\" array",
+        ),
+        ("row-number", r#"{"results":[7]}"#.into(), "is not a row"),
+        (
+            "row-nameless",
+            r#"{"results":[{"ms_median":1}]}"#.into(),
+            "\"technique\" is missing",
+        ),
+        (
+            "negative-ms",
+            row(r#","ms_median":-1"#),
+            "cannot be negative",
+        ),
+        (
+            "absurd-ms",
+            row(r#","ms_median":1e9"#),
+            "beyond any time in ms",
+        ),
+        ("text-ms", row(r#","ms_median":"fast""#), "not a number"),
+        (
+            "negative-ratio",
+            row(r#","ratio_to_preconv":-2"#),
+            "cannot be negative",
+        ),
+        (
+            "negative-error",
+            row(r#","rel_rmse":-0.5"#),
+            "cannot be negative",
+        ),
+        (
+            "absurd-error",
+            row(r#","rel_rmse":1e30"#),
+            "beyond any relative error",
+        ),
+        (
+            "fraction-bytes",
+            row(r#","texel_bytes":0.5"#),
+            "whole number",
+        ),
+        (
+            "negative-bytes",
+            row(r#","table_bytes":-8"#),
+            "cannot be negative",
+        ),
+        (
+            "overflow",
+            row(r#","ms_median":1e999"#),
+            "not a bench table.json",
+        ),
+        (
+            "width",
+            r#"{"width":-3,"results":[]}"#.into(),
+            "not a frame size",
+        ),
+        (
+            "height",
+            r#"{"height":1e7,"results":[]}"#.into(),
+            "not a frame size",
+        ),
+        ("paper-ms", row(r#","paper_ms":-0.1"#), "cannot be negative"),
+    ];
+    for (name, text, needle) in tables {
+        let table = d.join(format!("{name}.json"));
+        write(&table, text.as_bytes());
+        let page = out(&format!("report-{name}.md"));
+        suite.add(
+            k,
+            &format!("report {name}"),
+            &["report", &s(&table), "--out", &s(&page)],
+            Some(page),
+            error(1, &[&format!("{name}.json"), needle]),
+        );
+    }
+    let good = d.join("good.json");
+    write(&good, row(r#","ms_median":1.5"#).as_bytes());
+    let zero_table = d.join("zero.json");
+    std::os::unix::fs::symlink("/dev/zero", &zero_table).unwrap();
+    // The cases that aim --out at a table get tables of their own: a build that writes
+    // over its input must not spoil the cases after it.
+    let victims: Vec<PathBuf> = (0..2)
+        .map(|i| {
+            let v = d.join(format!("victim-{i}.json"));
+            write(&v, row(r#","ms_median":1.5"#).as_bytes());
+            v
+        })
+        .collect();
+    let table_link = d.join("page-link.md");
+    std::os::unix::fs::symlink(&victims[1], &table_link).unwrap();
+    let full_page = d.join("full-page.md");
+    std::os::unix::fs::symlink("/dev/full", &full_page).unwrap();
+    let page = out("report-page.md");
+    let refusals: Vec<(&str, Vec<String>, Vec<&str>)> = vec![
+        (
+            "missing table",
+            vec![s(&d.join("absent.json"))],
+            vec!["absent.json"],
+        ),
+        ("table is a folder", vec![s(&d)], vec!["surfaces"]),
+        (
+            "table links to /dev/zero",
+            vec![s(&zero_table)],
+            vec!["zero.json", "not a regular file"],
+        ),
+        (
+            "--out is the table",
+            vec![s(&victims[0]), "--out".into(), s(&victims[0])],
+            vec!["--out would overwrite"],
+        ),
+        (
+            "--out links to the table",
+            vec![s(&victims[1]), "--out".into(), s(&table_link)],
+            vec!["--out would overwrite"],
+        ),
+        (
+            "--out links to /dev/full",
+            vec![s(&good), "--out".into(), s(&full_page)],
+            vec!["full-page.md", "No space left"],
+        ),
+        (
+            "--out in a missing folder",
+            vec![s(&good), "--out".into(), s(&d.join("no/such/page.md"))],
+            vec!["page.md"],
+        ),
+        (
+            "labels for two tables, one given",
+            vec![
+                s(&good),
+                "--labels".into(),
+                "a,b".into(),
+                "--out".into(),
+                s(&page),
+            ],
+            vec!["--labels"],
+        ),
+    ];
+    for (name, mut args, needles) in refusals {
+        if !args.iter().any(|a| a == "--out") {
+            args.extend(["--out".into(), s(&page)]);
+        }
+        let mut all = vec!["report".to_string()];
+        all.extend(args);
+        let all: Vec<&str> = all.iter().map(String::as_str).collect();
+        suite.add(k, &format!("report {name}"), &all, None, error(1, &needles));
+    }
+    // Markup in a table's texts stays text: the page keeps its columns.
+    let markup = d.join("markup.json");
+    write(
+        &markup,
+        br#"{"device":"GPU | <b>x</b>\n# y","driver":"`d`","width":8,"height":8,"results":[{"technique":"unc6|x","path":"dx10","ms_median":1}]}"#,
+    );
+    let markup_page = out("report-markup.md");
+    suite.add(
+        k,
+        "report escapes markup",
+        &[
+            "report",
+            &s(&markup),
+            "--labels",
+            "a|b",
+            "--out",
+            &s(&markup_page),
+        ],
+        Some(markup_page.clone()),
+        Expect::Ok,
+    );
+    suite.last().check = Some(Box::new(move |_, _| {
+        let md = std::fs::read_to_string(&markup_page).map_err(|e| e.to_string())?;
+        for line in md.lines().filter(|l| l.starts_with('|')) {
+            let cells = line.replace("\\|", "").matches('|').count();
+            if cells != 7 && cells != 8 {
+                return Err(format!("a table line lost its columns: {line}"));
+            }
+        }
+        if md.contains("<b>") {
+            return Err("markup copied unescaped".into());
+        }
+        Ok(())
+    }));
+
+    // A full standard output: one error line, exit 1 (not a panic, not 0).
+    let report_page = out("report-full-stdout.md");
+    let full: Vec<(&str, Vec<String>)> = vec![
+        ("techniques", vec!["techniques".into()]),
+        (
+            "techniques --json",
+            vec!["techniques".into(), "--json".into()],
+        ),
+        ("devices", vec!["devices".into()]),
+        ("--help", vec!["--help".into()]),
+        ("--version", vec!["--version".into()]),
+        ("export --help", vec!["export".into(), "--help".into()]),
+        ("report --help", vec!["report".into(), "--help".into()]),
+        ("study --help", vec!["study".into(), "--help".into()]),
+        (
+            "report",
+            vec!["report".into(), s(&good), "--out".into(), s(&report_page)],
+        ),
+    ];
+    for (name, args) in full {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        suite.add(
+            k,
+            &format!("full stdout: {name}"),
+            &args,
+            None,
+            error(1, &["standard output"]),
+        );
+        suite.last().shell = Some("exec >/dev/full;".into());
+    }
+
+    // Named sets and list options.
+    let bench_out = out("bench");
+    let lists: Vec<(&str, Vec<&str>, Vec<&str>)> = vec![
+        (
+            "set with a name",
+            vec!["bench", "--techniques", "headline,l1"],
+            vec!["headline is a set"],
+        ),
+        (
+            "two sets",
+            vec!["bench", "--techniques", "all,paper"],
+            vec!["is a set"],
+        ),
+        (
+            "leading comma",
+            vec!["bench", "--techniques", ",shlmap"],
+            vec!["entry 1 is empty"],
+        ),
+        (
+            "double comma",
+            vec!["bench", "--techniques", "shlmap,,l1"],
+            vec!["entry 2 is empty"],
+        ),
+        (
+            "trailing comma",
+            vec!["bench", "--techniques", "shlmap,"],
+            vec!["entry 2 is empty"],
+        ),
+        (
+            "empty list",
+            vec!["bench", "--techniques", ""],
+            vec!["empty"],
+        ),
+        (
+            "paths double comma",
+            vec!["bench", "--paths", "dx10,,dx11"],
+            vec!["entry 2 is empty"],
+        ),
+        (
+            "relight set with a name",
+            vec!["relight", "--techniques", "paper,unc6"],
+            vec!["paper is a set"],
+        ),
+        (
+            "unknown name",
+            vec!["bench", "--techniques", "unc7x"],
+            vec!["unc7x", "headline"],
+        ),
+    ];
+    for (name, args, needles) in lists {
+        let mut args = args;
+        let o = s(&bench_out);
+        args.extend(["--out", &o]);
+        suite.add(
+            k,
+            &format!("list: {name}"),
+            &args,
+            Some(bench_out.clone()),
+            error(1, &needles),
+        );
+    }
+
+    for command in ["export", "render"] {
+        let o = s(&bench_out);
+        suite.add(
+            k,
+            &format!("list: {command} --technique a set"),
+            &[command, "--technique", "headline", "--out", &o],
+            Some(bench_out.clone()),
+            error(2, &["'headline' is a set of techniques"]),
+        );
+    }
+
+    // SHVIS_* variables that do not parse stop every command before any work.
+    let vars: Vec<(&str, &str)> = vec![
+        ("SHVIS_MEMORY_LIMIT", "abc"),
+        ("SHVIS_MEMORY_LIMIT", "-1"),
+        ("SHVIS_MEMORY_LIMIT", ""),
+        ("SHVIS_MEMORY_LIMIT", "1e999"),
+        ("SHVIS_MEMORY_LIMIT", "12 parsecs"),
+        ("SHVIS_TRACE_LANES", "3"),
+        ("SHVIS_TRACE_LANES", "abc"),
+        ("SHVIS_TRACE_LANES", ""),
+        ("SHVIS_TRACE_LANES", "32"),
+    ];
+    for (var, value) in vars {
+        let png = d.join(format!("var-{var}-{}.png", value.len()));
+        suite.add(
+            k,
+            &format!("{var}={value:?}"),
+            &["render", "--technique", "preconv", "--out", &s(&png)],
+            Some(png),
+            error(1, &[var]),
+        );
+        suite.last().env.push((var.into(), value.into()));
+    }
+
+    // Binary glTF and EXR channels.
+    let (json, bin) = scene_json(None, None);
+    let mut glb = b"glTF".to_vec();
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    let json_bytes = {
+        let mut j = serde_json::to_vec(&json).unwrap();
+        while j.len() % 4 != 0 {
+            j.push(b' ');
+        }
+        j
+    };
+    let total = 12 + 8 + json_bytes.len() + 8 + bin.len();
+    glb.extend_from_slice(&(total as u32).to_le_bytes());
+    glb.extend_from_slice(&(json_bytes.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"JSON");
+    glb.extend_from_slice(&json_bytes);
+    glb.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"BIN\0");
+    glb.extend_from_slice(&bin);
+    let mut magic = glb.clone();
+    magic[..4].copy_from_slice(b"XXXX");
+    let glbs: Vec<(&str, Vec<u8>, &str)> = vec![
+        ("magic", magic, "not a binary glTF"),
+        ("header", glb[..10].to_vec(), "glb"),
+        ("cut", glb[..glb.len() / 2].to_vec(), "truncated .glb"),
+        ("json-cut", glb[..30].to_vec(), "truncated .glb"),
+    ];
+    for (name, bytes, needle) in glbs {
+        let path = d.join(format!("{name}.glb"));
+        write(&path, &bytes);
+        let png = d.join(format!("glb-{name}.png"));
+        suite.add(
+            k,
+            &format!("glb {name}"),
+            &[
+                "render",
+                "--technique",
+                "preconv",
+                "--scene",
+                &s(&path),
+                "--out",
+                &s(&png),
+            ],
+            Some(png),
+            error(1, &[&format!("{name}.glb"), needle]),
+        );
+    }
+    let luminance = d.join("luminance.exr");
+    {
+        use exr::prelude::*;
+        let channel = AnyChannel::new("Y", FlatSamples::F32(vec![1.0; 8 * 4]));
+        let layer = Layer::new(
+            (8, 4),
+            LayerAttributes::named("lum"),
+            Encoding::FAST_LOSSLESS,
+            AnyChannels::sort(SmallVec::from_vec(vec![channel])),
+        );
+        Image::from_layer(layer)
+            .write()
+            .to_file(&luminance)
+            .unwrap();
+    }
+    let lum_png = d.join("lum-env.png");
+    suite.add(
+        k,
+        "exr without RGB as --env",
+        &[
+            "render",
+            "--technique",
+            "preconv",
+            "--env",
+            &s(&luminance),
+            "--out",
+            &s(&lum_png),
+        ],
+        Some(lum_png),
+        error(1, &["luminance.exr", "no R, G and B"]),
+    );
+    let lum_png = d.join("lum-height.png");
+    suite.add(
+        k,
+        "exr without RGB as --height-map",
+        &[
+            "render",
+            "--technique",
+            "rnmao",
+            "--height-map",
+            &s(&luminance),
+            "--out",
+            &s(&lum_png),
+        ],
+        Some(lum_png),
+        error(1, &["luminance.exr", "no R, G and B"]),
+    );
+
+    // Export over its own inputs, directly and through a link.
+    let sky = exr(&d.join("sky.exr"), 16, 8, |_, _| [1.0; 3]);
+    let sky_link = d.join("sky-link");
+    std::os::unix::fs::symlink(&sky, &sky_link).unwrap();
+    let sh_good = d.join("good.sh");
+    write(&sh_good, b"1 1 1\n");
+    let height = d.join("height.png");
+    write(&height, &png(8, 8));
+    let scene = gltf(&d, "scene", |_| {});
+    let overs: Vec<(&str, Vec<String>, PathBuf)> = vec![
+        ("the env", vec!["--env".into(), s(&sky)], sky.clone()),
+        (
+            "a link to the env",
+            vec!["--env".into(), s(&sky)],
+            sky_link.clone(),
+        ),
+        (
+            "the sh: file",
+            vec!["--env".into(), format!("sh:{}", sh_good.display())],
+            sh_good.clone(),
+        ),
+        (
+            "the height map",
+            vec!["--height-map".into(), s(&height)],
+            height.clone(),
+        ),
+        (
+            "the scene",
+            vec!["--scene".into(), s(&scene)],
+            scene.clone(),
+        ),
+    ];
+    for (name, args, over) in overs {
+        let mut all: Vec<String> = ["export", "--technique", "preconv", "--path", "dx10"]
+            .map(String::from)
+            .to_vec();
+        all.extend(args);
+        all.extend(["--out".into(), s(&over)]);
+        let all: Vec<&str> = all.iter().map(String::as_str).collect();
+        suite.add(
+            k,
+            &format!("export --out over {name}"),
+            &all,
+            None,
+            error(1, &["--out"]),
+        );
+    }
+
+    // Outputs linked to devices.
+    let full_png = d.join("full.png");
+    std::os::unix::fs::symlink("/dev/full", &full_png).unwrap();
+    suite.add(
+        k,
+        "render --out links to /dev/full",
+        &[
+            "render",
+            "--technique",
+            "preconv",
+            "--width",
+            "32",
+            "--height",
+            "20",
+            "--vis-res",
+            "64",
+            "--rays",
+            "16",
+            "--out",
+            &s(&full_png),
+        ],
+        None,
+        error(1, &["full.png", "No space left"]),
+    );
+    let full_dir = d.join("full-dir");
+    std::os::unix::fs::symlink("/dev/full", &full_dir).unwrap();
+    suite.add(
+        k,
+        "export --out links to /dev/full",
+        &[
+            "export",
+            "--technique",
+            "preconv",
+            "--path",
+            "dx10",
+            "--out",
+            &s(&full_dir),
+        ],
+        None,
+        error(1, &["/dev/full", "--out"]),
+    );
+
+    // --sg-solve and the dx11 path's refusals.
+    for value in ["", "fast", "ls,ls"] {
+        let png = d.join(format!("sg-{}.png", value.len()));
+        suite.add(
+            k,
+            &format!("--sg-solve {value:?}"),
+            &[
+                "render",
+                "--technique",
+                "sg9",
+                "--sg-solve",
+                value,
+                "--out",
+                &s(&png),
+            ],
+            Some(png),
+            error(2, &["--sg-solve"]),
+        );
+    }
+    let png = d.join("nmprt-dx11.png");
+    suite.add(
+        k,
+        "render nmprt on dx11",
+        &[
+            "render",
+            "--technique",
+            "nmprt",
+            "--path",
+            "dx11",
+            "--out",
+            &s(&png),
+        ],
+        Some(png),
+        error(1, &["nmprt", "dx11"]),
+    );
+    let o = out("bench-nmprt-dx11");
+    suite.add(
+        k,
+        "bench nmprt on dx11",
+        &[
+            "bench",
+            "--techniques",
+            "nmprt",
+            "--paths",
+            "dx11",
+            "--out",
+            &s(&o),
+        ],
+        Some(o),
+        error(1, &["nmprt", "dx11"]),
+    );
+    suite.add(
+        k,
+        "view without a display",
+        &["view"],
+        None,
+        error(1, &["display"]),
+    );
+    suite.last().env.push(("DISPLAY".into(), String::new()));
+    suite
+        .last()
+        .env
+        .push(("WAYLAND_DISPLAY".into(), String::new()));
 }
 
 /// Generates the cases of `kind` in a suite of its own (its own folder) and runs them: each
@@ -2396,6 +3153,11 @@ fn bake_caches() {
 #[test]
 fn design_hard_cases() {
     run_class(Kind::HardCases);
+}
+
+#[test]
+fn new_surfaces() {
+    run_class(Kind::Surfaces);
 }
 
 /// The suite as a whole, generated and not run (the class tests run it): some two hundred

@@ -15,7 +15,7 @@ use super::{MAX_BOUNCES, prepare_settings};
 #[derive(Args, Debug)]
 pub(super) struct ExportArgs {
     /// Technique name (`shvis techniques`).
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_one_technique)]
     technique: Technique,
     /// Hardware path whose layout the files hold: dx10 (RGBA16F/RGBA8 arrays) or dx11
     /// (block-compressed).

@@ -250,6 +250,17 @@ fn parse_techniques(list: &str) -> Result<Vec<Technique>> {
     })
 }
 
+/// A `--technique` value: one technique's name; a named set is explained, not unknown.
+fn parse_one_technique(name: &str) -> Result<Technique> {
+    use shvis::technique::catalog::SET_NAMES;
+    if SET_NAMES.contains(&name.trim()) {
+        bail!(
+            "'{name}' is a set of techniques; --technique takes one name (`shvis techniques` names them; bench and relight take sets)"
+        );
+    }
+    Ok(name.trim().parse()?)
+}
+
 /// A comma-separated list of names, each at most once.
 fn parse_each_once<T>(list: &str) -> Result<Vec<T>>
 where

@@ -30,7 +30,7 @@ pub(super) struct RenderArgs {
     env: String,
     /// Technique name (see `shvis bench`): unc3…unc6, pca4…pca24, pca4w…pca24w, shlmap,
     /// preconv, sh2.
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_one_technique)]
     technique: Technique,
     /// Hardware path: dx9, dx10 or dx11.
     #[arg(long, default_value = "dx10")]
