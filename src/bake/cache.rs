@@ -802,6 +802,18 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), BakeError> {
         action: "create the cache directory",
         source,
     })?;
+    // A cache entry is the cache's own file: a link there to anything but a regular file
+    // (a device, a dangling name) is damage, replaced by the entry rather than written
+    // through as an output would be.
+    if fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink())
+        && !fs::metadata(path).is_ok_and(|m| m.is_file())
+    {
+        fs::remove_file(path).map_err(|source| BakeError::Io {
+            path: path.to_path_buf(),
+            action: "replace the damaged cache link",
+            source,
+        })?;
+    }
     files::write_atomic(path, bytes).map_err(BakeError::File)
 }
 
