@@ -120,6 +120,10 @@ pub(super) fn run_render(a: RenderArgs) -> Result<()> {
     }
     shvis::files::check_outputs_spare_inputs(&[("--out".to_string(), a.out.clone())], &inputs)?;
     let technique = with_normal_filter(vec![a.technique], a.normal_filter)[0];
+    // A path the technique has no form on is refused before its bake.
+    if let Err(why) = technique.form_on(a.path) {
+        bail!("{technique}.{}: cannot run on {}: {why}", a.path, a.path);
+    }
     let settings = prepare_settings(&a.scene, &a.env, &[technique], a.bounces)?;
     // The device next: a missing GPU should not cost a bake.
     let label = with_gpu(&a.gpu, |ctx| {
