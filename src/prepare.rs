@@ -444,12 +444,46 @@ pub enum PrepareError {
         max: u32,
         scene: String,
     },
+    /// The lighting derived from `--env` (its SH, the SH lightmap baked from it) holds a
+    /// value that is not finite: the file's values overflowed the arithmetic.
+    #[error(
+        "{env}: the lighting it gives is not finite ({what}): its values overflow the arithmetic; scale the environment down"
+    )]
+    NonFiniteLighting { env: String, what: String },
     #[error(transparent)]
     Limit(#[from] crate::limits::LimitError),
     #[error(transparent)]
     Gpu(#[from] crate::gpu::GpuError),
     #[error(transparent)]
     File(#[from] crate::files::FileError),
+}
+
+/// Refuses lighting that is not finite, naming the environment `env` it came from, before
+/// any technique is built from it (a technique's tables would only say "not finite").
+fn check_lighting(
+    env: &str,
+    radiance_sh: &[[f64; 3]],
+    irradiance_sh: &[[f64; 3]],
+    sh_lightmap: Option<&ShLightmap>,
+) -> Result<(), PrepareError> {
+    let not_finite = |what: String| PrepareError::NonFiniteLighting {
+        env: env.to_string(),
+        what,
+    };
+    for (name, coeffs) in [("radiance", radiance_sh), ("irradiance", irradiance_sh)] {
+        if let Some(i) = coeffs.iter().position(|c| c.iter().any(|v| !v.is_finite())) {
+            return Err(not_finite(format!(
+                "its {name} SH coefficient {i} is {:?}",
+                coeffs[i]
+            )));
+        }
+    }
+    if let Some(map) = sh_lightmap
+        && crate::technique::shlmap::stored_scale(map).is_none()
+    {
+        return Err(not_finite("the SH lightmap baked from it".into()));
+    }
+    Ok(())
 }
 
 /// Whether `name` is a glTF path (`.gltf`/`.glb`, any case).
@@ -597,6 +631,12 @@ pub fn prepare_with(
             )?)
         }
     };
+    check_lighting(
+        &settings.env,
+        &radiance_sh,
+        &irradiance_sh,
+        sh_lightmap.as_ref(),
+    )?;
     let transfer = settings.transfer_bounces.map(|bounces| {
         Arc::new(bake_transfer(
             &scene,
@@ -721,4 +761,33 @@ pub fn bake_scene_ao(
             progress,
         },
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lighting_that_is_not_finite_is_refused_naming_the_environment() {
+        let good = vec![[1.0; 3]; 9];
+        assert!(check_lighting("sh:x.sh", &good, &good, None).is_ok());
+        let mut bad = good.clone();
+        bad[4][1] = f64::INFINITY;
+        let e = check_lighting("sh:x.sh", &bad, &good, None)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with(
+                "sh:x.sh: the lighting it gives is not finite (its radiance SH coefficient 4 is [1.0, inf, 1.0])"
+            ),
+            "{e}"
+        );
+        let e = check_lighting("sky", &good, &bad, None)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("sky: ") && e.contains("irradiance SH coefficient 4"),
+            "{e}"
+        );
+    }
 }
