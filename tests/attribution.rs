@@ -218,3 +218,42 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
         assert!(step(row("sh2", path), AttributionKind::ProductOrder) < 1e-6);
     }
 }
+
+/// Every technique's real dx11 blocks (the house's bakes) pass the check a cached entry
+/// must pass before it is believed: a second read through the bake cache uses the file and
+/// leaves it as it was (a failing check would rebuild and rewrite it, with a warning).
+#[test]
+fn the_house_dx11_blocks_pass_their_cache_check() {
+    let house = common::house();
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("dx11-block-check");
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut inputs = house.inputs();
+    inputs.cache_dir = Some(&dir);
+    let mut checked = 0;
+    for &t in Technique::all() {
+        if t.form_on(HwPath::Dx11).is_err() {
+            continue;
+        }
+        let first = shvis::technique::dx11_decoded_values(t, &inputs).unwrap();
+        let written: Vec<(std::path::PathBuf, std::time::SystemTime)> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| {
+                let e = e.unwrap();
+                (e.path(), e.metadata().unwrap().modified().unwrap())
+            })
+            .collect();
+        let again = shvis::technique::dx11_decoded_values(t, &inputs).unwrap();
+        assert_eq!(first, again, "{t}");
+        for (path, modified) in written {
+            assert_eq!(
+                std::fs::metadata(&path).unwrap().modified().unwrap(),
+                modified,
+                "{t}: {} was rebuilt: its real blocks failed the cache check",
+                path.display()
+            );
+        }
+        checked += 1;
+    }
+    assert!(checked > 20, "{checked} techniques");
+    let _ = std::fs::remove_dir_all(&dir);
+}

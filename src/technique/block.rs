@@ -634,21 +634,28 @@ pub fn compress_cached(
     })
 }
 
-/// Largest error a decoded value may have, over the largest |value| of its 4 × 4 block: BC4
-/// keeps every value within half of one of its 7 steps of the block's range (1/14) plus the
-/// 8-bit rounding; a ratio block within the worst the encoder gives where two magnitudes
-/// share a block (module doc: 10–15 %) with room to spare.
-const BLOCK_ERROR_BOUND: [f32; 2] = [1.0 / 14.0 + 1.0 / 255.0, 0.5];
+/// BC4's largest error: one of its 7 steps of the block's range (at most the block's largest
+/// value), plus the 8-bit rounding of its input and of its endpoints (an encoder need not
+/// take the block's extremes as endpoints).
+const BC4_ERROR: (f32, f32) = (1.0 / 7.0, 2.0 / 255.0);
 
-/// Largest relative RMS error of a whole ratio-coded image (the house's bakes: 1–2 %;
-/// smooth noise with a phase per value, the encoder's hard case: 10 %).
+/// How far beyond the image's largest |value| a ratio block may decode. A ratio block has
+/// no per-value bound worth the name: BC6H may hold a norm of a block that mixes
+/// magnitudes at twice its value, and a black gutter texel takes its block's norm (a texel
+/// of the house's `shlmapw` decodes 1.1 × its block's largest |value| away from its own);
+/// what only data of another image does is caught by the RMS bound, as a whole.
+const RATIO_RANGE: f32 = 2.0;
+
+/// Largest relative RMS error of a whole ratio-coded image (the house's bakes: 0.5–2.7 %
+/// over 21 techniques; smooth noise with a phase per value, the encoder's hard case: 10 %).
 const IMAGE_RMS_BOUND: f64 = 0.25;
 
 impl BlockTexels {
     /// Whether these blocks can be `texels`' (a cache file's claim, checked before use):
-    /// every decoded value finite and within [`BLOCK_ERROR_BOUND`] of its source value,
-    /// relative to its block's largest |value| (clamped to half float range as the norms
-    /// are), and the image's relative RMS error within [`IMAGE_RMS_BOUND`].
+    /// every decoded value finite; under BC4 within [`BC4_ERROR`] of its source value,
+    /// relative to its 4 × 4 block's largest; under the ratio codecs within
+    /// [`RATIO_RANGE`] × the image's largest |value| (clamped to half float range as the
+    /// norms are), and the image's relative RMS error within [`IMAGE_RMS_BOUND`].
     ///
     /// # Errors
     /// What fails, with the first texel where it does.
@@ -656,13 +663,12 @@ impl BlockTexels {
         let (channels, groups) = group_values(texels, "cache").map_err(|e| e.to_string())?;
         let decoded = self.decoded_values();
         let res = self.res as usize;
-        let bound = match self.codec {
-            BlockCodec::Bc4 => BLOCK_ERROR_BOUND[0],
-            BlockCodec::Ratio(_) => BLOCK_ERROR_BOUND[1],
-        };
         let source = |g: usize, t: usize, c: usize| -> f32 {
             groups[g][channels * t + c].clamp(-f32::from(f16::MAX), f32::from(f16::MAX))
         };
+        let image_scale = (0..groups.len())
+            .flat_map(|g| (0..res * res).flat_map(move |t| (0..channels).map(move |c| (g, t, c))))
+            .fold(0f32, |m, (g, t, c)| m.max(source(g, t, c).abs()));
         let (mut err2, mut sum2) = (0f64, 0f64);
         for (by, bx) in
             (0..res.div_ceil(4)).flat_map(|by| (0..res.div_ceil(4)).map(move |bx| (by, bx)))
@@ -677,12 +683,25 @@ impl BlockTexels {
                     (0..groups.len()).flat_map(move |g| (0..channels).map(move |c| (g, t, c)))
                 })
             };
-            let scale = all().fold(0f32, |m, (g, t, c)| m.max(source(g, t, c).abs()));
+            let block_scale = all().fold(0f32, |m, (g, t, c)| m.max(source(g, t, c).abs()));
             for (g, t, c) in all() {
                 let (d, v) = (decoded[g][VALUES_PER_TEXEL * t + c], source(g, t, c));
-                if !d.is_finite() || (d - v).abs() > bound * scale + 1e-6 {
+                let (fits, bound) = match self.codec {
+                    BlockCodec::Bc4 => {
+                        let bound = BC4_ERROR.0 * block_scale + BC4_ERROR.1;
+                        (
+                            (d - v).abs() <= bound,
+                            format!("within {bound} of its value"),
+                        )
+                    }
+                    BlockCodec::Ratio(_) => {
+                        let bound = RATIO_RANGE * image_scale;
+                        (d.abs() <= bound, format!("within ±{bound}"))
+                    }
+                };
+                if !d.is_finite() || !fits {
                     return Err(format!(
-                        "texel ({}, {}) of group {g} decodes to {d}, its value is {v}: beyond the encoder's bound ({bound} of its block's {scale})",
+                        "texel ({}, {}) of group {g} decodes to {d}, its value is {v}: not {bound} as the encoder keeps it",
                         t % res,
                         t / res
                     ));
