@@ -4,8 +4,9 @@
 //! The estimate is, per phase, its work times a rate: the probe (frames + 1) per
 //! megapixel, the references samples per pixel per megapixel (footprint and point), every
 //! row's builds (rows × rounds), its frames per megapixel, its ladder per megapixel, its
-//! images per row; the bakes in seconds. The rates are this device's from its last bench
-//! (`bench-rates-<key>.json` in the bake cache's folder, rewritten after every bench) or,
+//! images per row; the bakes in seconds. The rates are this device's from its last bench at
+//! the same frame size (`bench-rates-<key>.json` in the bake cache's folder, rewritten
+//! after every bench) or,
 //! with none, those of a 2-core lavapipe machine ([`Rates::LAVAPIPE`]); the plan says
 //! which. The bakes are those of the last bench with the same bakes on this machine
 //! (cached ones then cost nothing), else the lavapipe machine's scaled by texels × rays.
@@ -147,7 +148,7 @@ impl Plan {
             ladder: if ladder { rows as f64 * mpx } else { 0.0 },
             images: rows as f64,
         };
-        let rates_file = rates_file(ctx);
+        let rates_file = rates_file(ctx, settings.width, settings.height);
         let history = read_history(&rates_file);
         let bake_key = bake_key(prepare, &settings.techniques);
         let (rates, rates_from) = match &history {
@@ -291,13 +292,18 @@ struct History {
     bake_seconds: f64,
 }
 
-fn rates_file(ctx: &Context) -> PathBuf {
+/// The rates file of this device at a `width` × `height` frame: rates per megapixel learnt
+/// from a small frame (where each frame's fixed cost dominates) would price a large one many
+/// times over, so each frame size keeps its own.
+fn rates_file(ctx: &Context, width: u32, height: u32) -> PathBuf {
     let device = ctx.device_summary();
     let mut h = Hasher64::default();
     for text in [device.name.as_str(), device.driver.as_str()] {
         h.write(text.as_bytes());
         h.write_u64(text.len() as u64);
     }
+    h.write_u64(u64::from(width));
+    h.write_u64(u64::from(height));
     crate::bake::cache::default_cache_dir().join(format!("bench-rates-{:016x}.json", h.finish()))
 }
 
