@@ -45,14 +45,15 @@ pub struct Rates {
 }
 
 impl Rates {
-    /// A 2-core AMD EPYC VM with lavapipe (llvmpipe, LLVM 15), from its benches of the
-    /// headline set at 1280×800.
+    /// A 2-core AMD EPYC VM with lavapipe (llvmpipe, LLVM 15): the mean of two of its
+    /// benches of the headline set on dx9, dx10 and dx11 at 1280×800 (`make bench`), whose
+    /// frames ran at 0.13 and 0.19 s per frame-megapixel as the machine's speed states fell.
     pub const LAVAPIPE: Rates = Rates {
-        probe: 9.6,
-        reference: 0.185,
-        build: 0.19,
-        frame: 0.068,
-        ladder: 1.15,
+        probe: 13.6,
+        reference: 0.255,
+        build: 0.25,
+        frame: 0.16,
+        ladder: 2.14,
         images: 0.13,
     };
 
