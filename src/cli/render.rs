@@ -122,7 +122,8 @@ pub(super) fn run_render(a: RenderArgs) -> Result<()> {
     let technique = with_normal_filter(vec![a.technique], a.normal_filter)[0];
     // A path the technique has no form on is refused before its bake.
     if let Err(why) = technique.form_on(a.path) {
-        bail!("{technique}.{}: cannot run on {}: {why}", a.path, a.path);
+        let label = format!("{technique}.{}", a.path);
+        return Err(shvis::technique::refused(&label, a.path, why).into());
     }
     let settings = prepare_settings(&a.scene, &a.env, &[technique], a.bounces)?;
     // The device next: a missing GPU should not cost a bake.
