@@ -122,8 +122,8 @@ use rayon::prelude::*;
 
 use super::directions::{DirectionSet, above_horizon};
 use super::raster::{DilationPlan, LightmapTexels, texel_index_of};
-use super::surface::{RayEnd, SurfaceReader, trace_ray};
-use super::trace::Tracer;
+use super::surface::{PointGroup, RayEnd, SurfaceReader, trace_ray};
+use super::trace::{PACKET_RAYS, Tracer};
 use super::visibility::DILATION_PASSES;
 use super::{BakeStats, progress_bar};
 use crate::env::EnvMap;
@@ -353,36 +353,65 @@ fn sample_in(frame: &[DVec3; 3], d: Vec3, weight: f64, radiance: [f64; 3]) -> Sa
     }
 }
 
-/// Eq. (5): every basis of `fits` fitted from `samples`, written in f32 one after another
-/// into `out`; each fit's negative amplitudes added to `negative` (one counter per fit).
-fn fit_samples(fits: &[SampleFit], samples: &[Sample], out: &mut [f32], negative: &[AtomicU64]) {
+/// Eq. (5) at each point of a group: every basis of `fits` fitted from the point's
+/// samples (`points`, [`SampleFit::fit_group`]), in f32 one fit after another (`slot`
+/// values per point, at least their sum); each fit's negative amplitudes added to
+/// `negative` (one counter per fit).
+fn fit_points(
+    fits: &[SampleFit],
+    points: &[&[Sample]],
+    slot: usize,
+    negative: &[AtomicU64],
+) -> Vec<Vec<f32>> {
+    let mut out = vec![vec![0.0f32; slot]; points.len()];
     let mut offset = 0;
     for (fit, negative) in fits.iter().zip(negative) {
-        let (v, s) = fit.fit(samples);
-        for (o, x) in out[offset..offset + v.len()].iter_mut().zip(v) {
-            *o = x as f32;
+        for (o, (v, s)) in out.iter_mut().zip(fit.fit_group(points)) {
+            for (o, x) in o[offset..offset + v.len()].iter_mut().zip(v) {
+                *o = x as f32;
+            }
+            negative.fetch_add(s.negative, Ordering::Relaxed);
         }
         offset += fit.stored_values();
-        negative.fetch_add(s.negative, Ordering::Relaxed);
     }
+    out
 }
 
 /// A texel's slots in [`FittedBases`]: its values and its blocks' scales.
 type TexelSlots<'a> = (&'a mut [half::f16], &'a mut [f32]);
 
-/// Eq. (5) at one texel: [`fit_samples`] kept as one [`BlockF16`] per fit in `slots`.
-fn fit_texel(fits: &[SampleFit], samples: &[Sample], slots: TexelSlots, negative: &[AtomicU64]) {
+/// Eq. (5) at a group of texels (their gathers' samples): [`fit_points`] kept as one
+/// [`BlockF16`] per fit in each texel's slots (`values` and `scales` hold the group's,
+/// texel after texel).
+fn fit_texels(
+    fits: &[SampleFit],
+    gathers: &[TexelGather],
+    values: &mut [half::f16],
+    scales: &mut [f32],
+    negative: &[AtomicU64],
+) {
     if fits.is_empty() {
         return;
     }
-    let (values, scales) = slots;
-    let mut fitted = vec![0.0f32; values.len()];
-    fit_samples(fits, samples, &mut fitted, negative);
-    let mut offset = 0;
-    for (fit, scale) in fits.iter().zip(scales) {
-        let n = fit.stored_values();
-        *scale = BlockF16::encode(&fitted[offset..offset + n], &mut values[offset..offset + n]);
-        offset += n;
+    let slot = values.len() / gathers.len();
+    let scale_slot = scales.len() / gathers.len();
+    let points: Vec<&[Sample]> = gathers.iter().map(|g| g.samples.as_slice()).collect();
+    let fitted = fit_points(fits, &points, slot, negative);
+    for ((fitted, values), scales) in fitted
+        .iter()
+        .zip(values.chunks_mut(slot))
+        .zip(scales.chunks_mut(scale_slot))
+    {
+        let slots: TexelSlots = (values, scales);
+        let mut offset = 0;
+        for (fit, scale) in fits.iter().zip(slots.1.iter_mut()) {
+            let n = fit.stored_values();
+            *scale = BlockF16::encode(
+                &fitted[offset..offset + n],
+                &mut slots.0[offset..offset + n],
+            );
+            offset += n;
+        }
     }
 }
 
@@ -399,6 +428,96 @@ fn normalized_to_flat(lobes: &[Vec3; GATHERED_LOBES]) -> [Vec3; 3] {
     let mean = (positive[0] + positive[1] + positive[2]) / 3.0;
     let k = Vec3::select(mean.cmpgt(Vec3::ZERO), positive[3] / mean, Vec3::ZERO);
     [lobes[0] * k, lobes[1] * k, lobes[2] * k]
+}
+
+/// What one texel gathers in a pass: eq. (1)'s sums, the RNM lobes' and, where the pass
+/// fits bases, its samples in ray order.
+struct TexelGather {
+    normal: Vec3,
+    lobes: [DVec3; RNM_LOBES],
+    frame: [DVec3; 3],
+    sum: [[f64; 3]; SH_LIGHTMAP_COEFFS],
+    rnm: [DVec3; GATHERED_LOBES],
+    samples: Vec<Sample>,
+}
+
+impl TexelGather {
+    fn new(texels: &LightmapTexels, i: usize) -> TexelGather {
+        TexelGather {
+            normal: texels.normal[i],
+            lobes: world_basis(texels, i),
+            frame: texel_frame(texels, i),
+            sum: [[0.0; 3]; SH_LIGHTMAP_COEFFS],
+            rnm: [DVec3::ZERO; GATHERED_LOBES],
+            samples: Vec::new(),
+        }
+    }
+
+    /// The direct pass's ray: the environment where `visible` (`None`: below the horizon).
+    fn direct(&mut self, ray: &Ray, visible: Option<bool>, fitting: bool) {
+        let mut radiance = [0.0; 3];
+        if visible == Some(true) {
+            radiance = ray.env;
+            accumulate(&mut self.sum, &ray.y, ray.scaled(radiance));
+            accumulate_lobes(&mut self.rnm, &self.lobes, ray.d, ray.scaled(radiance));
+        }
+        if fitting {
+            self.samples
+                .push(sample_in(&self.frame, ray.d, ray.weight, radiance));
+        }
+    }
+
+    /// A bounce pass's ray ending at `end` (`None`: below the horizon): light `bounced`
+    /// off a front face is gathered; every ray's full radiance is a sample.
+    fn bounce(
+        &mut self,
+        ray: &Ray,
+        end: Option<RayEnd<'_>>,
+        bounced: &impl Fn(&super::surface::SurfacePoint) -> [f64; 3],
+        fitting: bool,
+    ) {
+        let l = match end {
+            Some(RayEnd::Escaped) => ray.env,
+            Some(RayEnd::Front(surface)) => {
+                let l = bounced(surface);
+                accumulate(&mut self.sum, &ray.y, ray.scaled(l));
+                accumulate_lobes(&mut self.rnm, &self.lobes, ray.d, ray.scaled(l));
+                l
+            }
+            Some(RayEnd::Back) | None => [0.0; 3],
+        };
+        if fitting {
+            self.samples
+                .push(sample_in(&self.frame, ray.d, ray.weight, l));
+        }
+    }
+
+    /// Eq. (1)'s coefficients and the RNM lobes' irradiance of the pass.
+    fn sums(&self, weight: f64) -> (Sh9Rgb, BasisIrradiance) {
+        (
+            Sh9Rgb::from_sums(&self.sum, weight),
+            BasisIrradiance::from_sums(&self.rnm, weight),
+        )
+    }
+}
+
+/// The covered texels `group` as a group of points traced together, and their gathers.
+fn texel_group(
+    tracer: &Tracer,
+    texels: &LightmapTexels,
+    group: &[u32],
+) -> (PointGroup, Vec<TexelGather>) {
+    let normals: Vec<Vec3> = group.iter().map(|&i| texels.normal[i as usize]).collect();
+    let origins = group
+        .iter()
+        .zip(&normals)
+        .map(|(&i, &n)| tracer.offset_origin(texels.position[i as usize], n))
+        .collect();
+    let gathers = group
+        .iter()
+        .map(|&i| TexelGather::new(texels, i as usize))
+        .collect();
+    (PointGroup::new(origins, normals), gathers)
 }
 
 /// Bakes the SH lightmap of `scene` under `lighting` (see the module doc), fitting each
@@ -431,51 +550,35 @@ pub fn bake_sh_lightmap(
     let mut fit_scales = vec![0.0f32; covered.len() * scale_slot];
     let negative: Vec<AtomicU64> = fits.iter().map(|_| AtomicU64::new(0)).collect();
 
-    // Bounce 0: direct light through the visible directions (any-hit rays).
+    // Bounce 0: direct light through the visible directions (any-hit rays), texels
+    // traced in groups (coherent walks over the shared directions), their own rays singly.
     let bar = progress_bar(settings.progress, covered.len(), "SH lightmap direct");
     let direct_fits = fits_in(0);
+    let shared_dirs: Vec<Vec3> = rays_of.shared.iter().map(|r| r.d).collect();
     let direct: Vec<(Sh9Rgb, BasisIrradiance)> = covered
-        .par_iter()
+        .par_chunks(PACKET_RAYS)
         .zip(
             fit_values
-                .par_chunks_mut(slot)
-                .zip(fit_scales.par_chunks_mut(scale_slot)),
+                .par_chunks_mut(PACKET_RAYS * slot)
+                .zip(fit_scales.par_chunks_mut(PACKET_RAYS * scale_slot)),
         )
-        .with_min_len(64)
-        .map(|(&i, fit_out)| {
-            let i = i as usize;
-            let (n, origin) = (
-                texels.normal[i],
-                tracer.offset_origin(texels.position[i], texels.normal[i]),
-            );
-            let lobes = world_basis(texels, i);
-            let frame = texel_frame(texels, i);
-            let mut samples = Vec::new();
-            let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
-            let mut rnm = [DVec3::ZERO; GATHERED_LOBES];
-            let mut rays = 0u64;
-            let own = rays_of.own(i as u64);
-            for ray in rays_of.shared.iter().chain(&own) {
-                let mut radiance = [0.0; 3];
-                if above_horizon(n, ray.d) {
-                    rays += 1;
-                    if !tracer.occluded(origin, ray.d, f32::INFINITY) {
-                        radiance = ray.env;
-                        accumulate(&mut sum, &ray.y, ray.scaled(radiance));
-                        accumulate_lobes(&mut rnm, &lobes, ray.d, ray.scaled(radiance));
-                    }
-                }
-                if !direct_fits.is_empty() {
-                    samples.push(sample_in(&frame, ray.d, ray.weight, radiance));
+        .flat_map_iter(|(group, (values, scales))| {
+            let (mut points, mut gathers) = texel_group(tracer, texels, group);
+            let mut rays = points.for_each_visibility(tracer, &shared_dirs, |k, r, visible| {
+                gathers[k].direct(&rays_of.shared[r], visible, !direct_fits.is_empty());
+            });
+            for (k, gather) in gathers.iter_mut().enumerate() {
+                for ray in &rays_of.own(u64::from(group[k])) {
+                    let visible = above_horizon(gather.normal, ray.d)
+                        .then(|| !tracer.occluded(points.origin(k), ray.d, f32::INFINITY));
+                    rays += u64::from(visible.is_some());
+                    gather.direct(ray, visible, !direct_fits.is_empty());
                 }
             }
-            fit_texel(direct_fits, &samples, fit_out, &negative);
+            fit_texels(direct_fits, &gathers, values, scales, &negative);
             rays_done.fetch_add(rays, Ordering::Relaxed);
-            bar.inc(1);
-            (
-                Sh9Rgb::from_sums(&sum, weight),
-                BasisIrradiance::from_sums(&rnm, weight),
-            )
+            bar.inc(group.len() as u64);
+            gathers.into_iter().map(move |g| g.sums(weight))
         })
         .collect();
     bar.finish_and_clear();
@@ -497,64 +600,48 @@ pub fn bake_sh_lightmap(
             &format!("SH lightmap bounce {bounce}"),
         );
         let pass_fits = fits_in(bounce);
+        // With fits every direction is a sample: escaped rays carry the environment
+        // (gathered into (1) in the direct pass), front hits the bounce, the rest nothing.
+        let fitting = !pass_fits.is_empty();
+        let bounced = |surface: &super::surface::SurfacePoint| -> [f64; 3] {
+            let e = irradiance[texels.texel_index(surface.uv_lightmap.into())];
+            (surface.albedo * e / std::f32::consts::PI)
+                .as_dvec3()
+                .into()
+        };
         current = covered
-            .par_iter()
-            .zip(direct.par_iter())
+            .par_chunks(PACKET_RAYS)
+            .zip(direct.par_chunks(PACKET_RAYS))
             .zip(
                 fit_values
-                    .par_chunks_mut(slot)
-                    .zip(fit_scales.par_chunks_mut(scale_slot)),
+                    .par_chunks_mut(PACKET_RAYS * slot)
+                    .zip(fit_scales.par_chunks_mut(PACKET_RAYS * scale_slot)),
             )
-            .with_min_len(64)
-            .map(|((&i, direct), fit_out)| {
-                let i = i as usize;
-                let n = texels.normal[i];
-                let origin = tracer.offset_origin(texels.position[i], n);
-                let lobes = world_basis(texels, i);
-                let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
-                let mut rnm = [DVec3::ZERO; GATHERED_LOBES];
-                let bounced = |surface: &super::surface::SurfacePoint| {
-                    let e = irradiance[texels.texel_index(surface.uv_lightmap.into())];
-                    (surface.albedo * e / std::f32::consts::PI)
-                        .as_dvec3()
-                        .into()
-                };
-                // With fits every direction is a sample: escaped rays carry the environment
-                // (gathered into (1) in the direct pass), front hits the bounce, the rest
-                // nothing.
-                let fitting = !pass_fits.is_empty();
-                let frame = texel_frame(texels, i);
-                let mut samples = Vec::new();
-                let mut rays = 0u64;
-                let own = rays_of.own(i as u64);
-                for ray in rays_of.shared.iter().chain(&own) {
-                    let mut l = [0.0; 3];
-                    if above_horizon(n, ray.d) {
-                        rays += 1;
-                        l = trace_ray(tracer, &surfaces, origin, ray.d, |end| match end {
-                            RayEnd::Escaped => ray.env,
-                            RayEnd::Front(surface) => {
-                                let l = bounced(surface);
-                                accumulate(&mut sum, &ray.y, ray.scaled(l));
-                                accumulate_lobes(&mut rnm, &lobes, ray.d, ray.scaled(l));
-                                l
-                            }
-                            RayEnd::Back => [0.0; 3],
-                        });
-                    }
-                    if fitting {
-                        samples.push(sample_in(&frame, ray.d, ray.weight, l));
+            .flat_map_iter(|((group, direct), (values, scales))| {
+                let (mut points, mut gathers) = texel_group(tracer, texels, group);
+                let mut rays = points.for_each_hit(tracer, &surfaces, &shared_dirs, |k, r, end| {
+                    gathers[k].bounce(&rays_of.shared[r], end, &bounced, fitting);
+                });
+                for (k, gather) in gathers.iter_mut().enumerate() {
+                    let origin = points.origin(k);
+                    for ray in &rays_of.own(u64::from(group[k])) {
+                        if above_horizon(gather.normal, ray.d) {
+                            rays += 1;
+                            trace_ray(tracer, &surfaces, origin, ray.d, |end| {
+                                gather.bounce(ray, Some(end), &bounced, fitting)
+                            });
+                        } else {
+                            gather.bounce(ray, None, &bounced, fitting);
+                        }
                     }
                 }
-                if fitting {
-                    fit_texel(pass_fits, &samples, fit_out, &negative);
-                }
+                fit_texels(pass_fits, &gathers, values, scales, &negative);
                 rays_done.fetch_add(rays, Ordering::Relaxed);
-                bar.inc(1);
-                (
-                    direct.0 + Sh9Rgb::from_sums(&sum, weight),
-                    direct.1 + BasisIrradiance::from_sums(&rnm, weight),
-                )
+                bar.inc(group.len() as u64);
+                gathers.into_iter().zip(direct).map(move |(g, direct)| {
+                    let (sh, rnm) = g.sums(weight);
+                    (direct.0 + sh, direct.1 + rnm)
+                })
             })
             .collect();
         bar.finish_and_clear();
@@ -681,26 +768,21 @@ pub fn radiance_at_points(
     let rays_of = RaySet::new(&dirs, lighting, settings.seed);
     let surfaces = SurfaceReader::new(scene);
     let bounced = !map.bounce_source.is_empty();
-    // The radiance arriving along `ray` from `origin`: the environment where it escapes,
-    // light bounced off a front face, nothing off a back face.
-    let arriving = |ray: &Ray, origin: Vec3| -> [f64; 3] {
-        if !bounced {
-            return if tracer.occluded(origin, ray.d, f32::INFINITY) {
-                [0.0; 3]
-            } else {
-                ray.env
-            };
-        }
-        trace_ray(tracer, &surfaces, origin, ray.d, |end| match end {
-            RayEnd::Escaped => ray.env,
-            RayEnd::Front(surface) => {
+    // The radiance arriving along `ray` from where it ended (`None`: below the horizon):
+    // the environment where it escapes, light bounced off a front face, nothing off a
+    // back face.
+    let arriving = |ray: &Ray, end: Option<RayEnd<'_>>| -> [f64; 3] {
+        match end {
+            Some(RayEnd::Escaped) => ray.env,
+            Some(RayEnd::Front(surface)) => {
                 let t = texel_index_of(map.res, surface.uv_lightmap.into());
                 let l = surface.albedo * map.bounce_source[t] / std::f32::consts::PI;
                 l.as_dvec3().into()
             }
-            RayEnd::Back => [0.0; 3],
-        })
+            Some(RayEnd::Back) | None => [0.0; 3],
+        }
     };
+    let shared_dirs: Vec<Vec3> = rays_of.shared.iter().map(|r| r.d).collect();
     let fits: Vec<SampleFit> = map.fitted.fits.clone();
     let negative: Vec<AtomicU64> = fits.iter().map(|_| AtomicU64::new(0)).collect();
     let mut gathered = GatheredPoints {
@@ -709,9 +791,10 @@ pub fn radiance_at_points(
         fits,
     };
     let per_point = gathered.fitted_per_point();
-    // Points in chunks of 64, each point's values written in place (one slot per point
-    // where nothing is fitted, so that both sides have a chunk per 64 points).
-    const CHUNK: usize = 64;
+    // Points in groups of PACKET_RAYS traced together, each point's values written in
+    // place (one slot per point where nothing is fitted, so that both sides have a chunk
+    // per group).
+    const CHUNK: usize = PACKET_RAYS;
     let slot = per_point.max(1);
     let mut fitted = vec![0.0f32; position.len() * slot];
     let fits = &gathered.fits;
@@ -721,28 +804,70 @@ pub fn radiance_at_points(
         .zip(fitted.par_chunks_mut(CHUNK * slot))
         .enumerate()
         .for_each(|(chunk, (sh_out, fitted_out))| {
-            for (j, sh_point) in sh_out.iter_mut().enumerate() {
-                let k = chunk * CHUNK + j;
-                let (p, n) = (position[k], normal[k]);
-                let origin = tracer.offset_origin(p, n);
-                let frame = orthonormal_frame(&frame[k]);
-                let mut sum = [[0.0f64; 3]; SH_LIGHTMAP_COEFFS];
-                let mut samples = Vec::new();
-                let own = rays_of.own(k as u64);
-                for ray in rays_of.shared.iter().chain(&own) {
-                    let mut radiance = [0.0; 3];
-                    if above_horizon(n, ray.d) {
-                        radiance = arriving(ray, origin);
-                        accumulate(&mut sum, &ray.y, ray.scaled(radiance));
-                    }
-                    if !fits.is_empty() {
-                        samples.push(sample_in(&frame, ray.d, ray.weight, radiance));
+            let points = chunk * CHUNK..chunk * CHUNK + sh_out.len();
+            let normals = normal[points.clone()].to_vec();
+            let origins = points
+                .clone()
+                .map(|k| tracer.offset_origin(position[k], normal[k]))
+                .collect();
+            let frames: Vec<[DVec3; 3]> = frame[points.clone()]
+                .iter()
+                .map(orthonormal_frame)
+                .collect();
+            let mut sums = vec![[[0.0f64; 3]; SH_LIGHTMAP_COEFFS]; sh_out.len()];
+            let mut samples = vec![Vec::new(); sh_out.len()];
+            let mut take = |j: usize, ray: &Ray, end: Option<RayEnd<'_>>| {
+                let traced = end.is_some();
+                let radiance = arriving(ray, end);
+                if traced {
+                    accumulate(&mut sums[j], &ray.y, ray.scaled(radiance));
+                }
+                if !fits.is_empty() {
+                    samples[j].push(sample_in(&frames[j], ray.d, ray.weight, radiance));
+                }
+            };
+            let mut group = PointGroup::new(origins, normals);
+            if bounced {
+                group.for_each_hit(tracer, &surfaces, &shared_dirs, |j, r, end| {
+                    take(j, &rays_of.shared[r], end)
+                });
+            } else {
+                group.for_each_visibility(tracer, &shared_dirs, |j, r, visible| {
+                    let end = visible.map(|v| if v { RayEnd::Escaped } else { RayEnd::Back });
+                    take(j, &rays_of.shared[r], end)
+                });
+            }
+            for (j, k) in points.enumerate() {
+                let origin = group.origin(j);
+                for ray in &rays_of.own(k as u64) {
+                    if !above_horizon(normal[k], ray.d) {
+                        take(j, ray, None);
+                    } else if bounced {
+                        trace_ray(tracer, &surfaces, origin, ray.d, |end| {
+                            take(j, ray, Some(end))
+                        });
+                    } else {
+                        let visible = !tracer.occluded(origin, ray.d, f32::INFINITY);
+                        take(
+                            j,
+                            ray,
+                            Some(if visible {
+                                RayEnd::Escaped
+                            } else {
+                                RayEnd::Back
+                            }),
+                        );
                     }
                 }
-                *sh_point = sum.map(|c| c.map(|v| v * weight));
-                if per_point > 0 {
-                    let out = &mut fitted_out[j * per_point..(j + 1) * per_point];
-                    fit_samples(fits, &samples, out, &negative);
+            }
+            for (out, sum) in sh_out.iter_mut().zip(&sums) {
+                *out = sum.map(|c| c.map(|v| v * weight));
+            }
+            if per_point > 0 {
+                let points: Vec<&[Sample]> = samples.iter().map(Vec::as_slice).collect();
+                let values = fit_points(fits, &points, per_point, &negative);
+                for (out, v) in fitted_out.chunks_mut(per_point).zip(values) {
+                    out.copy_from_slice(&v);
                 }
             }
         });

@@ -15,7 +15,8 @@
 
 use glam::{Vec2, Vec3};
 
-use super::trace::Hit;
+use super::directions::above_horizon;
+use super::trace::{Hit, PACKET_RAYS, RayPacket, Tracer};
 use crate::scene::{Scene, Texture8};
 
 /// The attributes of a hit point (see the module doc).
@@ -181,6 +182,111 @@ pub(crate) fn trace_ray<T>(
         f(RayEnd::Front(&surface))
     } else {
         f(RayEnd::Back)
+    }
+}
+
+/// A group of at most [`PACKET_RAYS`] points the gathers trace together, nearby points
+/// (consecutive texels or pixels) for coherence: each point's ray origin and unit normal.
+pub(crate) struct PointGroup {
+    packet: RayPacket,
+    normals: Vec<Vec3>,
+    origins: Vec<Vec3>,
+}
+
+impl PointGroup {
+    /// The group of points with ray `origins` (already offset) and unit `normals`.
+    ///
+    /// # Panics
+    /// With more than [`PACKET_RAYS`] points or a normal per point missing (a bug in the
+    /// caller).
+    pub(crate) fn new(origins: Vec<Vec3>, normals: Vec<Vec3>) -> PointGroup {
+        assert_eq!(origins.len(), normals.len(), "one normal per point");
+        PointGroup {
+            packet: RayPacket::new(&origins),
+            normals,
+            origins,
+        }
+    }
+
+    /// Number of points.
+    pub(crate) fn len(&self) -> usize {
+        self.origins.len()
+    }
+
+    /// Point `k`'s ray origin.
+    pub(crate) fn origin(&self, k: usize) -> Vec3 {
+        self.origins[k]
+    }
+
+    /// The points whose horizon `d` is above, as a mask.
+    fn above(&self, d: Vec3) -> u64 {
+        self.normals
+            .iter()
+            .enumerate()
+            .fold(0, |m, (k, &n)| m | u64::from(above_horizon(n, d)) << k)
+    }
+
+    /// For each direction `r` of `dirs` in turn, every point `k` in order: `f(k, r, end)`,
+    /// `end` where the ray from point k along `dirs[r]` ended, `None` where the direction
+    /// is below its horizon (not traced). One coherent closest-hit walk per direction
+    /// ([`Tracer::closest_coherent`]); each point sees its rays in the order of `dirs`, as
+    /// [`for_each_ray`] would give them. Returns the rays traced.
+    pub(crate) fn for_each_hit(
+        &mut self,
+        tracer: &Tracer,
+        surfaces: &SurfaceReader<'_>,
+        dirs: &[Vec3],
+        mut f: impl FnMut(usize, usize, Option<RayEnd<'_>>),
+    ) -> u64 {
+        let mut hits = [None; PACKET_RAYS];
+        let mut rays = 0u64;
+        for (r, &d) in dirs.iter().enumerate() {
+            let active = self.above(d);
+            rays += u64::from(active.count_ones());
+            tracer.closest_coherent(&mut self.packet, d, active, &mut hits);
+            for k in 0..self.len() {
+                if active >> k & 1 == 0 {
+                    f(k, r, None);
+                    continue;
+                }
+                match &hits[k] {
+                    None => f(k, r, Some(RayEnd::Escaped)),
+                    Some(hit) => {
+                        let surface = surfaces.at(hit, self.origins[k], d);
+                        let end = if surface.front_face {
+                            RayEnd::Front(&surface)
+                        } else {
+                            RayEnd::Back
+                        };
+                        f(k, r, Some(end));
+                    }
+                }
+            }
+        }
+        rays
+    }
+
+    /// For each direction `r` of `dirs` in turn, every point `k` in order: `f(k, r,
+    /// visible)`, `visible` whether the ray from point k along `dirs[r]` escapes, `None`
+    /// where the direction is below its horizon (not traced). One coherent any-hit walk
+    /// per direction ([`Tracer::occluded_coherent`]). Returns the rays traced.
+    pub(crate) fn for_each_visibility(
+        &mut self,
+        tracer: &Tracer,
+        dirs: &[Vec3],
+        mut f: impl FnMut(usize, usize, Option<bool>),
+    ) -> u64 {
+        let mut rays = 0u64;
+        for (r, &d) in dirs.iter().enumerate() {
+            let active = self.above(d);
+            rays += u64::from(active.count_ones());
+            let occluded = tracer.occluded_coherent(&mut self.packet, d, f32::INFINITY, active);
+            for k in 0..self.len() {
+                let traced = active >> k & 1 == 1;
+                f(k, r, traced.then_some(occluded >> k & 1 == 0));
+            }
+        }
+        rays
     }
 }
 

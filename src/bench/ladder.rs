@@ -97,7 +97,16 @@ pub(super) fn attribution(
         image: format!("{}.exr", reference_stem("reference_point", kind)),
     }];
     let rungs = match &ladder.pixels {
-        Some(pixels) => cpu_rungs(pixels, prepared, technique, path)?,
+        Some(pixels) => {
+            let start = std::time::Instant::now();
+            let rungs = cpu_rungs(pixels, prepared, technique, path)?;
+            log::info!(
+                "error ladder of {technique}.{path}: {} CPU rungs in {:.1} s",
+                rungs.len(),
+                start.elapsed().as_secs_f64()
+            );
+            rungs
+        }
         None => vec![],
     };
     let mut previous = point;

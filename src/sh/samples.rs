@@ -51,7 +51,7 @@ use super::ambient_cube::{self, CubeFit, FACES, UPPER_FACES};
 use super::basis::eval_basis;
 use super::dice::{self, DiceVariant, STORED_VERTICES, rgb_to_ycocg};
 use super::hbasis::{self, HBasisSize};
-use super::sg::{FitStats, SgBasis, Solver};
+use super::sg::{FitStats, SampleDesign, Solver};
 
 /// Where a run's tangent-frame bases are fitted from (`--basis-fit`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
@@ -125,43 +125,61 @@ impl SampleFit {
     /// The values fitting `samples` (module doc, Fits), and for SG what the solver made
     /// negative.
     pub fn fit(self, samples: &[Sample]) -> (Vec<f64>, FitStats) {
-        let mut stats = FitStats::default();
-        let values = match self {
-            SampleFit::HBasis(size) => {
-                let h = kernel_fit(samples, hbasis_table());
-                let mut out = Vec::with_capacity(self.stored_values());
-                for hi in h.iter().take(size.count()) {
-                    out.extend_from_slice(hi);
-                }
-                out
-            }
-            SampleFit::Sg { lobes, solver } => {
-                let basis = super::sg::shared_basis(lobes as usize);
-                let dirs: Vec<DVec3> = samples.iter().map(|s| s.dir).collect();
-                let weights: Vec<f64> = samples.iter().map(|s| s.weight).collect();
-                let radiance: Vec<[f64; 3]> = samples.iter().map(|s| s.radiance).collect();
-                fit_sg(&basis, &dirs, &weights, &radiance, solver, &mut stats)
-            }
-            SampleFit::Dice(variant) => dice_fit(samples, variant),
-            SampleFit::AmbientCube(fit) => cube_fit(samples, fit),
-        };
-        (values, stats)
+        self.fit_group(&[samples]).pop().expect("one fit per point")
     }
-}
 
-fn fit_sg(
-    basis: &SgBasis,
-    dirs: &[DVec3],
-    weights: &[f64],
-    radiance: &[[f64; 3]],
-    solver: Solver,
-    stats: &mut FitStats,
-) -> Vec<f64> {
-    basis
-        .fit_samples(dirs, weights, radiance, solver, stats)
-        .into_iter()
-        .flatten()
-        .collect()
+    /// [`SampleFit::fit`] of each point's samples in `points`, the same values point by
+    /// point. A tabulated kernel is read sample index by sample index across the points:
+    /// nearby points (a group of texels or pixels) see a shared direction at nearby
+    /// tangent-space directions, so the reads stay in cache where a point at a time would
+    /// wander over the whole table.
+    pub fn fit_group(self, points: &[&[Sample]]) -> Vec<(Vec<f64>, FitStats)> {
+        let plain = |values: Vec<Vec<f64>>| -> Vec<(Vec<f64>, FitStats)> {
+            values
+                .into_iter()
+                .map(|v| (v, FitStats::default()))
+                .collect()
+        };
+        match self {
+            SampleFit::HBasis(size) => plain(
+                kernel_fit_group(points, hbasis_table())
+                    .into_iter()
+                    .map(|h| h.iter().take(size.count()).flatten().copied().collect())
+                    .collect(),
+            ),
+            SampleFit::Sg { lobes, solver } => {
+                // A point whose samples have the previous one's directions and weights (a
+                // flat surface) reuses its design: the same operations on the same values.
+                let basis = super::sg::shared_basis(lobes as usize);
+                let mut design: Option<(Vec<DVec3>, Vec<f64>, SampleDesign)> = None;
+                points
+                    .iter()
+                    .map(|samples| {
+                        let mut stats = FitStats::default();
+                        let dirs: Vec<DVec3> = samples.iter().map(|s| s.dir).collect();
+                        let weights: Vec<f64> = samples.iter().map(|s| s.weight).collect();
+                        let radiance: Vec<[f64; 3]> = samples.iter().map(|s| s.radiance).collect();
+                        let same = design
+                            .as_ref()
+                            .is_some_and(|(d, w, _)| *d == dirs && *w == weights);
+                        if !same {
+                            let made = basis.sample_design(&dirs, &weights, solver);
+                            design = Some((dirs, weights, made));
+                        }
+                        let (_, _, made) = design.as_ref().expect("made above");
+                        let values = made
+                            .fit(&radiance, &mut stats)
+                            .into_iter()
+                            .flatten()
+                            .collect();
+                        (values, stats)
+                    })
+                    .collect()
+            }
+            SampleFit::Dice(variant) => plain(dice_fit_group(points, variant)),
+            SampleFit::AmbientCube(fit) => plain(cube_fit_group(points, fit)),
+        }
+    }
 }
 
 /// The SH coefficients (RGB, order² of them) of the samples, in their frame.
@@ -179,76 +197,110 @@ pub fn project_sh(samples: &[Sample], order: Order) -> Vec<[f64; 3]> {
     c
 }
 
-/// (1) with a tabulated kernel: Σ_s w_s L_s κ(ω_s), RGB per kernel row.
-fn kernel_fit(samples: &[Sample], table: &KernelTable) -> Vec<[f64; 3]> {
-    let mut out = vec![[0.0; 3]; table.rows];
+/// (1) with a tabulated kernel at each point of `points`: Σ_s w_s L_s κ(ω_s), RGB per
+/// kernel row; sample index outermost ([`SampleFit::fit_group`]), each point's sum in its
+/// samples' order.
+fn kernel_fit_group(points: &[&[Sample]], table: &KernelTable) -> Vec<Vec<[f64; 3]>> {
+    let mut out = vec![vec![[0.0; 3]; table.rows]; points.len()];
     let mut k = vec![0.0; table.rows];
-    for s in samples {
-        if s.radiance == [0.0; 3] {
-            continue;
-        }
-        table.read(s.dir, &mut k);
-        for (o, ki) in out.iter_mut().zip(&k) {
-            for c in 0..3 {
-                o[c] += s.weight * s.radiance[c] * ki;
+    let longest = points.iter().map(|p| p.len()).max().unwrap_or(0);
+    for i in 0..longest {
+        // Points of one flat surface see sample i at the same direction: read once.
+        let mut read_at = None;
+        for (samples, sums) in points.iter().zip(&mut out) {
+            let Some(s) = samples.get(i) else {
+                continue;
+            };
+            if s.radiance == [0.0; 3] {
+                continue;
+            }
+            if read_at != Some(s.dir) {
+                table.read(s.dir, &mut k);
+                read_at = Some(s.dir);
+            }
+            for (o, ki) in sums.iter_mut().zip(&k) {
+                for c in 0..3 {
+                    o[c] += s.weight * s.radiance[c] * ki;
+                }
             }
         }
     }
     out
 }
 
-fn dice_fit(samples: &[Sample], variant: DiceVariant) -> Vec<f64> {
-    let mut out = vec![0.0; variant.stored_values()];
+fn dice_fit_group(points: &[&[Sample]], variant: DiceVariant) -> Vec<Vec<f64>> {
     match variant {
-        DiceVariant::Rgb => {
-            let x = kernel_fit(samples, dice_hybrid_table());
-            for v in 0..STORED_VERTICES {
-                for k in 0..3 {
-                    for c in 0..3 {
-                        out[9 * v + 3 * k + c] = x[3 * v + k][c];
+        DiceVariant::Rgb => kernel_fit_group(points, dice_hybrid_table())
+            .into_iter()
+            .map(|x| {
+                let mut out = vec![0.0; variant.stored_values()];
+                for v in 0..STORED_VERTICES {
+                    for k in 0..3 {
+                        for c in 0..3 {
+                            out[9 * v + 3 * k + c] = x[3 * v + k][c];
+                        }
+                    }
+                }
+                out
+            })
+            .collect(),
+        DiceVariant::YCoCg => {
+            let ycocg: Vec<Vec<Sample>> = points
+                .iter()
+                .map(|samples| {
+                    samples
+                        .iter()
+                        .map(|s| Sample {
+                            radiance: rgb_to_ycocg(s.radiance),
+                            ..*s
+                        })
+                        .collect()
+                })
+                .collect();
+            let ycocg: Vec<&[Sample]> = ycocg.iter().map(Vec::as_slice).collect();
+            // Y by the hybrid kernels, Co and Cg by the linear ones (`sh::dice`, YCoCg).
+            let y = kernel_fit_group(&ycocg, dice_hybrid_table());
+            let chroma = kernel_fit_group(&ycocg, dice_linear_table());
+            y.into_iter()
+                .zip(chroma)
+                .map(|(y, chroma)| {
+                    let mut out = vec![0.0; variant.stored_values()];
+                    for v in 0..STORED_VERTICES {
+                        for k in 0..3 {
+                            out[5 * v + k] = y[3 * v + k][0];
+                        }
+                        out[5 * v + 3] = chroma[v][1];
+                        out[5 * v + 4] = chroma[v][2];
+                    }
+                    out
+                })
+                .collect()
+        }
+    }
+}
+
+fn cube_fit_group(points: &[&[Sample]], fit: CubeFit) -> Vec<Vec<f64>> {
+    let upper = (fit == CubeFit::LeastSquares).then(|| kernel_fit_group(points, cube_table()));
+    points
+        .iter()
+        .enumerate()
+        .map(|(p, samples)| {
+            // Valve's projection: C_±a = E(±e_a), κ = max(0, ±ω_a) (exact, no table).
+            let mut c = [[0.0; 3]; FACES];
+            for s in *samples {
+                for (face, axis) in ambient_cube::AXES.iter().enumerate() {
+                    let k = s.dir.dot(*axis).max(0.0) * s.weight;
+                    for ch in 0..3 {
+                        c[face][ch] += k * s.radiance[ch];
                     }
                 }
             }
-        }
-        DiceVariant::YCoCg => {
-            let ycocg: Vec<Sample> = samples
-                .iter()
-                .map(|s| Sample {
-                    radiance: rgb_to_ycocg(s.radiance),
-                    ..*s
-                })
-                .collect();
-            // Y by the hybrid kernels, Co and Cg by the linear ones (`sh::dice`, YCoCg).
-            let y = kernel_fit(&ycocg, dice_hybrid_table());
-            let chroma = kernel_fit(&ycocg, dice_linear_table());
-            for v in 0..STORED_VERTICES {
-                for k in 0..3 {
-                    out[5 * v + k] = y[3 * v + k][0];
-                }
-                out[5 * v + 3] = chroma[v][1];
-                out[5 * v + 4] = chroma[v][2];
+            if let Some(upper) = &upper {
+                c[..UPPER_FACES].copy_from_slice(&upper[p]);
             }
-        }
-    }
-    out
-}
-
-fn cube_fit(samples: &[Sample], fit: CubeFit) -> Vec<f64> {
-    // Valve's projection: C_±a = E(±e_a), κ = max(0, ±ω_a) (exact, no table).
-    let mut c = [[0.0; 3]; FACES];
-    for s in samples {
-        for (face, axis) in ambient_cube::AXES.iter().enumerate() {
-            let k = s.dir.dot(*axis).max(0.0) * s.weight;
-            for ch in 0..3 {
-                c[face][ch] += k * s.radiance[ch];
-            }
-        }
-    }
-    if fit == CubeFit::LeastSquares {
-        let upper = kernel_fit(samples, cube_table());
-        c[..UPPER_FACES].copy_from_slice(&upper);
-    }
-    c.into_iter().flatten().collect()
+            c.into_iter().flatten().collect()
+        })
+        .collect()
 }
 
 /// Grid intervals per side of a kernel table (module doc, Kernel tables).
@@ -290,18 +342,26 @@ impl KernelTable {
         let x0 = (f.x.floor().max(0.0) as usize).min(self.res - 1);
         let y0 = (f.y.floor().max(0.0) as usize).min(self.res - 1);
         let (tx, ty) = (f.x - x0 as f64, f.y - y0 as f64);
-        let side = self.res + 1;
-        out.fill(0.0);
-        for (dx, dy, w) in [
-            (0, 0, (1.0 - tx) * (1.0 - ty)),
-            (1, 0, tx * (1.0 - ty)),
-            (0, 1, (1.0 - tx) * ty),
-            (1, 1, tx * ty),
-        ] {
-            let base = ((y0 + dy) * side + x0 + dx) * self.rows;
-            for (o, v) in out.iter_mut().zip(&self.values[base..base + self.rows]) {
-                *o += w * f64::from(*v);
-            }
+        let (rows, side) = (self.rows, self.res + 1);
+        let [w00, w10, w01, w11] = [
+            (1.0 - tx) * (1.0 - ty),
+            tx * (1.0 - ty),
+            (1.0 - tx) * ty,
+            tx * ty,
+        ];
+        let tap = |dx: usize, dy: usize| {
+            let base = ((y0 + dy) * side + x0 + dx) * rows;
+            &self.values[base..base + rows]
+        };
+        // One pass over the four taps' rows (summed in the taps' order from zero).
+        for ((((o, &a), &b), &c), &d) in out[..rows]
+            .iter_mut()
+            .zip(tap(0, 0))
+            .zip(tap(1, 0))
+            .zip(tap(0, 1))
+            .zip(tap(1, 1))
+        {
+            *o = w00 * f64::from(a) + w10 * f64::from(b) + w01 * f64::from(c) + w11 * f64::from(d);
         }
     }
 }

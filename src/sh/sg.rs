@@ -302,7 +302,20 @@ impl SgBasis {
         solver: Solver,
         stats: &mut FitStats,
     ) -> Vec<[f64; 3]> {
-        assert!(dirs.len() == weights.len() && dirs.len() == radiance.len());
+        self.sample_design(dirs, weights, solver)
+            .fit(radiance, stats)
+    }
+
+    /// What [`SgBasis::fit_samples`] computes from the directions and weights alone, for
+    /// fitting any radiance at them ([`SampleDesign::fit`]): points whose samples share
+    /// directions and weights (texels or pixels of one flat surface) share it.
+    pub fn sample_design(
+        &self,
+        dirs: &[DVec3],
+        weights: &[f64],
+        solver: Solver,
+    ) -> SampleDesign<'_> {
+        assert_eq!(dirs.len(), weights.len(), "one weight per direction");
         let n = self.len();
         let upper: Vec<usize> = (0..dirs.len()).filter(|&s| dirs[s].z > 0.0).collect();
         let g: Vec<f64> = upper
@@ -314,51 +327,28 @@ impl SgBasis {
             })
             .collect();
         let w: Vec<f64> = upper.iter().map(|&s| weights[s]).collect();
-        let l: Vec<[f64; 3]> = upper.iter().map(|&s| radiance[s]).collect();
-        let channel = |c: usize| -> Vec<f64> { l.iter().map(|v| v[c]).collect() };
-        let per_colour: [Vec<f64>; 3] = match solver {
-            Solver::Projection => std::array::from_fn(|c| {
-                let lc = channel(c);
-                (0..n)
-                    .map(|k| {
-                        let (mut num, mut den) = (0.0, 0.0);
-                        for (i, &wi) in w.iter().enumerate() {
-                            num += wi * lc[i] * g[i * n + k];
-                            den += wi * g[i * n + k];
-                        }
-                        if den > 0.0 { num / den } else { 0.0 }
-                    })
-                    .collect()
-            }),
+        let (h, svd) = match solver {
             Solver::LeastSquares | Solver::NonNegative => {
                 let h = normal_matrix(&g, &w, n);
-                let rhs: [Vec<f64>; 3] =
-                    std::array::from_fn(|c| normal_rhs(&g, &w, &channel(c), n));
-                if solver == Solver::NonNegative {
-                    rhs.map(|c| nnls_normal(&h, &c, n))
-                } else {
-                    let hm = nalgebra::DMatrix::from_row_slice(n, n, &h);
-                    let svd = hm.svd(true, true);
+                let svd = (solver == Solver::LeastSquares).then(|| {
+                    let svd = nalgebra::DMatrix::from_row_slice(n, n, &h).svd(true, true);
                     let tol = 1e-10 * svd.singular_values.max();
-                    rhs.map(|c| {
-                        svd.solve(&nalgebra::DVector::from_vec(c), tol)
-                            .map(|a| a.iter().copied().collect())
-                            .unwrap_or_else(|_| vec![0.0; n])
-                    })
-                }
+                    (svd, tol)
+                });
+                (h, svd)
             }
-            Solver::RunningAverage | Solver::RunningAverageNonNegative => {
-                let non_negative = solver == Solver::RunningAverageNonNegative;
-                std::array::from_fn(|c| {
-                    running_average(&g, &w, &channel(c), self.mean_g2(), 1, non_negative)
-                })
-            }
+            _ => (Vec::new(), None),
         };
-        stats.amplitudes += 3 * n as u64;
-        stats.negative += per_colour.iter().flatten().filter(|&&v| v < 0.0).count() as u64;
-        (0..n)
-            .map(|k| std::array::from_fn(|c| per_colour[c][k]))
-            .collect()
+        SampleDesign {
+            basis: self,
+            samples: dirs.len(),
+            solver,
+            upper,
+            g,
+            w,
+            h,
+            svd,
+        }
     }
 
     /// Each lobe's mean of G² over the hemisphere (by the fitting rule).
@@ -394,6 +384,71 @@ impl SgBasis {
             .zip(amplitudes)
             .map(|(&mu, a)| a * cosine_integral_fitted(mu.dot(n), self.sharpness))
             .sum()
+    }
+}
+
+/// The samples' side of a fit from samples ([`SgBasis::sample_design`]): the upper
+/// samples' lobe values and weights and, for the least-squares solvers, the normal matrix
+/// (and its SVD).
+pub struct SampleDesign<'a> {
+    basis: &'a SgBasis,
+    samples: usize,
+    solver: Solver,
+    upper: Vec<usize>,
+    g: Vec<f64>,
+    w: Vec<f64>,
+    h: Vec<f64>,
+    svd: Option<(nalgebra::SVD<f64, nalgebra::Dyn, nalgebra::Dyn>, f64)>,
+}
+
+impl SampleDesign<'_> {
+    /// [`SgBasis::fit_samples`] of `radiance` at the design's samples.
+    ///
+    /// # Panics
+    /// If `radiance` has not one value per sample (a bug of the caller).
+    pub fn fit(&self, radiance: &[[f64; 3]], stats: &mut FitStats) -> Vec<[f64; 3]> {
+        assert_eq!(radiance.len(), self.samples, "one radiance per sample");
+        let (g, w) = (&self.g, &self.w);
+        let n = self.basis.len();
+        let l: Vec<[f64; 3]> = self.upper.iter().map(|&s| radiance[s]).collect();
+        let channel = |c: usize| -> Vec<f64> { l.iter().map(|v| v[c]).collect() };
+        let per_colour: [Vec<f64>; 3] = match self.solver {
+            Solver::Projection => std::array::from_fn(|c| {
+                let lc = channel(c);
+                (0..n)
+                    .map(|k| {
+                        let (mut num, mut den) = (0.0, 0.0);
+                        for (i, &wi) in w.iter().enumerate() {
+                            num += wi * lc[i] * g[i * n + k];
+                            den += wi * g[i * n + k];
+                        }
+                        if den > 0.0 { num / den } else { 0.0 }
+                    })
+                    .collect()
+            }),
+            Solver::LeastSquares | Solver::NonNegative => {
+                let rhs: [Vec<f64>; 3] = std::array::from_fn(|c| normal_rhs(g, w, &channel(c), n));
+                match &self.svd {
+                    None => rhs.map(|c| nnls_normal(&self.h, &c, n)),
+                    Some((svd, tol)) => rhs.map(|c| {
+                        svd.solve(&nalgebra::DVector::from_vec(c), *tol)
+                            .map(|a| a.iter().copied().collect())
+                            .unwrap_or_else(|_| vec![0.0; n])
+                    }),
+                }
+            }
+            Solver::RunningAverage | Solver::RunningAverageNonNegative => {
+                let non_negative = self.solver == Solver::RunningAverageNonNegative;
+                std::array::from_fn(|c| {
+                    running_average(g, w, &channel(c), self.basis.mean_g2(), 1, non_negative)
+                })
+            }
+        };
+        stats.amplitudes += 3 * n as u64;
+        stats.negative += per_colour.iter().flatten().filter(|&&v| v < 0.0).count() as u64;
+        (0..n)
+            .map(|k| std::array::from_fn(|c| per_colour[c][k]))
+            .collect()
     }
 }
 

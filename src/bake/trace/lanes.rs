@@ -15,6 +15,8 @@ pub(super) trait RayLanes: Copy {
     const WIDTH: usize;
     /// Lanes `src[0..WIDTH]`.
     fn load(src: &[f32]) -> Self;
+    /// The lanes into `dst[0..WIDTH]`.
+    fn store(self, dst: &mut [f32]);
     fn splat(v: f32) -> Self;
     fn add(self, o: Self) -> Self;
     fn sub(self, o: Self) -> Self;
@@ -45,6 +47,10 @@ impl RayLanes for Vec4 {
     #[inline(always)]
     fn load(src: &[f32]) -> Self {
         Vec4::from_slice(src)
+    }
+    #[inline(always)]
+    fn store(self, dst: &mut [f32]) {
+        self.write_to_slice(dst);
     }
     #[inline(always)]
     fn splat(v: f32) -> Self {
@@ -152,11 +158,16 @@ mod x86 {
     /// The arithmetic methods of [`RayLanes`] for a register wrapper `$lanes` of `$width`
     /// lanes, from its intrinsics (the same shape for AVX2 and AVX-512F).
     macro_rules! arithmetic {
-        ($lanes:ident, $width:literal, $load:ident, $set1:ident, $add:ident, $sub:ident, $mul:ident, $max:ident, $min:ident) => {
+        ($lanes:ident, $width:literal, $load:ident, $store:ident, $set1:ident, $add:ident, $sub:ident, $mul:ident, $max:ident, $min:ident) => {
             #[inline(always)]
             fn load(src: &[f32]) -> Self {
                 assert!(src.len() >= $width);
                 $lanes(unsafe { $load(src.as_ptr()) })
+            }
+            #[inline(always)]
+            fn store(self, dst: &mut [f32]) {
+                assert!(dst.len() >= $width);
+                unsafe { $store(dst.as_mut_ptr(), self.0) }
             }
             #[inline(always)]
             fn splat(v: f32) -> Self {
@@ -218,10 +229,7 @@ mod x86 {
             let meta = _mm_loadl_epi64(node.child_meta.as_ptr().cast());
             let empty = _mm_movemask_epi8(_mm_cmpeq_epi8(meta, _mm_setzero_si128())) as u32;
             let occupied = !empty & 0xff;
-            let (node_t_min, ray_t_max) = (
-                _mm256_set1_ps(super::super::NODE_T_MIN),
-                _mm256_set1_ps(test.t_max),
-            );
+            let node_t_min = _mm256_set1_ps(super::super::NODE_T_MIN);
             let p = node.p;
             let mut entered = [0u8; super::super::PACKET_RAYS];
             let mut any = 0u32;
@@ -242,7 +250,7 @@ mod x86 {
                     _mm256_min_ps(_mm256_add_ps(y1, oy), _mm256_add_ps(z1, oz)),
                 );
                 let tmin = _mm256_max_ps(tmin, node_t_min);
-                let tmax = _mm256_min_ps(tmax, ray_t_max);
+                let tmax = _mm256_min_ps(tmax, _mm256_set1_ps(packet.t_far[i]));
                 let hits =
                     _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax)) as u32 & occupied;
                 entered[i] = hits as u8;
@@ -280,6 +288,7 @@ mod x86 {
             Avx2,
             8,
             _mm256_loadu_ps,
+            _mm256_storeu_ps,
             _mm256_set1_ps,
             _mm256_add_ps,
             _mm256_sub_ps,
@@ -320,6 +329,7 @@ mod x86 {
             Avx512,
             16,
             _mm512_loadu_ps,
+            _mm512_storeu_ps,
             _mm512_set1_ps,
             _mm512_add_ps,
             _mm512_sub_ps,

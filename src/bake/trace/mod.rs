@@ -49,6 +49,16 @@
 //! [`Tracer::occluded`] — only the order of visits differs, which an any-hit query does
 //! not see. Tested here (random triangle soup, axis-aligned and finite-`t_max` rays) and
 //! in `tests/bake_visibility.rs` (whole bakes against a single-ray reference).
+//!
+//! # Closest hits
+//!
+//! [`Tracer::closest_coherent`] is the same walk for the nearest hit of each ray, as the
+//! lightmap bakes' gathers need it (`super::surface::for_each_ray_coherent`): every ray
+//! keeps the far end of its interval (∞, then its nearest hit so far), the node tests cull
+//! by it per ray instead of by one shared `t_max`, a triangle's hit replaces a ray's when
+//! strictly nearer, and no ray leaves the walk early. Each ray's `t` is the nearest
+//! [`Tracer::closest_hit`] finds (the same operations); only where two triangles are hit
+//! at exactly the same `t` may the walks' orders pick different ones.
 
 use std::time::Duration;
 
@@ -88,8 +98,16 @@ pub struct RayPacket {
     y: [f32; PACKET_RAYS],
     z: [f32; PACKET_RAYS],
     len: usize,
+    /// Per ray, the far end of its interval: the query's `t_max` for any-hit queries, the
+    /// nearest hit so far for closest-hit ones.
+    t_far: [f32; PACKET_RAYS],
+    /// Per ray, the BVH primitive of its nearest hit so far ([`NO_HIT`]: none).
+    primitive: [u32; PACKET_RAYS],
     stack: Vec<(u32, u64)>,
 }
+
+/// [`RayPacket`]'s primitive of a ray that hit nothing.
+const NO_HIT: u32 = u32::MAX;
 
 impl RayPacket {
     /// A packet of `origins` (ray i = bit i of the query masks).
@@ -107,6 +125,8 @@ impl RayPacket {
             y: [0.0; PACKET_RAYS],
             z: [0.0; PACKET_RAYS],
             len: origins.len(),
+            t_far: [f32::INFINITY; PACKET_RAYS],
+            primitive: [NO_HIT; PACKET_RAYS],
             stack: Vec::with_capacity(256),
         };
         for (i, o) in origins.iter().enumerate() {
@@ -396,9 +416,14 @@ impl Tracer {
         if !bvh.ray_traverse(ray, &mut hit, |ray, id| self.triangles[id].intersect(ray)) {
             return None;
         }
-        let tri = &self.triangles[hit.primitive_id as usize];
+        Some(self.hit_at(hit.primitive_id, origin, dir, hit.t))
+    }
+
+    /// The [`Hit`] of BVH primitive `primitive` at distance `t` along `origin + t·dir`.
+    fn hit_at(&self, primitive: u32, origin: Vec3, dir: Vec3, t: f32) -> Hit {
+        let tri = &self.triangles[primitive as usize];
         // Barycentrics of the hit point (Möller–Trumbore's u, v recomputed in f32).
-        let p = Vec3A::from(origin) + Vec3A::from(dir) * hit.t;
+        let p = Vec3A::from(origin) + Vec3A::from(dir) * t;
         let (e1, e2, d) = (tri.v1 - tri.v0, tri.v2 - tri.v0, p - tri.v0);
         let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
         let (dp1, dp2) = (d.dot(e1), d.dot(e2));
@@ -411,12 +436,12 @@ impl Tracer {
         } else {
             (0.0, 0.0)
         };
-        Some(Hit {
-            triangle: self.mesh_triangles[hit.primitive_id as usize],
-            t: hit.t,
+        Hit {
+            triangle: self.mesh_triangles[primitive as usize],
+            t,
             u,
             v,
-        })
+        }
     }
 
     /// [`Self::occluded`] for the rays of `packet` selected by `active` (bit i = origin
@@ -455,6 +480,65 @@ impl Tracer {
             Width::Avx512x16 => unsafe { query.walk_avx512(packet, active) },
         }
     }
+
+    /// [`Self::closest_hit`] for the rays of `packet` selected by `active`, all along the
+    /// unit `dir`, in one coherent BVH walk (module doc, Closest hits): `hits[i]` is ray
+    /// i's nearest hit (`None` for a ray that escapes or is not active). Each ray's `t` is
+    /// the one [`Self::closest_hit`] finds; its triangle too, but for hits at exactly equal
+    /// `t` on two triangles (a shared edge), where the walks' orders may pick either.
+    pub fn closest_coherent(
+        &self,
+        packet: &mut RayPacket,
+        dir: Vec3,
+        active: u64,
+        hits: &mut [Option<Hit>; PACKET_RAYS],
+    ) {
+        *hits = [None; PACKET_RAYS];
+        let active = active & packet.all();
+        let Some(bvh) = &self.bvh else {
+            return;
+        };
+        if active == 0 || bvh.nodes.is_empty() {
+            return;
+        }
+        let query = CoherentQuery {
+            bvh,
+            edges: &self.edges,
+            t_min: self.t_min(),
+            t_max: f32::INFINITY,
+            dir: canonical_direction(dir),
+        };
+        match self.width {
+            Width::Sse4 => query.walk_closest::<Vec4>(packet, active),
+            // SAFETY: `Width::detect` found the feature on this CPU.
+            #[cfg(target_arch = "x86_64")]
+            #[allow(unsafe_code)]
+            Width::Avx2x8 => unsafe { query.walk_closest_avx2(packet, active) },
+            #[cfg(target_arch = "x86_64")]
+            #[allow(unsafe_code)]
+            Width::Avx512x16 => unsafe { query.walk_closest_avx512(packet, active) },
+        }
+        for i in slots64(active) {
+            let primitive = packet.primitive[i];
+            if primitive != NO_HIT {
+                let origin = Vec3::new(packet.x[i], packet.y[i], packet.z[i]);
+                hits[i] = Some(self.hit_at(primitive, origin, dir, packet.t_far[i]));
+            }
+        }
+    }
+}
+
+/// The set bits of a ray mask, lowest first.
+#[inline(always)]
+fn slots64(set: u64) -> impl Iterator<Item = usize> {
+    let mut todo = set;
+    std::iter::from_fn(move || {
+        (todo != 0).then(|| {
+            let c = todo.trailing_zeros() as usize;
+            todo &= todo - 1;
+            c
+        })
+    })
 }
 
 /// One node of a coherent walk against its rays: what [`RayLanes::child_masks`] needs.
@@ -466,7 +550,6 @@ struct NodeTest<'a> {
     inv: Vec3A,
     /// d < 0 per axis: which child planes are near.
     negative: [bool; 3],
-    t_max: f32,
 }
 
 /// [`RayLanes::child_masks`] a block of `L::WIDTH` rays at a time: each occupied child's
@@ -478,7 +561,7 @@ fn child_masks_by_block<L: RayLanes>(test: &NodeTest, packet: &RayPacket, mask: 
     let (node, adj, inv) = (test.node, test.adj, test.inv);
     let [rdx, rdy, rdz] = test.negative;
     let s = L::splat;
-    let (node_t_min, ray_t_max) = (s(NODE_T_MIN), s(test.t_max));
+    let node_t_min = s(NODE_T_MIN);
     let (inv_x, inv_y, inv_z) = (s(inv.x), s(inv.y), s(inv.z));
     let block = |axis: &[f32; PACKET_RAYS], first: usize| L::load(&axis[first..]);
     let occupied = u64::from_le_bytes(node.child_meta);
@@ -509,7 +592,8 @@ fn child_masks_by_block<L: RayLanes>(test: &NodeTest, packet: &RayPacket, mask: 
         let oz = pz.sub(block(&packet.z, first)).mul(inv_z);
         for (k, [x0, x1, y0, y1, z0, z1]) in slabs[..child_count].iter().enumerate() {
             let tmin = x0.add(ox).max(y0.add(oy).max(z0.add(oz))).max(node_t_min);
-            let tmax = x1.add(ox).min(y1.add(oy).min(z1.add(oz))).min(ray_t_max);
+            let ray_t_far = block(&packet.t_far, first);
+            let tmax = x1.add(ox).min(y1.add(oy).min(z1.add(oz))).min(ray_t_far);
             let hits = tmin.le(tmax) & lanes;
             child_masks[children[k]] |= u64::from(hits) << first;
         }
@@ -540,6 +624,110 @@ impl CoherentQuery<'_> {
         self.walk::<lanes::Avx512>(packet, active)
     }
 
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn walk_closest_avx2(&self, packet: &mut RayPacket, active: u64) {
+        self.walk_closest::<lanes::Avx2>(packet, active)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn walk_closest_avx512(&self, packet: &mut RayPacket, active: u64) {
+        self.walk_closest::<lanes::Avx512>(packet, active)
+    }
+
+    /// The closest-hit walk (module doc, Closest hits): each ray's interval ends at its
+    /// nearest hit so far (`packet.t_far`, its primitive in `packet.primitive`), which the
+    /// node tests cull by; children are walked near first.
+    #[inline(always)]
+    fn walk_closest<L: RayLanes>(&self, packet: &mut RayPacket, active: u64) {
+        let (bvh, t_min, d) = (self.bvh, self.t_min, self.dir);
+        let inv = Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
+        let (rdx, rdy, rdz) = (d.x < 0.0, d.y < 0.0, d.z < 0.0);
+        let oct = (if rdx { 0 } else { 4 }) | (if rdy { 0 } else { 2 }) | (if rdz { 0 } else { 1 });
+        let s = L::splat;
+        let ray_t_min = s(t_min);
+        let (dx, dy, dz) = (s(d.x), s(d.y), s(d.z));
+        let one = s(1.0);
+        packet.t_far = [f32::INFINITY; PACKET_RAYS];
+        packet.primitive = [NO_HIT; PACKET_RAYS];
+        let mut t_lanes = [0.0f32; 16];
+        let mut stack = std::mem::take(&mut packet.stack);
+        stack.clear();
+        stack.push((0, active));
+        while let Some((node_index, mask)) = stack.pop() {
+            let node = &bvh.nodes[node_index as usize];
+            let test = NodeTest {
+                node,
+                adj: node.compute_extent() * inv,
+                inv,
+                negative: [rdx, rdy, rdz],
+            };
+            let child_masks = L::child_masks(&test, packet, mask);
+            let entered = (0..8).fold(0u32, |e, c| e | u32::from(child_masks[c] != 0) << c);
+            let internal = entered & u32::from(node.imask);
+            let leaves = entered & !internal;
+            for c in slots(leaves) {
+                let (first_prim, count) = node.child_primitives(c);
+                for prim in first_prim..first_prim + count {
+                    lanes::prefetch(&self.edges[prim as usize]);
+                }
+            }
+            for c in slots(internal) {
+                lanes::prefetch_lines(&bvh.nodes[node.child_node_index(c) as usize]);
+            }
+            for c in slots(leaves) {
+                let m = child_masks[c];
+                let (first_prim, count) = node.child_primitives(c);
+                for prim in first_prim..first_prim + count {
+                    // As in `walk`, with the hit kept where it is nearer than the ray's.
+                    let tri = &self.edges[prim as usize];
+                    let (e1, e2, n) = (tri.e1, tri.e2, tri.n);
+                    let inv_det = 1.0 / n.dot(d);
+                    if inv_det == 0.0 {
+                        continue;
+                    }
+                    let (v0x, v0y, v0z) = (s(tri.v0.x), s(tri.v0.y), s(tri.v0.z));
+                    let (e1x, e1y, e1z) = (s(e1.x), s(e1.y), s(e1.z));
+                    let (e2x, e2y, e2z) = (s(e2.x), s(e2.y), s(e2.z));
+                    let (nx, ny, nz) = (s(n.x), s(n.y), s(n.z));
+                    let inv_det = s(inv_det);
+                    for_each_block(L::WIDTH, m, |first, lanes| {
+                        let cx = v0x.sub(L::load(&packet.x[first..]));
+                        let cy = v0y.sub(L::load(&packet.y[first..]));
+                        let cz = v0z.sub(L::load(&packet.z[first..]));
+                        let qx = dy.mul(cz).sub(dz.mul(cy));
+                        let qy = dz.mul(cx).sub(dx.mul(cz));
+                        let qz = dx.mul(cy).sub(dy.mul(cx));
+                        let u = qx.mul(e2x).add(qy.mul(e2y)).add(qz.mul(e2z)).mul(inv_det);
+                        let v = qx.mul(e1x).add(qy.mul(e1y)).add(qz.mul(e1z)).mul(inv_det);
+                        let w = one.sub(u).sub(v);
+                        let outside = u.negative() | v.negative() | w.negative();
+                        let t = nx.mul(cx).add(ny.mul(cy)).add(nz.mul(cz)).mul(inv_det);
+                        let nearer = t.ge(ray_t_min) & t.lt(L::load(&packet.t_far[first..]));
+                        let hit = lanes & !outside & nearer;
+                        if hit != 0 {
+                            t.store(&mut t_lanes);
+                            for j in slots(hit) {
+                                packet.t_far[first + j] = t_lanes[j];
+                                packet.primitive[first + j] = prim;
+                            }
+                        }
+                    });
+                }
+            }
+            let by_priority = slots(internal).fold(0u32, |p, c| p | 1 << (c ^ oct));
+            for priority in slots(by_priority) {
+                let c = priority ^ oct;
+                let m = child_masks[c];
+                if m != 0 {
+                    stack.push((node.child_node_index(c), m));
+                }
+            }
+        }
+        packet.stack = stack;
+    }
+
     /// The walk (module doc), `L::WIDTH` rays per vector operation.
     #[inline(always)]
     fn walk<L: RayLanes>(&self, packet: &mut RayPacket, active: u64) -> u64 {
@@ -556,6 +744,7 @@ impl CoherentQuery<'_> {
         let one = s(1.0);
         let block = |axis: &[f32; PACKET_RAYS], first: usize| L::load(&axis[first..]);
         let mut occluded = 0u64;
+        packet.t_far = [t_max; PACKET_RAYS];
         let mut stack = std::mem::take(&mut packet.stack);
         stack.clear();
         stack.push((0, active));
@@ -570,7 +759,6 @@ impl CoherentQuery<'_> {
                 adj: node.compute_extent() * inv,
                 inv,
                 negative: [rdx, rdy, rdz],
-                t_max,
             };
             let child_masks = L::child_masks(&test, packet, mask);
             // Slots entered by some ray, split into leaves and internal nodes; walked as
@@ -764,6 +952,54 @@ mod tests {
             }
             assert_eq!(got >> origins.len(), 0);
         }
+    }
+
+    #[test]
+    fn coherent_closest_hits_equal_single_rays() {
+        let mut h = 7u64;
+        let mut next = || {
+            h = h
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((h >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+        };
+        let tris: Vec<[Vec3; 3]> = (0..3000)
+            .map(|_| {
+                let c = Vec3::new(next(), next(), next()) * 4.0;
+                [0, 1, 2].map(|_| c + Vec3::new(next(), next(), next()) * 0.3)
+            })
+            .collect();
+        let mut tracer = Tracer::new(&mesh(&tris));
+        let origins: Vec<Vec3> = (0..57)
+            .map(|i| Vec3::new((i % 8) as f32 * 0.1, (i / 8) as f32 * 0.1, 0.05))
+            .collect();
+        let mut packet = RayPacket::new(&origins);
+        let mut hits = [None; PACKET_RAYS];
+        let widths = Width::available();
+        let mut hit_count = 0;
+        for k in 0..200 * widths.len() {
+            tracer.width = widths[k / 200];
+            let dir = Vec3::new(next(), next(), next()).normalize_or(Vec3::X);
+            let dir = if k % 17 == 0 { Vec3::NEG_Y } else { dir };
+            let active = if k % 3 == 0 {
+                !0
+            } else {
+                0x5555_aaaa_0f0f_f0f0
+            };
+            tracer.closest_coherent(&mut packet, dir, active, &mut hits);
+            for (i, &o) in origins.iter().enumerate() {
+                let want = if active >> i & 1 == 1 {
+                    tracer.closest_hit(o, dir)
+                } else {
+                    None
+                };
+                let width = tracer.width;
+                assert_eq!(hits[i], want, "direction {k}, ray {i}, {width:?}");
+                hit_count += usize::from(want.is_some());
+            }
+            assert!(hits[origins.len()..].iter().all(Option::is_none));
+        }
+        assert!(hit_count > 1000, "the soup is hit ({hit_count} hits)");
     }
 
     #[test]
