@@ -134,7 +134,7 @@ impl LinearTexture {
     }
 }
 
-/// Where a traced ray of [`for_each_ray`] ended.
+/// Where a traced ray of a gather ended.
 pub(crate) enum RayEnd<'a> {
     /// It left the scene: the environment's radiance arrives along it.
     Escaped,
@@ -144,29 +144,8 @@ pub(crate) enum RayEnd<'a> {
     Back,
 }
 
-/// The gather of the lightmap bakes (`super::shlmap`, `super::transfer`): for each direction
-/// `r` of `dirs` above the horizon of `normal`, the ray from `origin` is traced and
-/// `f(r, d, end)` called with where it ended. Returns the rays traced.
-pub(crate) fn for_each_ray(
-    tracer: &super::trace::Tracer,
-    surfaces: &SurfaceReader<'_>,
-    dirs: &super::directions::DirectionSet,
-    normal: Vec3,
-    origin: Vec3,
-    mut f: impl FnMut(usize, Vec3, RayEnd<'_>),
-) -> u64 {
-    let mut rays = 0u64;
-    for (r, &d) in dirs.dirs().iter().enumerate() {
-        if !super::directions::above_horizon(normal, d) {
-            continue;
-        }
-        rays += 1;
-        trace_ray(tracer, surfaces, origin, d, |end| f(r, d, end));
-    }
-    rays
-}
-
-/// One ray of [`for_each_ray`] from `origin` along `d`: `f` called with where it ended.
+/// One ray from `origin` along `d` (the gathers' own rays, traced singly): `f` called
+/// with where it ended.
 pub(crate) fn trace_ray<T>(
     tracer: &super::trace::Tracer,
     surfaces: &SurfaceReader<'_>,
@@ -229,8 +208,8 @@ impl PointGroup {
     /// For each direction `r` of `dirs` in turn, every point `k` in order: `f(k, r, end)`,
     /// `end` where the ray from point k along `dirs[r]` ended, `None` where the direction
     /// is below its horizon (not traced). One coherent closest-hit walk per direction
-    /// ([`Tracer::closest_coherent`]); each point sees its rays in the order of `dirs`, as
-    /// [`for_each_ray`] would give them. Returns the rays traced.
+    /// ([`Tracer::closest_coherent`]); each point sees its rays in the order of `dirs`, as a
+    /// point-at-a-time gather would give them. Returns the rays traced.
     pub(crate) fn for_each_hit(
         &mut self,
         tracer: &Tracer,
@@ -288,23 +267,6 @@ impl PointGroup {
         }
         rays
     }
-}
-
-/// [`for_each_ray`] calling `f(r, d, surface)` only where the ray hits the front of a
-/// surface (the bounce gather).
-pub(crate) fn for_each_front_hit(
-    tracer: &super::trace::Tracer,
-    surfaces: &SurfaceReader<'_>,
-    dirs: &super::directions::DirectionSet,
-    normal: Vec3,
-    origin: Vec3,
-    mut f: impl FnMut(usize, Vec3, &SurfacePoint),
-) -> u64 {
-    for_each_ray(tracer, surfaces, dirs, normal, origin, |r, d, end| {
-        if let RayEnd::Front(surface) = end {
-            f(r, d, surface);
-        }
-    })
 }
 
 #[cfg(test)]

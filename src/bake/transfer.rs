@@ -42,9 +42,10 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::directions::{DirectionSet, above_horizon};
+use super::directions::DirectionSet;
 use super::raster::{DilationPlan, LightmapTexels};
-use super::surface::{SurfaceReader, for_each_front_hit};
+use super::surface::{PointGroup, RayEnd, SurfaceReader};
+use super::trace::PACKET_RAYS;
 use super::trace::Tracer;
 use super::visibility::DILATION_PASSES;
 use super::{BakeStats, progress_bar};
@@ -433,35 +434,30 @@ fn bake_direct(pass: &TransferPass<'_>, basis: &[(Vec<f64>, Vec<f64>)]) -> Vec<f
     } = *pass;
     let bar = progress_bar(progress, covered.len(), "transfer direct");
     let mut direct = vec![0.0f32; covered.len() * per_channel];
+    // Texels in groups traced together (coherent walks over the shared directions).
     direct
-        .par_chunks_mut(per_channel)
-        .zip(covered.par_iter())
-        .with_min_len(16)
-        .for_each(|(out, &i)| {
-            let i = i as usize;
-            let normal = texels.normal[i];
-            let origin = tracer.offset_origin(texels.position[i], normal);
-            let mut m = vec![0.0f64; per_channel];
-            let mut rays = 0u64;
-            for (r, &d) in dirs.dirs().iter().enumerate() {
-                if !above_horizon(normal, d) {
-                    continue;
-                }
-                rays += 1;
-                if !tracer.occluded(origin, d, f32::INFINITY) {
+        .par_chunks_mut(PACKET_RAYS * per_channel)
+        .zip(covered.par_chunks(PACKET_RAYS))
+        .for_each(|(out, group)| {
+            let mut points = texel_points(tracer, texels, group);
+            let mut m = vec![vec![0.0f64; per_channel]; group.len()];
+            let rays = points.for_each_visibility(tracer, dirs.dirs(), |k, r, visible| {
+                if visible == Some(true) {
                     let (rows, cols) = &basis[r];
                     for (row, &yi) in rows.iter().enumerate() {
-                        for (mij, &yj) in m[row * n..(row + 1) * n].iter_mut().zip(cols) {
+                        for (mij, &yj) in m[k][row * n..(row + 1) * n].iter_mut().zip(cols) {
                             *mij += yi * yj;
                         }
                     }
                 }
-            }
-            for (o, v) in out.iter_mut().zip(&m) {
-                *o = (v * weight) as f32;
+            });
+            for (out, m) in out.chunks_mut(per_channel).zip(&m) {
+                for (o, v) in out.iter_mut().zip(m) {
+                    *o = (v * weight) as f32;
+                }
             }
             rays_done.fetch_add(rays, Ordering::Relaxed);
-            bar.inc(1);
+            bar.inc(group.len() as u64);
         });
     bar.finish_and_clear();
     direct
@@ -518,6 +514,17 @@ fn gather_irradiance(
     irradiance
 }
 
+/// The covered texels `group` as a group of points traced together.
+fn texel_points(tracer: &Tracer, texels: &LightmapTexels, group: &[u32]) -> PointGroup {
+    let normals: Vec<glam::Vec3> = group.iter().map(|&i| texels.normal[i as usize]).collect();
+    let origins = group
+        .iter()
+        .zip(&normals)
+        .map(|(&i, &n)| tracer.offset_origin(texels.position[i as usize], n))
+        .collect();
+    PointGroup::new(origins, normals)
+}
+
 /// Eq. (3) for bounce `bounce`: per covered texel M⁰ (`direct`) plus the hits' sums in
 /// f32 (in ray order) of `irradiance` read at the hit texel, weighted by its albedo.
 fn bake_bounce(
@@ -547,44 +554,50 @@ fn bake_bounce(
     );
     // Eq. (3), the hits' sums in f32 per texel (in ray order).
     let mut next = vec![0.0f32; covered.len() * per_texel];
-    next.par_chunks_mut(per_texel)
-        .enumerate()
-        .with_min_len(16)
-        .for_each(|(k, out)| {
-            let i = covered[k] as usize;
-            let normal = texels.normal[i];
-            let origin = tracer.offset_origin(texels.position[i], normal);
-            let mut m = vec![0.0f32; per_texel];
-            let rays =
-                for_each_front_hit(tracer, surfaces, dirs, normal, origin, |r, _, surface| {
-                    let t = texels.texel_index(surface.uv_lightmap.into());
-                    let rows = &rows_f32[r];
-                    for c in 0..3 {
-                        let albedo = surface.albedo[c] / std::f32::consts::PI;
-                        let e = &irradiance[(t * 3 + c) * n..(t * 3 + c + 1) * n];
-                        for (row, &yi) in rows.iter().enumerate() {
-                            let s = yi * albedo;
-                            let acc = &mut m[(c * TRANSFER_ROWS + row) * n..][..n];
-                            for (o, &ej) in acc.iter_mut().zip(e) {
-                                *o += s * ej;
-                            }
+    next.par_chunks_mut(PACKET_RAYS * per_texel)
+        .zip(covered.par_chunks(PACKET_RAYS))
+        .zip(direct.par_chunks(PACKET_RAYS * per_channel))
+        .for_each(|((out, group), direct)| {
+            let mut points = texel_points(tracer, texels, group);
+            let mut m = vec![vec![0.0f32; per_texel]; group.len()];
+            let dirs = dirs.dirs();
+            let rays = points.for_each_hit(tracer, surfaces, dirs, |k, r, end| {
+                let Some(RayEnd::Front(surface)) = end else {
+                    return;
+                };
+                let t = texels.texel_index(surface.uv_lightmap.into());
+                let rows = &rows_f32[r];
+                for c in 0..3 {
+                    let albedo = surface.albedo[c] / std::f32::consts::PI;
+                    let e = &irradiance[(t * 3 + c) * n..(t * 3 + c + 1) * n];
+                    for (row, &yi) in rows.iter().enumerate() {
+                        let s = yi * albedo;
+                        let acc = &mut m[k][(c * TRANSFER_ROWS + row) * n..][..n];
+                        for (o, &ej) in acc.iter_mut().zip(e) {
+                            *o += s * ej;
                         }
                     }
-                });
+                }
+            });
             let weight = weight as f32;
-            for c in 0..3 {
-                let d0 = &direct[k * per_channel..][..per_channel];
-                let bounced = &m[c * per_channel..][..per_channel];
-                for ((o, &d), &v) in out[c * per_channel..][..per_channel]
-                    .iter_mut()
-                    .zip(d0)
-                    .zip(bounced)
-                {
-                    *o = d + weight * v;
+            for ((out, m), d0) in out
+                .chunks_mut(per_texel)
+                .zip(&m)
+                .zip(direct.chunks(per_channel))
+            {
+                for c in 0..3 {
+                    let bounced = &m[c * per_channel..][..per_channel];
+                    for ((o, &d), &v) in out[c * per_channel..][..per_channel]
+                        .iter_mut()
+                        .zip(d0)
+                        .zip(bounced)
+                    {
+                        *o = d + weight * v;
+                    }
                 }
             }
             rays_done.fetch_add(rays, Ordering::Relaxed);
-            bar.inc(1);
+            bar.inc(group.len() as u64);
         });
     bar.finish_and_clear();
     next

@@ -53,7 +53,7 @@
 //! # Closest hits
 //!
 //! [`Tracer::closest_coherent`] is the same walk for the nearest hit of each ray, as the
-//! lightmap bakes' gathers need it (`super::surface::for_each_ray_coherent`): every ray
+//! lightmap bakes' gathers need it (`super::surface::PointGroup`): every ray
 //! keeps the far end of its interval (∞, then its nearest hit so far), the node tests cull
 //! by it per ray instead of by one shared `t_max`, a triangle's hit replaces a ray's when
 //! strictly nearer, and no ray leaves the walk early. Each ray's `t` is the nearest
