@@ -143,6 +143,37 @@ fn best(clusters: usize, cost: impl Fn(usize) -> f64) -> (u32, f64) {
     best
 }
 
+/// [`best`] over [`squared_distance`] to each of `means`: the same sums (each in
+/// coordinate order), four means at a time so that their four chains of additions overlap.
+fn nearest_mean(v: &[f32], means: &[Vec<f64>]) -> (u32, f64) {
+    let mut nearest = (0u32, f64::INFINITY);
+    let mut keep = |c: usize, e: f64| {
+        if e < nearest.1 {
+            nearest = (c as u32, e);
+        }
+    };
+    let mut quads = means.chunks_exact(4);
+    for (q, quad) in quads.by_ref().enumerate() {
+        let [m0, m1, m2, m3] = [&quad[0], &quad[1], &quad[2], &quad[3]].map(|m| &m[..v.len()]);
+        let mut e = [0.0f64; 4];
+        for (j, &a) in v.iter().enumerate() {
+            let a = f64::from(a);
+            e[0] += (a - m0[j]).powi(2);
+            e[1] += (a - m1[j]).powi(2);
+            e[2] += (a - m2[j]).powi(2);
+            e[3] += (a - m3[j]).powi(2);
+        }
+        for (k, e) in e.into_iter().enumerate() {
+            keep(4 * q + k, e);
+        }
+    }
+    let done = means.len() - quads.remainder().len();
+    for (k, mean) in quads.remainder().iter().enumerate() {
+        keep(done + k, squared_distance(v, mean));
+    }
+    nearest
+}
+
 /// k-means++ seeds: up to `k` distinct sample indices (fewer when there are fewer
 /// distinct vectors).
 fn seeds(samples: &Samples<'_>, k: usize, seed: u64) -> Vec<usize> {
@@ -266,7 +297,7 @@ fn kmeans(samples: &Samples<'_>, k: usize, seed: u64, n: usize) -> (Vec<u32>, Ve
         iterations += 1;
         let assigned: Vec<(u32, f64)> = (0..samples.covered.len())
             .into_par_iter()
-            .map(|i| best(live, |c| squared_distance(samples.vector(i), &means[c])))
+            .map(|i| nearest_mean(samples.vector(i), &means[..live]))
             .collect();
         let changed = assigned.iter().zip(&assignment).any(|(a, &old)| a.0 != old);
         let mut next: Vec<u32> = assigned.iter().map(|a| a.0).collect();
