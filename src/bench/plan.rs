@@ -47,13 +47,14 @@ pub struct Rates {
 impl Rates {
     /// A 2-core AMD EPYC VM with lavapipe (llvmpipe, LLVM 15): the mean of two of its
     /// benches of the headline set on dx9, dx10 and dx11 at 1280×800 (`make bench`), whose
-    /// frames ran at 0.13 and 0.19 s per frame-megapixel as the machine's speed states fell.
+    /// frames ran at 0.13 and 0.19 s per frame-megapixel as the machine's speed states fell;
+    /// the ladder's from a third, after its per-pixel gather was made coherent.
     pub const LAVAPIPE: Rates = Rates {
         probe: 13.6,
         reference: 0.255,
         build: 0.25,
         frame: 0.16,
-        ladder: 2.14,
+        ladder: 1.35,
         images: 0.13,
     };
 
@@ -402,9 +403,9 @@ fn bake_names(prepare: &PrepareSettings, techniques: &[Technique]) -> Vec<&'stat
 }
 
 /// The bakes' seconds on a 2-core machine (the house at 512² texels × 1024 rays: visibility
-/// 0.5 s, the SH lightmap 11 s and the transfer matrices 44 s with 2 bounces, each basis
-/// fitted from the samples [`SECONDS_PER_SAMPLE_FIT`], k-means 0.13 s per cluster, a CPCA
-/// fit 5 s), scaled by texels × rays; the SH lightmap's rays and fits by
+/// 0.5 s, the SH lightmap 6.5 s and the transfer matrices 22 s with 2 bounces, each basis
+/// fitted from the samples [`SECONDS_PER_SAMPLE_FIT`], k-means 0.12 s per cluster, a CPCA
+/// fit 7.5 s), scaled by texels × rays; the SH lightmap's rays and fits by
 /// [`PIXELS_BAKE_FACTOR`] with `--bake-env pixels`.
 fn default_bake_seconds(prepare: &PrepareSettings, techniques: &[Technique]) -> f64 {
     let scale =
@@ -420,11 +421,11 @@ fn default_bake_seconds(prepare: &PrepareSettings, techniques: &[Technique]) -> 
         crate::bake::shlmap::BakeEnv::Pixels => PIXELS_BAKE_FACTOR,
     };
     let mut seconds = 0.5
-        + (11.0 * passes(prepare.sh_lightmap_bounces) + SECONDS_PER_SAMPLE_FIT * fits) * own_rays
-        + 44.0 * passes(prepare.transfer_bounces);
+        + (6.5 * passes(prepare.sh_lightmap_bounces) + SECONDS_PER_SAMPLE_FIT * fits) * own_rays
+        + 22.0 * passes(prepare.transfer_bounces);
     for t in techniques {
         if let Some(c) = t.needs().clusters {
-            seconds += if c.m == 0 { 0.13 * f64::from(c.k) } else { 5.0 };
+            seconds += if c.m == 0 { 0.12 * f64::from(c.k) } else { 7.5 };
         }
     }
     seconds * scale
@@ -436,9 +437,9 @@ fn default_bake_seconds(prepare: &PrepareSettings, techniques: &[Technique]) -> 
 pub const PIXELS_BAKE_FACTOR: f64 = 1.75;
 
 /// Seconds one basis fitted from the samples adds to the SH lightmap bake of the house at
-/// 512² texels × 1024 rays on 2 cores (the nine tangent-frame bases of the table together,
-/// over nine).
-pub const SECONDS_PER_SAMPLE_FIT: f64 = 4.0;
+/// 512² texels × 1024 rays on 2 cores (the headline's four tangent-frame bases together,
+/// over four).
+pub const SECONDS_PER_SAMPLE_FIT: f64 = 1.6;
 
 /// Progress over the rows' timing rounds with an ETA from the pace so far.
 pub(crate) struct Progress {
