@@ -95,13 +95,35 @@ pub struct LadderPixels {
     exact: ExactLightTable,
     /// Rung images by stem, kept between rows ([`LadderPixels::rung`]).
     rung_cache: Mutex<VecDeque<(String, Frame)>>,
+    /// L×H products at every covered pixel's normal by name, kept between rows
+    /// ([`LadderPixels::products`]).
+    product_cache: Mutex<VecDeque<(String, Arc<PixelProducts>)>>,
     pub seconds: f64,
+}
+
+/// (L×H_n)_j for j < O² at every covered pixel's normal n (pixel-major, O² per pixel).
+struct PixelProducts {
+    per_pixel: usize,
+    values: Vec<[f64; 3]>,
+}
+
+impl PixelProducts {
+    /// [`shade`] at covered pixel `k`: the same sum of the same products.
+    fn shade(&self, k: usize, v: &[f64]) -> [f64; 3] {
+        let n = self.per_pixel;
+        dot_rgb(v, &self.values[k * n..(k + 1) * n], n)
+    }
 }
 
 /// Rung images [`LadderPixels`] keeps: the rows of one technique (dx9 and dx10; `pcaM`
 /// and `pcaMw`) come one after another, and 24 images (16 MB each at 1280×800) cover the
 /// largest family's shared rungs.
 const RUNG_CACHE_IMAGES: usize = 24;
+
+/// Per-pixel L×H products [`LadderPixels`] keeps: the lighting-order and cosine-order
+/// matrices at the bake's order, which every compressed visibility of that order (the PCA,
+/// VQ and CPCA rows after `unc6`) shades with (0.5 GB each at 1280×800, order 6).
+const PRODUCT_CACHE_TABLES: usize = 2;
 
 impl LadderPixels {
     /// Renders the point G-buffer, traces the visibility at each covered pixel and
@@ -163,6 +185,7 @@ impl LadderPixels {
             sh_radiance: std::sync::OnceLock::new(),
             exact,
             rung_cache: Mutex::new(VecDeque::new()),
+            product_cache: Mutex::new(VecDeque::new()),
             seconds: start.elapsed().as_secs_f64(),
         })
     }
@@ -210,6 +233,37 @@ impl LadderPixels {
         }
         cache.push_back((stem.to_string(), frame.clone()));
         frame
+    }
+
+    /// The products of `m` at every covered pixel's normal, named `name` (equal names are
+    /// equal matrices), made on first use and kept for the rows after
+    /// ([`PRODUCT_CACHE_TABLES`]).
+    fn products(&self, name: &str, m: &LxhMatrices) -> Arc<PixelProducts> {
+        let cached = |cache: &VecDeque<(String, Arc<PixelProducts>)>| {
+            cache
+                .iter()
+                .find(|(s, _)| s == name)
+                .map(|(_, p)| Arc::clone(p))
+        };
+        if let Some(products) = cached(&self.product_cache.lock().expect("product cache")) {
+            return products;
+        }
+        let (hn, per_pixel) = (m.h_order.coeff_count(), m.v_order.coeff_count());
+        let mut values = vec![[0.0; 3]; self.len() * per_pixel];
+        values
+            .par_chunks_mut(per_pixel)
+            .enumerate()
+            .for_each(|(k, out)| {
+                let mut h = [0.0; 256];
+                m.eval_into(self.normal[k], &mut h[..hn], out);
+            });
+        let products = Arc::new(PixelProducts { per_pixel, values });
+        let mut cache = self.product_cache.lock().expect("product cache");
+        if cache.len() == PRODUCT_CACHE_TABLES {
+            cache.pop_front();
+        }
+        cache.push_back((name.to_string(), Arc::clone(&products)));
+        products
     }
 
     /// The image of irradiance `irradiance(k)` at covered pixel k (module doc's radiance).
@@ -266,6 +320,21 @@ fn shade(m: &LxhMatrices, n: DVec3, v: &[f64]) -> [f64; 3] {
     let (hn, vn) = (m.h_order.coeff_count(), m.v_order.coeff_count());
     m.eval_into(n, &mut h[..hn], &mut out[..vn]);
     dot_rgb(v, &out, vn)
+}
+
+/// [`LadderPixels::products`]' name of [`exact_cosine`] at the lighting order the ladder
+/// pairs with visibility of `order` (O + 2).
+fn lighting_order_name(order: Order) -> String {
+    format!(
+        "lighting order {} × visibility order {order}",
+        order.get() + 2
+    )
+}
+
+/// [`LadderPixels::products`]' name of the L×H matrices of visibility `order` with the
+/// run's H order.
+fn cosine_order_name(order: Order) -> String {
+    format!("L×H at visibility order {order}")
 }
 
 /// The exact-cosine product of lighting of order `l` with visibility of order `v`
@@ -401,12 +470,18 @@ fn compression_rungs(
         rung(
             AttributionKind::LightingOrder,
             format!("{base}.lighting_order"),
-            &|| px.image(|k| shade(&lighting, px.normal[k], &compressed(k))),
+            &|| {
+                let products = px.products(&lighting_order_name(order), &lighting);
+                px.image(|k| products.shade(k, &compressed(k)))
+            },
         ),
         rung(
             AttributionKind::CosineOrder,
             format!("{base}.cosine_order"),
-            &|| px.image(|k| shade(&lxh, px.normal[k], &compressed(k))),
+            &|| {
+                let products = px.products(&cosine_order_name(order), &lxh);
+                px.image(|k| products.shade(k, &compressed(k)))
+            },
         ),
     ];
     let rungs = rungs.into_iter().map(|(k, f, stem)| (k, stem, f)).collect();

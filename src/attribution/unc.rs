@@ -3,7 +3,7 @@
 
 use super::{
     AttributionKind, LadderRecipe, LxhMatrices, Order, RowLadder, Rung, StoredTable, build_table,
-    dot_rgb, exact_cosine, shade, table_map,
+    cosine_order_name, dot_rgb, exact_cosine, lighting_order_name, table_map,
 };
 use crate::technique::TechniqueError;
 use crate::technique::unc::Unc;
@@ -22,14 +22,20 @@ impl<'a> RowLadder<'a> {
             rungs,
             AttributionKind::LightingOrder,
             format!("{technique}.lighting_order"),
-            &|| px.image(|k| shade(&lighting, px.normal[k], &px.visibility(k, n2))),
+            &|| {
+                let products = px.products(&lighting_order_name(order), &lighting);
+                px.image(|k| products.shade(k, &px.visibility(k, n2)))
+            },
         );
         let lxh = LxhMatrices::new(radiance, order, prepared.h_order);
         self.push(
             rungs,
             AttributionKind::CosineOrder,
             format!("{technique}.cosine_order"),
-            &|| px.image(|k| shade(&lxh, px.normal[k], &px.visibility(k, n2))),
+            &|| {
+                let products = px.products(&cosine_order_name(order), &lxh);
+                px.image(|k| products.shade(k, &px.visibility(k, n2)))
+            },
         );
         let map = table_map(self.path, prepared.table_res, label)?;
         let table = build_table(&lxh, map);

@@ -201,13 +201,15 @@ pub fn project_sh(samples: &[Sample], order: Order) -> Vec<[f64; 3]> {
 /// kernel row; sample index outermost ([`SampleFit::fit_group`]), each point's sum in its
 /// samples' order.
 fn kernel_fit_group(points: &[&[Sample]], table: &KernelTable) -> Vec<Vec<[f64; 3]>> {
-    let mut out = vec![vec![[0.0; 3]; table.rows]; points.len()];
-    let mut k = vec![0.0; table.rows];
+    let rows = table.rows;
+    // Per point, channel-major sums (contiguous rows per channel: the loop vectorizes).
+    let mut sums = vec![0.0f64; points.len() * 3 * rows];
+    let mut k = vec![0.0; rows];
     let longest = points.iter().map(|p| p.len()).max().unwrap_or(0);
     for i in 0..longest {
         // Points of one flat surface see sample i at the same direction: read once.
         let mut read_at = None;
-        for (samples, sums) in points.iter().zip(&mut out) {
+        for (samples, sums) in points.iter().zip(sums.chunks_mut(3 * rows)) {
             let Some(s) = samples.get(i) else {
                 continue;
             };
@@ -218,14 +220,21 @@ fn kernel_fit_group(points: &[&[Sample]], table: &KernelTable) -> Vec<Vec<[f64; 
                 table.read(s.dir, &mut k);
                 read_at = Some(s.dir);
             }
-            for (o, ki) in sums.iter_mut().zip(&k) {
-                for c in 0..3 {
-                    o[c] += s.weight * s.radiance[c] * ki;
+            for (c, sums) in sums.chunks_mut(rows).enumerate() {
+                let wl = s.weight * s.radiance[c];
+                for (o, ki) in sums.iter_mut().zip(&k) {
+                    *o += wl * ki;
                 }
             }
         }
     }
-    out
+    sums.chunks(3 * rows)
+        .map(|p| {
+            (0..rows)
+                .map(|r| [p[r], p[rows + r], p[2 * rows + r]])
+                .collect()
+        })
+        .collect()
 }
 
 fn dice_fit_group(points: &[&[Sample]], variant: DiceVariant) -> Vec<Vec<f64>> {
