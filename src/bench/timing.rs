@@ -1,7 +1,8 @@
 //! A bench's frame times: each row's frames timed in chunks between readings of the
 //! probe's monitor frame (`probe::states`), in [`TIMING_ROUNDS`] rounds over every row, and
 //! up to [`MODEL_STATE_ROUNDS`] more rounds for a row without frames of two agreeing builds
-//! in a state the probe has a model of.
+//! in a state the probe has a model of; after its first round a row slower than
+//! [`SLOW_FRAME_MS`] a frame times one frame per round.
 
 use super::rows::RowTechniques;
 use super::{BenchError, BenchSettings, Clock};
@@ -28,8 +29,16 @@ const MODEL_STATE_ROUNDS: usize = 3;
 /// rows' builds agree within 5 %; an odd build runs 13–37 % slow).
 const BUILD_AGREEMENT: f64 = 0.1;
 
+/// A row whose frames so far have a median this slow (ms) or slower times one frame per
+/// round after its first: a frame this long varies by a small share of itself, and such
+/// frames are most of a run's time where they occur (lavapipe decodes block-compressed
+/// textures in software: its dx11 rows take ≈ 1 s a frame). Its rounds still each run on a
+/// build of its own, as the speed states need.
+pub(super) const SLOW_FRAME_MS: f64 = 250.0;
+
 /// How the rounds after the first time a row: on a build of its own each, `per_round`
-/// frames after one warm-up frame, between monitor readings.
+/// frames (one for a row slower than [`SLOW_FRAME_MS`]) after one warm-up frame, between
+/// monitor readings.
 pub(super) struct Rounds<'a> {
     pub rows_of: RowTechniques<'a>,
     pub monitor: Option<&'a Monitor>,
@@ -49,12 +58,19 @@ impl Rounds<'_> {
         let tech = self.rows_of.build(technique, path)?;
         clock.split(|p| &mut p.build);
         let build = times.0.last().map_or(0, |s| s.build + 1);
+        let timed: Vec<f64> = times.0.iter().flat_map(|s| s.ms.iter().copied()).collect();
+        let frames =
+            if !timed.is_empty() && crate::gpu::frame_timing::median(&timed) >= SLOW_FRAME_MS {
+                1
+            } else {
+                self.per_round
+            };
         let scene = self.rows_of.scene;
         times.0.extend(timed_segments(
             self.monitor,
             build,
             self.settings.warmup.min(1),
-            self.per_round,
+            frames,
             |w, n| tech.time(scene, w, n),
         )?);
         clock.split(|p| &mut p.render);

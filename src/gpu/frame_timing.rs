@@ -55,7 +55,8 @@ pub fn settled(ms: &[f64]) -> bool {
     before > 0.0 && ((last - before) / before).abs() <= SETTLE_TOLERANCE
 }
 
-fn median(values: &[f64]) -> f64 {
+/// The median of `values` (the mean of the middle two for an even count).
+pub fn median(values: &[f64]) -> f64 {
     let mut v = values.to_vec();
     v.sort_by(f64::total_cmp);
     let n = v.len();

@@ -601,6 +601,128 @@ fn child_masks_by_block<L: RayLanes>(test: &NodeTest, packet: &RayPacket, mask: 
     child_masks
 }
 
+/// A triangle's Möller–Trumbore for a coherent walk: its ray-independent part
+/// (edges, normal, 1/(n·d)) splat once, then [`LaneTriangle::test`] a block of rays at a
+/// time with the same operations in the same order as glam's Vec3A cross and dot in
+/// obvhs's `Triangle::intersect`, so the same bits.
+struct LaneTriangle<L> {
+    v0: [L; 3],
+    e1: [L; 3],
+    e2: [L; 3],
+    n: [L; 3],
+    inv_det: L,
+}
+
+impl<L: RayLanes> LaneTriangle<L> {
+    /// `None` where n·d is 0 (obvhs's `valid` needs 1/(n·d) ≠ 0).
+    #[inline(always)]
+    fn new(tri: &TriangleEdges, d: Vec3A) -> Option<Self> {
+        let inv_det = 1.0 / tri.n.dot(d);
+        if inv_det == 0.0 {
+            return None;
+        }
+        let s = L::splat;
+        let lanes = |v: Vec3A| [s(v.x), s(v.y), s(v.z)];
+        Some(LaneTriangle {
+            v0: lanes(tri.v0),
+            e1: lanes(tri.e1),
+            e2: lanes(tri.e2),
+            n: lanes(tri.n),
+            inv_det: s(inv_det),
+        })
+    }
+
+    /// For the rays `first..first + L::WIDTH` of `packet` along `d` (splat): their t and
+    /// the lanes whose hit point lies outside the triangle.
+    #[inline(always)]
+    fn test(&self, d: &[L; 3], packet: &RayPacket, first: usize) -> (L, u32) {
+        let [dx, dy, dz] = *d;
+        let cx = self.v0[0].sub(L::load(&packet.x[first..]));
+        let cy = self.v0[1].sub(L::load(&packet.y[first..]));
+        let cz = self.v0[2].sub(L::load(&packet.z[first..]));
+        // q = d × c
+        let qx = dy.mul(cz).sub(dz.mul(cy));
+        let qy = dz.mul(cx).sub(dx.mul(cz));
+        let qz = dx.mul(cy).sub(dy.mul(cx));
+        let [e1x, e1y, e1z] = self.e1;
+        let [e2x, e2y, e2z] = self.e2;
+        let [nx, ny, nz] = self.n;
+        let u = qx
+            .mul(e2x)
+            .add(qy.mul(e2y))
+            .add(qz.mul(e2z))
+            .mul(self.inv_det);
+        let v = qx
+            .mul(e1x)
+            .add(qy.mul(e1y))
+            .add(qz.mul(e1z))
+            .mul(self.inv_det);
+        let w = L::splat(1.0).sub(u).sub(v);
+        let outside = u.negative() | v.negative() | w.negative();
+        let t = nx.mul(cx).add(ny.mul(cy)).add(nz.mul(cz)).mul(self.inv_det);
+        (t, outside)
+    }
+}
+
+/// A node of a coherent walk entered by its rays: the rays of `mask` entering each child
+/// slot ([`RayLanes::child_masks`]) and the entered slots split into leaves and internal
+/// nodes (as bit sets: a branch per slot mispredicts), every entered child's memory
+/// requested before any is read (on big scenes the walk waits on cache misses).
+struct Entered {
+    child_masks: [u64; 8],
+    leaves: u32,
+    internal: u32,
+}
+
+impl Entered {
+    #[inline(always)]
+    fn node<L: RayLanes>(
+        query: &CoherentQuery,
+        node: &CwBvhNode,
+        inv: Vec3A,
+        packet: &RayPacket,
+        mask: u64,
+    ) -> Entered {
+        let d = query.dir;
+        let test = NodeTest {
+            node,
+            adj: node.compute_extent() * inv,
+            inv,
+            negative: [d.x < 0.0, d.y < 0.0, d.z < 0.0],
+        };
+        let child_masks = L::child_masks(&test, packet, mask);
+        let entered = (0..8).fold(0u32, |e, c| e | u32::from(child_masks[c] != 0) << c);
+        let internal = entered & u32::from(node.imask);
+        let leaves = entered & !internal;
+        for c in slots(leaves) {
+            let (first_prim, count) = node.child_primitives(c);
+            for prim in first_prim..first_prim + count {
+                lanes::prefetch(&query.edges[prim as usize]);
+            }
+        }
+        for c in slots(internal) {
+            // 80 bytes: both of its cache lines.
+            lanes::prefetch_lines(&query.bvh.nodes[node.child_node_index(c) as usize]);
+        }
+        Entered {
+            child_masks,
+            leaves,
+            internal,
+        }
+    }
+
+    /// The internal children in the order a walk pushes them: far to near (obvhs's
+    /// priority, slot ^ octant of the direction), so the nearest is walked next.
+    #[inline(always)]
+    fn internal_far_to_near(&self, d: Vec3A) -> impl Iterator<Item = usize> {
+        let oct = (if d.x < 0.0 { 0 } else { 4 })
+            | (if d.y < 0.0 { 0 } else { 2 })
+            | (if d.z < 0.0 { 0 } else { 1 });
+        let by_priority = slots(self.internal).fold(0u32, |p, c| p | 1 << (c ^ oct));
+        slots(by_priority).map(move |priority| priority ^ oct)
+    }
+}
+
 /// One [`Tracer::occluded_coherent`] query: what the walk shares across its rays.
 struct CoherentQuery<'a> {
     bvh: &'a CwBvh,
@@ -636,19 +758,68 @@ impl CoherentQuery<'_> {
         self.walk_closest::<lanes::Avx512>(packet, active)
     }
 
+    /// The walk (module doc), `L::WIDTH` rays per vector operation.
+    #[inline(always)]
+    fn walk<L: RayLanes>(&self, packet: &mut RayPacket, active: u64) -> u64 {
+        let (bvh, d) = (self.bvh, self.dir);
+        // As Ray::new computes it.
+        let inv = Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
+        let s = L::splat;
+        let (ray_t_min, ray_t_max) = (s(self.t_min), s(self.t_max));
+        let dir = [s(d.x), s(d.y), s(d.z)];
+        let mut occluded = 0u64;
+        packet.t_far = [self.t_max; PACKET_RAYS];
+        let mut stack = std::mem::take(&mut packet.stack);
+        stack.clear();
+        stack.push((0, active));
+        while let Some((node_index, mask)) = stack.pop() {
+            let mask = mask & !occluded;
+            if mask == 0 {
+                continue;
+            }
+            let node = &bvh.nodes[node_index as usize];
+            let entered = Entered::node::<L>(self, node, inv, packet, mask);
+            // Leaves first (any hit removes rays from everything below).
+            for c in slots(entered.leaves) {
+                let m = entered.child_masks[c];
+                let (first_prim, count) = node.child_primitives(c);
+                for prim in first_prim..first_prim + count {
+                    let Some(tri) = LaneTriangle::<L>::new(&self.edges[prim as usize], d) else {
+                        continue;
+                    };
+                    for_each_block(L::WIDTH, m & !occluded, |first, lanes| {
+                        let (t, outside) = tri.test(&dir, packet, first);
+                        // intersect() returns t within [t_min, t_max] (else ∞) and the
+                        // any-hit traversal counts it when t < t_max.
+                        let in_range = t.ge(ray_t_min) & t.lt(ray_t_max);
+                        occluded |= u64::from(lanes & !outside & in_range) << first;
+                    });
+                }
+            }
+            if occluded == active {
+                break;
+            }
+            for c in entered.internal_far_to_near(d) {
+                let m = entered.child_masks[c] & !occluded;
+                if m != 0 {
+                    stack.push((node.child_node_index(c), m));
+                }
+            }
+        }
+        packet.stack = stack;
+        occluded
+    }
+
     /// The closest-hit walk (module doc, Closest hits): each ray's interval ends at its
     /// nearest hit so far (`packet.t_far`, its primitive in `packet.primitive`), which the
     /// node tests cull by; children are walked near first.
     #[inline(always)]
     fn walk_closest<L: RayLanes>(&self, packet: &mut RayPacket, active: u64) {
-        let (bvh, t_min, d) = (self.bvh, self.t_min, self.dir);
+        let (bvh, d) = (self.bvh, self.dir);
         let inv = Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
-        let (rdx, rdy, rdz) = (d.x < 0.0, d.y < 0.0, d.z < 0.0);
-        let oct = (if rdx { 0 } else { 4 }) | (if rdy { 0 } else { 2 }) | (if rdz { 0 } else { 1 });
         let s = L::splat;
-        let ray_t_min = s(t_min);
-        let (dx, dy, dz) = (s(d.x), s(d.y), s(d.z));
-        let one = s(1.0);
+        let ray_t_min = s(self.t_min);
+        let dir = [s(d.x), s(d.y), s(d.z)];
         packet.t_far = [f32::INFINITY; PACKET_RAYS];
         packet.primitive = [NO_HIT; PACKET_RAYS];
         let mut t_lanes = [0.0f32; 16];
@@ -657,53 +828,16 @@ impl CoherentQuery<'_> {
         stack.push((0, active));
         while let Some((node_index, mask)) = stack.pop() {
             let node = &bvh.nodes[node_index as usize];
-            let test = NodeTest {
-                node,
-                adj: node.compute_extent() * inv,
-                inv,
-                negative: [rdx, rdy, rdz],
-            };
-            let child_masks = L::child_masks(&test, packet, mask);
-            let entered = (0..8).fold(0u32, |e, c| e | u32::from(child_masks[c] != 0) << c);
-            let internal = entered & u32::from(node.imask);
-            let leaves = entered & !internal;
-            for c in slots(leaves) {
+            let entered = Entered::node::<L>(self, node, inv, packet, mask);
+            for c in slots(entered.leaves) {
+                let m = entered.child_masks[c];
                 let (first_prim, count) = node.child_primitives(c);
                 for prim in first_prim..first_prim + count {
-                    lanes::prefetch(&self.edges[prim as usize]);
-                }
-            }
-            for c in slots(internal) {
-                lanes::prefetch_lines(&bvh.nodes[node.child_node_index(c) as usize]);
-            }
-            for c in slots(leaves) {
-                let m = child_masks[c];
-                let (first_prim, count) = node.child_primitives(c);
-                for prim in first_prim..first_prim + count {
-                    // As in `walk`, with the hit kept where it is nearer than the ray's.
-                    let tri = &self.edges[prim as usize];
-                    let (e1, e2, n) = (tri.e1, tri.e2, tri.n);
-                    let inv_det = 1.0 / n.dot(d);
-                    if inv_det == 0.0 {
+                    let Some(tri) = LaneTriangle::<L>::new(&self.edges[prim as usize], d) else {
                         continue;
-                    }
-                    let (v0x, v0y, v0z) = (s(tri.v0.x), s(tri.v0.y), s(tri.v0.z));
-                    let (e1x, e1y, e1z) = (s(e1.x), s(e1.y), s(e1.z));
-                    let (e2x, e2y, e2z) = (s(e2.x), s(e2.y), s(e2.z));
-                    let (nx, ny, nz) = (s(n.x), s(n.y), s(n.z));
-                    let inv_det = s(inv_det);
+                    };
                     for_each_block(L::WIDTH, m, |first, lanes| {
-                        let cx = v0x.sub(L::load(&packet.x[first..]));
-                        let cy = v0y.sub(L::load(&packet.y[first..]));
-                        let cz = v0z.sub(L::load(&packet.z[first..]));
-                        let qx = dy.mul(cz).sub(dz.mul(cy));
-                        let qy = dz.mul(cx).sub(dx.mul(cz));
-                        let qz = dx.mul(cy).sub(dy.mul(cx));
-                        let u = qx.mul(e2x).add(qy.mul(e2y)).add(qz.mul(e2z)).mul(inv_det);
-                        let v = qx.mul(e1x).add(qy.mul(e1y)).add(qz.mul(e1z)).mul(inv_det);
-                        let w = one.sub(u).sub(v);
-                        let outside = u.negative() | v.negative() | w.negative();
-                        let t = nx.mul(cx).add(ny.mul(cy)).add(nz.mul(cz)).mul(inv_det);
+                        let (t, outside) = tri.test(&dir, packet, first);
                         let nearer = t.ge(ray_t_min) & t.lt(L::load(&packet.t_far[first..]));
                         let hit = lanes & !outside & nearer;
                         if hit != 0 {
@@ -716,124 +850,14 @@ impl CoherentQuery<'_> {
                     });
                 }
             }
-            let by_priority = slots(internal).fold(0u32, |p, c| p | 1 << (c ^ oct));
-            for priority in slots(by_priority) {
-                let c = priority ^ oct;
-                let m = child_masks[c];
+            for c in entered.internal_far_to_near(d) {
+                let m = entered.child_masks[c];
                 if m != 0 {
                     stack.push((node.child_node_index(c), m));
                 }
             }
         }
         packet.stack = stack;
-    }
-
-    /// The walk (module doc), `L::WIDTH` rays per vector operation.
-    #[inline(always)]
-    fn walk<L: RayLanes>(&self, packet: &mut RayPacket, active: u64) -> u64 {
-        let (bvh, t_min, t_max, d) = (self.bvh, self.t_min, self.t_max, self.dir);
-        // As Ray::new computes it.
-        let inv = Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
-        let (rdx, rdy, rdz) = (d.x < 0.0, d.y < 0.0, d.z < 0.0);
-        // Child-slot priority of obvhs's traversal order: slot ^ octant (near first).
-        let oct = (if rdx { 0 } else { 4 }) | (if rdy { 0 } else { 2 }) | (if rdz { 0 } else { 1 });
-        let s = L::splat;
-        let ray_t_min = s(t_min);
-        let ray_t_max = s(t_max);
-        let (dx, dy, dz) = (s(d.x), s(d.y), s(d.z));
-        let one = s(1.0);
-        let block = |axis: &[f32; PACKET_RAYS], first: usize| L::load(&axis[first..]);
-        let mut occluded = 0u64;
-        packet.t_far = [t_max; PACKET_RAYS];
-        let mut stack = std::mem::take(&mut packet.stack);
-        stack.clear();
-        stack.push((0, active));
-        while let Some((node_index, mask)) = stack.pop() {
-            let mask = mask & !occluded;
-            if mask == 0 {
-                continue;
-            }
-            let node = &bvh.nodes[node_index as usize];
-            let test = NodeTest {
-                node,
-                adj: node.compute_extent() * inv,
-                inv,
-                negative: [rdx, rdy, rdz],
-            };
-            let child_masks = L::child_masks(&test, packet, mask);
-            // Slots entered by some ray, split into leaves and internal nodes; walked as
-            // bit sets (a branch per slot mispredicts).
-            let entered = (0..8).fold(0u32, |e, c| e | u32::from(child_masks[c] != 0) << c);
-            let internal = entered & u32::from(node.imask);
-            let leaves = entered & !internal;
-            // The children's memory requested before any is read (the walk is bound by
-            // cache misses on big scenes).
-            for c in slots(leaves) {
-                let (first_prim, count) = node.child_primitives(c);
-                for prim in first_prim..first_prim + count {
-                    lanes::prefetch(&self.edges[prim as usize]);
-                }
-            }
-            for c in slots(internal) {
-                // 80 bytes: both of its cache lines.
-                lanes::prefetch_lines(&bvh.nodes[node.child_node_index(c) as usize]);
-            }
-            // Leaves first (any hit removes rays from everything below), then internal
-            // children pushed far to near so the nearest is walked next.
-            for c in slots(leaves) {
-                let m = child_masks[c];
-                let (first_prim, count) = node.child_primitives(c);
-                for prim in first_prim..first_prim + count {
-                    // Triangle::intersect (Möller–Trumbore), its ray-independent part
-                    // precomputed, the rest a vector of rays at a time: the same
-                    // operations in the same order as glam's Vec3A cross and dot, so the
-                    // same bits.
-                    let tri = &self.edges[prim as usize];
-                    let (e1, e2, n) = (tri.e1, tri.e2, tri.n);
-                    let inv_det = 1.0 / n.dot(d);
-                    if inv_det == 0.0 {
-                        continue; // obvhs's `valid` needs inv_det ≠ 0
-                    }
-                    let (v0x, v0y, v0z) = (s(tri.v0.x), s(tri.v0.y), s(tri.v0.z));
-                    let (e1x, e1y, e1z) = (s(e1.x), s(e1.y), s(e1.z));
-                    let (e2x, e2y, e2z) = (s(e2.x), s(e2.y), s(e2.z));
-                    let (nx, ny, nz) = (s(n.x), s(n.y), s(n.z));
-                    let inv_det = s(inv_det);
-                    for_each_block(L::WIDTH, m & !occluded, |first, lanes| {
-                        let cx = v0x.sub(block(&packet.x, first));
-                        let cy = v0y.sub(block(&packet.y, first));
-                        let cz = v0z.sub(block(&packet.z, first));
-                        // q = d × c
-                        let qx = dy.mul(cz).sub(dz.mul(cy));
-                        let qy = dz.mul(cx).sub(dx.mul(cz));
-                        let qz = dx.mul(cy).sub(dy.mul(cx));
-                        let u = qx.mul(e2x).add(qy.mul(e2y)).add(qz.mul(e2z)).mul(inv_det);
-                        let v = qx.mul(e1x).add(qy.mul(e1y)).add(qz.mul(e1z)).mul(inv_det);
-                        let w = one.sub(u).sub(v);
-                        let outside = u.negative() | v.negative() | w.negative();
-                        let t = nx.mul(cx).add(ny.mul(cy)).add(nz.mul(cz)).mul(inv_det);
-                        // intersect() returns t within [t_min, t_max] (else ∞) and the
-                        // any-hit traversal counts it when t < t_max.
-                        let in_range = t.ge(ray_t_min) & t.lt(ray_t_max);
-                        let hit = lanes & !outside & in_range;
-                        occluded |= u64::from(hit) << first;
-                    });
-                }
-            }
-            if occluded == active {
-                break;
-            }
-            let by_priority = slots(internal).fold(0u32, |p, c| p | 1 << (c ^ oct));
-            for priority in slots(by_priority) {
-                let c = priority ^ oct;
-                let m = child_masks[c] & !occluded;
-                if m != 0 {
-                    stack.push((node.child_node_index(c), m));
-                }
-            }
-        }
-        packet.stack = stack;
-        occluded
     }
 }
 
