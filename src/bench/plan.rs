@@ -46,15 +46,15 @@ pub struct Rates {
 
 impl Rates {
     /// A 2-core AMD EPYC VM with lavapipe (llvmpipe, LLVM 15): the mean of two of its
-    /// benches of the headline set on dx9, dx10 and dx11 at 1280×800 (`make bench`), whose
-    /// frames ran at 0.13 and 0.19 s per frame-megapixel as the machine's speed states fell;
-    /// the ladder's from a third, after its per-pixel gather was made coherent.
+    /// `make bench` runs from an empty cache (the headline set on dx9, dx10 and dx11 at
+    /// 1280×800), whose frames ran at 0.12 and 0.17 s per frame-megapixel as the machine's
+    /// speed states fell.
     pub const LAVAPIPE: Rates = Rates {
         probe: 13.6,
         reference: 0.255,
-        build: 0.25,
-        frame: 0.16,
-        ladder: 1.35,
+        build: 0.19,
+        frame: 0.14,
+        ladder: 1.2,
         images: 0.13,
     };
 
