@@ -45,16 +45,16 @@ pub struct Rates {
 }
 
 impl Rates {
-    /// A 2-core AMD EPYC VM with lavapipe (llvmpipe, LLVM 15): the mean of two of its
-    /// `make bench` runs from an empty cache (the headline set on dx9, dx10 and dx11 at
-    /// 1280×800), whose frames ran at 0.12 and 0.17 s per frame-megapixel as the machine's
-    /// speed states fell.
+    /// A 2-core AMD EPYC VM with lavapipe (llvmpipe, LLVM 15): its `make bench` runs from
+    /// a fresh clone (the headline set on dx9, dx10 and dx11 at 1280×800), the frames' rate
+    /// with the slow dx11 rows timed once per later round (0.09 s per planned
+    /// frame-megapixel in its faster speed states, about 0.13 in its slower).
     pub const LAVAPIPE: Rates = Rates {
         probe: 13.6,
         reference: 0.255,
-        build: 0.19,
-        frame: 0.14,
-        ladder: 1.2,
+        build: 0.17,
+        frame: 0.11,
+        ladder: 1.1,
         images: 0.13,
     };
 
