@@ -12,6 +12,11 @@
 //!   the interpolated `uv_material` (as the GPU's sampler reads it, without mipmaps),
 //!   times the interpolated `albedo_tint`;
 //! - the lightmap texel containing the interpolated `uv_lightmap`.
+//!
+//! The lightmap bakes' gathers (and the error ladder's, which gathers at pixels as the bake
+//! does at texels) trace their shared directions through a [`PointGroup`]: up to 64 nearby
+//! points at a time, one coherent walk per direction (`super::trace`, Closest hits), each
+//! point seeing its rays in the directions' order as a point-at-a-time gather would.
 
 use glam::{Vec2, Vec3};
 

@@ -936,26 +936,39 @@ mod tests {
         assert!(!Tracer::new(&Mesh::default()).occluded(Vec3::ZERO, Vec3::Z, 1.0));
     }
 
-    #[test]
-    fn coherent_queries_equal_single_rays_bit_for_bit() {
-        // A cloud of small random triangles, rays from a grid of origins inside it.
-        let mut h = 1u64;
-        let mut next = || {
+    /// Uniform numbers in [−1, 1) from a linear congruential generator seeded `seed`.
+    fn uniform(seed: u64) -> impl FnMut() -> f32 {
+        let mut h = seed;
+        move || {
             h = h
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
             ((h >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
-        };
-        let tris: Vec<[Vec3; 3]> = (0..3000)
+        }
+    }
+
+    /// A cloud of 3000 small random triangles.
+    fn soup(next: &mut impl FnMut() -> f32) -> Vec<[Vec3; 3]> {
+        (0..3000)
             .map(|_| {
                 let c = Vec3::new(next(), next(), next()) * 4.0;
                 [0, 1, 2].map(|_| c + Vec3::new(next(), next(), next()) * 0.3)
             })
-            .collect();
-        let mut tracer = Tracer::new(&mesh(&tris));
-        let origins: Vec<Vec3> = (0..61)
+            .collect()
+    }
+
+    /// `count` ray origins on a grid inside the soup.
+    fn grid_origins(count: usize) -> Vec<Vec3> {
+        (0..count)
             .map(|i| Vec3::new((i % 8) as f32 * 0.1, (i / 8) as f32 * 0.1, 0.05))
-            .collect();
+            .collect()
+    }
+
+    #[test]
+    fn coherent_queries_equal_single_rays_bit_for_bit() {
+        let mut next = uniform(1);
+        let mut tracer = Tracer::new(&mesh(&soup(&mut next)));
+        let origins = grid_origins(61);
         let mut packet = RayPacket::new(&origins);
         let widths = Width::available();
         for k in 0..200 * widths.len() {
@@ -980,23 +993,9 @@ mod tests {
 
     #[test]
     fn coherent_closest_hits_equal_single_rays() {
-        let mut h = 7u64;
-        let mut next = || {
-            h = h
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((h >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
-        };
-        let tris: Vec<[Vec3; 3]> = (0..3000)
-            .map(|_| {
-                let c = Vec3::new(next(), next(), next()) * 4.0;
-                [0, 1, 2].map(|_| c + Vec3::new(next(), next(), next()) * 0.3)
-            })
-            .collect();
-        let mut tracer = Tracer::new(&mesh(&tris));
-        let origins: Vec<Vec3> = (0..57)
-            .map(|i| Vec3::new((i % 8) as f32 * 0.1, (i / 8) as f32 * 0.1, 0.05))
-            .collect();
+        let mut next = uniform(7);
+        let mut tracer = Tracer::new(&mesh(&soup(&mut next)));
+        let origins = grid_origins(57);
         let mut packet = RayPacket::new(&origins);
         let mut hits = [None; PACKET_RAYS];
         let widths = Width::available();
