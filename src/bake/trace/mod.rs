@@ -169,10 +169,10 @@ fn for_each_block(width: usize, mask: u64, mut f: impl FnMut(usize, u32)) {
     }
 }
 
-/// The set bits of an 8-bit slot set, lowest first.
+/// The set bits of a slot set or ray mask, lowest first.
 #[inline(always)]
-fn slots(set: u32) -> impl Iterator<Item = usize> {
-    let mut todo = set;
+fn slots(set: impl Into<u64>) -> impl Iterator<Item = usize> {
+    let mut todo: u64 = set.into();
     std::iter::from_fn(move || {
         (todo != 0).then(|| {
             let c = todo.trailing_zeros() as usize;
@@ -456,18 +456,8 @@ impl Tracer {
         active: u64,
     ) -> u64 {
         let active = active & packet.all();
-        let Some(bvh) = &self.bvh else {
+        let Some(query) = self.coherent_query(dir, t_max).filter(|_| active != 0) else {
             return 0;
-        };
-        if active == 0 || bvh.nodes.is_empty() {
-            return 0;
-        }
-        let query = CoherentQuery {
-            bvh,
-            edges: &self.edges,
-            t_min: self.t_min(),
-            t_max,
-            dir: canonical_direction(dir),
         };
         match self.width {
             Width::Sse4 => query.walk::<Vec4>(packet, active),
@@ -479,6 +469,19 @@ impl Tracer {
             #[allow(unsafe_code)]
             Width::Avx512x16 => unsafe { query.walk_avx512(packet, active) },
         }
+    }
+
+    /// What a coherent walk along the unit `dir` up to `t_max` shares across its rays;
+    /// `None` for a mesh without a usable triangle.
+    fn coherent_query(&self, dir: Vec3, t_max: f32) -> Option<CoherentQuery<'_>> {
+        let bvh = self.bvh.as_ref().filter(|bvh| !bvh.nodes.is_empty())?;
+        Some(CoherentQuery {
+            bvh,
+            edges: &self.edges,
+            t_min: self.t_min(),
+            t_max,
+            dir: canonical_direction(dir),
+        })
     }
 
     /// [`Self::closest_hit`] for the rays of `packet` selected by `active`, all along the
@@ -495,18 +498,11 @@ impl Tracer {
     ) {
         *hits = [None; PACKET_RAYS];
         let active = active & packet.all();
-        let Some(bvh) = &self.bvh else {
+        let Some(query) = self
+            .coherent_query(dir, f32::INFINITY)
+            .filter(|_| active != 0)
+        else {
             return;
-        };
-        if active == 0 || bvh.nodes.is_empty() {
-            return;
-        }
-        let query = CoherentQuery {
-            bvh,
-            edges: &self.edges,
-            t_min: self.t_min(),
-            t_max: f32::INFINITY,
-            dir: canonical_direction(dir),
         };
         match self.width {
             Width::Sse4 => query.walk_closest::<Vec4>(packet, active),
@@ -518,7 +514,7 @@ impl Tracer {
             #[allow(unsafe_code)]
             Width::Avx512x16 => unsafe { query.walk_closest_avx512(packet, active) },
         }
-        for i in slots64(active) {
+        for i in slots(active) {
             let primitive = packet.primitive[i];
             if primitive != NO_HIT {
                 let origin = Vec3::new(packet.x[i], packet.y[i], packet.z[i]);
@@ -526,19 +522,6 @@ impl Tracer {
             }
         }
     }
-}
-
-/// The set bits of a ray mask, lowest first.
-#[inline(always)]
-fn slots64(set: u64) -> impl Iterator<Item = usize> {
-    let mut todo = set;
-    std::iter::from_fn(move || {
-        (todo != 0).then(|| {
-            let c = todo.trailing_zeros() as usize;
-            todo &= todo - 1;
-            c
-        })
-    })
 }
 
 /// One node of a coherent walk against its rays: what [`RayLanes::child_masks`] needs.
