@@ -507,17 +507,11 @@ fn texel_group(
     texels: &LightmapTexels,
     group: &[u32],
 ) -> (PointGroup, Vec<TexelGather>) {
-    let normals: Vec<Vec3> = group.iter().map(|&i| texels.normal[i as usize]).collect();
-    let origins = group
-        .iter()
-        .zip(&normals)
-        .map(|(&i, &n)| tracer.offset_origin(texels.position[i as usize], n))
-        .collect();
     let gathers = group
         .iter()
         .map(|&i| TexelGather::new(texels, i as usize))
         .collect();
-    (PointGroup::new(origins, normals), gathers)
+    (PointGroup::of_texels(tracer, texels, group), gathers)
 }
 
 /// Bakes the SH lightmap of `scene` under `lighting` (see the module doc), fitting each
@@ -806,10 +800,6 @@ pub fn radiance_at_points(
         .for_each(|(chunk, (sh_out, fitted_out))| {
             let points = chunk * CHUNK..chunk * CHUNK + sh_out.len();
             let normals = normal[points.clone()].to_vec();
-            let origins = points
-                .clone()
-                .map(|k| tracer.offset_origin(position[k], normal[k]))
-                .collect();
             let frames: Vec<[DVec3; 3]> = frame[points.clone()]
                 .iter()
                 .map(orthonormal_frame)
@@ -826,7 +816,7 @@ pub fn radiance_at_points(
                     samples[j].push(sample_in(&frames[j], ray.d, ray.weight, radiance));
                 }
             };
-            let mut group = PointGroup::new(origins, normals);
+            let mut group = PointGroup::new(tracer, &position[points.clone()], normals);
             if bounced {
                 group.for_each_hit(tracer, &surfaces, &shared_dirs, |j, r, end| {
                     take(j, &rays_of.shared[r], end)

@@ -21,6 +21,7 @@
 use glam::{Vec2, Vec3};
 
 use super::directions::above_horizon;
+use super::raster::LightmapTexels;
 use super::trace::{Hit, PACKET_RAYS, RayPacket, Tracer};
 use crate::scene::{Scene, Texture8};
 
@@ -178,18 +179,31 @@ pub(crate) struct PointGroup {
 }
 
 impl PointGroup {
-    /// The group of points with ray `origins` (already offset) and unit `normals`.
+    /// The group of surface points `positions` with unit geometric `normals`, their rays
+    /// leaving from [`Tracer::offset_origin`].
     ///
     /// # Panics
     /// With more than [`PACKET_RAYS`] points or a normal per point missing (a bug in the
     /// caller).
-    pub(crate) fn new(origins: Vec<Vec3>, normals: Vec<Vec3>) -> PointGroup {
-        assert_eq!(origins.len(), normals.len(), "one normal per point");
+    pub(crate) fn new(tracer: &Tracer, positions: &[Vec3], normals: Vec<Vec3>) -> PointGroup {
+        assert_eq!(positions.len(), normals.len(), "one normal per point");
+        let origins: Vec<Vec3> = positions
+            .iter()
+            .zip(&normals)
+            .map(|(&p, &n)| tracer.offset_origin(p, n))
+            .collect();
         PointGroup {
             packet: RayPacket::new(&origins),
             normals,
             origins,
         }
+    }
+
+    /// The covered lightmap texels `group` (texel indices) as a group of points.
+    pub(crate) fn of_texels(tracer: &Tracer, texels: &LightmapTexels, group: &[u32]) -> PointGroup {
+        let positions: Vec<Vec3> = group.iter().map(|&i| texels.position[i as usize]).collect();
+        let normals = group.iter().map(|&i| texels.normal[i as usize]).collect();
+        PointGroup::new(tracer, &positions, normals)
     }
 
     /// Number of points.

@@ -439,7 +439,7 @@ fn bake_direct(pass: &TransferPass<'_>, basis: &[(Vec<f64>, Vec<f64>)]) -> Vec<f
         .par_chunks_mut(PACKET_RAYS * per_channel)
         .zip(covered.par_chunks(PACKET_RAYS))
         .for_each(|(out, group)| {
-            let mut points = texel_points(tracer, texels, group);
+            let mut points = PointGroup::of_texels(tracer, texels, group);
             let mut m = vec![vec![0.0f64; per_channel]; group.len()];
             let rays = points.for_each_visibility(tracer, dirs.dirs(), |k, r, visible| {
                 if visible == Some(true) {
@@ -514,17 +514,6 @@ fn gather_irradiance(
     irradiance
 }
 
-/// The covered texels `group` as a group of points traced together.
-fn texel_points(tracer: &Tracer, texels: &LightmapTexels, group: &[u32]) -> PointGroup {
-    let normals: Vec<glam::Vec3> = group.iter().map(|&i| texels.normal[i as usize]).collect();
-    let origins = group
-        .iter()
-        .zip(&normals)
-        .map(|(&i, &n)| tracer.offset_origin(texels.position[i as usize], n))
-        .collect();
-    PointGroup::new(origins, normals)
-}
-
 /// Eq. (3) for bounce `bounce`: per covered texel M⁰ (`direct`) plus the hits' sums in
 /// f32 (in ray order) of `irradiance` read at the hit texel, weighted by its albedo.
 fn bake_bounce(
@@ -558,7 +547,7 @@ fn bake_bounce(
         .zip(covered.par_chunks(PACKET_RAYS))
         .zip(direct.par_chunks(PACKET_RAYS * per_channel))
         .for_each(|((out, group), direct)| {
-            let mut points = texel_points(tracer, texels, group);
+            let mut points = PointGroup::of_texels(tracer, texels, group);
             let mut m = vec![vec![0.0f32; per_texel]; group.len()];
             let dirs = dirs.dirs();
             let rays = points.for_each_hit(tracer, surfaces, dirs, |k, r, end| {
