@@ -18,7 +18,7 @@ mkdir -p "$CACHE"
 steps() {
     cat <<STEPS
 bench|950|$SHVIS bench --techniques all --out $OUT
-bench dx11|420|$SHVIS bench --techniques all --paths dx11 --frames 5 --warmup 1 --no-probe --out $OUT/dx11
+bench dx11|480|$SHVIS bench --techniques all --paths dx11 --frames 5 --warmup 1 --out $OUT/dx11
 study rnm|60|$SHVIS study rnm --envs $RNM_ENVS --out $OUT/rnm
 study normalmap|75|$SHVIS study normalmap $MODEL_ARG --out $OUT/normalmap
 study ndf|40|$SHVIS study ndf --diffuse-envs $NDF_ENVS --out $OUT/ndf

@@ -5,6 +5,7 @@
 #define SHVIS_COMMON_GLSL
 
 #include "math.glsl"
+#include "unroll.glsl"
 
 layout(std140, set = 0, binding = SHVIS_BINDING_FRAME) uniform FrameParams {
     layout(offset = 0) mat4 clip_from_world;

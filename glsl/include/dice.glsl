@@ -8,6 +8,7 @@
 #ifndef SHVIS_DICE_GLSL
 #define SHVIS_DICE_GLSL
 
+#include "unroll.glsl"
 #if SHVIS_DICE_YCOCG
 #define DICE_PER_VERTEX 5
 #else
@@ -27,7 +28,7 @@ void dice_weights(vec3 m, out ivec3 vertex, out vec3 w_value, out vec3 w_du, out
                   out vec3 b) {
     int face = 0;
     float best = -2.0;
-    for (int f = 0; f < SHVIS_DICE_FACES; ++f) {
+    UNROLL for (int f = 0; f < SHVIS_DICE_FACES; ++f) {
         float d = dot(m, DICE_FACE(7 * f).xyz);
         if (d > best) {
             best = d;
@@ -44,8 +45,8 @@ void dice_weights(vec3 m, out ivec3 vertex, out vec3 w_value, out vec3 w_du, out
     // Bernstein weights: corners, edge points e[3i + j] (next to v_i on edge ij), centre.
     vec3 corner = b * b * b;
     float e[9];
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) {
+    UNROLL for (int i = 0; i < 3; ++i) {
+        UNROLL for (int j = 0; j < 3; ++j) {
             e[3 * i + j] = i == j ? 0.0 : 3.0 * b[i] * b[i] * b[j];
         }
     }
@@ -53,7 +54,7 @@ void dice_weights(vec3 m, out ivec3 vertex, out vec3 w_value, out vec3 w_du, out
     float pair = b.x * b.y + b.y * b.z + b.z * b.x;
     vec3 omega = pair > 1e-30 ? vec3(b.y * b.z, b.z * b.x, b.x * b.y) / pair : vec3(1.0 / 3.0);
     // (2): the candidate of the edge opposite v_i, weighted by ω_i.
-    for (int i = 0; i < 3; ++i) {
+    UNROLL for (int i = 0; i < 3; ++i) {
         int j = (i + 1) % 3;
         int l = (i + 2) % 3;
         float w = centre * omega[i];
@@ -66,7 +67,7 @@ void dice_weights(vec3 m, out ivec3 vertex, out vec3 w_value, out vec3 w_du, out
     }
     // (1): edge point i→j = f_i + (du_i t_u,i·v_j + dv_i t_v,i·v_j)/3; the factors toward
     // v_i's two others in increasing order are in .xy and .zw.
-    for (int i = 0; i < 3; ++i) {
+    UNROLL for (int i = 0; i < 3; ++i) {
         vec4 t = DICE_FACE(k + 4 + i);
         int first = i == 0 ? 1 : 0;
         int second = i == 2 ? 1 : 2;
@@ -85,7 +86,7 @@ vec3 dice_irradiance(vec3 m) {
     dice_weights(dice_lift(m), vertex, w_value, w_du, w_dv, b);
     vec3 sum = vec3(0.0);
     vec3 chroma = vec3(0.0);
-    for (int i = 0; i < 3; ++i) {
+    UNROLL for (int i = 0; i < 3; ++i) {
         // A vertex's values start at offset base of its first group; they span 3 groups
         // (9 values) or 2 (5 values) whatever the offset.
         int base = DICE_PER_VERTEX * vertex[i];

@@ -5,6 +5,7 @@
 #define SHVIS_HBASIS_GLSL
 
 #include "math.glsl"
+#include "unroll.glsl"
 
 void hbasis_eval(vec3 m, out float h[6]) {
     const float k0 = 1.0 / sqrt(2.0 * PI);
@@ -23,7 +24,7 @@ vec3 hbasis_irradiance(float v[20], int count, vec3 m) {
     float h[6];
     hbasis_eval(m, h);
     vec3 e = vec3(0.0);
-    for (int i = 0; i < count; ++i) {
+    UNROLL for (int i = 0; i < count; ++i) {
         e += vec3(v[3 * i], v[3 * i + 1], v[3 * i + 2]) * h[i];
     }
     return e;

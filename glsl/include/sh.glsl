@@ -4,6 +4,7 @@
 #define SHVIS_SH_GLSL
 
 #include "math.glsl"
+#include "unroll.glsl"
 
 const float SH_K00 = 0.5 * sqrt(1.0 / PI);
 const float SH_K1 = sqrt(3.0 / (4.0 * PI));
@@ -42,7 +43,7 @@ void sh_expect_order3(vec3 u, mat3 m, out float y[9]) {
 // Σ c_i y_i for order-3 RGB coefficients in .rgb and basis values y.
 vec3 sh_dot_rgb_order3(vec4 c[9], float y[9]) {
     vec3 sum = vec3(0.0);
-    for (int i = 0; i < 9; ++i) {
+    UNROLL for (int i = 0; i < 9; ++i) {
         sum += c[i].rgb * y[i];
     }
     return sum;
@@ -64,10 +65,10 @@ vec3 sh_irradiance_order3(vec3 radiance[9], vec3 n) {
     float y[9];
     sh_eval_order3(n, y);
     vec3 sum = radiance[0] * (a[0] * y[0]);
-    for (int i = 1; i < 4; ++i) {
+    UNROLL for (int i = 1; i < 4; ++i) {
         sum += radiance[i] * (a[1] * y[i]);
     }
-    for (int i = 4; i < 9; ++i) {
+    UNROLL for (int i = 4; i < 9; ++i) {
         sum += radiance[i] * (a[2] * y[i]);
     }
     return sum;

@@ -34,7 +34,7 @@ vec3 sh_linear_vector(float v[16], int c) {
 // (1): π c_00 y_00 + (2π/3) K_1 d·n, RGB.
 vec3 sh_l1_linear(float v[16], vec3 n) {
     vec3 e;
-    for (int c = 0; c < 3; ++c) {
+    UNROLL for (int c = 0; c < 3; ++c) {
         e[c] = PI * SH_K00 * v[c] + (2.0 * PI / 3.0) * SH_K1 * dot(sh_linear_vector(v, c), n);
     }
     return e;
@@ -71,7 +71,7 @@ vec3 engine_sh_irradiance(float v[16], vec3 n) {
     return sh_l1_linear(v, n);
 #elif SHVIS_ENGINE_SH_BASIS == SHVIS_SH_BASIS_L1_GEOMERICS
     vec3 e;
-    for (int c = 0; c < 3; ++c) {
+    UNROLL for (int c = 0; c < 3; ++c) {
         vec3 r1 = 0.5 * (2.0 * PI / 3.0) * SH_K1 * sh_linear_vector(v, c);
         e[c] = sh_geomerics(PI * SH_K00 * v[c], r1, n);
     }
@@ -86,7 +86,7 @@ vec3 engine_sh_irradiance(float v[16], vec3 n) {
     float y20 = SH_K20_ZONAL * (3.0 * t * t - 1.0);
     vec3 z;
 #if SHVIS_ENGINE_SH_BASIS == SHVIS_SH_BASIS_L1_ZH3_HALLUCINATED
-    for (int c = 0; c < 3; ++c) {
+    UNROLL for (int c = 0; c < 3; ++c) {
         float c00 = v[c];
         float r = c00 > 0.0 ? min(abs(dot(sh_linear_vector(v, c), axis)) / c00, SH_SQRT_3) : 0.0;
         z[c] = c00 > 0.0 ? c00 * (0.08 * r + 0.6 * r * r) : 0.0;

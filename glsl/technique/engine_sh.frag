@@ -19,7 +19,7 @@ layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform ShLigh
 
 void main() {
     float v[16];
-    for (int i = 0; i < 16; ++i) {
+    UNROLL for (int i = 0; i < 16; ++i) {
         v[i] = 0.0;
     }
     // dx9 indexes its sampler array by constants only: one read per group, unrolled.

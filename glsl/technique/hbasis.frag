@@ -18,7 +18,7 @@ layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform ShLigh
 
 void main() {
     float v[20];
-    for (int i = 0; i < 20; ++i) {
+    UNROLL for (int i = 0; i < 20; ++i) {
         v[i] = 0.0;
     }
     // dx9 indexes its sampler array by constants only: one read per group, unrolled.

@@ -28,17 +28,17 @@ layout(set = 0, binding = SHVIS_BINDING_TECHNIQUE_TEXTURE0 + 1) uniform sampler2
 void main() {
     vec2 uv = tangent_space_normal().xy * 0.5 + 0.5;
     float u[4 * SHVIS_NMPRT_BASIS_LAYERS];
-    for (int k = 0; k < SHVIS_NMPRT_BASIS_LAYERS; ++k) {
+    UNROLL for (int k = 0; k < SHVIS_NMPRT_BASIS_LAYERS; ++k) {
         vec4 b = SAMPLE_BASIS(k, uv);
         u[4 * k] = b.x; u[4 * k + 1] = b.y; u[4 * k + 2] = b.z; u[4 * k + 3] = b.w;
     }
     float c[4 * SHVIS_NMPRT_GROUPS];
-    for (int g = 0; g < SHVIS_NMPRT_GROUPS; ++g) {
+    UNROLL for (int g = 0; g < SHVIS_NMPRT_GROUPS; ++g) {
         vec4 v = SAMPLE_PER_TEXEL(g);
         c[4 * g] = v.x; c[4 * g + 1] = v.y; c[4 * g + 2] = v.z; c[4 * g + 3] = v.w;
     }
     vec3 irradiance = vec3(0.0);
-    for (int m = 0; m < SHVIS_NMPRT_VECTORS; ++m) {
+    UNROLL for (int m = 0; m < SHVIS_NMPRT_VECTORS; ++m) {
         irradiance += u[m] * vec3(c[3 * m], c[3 * m + 1], c[3 * m + 2]);
     }
     write_diffuse(max(irradiance * params.unscale.x, vec3(0.0)));

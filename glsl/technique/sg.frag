@@ -25,7 +25,7 @@ layout(std140, set = 0, binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform SgPara
 
 void main() {
     float v[36];
-    for (int i = 0; i < 36; ++i) {
+    UNROLL for (int i = 0; i < 36; ++i) {
         v[i] = 0.0;
     }
     // dx9 indexes its sampler array by constants only: one read per group, unrolled.
@@ -51,7 +51,7 @@ void main() {
 #endif
     vec3 m = tangent_space_normal();
     vec3 irradiance = vec3(0.0);
-    for (int k = 0; k < SHVIS_SG_LOBES; ++k) {
+    UNROLL for (int k = 0; k < SHVIS_SG_LOBES; ++k) {
         vec4 lobe = params.lobes[k];
         irradiance += vec3(v[3 * k], v[3 * k + 1], v[3 * k + 2])
             * sg_cosine_integral(dot(lobe.xyz, m), lobe.w);

@@ -44,6 +44,15 @@
 //! lane, [`Kind::Loop`]: the indexed-read points read in such a loop, as the decode does;
 //! straight-line they fitted 1.15× at 144 reads and 0.85× at 18).
 //!
+//! **What a CPU rasterizer pays that a GPU does not** (each its own kind, so each device's
+//! probe prices it): transcendentals ([`Kind::Transcendental`], polynomials on lavapipe:
+//! 0.048 ns per lane against 0.006 for a float op, on a 2-vCPU EPYC), integer divides by a
+//! computed divisor ([`Kind::IntegerDivide`], lane by lane: 0.84 ns), private arrays read at
+//! a computed index ([`Kind::IndexedPrivateRead`], gathered from the stack: 0.19 ns) and
+//! block-compressed lookups ([`Kind::Bc6hArray`], [`Kind::Bc7Array`], [`Kind::Bc4Array`],
+//! decoded in software at every fetch: 179, 124 and 3.5 ns against 2.5 for an RGBA16F array
+//! lookup).
+//!
 //! **Limits.** The per-triangle and per-edge costs are the probe's: screen-filling grids
 //! with the shared vertex shader; a vertex shader's own work beyond the varyings it writes
 //! (pcaMv's copies its weights) is not priced. On lavapipe a term in
@@ -71,7 +80,7 @@ pub use plan::{CountPlan, CountVariant};
 use spirv::OpCounts;
 
 /// How many kinds the model prices.
-pub const KINDS: usize = 13;
+pub const KINDS: usize = 19;
 
 /// The operation kinds the model prices.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -111,6 +120,27 @@ pub enum Kind {
     /// 2-vCPU Xeon: the house's albedo lookup 7.5 ms a frame where its UNORM normal map's
     /// took 5.9, and every row ran 1.05–1.20× a model that priced the albedo as UNORM).
     TrilinearSrgb,
+    /// Transcendental function, per component (`exp`, `exp2`, `log`, `log2`, `pow`, `sin`,
+    /// `cos`, `tan` and their inverses): a polynomial of many float ops where the device has
+    /// no special-function unit (lavapipe), one instruction where it has (GPUs). The SG
+    /// lobes' `exp`.
+    Transcendental,
+    /// Float read from a private array at an index computed per pixel (Ambient Dice's
+    /// stored values at a vertex's offset): a register on GPUs where the index is uniform,
+    /// else scratch memory; lavapipe gathers each lane's element from the stack.
+    IndexedPrivateRead,
+    /// Integer division or remainder by a divisor computed per pixel (Ambient Dice's atlas
+    /// tile on dx9: a group's column and row among the atlas' columns); a constant divisor
+    /// is a multiply and shift, not counted. No SIMD unit divides integers: the lanes are
+    /// divided one by one on a CPU.
+    IntegerDivide,
+    /// Bilinear 2D-array lookup of a BC6H layer (dx11's norms): decoded in the texture unit
+    /// on GPUs, in software at every fetch on lavapipe.
+    Bc6hArray,
+    /// Bilinear 2D-array lookup of a BC7 layer (dx11's ratios).
+    Bc7Array,
+    /// Bilinear 2D-array lookup of a BC4 layer (dx11's single values).
+    Bc4Array,
 }
 
 impl Kind {
@@ -128,6 +158,12 @@ impl Kind {
         Kind::Loop,
         Kind::TrilinearWide,
         Kind::TrilinearSrgb,
+        Kind::Transcendental,
+        Kind::IndexedPrivateRead,
+        Kind::IntegerDivide,
+        Kind::Bc6hArray,
+        Kind::Bc7Array,
+        Kind::Bc4Array,
     ];
 
     pub fn name(self) -> &'static str {
@@ -145,7 +181,30 @@ impl Kind {
             Kind::Loop => "loop entered",
             Kind::TrilinearWide => "trilinear RGBA32F lookup",
             Kind::TrilinearSrgb => "trilinear sRGB lookup",
+            Kind::Transcendental => "transcendental",
+            Kind::IndexedPrivateRead => "indexed private float read",
+            Kind::IntegerDivide => "integer divide",
+            Kind::Bc6hArray => "BC6H array lookup",
+            Kind::Bc7Array => "BC7 array lookup",
+            Kind::Bc4Array => "BC4 array lookup",
         }
+    }
+
+    /// The block-compressed format a lookup of this kind reads, for the BC kinds.
+    pub fn block_format(self) -> Option<ash::vk::Format> {
+        match self {
+            Kind::Bc6hArray => Some(ash::vk::Format::BC6H_UFLOAT_BLOCK),
+            Kind::Bc7Array => Some(ash::vk::Format::BC7_UNORM_BLOCK),
+            Kind::Bc4Array => Some(ash::vk::Format::BC4_UNORM_BLOCK),
+            _ => None,
+        }
+    }
+
+    /// The BC kind of a 2D-array lookup of `format`, where it is one of them.
+    pub fn of_block_format(format: ash::vk::Format) -> Option<Kind> {
+        Kind::ALL
+            .into_iter()
+            .find(|k| k.block_format() == Some(format))
     }
 
     pub(crate) fn index(self) -> usize {
@@ -169,6 +228,9 @@ impl CostCounts {
         c[Kind::UniformRead.index()] += f64::from(ops.uniform_reads);
         c[Kind::IndexedUniformRead.index()] += f64::from(ops.indexed_uniform_reads);
         c[Kind::Loop.index()] += f64::from(ops.kept_loops);
+        c[Kind::Transcendental.index()] += f64::from(ops.transcendentals);
+        c[Kind::IndexedPrivateRead.index()] += f64::from(ops.indexed_private_reads);
+        c[Kind::IntegerDivide.index()] += f64::from(ops.integer_divides);
         CostCounts(c)
     }
 

@@ -13,6 +13,13 @@
 //!   (computed per invocation, e.g. a cluster's block from a texel's cluster id), constant
 //!   otherwise;
 //! - **varying reads**: float components loaded from `Input` variables (interpolants);
+//! - **transcendentals**: `exp`, `exp2`, `log`, `log2`, `pow` and the trigonometric and
+//!   hyperbolic functions, per component (`sqrt` and `inversesqrt` are float ops);
+//! - **indexed private reads**: float components loaded from a `Function` or `Private`
+//!   variable through an access chain with a non-constant index (a local array read at an
+//!   index computed per invocation, which no compiler can keep in named registers);
+//! - **integer divides**: integer division, remainder and modulo by a divisor that is not a
+//!   constant, per component;
 //! - **samples**: image sample / fetch / gather instructions;
 //! - **loops**: loops left in the code (`OpLoopMerge`): where there are any, the other counts
 //!   are of the code as written, not as executed; of them **kept loops**, those marked
@@ -40,6 +47,9 @@ pub struct OpCounts {
     pub samples: u32,
     pub loops: u32,
     pub kept_loops: u32,
+    pub transcendentals: u32,
+    pub indexed_private_reads: u32,
+    pub integer_divides: u32,
 }
 
 /// Loop Control mask bit (SPIR-V unified specification, §3.23).
@@ -54,6 +64,8 @@ const OP_LOOP_MERGE: u32 = 246;
 const SAMPLE_OPS: [u32; 10] = [87, 88, 89, 90, 91, 92, 93, 94, 95, 96];
 /// OpFNegate, OpFAdd, OpFSub, OpFMul, OpFDiv, OpFRem, OpFMod.
 const FLOAT_ELEMENTWISE_OPS: [u32; 7] = [127, 129, 131, 133, 136, 140, 141];
+/// OpUDiv, OpSDiv, OpUMod, OpSRem, OpSMod.
+const INTEGER_DIVIDE_OPS: [u32; 5] = [134, 135, 137, 138, 139];
 const OP_VECTOR_TIMES_SCALAR: u32 = 142;
 const OP_MATRIX_TIMES_SCALAR: u32 = 143;
 const OP_VECTOR_TIMES_MATRIX: u32 = 144;
@@ -64,6 +76,8 @@ const OP_DOT: u32 = 148;
 
 // Storage classes (§3.7).
 const STORAGE_INPUT: u32 = 1;
+const STORAGE_PRIVATE: u32 = 6;
+const STORAGE_FUNCTION: u32 = 7;
 const STORAGE_STORAGE_BUFFER: u32 = 12;
 
 // GLSL.std.450 instructions that cost more than one operation per component.
@@ -73,6 +87,8 @@ const GLSL_DISTANCE: u32 = 67;
 const GLSL_CROSS: u32 = 68;
 const GLSL_DETERMINANT: u32 = 33;
 const GLSL_MATRIX_INVERSE: u32 = 34;
+/// GLSL.std.450 Sin … Atanh (13–25) and Pow, Exp, Log, Exp2, Log2 (26–30): transcendentals.
+const GLSL_TRANSCENDENTALS: std::ops::RangeInclusive<u32> = 13..=30;
 
 /// A type's shape: float components (0 for non-float scalars) and bytes-ish size in
 /// 16-byte units for memory reads.
@@ -256,6 +272,11 @@ impl Walk {
                         }
                     }
                     Some(STORAGE_INPUT) => counts.varying_reads += loaded.floats,
+                    Some(STORAGE_FUNCTION | STORAGE_PRIVATE)
+                        if indexed_pointers.contains(&w[2]) =>
+                    {
+                        counts.indexed_private_reads += loaded.floats;
+                    }
                     _ => {}
                 }
             }
@@ -268,6 +289,11 @@ impl Walk {
                 }
             }
             op if SAMPLE_OPS.contains(&op) => counts.samples += 1,
+            op if INTEGER_DIVIDE_OPS.contains(&op) && w.len() >= 4 => {
+                if !self.constants.contains_key(&w[3]) {
+                    counts.integer_divides += shape_of(shapes, w[0]).rows.max(1);
+                }
+            }
             op if FLOAT_ELEMENTWISE_OPS.contains(&op)
                 || op == OP_VECTOR_TIMES_SCALAR
                 || op == OP_MATRIX_TIMES_SCALAR =>
@@ -311,6 +337,10 @@ impl Walk {
                     .get(4)
                     .and_then(|a| value_types.get(a))
                     .map_or(result, |&t| shape_of(shapes, t));
+                if GLSL_TRANSCENDENTALS.contains(&w[3]) {
+                    counts.transcendentals += result.floats;
+                    return;
+                }
                 counts.float_ops += match w[3] {
                     GLSL_NORMALIZE => 3 * operand.floats,
                     GLSL_LENGTH | GLSL_DISTANCE => 2 * operand.floats,
@@ -366,6 +396,39 @@ mod tests {
         // The optimizer fuses a*c + sample into one vec4 Fma (4), then one add (4), the dot
         // (4), x * scalar (4), uv * 0.5 (2): a fused multiply-add counts once.
         assert_eq!(c.float_ops, 18, "{c:?}");
+    }
+
+    #[test]
+    fn transcendentals_are_counted_apart_from_float_ops() {
+        // exp of a vec4 (4), sin of a float (1), pow of a vec2 (2); sqrt stays a float op.
+        let c = counts_of(
+            "vec4 e = exp(a);\nfloat s = sin(a.x);\nvec2 q = pow(uv, vec2(2.5));\n\
+             o = vec4(e.x + s, q, sqrt(a.w));",
+        );
+        assert_eq!(c.transcendentals, 7, "{c:?}");
+        assert_eq!(c.float_ops, 2, "{c:?}");
+    }
+
+    #[test]
+    fn integer_divides_by_a_computed_divisor_are_counted() {
+        // Two by a divisor from a varying (one a remainder), one by a constant (a shift).
+        let c = counts_of(
+            "int q = int(uv.x * 100.0);\nint d = 2 + int(uv.y * 4.0);\n\
+             o = vec4(float(q / d), float(q % d), float(q / 4), 0.0);",
+        );
+        assert_eq!(c.integer_divides, 2, "{c:?}");
+    }
+
+    #[test]
+    fn a_private_array_read_at_a_computed_index_is_counted() {
+        // Twelve floats from the varyings at constant indices, three read back at an index
+        // computed per invocation, one at a constant index (a register, not counted).
+        let c = counts_of(
+            "float t[12];\n[[unroll]] for (int i = 0; i < 12; ++i) { t[i] = a[i & 3] * float(i); }\n\
+             int k = int(uv.x * 8.0);\n\
+             o = vec4(t[k], t[k + 1], t[k + 2], t[3]);",
+        );
+        assert_eq!(c.indexed_private_reads, 3, "{c:?}");
     }
 
     #[test]

@@ -17,7 +17,7 @@ use crate::gpu::{Context, GpuError};
 pub use crate::files::clock::utc_now;
 
 /// Bump when a cached probe of an older layout or meaning must not be reused.
-const CACHE_VERSION: u64 = 1;
+const CACHE_VERSION: u64 = 2;
 /// Largest probe file read (a probe's JSON is a few hundred KiB).
 const MAX_PROBE_BYTES: u64 = 16 << 20;
 

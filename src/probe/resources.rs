@@ -9,6 +9,7 @@ use ash::vk;
 use glam::Vec2;
 
 use super::ProbeSettings;
+use crate::cost::Kind;
 use crate::gpu::{Buffer, Context, GpuError, Image, ImageDesc, MeshBuffers, Sampler, SamplerKind};
 use crate::render::{FrameSettings, SceneGpu, ShadingLoad};
 use crate::scene::{Mesh, Scene, Vertex};
@@ -20,6 +21,10 @@ pub(super) const TEXTURES: u32 = 16;
 
 /// Side of the probe's textures.
 pub(super) const TEXTURE_SIDE: u32 = 512;
+
+/// Side of the probe's block-compressed arrays (smaller than [`TEXTURE_SIDE`]: encoding
+/// takes time, and a lookup's decode costs the same whatever the texture's size).
+pub(super) const BLOCK_SIDE: u32 = 256;
 
 /// Uniform vec4s in the probe's block.
 pub(super) const UNIFORM_VEC4S: u32 = 256;
@@ -77,6 +82,9 @@ pub(super) struct ProbeResources {
     pub(super) trilinear_wide: Vec<Image>,
     pub(super) trilinear_srgb: Vec<Image>,
     pub(super) array: Image,
+    /// The same pattern block-compressed, [`BLOCK_SIDE`]², one array per BC format the
+    /// device samples (none where it samples none).
+    pub(super) block_arrays: Vec<(Kind, Image)>,
     pub(super) cube_array: Image,
     pub(super) uniforms: Buffer,
 }
@@ -166,6 +174,7 @@ fn probe_resources(ctx: &Arc<Context>) -> Result<ProbeResources, GpuError> {
         &[layers.iter().map(Vec::as_slice).collect()],
         "probe.array",
     )?;
+    let block_arrays = block_arrays(ctx, &value)?;
     let cube_side = 32;
     let faces: Vec<Vec<u8>> = (0..6 * TEXTURES).map(|i| halves(i, cube_side)).collect();
     let cube_array = Image::with_data(
@@ -190,9 +199,85 @@ fn probe_resources(ctx: &Arc<Context>) -> Result<ProbeResources, GpuError> {
         trilinear_wide,
         trilinear_srgb,
         array,
+        block_arrays,
         cube_array,
         uniforms,
     })
+}
+
+impl ProbeResources {
+    /// The block-compressed array of BC kind `kind`, where the device samples its format.
+    pub(super) fn block_array(&self, kind: Kind) -> Option<&Image> {
+        self.block_arrays
+            .iter()
+            .find(|(k, _)| *k == kind)
+            .map(|(_, image)| image)
+    }
+}
+
+/// [`TEXTURES`] layers of each BC format the device samples, at the dx11 path's qualities
+/// (`technique::block`), of a smooth pattern with a little of `value`'s noise: the encoders
+/// pick a block's mode by its content, the decode's cost follows the mode, and lightmaps are
+/// smooth within their charts (over white noise every row's dx11 lookups ran 0.79–0.88×
+/// the model on lavapipe).
+fn block_arrays(
+    ctx: &Arc<Context>,
+    value: &dyn Fn(u32, u32, u32) -> f32,
+) -> Result<Vec<(Kind, Image)>, GpuError> {
+    use crate::bake::block;
+    let side = BLOCK_SIDE;
+    let texel = |i: u32, j: u32, c: u32| {
+        let (x, y) = (j % side, j / side);
+        let phase = i as f32 * 0.7 + c as f32 * 1.3;
+        let wave = (x as f32 / 37.0 + phase).sin() * (y as f32 / 29.0 - phase).cos();
+        0.5 + 0.4 * wave + 0.05 * (value(i, x * 4 + c, y) - 0.5)
+    };
+    let mut arrays = Vec::new();
+    for kind in [Kind::Bc6hArray, Kind::Bc7Array, Kind::Bc4Array] {
+        let Some(format) = kind.block_format() else {
+            continue;
+        };
+        if !ctx.supports_block_format(format) {
+            continue;
+        }
+        let layers: Vec<Vec<u8>> = (0..TEXTURES)
+            .map(|i| {
+                let texels = 0..side * side;
+                let byte = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+                match kind {
+                    Kind::Bc6hArray => {
+                        let rgb: Vec<[f32; 3]> = texels
+                            .map(|j| std::array::from_fn(|c| texel(i, j, c as u32)))
+                            .collect();
+                        block::encode_bc6h(&rgb, side, crate::technique::block::NORM_QUALITY).0
+                    }
+                    Kind::Bc7Array => {
+                        let rgba: Vec<[u8; 4]> = texels
+                            .map(|j| std::array::from_fn(|c| byte(texel(i, j, c as u32))))
+                            .collect();
+                        block::encode_bc7_at(
+                            &rgba,
+                            side,
+                            true,
+                            crate::technique::block::RATIO_QUALITY,
+                        )
+                    }
+                    _ => {
+                        let r: Vec<u8> = texels.map(|j| byte(texel(i, j, 0))).collect();
+                        block::encode_bc4(&r, side)
+                    }
+                }
+            })
+            .collect();
+        let image = Image::with_data(
+            ctx,
+            &ImageDesc::texture_2d_array(format, side, side, TEXTURES),
+            &[layers.iter().map(Vec::as_slice).collect()],
+            &format!("probe.{}", format!("{kind:?}").to_lowercase()),
+        )?;
+        arrays.push((kind, image));
+    }
+    Ok(arrays)
 }
 
 /// The probe's scene on the GPU at `s`'s size, over a `base`² grid of triangle pairs.

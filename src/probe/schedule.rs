@@ -37,6 +37,12 @@ pub fn probe_counts(kind: Kind) -> &'static [u32] {
         Kind::IndexedUniformRead => &[18, 36, 72, 144],
         Kind::TexelFetch => &[4, 8, 12, 16],
         Kind::TrilinearWide | Kind::TrilinearSrgb => &[1, 2, 4, 8],
+        Kind::Transcendental => &[32, 64, 128, 256],
+        Kind::IndexedPrivateRead => &[9, 18, 27, 36],
+        Kind::IntegerDivide => &[8, 16, 32, 64],
+        // Decoded in software on lavapipe (0.15–0.2 s a lookup over the screen): two points,
+        // over half the screen (`point_specs`).
+        Kind::Bc6hArray | Kind::Bc7Array | Kind::Bc4Array => &[1, 2],
         // No points of its own: the indexed reads' points enter one loop each.
         Kind::Loop => &[],
         _ => &[1, 2, 4, 8, 12, 16],
@@ -89,12 +95,23 @@ pub(super) fn point_specs<'m>(
     // A device that cannot filter RGBA32F (optional in Vulkan) gets no such points: its
     // cost stays 0 (and the NDF rows, which need it, refuse to build there).
     let wide_filters = ctx.supports_linear_filter(crate::ndf::MOMENT_FORMAT);
+    // Likewise a device that cannot sample a BC format gets no points of its kind (the dx11
+    // rows refuse to build there).
     for kind in Kind::ALL
         .into_iter()
         .filter(|&k| k != Kind::TrilinearWide || wide_filters)
+        .filter(|k| {
+            k.block_format()
+                .is_none_or(|f| ctx.supports_block_format(f))
+        })
     {
+        let mesh = if kind.block_format().is_some() {
+            half_mesh
+        } else {
+            full_mesh
+        };
         for &count in probe_counts(kind) {
-            specs.push((Some(kind), count, false, true, full_mesh));
+            specs.push((Some(kind), count, false, true, mesh));
         }
     }
     for (g, _) in grids
@@ -243,6 +260,11 @@ impl<'a> PointPlanner<'a> {
                 Resource::TextureArray(res.trilinear_srgb.iter().map(|i| (i, material)).collect()),
             )),
             Some(Kind::Array2d) => resources.push((t0, Resource::Texture(&res.array, linear))),
+            Some(k @ (Kind::Bc6hArray | Kind::Bc7Array | Kind::Bc4Array)) => {
+                if let Some(image) = res.block_array(k) {
+                    resources.push((t0, Resource::Texture(image, linear)));
+                }
+            }
             Some(Kind::CubeArray) => {
                 resources.push((t0, Resource::Texture(&res.cube_array, linear)));
             }
@@ -263,7 +285,10 @@ fn lookups_of(kind: Option<Kind>, count: u32) -> Vec<(Kind, u32)> {
             | Kind::TrilinearSrgb
             | Kind::Array2d
             | Kind::CubeArray
-            | Kind::Dependent2d),
+            | Kind::Dependent2d
+            | Kind::Bc6hArray
+            | Kind::Bc7Array
+            | Kind::Bc4Array),
         ) => {
             vec![(k, count)]
         }

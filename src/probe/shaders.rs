@@ -23,7 +23,12 @@ pub(super) fn probe_source(kind: Option<Kind>, count: u32, untaken: bool, counte
             k @ (Kind::Bilinear2d | Kind::Trilinear2d | Kind::TrilinearWide | Kind::TrilinearSrgb),
         ) => filtered_2d_lookups(k, count),
         Some(Kind::TexelFetch) => texel_fetches(count),
-        Some(Kind::Array2d) => array_lookups(count),
+        Some(Kind::Array2d | Kind::Bc6hArray | Kind::Bc7Array | Kind::Bc4Array) => {
+            array_lookups(count)
+        }
+        Some(Kind::Transcendental) => (String::new(), transcendentals(count)),
+        Some(Kind::IndexedPrivateRead) => (String::new(), indexed_private_reads(count)),
+        Some(Kind::IntegerDivide) => (String::new(), integer_divides(count)),
         Some(Kind::CubeArray) => cube_array_lookups(count),
         Some(Kind::Dependent2d) => dependent_lookups(count),
         Some(Kind::FloatOp) => (String::new(), float_ops(count)),
@@ -160,6 +165,52 @@ fn float_ops(count: u32) -> String {
     body
 }
 
+/// At least `count` transcendentals, in rounds of 32: the body.
+fn transcendentals(count: u32) -> String {
+    // Four independent vec4 chains of sin(exp(c)): bounded, so no value overflows or
+    // turns denormal however long the chain.
+    let mut body = String::new();
+    body += "    vec4 c0 = vec4(in_uv_lightmap, 0.5, 0.25), c1 = c0.yxwz, c2 = c0.zwxy, c3 = c0.wzyx;\n";
+    for _ in 0..count.div_ceil(32) {
+        body += "    c0 = sin(exp(c0)); c1 = sin(exp(c1)); c2 = sin(exp(c2)); c3 = sin(exp(c3));\n";
+    }
+    body += "    acc = c0 + c1 + c2 + c3;\n";
+    body
+}
+
+/// `count` reads of a private array of 12 floats at an index computed per pixel, in blocks
+/// of 9 from an array filled afresh for each block, as Ambient Dice reads a vertex's
+/// values at its offset: the body.
+fn indexed_private_reads(count: u32) -> String {
+    let mut body = "    int o = int(in_uv_lightmap.x * 4.0) & 3;\n    float t[12];\n".to_string();
+    for block in 0..count.div_ceil(9) {
+        for i in 0..12 {
+            body += &format!(
+                "    t[{i}] = in_uv_lightmap[{}] + {}.0;\n",
+                i & 1,
+                block * 12 + i
+            );
+        }
+        for k in 0..(count - 9 * block).min(9) {
+            body += &format!("    acc.x += t[o + {k}];\n");
+        }
+    }
+    body
+}
+
+/// `count` integer divisions and remainders (alternately) by a divisor that varies across
+/// the screen, as a dx9 atlas tile's column and row: the body.
+fn integer_divides(count: u32) -> String {
+    let mut body = "    int q = int(in_uv_lightmap.x * 4096.0) + 4096;\n\
+                    int d = 3 + (int(in_uv_lightmap.y * 8.0) & 7);\n"
+        .to_string();
+    for k in 0..count {
+        let op = if k % 2 == 0 { '/' } else { '%' };
+        body += &format!("    acc.x += float((q + {k}) {op} d);\n");
+    }
+    body
+}
+
 /// The first `count` of the scene vertex's [`MAX_PROBE_VARYINGS`] varying floats, read:
 /// the body.
 fn varying_reads(count: u32) -> String {
@@ -266,6 +317,11 @@ mod tests {
                     }
                     Kind::Varying => assert_eq!(ops.varying_reads, count, "{ops:?}"),
                     Kind::FloatOp => assert!(ops.float_ops >= count, "{ops:?}"),
+                    Kind::Transcendental => assert!(ops.transcendentals >= count, "{ops:?}"),
+                    Kind::IntegerDivide => assert_eq!(ops.integer_divides, count, "{ops:?}"),
+                    Kind::IndexedPrivateRead => {
+                        assert_eq!(ops.indexed_private_reads, count, "{ops:?}");
+                    }
                     _ => assert_eq!(ops.samples, count, "{kind:?}: {ops:?}"),
                 }
             }

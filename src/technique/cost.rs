@@ -10,7 +10,9 @@
 //! or, where a shader reads its taps one by one, texel fetches (priced as 2D fetches on every
 //! path: the probe has no array fetch), normal-indexed tables dependent 2D (dx9) or cube
 //! array (dx10, dx11), a normal basis dependent 2D (dx9) or 2D array (dx10, dx11), the specular term's
-//! moment maps trilinear RGBA32F.
+//! moment maps trilinear RGBA32F. On dx11 each per-texel layer is priced by its format: a
+//! BC6H, BC7 or BC4 layer as a lookup of that format (which a device without a texture
+//! unit's decoder pays for at every fetch), any other as a 2D-array lookup.
 
 use std::sync::Arc;
 
@@ -182,6 +184,20 @@ fn lookup_counts(
             }
         };
         let kind = match (slot.kind, path) {
+            (SlotKind::PerTexel, HwPath::Dx11) => {
+                // Each image by its format, the block-compressed ones by their own kinds:
+                // the groups' layers (the first image) as the shader reads them, the
+                // norms' once.
+                for (i, d) in slot.images.iter().enumerate() {
+                    let kind = Kind::of_block_format(d.format).unwrap_or(Kind::Array2d);
+                    let reads = match reads.per_texel_taps {
+                        Some(taps) if i == 0 => taps.lookups - taps.fetches,
+                        _ => d.layers,
+                    };
+                    lookups.push((kind, reads));
+                }
+                continue;
+            }
             (SlotKind::Material, _) => {
                 // RGBA32F (the NDF moment maps) priced apart from RGBA8 material textures.
                 let wide = |d: &&ImageDesc| d.format == crate::ndf::MOMENT_FORMAT;
@@ -191,7 +207,7 @@ fn lookup_counts(
                 continue;
             }
             (SlotKind::PerTexel, HwPath::Dx9) => Kind::Bilinear2d,
-            (SlotKind::PerTexel, HwPath::Dx10 | HwPath::Dx11) => Kind::Array2d,
+            (SlotKind::PerTexel, HwPath::Dx10) => Kind::Array2d,
             (SlotKind::NormalTable, HwPath::Dx9) => Kind::Dependent2d,
             (SlotKind::NormalTable, HwPath::Dx10 | HwPath::Dx11) => Kind::CubeArray,
             // The disk texture is read at the normal map's coordinates: dependent, a 2D

@@ -499,8 +499,11 @@ mod tests {
     use super::*;
     use crate::gpu::{ShaderStage, compile_glsl};
 
-    #[test]
-    fn every_registered_fragment_shader_compiles_on_both_paths() {
+    /// Every registered technique's fragment shader (and a few beyond the table's rows) on
+    /// every path, compiled as its build compiles it, with `f` given each result.
+    fn for_every_fragment_shader(
+        mut f: impl FnMut(Technique, HwPath, Result<Vec<u32>, crate::gpu::GpuError>),
+    ) {
         let beyond_the_table = [
             "unc2",
             "unc5",
@@ -528,9 +531,37 @@ mod tests {
                     let order = crate::bake::transfer::DEFAULT_LIGHTING_ORDER;
                     defines.push(nmprt::pixel_row_groups(order.coeff_count()));
                 }
-                compile_glsl(shader.path, ShaderStage::Fragment, &defines)
-                    .unwrap_or_else(|e| panic!("{technique}.{path}: {e}"));
+                f(
+                    technique,
+                    path,
+                    compile_glsl(shader.path, ShaderStage::Fragment, &defines),
+                );
             }
         }
+    }
+
+    #[test]
+    fn every_registered_fragment_shader_compiles_on_both_paths() {
+        for_every_fragment_shader(|technique, path, spirv| {
+            if let Err(e) = spirv {
+                panic!("{technique}.{path}: {e}");
+            }
+        });
+    }
+
+    /// The cost model counts a shader's SPIR-V as written: a loop left in it would be
+    /// counted once however many times it runs. Every shader without a count plan (whose
+    /// count builds unroll what the drawn one keeps) is unrolled in full.
+    #[test]
+    fn every_counted_fragment_shader_is_unrolled() {
+        let mut kept = Vec::new();
+        for_every_fragment_shader(|technique, path, spirv| {
+            let spirv = spirv.unwrap_or_else(|e| panic!("{technique}.{path}: {e}"));
+            let counts = crate::cost::spirv::count(&spirv);
+            if technique.reads().count_plan.is_none() && counts.loops > 0 {
+                kept.push(format!("{technique}.{path}: {} loop(s)", counts.loops));
+            }
+        });
+        assert!(kept.is_empty(), "loops counted once: {kept:#?}");
     }
 }
