@@ -26,7 +26,7 @@ study nmprt-svd|5|$SHVIS study nmprt-svd --out $OUT/nmprt
 study bases|40|$SHVIS study bases --envs $BASES_ENVS --out $OUT/bases
 study rays|110|$SHVIS study rays --out $OUT/rays
 bench engine-sh|200|$SHVIS bench --techniques $ENGINE_SH_ROWS --env $ENGINE_SH_ENV --out $OUT/engine-sh
-bench relit90|90|$SHVIS bench --techniques $NMPRT_ROWS --relight-rotate 90 --point-reference --ref-spp 256 --no-probe --frames 3 --warmup 1 --out $OUT/relit90
+bench relit90|90|$SHVIS bench --techniques $NMPRT_ROWS --relight-rotate 90 --point-reference --ref-spp 256 --frames 3 --warmup 1 --out $OUT/relit90
 bench specular|165|$SHVIS bench --scene bumpy --techniques unc6,preconv,unc6ndf,preconvndf --specular mip,ndf,ndfn --light-dir 0,0.3,-1 --vis-res 256 --rays 256 --width 640 --height 360 --out $OUT/specular
 STEPS
 }

@@ -119,19 +119,11 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
             let tech = technique::build(&ctx, &scene, t, path, &inputs).unwrap();
             let costs = technique::cost::counts(&ctx, &scene, &tech).unwrap();
             let c = costs.done;
-            let lookups: f64 = [
-                Kind::Bilinear2d,
-                Kind::Trilinear2d,
-                Kind::TrilinearWide,
-                Kind::TrilinearSrgb,
-                Kind::Array2d,
-                Kind::CubeArray,
-                Kind::Dependent2d,
-                Kind::TexelFetch,
-            ]
-            .iter()
-            .map(|&k| c.get(k))
-            .sum();
+            let lookups: f64 = Kind::ALL
+                .iter()
+                .filter(|k| k.is_lookup())
+                .map(|&k| c.get(k))
+                .sum();
             // The cost model's lookups are the cost table's.
             assert_eq!(
                 lookups,
@@ -156,6 +148,16 @@ fn every_technique_counts_its_lookups_by_kind_and_its_shader_ops() {
                 c.get(Kind::FloatOp) > 0.0 && c.get(Kind::Varying) > 0.0,
                 "{t}.{path}"
             );
+            // Block-compressed layers are dx11's alone, and its norms are read once a pixel.
+            let blocks: f64 = [Kind::Bc6hArray, Kind::Bc7Array, Kind::Bc4Array]
+                .iter()
+                .map(|&k| c.get(k))
+                .sum();
+            if path == HwPath::Dx11 {
+                assert!(c.get(Kind::Bc6hArray) <= 1.0, "{t}.{path}: {c:?}");
+            } else {
+                assert_eq!(blocks, 0.0, "{t}.{path}: {c:?}");
+            }
             // RGBA32F lookups are the NDF moment maps': preconvndf reads all three, unc6ndf
             // the first; no other technique binds RGBA32F (no specular term here).
             let wide = match t {

@@ -3,21 +3,26 @@
 //!
 //! The estimate is, per phase, its work times a rate: the probe (frames + 1) per
 //! megapixel, the references samples per pixel per megapixel (footprint and point), every
-//! row's builds (rows × rounds), its frames per megapixel, its ladder per megapixel, its
-//! images per row; the bakes in seconds. The rates are this device's from its last bench at
-//! the same frame size (`bench-rates-<key>.json` in the bake cache's folder, rewritten
-//! after every bench) or,
-//! with none, those of a 2-core lavapipe machine ([`Rates::LAVAPIPE`]); the plan says
+//! row's builds (rows × rounds), its frames, its ladder per megapixel, its images per row;
+//! the bakes in seconds. A row's frames are the frames it will draw (warm-up included, one a
+//! round after the first where it is slower than `SLOW_FRAME_MS`) at its median frame time
+//! in this device's last bench that drew it, or per megapixel where none did, plus a cost
+//! per row and round beside its frames (monitor readings, submission, read-back): a bench of
+//! other rows than the last, or with other frame counts, is priced by what its own rows
+//! cost. The rates and row times are this device's from its last benches at the same frame
+//! size (`bench-rates-<key>.json` in the bake cache's folder, rewritten after every bench)
+//! or, with none, those of a 2-core lavapipe machine ([`Rates::LAVAPIPE`]); the plan says
 //! which. The bakes are those of the last bench with the same bakes on this machine
 //! (cached ones then cost nothing), else the lavapipe machine's scaled by texels × rays.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
 use super::BenchSettings;
-use super::timing::TIMING_ROUNDS;
+use super::timing::{SLOW_FRAME_MS, TIMING_ROUNDS};
 use crate::files::Hasher64;
 use crate::gpu::Context;
 use crate::prepare::PrepareSettings;
@@ -25,7 +30,7 @@ use crate::report::table::{BenchPhases, BenchTable};
 use crate::technique::Technique;
 
 /// Bump when the meaning of a rates file changes.
-const RATES_VERSION: u64 = 1;
+const RATES_VERSION: u64 = 2;
 
 /// Seconds per unit of work of each phase (module doc).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -36,8 +41,10 @@ pub struct Rates {
     pub reference: f64,
     /// Per row build.
     pub build: f64,
-    /// Per frame (warm-up or timed) per megapixel.
+    /// Per frame (warm-up or timed) per megapixel, of a row this device has not timed.
     pub frame: f64,
+    /// Per row per timing round, beside its frames.
+    pub row_round: f64,
     /// Per row's ladder per megapixel.
     pub ladder: f64,
     /// Per row's images, and the figures.
@@ -47,18 +54,21 @@ pub struct Rates {
 impl Rates {
     /// A 2-core AMD EPYC VM with lavapipe (llvmpipe, LLVM 15): its `make bench` runs from
     /// a fresh clone (the headline set on dx9, dx10 and dx11 at 1280×800), the frames' rate
-    /// with the slow dx11 rows timed once per later round (0.09 s per planned
-    /// frame-megapixel in its faster speed states, about 0.13 in its slower).
+    /// per frame a row would draw were it not slow (the slow dx11 rows draw one a round after
+    /// their first; 0.07–0.1 s per such frame-megapixel across its speed states).
     pub const LAVAPIPE: Rates = Rates {
-        probe: 13.6,
+        probe: 15.0,
         reference: 0.255,
         build: 0.17,
-        frame: 0.11,
+        frame: 0.08,
+        row_round: 0.1,
         ladder: 1.1,
         images: 0.13,
     };
 
-    fn from_run(work: &Work, phases: &BenchPhases) -> Rates {
+    /// The rates of a finished bench of `work` with `phases`, whose rows drew `drawn`
+    /// frame-megapixels in `frame_seconds` of frames.
+    fn from_run(work: &Work, phases: &BenchPhases, drawn: f64, frame_seconds: f64) -> Rates {
         let per = |seconds: f64, units: f64, default: f64| {
             if units > 0.0 && seconds > 0.0 {
                 seconds / units
@@ -75,7 +85,12 @@ impl Rates {
                 d.reference,
             ),
             build: per(phases.build, work.builds, d.build),
-            frame: per(phases.render, work.frames, d.frame),
+            frame: per(frame_seconds, drawn, d.frame),
+            row_round: per(
+                (phases.render - frame_seconds).max(0.0),
+                work.row_rounds,
+                d.row_round,
+            ),
             ladder: per(phases.ladder, work.ladder, d.ladder),
             images: per(phases.row_images + phases.figures, work.images, d.images),
         }
@@ -88,7 +103,11 @@ struct Work {
     probe: f64,
     reference: f64,
     builds: f64,
+    /// Frame-megapixels of the rows with no time of their own.
     frames: f64,
+    /// Seconds of the frames of the rows with a time of their own.
+    known_frame_seconds: f64,
+    row_rounds: f64,
     ladder: f64,
     images: f64,
 }
@@ -107,6 +126,54 @@ pub struct Plan {
     bake_key: u64,
     rates_file: PathBuf,
     bake_names: Vec<&'static str>,
+    schedule: FrameSchedule,
+    /// Rows the plan priced by their own last time.
+    known_rows: usize,
+}
+
+/// How a bench's rows draw their frames (`bench::timing`): `warmup` before the first
+/// round's `per_round`, one before each later round's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct FrameSchedule {
+    warmup: u32,
+    per_round: u32,
+    rounds: u32,
+}
+
+impl FrameSchedule {
+    fn of(settings: &BenchSettings) -> FrameSchedule {
+        let rounds = if settings.specular.is_some() {
+            1
+        } else {
+            TIMING_ROUNDS.min(settings.frames.max(1))
+        };
+        FrameSchedule {
+            warmup: settings.warmup,
+            per_round: settings.frames.div_ceil(rounds),
+            rounds,
+        }
+    }
+
+    /// Frames a row draws, warm-up included, where its frames take `ms` (unknown: `None`):
+    /// a slow row one a round after its first.
+    fn frames(&self, ms: Option<f64>) -> u32 {
+        let later = if ms.is_some_and(|ms| ms >= SLOW_FRAME_MS) {
+            1
+        } else {
+            self.per_round
+        };
+        self.warmup + self.per_round + (self.rounds - 1) * (self.warmup.min(1) + later)
+    }
+
+    /// Warm-up frames a row draws in its rounds.
+    fn warmups(&self) -> u32 {
+        self.warmup + (self.rounds - 1) * self.warmup.min(1)
+    }
+}
+
+/// A row's key in the rates file: "technique.path".
+fn row_key(technique: impl std::fmt::Display, path: impl std::fmt::Display) -> String {
+    format!("{technique}.{path}")
 }
 
 impl Plan {
@@ -122,12 +189,36 @@ impl Plan {
         let rows_per_filter = settings.row_count();
         let filters = settings.specular.as_ref().map_or(1, |s| s.filters.len());
         let rows = rows_per_filter * filters;
-        let rounds = if settings.specular.is_some() {
-            1
-        } else {
-            TIMING_ROUNDS.min(settings.frames.max(1))
-        };
+        let schedule = FrameSchedule::of(settings);
+        let rounds = schedule.rounds;
         let mpx = f64::from(settings.width) * f64::from(settings.height) / 1e6;
+        let rates_file = rates_file(ctx, settings.width, settings.height);
+        let history = read_history(&rates_file);
+        // Each row's last median frame time on this device (specular rows: none kept).
+        let row_ms = |technique: Technique, path| {
+            history
+                .as_ref()
+                .filter(|_| settings.specular.is_none())
+                .and_then(|h| h.row_ms.get(&row_key(technique, path)).copied())
+        };
+        let (mut unknown_frames, mut known_frame_seconds, mut known_rows) = (0.0, 0.0, 0);
+        for &technique in &settings.techniques {
+            for &path in settings
+                .paths
+                .iter()
+                .filter(|&&p| settings.measures(technique, p))
+            {
+                let ms = row_ms(technique, path);
+                let frames = f64::from(schedule.frames(ms)) * filters as f64;
+                match ms {
+                    Some(ms) => {
+                        known_frame_seconds += frames * ms / 1000.0;
+                        known_rows += 1;
+                    }
+                    None => unknown_frames += frames * mpx,
+                }
+            }
+        }
         let references = if settings.ref_spp == 0 {
             0.0
         } else if settings.footprint_reference {
@@ -146,12 +237,12 @@ impl Plan {
             },
             reference: references * f64::from(settings.ref_spp) * mpx,
             builds: (rows as u32 * rounds) as f64,
-            frames: rows as f64 * f64::from(settings.frames + settings.warmup + rounds) * mpx,
+            frames: unknown_frames,
+            known_frame_seconds,
+            row_rounds: (rows as u32 * rounds) as f64,
             ladder: if ladder { rows as f64 * mpx } else { 0.0 },
             images: rows as f64,
         };
-        let rates_file = rates_file(ctx, settings.width, settings.height);
-        let history = read_history(&rates_file);
         let bake_key = bake_key(prepare, &settings.techniques);
         let (rates, rates_from) = match &history {
             Some(h) => (h.rates, format!("this device's last bench, {}", h.measured)),
@@ -180,6 +271,8 @@ impl Plan {
             bake_key,
             rates_file,
             bake_names: bake_names(prepare, &settings.techniques),
+            schedule,
+            known_rows,
         }
     }
 
@@ -190,7 +283,7 @@ impl Plan {
             w.probe * r.probe,
             w.reference * r.reference,
             w.builds * r.build,
-            w.frames * r.frame,
+            w.frames * r.frame + w.known_frame_seconds + w.row_rounds * r.row_round,
             w.ladder * r.ladder,
             w.images * r.images,
         ]
@@ -215,7 +308,7 @@ impl Plan {
             ),
         };
         format!(
-            "plan: {} rows ({} techniques × {}) at {}×{}, {} timed frames each after {} warm-up, in {} rounds ≈ {} (builds {}, frames {}, images {})\n\
+            "plan: {} rows ({} techniques × {}) at {}×{}, {} timed frames each after {} warm-up, in {} rounds ≈ {} (builds {}, frames {}: {} of the rows at their own last time here, images {})\n\
              plan: bakes ({}) ≈ {} ({}); {}; references at {} spp ≈ {}; error ladder ≈ {}\n\
              plan: about {} in all ({})",
             self.rows,
@@ -229,6 +322,7 @@ impl Plan {
             duration(builds + frames + images),
             duration(builds),
             duration(frames),
+            self.known_rows,
             duration(images),
             self.bake_names.join(", "),
             duration(self.bake_seconds),
@@ -256,10 +350,27 @@ impl Plan {
             0.0
         };
         work.builds *= scale;
-        work.frames *= scale;
+        work.row_rounds *= scale;
         work.ladder *= scale;
         work.images *= scale;
-        let mut rates = Rates::from_run(&work, &table.phases);
+        // What the rows drew: their timed frames (re-timing rounds included) and warm-ups.
+        let mpx = f64::from(table.width) * f64::from(table.height) / 1e6;
+        let (mut drawn, mut frame_seconds) = (0.0, 0.0);
+        let mut row_ms = read_history(&self.rates_file)
+            .map(|h| h.row_ms)
+            .unwrap_or_default();
+        for row in &table.results {
+            let Some(ms) = row.ms_median.filter(|ms| ms.is_finite() && *ms > 0.0) else {
+                continue;
+            };
+            let frames = (row.frames + self.schedule.warmups() as usize) as f64;
+            drawn += frames * mpx;
+            frame_seconds += frames * ms / 1000.0;
+            if row.specular.is_none() {
+                row_ms.insert(row_key(row.technique, row.path), ms);
+            }
+        }
+        let mut rates = Rates::from_run(&work, &table.phases, drawn, frame_seconds);
         if work.probe == 0.0 {
             rates.probe =
                 read_history(&self.rates_file).map_or(self.rates.probe, |h| h.rates.probe);
@@ -270,6 +381,7 @@ impl Plan {
             rates,
             bake_key: self.bake_key,
             bake_seconds,
+            row_ms,
         };
         let written = serde_json::to_vec_pretty(&history)
             .map_err(|e| e.to_string())
@@ -292,6 +404,8 @@ struct History {
     /// The bakes of that run ([`bake_key`]) and their seconds.
     bake_key: u64,
     bake_seconds: f64,
+    /// Each row's median frame time, ms, in the last bench that drew it ([`row_key`]).
+    row_ms: BTreeMap<String, f64>,
 }
 
 /// The rates file of this device at a `width` × `height` frame: rates per megapixel learnt
@@ -345,6 +459,7 @@ impl History {
             ("reference", r.reference),
             ("build", r.build),
             ("frame", r.frame),
+            ("row_round", r.row_round),
             ("ladder", r.ladder),
             ("images", r.images),
             ("bake_seconds", self.bake_seconds),
@@ -354,6 +469,13 @@ impl History {
                     "{name} is {seconds} s, not a duration between 0 and a day"
                 ));
             }
+        }
+        if let Some((row, ms)) = self
+            .row_ms
+            .iter()
+            .find(|(_, ms)| !(ms.is_finite() && **ms > 0.0 && **ms <= 1000.0 * DAY_SECONDS))
+        {
+            return Err(format!("{row} is {ms} ms a frame, not a duration"));
         }
         if !crate::files::clock::is_utc_minute(&self.measured) {
             return Err(format!(
@@ -514,6 +636,8 @@ mod tests {
             reference: 10.0,
             builds: 4.0,
             frames: 100.0,
+            known_frame_seconds: 0.0,
+            row_rounds: 4.0,
             ladder: 0.0,
             images: 4.0,
         };
@@ -527,14 +651,37 @@ mod tests {
             ladder: 3.0,
             figures: 1.0,
         };
-        let r = Rates::from_run(&work, &phases);
+        // The rows drew 50 frame-megapixels in 3 s of frames; the rest of the render phase
+        // is their rounds' own cost.
+        let r = Rates::from_run(&work, &phases, 50.0, 3.0);
         assert_eq!(r.probe, 10.0);
         assert_eq!(r.reference, 0.2);
         assert_eq!(r.build, 0.5);
-        assert_eq!(r.frame, 0.07);
+        assert_eq!(r.frame, 0.06);
+        assert_eq!(r.row_round, 1.0);
         // No ladder work: the default rate stays.
         assert_eq!(r.ladder, Rates::LAVAPIPE.ladder);
         assert_eq!(r.images, 0.5);
+    }
+
+    #[test]
+    fn a_slow_row_is_planned_at_one_frame_a_round_after_its_first() {
+        let schedule = FrameSchedule {
+            warmup: 1,
+            per_round: 3,
+            rounds: 3,
+        };
+        // 1 warm-up + 3, then two rounds of 1 warm-up + 3 (a slow row: + 1).
+        assert_eq!(schedule.frames(None), 12);
+        assert_eq!(schedule.frames(Some(30.0)), 12);
+        assert_eq!(schedule.frames(Some(SLOW_FRAME_MS)), 8);
+        assert_eq!(schedule.warmups(), 3);
+        let once = FrameSchedule {
+            warmup: 10,
+            per_round: 100,
+            rounds: 1,
+        };
+        assert_eq!(once.frames(Some(1000.0)), 110);
     }
 
     #[test]
@@ -548,6 +695,7 @@ mod tests {
             rates: Rates::LAVAPIPE,
             bake_key: 1,
             bake_seconds: 30.0,
+            row_ms: BTreeMap::from([("unc6.dx9".to_string(), 85.0)]),
         };
         let written = |h: &History| {
             std::fs::write(&file, serde_json::to_vec(h).unwrap()).unwrap();
@@ -588,6 +736,13 @@ mod tests {
                     ..good.clone()
                 },
                 "measured \"| x |\" is not a UTC time",
+            ),
+            (
+                History {
+                    row_ms: BTreeMap::from([("unc6.dx11".to_string(), -1.0)]),
+                    ..good.clone()
+                },
+                "unc6.dx11 is -1 ms a frame",
             ),
             (
                 History {

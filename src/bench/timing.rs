@@ -29,6 +29,14 @@ const MODEL_STATE_ROUNDS: usize = 3;
 /// rows' builds agree within 5 %; an odd build runs 13–37 % slow).
 const BUILD_AGREEMENT: f64 = 0.1;
 
+/// Passes over the rows still to settle, at most, counting those that time none
+/// ([`Rounds::until_modelled`]).
+const MAX_RETIMING_PASSES: usize = 4 * MODEL_STATE_ROUNDS;
+
+/// The share of the rows a re-timing round times that it must settle for another round to
+/// follow ([`Rounds::until_modelled`]).
+const SETTLED_SHARE: f64 = 0.25;
+
 /// A row whose frames so far have a median this slow (ms) or slower times one frame per
 /// round after its first: a frame this long varies by a small share of itself, and such
 /// frames are most of a run's time where they occur (lavapipe decodes block-compressed
@@ -107,6 +115,12 @@ impl Rounds<'_> {
     /// ≈ 25 % slow for as long as it lives (`probe::states`), and its time there is its
     /// fastest build's. Not with `--specular`: its rows differ by the specular term bound
     /// when they were measured, and only the last one is bound now.
+    ///
+    /// Such rounds are only spent where they can settle a row: a row is passed over while
+    /// the monitor reads a state with no model (its frames could not count), and the rounds
+    /// stop once one settles fewer than [`SETTLED_SHARE`] of the rows it timed — the builds
+    /// then disagree because the device's speed drifts between rounds, not because one build
+    /// is odd, and more rounds would only repeat every row's work.
     pub(super) fn until_modelled(
         &self,
         probe: &Probe,
@@ -116,8 +130,8 @@ impl Rounds<'_> {
         clock: &mut Clock,
     ) -> Result<(), BenchError> {
         let modelled: Vec<usize> = probe.state_models.iter().map(|m| m.state).collect();
-        for _ in 0..MODEL_STATE_ROUNDS {
-            let unmodelled: Vec<usize> = (0..rows.len())
+        let unsettled = |samples: &[Segmented]| -> Vec<usize> {
+            (0..rows.len())
                 .filter(|&i| {
                     match samples[i].fastest_state(&monitor.states, modelled.iter().copied()) {
                         Some((state, _, _)) => {
@@ -126,22 +140,54 @@ impl Rounds<'_> {
                         None => true,
                     }
                 })
-                .collect();
-            if unmodelled.is_empty() {
+                .collect()
+        };
+        let mut left = unsettled(samples);
+        // Rounds that timed a row, and passes over the rows in all (a pass that times none
+        // costs a monitor frame per row: a spell in a state with no model waits a few).
+        let (mut rounds, mut passes) = (0, 0);
+        while rounds < MODEL_STATE_ROUNDS && passes < MAX_RETIMING_PASSES {
+            passes += 1;
+            if left.is_empty() {
                 break;
             }
             log::info!(
                 "cost model: {} row(s) without frames of two builds within {:.0} % of each other in a modelled state, timed again",
-                unmodelled.len(),
+                left.len(),
                 100.0 * BUILD_AGREEMENT
             );
-            clock.progress.add(unmodelled.len());
-            for i in unmodelled {
+            clock.progress.add(left.len());
+            let (mut timed, mut passed_over) = (0usize, 0usize);
+            for &i in &left {
                 clock.progress.step(&format!(
                     "{}.{}: timed again",
                     rows[i].technique, rows[i].path
                 ));
+                let now = monitor.states.state_of(monitor.read()?);
+                if !now.is_some_and(|s| modelled.contains(&s)) {
+                    passed_over += 1;
+                    continue;
+                }
                 self.time_round(rows[i].technique, rows[i].path, &mut samples[i], clock)?;
+                timed += 1;
+            }
+            if timed > 0 {
+                rounds += 1;
+            }
+            let still = unsettled(samples);
+            let settled = left.len() - still.len();
+            left = still;
+            if passed_over > 0 {
+                log::info!(
+                    "cost model: {passed_over} row(s) passed over, the device in a state with no model"
+                );
+            }
+            if timed > 0 && (settled as f64) < SETTLED_SHARE * timed as f64 {
+                log::info!(
+                    "cost model: {settled} of {timed} row(s) timed again settled; the builds of {} row(s) still disagree (the device's speed drifts between rounds), no more rounds",
+                    left.len()
+                );
+                break;
             }
         }
         Ok(())

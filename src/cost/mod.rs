@@ -129,10 +129,11 @@ pub enum Kind {
     /// stored values at a vertex's offset): a register on GPUs where the index is uniform,
     /// else scratch memory; lavapipe gathers each lane's element from the stack.
     IndexedPrivateRead,
-    /// Integer division or remainder by a divisor computed per pixel (Ambient Dice's atlas
-    /// tile on dx9: a group's column and row among the atlas' columns); a constant divisor
-    /// is a multiply and shift, not counted. No SIMD unit divides integers: the lanes are
-    /// divided one by one on a CPU.
+    /// Integer division or remainder by a divisor that is not a compile-time constant
+    /// (Ambient Dice's atlas tile on dx9: a group's column and row among the atlas' columns,
+    /// a uniform); a constant divisor is a multiply and shift, not counted. No SIMD unit
+    /// divides integers: a CPU divides the lanes one by one. The probe's divisor varies per
+    /// pixel, so a device that hoists a uniform divisor's set-up pays less than it prices.
     IntegerDivide,
     /// Bilinear 2D-array lookup of a BC6H layer (dx11's norms): decoded in the texture unit
     /// on GPUs, in software at every fetch on lavapipe.
@@ -188,6 +189,21 @@ impl Kind {
             Kind::Bc7Array => "BC7 array lookup",
             Kind::Bc4Array => "BC4 array lookup",
         }
+    }
+
+    /// Whether this kind is a texture lookup (the rest are shader operations and reads).
+    pub fn is_lookup(self) -> bool {
+        !matches!(
+            self,
+            Kind::FloatOp
+                | Kind::Varying
+                | Kind::UniformRead
+                | Kind::IndexedUniformRead
+                | Kind::Loop
+                | Kind::Transcendental
+                | Kind::IndexedPrivateRead
+                | Kind::IntegerDivide
+        )
     }
 
     /// The block-compressed format a lookup of this kind reads, for the BC kinds.

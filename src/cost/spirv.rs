@@ -87,7 +87,7 @@ const GLSL_DISTANCE: u32 = 67;
 const GLSL_CROSS: u32 = 68;
 const GLSL_DETERMINANT: u32 = 33;
 const GLSL_MATRIX_INVERSE: u32 = 34;
-/// GLSL.std.450 Sin … Atanh (13–25) and Pow, Exp, Log, Exp2, Log2 (26–30): transcendentals.
+/// GLSL.std.450 Sin … Atan2 (13–25) and Pow, Exp, Log, Exp2, Log2 (26–30): transcendentals.
 const GLSL_TRANSCENDENTALS: std::ops::RangeInclusive<u32> = 13..=30;
 
 /// A type's shape: float components (0 for non-float scalars) and bytes-ish size in

@@ -40,8 +40,8 @@ pub fn probe_counts(kind: Kind) -> &'static [u32] {
         Kind::Transcendental => &[32, 64, 128, 256],
         Kind::IndexedPrivateRead => &[9, 18, 27, 36],
         Kind::IntegerDivide => &[8, 16, 32, 64],
-        // Decoded in software on lavapipe (0.15–0.2 s a lookup over the screen): two points,
-        // over half the screen (`point_specs`).
+        // BC6H and BC7 are decoded in software on lavapipe (0.1–0.2 s a lookup over the
+        // screen): two points each, over half the screen (`point_specs`).
         Kind::Bc6hArray | Kind::Bc7Array | Kind::Bc4Array => &[1, 2],
         // No points of its own: the indexed reads' points enter one loop each.
         Kind::Loop => &[],
@@ -277,21 +277,7 @@ impl<'a> PointPlanner<'a> {
 /// The texture lookups a point of `kind` makes: `count` of its kind where it is a lookup.
 fn lookups_of(kind: Option<Kind>, count: u32) -> Vec<(Kind, u32)> {
     match kind {
-        Some(
-            k @ (Kind::Bilinear2d
-            | Kind::TexelFetch
-            | Kind::Trilinear2d
-            | Kind::TrilinearWide
-            | Kind::TrilinearSrgb
-            | Kind::Array2d
-            | Kind::CubeArray
-            | Kind::Dependent2d
-            | Kind::Bc6hArray
-            | Kind::Bc7Array
-            | Kind::Bc4Array),
-        ) => {
-            vec![(k, count)]
-        }
+        Some(k) if k.is_lookup() => vec![(k, count)],
         _ => vec![],
     }
 }

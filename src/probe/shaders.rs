@@ -167,10 +167,11 @@ fn float_ops(count: u32) -> String {
 
 /// At least `count` transcendentals, in rounds of 32: the body.
 fn transcendentals(count: u32) -> String {
-    // Four independent vec4 chains of sin(exp(c)): bounded, so no value overflows or
-    // turns denormal however long the chain.
+    // Four independent vec4 chains of sin(exp(c)), every lane from the varyings (a constant
+    // lane would be folded where the device runs lanes apart): bounded, so no value
+    // overflows or turns denormal however long the chain.
     let mut body = String::new();
-    body += "    vec4 c0 = vec4(in_uv_lightmap, 0.5, 0.25), c1 = c0.yxwz, c2 = c0.zwxy, c3 = c0.wzyx;\n";
+    body += "    vec4 c0 = vec4(in_uv_lightmap, in_uv_lightmap.yx * 0.5 + 0.25), c1 = c0.yxwz, c2 = c0.zwxy, c3 = c0.wzyx;\n";
     for _ in 0..count.div_ceil(32) {
         body += "    c0 = sin(exp(c0)); c1 = sin(exp(c1)); c2 = sin(exp(c2)); c3 = sin(exp(c3));\n";
     }

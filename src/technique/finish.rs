@@ -105,8 +105,17 @@ pub fn stats(
     per_texel_lookups: Option<u32>,
 ) -> TechniqueStats {
     let of_kind = |kind: SlotKind| slots.iter().filter(move |s| s.kind == kind);
+    // A shader that reads its per-texel groups tap by tap reads a ratio codec's norms (dx11,
+    // BC6H) once a pixel besides.
+    let norms = |s: &SlotLayout| -> u32 {
+        s.images
+            .iter()
+            .filter(|d| d.format == vk::Format::BC6H_UFLOAT_BLOCK)
+            .map(|d| d.layers)
+            .sum()
+    };
     let slot_lookups = |s: &SlotLayout| match (s.kind, per_texel_lookups) {
-        (SlotKind::PerTexel, Some(n)) => n,
+        (SlotKind::PerTexel, Some(n)) => n + norms(s),
         _ => s.lookups(),
     };
     TechniqueStats {
