@@ -41,7 +41,8 @@ pub struct Rates {
     pub reference: f64,
     /// Per row build.
     pub build: f64,
-    /// Per frame (warm-up or timed) per megapixel, of a row this device has not timed.
+    /// Per frame (warm-up or timed) per megapixel, of a row this device has not timed (from
+    /// a run: its rows' frames, as planned, at their medians, over their frame-megapixels).
     pub frame: f64,
     /// Per row per timing round, beside its frames.
     pub row_round: f64,
@@ -141,8 +142,10 @@ struct FrameSchedule {
 }
 
 impl FrameSchedule {
-    fn of(settings: &BenchSettings) -> FrameSchedule {
-        let rounds = if settings.specular.is_some() {
+    /// The schedule of a bench of `settings` with `specular_filters` specular filterings (0:
+    /// none; a specular bench times its rows in one round).
+    fn of(settings: &BenchSettings, specular_filters: usize) -> FrameSchedule {
+        let rounds = if specular_filters > 0 {
             1
         } else {
             TIMING_ROUNDS.min(settings.frames.max(1))
@@ -154,20 +157,15 @@ impl FrameSchedule {
         }
     }
 
-    /// Frames a row draws, warm-up included, where its frames take `ms` (unknown: `None`):
-    /// a slow row one a round after its first.
+    /// Frames a row draws, warm-up and its image's included, where its frames take `ms`
+    /// (unknown: `None`): a slow row one a round after its first.
     fn frames(&self, ms: Option<f64>) -> u32 {
         let later = if ms.is_some_and(|ms| ms >= SLOW_FRAME_MS) {
             1
         } else {
             self.per_round
         };
-        self.warmup + self.per_round + (self.rounds - 1) * (self.warmup.min(1) + later)
-    }
-
-    /// Warm-up frames a row draws in its rounds.
-    fn warmups(&self) -> u32 {
-        self.warmup + (self.rounds - 1) * self.warmup.min(1)
+        self.warmup + self.per_round + 1 + (self.rounds - 1) * (self.warmup.min(1) + later)
     }
 }
 
@@ -178,18 +176,20 @@ fn row_key(technique: impl std::fmt::Display, path: impl std::fmt::Display) -> S
 
 impl Plan {
     /// The plan of a bench of `settings` (its rows before any is left out for lack of a
-    /// height map) after bakes of `prepare`; `probe_cached`: when the cached probe it
-    /// will reuse was measured, if there is one.
+    /// height map) with `specular_filters` specular filterings (0: none; its specular term
+    /// is set up after the bakes) after bakes of `prepare`; `probe_cached`: when the cached
+    /// probe it will reuse was measured, if there is one.
     pub fn new(
         ctx: &Context,
         settings: &BenchSettings,
+        specular_filters: usize,
         prepare: &PrepareSettings,
         probe_cached: Option<String>,
     ) -> Plan {
         let rows_per_filter = settings.row_count();
-        let filters = settings.specular.as_ref().map_or(1, |s| s.filters.len());
+        let filters = specular_filters.max(1);
         let rows = rows_per_filter * filters;
-        let schedule = FrameSchedule::of(settings);
+        let schedule = FrameSchedule::of(settings, specular_filters);
         let rounds = schedule.rounds;
         let mpx = f64::from(settings.width) * f64::from(settings.height) / 1e6;
         let rates_file = rates_file(ctx, settings.width, settings.height);
@@ -198,7 +198,7 @@ impl Plan {
         let row_ms = |technique: Technique, path| {
             history
                 .as_ref()
-                .filter(|_| settings.specular.is_none())
+                .filter(|_| specular_filters == 0)
                 .and_then(|h| h.row_ms.get(&row_key(technique, path)).copied())
         };
         let (mut unknown_frames, mut known_frame_seconds, mut known_rows) = (0.0, 0.0, 0);
@@ -226,9 +226,8 @@ impl Plan {
         } else {
             1.0
         };
-        let ladder = settings.ref_spp > 0
-            && settings.specular.is_none()
-            && settings.relight_degrees.is_none();
+        let ladder =
+            settings.ref_spp > 0 && specular_filters == 0 && settings.relight_degrees.is_none();
         let work = Work {
             probe: if settings.probe && probe_cached.is_none() {
                 f64::from(settings.probe_frames + 1) * mpx
@@ -353,7 +352,8 @@ impl Plan {
         work.row_rounds *= scale;
         work.ladder *= scale;
         work.images *= scale;
-        // What the rows drew: their timed frames (re-timing rounds included) and warm-ups.
+        // What the rows' planned frames took at their medians; the rest of the render phase
+        // (re-timing rounds among it) is the rows' rounds' own cost.
         let mpx = f64::from(table.width) * f64::from(table.height) / 1e6;
         let (mut drawn, mut frame_seconds) = (0.0, 0.0);
         let mut row_ms = read_history(&self.rates_file)
@@ -363,7 +363,7 @@ impl Plan {
             let Some(ms) = row.ms_median.filter(|ms| ms.is_finite() && *ms > 0.0) else {
                 continue;
             };
-            let frames = (row.frames + self.schedule.warmups() as usize) as f64;
+            let frames = f64::from(self.schedule.frames(Some(ms)));
             drawn += frames * mpx;
             frame_seconds += frames * ms / 1000.0;
             if row.specular.is_none() {
@@ -671,17 +671,16 @@ mod tests {
             per_round: 3,
             rounds: 3,
         };
-        // 1 warm-up + 3, then two rounds of 1 warm-up + 3 (a slow row: + 1).
-        assert_eq!(schedule.frames(None), 12);
-        assert_eq!(schedule.frames(Some(30.0)), 12);
-        assert_eq!(schedule.frames(Some(SLOW_FRAME_MS)), 8);
-        assert_eq!(schedule.warmups(), 3);
+        // 1 warm-up + 3 + the image, then two rounds of 1 warm-up + 3 (a slow row: + 1).
+        assert_eq!(schedule.frames(None), 13);
+        assert_eq!(schedule.frames(Some(30.0)), 13);
+        assert_eq!(schedule.frames(Some(SLOW_FRAME_MS)), 9);
         let once = FrameSchedule {
             warmup: 10,
             per_round: 100,
             rounds: 1,
         };
-        assert_eq!(once.frames(Some(1000.0)), 110);
+        assert_eq!(once.frames(Some(1000.0)), 111);
     }
 
     #[test]

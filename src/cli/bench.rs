@@ -219,7 +219,13 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
             shvis::prepare::resolve_scene(&prepare_settings.scene, prepare_settings.vis_res)?;
         let cached_probe = shvis::bench::cached_probe(ctx, &settings, &scene);
         drop(scene);
-        let plan = Plan::new(ctx, &settings, &prepare_settings, cached_probe);
+        let plan = Plan::new(
+            ctx,
+            &settings,
+            a.specular.specular.len(),
+            &prepare_settings,
+            cached_probe,
+        );
         for line in plan.describe(&settings).lines() {
             log::info!("{line}");
         }
