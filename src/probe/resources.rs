@@ -233,13 +233,11 @@ fn block_arrays(
         0.5 + 0.4 * wave + 0.05 * (value(i, x * 4 + c, y) - 0.5)
     };
     let mut arrays = Vec::new();
-    for kind in [Kind::Bc6hArray, Kind::Bc7Array, Kind::Bc4Array] {
-        let Some(format) = kind.block_format() else {
-            continue;
-        };
-        if !ctx.supports_block_format(format) {
-            continue;
-        }
+    let sampled = Kind::ALL
+        .into_iter()
+        .filter_map(|k| k.block_format().map(|f| (k, f)))
+        .filter(|&(_, f)| ctx.supports_block_format(f));
+    for (kind, format) in sampled {
         let layers: Vec<Vec<u8>> = (0..TEXTURES)
             .map(|i| {
                 let texels = 0..side * side;

@@ -260,7 +260,7 @@ impl<'a> PointPlanner<'a> {
                 Resource::TextureArray(res.trilinear_srgb.iter().map(|i| (i, material)).collect()),
             )),
             Some(Kind::Array2d) => resources.push((t0, Resource::Texture(&res.array, linear))),
-            Some(k @ (Kind::Bc6hArray | Kind::Bc7Array | Kind::Bc4Array)) => {
+            Some(k) if k.block_format().is_some() => {
                 if let Some(image) = res.block_array(k) {
                     resources.push((t0, Resource::Texture(image, linear)));
                 }
