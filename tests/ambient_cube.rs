@@ -16,7 +16,7 @@ fn both_fits_draw_their_cpu_evaluation_and_meet_the_bounced_reference_on_every_p
     let (reference, settings) = common::house_reference(&ctx);
     let bounced = reference.bounced.as_ref().expect("a bounced reference");
     let prepared = common::house();
-    let pixels = LadderPixels::new(&ctx, prepared, settings.width, settings.height)
+    let pixels = LadderPixels::new(&ctx, prepared, settings.width, settings.height, 1)
         .expect("the ladder's pixels");
     for name in ["acube", "acubels"] {
         let technique: Technique = name.parse().expect("an ambient cube name");

@@ -1,6 +1,7 @@
 //! The error attribution ladder of the bench (`shvis::attribution`): on the test
 //! house, every row's rungs go from the footprint reference to the technique's own bench
-//! image, every rung's image is written and is the image its error was measured on, the
+//! image, every rung's image is written at the ladder's grid (every 2nd pixel) and is the
+//! image its error was measured on (the frame-sized images picked at that grid), the
 //! visibility-truncation rung falls towards order 6, and the last CPU rung meets the GPU
 //! at f16 level (8-bit weights: see the bound below). Real Vulkan on lavapipe with validation on.
 
@@ -47,6 +48,29 @@ fn rel_rmse(test: &[[f32; 4]], reference: &[[f32; 4]]) -> f64 {
     (se / sq).sqrt()
 }
 
+/// The ladder's grid in the bench below: every 2nd pixel of its 160 × 100 frames.
+const LADDER_STRIDE: u32 = 2;
+const FRAME_WIDTH: usize = 160;
+
+/// A frame-sized image at the ladder's grid (every [`LADDER_STRIDE`]-th pixel in each
+/// direction); a ladder rung as it is.
+fn at_grid((width, pixels): (usize, Vec<[f32; 4]>)) -> Vec<[f32; 4]> {
+    if width != FRAME_WIDTH {
+        assert_eq!(
+            width,
+            FRAME_WIDTH / LADDER_STRIDE as usize,
+            "a rung's width"
+        );
+        return pixels;
+    }
+    let s = LADDER_STRIDE as usize;
+    pixels
+        .chunks(width)
+        .step_by(s)
+        .flat_map(|row| row.iter().step_by(s).copied())
+        .collect()
+}
+
 fn step(row: &BenchRow, kind: AttributionKind) -> f64 {
     row.attribution
         .iter()
@@ -77,7 +101,7 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
             paths: vec![HwPath::Dx9, HwPath::Dx10],
             frames: 1,
             warmup: 0,
-            width: 160,
+            width: FRAME_WIDTH as u32,
             height: 100,
             exposure: 0.0,
             ref_spp: 16,
@@ -91,6 +115,7 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
             probe_frames: 5,
             relight_degrees: None,
             ladder: true,
+            ladder_stride: LADDER_STRIDE,
             dx11_rows: None,
         },
     )
@@ -120,12 +145,20 @@ fn ladders_telescope_from_the_reference_to_the_bench_image() {
             shvis::report::table::RowReference::Bounced(n) => format!("reference_bounces{n}.exr"),
             _ => "reference.exr".to_string(),
         };
-        let mut previous = read_exr(&out_dir.join(&start)).1;
+        let mut previous = at_grid(read_exr(&out_dir.join(&start)));
         for s in steps {
             let path = out_dir.join(&s.image);
             let png = path.with_extension("png");
             assert!(png.is_file(), "{}", png.display());
-            let image = read_exr(&path).1;
+            let image = read_exr(&path);
+            if s.image.starts_with(LADDER_DIR) {
+                assert_eq!(
+                    image.0,
+                    FRAME_WIDTH / LADDER_STRIDE as usize,
+                    "{label}: {s:?}"
+                );
+            }
+            let image = at_grid(image);
             let measured = s.rel_rmse.expect("rung error");
             let recomputed = rel_rmse(&image, &previous);
             // Ladder images are stored in f16: ≲ 5e-4 relative per image.

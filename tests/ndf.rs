@@ -376,6 +376,7 @@ fn the_bench_measures_the_specular_filterings_side_by_side() {
             probe_frames: 5,
             relight_degrees: None,
             ladder: true,
+            ladder_stride: 1,
             dx11_rows: None,
         },
     )

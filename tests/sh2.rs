@@ -54,7 +54,7 @@ fn sh2_error_is_below_preconv_and_paths_agree() {
     let ctx = common::validated_context();
     let (reference, settings) = common::house_reference(&ctx);
     let prepared = common::house();
-    let pixels = LadderPixels::new(&ctx, prepared, settings.width, settings.height)
+    let pixels = LadderPixels::new(&ctx, prepared, settings.width, settings.height, 1)
         .expect("the ladder's pixels");
     let sh2 = Technique::Sh2(shvis::technique::Sh2);
     let preconv = Technique::Preconv(shvis::technique::Preconv);

@@ -2,8 +2,9 @@
 //! footprint reference to its GPU output, each rung removing one idealisation, so that the
 //! cost table's error is explained step by step. The rungs between the point-sampled
 //! reference and the GPU image are evaluated here, on the CPU in f64, at every covered
-//! pixel of the point G-buffer (`reference::render_point_gbuffer`: the position, shading
-//! normal, albedo and lightmap UV the technique's fragment shader sees):
+//! pixel of a grid of the point G-buffer (`reference::render_point_gbuffer`: the position,
+//! shading normal, albedo and lightmap UV the technique's fragment shader sees; the grid
+//! every `stride`-th pixel in each direction, [`LadderPixels::pick`]):
 //!
 //! ```text
 //! rung                     irradiance I at the pixel (radiance = albedo/π · max(0, I))
@@ -73,9 +74,14 @@ use exact_light::ExactLightTable;
 
 /// What every rung needs at each covered pixel, computed once per bench.
 pub struct LadderPixels {
+    /// The ladder's grid: every `stride`-th pixel of the frame in each direction
+    /// ([`LadderPixels::pick`]), `width` × `height` of them.
+    stride: u32,
     width: u32,
     height: u32,
-    /// Frame index of each covered pixel.
+    /// The frame's width, of which the grid picks.
+    frame_width: u32,
+    /// Grid index of each covered pixel.
     index: Vec<usize>,
     normal: Vec<DVec3>,
     albedo_over_pi: Vec<[f64; 3]>,
@@ -126,19 +132,32 @@ const RUNG_CACHE_IMAGES: usize = 24;
 const PRODUCT_CACHE_TABLES: usize = 2;
 
 impl LadderPixels {
-    /// Renders the point G-buffer, traces the visibility at each covered pixel and
+    /// Renders the point G-buffer at `width` × `height`, traces the visibility at each
+    /// covered pixel of the grid of every `stride`-th pixel in each direction and
     /// tabulates the exact-lighting integrals.
+    ///
+    /// # Panics
+    /// With `stride` 0 (a bug of the caller).
     pub fn new(
         ctx: &Arc<Context>,
         prepared: &Prepared,
         width: u32,
         height: u32,
+        stride: u32,
     ) -> Result<LadderPixels, GpuError> {
+        assert!(stride > 0, "the ladder's stride is at least 1");
         let start = Instant::now();
         let g = render_point_gbuffer(ctx, &prepared.scene, width, height)?;
-        let index: Vec<usize> = (0..g.position.rgba.len())
-            .filter(|&i| g.position.rgba[i][3] >= 0.5)
-            .collect();
+        let (grid_width, grid_height) = (width.div_ceil(stride), height.div_ceil(stride));
+        // Frame index of each covered grid pixel, and its grid index.
+        let (index, grid_index): (Vec<usize>, Vec<usize>) = (0..grid_height)
+            .flat_map(|gy| (0..grid_width).map(move |gx| (gx, gy)))
+            .map(|(gx, gy)| {
+                let frame = (gy * stride * width + gx * stride) as usize;
+                (frame, (gy * grid_width + gx) as usize)
+            })
+            .filter(|&(i, _)| g.position.rgba[i][3] >= 0.5)
+            .unzip();
         let v3 = |f: &Frame, i: usize| Vec3::from_slice(&f.rgba[i][..3]);
         let normals_g: Vec<Vec3> = index
             .iter()
@@ -155,8 +174,10 @@ impl LadderPixels {
         let exact = ExactLightTable::new(&prepared.env, prepared.visibility_settings.order);
         let pi = std::f64::consts::PI;
         Ok(LadderPixels {
-            width,
-            height,
+            stride,
+            width: grid_width,
+            height: grid_height,
+            frame_width: width,
             normal: index
                 .iter()
                 .map(|&i| v3(&g.normal, i).as_dvec3().normalize_or_zero())
@@ -178,7 +199,7 @@ impl LadderPixels {
                 .zip(&normals_g)
                 .map(|(&i, n)| [v3(&g.tangent, i), v3(&g.bitangent, i), *n].map(|c| c.as_dvec3()))
                 .collect(),
-            index,
+            index: grid_index,
             position: positions,
             normal_g: normals_g,
             vis,
@@ -190,7 +211,30 @@ impl LadderPixels {
         })
     }
 
-    /// Covered pixels.
+    /// `frame` (of the G-buffer's size) at the ladder's grid: what the rungs are compared
+    /// with.
+    pub fn pick(&self, frame: &Frame) -> Frame {
+        let s = self.stride as usize;
+        let rgba = (0..self.height as usize)
+            .flat_map(|gy| {
+                (0..self.width as usize).map(move |gx| gy * s * self.frame_width as usize + gx * s)
+            })
+            .map(|i| frame.rgba[i])
+            .collect();
+        Frame {
+            width: self.width,
+            height: self.height,
+            rgba,
+            ms: vec![],
+        }
+    }
+
+    /// Every how many pixels of the frame, in each direction, the ladder evaluates one.
+    pub fn stride(&self) -> u32 {
+        self.stride
+    }
+
+    /// Covered pixels of the grid.
     pub fn len(&self) -> usize {
         self.index.len()
     }

@@ -12,7 +12,7 @@ use crate::prepare::Prepared;
 use crate::render::Frame;
 use crate::report::bench_output::BenchOutput;
 use crate::report::metrics::image_error;
-use crate::report::table::{AttributionKind, AttributionStep};
+use crate::report::table::{AttributionKind, AttributionStep, ladder_grid_words};
 use crate::technique::{HwPath, Technique};
 
 /// The error ladder's per-pixel data of the CPU rungs, where the bench has a ladder.
@@ -50,6 +50,14 @@ impl Ladder {
     }
 }
 
+impl Ladder {
+    /// Every how many pixels in each direction the ladder evaluates one; `None` without
+    /// a ladder.
+    pub(super) fn stride(&self) -> Option<u32> {
+        self.pixels.as_ref().map(LadderPixels::stride)
+    }
+}
+
 /// Renders the point G-buffer and traces the per-pixel visibility of the ladder.
 fn ladder_pixels(
     ctx: &Arc<Context>,
@@ -57,10 +65,17 @@ fn ladder_pixels(
     settings: &BenchSettings,
     out: &BenchOutput,
 ) -> Result<LadderPixels, BenchError> {
-    let pixels = LadderPixels::new(ctx, prepared, settings.width, settings.height)?;
+    let pixels = LadderPixels::new(
+        ctx,
+        prepared,
+        settings.width,
+        settings.height,
+        settings.ladder_stride,
+    )?;
     log::info!(
-        "error ladder: {} pixels, visibility traced per pixel ({} rays) and exact lighting tabulated in {:.1} s",
+        "error ladder: {} pixels ({}), visibility traced per pixel ({} rays) and exact lighting tabulated in {:.1} s",
         pixels.len(),
+        ladder_grid_words(pixels.stride()),
         pixels.rays_traced(),
         pixels.seconds
     );
@@ -90,6 +105,14 @@ pub(super) fn attribution(
     }
     let (footprint, _) = reference_for(technique, &r.main);
     let (point, kind) = reference_for(technique, point);
+    // With CPU rungs, every step is measured at the ladder's grid of pixels.
+    let grid = ladder.pixels.as_ref();
+    let at_grid = |f: &Frame| grid.map(|px| px.pick(f));
+    let (footprint_grid, point_grid, frame_grid) =
+        (at_grid(footprint), at_grid(point), at_grid(frame));
+    let footprint = footprint_grid.as_ref().unwrap_or(footprint);
+    let point = point_grid.as_ref().unwrap_or(point);
+    let frame = frame_grid.as_ref().unwrap_or(frame);
     let rel = |a: &Frame, b: &Frame| image_error(a, b).map(|e| e.rel_rmse);
     let mut steps = vec![AttributionStep {
         step: AttributionKind::PixelFootprint,

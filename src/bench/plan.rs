@@ -239,7 +239,11 @@ impl Plan {
             frames: unknown_frames,
             known_frame_seconds,
             row_rounds: (rows as u32 * rounds) as f64,
-            ladder: if ladder { rows as f64 * mpx } else { 0.0 },
+            ladder: if ladder {
+                rows as f64 * mpx / f64::from(settings.ladder_stride.pow(2))
+            } else {
+                0.0
+            },
             images: rows as f64,
         };
         let bake_key = bake_key(prepare, &settings.techniques);

@@ -99,6 +99,10 @@ pub(super) struct BenchArgs {
     /// build with the same settings (in the bake cache's folder), `fresh` measures again.
     #[arg(help_heading = "Frames and timing", long, value_enum, default_value_t = ProbeMode::Cached)]
     probe: ProbeMode,
+    /// The error ladder evaluates every Nth pixel in each direction and measures each of
+    /// its steps at those pixels (1: every pixel; the rung images are 1/N the frame's size).
+    #[arg(help_heading = "Reference and errors", long, value_name = "N", default_value_t = shvis::bench::DEFAULT_LADDER_STRIDE, value_parser = clap::value_parser!(u32).range(1..=16))]
+    ladder_stride: u32,
     /// Leave out, with a note, technique × path pairs that cannot run (`nmprtsvdMp` on dx9)
     /// instead of failing.
     #[arg(help_heading = "Rows", long)]
@@ -187,6 +191,7 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
         probe_frames: a.probe_frames.unwrap_or(a.frames.clamp(5, 30)),
         relight_degrees: a.relight_rotate,
         ladder: true,
+        ladder_stride: a.ladder_stride,
         dx11_rows: (a.techniques.trim() == "headline")
             .then(|| shvis::technique::catalog::headline_on(HwPath::Dx11)),
     };

@@ -473,6 +473,7 @@ fn run_rays(a: StudyRaysArgs) -> Result<()> {
         probe_frames: 5,
         relight_degrees: None,
         ladder: false,
+        ladder_stride: 1,
         dx11_rows: None,
     };
     with_gpu(&a.gpu, |ctx| {

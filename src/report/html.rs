@@ -313,6 +313,15 @@ fn settings_list(t: &BenchTable) -> String {
             opt(t.reference_rel_noise)
         ),
     );
+    if let Some(stride) = t.ladder_stride {
+        item(
+            "error ladder",
+            format!(
+                "measured at {}",
+                crate::report::table::ladder_grid_words(stride)
+            ),
+        );
+    }
     if t.reference_bounces > 0 {
         item(
             "inter-reflected reference",

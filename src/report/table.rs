@@ -237,6 +237,9 @@ pub struct BenchTable {
     pub reference_spp: u32,
     /// The reference's own relative noise (compare with `rel_rmse`).
     pub reference_rel_noise: Option<f64>,
+    /// The error ladder's grid: every `ladder_stride`-th pixel in each direction, where its
+    /// steps are measured (`None`: no ladder).
+    pub ladder_stride: Option<u32>,
     /// Bounces of the inter-reflected reference `shlmap` is measured against (0: none).
     pub reference_bounces: u32,
     /// That reference's relative noise.
@@ -309,6 +312,14 @@ impl BenchPhases {
     }
 }
 
+/// The pixels an error ladder of `stride` is measured at, in words.
+pub fn ladder_grid_words(stride: u32) -> String {
+    match stride {
+        1 => "every pixel".into(),
+        n => format!("one pixel of each {n}×{n} block"),
+    }
+}
+
 fn opt(v: Option<f64>, digits: usize) -> String {
     v.map_or_else(|| "—".to_string(), |v| format!("{v:.digits$}"))
 }
@@ -325,6 +336,9 @@ impl BenchTable {
             self.reference_spp,
             opt(self.reference_rel_noise, 4)
         );
+        if let Some(stride) = self.ladder_stride {
+            s += &format!(" · error ladder at {}", ladder_grid_words(stride));
+        }
         s += &format!(
             "; bench wall time {:.1} s ({})",
             self.seconds,
@@ -560,6 +574,7 @@ pub(crate) mod tests {
             height: 4,
             vis_res: 16,
             reference_spp: 4,
+            ladder_stride: None,
             reference_rel_noise: Some(0.1),
             reference_bounces: 0,
             reference_bounced_rel_noise: None,

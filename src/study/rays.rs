@@ -127,6 +127,7 @@ pub fn run(
                 out,
                 probe: false,
                 ladder: false,
+                ladder_stride: 1,
                 ..bench.clone()
             },
         )?;
