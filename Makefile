@@ -39,7 +39,7 @@ NMPRT_ROWS = unc6,preconv,shlmap,nmprt,nmprtsvd4,nmprtsvd6,nmprthl2,nmprtratio
 # and estimate first, then the time left); dx11 rows for the headline's HEADLINE_DX11.
 # Frames are few to fit five minutes on 2 cores.
 bench: build
-	target/release/shvis bench --techniques headline --paths dx9,dx10,dx11 --frames 9 --warmup 1 --probe-frames 4 --out $(BENCH_OUT)
+	target/release/shvis bench --techniques headline --paths dx9,dx10,dx11 --frames 9 --warmup 1 --probe-frames 5 --out $(BENCH_OUT)
 
 # Everything: every row, every study, the relit and specular benches.
 bench-full: build

@@ -56,14 +56,16 @@ impl Rates {
     /// A 2-core AMD EPYC VM with lavapipe (llvmpipe, LLVM 15): its `make bench` runs from
     /// a fresh clone (the headline set on dx9, dx10 and dx11 at 1280×800), the frames' rate
     /// per frame a row would draw were it not slow (the slow dx11 rows draw one a round after
-    /// their first; 0.07–0.1 s per such frame-megapixel across its speed states).
+    /// their first; 0.07–0.1 s per such frame-megapixel across its speed states). Its probe
+    /// took 37 s where the device kept one speed state and 76 s where it switched between
+    /// two (most points then timed in another batch); the rate is between.
     pub const LAVAPIPE: Rates = Rates {
-        probe: 15.0,
-        reference: 0.255,
+        probe: 9.0,
+        reference: 0.215,
         build: 0.17,
-        frame: 0.08,
+        frame: 0.072,
         row_round: 0.1,
-        ladder: 1.1,
+        ladder: 1.55,
         images: 0.13,
     };
 
@@ -548,10 +550,10 @@ fn default_bake_seconds(prepare: &PrepareSettings, techniques: &[Technique]) -> 
     };
     let mut seconds = 0.5
         + (6.5 * passes(prepare.sh_lightmap_bounces) + SECONDS_PER_SAMPLE_FIT * fits) * own_rays
-        + 22.0 * passes(prepare.transfer_bounces);
+        + 18.5 * passes(prepare.transfer_bounces);
     for t in techniques {
         if let Some(c) = t.needs().clusters {
-            seconds += if c.m == 0 { 0.12 * f64::from(c.k) } else { 7.5 };
+            seconds += if c.m == 0 { 0.09 * f64::from(c.k) } else { 6.0 };
         }
     }
     seconds * scale

@@ -24,10 +24,11 @@
 //! traffic by the look of it): a monitor frame after each point's frames tells which state
 //! they ran in ([`states`]); a model is fitted per state to the points' medians in it
 //! (the main one: the fastest state every point ran in, the device least disturbed). A
-//! point the first fit misses by more than 8 %, or with fewer than 5 frames in a state of
-//! ≥ 10 % of the monitor frames, is timed in two more batches of rounds on freshly built
-//! pipelines, its frames pooled with the first and its time that of its fastest build (a
-//! build can run ≈ 25 % slow for as long as it lives, `states`).
+//! point the fit misses by more than 8 %, or with fewer than 5 frames in a state of ≥ 10 %
+//! of the monitor frames, is timed in another batch of rounds on freshly built pipelines,
+//! its frames pooled with the first and its time that of its fastest build (a build can
+//! run ≈ 25 % slow for as long as it lives, `states`), then the model is fitted again —
+//! up to two such batches. A batch warms each pipeline up in its first round only.
 //!
 //! **Model.** The costs of [`crate::cost::CostModel`] are fitted to the points' medians by
 //! a **minimax** fit: the costs that make the largest relative error over the points least
@@ -103,7 +104,7 @@ pub struct ProbePoint {
     /// Median of its timed frames in the main state, of its fastest build there (of all
     /// its frames where none ran in it: `state_frames` 0).
     pub ms_median: f64,
-    /// Batches of interleaved rounds it was timed in (1, or 1 + RETIME_BATCHES).
+    /// Batches of interleaved rounds it was timed in (1 to 1 + RETIME_BATCHES).
     pub batches: u32,
     /// Frames timed, and of them in the main state ([`states`]).
     pub frames: usize,
@@ -291,12 +292,16 @@ pub fn run_with_monitor(
     let mut model = fit_points(ctx, &points)?;
     // A point the fit misses by more than RETIME_ERROR, or with fewer than MIN_STATE_FRAMES
     // frames in a state that held at least STATE_MODEL_SHARE of the monitor frames, is
-    // timed in RETIME_BATCHES more batches, each on a pipeline built afresh (a build can run
-    // a shader ≈ 25 % slower than another for as long as it lives, `states`); its segments
-    // join the first ones, each point's time is its fastest build's, and the states are
-    // told apart again over every monitor frame.
-    let missed = missed_points(&model, &points, &timed, &states);
-    if !missed.is_empty() {
+    // timed in another batch, on a pipeline built afresh (a build can run a shader ≈ 25 %
+    // slower than another for as long as it lives, `states`); its segments join the first
+    // ones, each point's time is its fastest build's, the states are told apart again over
+    // every monitor frame and the model fitted again, up to RETIME_BATCHES batches while a
+    // point is still missed.
+    let mut missed = missed_points(&model, &points, &timed, &states);
+    for _ in 0..RETIME_BATCHES {
+        if missed.is_empty() {
+            break;
+        }
         retime(
             &planner,
             &batches,
@@ -309,9 +314,10 @@ pub fn run_with_monitor(
         states = DeviceStates::from_monitor(&monitor);
         measure(&mut points, &timed, &states, states.main_state);
         for &i in &missed {
-            points[i].batches = 1 + RETIME_BATCHES as u32;
+            points[i].batches += 1;
         }
         model = fit_points(ctx, &points)?;
+        missed = missed_points(&model, &points, &timed, &states);
     }
     let model = main_model(ctx, &mut states, &mut points, &timed, model)?;
     for p in &mut points {
