@@ -122,13 +122,13 @@ impl PixelProducts {
 }
 
 /// Rung images [`LadderPixels`] keeps: the rows of one technique (dx9 and dx10; `pcaM`
-/// and `pcaMw`) come one after another, and 24 images (16 MB each at 1280×800) cover the
+/// and `pcaMw`) come one after another, and 24 images (16 MB each at 1280×800 and every pixel) cover the
 /// largest family's shared rungs.
 const RUNG_CACHE_IMAGES: usize = 24;
 
 /// Per-pixel L×H products [`LadderPixels`] keeps: the lighting-order and cosine-order
 /// matrices at the bake's order, which every compressed visibility of that order (the PCA,
-/// VQ and CPCA rows after `unc6`) shades with (0.5 GB each at 1280×800, order 6).
+/// VQ and CPCA rows after `unc6`) shades with (0.5 GB each at 1280×800, every pixel, order 6).
 const PRODUCT_CACHE_TABLES: usize = 2;
 
 impl LadderPixels {

@@ -3,8 +3,8 @@
 //!
 //! The estimate is, per phase, its work times a rate: the probe (frames + 1) per
 //! megapixel, the references samples per pixel per megapixel (footprint and point), every
-//! row's builds (rows × rounds), its frames, its ladder per megapixel, its images per row;
-//! the bakes in seconds. A row's frames are the frames it will draw (warm-up included, one a
+//! row's builds (rows × rounds), its frames, its ladder per megapixel of its grid, its images
+//! per row; the bakes in seconds. A row's frames are the frames it will draw (warm-up included, one a
 //! round after the first where it is slower than `SLOW_FRAME_MS`) at its median frame time
 //! in this device's last bench that drew it, or per megapixel where none did, plus a cost
 //! per row and round beside its frames (monitor readings, submission, read-back): a bench of
@@ -46,7 +46,7 @@ pub struct Rates {
     pub frame: f64,
     /// Per row per timing round, beside its frames.
     pub row_round: f64,
-    /// Per row's ladder per megapixel.
+    /// Per row's ladder per megapixel of its grid (`--ladder-stride`).
     pub ladder: f64,
     /// Per row's images, and the figures.
     pub images: f64,
@@ -228,8 +228,11 @@ impl Plan {
         } else {
             1.0
         };
-        let ladder =
-            settings.ref_spp > 0 && specular_filters == 0 && settings.relight_degrees.is_none();
+        let ladder = settings.ladder
+            && settings.footprint_reference
+            && settings.ref_spp > 0
+            && specular_filters == 0
+            && settings.relight_degrees.is_none();
         let work = Work {
             probe: if settings.probe && probe_cached.is_none() {
                 f64::from(settings.probe_frames + 1) * mpx

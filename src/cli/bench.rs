@@ -100,7 +100,7 @@ pub(super) struct BenchArgs {
     #[arg(help_heading = "Frames and timing", long, value_enum, default_value_t = ProbeMode::Cached)]
     probe: ProbeMode,
     /// The error ladder evaluates every Nth pixel in each direction and measures each of
-    /// its steps at those pixels (1: every pixel; the rung images are 1/N the frame's size).
+    /// its steps at those pixels (1: every pixel; the rung images are 1/N of the frame's width and height).
     #[arg(help_heading = "Reference and errors", long, value_name = "N", default_value_t = shvis::bench::DEFAULT_LADDER_STRIDE, value_parser = clap::value_parser!(u32).range(1..=16))]
     ladder_stride: u32,
     /// Leave out, with a note, technique × path pairs that cannot run (`nmprtsvdMp` on dx9)

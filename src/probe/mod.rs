@@ -28,7 +28,8 @@
 //! of the monitor frames, is timed in another batch of rounds on freshly built pipelines,
 //! its frames pooled with the first and its time that of its fastest build (a build can
 //! run ≈ 25 % slow for as long as it lives, `states`), then the model is fitted again —
-//! up to two such batches. A batch warms each pipeline up in its first round only.
+//! up to two such batches. A batch warms each pipeline up in its first round, and a cheap
+//! point's (under 40 ms a frame) in every round.
 //!
 //! **Model.** The costs of [`crate::cost::CostModel`] are fitted to the points' medians by
 //! a **minimax** fit: the costs that make the largest relative error over the points least
