@@ -48,9 +48,7 @@ impl Ladder {
         };
         Ok(Ladder { pixels })
     }
-}
 
-impl Ladder {
     /// Every how many pixels in each direction the ladder evaluates one; `None` without
     /// a ladder.
     pub(super) fn stride(&self) -> Option<u32> {
