@@ -21,30 +21,31 @@ pub(super) struct Ladder {
 }
 
 impl Ladder {
-    /// The ladder of a bench: none without a point reference, when relit (its CPU rungs use
-    /// the bake's lighting) or with `--specular` (its CPU rungs are diffuse).
+    /// The ladder of a bench where it runs ([`BenchSettings::ladder_runs`]) and has its
+    /// point reference; the reason logged where it is left out.
     pub(super) fn new(
         ctx: &Arc<Context>,
         prepared: &Prepared,
         settings: &BenchSettings,
         references: Option<&References>,
-        relit: bool,
         out: &BenchOutput,
     ) -> Result<Ladder, BenchError> {
+        let specular = settings.specular.is_some();
         let pixels = match references.and_then(|r| r.point.as_ref()) {
-            Some(_) if relit => {
+            Some(_) if settings.ladder_runs(specular) => {
+                Some(ladder_pixels(ctx, prepared, settings, out)?)
+            }
+            Some(_) if settings.relight_degrees.is_some() => {
                 log::info!(
                     "error ladder: left out when relit (its CPU rungs use the bake's lighting)"
                 );
                 None
             }
-            Some(_) if !settings.ladder => None,
-            Some(_) if settings.specular.is_some() => {
+            Some(_) if specular => {
                 log::info!("error ladder: left out with --specular (its CPU rungs are diffuse)");
                 None
             }
-            Some(_) => Some(ladder_pixels(ctx, prepared, settings, out)?),
-            None => None,
+            _ => None,
         };
         Ok(Ladder { pixels })
     }

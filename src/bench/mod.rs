@@ -110,6 +110,18 @@ impl SpecularSettings {
 pub const DEFAULT_LADDER_STRIDE: u32 = 2;
 
 impl BenchSettings {
+    /// Whether the bench runs its error ladder: asked for, against a footprint reference
+    /// (the point reference beside it is the ladder's first rung), not relit (its CPU rungs
+    /// use the bake's lighting) and without a specular term (`specular`; its CPU rungs are
+    /// diffuse).
+    pub(crate) fn ladder_runs(&self, specular: bool) -> bool {
+        self.ladder
+            && self.footprint_reference
+            && self.ref_spp > 0
+            && !specular
+            && self.relight_degrees.is_none()
+    }
+
     /// Whether the run measures `technique` on `path`: it runs there
     /// (`Technique::runs_on`) and, on dx11, is one of [`BenchSettings::dx11_rows`].
     pub fn measures(&self, technique: Technique, path: HwPath) -> bool {
@@ -209,14 +221,7 @@ pub fn run(
     let env = relit.as_ref().map_or(&prepared.env, |r| &r.env);
     let references = render_references(ctx, prepared, env, settings, &out)?;
     clock.split(|p| &mut p.references);
-    let ladder = Ladder::new(
-        ctx,
-        prepared,
-        settings,
-        references.as_ref(),
-        relit.is_some(),
-        &out,
-    )?;
+    let ladder = Ladder::new(ctx, prepared, settings, references.as_ref(), &out)?;
     clock.split(|p| &mut p.ladder_setup);
     let frame_settings = FrameSettings {
         width: settings.width,

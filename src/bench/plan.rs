@@ -228,11 +228,7 @@ impl Plan {
         } else {
             1.0
         };
-        let ladder = settings.ladder
-            && settings.footprint_reference
-            && settings.ref_spp > 0
-            && specular_filters == 0
-            && settings.relight_degrees.is_none();
+        let ladder = settings.ladder_runs(specular_filters > 0);
         let work = Work {
             probe: if settings.probe && probe_cached.is_none() {
                 f64::from(settings.probe_frames + 1) * mpx
