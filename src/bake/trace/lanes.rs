@@ -35,10 +35,13 @@ pub(super) trait RayLanes: Copy {
     fn negative(self) -> u32;
 
     /// The rays of `mask` (bit i = ray i of `packet`) that enter each child slot of the
-    /// node, as obvhs's single-ray `CwBvhNode::intersect_ray_simd` decides per ray.
+    /// node, as obvhs's single-ray `CwBvhNode::intersect_ray_simd` decides per ray, and
+    /// the set of slots some ray enters.
     #[inline(always)]
-    fn child_masks(test: &NodeTest, packet: &RayPacket, mask: u64) -> [u64; 8] {
-        child_masks_by_block::<Self>(test, packet, mask)
+    fn child_masks(test: &NodeTest, packet: &RayPacket, mask: u64) -> ([u64; 8], u32) {
+        let masks = child_masks_by_block::<Self>(test, packet, mask);
+        let entered = (0..8).fold(0u32, |e, c| e | u32::from(masks[c] != 0) << c);
+        (masks, entered)
     }
 }
 
@@ -207,7 +210,11 @@ mod x86 {
     /// The CPU must have AVX2: called only inlined into a walk compiled with it, which
     /// `Width::detect` picked after checking.
     #[inline(always)]
-    unsafe fn child_masks_by_ray(test: &NodeTest, packet: &RayPacket, mask: u64) -> [u64; 8] {
+    unsafe fn child_masks_by_ray(
+        test: &NodeTest,
+        packet: &RayPacket,
+        mask: u64,
+    ) -> ([u64; 8], u32) {
         let node = test.node;
         let (adj, inv) = (test.adj, test.inv);
         unsafe {
@@ -256,8 +263,17 @@ mod x86 {
                 entered[i] = hits as u8;
                 any |= hits;
             }
-            // Transpose: bit c of ray i's byte → bit i of slot c's mask.
             let mut child_masks = [0u64; 8];
+            if mask & (mask - 1) == 0 {
+                // One ray: each slot it enters gets the whole mask.
+                let mut slots = any;
+                while slots != 0 {
+                    child_masks[slots.trailing_zeros() as usize] = mask;
+                    slots &= slots - 1;
+                }
+                return (child_masks, any);
+            }
+            // Transpose: bit c of ray i's byte → bit i of slot c's mask.
             for half in 0..2 {
                 if (mask >> (32 * half)) as u32 == 0 {
                     continue;
@@ -272,7 +288,7 @@ mod x86 {
                     child_masks[c as usize] |= u64::from(rays) << (32 * half);
                 }
             }
-            child_masks
+            (child_masks, any)
         }
     }
 
@@ -313,7 +329,7 @@ mod x86 {
             unsafe { _mm256_movemask_ps(self.0) as u32 }
         }
         #[inline(always)]
-        fn child_masks(test: &NodeTest, packet: &RayPacket, mask: u64) -> [u64; 8] {
+        fn child_masks(test: &NodeTest, packet: &RayPacket, mask: u64) -> ([u64; 8], u32) {
             unsafe { child_masks_by_ray(test, packet, mask) }
         }
     }

@@ -27,14 +27,23 @@
 //! entered slots is transposed into the slots' ray masks (`movemask_epi8`); without AVX2
 //! the rays go in blocks of 4 lanes, each block costing one 4-ray slab test per occupied
 //! child ([`lanes`]). On big (507k triangles) a node is reached by 5.7 rays in 1.9 blocks of
-//! 8 on average, so a test per ray beats a test per child and block. The entered slots are
-//! then walked as bit sets, not a branch per slot. With both, big's queries run at
-//! 13.1–14.5 Mrays/s on 2 threads against 8.8 without (README, the tracer against Embree).
-//! In a leaf, the ray-independent part of Möller–Trumbore
-//! (edges and normal, precomputed per triangle at build; 1/(n·d) per triangle and
-//! direction) is shared and the rest runs W rays per vector. A ray found occluded leaves
-//! every mask. The children a packet enters are prefetched before any is read: on big
-//! scenes the walk waits on cache misses (node and triangle loads) more than it computes.
+//! 8 on average, so a test per ray beats a test per child and block; a node reached by one
+//! ray skips the transposition (each slot it enters gets the whole mask). The entered
+//! slots are then walked as bit sets, not a branch per slot. In a leaf, the
+//! ray-independent part of Möller–Trumbore (edges and normal, precomputed per triangle at
+//! build; 1/(n·d) per triangle and direction) is shared and the rest runs W rays per
+//! vector, except for a triangle reached by one live ray: it gets obvhs's scalar
+//! operations on the precomputed edges, without the lanes' broadcasts. On big that is
+//! nearly every triangle visit (1.0 ray each: about 9 triangles per 512² texel, so
+//! neighbouring texels' rays part before the leaves). A ray found occluded leaves every
+//! mask. The children a packet enters are prefetched before any is read.
+//!
+//! On big the walk pays per visit more than it waits on memory: with 36-byte triangle
+//! records instead of 64, or with four walks interleaved a visit at a time (one walk's
+//! misses overlapping the others' work), its queries run no faster; with the one-ray
+//! paths above they run at 15.2–16.1 Mrays/s on 2 threads, 12.0 without. Fans of one
+//! texel's directions share no more nodes than packets of one direction (5.7 rays a node
+//! visit either way) and make the house's walk a third slower.
 //!
 //! No packet-level test of each child box and triangle against the box of the packet's
 //! origins (all rays enter / none does, exact by monotonicity of the f32 slab operations):
@@ -673,8 +682,7 @@ impl Entered {
             inv,
             negative: [d.x < 0.0, d.y < 0.0, d.z < 0.0],
         };
-        let child_masks = L::child_masks(&test, packet, mask);
-        let entered = (0..8).fold(0u32, |e, c| e | u32::from(child_masks[c] != 0) << c);
+        let (child_masks, entered) = L::child_masks(&test, packet, mask);
         let internal = entered & u32::from(node.imask);
         let leaves = entered & !internal;
         for c in slots(leaves) {
@@ -767,10 +775,18 @@ impl CoherentQuery<'_> {
                 let m = entered.child_masks[c];
                 let (first_prim, count) = node.child_primitives(c);
                 for prim in first_prim..first_prim + count {
-                    let Some(tri) = LaneTriangle::<L>::new(&self.edges[prim as usize], d) else {
+                    let edges = &self.edges[prim as usize];
+                    let live = m & !occluded;
+                    if live & live.wrapping_sub(1) == 0 {
+                        if live != 0 && self.one_ray_hits(edges, packet, live.trailing_zeros()) {
+                            occluded |= live;
+                        }
+                        continue;
+                    }
+                    let Some(tri) = LaneTriangle::<L>::new(edges, d) else {
                         continue;
                     };
-                    for_each_block(L::WIDTH, m & !occluded, |first, lanes| {
+                    for_each_block(L::WIDTH, live, |first, lanes| {
                         let (t, outside) = tri.test(&dir, packet, first);
                         // intersect() returns t within [t_min, t_max] (else ∞) and the
                         // any-hit traversal counts it when t < t_max.
@@ -791,6 +807,26 @@ impl CoherentQuery<'_> {
         }
         packet.stack = stack;
         occluded
+    }
+
+    /// Whether ray `i` of `packet` hits the triangle at t ∈ [t_min, t_max): obvhs's
+    /// `Triangle::intersect` with the precomputed edges, its very operations, and the
+    /// any-hit traversal's `t < t_max`.
+    #[inline(always)]
+    fn one_ray_hits(&self, tri: &TriangleEdges, packet: &RayPacket, i: u32) -> bool {
+        let i = i as usize;
+        let c = tri.v0 - Vec3A::new(packet.x[i], packet.y[i], packet.z[i]);
+        let r = self.dir.cross(c);
+        let inv_det = 1.0 / tri.n.dot(self.dir);
+        let u = r.dot(tri.e2) * inv_det;
+        let v = r.dot(tri.e1) * inv_det;
+        let w = 1.0 - u - v;
+        let signs = u.to_bits() | v.to_bits() | w.to_bits();
+        if inv_det == 0.0 || signs & 0x8000_0000 != 0 {
+            return false;
+        }
+        let t = tri.n.dot(c) * inv_det;
+        t >= self.t_min && t < self.t_max
     }
 
     /// The closest-hit walk (module doc, Closest hits): each ray's interval ends at its
