@@ -34,14 +34,14 @@ pub(super) trait RayLanes: Copy {
     /// Bit i set where lane i's sign bit is set.
     fn negative(self) -> u32;
 
-    /// The rays of `mask` (bit i = ray i of `packet`) that enter each child slot of the
-    /// node, as obvhs's single-ray `CwBvhNode::intersect_ray_simd` decides per ray, and
-    /// the set of slots some ray enters.
+    /// Into `masks`, the rays of `mask` (bit i = ray i of `packet`) that enter each child
+    /// slot of the node, as obvhs's single-ray `CwBvhNode::intersect_ray_simd` decides per
+    /// ray; returns the set of slots some ray enters. (The caller's buffer: returned by
+    /// value, the 64 bytes were copied through the stack on every node.)
     #[inline(always)]
-    fn child_masks(test: &NodeTest, packet: &RayPacket, mask: u64) -> ([u64; 8], u32) {
-        let masks = child_masks_by_block::<Self>(test, packet, mask);
-        let entered = (0..8).fold(0u32, |e, c| e | u32::from(masks[c] != 0) << c);
-        (masks, entered)
+    fn child_masks(test: &NodeTest, packet: &RayPacket, mask: u64, masks: &mut [u64; 8]) -> u32 {
+        *masks = child_masks_by_block::<Self>(test, packet, mask);
+        (0..8).fold(0u32, |e, c| e | u32::from(masks[c] != 0) << c)
     }
 }
 
@@ -214,7 +214,8 @@ mod x86 {
         test: &NodeTest,
         packet: &RayPacket,
         mask: u64,
-    ) -> ([u64; 8], u32) {
+        child_masks: &mut [u64; 8],
+    ) -> u32 {
         let node = test.node;
         let (adj, inv) = (test.adj, test.inv);
         unsafe {
@@ -263,7 +264,7 @@ mod x86 {
                 entered[i] = hits as u8;
                 any |= hits;
             }
-            let mut child_masks = [0u64; 8];
+            *child_masks = [0; 8];
             if mask & (mask - 1) == 0 {
                 // One ray: each slot it enters gets the whole mask.
                 let mut slots = any;
@@ -271,7 +272,7 @@ mod x86 {
                     child_masks[slots.trailing_zeros() as usize] = mask;
                     slots &= slots - 1;
                 }
-                return (child_masks, any);
+                return any;
             }
             // Transpose: bit c of ray i's byte → bit i of slot c's mask.
             for half in 0..2 {
@@ -288,7 +289,7 @@ mod x86 {
                     child_masks[c as usize] |= u64::from(rays) << (32 * half);
                 }
             }
-            (child_masks, any)
+            any
         }
     }
 
@@ -329,8 +330,13 @@ mod x86 {
             unsafe { _mm256_movemask_ps(self.0) as u32 }
         }
         #[inline(always)]
-        fn child_masks(test: &NodeTest, packet: &RayPacket, mask: u64) -> ([u64; 8], u32) {
-            unsafe { child_masks_by_ray(test, packet, mask) }
+        fn child_masks(
+            test: &NodeTest,
+            packet: &RayPacket,
+            mask: u64,
+            masks: &mut [u64; 8],
+        ) -> u32 {
+            unsafe { child_masks_by_ray(test, packet, mask, masks) }
         }
     }
 
@@ -371,36 +377,5 @@ mod x86 {
                 _mm512_cmplt_epi32_mask(_mm512_castps_si512(self.0), _mm512_setzero_si512())
             })
         }
-    }
-}
-
-/// Asks the CPU to bring the cache line of `value` in (no effect off x86-64): the walk
-/// issues these for the children it is about to visit, so their cache misses overlap.
-#[inline(always)]
-pub(super) fn prefetch<T>(value: &T) {
-    prefetch_address(value as *const T as usize);
-}
-
-#[inline(always)]
-fn prefetch_address(address: usize) {
-    #[cfg(target_arch = "x86_64")]
-    #[allow(unsafe_code)]
-    // SAFETY: a prefetch is a hint; it reads nothing and cannot fault.
-    unsafe {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        _mm_prefetch::<_MM_HINT_T0>(address as *const i8);
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = address;
-}
-
-/// [`prefetch`] of every cache line `value` spans.
-#[inline(always)]
-pub(super) fn prefetch_lines<T>(value: &T) {
-    const LINE: usize = 64;
-    let start = value as *const T as usize;
-    let (first, last) = (start / LINE, (start + size_of::<T>() - 1) / LINE);
-    for line in first..=last {
-        prefetch_address(line * LINE);
     }
 }

@@ -36,11 +36,12 @@
 //! operations on the precomputed edges, without the lanes' broadcasts. On big that is
 //! nearly every triangle visit (1.0 ray each: about 9 triangles per 512² texel, so
 //! neighbouring texels' rays part before the leaves). A ray found occluded leaves every
-//! mask. The children a packet enters are prefetched before any is read.
+//! mask.
 //!
 //! On big the walk pays per visit more than it waits on memory: with 36-byte triangle
-//! records instead of 64, or with four walks interleaved a visit at a time (one walk's
-//! misses overlapping the others' work), its queries run no faster; with the one-ray
+//! records instead of 64, with the children a packet enters prefetched before any is
+//! read, or with four walks interleaved a visit at a time (one walk's misses overlapping
+//! the others' work), its queries run no faster; with the one-ray
 //! paths above they run at 15.2–16.1 Mrays/s on 2 threads, 12.0 without. Fans of one
 //! texel's directions share no more nodes than packets of one direction (5.7 rays a node
 //! visit either way) and make the house's walk a third slower.
@@ -656,12 +657,10 @@ impl<L: RayLanes> LaneTriangle<L> {
     }
 }
 
-/// A node of a coherent walk entered by its rays: the rays of `mask` entering each child
-/// slot ([`RayLanes::child_masks`]) and the entered slots split into leaves and internal
-/// nodes (as bit sets: a branch per slot mispredicts), every entered child's memory
-/// requested before any is read (on big scenes the walk waits on cache misses).
+/// A node of a coherent walk entered by its rays: the entered slots split into leaves and
+/// internal nodes (as bit sets: a branch per slot mispredicts), the rays entering each
+/// slot in the walk's buffer ([`RayLanes::child_masks`]).
 struct Entered {
-    child_masks: [u64; 8],
     leaves: u32,
     internal: u32,
 }
@@ -674,6 +673,7 @@ impl Entered {
         inv: Vec3A,
         packet: &RayPacket,
         mask: u64,
+        child_masks: &mut [u64; 8],
     ) -> Entered {
         let d = query.dir;
         let test = NodeTest {
@@ -682,24 +682,10 @@ impl Entered {
             inv,
             negative: [d.x < 0.0, d.y < 0.0, d.z < 0.0],
         };
-        let (child_masks, entered) = L::child_masks(&test, packet, mask);
+        let entered = L::child_masks(&test, packet, mask, child_masks);
         let internal = entered & u32::from(node.imask);
         let leaves = entered & !internal;
-        for c in slots(leaves) {
-            let (first_prim, count) = node.child_primitives(c);
-            for prim in first_prim..first_prim + count {
-                lanes::prefetch(&query.edges[prim as usize]);
-            }
-        }
-        for c in slots(internal) {
-            // 80 bytes: both of its cache lines.
-            lanes::prefetch_lines(&query.bvh.nodes[node.child_node_index(c) as usize]);
-        }
-        Entered {
-            child_masks,
-            leaves,
-            internal,
-        }
+        Entered { leaves, internal }
     }
 
     /// The internal children in the order a walk pushes them: far to near (obvhs's
@@ -759,6 +745,7 @@ impl CoherentQuery<'_> {
         let (ray_t_min, ray_t_max) = (s(self.t_min), s(self.t_max));
         let dir = [s(d.x), s(d.y), s(d.z)];
         let mut occluded = 0u64;
+        let mut child_masks = [0u64; 8];
         packet.t_far = [self.t_max; PACKET_RAYS];
         let mut stack = std::mem::take(&mut packet.stack);
         stack.clear();
@@ -769,10 +756,10 @@ impl CoherentQuery<'_> {
                 continue;
             }
             let node = &bvh.nodes[node_index as usize];
-            let entered = Entered::node::<L>(self, node, inv, packet, mask);
+            let entered = Entered::node::<L>(self, node, inv, packet, mask, &mut child_masks);
             // Leaves first (any hit removes rays from everything below).
             for c in slots(entered.leaves) {
-                let m = entered.child_masks[c];
+                let m = child_masks[c];
                 let (first_prim, count) = node.child_primitives(c);
                 for prim in first_prim..first_prim + count {
                     let edges = &self.edges[prim as usize];
@@ -799,7 +786,7 @@ impl CoherentQuery<'_> {
                 break;
             }
             for c in entered.internal_far_to_near(d) {
-                let m = entered.child_masks[c] & !occluded;
+                let m = child_masks[c] & !occluded;
                 if m != 0 {
                     stack.push((node.child_node_index(c), m));
                 }
@@ -842,14 +829,15 @@ impl CoherentQuery<'_> {
         packet.t_far = [f32::INFINITY; PACKET_RAYS];
         packet.primitive = [NO_HIT; PACKET_RAYS];
         let mut t_lanes = [0.0f32; 16];
+        let mut child_masks = [0u64; 8];
         let mut stack = std::mem::take(&mut packet.stack);
         stack.clear();
         stack.push((0, active));
         while let Some((node_index, mask)) = stack.pop() {
             let node = &bvh.nodes[node_index as usize];
-            let entered = Entered::node::<L>(self, node, inv, packet, mask);
+            let entered = Entered::node::<L>(self, node, inv, packet, mask, &mut child_masks);
             for c in slots(entered.leaves) {
-                let m = entered.child_masks[c];
+                let m = child_masks[c];
                 let (first_prim, count) = node.child_primitives(c);
                 for prim in first_prim..first_prim + count {
                     let Some(tri) = LaneTriangle::<L>::new(&self.edges[prim as usize], d) else {
@@ -870,7 +858,7 @@ impl CoherentQuery<'_> {
                 }
             }
             for c in entered.internal_far_to_near(d) {
-                let m = entered.child_masks[c];
+                let m = child_masks[c];
                 if m != 0 {
                     stack.push((node.child_node_index(c), m));
                 }
