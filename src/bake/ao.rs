@@ -140,6 +140,7 @@ pub fn bake_ao(tracer: &Tracer, texels: &LightmapTexels, settings: &AoSettings) 
     values
         .par_chunks_mut(res.max(1))
         .enumerate()
+        .with_max_len(1)
         .for_each(|(y, row)| {
             let mut row_rays = 0u64;
             for (x, value) in row.iter_mut().enumerate() {

@@ -556,6 +556,7 @@ pub fn bake_sh_lightmap(
                 .par_chunks_mut(PACKET_RAYS * slot)
                 .zip(fit_scales.par_chunks_mut(PACKET_RAYS * scale_slot)),
         )
+        .with_max_len(1)
         .flat_map_iter(|(group, (values, scales))| {
             let (mut points, mut gathers) = texel_group(tracer, texels, group);
             let mut rays = points.for_each_visibility(tracer, &shared_dirs, |k, r, visible| {
@@ -611,6 +612,7 @@ pub fn bake_sh_lightmap(
                     .par_chunks_mut(PACKET_RAYS * slot)
                     .zip(fit_scales.par_chunks_mut(PACKET_RAYS * scale_slot)),
             )
+            .with_max_len(1)
             .flat_map_iter(|((group, direct), (values, scales))| {
                 let (mut points, mut gathers) = texel_group(tracer, texels, group);
                 let mut rays = points.for_each_hit(tracer, &surfaces, &shared_dirs, |k, r, end| {
@@ -797,6 +799,7 @@ pub fn radiance_at_points(
         .par_chunks_mut(CHUNK)
         .zip(fitted.par_chunks_mut(CHUNK * slot))
         .enumerate()
+        .with_max_len(1)
         .for_each(|(chunk, (sh_out, fitted_out))| {
             let points = chunk * CHUNK..chunk * CHUNK + sh_out.len();
             let normals = normal[points.clone()].to_vec();

@@ -438,6 +438,7 @@ fn bake_direct(pass: &TransferPass<'_>, basis: &[(Vec<f64>, Vec<f64>)]) -> Vec<f
     direct
         .par_chunks_mut(PACKET_RAYS * per_channel)
         .zip(covered.par_chunks(PACKET_RAYS))
+        .with_max_len(1)
         .for_each(|(out, group)| {
             let mut points = PointGroup::of_texels(tracer, texels, group);
             let mut m = vec![vec![0.0f64; per_channel]; group.len()];
@@ -546,6 +547,7 @@ fn bake_bounce(
     next.par_chunks_mut(PACKET_RAYS * per_texel)
         .zip(covered.par_chunks(PACKET_RAYS))
         .zip(direct.par_chunks(PACKET_RAYS * per_channel))
+        .with_max_len(1)
         .for_each(|((out, group), direct)| {
             let mut points = PointGroup::of_texels(tracer, texels, group);
             let mut m = vec![vec![0.0f32; per_texel]; group.len()];

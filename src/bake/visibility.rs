@@ -277,8 +277,12 @@ pub fn bake_visibility(
     let progress = progress_bar(settings.progress, order.len(), "visibility");
     let rays_done = AtomicU64::new(0);
     let groups: Vec<&[u32]> = order.chunks(PACKET_RAYS).collect();
+    // One group per job: rayon otherwise runs one contiguous run of groups per thread,
+    // and groups in tracing order differ in cost (by normal axis), so a thread idled for
+    // a tenth of the bake. The same holds for the other bakes' groups and rows.
     let results: Vec<GroupResult> = groups
         .par_iter()
+        .with_max_len(1)
         .map(|group| {
             let result = bake_group(tracer, &points, &dirs, &projector, group);
             let total = rays_done.fetch_add(result.rays, Ordering::Relaxed) + result.rays;
@@ -380,6 +384,7 @@ pub fn bake_points(
     let groups: Vec<&[u32]> = order.chunks(PACKET_RAYS).collect();
     let results: Vec<GroupResult> = groups
         .par_iter()
+        .with_max_len(1)
         .map(|group| bake_group(tracer, &points, &dirs, &projector, group))
         .collect();
     let mut out = PointVisibility {

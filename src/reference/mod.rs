@@ -293,6 +293,7 @@ pub fn render_reference(
         rays += pixels
             .par_chunks_mut(w)
             .enumerate()
+            .with_max_len(1)
             .map(|(y, row)| job.accumulate_row(y, row))
             .sum::<u64>();
     }
