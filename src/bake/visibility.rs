@@ -170,7 +170,7 @@ fn coherent_order(texels: &SurfacePoints<'_>, covered: Vec<u32>) -> Vec<u32> {
         ((axis as u64 + sign) << 32) | morton
     };
     let mut order = covered;
-    order.sort_by_cached_key(|&i| (key(i), i));
+    order.par_sort_by_cached_key(|&i| (key(i), i));
     order
 }
 
@@ -180,7 +180,8 @@ struct GroupResult {
     coeffs: Vec<f32>,
     ao: Vec<f32>,
     rays: u64,
-    /// Time inside the tracer's queries alone, ns (no horizon test, projection or AO).
+    /// Time inside the tracer's queries alone, ns (no horizon test, projection or AO);
+    /// 0 when not timed.
     trace_ns: u64,
 }
 
@@ -191,6 +192,7 @@ fn bake_group(
     dirs: &DirectionSet,
     projector: &ShProjector,
     group: &[u32],
+    time_queries: bool,
 ) -> GroupResult {
     let n2 = projector.order().coeff_count();
     let words = dirs.mask_words();
@@ -222,9 +224,11 @@ fn bake_group(
             continue;
         }
         rays += u64::from(active.count_ones());
-        let queried = Instant::now();
+        let queried = time_queries.then(Instant::now);
         let visible = active & !tracer.occluded_coherent(&mut packet, d, f32::INFINITY, active);
-        trace_ns += queried.elapsed().as_nanos() as u64;
+        if let Some(queried) = queried {
+            trace_ns += queried.elapsed().as_nanos() as u64;
+        }
         let mut todo = active;
         while todo != 0 {
             let k = todo.trailing_zeros() as usize;
@@ -276,39 +280,67 @@ pub fn bake_visibility(
     let points = SurfacePoints::of(texels);
     let progress = progress_bar(settings.progress, order.len(), "visibility");
     let rays_done = AtomicU64::new(0);
+    // Two clock reads a query cost a few per cent of a small scene's bake: only with
+    // RUST_LOG=debug, which logs the queries' own rate.
+    let time_queries = log::log_enabled!(log::Level::Debug);
     let groups: Vec<&[u32]> = order.chunks(PACKET_RAYS).collect();
     // One group per job: rayon otherwise runs one contiguous run of groups per thread,
     // and groups in tracing order differ in cost (by normal axis), so a thread idled for
     // a tenth of the bake. The same holds for the other bakes' groups and rows.
-    let results: Vec<GroupResult> = groups
-        .par_iter()
-        .with_max_len(1)
-        .map(|group| {
-            let result = bake_group(tracer, &points, &dirs, &projector, group);
-            let total = rays_done.fetch_add(result.rays, Ordering::Relaxed) + result.rays;
-            if settings.progress {
-                let s = start.elapsed().as_secs_f64().max(1e-9);
-                progress.set_message(format!("{:.2} Mrays/s", total as f64 / s * 1e-6));
-                progress.inc(group.len() as u64);
-            }
-            result
-        })
-        .collect();
+    let trace = || -> Vec<GroupResult> {
+        groups
+            .par_iter()
+            .with_max_len(1)
+            .map(|group| {
+                let result = bake_group(tracer, &points, &dirs, &projector, group, time_queries);
+                let total = rays_done.fetch_add(result.rays, Ordering::Relaxed) + result.rays;
+                if settings.progress {
+                    let s = start.elapsed().as_secs_f64().max(1e-9);
+                    progress.set_message(format!("{:.2} Mrays/s", total as f64 / s * 1e-6));
+                    progress.inc(group.len() as u64);
+                }
+                result
+            })
+            .collect()
+    };
+    // The dilation plan needs only the coverage: a job beside the groups, off the
+    // serial tail.
+    let (results, plan) = rayon::join(trace, || {
+        DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES)
+    });
     progress.finish_and_clear();
     let traced = start.elapsed().as_secs_f64();
 
+    // Scattered to texels row by row in parallel (each row's pages are first touched
+    // by the thread that fills them).
+    let mut slot_of = vec![u32::MAX; res * res];
+    for (slot, &i) in order.iter().enumerate() {
+        slot_of[i as usize] = slot as u32;
+    }
     let mut coeffs = vec![0.0f32; res * res * n2];
     let mut ao = vec![1.0f32; res * res];
-    for (group, result) in groups.iter().zip(&results) {
-        for (k, &i) in group.iter().enumerate() {
-            let i = i as usize;
-            coeffs[i * n2..(i + 1) * n2].copy_from_slice(&result.coeffs[k * n2..(k + 1) * n2]);
-            ao[i] = result.ao[k];
-        }
-    }
+    coeffs
+        .par_chunks_mut((res * n2).max(1))
+        .zip(ao.par_chunks_mut(res.max(1)))
+        .zip(slot_of.par_chunks(res.max(1)))
+        .for_each(|((coeff_row, ao_row), slots)| {
+            for (x, &slot) in slots.iter().enumerate() {
+                if slot == u32::MAX {
+                    continue;
+                }
+                let (result, k) = (
+                    &results[slot as usize / PACKET_RAYS],
+                    slot as usize % PACKET_RAYS,
+                );
+                coeff_row[x * n2..(x + 1) * n2]
+                    .copy_from_slice(&result.coeffs[k * n2..(k + 1) * n2]);
+                ao_row[x] = result.ao[k];
+            }
+        });
     let results_trace_ns: u64 = results.iter().map(|r| r.trace_ns).sum();
     drop(results);
-    dilate_visibility(&mut coeffs, n2, &mut ao, texels);
+    plan.apply_vectors(&mut coeffs, n2);
+    plan.apply(&mut ao);
     let map = VisibilityMap {
         res: texels.res,
         order: settings.order,
@@ -321,27 +353,32 @@ pub fn bake_visibility(
         },
     };
     log::debug!(
-        "visibility bake phases: set-up and order {ordered:.3} s, trace {:.3} s, scatter and dilate {:.3} s",
+        "visibility bake phases: set-up and order {ordered:.3} s, trace (and dilation plan) {:.3} s, scatter and dilate {:.3} s",
         traced - ordered,
         map.stats.seconds - traced
     );
-    // The tracer's own throughput, as a ray-tracing library's is measured (Embree's
-    // harness in ../shared/peers times its occlusion queries alone): rays over the query
-    // time summed over the threads, per thread.
-    let threads = rayon::current_num_threads() as f64;
-    let query_s = results_trace_ns as f64 * 1e-9 / threads;
     log::info!(
-        "visibility bake: {} texels × {} directions (order {}): {} traced; the queries alone {:.2} Mrays/s on {threads} threads",
+        "visibility bake: {} texels × {} directions (order {}): {} traced",
         order.len(),
         settings.rays,
         settings.order.get(),
         map.stats,
-        if query_s > 0.0 {
-            map.stats.rays_traced as f64 / query_s * 1e-6
-        } else {
-            0.0
-        }
     );
+    if time_queries {
+        // The tracer's own throughput, as a ray-tracing library's is measured (Embree's
+        // harness in ../shared/peers times its occlusion queries alone): rays over the
+        // query time summed over the threads, per thread.
+        let threads = rayon::current_num_threads() as f64;
+        let query_s = results_trace_ns as f64 * 1e-9 / threads;
+        log::debug!(
+            "visibility bake: the queries alone {:.2} Mrays/s on {threads} threads",
+            if query_s > 0.0 {
+                map.stats.rays_traced as f64 / query_s * 1e-6
+            } else {
+                0.0
+            }
+        );
+    }
     map
 }
 
@@ -382,10 +419,11 @@ pub fn bake_points(
     let points = SurfacePoints { position, normal };
     let order = coherent_order(&points, (0..position.len() as u32).collect());
     let groups: Vec<&[u32]> = order.chunks(PACKET_RAYS).collect();
+    let time_queries = false;
     let results: Vec<GroupResult> = groups
         .par_iter()
         .with_max_len(1)
-        .map(|group| bake_group(tracer, &points, &dirs, &projector, group))
+        .map(|group| bake_group(tracer, &points, &dirs, &projector, group, time_queries))
         .collect();
     let mut out = PointVisibility {
         order: settings.order,
