@@ -239,6 +239,53 @@ mod x86 {
             let occupied = !empty & 0xff;
             let node_t_min = _mm256_set1_ps(super::super::NODE_T_MIN);
             let p = node.p;
+            if let Some((lo, hi)) = packet
+                .origin_box
+                .filter(|_| mask.count_ones() >= super::super::PACKET_TEST_RAYS)
+            {
+                // Every op of the slab test is monotonic in each origin coordinate
+                // (rounding included), so over the box each ray's t_min and t_max lie
+                // between their values at the box's ends: where the bounds decide every
+                // slot, they decide it for each ray as its own test would.
+                let ends = |p: f32, lo: f32, hi: f32, inv: f32| {
+                    let (a, b) = ((p - lo) * inv, (p - hi) * inv);
+                    (_mm256_set1_ps(a.min(b)), _mm256_set1_ps(a.max(b)))
+                };
+                let (ox_lo, ox_hi) = ends(p.x, lo.x, hi.x, inv.x);
+                let (oy_lo, oy_hi) = ends(p.y, lo.y, hi.y, inv.y);
+                let (oz_lo, oz_hi) = ends(p.z, lo.z, hi.z, inv.z);
+                let t_far = _mm256_set1_ps(packet.t_far[mask.trailing_zeros() as usize]);
+                let t_min = |ox, oy, oz| {
+                    let t = _mm256_max_ps(
+                        _mm256_add_ps(x0, ox),
+                        _mm256_max_ps(_mm256_add_ps(y0, oy), _mm256_add_ps(z0, oz)),
+                    );
+                    _mm256_max_ps(t, node_t_min)
+                };
+                let t_max = |ox, oy, oz| {
+                    let t = _mm256_min_ps(
+                        _mm256_add_ps(x1, ox),
+                        _mm256_min_ps(_mm256_add_ps(y1, oy), _mm256_add_ps(z1, oz)),
+                    );
+                    _mm256_min_ps(t, t_far)
+                };
+                let (t_min_lo, t_min_hi) = (t_min(ox_lo, oy_lo, oz_lo), t_min(ox_hi, oy_hi, oz_hi));
+                let (t_max_lo, t_max_hi) = (t_max(ox_lo, oy_lo, oz_lo), t_max(ox_hi, oy_hi, oz_hi));
+                let all =
+                    _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t_min_hi, t_max_lo)) as u32;
+                let none =
+                    _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(t_min_lo, t_max_hi)) as u32;
+                if (all | none | !occupied) & 0xff == 0xff {
+                    let all = all & occupied;
+                    *child_masks = [0; 8];
+                    let mut slots = all;
+                    while slots != 0 {
+                        child_masks[slots.trailing_zeros() as usize] = mask;
+                        slots &= slots - 1;
+                    }
+                    return all;
+                }
+            }
             let mut entered = [0u8; super::super::PACKET_RAYS];
             let mut any = 0u32;
             let mut todo = mask;
