@@ -42,7 +42,7 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use rayon::prelude::*;
 
@@ -219,7 +219,11 @@ fn bake_group(
         for k in 0..PACKET_RAYS {
             cos[k] = nx[k] * d.x + ny[k] * d.y + nz[k] * d.z;
         }
-        let active = (0..group.len()).fold(0u64, |a, k| a | u64::from(cos[k] > 0.0) << k);
+        // Four horizon tests per comparison; lanes past the group have n = 0, so cos = 0.
+        let active = (0..PACKET_RAYS / 4).fold(0u64, |a, j| {
+            let above = Vec4::from_slice(&cos[4 * j..]).cmpgt(Vec4::ZERO).bitmask();
+            a | u64::from(above) << (4 * j)
+        });
         if active == 0 {
             continue;
         }
@@ -229,15 +233,18 @@ fn bake_group(
         if let Some(queried) = queried {
             trace_ns += queried.elapsed().as_nanos() as u64;
         }
+        let (word, bit) = (r / 64, r % 64);
         let mut todo = active;
         while todo != 0 {
             let k = todo.trailing_zeros() as usize;
             todo &= todo - 1;
-            up_cos[k] += f64::from(cos[k]);
-            if visible >> k & 1 == 1 {
-                vis_cos[k] += f64::from(cos[k]);
-                masks[k * words + r / 64] |= 1 << (r % 64);
-            }
+            // No branch on visibility (it mispredicts): an occluded ray adds cos·0 = +0.0,
+            // which leaves a sum that started at +0.0 as it was.
+            let escaped = visible >> k & 1;
+            let c = f64::from(cos[k]);
+            up_cos[k] += c;
+            vis_cos[k] += c * escaped as f64;
+            masks[k * words + word] |= escaped << bit;
         }
     }
     let mut coeffs = vec![0.0f32; group.len() * n2];
