@@ -111,8 +111,8 @@ impl Width {
     /// AVX2's 8 lanes where the CPU has them, else 4. `SHVIS_TRACE_LANES=4|8|16` picks
     /// another width (if the CPU has it), for comparisons. Only the 8-lane walk tests a
     /// node a ray at a time (the 4- and 16-lane ones a block of rays per child); on this
-    /// project's AMD EPYC the queries alone ran at 8 / 16 / 4 lanes: big 13.5–13.8 /
-    /// 8.3–8.8 / 9.7–10.1 Mrays/s, house 69–78 / 54 / 50–52 (2 threads, 512² × 256).
+    /// project's AMD EPYC (Zen 4) the queries alone run at 8 / 16 / 4 lanes: big 15–17 /
+    /// 6.5 / 8.6 Mrays/s, house 79–85 / 41 / 41–46 (2 threads, 512² × 256).
     pub(super) fn detect() -> Width {
         let cap: usize = std::env::var(super::LANES_ENV)
             .ok()

@@ -180,18 +180,43 @@ impl RayPacket {
     }
 }
 
-/// Calls `f(first_ray, lanes)` for every block of `width` (< 64) consecutive rays with a
-/// ray in `mask`, `lanes` = that block's bits of `mask`.
+/// `(first_ray, lanes)` of every block of `width` (< 64) consecutive rays with a ray in
+/// `mask`, `lanes` = that block's bits of `mask`. An iterator, not a closure-taking
+/// function: a closure is compiled without the walk's target features unless inlined, and
+/// then every lane operation in it is a call.
 #[inline(always)]
-fn for_each_block(width: usize, mask: u64, mut f: impl FnMut(usize, u32)) {
-    let (block_bits, w) = ((1u64 << width) - 1, width);
+fn blocks(width: usize, mask: u64) -> impl Iterator<Item = (usize, u32)> {
+    let block_bits = (1u64 << width) - 1;
     let mut todo = mask;
-    while todo != 0 {
-        let first = todo.trailing_zeros() as usize / w * w;
-        let lanes = ((todo >> first) & block_bits) as u32;
-        todo &= !(block_bits << first);
-        f(first, lanes);
-    }
+    std::iter::from_fn(move || {
+        (todo != 0).then(|| {
+            let first = todo.trailing_zeros() as usize / width * width;
+            let lanes = ((todo >> first) & block_bits) as u32;
+            todo &= !(block_bits << first);
+            (first, lanes)
+        })
+    })
+}
+
+/// The near and far planes of child slot `c` along one axis, picked by the direction's
+/// sign, u8 → f32 times extent·(1/d), splat.
+#[inline(always)]
+fn near_far<L: RayLanes>(
+    lo: &[u8; 8],
+    hi: &[u8; 8],
+    negative: bool,
+    scale: f32,
+    c: usize,
+) -> (L, L) {
+    let (near, far) = if negative {
+        (hi[c], lo[c])
+    } else {
+        (lo[c], hi[c])
+    };
+    (
+        L::splat(f32::from(near) * scale),
+        L::splat(f32::from(far) * scale),
+    )
 }
 
 /// The set bits of a slot set or ray mask, lowest first.
@@ -571,12 +596,7 @@ fn child_masks_by_block<L: RayLanes>(test: &NodeTest, packet: &RayPacket, mask: 
     let s = L::splat;
     let node_t_min = s(NODE_T_MIN);
     let (inv_x, inv_y, inv_z) = (s(inv.x), s(inv.y), s(inv.z));
-    let block = |axis: &[f32; PACKET_RAYS], first: usize| L::load(&axis[first..]);
     let occupied = u64::from_le_bytes(node.child_meta);
-    let pick = |lo: &[u8; 8], hi: &[u8; 8], neg: bool, scale: f32, c: usize| {
-        let (near, far) = if neg { (hi[c], lo[c]) } else { (lo[c], hi[c]) };
-        (s(f32::from(near) * scale), s(f32::from(far) * scale))
-    };
     let mut slabs = [[s(0.0); 6]; 8];
     let mut children = [0usize; 8];
     let mut child_count = 0;
@@ -584,28 +604,28 @@ fn child_masks_by_block<L: RayLanes>(test: &NodeTest, packet: &RayPacket, mask: 
         if (occupied >> (8 * c)) & 0xff == 0 {
             continue; // empty slot
         }
-        let (x0, x1) = pick(&node.child_min_x, &node.child_max_x, rdx, adj.x, c);
-        let (y0, y1) = pick(&node.child_min_y, &node.child_max_y, rdy, adj.y, c);
-        let (z0, z1) = pick(&node.child_min_z, &node.child_max_z, rdz, adj.z, c);
+        let (x0, x1) = near_far::<L>(&node.child_min_x, &node.child_max_x, rdx, adj.x, c);
+        let (y0, y1) = near_far::<L>(&node.child_min_y, &node.child_max_y, rdy, adj.y, c);
+        let (z0, z1) = near_far::<L>(&node.child_min_z, &node.child_max_z, rdz, adj.z, c);
         slabs[child_count] = [x0, x1, y0, y1, z0, z1];
         children[child_count] = c;
         child_count += 1;
     }
     let mut child_masks = [0u64; 8];
     let (px, py, pz) = (s(node.p.x), s(node.p.y), s(node.p.z));
-    for_each_block(L::WIDTH, mask, |first, lanes| {
+    for (first, lanes) in blocks(L::WIDTH, mask) {
         // obvhs's slab test with its operand order of _mm_max_ps/_mm_min_ps (NaN handling).
-        let ox = px.sub(block(&packet.x, first)).mul(inv_x);
-        let oy = py.sub(block(&packet.y, first)).mul(inv_y);
-        let oz = pz.sub(block(&packet.z, first)).mul(inv_z);
+        let ox = px.sub(L::load(&packet.x[first..])).mul(inv_x);
+        let oy = py.sub(L::load(&packet.y[first..])).mul(inv_y);
+        let oz = pz.sub(L::load(&packet.z[first..])).mul(inv_z);
+        let ray_t_far = L::load(&packet.t_far[first..]);
         for (k, [x0, x1, y0, y1, z0, z1]) in slabs[..child_count].iter().enumerate() {
             let tmin = x0.add(ox).max(y0.add(oy).max(z0.add(oz))).max(node_t_min);
-            let ray_t_far = block(&packet.t_far, first);
             let tmax = x1.add(ox).min(y1.add(oy).min(z1.add(oz))).min(ray_t_far);
             let hits = tmin.le(tmax) & lanes;
             child_masks[children[k]] |= u64::from(hits) << first;
         }
-    });
+    }
     child_masks
 }
 
@@ -795,13 +815,13 @@ impl CoherentQuery<'_> {
                     let Some(tri) = LaneTriangle::<L>::new(edges, d) else {
                         continue;
                     };
-                    for_each_block(L::WIDTH, live, |first, lanes| {
+                    for (first, lanes) in blocks(L::WIDTH, live) {
                         let (t, outside) = tri.test(&dir, packet, first);
                         // intersect() returns t within [t_min, t_max] (else ∞) and the
                         // any-hit traversal counts it when t < t_max.
                         let in_range = t.ge(ray_t_min) & t.lt(ray_t_max);
                         occluded |= u64::from(lanes & !outside & in_range) << first;
-                    });
+                    }
                 }
             }
             if occluded == active {
@@ -866,7 +886,7 @@ impl CoherentQuery<'_> {
                     let Some(tri) = LaneTriangle::<L>::new(&self.edges[prim as usize], d) else {
                         continue;
                     };
-                    for_each_block(L::WIDTH, m, |first, lanes| {
+                    for (first, lanes) in blocks(L::WIDTH, m) {
                         let (t, outside) = tri.test(&dir, packet, first);
                         let nearer = t.ge(ray_t_min) & t.lt(L::load(&packet.t_far[first..]));
                         let hit = lanes & !outside & nearer;
@@ -877,7 +897,7 @@ impl CoherentQuery<'_> {
                                 packet.primitive[first + j] = prim;
                             }
                         }
-                    });
+                    }
                 }
             }
             for c in entered.internal_far_to_near(d) {
