@@ -36,8 +36,8 @@ pub(super) trait RayLanes: Copy {
 
     /// Into `masks`, the rays of `mask` (bit i = ray i of `packet`) that enter each child
     /// slot of the node, as obvhs's single-ray `CwBvhNode::intersect_ray_simd` decides per
-    /// ray; returns the set of slots some ray enters. (The caller's buffer: returned by
-    /// value, the 64 bytes were copied through the stack on every node.)
+    /// ray; returns the set of slots some ray enters. (A buffer of the caller's: returned
+    /// by value, the 64 bytes would be copied through the stack at every node.)
     #[inline(always)]
     fn child_masks(test: &NodeTest, packet: &RayPacket, mask: u64, masks: &mut [u64; 8]) -> u32 {
         *masks = child_masks_by_block::<Self>(test, packet, mask);
@@ -277,12 +277,7 @@ mod x86 {
                     _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(t_min_lo, t_max_hi)) as u32;
                 if (all | none | !occupied) & 0xff == 0xff {
                     let all = all & occupied;
-                    *child_masks = [0; 8];
-                    let mut slots = all;
-                    while slots != 0 {
-                        child_masks[slots.trailing_zeros() as usize] = mask;
-                        slots &= slots - 1;
-                    }
+                    whole_mask_at(child_masks, all, mask);
                     return all;
                 }
             }
@@ -311,16 +306,12 @@ mod x86 {
                 entered[i] = hits as u8;
                 any |= hits;
             }
-            *child_masks = [0; 8];
             if mask & (mask - 1) == 0 {
                 // One ray: each slot it enters gets the whole mask.
-                let mut slots = any;
-                while slots != 0 {
-                    child_masks[slots.trailing_zeros() as usize] = mask;
-                    slots &= slots - 1;
-                }
+                whole_mask_at(child_masks, any, mask);
                 return any;
             }
+            *child_masks = [0; 8];
             // Transpose: bit c of ray i's byte → bit i of slot c's mask.
             for half in 0..2 {
                 if (mask >> (32 * half)) as u32 == 0 {
@@ -337,6 +328,17 @@ mod x86 {
                 }
             }
             any
+        }
+    }
+
+    /// `child_masks` = `mask` at the slots of `slots`, 0 at the others.
+    #[inline(always)]
+    fn whole_mask_at(child_masks: &mut [u64; 8], slots: u32, mask: u64) {
+        *child_masks = [0; 8];
+        let mut todo = slots;
+        while todo != 0 {
+            child_masks[todo.trailing_zeros() as usize] = mask;
+            todo &= todo - 1;
         }
     }
 
