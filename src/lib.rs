@@ -10,7 +10,7 @@
 //! client of techniques, asked by the bench and the probe, never part of building one.
 //!
 //! Unsafe code is denied everywhere but in [`UNSAFE_MODULES`]: `gpu` (Vulkan), the bake's
-//! SIMD ray traversal (`bake::trace`) and `files` (the SIGINT/SIGTERM handler that removes
+//! SIMD ray traversal (`bake::trace`), the transfer bake's AVX2 sums (`bake::outer`) and `files` (the SIGINT/SIGTERM handler that removes
 //! temporaries, and with the `test-hooks` feature the hooks that kill or interrupt the
 //! process mid-write); each block says why it is sound (`// SAFETY:`).
 #![deny(unsafe_code)]
@@ -66,4 +66,4 @@ pub const LAYERS: &[&[&str]] = &[
 
 /// The modules (paths from the crate root) where `unsafe` is allowed; nowhere else does
 /// `#[allow(unsafe_code)]` appear.
-pub const UNSAFE_MODULES: &[&str] = &["gpu", "bake::trace", "files"];
+pub const UNSAFE_MODULES: &[&str] = &["gpu", "bake::trace", "bake::outer", "files"];

@@ -120,14 +120,33 @@ fn squared_distance(v: &[f32], mean: &[f64]) -> f64 {
         .sum()
 }
 
-/// Squared error of reconstructing `v` with `cluster` (orthonormal basis).
+/// Squared error of reconstructing `v` with `cluster` (orthonormal basis):
+/// ‖d‖² − Σ_k (B_k·d)², d = v − μ. Each dot product is summed in coordinate order and the
+/// squares in basis order, as one at a time would; four basis vectors are taken together
+/// so that their chains of additions overlap.
 fn subspace_error(v: &[f32], cluster: &Cluster) -> f64 {
     let d: Vec<f64> = v
         .iter()
         .zip(&cluster.mean)
         .map(|(&a, &b)| f64::from(a) - b)
         .collect();
-    let along: f64 = cluster.basis.iter().map(|b| dot(b, &d).powi(2)).sum();
+    // `Iterator::sum`'s start, so that the sums are the ones `dot` and `sum` give.
+    let mut along = -0.0f64;
+    for group in cluster.basis.chunks(4) {
+        // Lanes past the group's end repeat its first vector and are not read back.
+        let lane = |k: usize| &group.get(k).unwrap_or(&group[0])[..d.len()];
+        let [b0, b1, b2, b3] = [lane(0), lane(1), lane(2), lane(3)];
+        let mut sums = [-0.0f64; 4];
+        for (j, &x) in d.iter().enumerate() {
+            sums[0] += b0[j] * x;
+            sums[1] += b1[j] * x;
+            sums[2] += b2[j] * x;
+            sums[3] += b3[j] * x;
+        }
+        for s in &sums[..group.len()] {
+            along += s.powi(2);
+        }
+    }
     (dot(&d, &d) - along).max(0.0)
 }
 
@@ -675,6 +694,43 @@ mod tests {
         let u = unit_f64(h) as f32 - 0.5;
         let v = unit_f64(splitmix64(h)) as f32 - 0.5;
         vec![centre[0] + u, centre[1] + 3.0 * u + 0.1 * v, u * 2.0, v]
+    }
+
+    /// The one-at-a-time form `subspace_error` must equal bit for bit.
+    fn subspace_error_one_at_a_time(v: &[f32], cluster: &Cluster) -> f64 {
+        let d: Vec<f64> = v
+            .iter()
+            .zip(&cluster.mean)
+            .map(|(&a, &b)| f64::from(a) - b)
+            .collect();
+        let along: f64 = cluster.basis.iter().map(|b| dot(b, &d).powi(2)).sum();
+        (dot(&d, &d) - along).max(0.0)
+    }
+
+    #[test]
+    fn subspace_error_equals_one_dot_product_at_a_time() {
+        let mut state = 7u64;
+        let mut draw = || {
+            state = splitmix64(state);
+            (unit_f64(state) - 0.5) * 10f64.powi((state % 5) as i32 - 2)
+        };
+        for (n, m) in [(36, 11), (36, 0), (9, 1), (16, 4), (49, 7), (25, 9)] {
+            for _ in 0..20 {
+                let v: Vec<f32> = (0..n).map(|_| draw() as f32).collect();
+                let cluster = Cluster {
+                    mean: (0..n).map(|_| draw()).collect(),
+                    basis: (0..m)
+                        .map(|_| (0..n).map(|_| 0.05 * draw()).collect())
+                        .collect(),
+                    members: 1,
+                };
+                assert_eq!(
+                    subspace_error(&v, &cluster).to_bits(),
+                    subspace_error_one_at_a_time(&v, &cluster).to_bits(),
+                    "n = {n}, m = {m}"
+                );
+            }
+        }
     }
 
     #[test]

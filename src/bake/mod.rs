@@ -12,6 +12,8 @@
 //! - [`shlmap`]: order-3 SH of incident radiance with inter-reflection, the `shlmap` data.
 //! - [`transfer`]: per-texel transfer matrices M (lighting → order-3 transferred incident
 //!   radiance, inter-reflection included) of normal mapping for PRT.
+//! - [`outer`]: sums of nine-row outer products in a fixed order, the transfer bake's
+//!   inner loop.
 //! - [`cache`]: versioned, checksummed bake cache files, and EXR dumps for inspection.
 //! - [`block`]: BC6H / BC7 block compression (Intel's ISPC encoder) and decoding (`bcdec_rs`).
 //!
@@ -26,6 +28,7 @@ pub mod directions;
 pub mod gpu_check;
 pub mod gpu_visibility;
 pub mod lxh;
+pub mod outer;
 pub mod pca;
 pub mod raster;
 pub mod shlmap;

@@ -43,6 +43,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::directions::DirectionSet;
+use super::outer::add_outer_products;
 use super::raster::{DilationPlan, LightmapTexels};
 use super::surface::{PointGroup, RayEnd, SurfaceReader};
 use super::trace::PACKET_RAYS;
@@ -334,7 +335,7 @@ pub fn bake_transfer(
     let per_texel = 3 * per_channel;
     let dirs = DirectionSet::new(settings.rays, settings.seed);
     let weight = dirs.weight();
-    let basis = direction_basis(&dirs, settings.lighting_order, n);
+    let basis = DirectionBasis::new(&dirs, settings.lighting_order, n);
     let surfaces = SurfaceReader::new(scene);
     let covered: Vec<u32> = (0..res * res)
         .filter(|&i| texels.covered[i])
@@ -359,8 +360,9 @@ pub fn bake_transfer(
 
     // The bounces' gathers read the rows' basis in f32.
     let rows_f32: Vec<[f32; TRANSFER_ROWS]> = basis
+        .rows
         .iter()
-        .map(|(rows, _)| std::array::from_fn(|i| rows[i] as f32))
+        .map(|rows| rows.map(|y| y as f32))
         .collect();
     let dilation = DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES);
     let a: Vec<f64> = (0..TRANSFER_ROWS)
@@ -397,35 +399,43 @@ pub fn bake_transfer(
     map
 }
 
-/// Per direction of `dirs`: the 9 rows' basis values, then the N columns' (order
-/// `lighting_order`, N = `n`).
-fn direction_basis(
-    dirs: &DirectionSet,
-    lighting_order: Order,
+/// Per direction of `dirs`: the 9 rows' basis values and the N columns' (order
+/// `lighting_order`).
+struct DirectionBasis {
+    rows: Vec<[f64; TRANSFER_ROWS]>,
+    /// Direction r's N values at `r·N..(r + 1)·N`.
+    columns: Vec<f64>,
     n: usize,
-) -> Vec<(Vec<f64>, Vec<f64>)> {
-    dirs.dirs()
-        .iter()
-        .map(|d| {
+}
+
+impl DirectionBasis {
+    fn new(dirs: &DirectionSet, lighting_order: Order, n: usize) -> DirectionBasis {
+        let mut rows = Vec::with_capacity(dirs.dirs().len());
+        let mut columns = vec![0.0; dirs.dirs().len() * n];
+        for (d, cols) in dirs.dirs().iter().zip(columns.chunks_mut(n)) {
             let d = d.as_dvec3().normalize();
-            let mut rows = vec![0.0; TRANSFER_ROWS];
-            eval_basis(Order::THREE, d, &mut rows);
-            let mut cols = vec![0.0; n];
-            eval_basis(lighting_order, d, &mut cols);
-            (rows, cols)
-        })
-        .collect()
+            let mut row = [0.0; TRANSFER_ROWS];
+            eval_basis(Order::THREE, d, &mut row);
+            rows.push(row);
+            eval_basis(lighting_order, d, cols);
+        }
+        DirectionBasis { rows, columns, n }
+    }
+
+    /// Direction `r`'s N column values.
+    fn columns(&self, r: usize) -> &[f64] {
+        &self.columns[r * self.n..][..self.n]
+    }
 }
 
 /// Eq. (1) per covered texel: the unbounced matrix M⁰, summed in f64 over the escaping
 /// directions of `basis` (one for the three channels).
-fn bake_direct(pass: &TransferPass<'_>, basis: &[(Vec<f64>, Vec<f64>)]) -> Vec<f32> {
+fn bake_direct(pass: &TransferPass<'_>, basis: &DirectionBasis) -> Vec<f32> {
     let TransferPass {
         tracer,
         texels,
         dirs,
         covered,
-        n,
         per_channel,
         weight,
         progress,
@@ -434,26 +444,31 @@ fn bake_direct(pass: &TransferPass<'_>, basis: &[(Vec<f64>, Vec<f64>)]) -> Vec<f
     } = *pass;
     let bar = progress_bar(progress, covered.len(), "transfer direct");
     let mut direct = vec![0.0f32; covered.len() * per_channel];
-    // Texels in groups traced together (coherent walks over the shared directions).
+    // Texels in groups traced together (coherent walks over the shared directions); each
+    // texel's escaping directions are then summed on their own, in the order of `dirs`.
     direct
         .par_chunks_mut(PACKET_RAYS * per_channel)
         .zip(covered.par_chunks(PACKET_RAYS))
         .with_max_len(1)
         .for_each(|(out, group)| {
             let mut points = PointGroup::of_texels(tracer, texels, group);
-            let mut m = vec![vec![0.0f64; per_channel]; group.len()];
+            let mut escaping = vec![Vec::new(); group.len()];
             let rays = points.for_each_visibility(tracer, dirs.dirs(), |k, r, visible| {
                 if visible == Some(true) {
-                    let (rows, cols) = &basis[r];
-                    for (row, &yi) in rows.iter().enumerate() {
-                        for (mij, &yj) in m[k][row * n..(row + 1) * n].iter_mut().zip(cols) {
-                            *mij += yi * yj;
-                        }
-                    }
+                    escaping[k].push(r);
                 }
             });
-            for (out, m) in out.chunks_mut(per_channel).zip(&m) {
-                for (o, v) in out.iter_mut().zip(m) {
+            let mut rows = Vec::new();
+            let mut cols = Vec::new();
+            let mut m = vec![0.0f64; per_channel];
+            for (out, escaping) in out.chunks_mut(per_channel).zip(&escaping) {
+                rows.clear();
+                rows.extend(escaping.iter().map(|&r| basis.rows[r]));
+                cols.clear();
+                cols.extend(escaping.iter().map(|&r| basis.columns(r)));
+                m.fill(0.0);
+                add_outer_products(&mut m, &rows, &cols);
+                for (o, v) in out.iter_mut().zip(&m) {
                     *o = (v * weight) as f32;
                 }
             }
@@ -542,7 +557,8 @@ fn bake_bounce(
         covered.len(),
         &format!("transfer bounce {bounce}"),
     );
-    // Eq. (3), the hits' sums in f32 per texel (in ray order).
+    // Eq. (3): each texel's front hits gathered by a coherent walk, then summed on their
+    // own, in f32 in ray order.
     let mut next = vec![0.0f32; covered.len() * per_texel];
     next.par_chunks_mut(PACKET_RAYS * per_texel)
         .zip(covered.par_chunks(PACKET_RAYS))
@@ -550,38 +566,43 @@ fn bake_bounce(
         .with_max_len(1)
         .for_each(|((out, group), direct)| {
             let mut points = PointGroup::of_texels(tracer, texels, group);
-            let mut m = vec![vec![0.0f32; per_texel]; group.len()];
-            let dirs = dirs.dirs();
-            let rays = points.for_each_hit(tracer, surfaces, dirs, |k, r, end| {
+            let mut hits: Vec<Vec<FrontHit>> = vec![Vec::new(); group.len()];
+            let rays = points.for_each_hit(tracer, surfaces, dirs.dirs(), |k, r, end| {
                 let Some(RayEnd::Front(surface)) = end else {
                     return;
                 };
-                let t = texels.texel_index(surface.uv_lightmap.into());
-                let rows = &rows_f32[r];
-                for c in 0..3 {
-                    let albedo = surface.albedo[c] / std::f32::consts::PI;
-                    let e = &irradiance[(t * 3 + c) * n..(t * 3 + c + 1) * n];
-                    for (row, &yi) in rows.iter().enumerate() {
-                        let s = yi * albedo;
-                        let acc = &mut m[k][(c * TRANSFER_ROWS + row) * n..][..n];
-                        for (o, &ej) in acc.iter_mut().zip(e) {
-                            *o += s * ej;
-                        }
-                    }
-                }
+                hits[k].push(FrontHit {
+                    direction: r,
+                    texel: texels.texel_index(surface.uv_lightmap.into()),
+                    albedo: (surface.albedo / std::f32::consts::PI).to_array(),
+                });
             });
             let weight = weight as f32;
-            for ((out, m), d0) in out
+            let mut scaled_rows = Vec::new();
+            let mut gathered = Vec::new();
+            let mut sums = vec![0.0f32; per_channel];
+            for ((out, hits), d0) in out
                 .chunks_mut(per_texel)
-                .zip(&m)
+                .zip(&hits)
                 .zip(direct.chunks(per_channel))
             {
                 for c in 0..3 {
-                    let bounced = &m[c * per_channel..][..per_channel];
+                    scaled_rows.clear();
+                    scaled_rows.extend(
+                        hits.iter()
+                            .map(|h| rows_f32[h.direction].map(|y| y * h.albedo[c])),
+                    );
+                    gathered.clear();
+                    gathered.extend(
+                        hits.iter()
+                            .map(|h| &irradiance[(h.texel * 3 + c) * n..][..n]),
+                    );
+                    sums.fill(0.0);
+                    add_outer_products(&mut sums, &scaled_rows, &gathered);
                     for ((o, &d), &v) in out[c * per_channel..][..per_channel]
                         .iter_mut()
                         .zip(d0)
-                        .zip(bounced)
+                        .zip(&sums)
                     {
                         *o = d + weight * v;
                     }
@@ -592,6 +613,15 @@ fn bake_bounce(
         });
     bar.finish_and_clear();
     next
+}
+
+/// A ray of eq. (3) that hit the front of a surface: its direction, the hit's lightmap
+/// texel and albedo / π.
+#[derive(Clone, Copy)]
+struct FrontHit {
+    direction: usize,
+    texel: usize,
+    albedo: [f32; 3],
 }
 
 /// Every texel's three channels' matrices in the lightmap — M^k (`current`) or M⁰
