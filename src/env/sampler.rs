@@ -23,6 +23,15 @@ pub struct EnvSampler<'a> {
     env: &'a EnvMap,
     /// Cumulative weights over texels (row-major), last = total.
     cdf: Vec<f64>,
+    /// A guide table (Devroye, *Non-Uniform Random Variate Generation*, §III.2.4): entry
+    /// b is the first texel whose `cdf` exceeds b/n of the total (n = texels), so that a
+    /// search for the first texel above a target starts at most a few texels short of it
+    /// — the texel a binary search over `cdf` finds, at one or two cache misses.
+    guide: Vec<u32>,
+    /// Per row, [`EnvMap::texel_solid_angle`].
+    row_solid_angles: Vec<f64>,
+    /// cos θ at the row edges: row y spans `edge_cos[y]` to `edge_cos[y + 1]`.
+    edge_cos: Vec<f64>,
 }
 
 impl<'a> EnvSampler<'a> {
@@ -38,7 +47,26 @@ impl<'a> EnvSampler<'a> {
                 cdf.push(total);
             }
         }
-        EnvSampler { env, cdf }
+        let count = cdf.len();
+        let mut guide = Vec::with_capacity(count);
+        let mut t = 0;
+        for b in 0..count {
+            let start = b as f64 * total / count as f64;
+            while t + 1 < count && cdf[t] <= start {
+                t += 1;
+            }
+            guide.push(t as u32);
+        }
+        let h = env.height as f64;
+        EnvSampler {
+            env,
+            cdf,
+            guide,
+            row_solid_angles: (0..env.height).map(|y| env.texel_solid_angle(y)).collect(),
+            edge_cos: (0..=env.height)
+                .map(|y| (std::f64::consts::PI * y as f64 / h).cos())
+                .collect(),
+        }
     }
 
     /// (direction, radiance, pdf per steradian) of one sample.
@@ -48,18 +76,23 @@ impl<'a> EnvSampler<'a> {
             return (Vec3::Y, [0.0; 3], 0.0);
         }
         let target = rng.next_f64() * total;
-        let t = self
-            .cdf
-            .partition_point(|&c| c <= target)
-            .min(self.cdf.len() - 1);
-        let (w, h) = (self.env.width as usize, self.env.height as usize);
+        let w = self.env.width as usize;
+        // The first texel whose cdf exceeds the target (the last one if none does),
+        // scanned from the guide entry of the slice below the target's: that slice starts
+        // below the target whatever the rounding of the slice index.
+        let count = self.cdf.len();
+        let slice = ((target / total * count as f64) as usize).min(count - 1);
+        let mut t = self.guide[slice.saturating_sub(1)] as usize;
+        while t + 1 < count && self.cdf[t] <= target {
+            t += 1;
+        }
         let (x, y) = (t % w, t / w);
         let p_texel = (self.cdf[t] - if t > 0 { self.cdf[t - 1] } else { 0.0 }) / total;
-        let omega = self.env.texel_solid_angle(y as u32);
+        let omega = self.row_solid_angles[y];
         // Uniform in solid angle within the texel: φ uniform, cos θ uniform.
         let pi = std::f64::consts::PI;
-        let (theta0, theta1) = (pi * y as f64 / h as f64, pi * (y + 1) as f64 / h as f64);
-        let cos_theta = theta0.cos() + rng.next_f64() * (theta1.cos() - theta0.cos());
+        let (cos0, cos1) = (self.edge_cos[y], self.edge_cos[y + 1]);
+        let cos_theta = cos0 + rng.next_f64() * (cos1 - cos0);
         let u = (x as f64 + rng.next_f64()) / w as f64;
         let phi = 2.0 * pi * (u - 0.5);
         let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
