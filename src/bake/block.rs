@@ -182,13 +182,18 @@ pub fn encode_bc6h(rgb: &[[f32; 3]], res: u32, quality: Bc6hQuality) -> (Vec<u8>
             data.extend_from_slice(&[0, 0]);
         }
     }
-    let surface = intel_tex_2::RgbaSurface {
-        data: &data,
-        width: side,
-        height: side,
-        stride: side * 8,
-    };
-    let blocks = intel_tex_2::bc6h::compress_blocks(&quality.settings(), &surface);
+    let settings = quality.settings();
+    let blocks = in_bands(&data, side, 8, |band, height| {
+        intel_tex_2::bc6h::compress_blocks(
+            &settings,
+            &intel_tex_2::RgbaSurface {
+                data: band,
+                width: side,
+                height,
+                stride: side * 8,
+            },
+        )
+    });
     (blocks, clamped)
 }
 
@@ -249,13 +254,18 @@ pub fn encode_bc7(rgba: &[[u8; 4]], res: u32, alpha: bool) -> Vec<u8> {
 /// If `rgba` does not hold res² texels.
 pub fn encode_bc7_at(rgba: &[[u8; 4]], res: u32, alpha: bool, quality: Bc7Quality) -> Vec<u8> {
     let (data, side) = padded(rgba, res);
-    let surface = intel_tex_2::RgbaSurface {
-        data: &data,
-        width: side,
-        height: side,
-        stride: side * 4,
-    };
-    intel_tex_2::bc7::compress_blocks(&quality.settings(alpha), &surface)
+    let settings = quality.settings(alpha);
+    in_bands(&data, side, 4, |band, height| {
+        intel_tex_2::bc7::compress_blocks(
+            &settings,
+            &intel_tex_2::RgbaSurface {
+                data: band,
+                width: side,
+                height,
+                stride: side * 4,
+            },
+        )
+    })
 }
 
 /// BC4 blocks of the one-channel 8-bit image `r`.
@@ -265,13 +275,37 @@ pub fn encode_bc7_at(rgba: &[[u8; 4]], res: u32, alpha: bool, quality: Bc7Qualit
 pub fn encode_bc4(r: &[u8], res: u32) -> Vec<u8> {
     let texels: Vec<[u8; 1]> = r.iter().map(|&v| [v]).collect();
     let (data, side) = padded(&texels, res);
-    let surface = intel_tex_2::RSurface {
-        data: &data,
-        width: side,
-        height: side,
-        stride: side,
-    };
-    intel_tex_2::bc4::compress_blocks(&surface)
+    in_bands(&data, side, 1, |band, height| {
+        intel_tex_2::bc4::compress_blocks(&intel_tex_2::RSurface {
+            data: band,
+            width: side,
+            height,
+            stride: side,
+        })
+    })
+}
+
+/// Rows of blocks an encoder call takes at a time in [`in_bands`].
+const BAND_BLOCK_ROWS: usize = 8;
+
+/// The blocks of the padded `side` × `side` image `data` (`texel_bytes` per texel) as
+/// `compress(band, rows)` gives them for bands of [`BAND_BLOCK_ROWS`] rows of blocks,
+/// encoded in parallel and concatenated in order: the encoder takes every block on its
+/// own, so these are the blocks of one call over the whole image.
+fn in_bands(
+    data: &[u8],
+    side: u32,
+    texel_bytes: usize,
+    compress: impl Fn(&[u8], u32) -> Vec<u8> + Sync,
+) -> Vec<u8> {
+    use rayon::prelude::*;
+    let band_bytes = BAND_BLOCK_ROWS * 4 * side as usize * texel_bytes;
+    let row_bytes = side as usize * texel_bytes;
+    let bands: Vec<Vec<u8>> = data
+        .par_chunks(band_bytes.max(1))
+        .map(|band| compress(band, (band.len() / row_bytes.max(1)) as u32))
+        .collect();
+    bands.concat()
 }
 
 /// The one-channel image BC4 `blocks` of a `res` × `res` image decode to.
@@ -311,6 +345,69 @@ mod tests {
                 [s, 0.8 * s, 0.5 * s]
             })
             .collect()
+    }
+
+    #[test]
+    fn bands_encode_the_blocks_of_one_call_over_the_image() {
+        // 18 rows of blocks: two whole bands and a short one.
+        let res = 72u32;
+        let rgba: Vec<[u8; 4]> = (0..res * res)
+            .map(|i| {
+                let v = i.wrapping_mul(2654435761);
+                [
+                    v as u8,
+                    (v >> 8) as u8,
+                    (i / res * 3) as u8,
+                    (v >> 16) as u8,
+                ]
+            })
+            .collect();
+        let (data, side) = padded(&rgba, res);
+        let settings = Bc7Quality::Basic.settings(true);
+        let whole = intel_tex_2::bc7::compress_blocks(
+            &settings,
+            &intel_tex_2::RgbaSurface {
+                data: &data,
+                width: side,
+                height: side,
+                stride: side * 4,
+            },
+        );
+        assert_eq!(encode_bc7_at(&rgba, res, true, Bc7Quality::Basic), whole);
+        let red: Vec<u8> = rgba.iter().map(|t| t[0]).collect();
+        let whole = intel_tex_2::bc4::compress_blocks(&intel_tex_2::RSurface {
+            data: &red,
+            width: res,
+            height: res,
+            stride: res,
+        });
+        assert_eq!(encode_bc4(&red, res), whole);
+        let rgb: Vec<[f32; 3]> = smooth(res)
+            .iter()
+            .zip(&rgba)
+            .map(|(s, t)| [s[0] * f32::from(t[0]), s[1], s[2] + f32::from(t[1])])
+            .collect();
+        let (banded, _) = encode_bc6h(&rgb, res, Bc6hQuality::Fast);
+        let halves: Vec<u8> = rgb
+            .iter()
+            .flat_map(|t| {
+                let mut texel = [0u8; 8];
+                for (c, &v) in t.iter().enumerate() {
+                    texel[2 * c..2 * c + 2].copy_from_slice(&f16::from_f32(v).to_le_bytes());
+                }
+                texel
+            })
+            .collect();
+        let whole = intel_tex_2::bc6h::compress_blocks(
+            &Bc6hQuality::Fast.settings(),
+            &intel_tex_2::RgbaSurface {
+                data: &halves,
+                width: res,
+                height: res,
+                stride: res * 8,
+            },
+        );
+        assert_eq!(banded, whole);
     }
 
     #[test]
