@@ -129,13 +129,14 @@ impl LinearTexture {
         }
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
-        let fetch = |xi: i64, yi: i64| {
-            let (xi, yi) = (xi.rem_euclid(w), yi.rem_euclid(h));
-            self.texels[(yi * w + xi) as usize]
-        };
-        let (x0, y0) = (x0 as i64, y0 as i64);
-        let top = fetch(x0, y0) * (1.0 - fx) + fetch(x0 + 1, y0) * fx;
-        let bottom = fetch(x0, y0 + 1) * (1.0 - fx) + fetch(x0 + 1, y0 + 1) * fx;
+        // The wrapped columns and rows of the four texels: one division each for x0 and
+        // y0; their neighbours wrap by a comparison.
+        let (x0, y0) = ((x0 as i64).rem_euclid(w), (y0 as i64).rem_euclid(h));
+        let next = |i: i64, n: i64| if i + 1 == n { 0 } else { i + 1 };
+        let (x1, y1) = (next(x0, w), next(y0, h));
+        let fetch = |xi: i64, yi: i64| self.texels[(yi * w + xi) as usize];
+        let top = fetch(x0, y0) * (1.0 - fx) + fetch(x1, y0) * fx;
+        let bottom = fetch(x0, y1) * (1.0 - fx) + fetch(x1, y1) * fx;
         top * (1.0 - fy) + bottom * fy
     }
 }
