@@ -24,7 +24,7 @@
 //! traffic by the look of it): a monitor frame after each point's frames tells which state
 //! they ran in ([`states`]); a model is fitted per state to the points' medians in it
 //! (the main one: the fastest state every point ran in, the device least disturbed). A
-//! point the fit misses by more than 8 %, or with fewer than 5 frames in a state of ≥ 10 %
+//! point the fit misses by more than 8 %, or with fewer than 5 frames in a state of ≥ 20 %
 //! of the monitor frames, is timed in another batch of rounds on freshly built pipelines,
 //! its frames pooled with the first and its time that of its fastest build (a build can
 //! run ≈ 25 % slow for as long as it lives, `states`), then the model is fitted again —
