@@ -125,11 +125,7 @@ fn squared_distance(v: &[f32], mean: &[f64]) -> f64 {
 /// squares in basis order, as one at a time would; four basis vectors are taken together
 /// so that their chains of additions overlap.
 fn subspace_error(v: &[f32], cluster: &Cluster) -> f64 {
-    let d: Vec<f64> = v
-        .iter()
-        .zip(&cluster.mean)
-        .map(|(&a, &b)| f64::from(a) - b)
-        .collect();
+    let d = from_mean(v, &cluster.mean);
     // `Iterator::sum`'s start, so that the sums are the ones `dot` and `sum` give.
     let mut along = -0.0f64;
     for group in cluster.basis.chunks(4) {
@@ -148,6 +144,14 @@ fn subspace_error(v: &[f32], cluster: &Cluster) -> f64 {
         }
     }
     (dot(&d, &d) - along).max(0.0)
+}
+
+/// v − μ, in f64.
+fn from_mean(v: &[f32], mean: &[f64]) -> Vec<f64> {
+    v.iter()
+        .zip(mean)
+        .map(|(&a, &b)| f64::from(a) - b)
+        .collect()
 }
 
 /// The cluster with the smallest `cost`, lowest index on ties; and that cost.
@@ -490,12 +494,7 @@ pub fn fit_vectors(
     if m > 0 {
         for t in samples.covered.iter().chain(&gutter) {
             let cluster = &clusters[cluster_of[*t] as usize];
-            let d: Vec<f64> = samples
-                .texel(*t)
-                .iter()
-                .zip(&cluster.mean)
-                .map(|(&a, &b)| f64::from(a) - b)
-                .collect();
+            let d = from_mean(samples.texel(*t), &cluster.mean);
             for (w, b) in weights[t * m..(t + 1) * m].iter_mut().zip(&cluster.basis) {
                 *w = dot(b, &d) as f32;
             }
@@ -698,11 +697,7 @@ mod tests {
 
     /// The one-at-a-time form `subspace_error` must equal bit for bit.
     fn subspace_error_one_at_a_time(v: &[f32], cluster: &Cluster) -> f64 {
-        let d: Vec<f64> = v
-            .iter()
-            .zip(&cluster.mean)
-            .map(|(&a, &b)| f64::from(a) - b)
-            .collect();
+        let d = from_mean(v, &cluster.mean);
         let along: f64 = cluster.basis.iter().map(|b| dot(b, &d).powi(2)).sum();
         (dot(&d, &d) - along).max(0.0)
     }
