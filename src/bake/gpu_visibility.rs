@@ -46,7 +46,7 @@ use glam::Vec3;
 use super::directions::{DirectionSet, above_horizon};
 use super::raster::LightmapTexels;
 use super::trace::{ray_epsilon_of, usable_triangles};
-use super::visibility::{VisibilityMap, VisibilitySettings, dilate_visibility};
+use super::visibility::{VisibilityMap, VisibilitySettings, dilate_visibility, dilation_plan};
 use super::{BakeStats, progress_bar};
 use crate::gpu::visibility_sim::{self, DirectionView, SimulationJob};
 use crate::gpu::{Context, GpuError};
@@ -309,7 +309,7 @@ fn texel_results(
         let n = texels.normal[i];
         rays_traced += dirs.dirs().iter().filter(|&&d| above_horizon(n, d)).count() as u64;
     }
-    dilate_visibility(&mut coeffs, n2, &mut ao, texels);
+    dilate_visibility(&dilation_plan(texels), &mut coeffs, n2, &mut ao);
     (coeffs, ao, rays_traced)
 }
 

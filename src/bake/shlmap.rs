@@ -124,7 +124,7 @@ use super::directions::{DirectionSet, above_horizon};
 use super::raster::{DilationPlan, LightmapTexels, texel_index_of};
 use super::surface::{PointGroup, RayEnd, SurfaceReader, trace_ray};
 use super::trace::{PACKET_RAYS, Tracer};
-use super::visibility::DILATION_PASSES;
+use super::visibility::{DILATION_PASSES, dilation_plan};
 use super::{BakeStats, progress_bar};
 use crate::env::EnvMap;
 use crate::env::sampler::{EnvSampler, Pcg32};
@@ -579,7 +579,7 @@ pub fn bake_sh_lightmap(
     bar.finish_and_clear();
     let mut current = direct.clone();
     let mut bounce_source = Vec::new();
-    let dilation = DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES);
+    let dilation = dilation_plan(texels);
 
     for bounce in 1..=settings.bounces {
         // Irradiance of the previous bounce at every texel, dilated into the gutters.

@@ -48,7 +48,7 @@ use super::raster::{DilationPlan, LightmapTexels};
 use super::surface::{PointGroup, RayEnd, SurfaceReader};
 use super::trace::PACKET_RAYS;
 use super::trace::Tracer;
-use super::visibility::DILATION_PASSES;
+use super::visibility::dilation_plan;
 use super::{BakeStats, progress_bar};
 use crate::scene::Scene;
 use crate::sh::{Order, basis::eval_basis, zonal};
@@ -364,7 +364,7 @@ pub fn bake_transfer(
         .iter()
         .map(|rows| rows.map(|y| y as f32))
         .collect();
-    let dilation = DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES);
+    let dilation = dilation_plan(texels);
     let a: Vec<f64> = (0..TRANSFER_ROWS)
         .map(|i| zonal::clamped_cosine_convolution((i as f64).sqrt() as u32))
         .collect();

@@ -312,9 +312,7 @@ pub fn bake_visibility(
     };
     // The dilation plan needs only the coverage: a job beside the groups, off the
     // serial tail.
-    let (results, plan) = rayon::join(trace, || {
-        DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES)
-    });
+    let (results, plan) = rayon::join(trace, || dilation_plan(texels));
     progress.finish_and_clear();
     let traced = start.elapsed().as_secs_f64();
 
@@ -346,8 +344,7 @@ pub fn bake_visibility(
         });
     let results_trace_ns: u64 = results.iter().map(|r| r.trace_ns).sum();
     drop(results);
-    plan.apply_vectors(&mut coeffs, n2);
-    plan.apply(&mut ao);
+    dilate_visibility(&plan, &mut coeffs, n2, &mut ao);
     let map = VisibilityMap {
         res: texels.res,
         order: settings.order,
@@ -449,15 +446,20 @@ pub fn bake_points(
     out
 }
 
+/// The dilation every lightmap bake of `texels` applies: [`DILATION_PASSES`] texels into
+/// the chart gutters.
+pub(crate) fn dilation_plan(texels: &LightmapTexels) -> DilationPlan {
+    DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES)
+}
+
 /// Dilates a visibility bake's coefficient vectors (`n2` per texel) and AO into the chart
-/// gutters with one [`DilationPlan`] (the CPU bake and the GPU simulator).
+/// gutters with `plan` ([`dilation_plan`]; the CPU bake and the GPU simulator).
 pub(crate) fn dilate_visibility(
+    plan: &DilationPlan,
     coeffs: &mut [f32],
     n2: usize,
     ao: &mut [f32],
-    texels: &LightmapTexels,
 ) {
-    let plan = DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES);
     plan.apply_vectors(coeffs, n2);
     plan.apply(ao);
 }

@@ -118,7 +118,7 @@ impl<'a> EnvSampler<'a> {
         let t = self.env.texel_index(dir.as_dvec3());
         let y = (t / self.env.width as usize) as u32;
         let p_texel = self.cdf[t] - if t > 0 { self.cdf[t - 1] } else { 0.0 };
-        p_texel / total / self.env.texel_solid_angle(y)
+        p_texel / total / self.row_solid_angles[y as usize]
     }
 
     /// The map's radiance along `dir`, read as (1) reads it: the texel that holds it.
