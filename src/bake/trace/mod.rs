@@ -46,6 +46,17 @@
 //! texel's directions share no more nodes than packets of one direction (5.7 rays a node
 //! visit either way) and make the house's walk a third slower.
 //!
+//! Where a ray's work goes on big (counted over a 512² × 256 bake): 9.3 node tests and
+//! 3.1 triangle tests per ray. 73 % of the node tests are at nodes whose box holds the
+//! ray's origin — every direction from a texel walks the same chain of boxes down to its
+//! own leaf (leaves hold 1.5 triangles on average, at a mean depth of 6.9) — and 65 % of
+//! the triangle tests are on triangles wholly below the origin's horizon, its neighbours.
+//! Those triangles are in cache: leaving them out of the tests (a per-packet table) does
+//! not speed the walk. Letting steep rays skip the subtree around their origin (sound
+//! where every point of it, seen from the origin, lies lower than the ray rises) takes
+//! 12–18 % off the query time when it spans one to three levels, but bounding each
+//! texel's subtree costs about as much time as it saves at 256 directions.
+//!
 //! A node reached by at least [`PACKET_TEST_RAYS`] rays is first tested for the whole
 //! packet (AVX2 walk): every operation of the slab test is monotonic in each origin
 //! coordinate, rounding included, so evaluated at the two ends of the box of the query's
