@@ -291,15 +291,25 @@ impl TriangleEdges {
 fn in_huge_pages<T: Copy>(items: &[T]) -> Vec<T> {
     let mut copy = Vec::with_capacity(items.len());
     #[cfg(target_os = "linux")]
-    advise_huge_pages(copy.as_ptr() as usize, copy.capacity() * size_of::<T>());
+    advise_range(copy.as_ptr() as usize, copy.capacity() * size_of::<T>());
     copy.extend_from_slice(items);
     copy
+}
+
+/// Asks the kernel to back the whole 2 MiB pages inside `items` with 2 MiB pages (Linux's
+/// `MADV_HUGEPAGE`; elsewhere nothing). Pages already touched keep their 4 KiB pages: call
+/// it on a fresh allocation (`vec![0.0; n]` of tens of MB) before filling it.
+pub fn advise_huge_pages<T>(items: &[T]) {
+    #[cfg(target_os = "linux")]
+    advise_range(items.as_ptr() as usize, size_of_val(items));
+    #[cfg(not(target_os = "linux"))]
+    let _ = items;
 }
 
 /// Asks for 2 MiB pages over the whole 2 MiB pages inside `len` bytes from `start`.
 #[cfg(target_os = "linux")]
 #[allow(unsafe_code)]
-fn advise_huge_pages(start: usize, len: usize) {
+fn advise_range(start: usize, len: usize) {
     const HUGE_PAGE: usize = 2 << 20;
     let (begin, end) = (
         start.next_multiple_of(HUGE_PAGE),
