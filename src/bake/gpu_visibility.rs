@@ -309,7 +309,12 @@ fn texel_results(
         let n = texels.normal[i];
         rays_traced += dirs.dirs().iter().filter(|&&d| above_horizon(n, d)).count() as u64;
     }
-    dilate_visibility(&dilation_plan(texels), &mut coeffs, n2, &mut ao);
+    dilate_visibility(
+        &dilation_plan(&texels.covered, texels.res),
+        &mut coeffs,
+        n2,
+        &mut ao,
+    );
     (coeffs, ao, rays_traced)
 }
 

@@ -109,8 +109,9 @@
 //! weighed by their density. With `sh` M = 0 and (6) is 4π/R.
 //!
 //! Texels are independent within a pass and sum their rays in a fixed order, so a bake is
-//! bit-identical for any thread count. Results are dilated [`DILATION_PASSES`] texels
-//! into the gutters, as the visibility bake's are.
+//! bit-identical for any thread count. Results are dilated
+//! [`DILATION_PASSES`](super::visibility::DILATION_PASSES) texels into the gutters, as the
+//! visibility bake's are.
 
 use std::ops::{Add, Mul};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -121,10 +122,10 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::directions::{DirectionSet, above_horizon};
-use super::raster::{DilationPlan, LightmapTexels, texel_index_of};
+use super::raster::{LightmapTexels, texel_index_of};
 use super::surface::{PointGroup, RayEnd, SurfaceReader, trace_ray};
 use super::trace::{PACKET_RAYS, Tracer};
-use super::visibility::{DILATION_PASSES, dilation_plan};
+use super::visibility::dilation_plan;
 use super::{BakeStats, progress_bar};
 use crate::env::EnvMap;
 use crate::env::sampler::{EnvSampler, Pcg32};
@@ -279,7 +280,7 @@ impl FittedBasis<'_> {
                 &mut values[t * n..(t + 1) * n],
             );
         }
-        DilationPlan::new(&map.covered, map.res, DILATION_PASSES).apply_vectors(&mut values, n);
+        dilation_plan(&map.covered, map.res).apply_vectors(&mut values, n);
         values
     }
 }
@@ -579,7 +580,7 @@ pub fn bake_sh_lightmap(
     bar.finish_and_clear();
     let mut current = direct.clone();
     let mut bounce_source = Vec::new();
-    let dilation = dilation_plan(texels);
+    let dilation = dilation_plan(&texels.covered, texels.res);
 
     for bounce in 1..=settings.bounces {
         // Irradiance of the previous bounce at every texel, dilated into the gutters.

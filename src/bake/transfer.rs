@@ -364,7 +364,7 @@ pub fn bake_transfer(
         .iter()
         .map(|rows| rows.map(|y| y as f32))
         .collect();
-    let dilation = dilation_plan(texels);
+    let dilation = dilation_plan(&texels.covered, texels.res);
     let a: Vec<f64> = (0..TRANSFER_ROWS)
         .map(|i| zonal::clamped_cosine_convolution((i as f64).sqrt() as u32))
         .collect();

@@ -313,7 +313,7 @@ pub fn bake_visibility(
     };
     // The dilation plan needs only the coverage: a job beside the groups, off the
     // serial tail.
-    let (results, plan) = rayon::join(trace, || dilation_plan(texels));
+    let (results, plan) = rayon::join(trace, || dilation_plan(&texels.covered, texels.res));
     progress.finish_and_clear();
     let traced = start.elapsed().as_secs_f64();
 
@@ -450,10 +450,11 @@ pub fn bake_points(
     out
 }
 
-/// The dilation every lightmap bake of `texels` applies: [`DILATION_PASSES`] texels into
+/// The dilation every lightmap of `res`² texels with coverage `covered` gets (each bake's
+/// results, and the SH lightmap's fitted bases read back): [`DILATION_PASSES`] texels into
 /// the chart gutters.
-pub(crate) fn dilation_plan(texels: &LightmapTexels) -> DilationPlan {
-    DilationPlan::new(&texels.covered, texels.res, DILATION_PASSES)
+pub(crate) fn dilation_plan(covered: &[bool], res: u32) -> DilationPlan {
+    DilationPlan::new(covered, res, DILATION_PASSES)
 }
 
 /// Dilates a visibility bake's coefficient vectors (`n2` per texel) and AO into the chart

@@ -36,10 +36,11 @@ pub struct EnvSampler<'a> {
 
 impl<'a> EnvSampler<'a> {
     pub fn new(env: &'a EnvMap) -> Self {
+        let row_solid_angles: Vec<f64> =
+            (0..env.height).map(|y| env.texel_solid_angle(y)).collect();
         let mut cdf = Vec::with_capacity(env.texels.len());
         let mut total = 0.0;
-        for y in 0..env.height {
-            let omega = env.texel_solid_angle(y);
+        for (y, &omega) in (0..env.height).zip(&row_solid_angles) {
             for x in 0..env.width {
                 let [r, g, b] = env.texel(x, y);
                 total +=
@@ -62,7 +63,7 @@ impl<'a> EnvSampler<'a> {
             env,
             cdf,
             guide,
-            row_solid_angles: (0..env.height).map(|y| env.texel_solid_angle(y)).collect(),
+            row_solid_angles,
             edge_cos: (0..=env.height)
                 .map(|y| (std::f64::consts::PI * y as f64 / h).cos())
                 .collect(),
