@@ -62,7 +62,9 @@
 //! triangle tests per ray) and big's bake runs 1.75× as fast, so the chain holds a bit
 //! over half of the time. Testing each texel's chain siblings from a per-texel list
 //! instead (40 boxes relative to the origin, a conservative test 8 at a time and the
-//! exact one for the 1.5 that pass) costs more than the whole packet walk. Prefetching
+//! exact one for the 1.5 that pass) costs more than the whole packet walk, and walking
+//! two neighbouring directions at once (32 texels each, so that a chain's lower visits
+//! serve two rays) is a tenth slower. Prefetching
 //! the triangle records of the leaves a node holds or a packet enters, walking a lone
 //! ray's subtree with its own stack (44 % of visits hold one ray), or a costlier build
 //! (PLOC's widest search with spatial splits and 20 % reinsertion: 2.6 % fewer node
