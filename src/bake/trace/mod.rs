@@ -57,18 +57,16 @@
 //! 12–18 % off the query time when it spans one to three levels, but bounding each
 //! texel's subtree costs about as much time as it saves at 256 directions.
 //!
-//! The chain is cheap because the packet shares it, not because it is short: cut every
-//! ray at 10 ray offsets (the chain and its immediate neighbours: 7.0 node tests, 1.5
-//! triangle tests per ray) and big's bake runs 1.75× as fast, so the chain holds a bit
-//! over half of the time. Testing each texel's chain siblings from a per-texel list
+//! The chain holds a bit over half of big's bake: cut every ray at 10 ray offsets (the
+//! chain and its immediate neighbours: 7.0 node tests, 1.5 triangle tests per ray) and
+//! the bake runs 1.75× as fast. Testing each texel's chain siblings from a per-texel list
 //! instead (40 boxes relative to the origin, a conservative test 8 at a time and the
 //! exact one for the 1.5 that pass) costs more than the whole packet walk, and walking
 //! two neighbouring directions at once (32 texels each, so that a chain's lower visits
-//! serve two rays) is a tenth slower. Prefetching
-//! the triangle records of the leaves a node holds or a packet enters, walking a lone
-//! ray's subtree with its own stack (44 % of visits hold one ray), or a costlier build
-//! (PLOC's widest search with spatial splits and 20 % reinsertion: 2.6 % fewer node
-//! tests) do not speed the walk either.
+//! serve two rays) is a tenth slower. Prefetching the triangle records of the leaves a
+//! node holds or a packet enters, walking a lone ray's subtree with its own stack (44 %
+//! of visits hold one ray), or a costlier build (PLOC's widest search with spatial
+//! splits and 20 % reinsertion: 2.6 % fewer node tests) do not speed the walk either.
 //!
 //! A node reached by at least [`PACKET_TEST_RAYS`] rays is first tested for the whole
 //! packet (AVX2 walk): every operation of the slab test is monotonic in each origin
