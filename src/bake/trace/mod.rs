@@ -39,12 +39,14 @@
 //! mask.
 //!
 //! On big the walk pays per visit more than it waits on memory: with 36-byte triangle
-//! records instead of 64, with the children a packet enters prefetched before any is
-//! read, or with four walks interleaved a visit at a time (one walk's misses overlapping
-//! the others' work), its queries run no faster; with the one-ray
-//! paths above they run at 15.2–16.1 Mrays/s on 2 threads, 12.0 without. Fans of one
-//! texel's directions share no more nodes than packets of one direction (5.7 rays a node
-//! visit either way) and make the house's walk a third slower.
+//! records instead of 64, with the children a packet enters (or the triangle records of
+//! a node's leaves) prefetched before any is read, or with four walks interleaved a visit
+//! at a time (one walk's misses overlapping the others' work), its queries run no faster;
+//! with the one-ray paths above they run at 15.2–16.1 Mrays/s on 2 threads, 12.0
+//! without. Fans of one texel's directions share no more nodes than packets of one
+//! direction (5.7 rays a node visit either way) and make the house's walk a third slower;
+//! packets of two neighbouring directions (32 texels each, a half of the packet per
+//! direction) make big's a tenth slower.
 //!
 //! Where a ray's work goes on big (counted over a 512² × 256 bake): 9.3 node tests and
 //! 3.1 triangle tests per ray. 73 % of the node tests are at nodes whose box holds the
@@ -61,12 +63,10 @@
 //! chain and its immediate neighbours: 7.0 node tests, 1.5 triangle tests per ray) and
 //! the bake runs 1.75× as fast. Testing each texel's chain siblings from a per-texel list
 //! instead (40 boxes relative to the origin, a conservative test 8 at a time and the
-//! exact one for the 1.5 that pass) costs more than the whole packet walk, and walking
-//! two neighbouring directions at once (32 texels each, so that a chain's lower visits
-//! serve two rays) is a tenth slower. Prefetching the triangle records of the leaves a
-//! node holds or a packet enters, walking a lone ray's subtree with its own stack (44 %
-//! of visits hold one ray), or a costlier build (PLOC's widest search with spatial
-//! splits and 20 % reinsertion: 2.6 % fewer node tests) do not speed the walk either.
+//! exact one for the 1.5 that pass) costs more than the whole packet walk. Walking a lone
+//! ray's subtree with its own stack (44 % of visits hold one ray) or a costlier build
+//! (PLOC's widest search with spatial splits and 20 % reinsertion: 2.6 % fewer node
+//! tests) does not speed the walk either.
 //!
 //! A node reached by at least [`PACKET_TEST_RAYS`] rays is first tested for the whole
 //! packet (AVX2 walk): every operation of the slab test is monotonic in each origin
