@@ -48,6 +48,14 @@
 //! packets of two neighbouring directions (32 texels each, a half of the packet per
 //! direction) make big's a tenth slower.
 //!
+//! A timer profile of big's walk puts 14 % of its samples at the first read of a
+//! triangle record and 5 % at a node's. The far triangles are cold for every packet:
+//! the parallel rays of neighbouring groups (64 texels, about 1.5 scene units across)
+//! share few of them (walking 4 or 16 groups a direction at a time is 3 % or 7 %
+//! slower). 23 % of big's
+//! rays are occluded, and a texel's occluder at one direction almost never occludes its
+//! next (0.25 % of rays), so testing it first (an occluder cache) costs 3 %.
+//!
 //! Where a ray's work goes on big (counted over a 512² × 256 bake): 9.3 node tests and
 //! 3.1 triangle tests per ray. 73 % of the node tests are at nodes whose box holds the
 //! ray's origin — every direction from a texel walks the same chain of boxes down to its
