@@ -492,6 +492,16 @@ pub fn is_gltf_path(name: &str) -> bool {
     lower.ends_with(".gltf") || lower.ends_with(".glb")
 }
 
+/// The files a run reads for the scene `name`: a glTF file and the buffers and images it
+/// references; none for a built-in scene.
+pub fn scene_files(name: &str) -> Vec<std::path::PathBuf> {
+    if is_gltf_path(name) {
+        gltf::files_read(std::path::Path::new(name))
+    } else {
+        Vec::new()
+    }
+}
+
 /// The built-in scene by name, or a scene file.
 pub fn resolve_scene(name: &str, vis_res: u32) -> Result<Scene, SceneError> {
     match name {

@@ -206,13 +206,77 @@ fn no_output_overwrites_an_input() {
         &["low.gltf", "--gltf would overwrite the --low input"],
     );
     assert_eq!(std::fs::read(&h).unwrap(), before, "the input was written");
+    // A file the scene's glTF references (its texture): render's, reference's and
+    // normalmap's outputs spare it.
+    let model = dir.join("m");
+    std::fs::create_dir_all(&model).unwrap();
+    let gltf = model.join("m.gltf");
+    std::fs::write(
+        &gltf,
+        br#"{"asset": {"version": "2.0"}, "images": [{"uri": "tex%20a.png"}], "buffers": [{"uri": "m.bin", "byteLength": 4}]}"#,
+    )
+    .unwrap();
+    let texture = model.join("tex a.png");
+    std::fs::write(&texture, b"texture").unwrap();
+    for (command, option) in [("render", "--scene"), ("reference", "--scene")] {
+        let mut args = vec![command, option, s(&gltf), "--out", s(&texture)];
+        if command == "render" {
+            args.extend(["--technique", "preconv"]);
+        }
+        let run = shvis(&args, &[]);
+        assert_one_error_line(
+            &run,
+            &["tex a.png", "--out would overwrite the --scene input"],
+        );
+    }
+    let run = shvis(
+        &[
+            "normalmap",
+            "--high",
+            s(&gltf),
+            "--low",
+            "sphere:1",
+            "--out",
+            s(&texture),
+        ],
+        &[],
+    );
+    assert_one_error_line(
+        &run,
+        &["tex a.png", "--out would overwrite the --high input"],
+    );
+    assert_eq!(std::fs::read(&texture).unwrap(), b"texture");
+    // An input inside the folder a bench, relight or study writes into.
+    let folder = dir.join("folder");
+    std::fs::create_dir_all(&folder).unwrap();
+    let sh = folder.join("table.md");
+    std::fs::write(&sh, b"1 1 1\n").unwrap();
+    let env = format!("sh:{}", s(&sh));
+    for command in [
+        vec!["bench"],
+        vec!["relight"],
+        vec!["study", "block"],
+        vec!["study", "seams"],
+    ] {
+        let mut args = command.clone();
+        args.extend(["--env", env.as_str(), "--out", s(&folder)]);
+        let run = shvis(&args, &[]);
+        assert_one_error_line(
+            &run,
+            &[
+                "table.md",
+                "--out (the folder the run writes into) would overwrite the --env input",
+            ],
+        );
+    }
+    assert_eq!(std::fs::read(&sh).unwrap(), b"1 1 1\n");
 }
 
-/// A rerun into the folder of an earlier run removes that run's report and a killed run's
-/// temporaries before it does anything else, so a run that stops early never leaves a
-/// report that describes other images.
+/// A rerun into the folder of an earlier run removes a killed run's temporaries before it
+/// does anything else; refused for its inputs, it leaves the earlier run's report as it was
+/// (the report is removed only once the run is about to write images).
 #[test]
-fn a_rerun_clears_the_earlier_report_and_stale_temporaries() {
+fn a_rerun_clears_stale_temporaries_and_a_refused_one_keeps_the_earlier_report() {
     let dir = Scratch::new("reliability", "rerun");
     let out = dir.join("bench");
     std::fs::create_dir_all(&out).unwrap();
@@ -228,9 +292,10 @@ fn a_rerun_clears_the_earlier_report_and_stale_temporaries() {
     );
     assert_one_error_line(&run, &["/no/such/env.exr"]);
     for f in ["index.html", "table.md", "table.json", "probe.md"] {
-        assert!(
-            !out.join(f).exists(),
-            "{f} of the earlier run is still there"
+        assert_eq!(
+            std::fs::read(out.join(f)).ok().as_deref(),
+            Some(&b"an earlier run"[..]),
+            "{f} of the earlier run was not kept"
         );
     }
     assert!(!stale.exists(), "the killed run's temporary is still there");

@@ -55,7 +55,7 @@ pub(super) fn finite_degrees(s: &str) -> Result<f64, String> {
 #[derive(Args, Debug, Clone)]
 #[command(next_help_heading = "Scene and bake")]
 pub(super) struct SceneArgs {
-    /// `house` (built-in), `patio` (built-in brick corner) or a .gltf/.glb file.
+    /// A built-in scene (`house`, `patio`: a brick corner, `bumpy`, `wavy`) or a .gltf/.glb file.
     #[arg(long, default_value = "house")]
     pub(super) scene: String,
     /// Lightmap texels per side.

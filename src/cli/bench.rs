@@ -16,7 +16,7 @@ use super::args::{
     finite_f32, with_normal_filter,
 };
 use super::{
-    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, check_frame_memory, check_rows,
+    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, RunInputs, check_frame_memory, check_rows,
     clear_earlier_run, create_dir, parse_list, parse_techniques, prepare_settings, print_table,
     print_written, with_gpu,
 };
@@ -114,7 +114,7 @@ pub(super) struct BenchArgs {
     /// Measure under the environment turned DEG degrees about +Y after the bake:
     /// references under the turned map, techniques with dynamic lighting relit to it
     /// through their lighting update, baked ones (shlmap, rnm*) as baked. No error ladder.
-    #[arg(help_heading = "Frames and timing", long, value_name = "DEG", value_parser = finite_degrees)]
+    #[arg(help_heading = "Frames and timing", long, value_name = "DEG", allow_hyphen_values = true, value_parser = finite_degrees)]
     relight_rotate: Option<f64>,
     /// Output directory.
     #[arg(help_heading = "Output", short, long, default_value = "bench-out")]
@@ -204,17 +204,13 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
     if a.relight_rotate.is_some() && !a.specular.specular.is_empty() {
         bail!("--relight-rotate: not with --specular (its light is the bake's sun)");
     }
+    RunInputs::default()
+        .env("--env", &a.env)
+        .scene("--scene", &a.scene.scene)
+        .file("--height-map", a.scene.height_map.as_deref())
+        .check_outside(&a.out, "--out (the folder the run writes into)")?;
     create_dir(&a.out)?;
-    clear_earlier_run(
-        &a.out,
-        &[
-            "table.md",
-            "table.json",
-            shvis::report::html::INDEX_NAME,
-            "probe.md",
-            "probe.json",
-        ],
-    );
+    shvis::files::remove_stale_temps(&a.out);
     let started = Instant::now();
     let prepare_settings = prepare_settings(&a.scene, &a.env, &settings.techniques, a.bounces)?;
     // The device before the bake: a missing GPU should not cost one, and `--baker gpu`
@@ -255,6 +251,17 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
                 );
             }
         }
+        // Inputs, device and bakes are good: the earlier run's report goes only now.
+        clear_earlier_run(
+            &a.out,
+            &[
+                "table.md",
+                "table.json",
+                shvis::report::html::INDEX_NAME,
+                "probe.md",
+                "probe.json",
+            ],
+        );
         let table = shvis::bench::run(ctx, &prepared, &settings)?;
         plan.record(&table, bake_seconds);
         eprintln!(

@@ -10,7 +10,7 @@ use shvis::gpu::HwPath;
 use shvis::technique::Technique;
 
 use super::args::SceneArgs;
-use super::{MAX_BOUNCES, prepare_settings};
+use super::{MAX_BOUNCES, RunInputs, prepare_settings};
 
 #[derive(Args, Debug)]
 pub(super) struct ExportArgs {
@@ -50,16 +50,11 @@ pub(super) fn run_export(a: ExportArgs) -> Result<()> {
         );
     }
     // The export replaces --out whole: no input may lie inside it.
-    let env = ["angular:", "sh:"]
-        .iter()
-        .find_map(|prefix| a.env.strip_prefix(prefix))
-        .unwrap_or(&a.env);
-    let (env, scene) = (PathBuf::from(env), PathBuf::from(&a.scene.scene));
-    let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--env", &env), ("--scene", &scene)];
-    if let Some(h) = &a.scene.height_map {
-        inputs.push(("--height-map", h));
-    }
-    shvis::files::check_inputs_outside(&a.out, "--out", &inputs)?;
+    RunInputs::default()
+        .env("--env", &a.env)
+        .scene("--scene", &a.scene.scene)
+        .file("--height-map", a.scene.height_map.as_deref())
+        .check_outside(&a.out, "--out (a folder replaced whole)")?;
     let settings = prepare_settings(&a.scene, &a.env, &[a.technique], a.bounces)?;
     let mut prepared = shvis::prepare::prepare(&settings)?;
     prepared.prepare_techniques(&[a.technique])?;

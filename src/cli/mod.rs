@@ -20,7 +20,7 @@ mod study;
 mod tools;
 mod view;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -174,7 +174,7 @@ fn print_table(markdown: &str, out: &Path, tables: &str, started: Instant) -> Re
 }
 
 /// Prints the files a run wrote, one `wrote PATH` line each.
-fn print_written(paths: &[std::path::PathBuf]) -> Result<()> {
+fn print_written(paths: &[PathBuf]) -> Result<()> {
     for p in paths {
         out!("wrote {}", p.display());
     }
@@ -205,6 +205,57 @@ fn check_environment() -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The files a run reads, each with the option that names it: a scene's (a glTF and the
+/// buffers and images it references), environments' and any others, for the checks that
+/// keep its outputs off them.
+#[derive(Default)]
+struct RunInputs(Vec<(&'static str, PathBuf)>);
+
+impl RunInputs {
+    /// The files of the scene `name` (none for a built-in scene).
+    fn scene(mut self, option: &'static str, name: &str) -> Self {
+        let files = shvis::prepare::scene_files(name);
+        self.0.extend(files.into_iter().map(|f| (option, f)));
+        self
+    }
+
+    /// The file of the environment `spec` (none for the built-in sky).
+    fn env(mut self, option: &'static str, spec: &str) -> Self {
+        if let Some(file) = shvis::env::file_of(spec) {
+            self.0.push((option, file.to_path_buf()));
+        }
+        self
+    }
+
+    /// A file read as it is named.
+    fn file(mut self, option: &'static str, path: Option<&Path>) -> Self {
+        self.0.extend(path.map(|p| (option, p.to_path_buf())));
+        self
+    }
+
+    /// The pairs as the `shvis::files` checks take them.
+    fn pairs(&self) -> Vec<(&str, &Path)> {
+        self.0.iter().map(|(o, p)| (*o, p.as_path())).collect()
+    }
+
+    /// Refuses `outputs` that are any of these files.
+    fn check_spared_by(&self, outputs: &[(String, PathBuf)]) -> Result<()> {
+        Ok(shvis::files::check_outputs_spare_inputs(
+            outputs,
+            &self.pairs(),
+        )?)
+    }
+
+    /// Refuses an output folder `dir` that holds any of these files.
+    fn check_outside(&self, dir: &Path, output: &str) -> Result<()> {
+        Ok(shvis::files::check_inputs_outside(
+            dir,
+            output,
+            &self.pairs(),
+        )?)
+    }
 }
 
 /// Creates the `--out` directory and checks it takes files, before any work.

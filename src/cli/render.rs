@@ -17,8 +17,8 @@ use super::args::{
     BakerArgs, GpuArgs, NormalFilterArg, SceneArgs, SpecularArgs, finite_f32, with_normal_filter,
 };
 use super::{
-    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, check_frame_memory, prepare_settings,
-    with_gpu,
+    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, RunInputs, check_frame_memory,
+    prepare_settings, with_gpu,
 };
 
 #[derive(Args, Debug)]
@@ -69,7 +69,7 @@ pub(super) struct RenderArgs {
 
 #[derive(Args, Debug)]
 pub(super) struct ReferenceArgs {
-    /// `house` (built-in), `patio` (built-in brick corner) or a .gltf/.glb file.
+    /// A built-in scene (`house`, `patio`: a brick corner, `bumpy`, `wavy`) or a .gltf/.glb file.
     #[arg(long, default_value = "house")]
     scene: String,
     #[arg(long, default_value = "sky")]
@@ -112,13 +112,11 @@ pub(super) fn run_render(a: RenderArgs) -> Result<()> {
     frame_format(&a.out)?;
     check_frame_memory(a.width, a.height, 48)?;
     shvis::files::check_writable_file(&a.out, "--out")?;
-    let env = PathBuf::from(a.env.strip_prefix("angular:").unwrap_or(&a.env));
-    let scene = PathBuf::from(&a.scene.scene);
-    let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--env", &env), ("--scene", &scene)];
-    if let Some(h) = &a.scene.height_map {
-        inputs.push(("--height-map", h));
-    }
-    shvis::files::check_outputs_spare_inputs(&[("--out".to_string(), a.out.clone())], &inputs)?;
+    RunInputs::default()
+        .env("--env", &a.env)
+        .scene("--scene", &a.scene.scene)
+        .file("--height-map", a.scene.height_map.as_deref())
+        .check_spared_by(&[("--out".to_string(), a.out.clone())])?;
     let technique = with_normal_filter(vec![a.technique], a.normal_filter)[0];
     // A path the technique has no form on is refused before its bake.
     if let Err(why) = technique.form_on(a.path) {
@@ -153,6 +151,10 @@ pub(super) fn run_reference(a: ReferenceArgs) -> Result<()> {
     frame_format(&a.out)?;
     check_frame_memory(a.width, a.height, 160)?;
     shvis::files::check_writable_file(&a.out, "--out")?;
+    RunInputs::default()
+        .env("--env", &a.env)
+        .scene("--scene", &a.scene)
+        .check_spared_by(&[("--out".to_string(), a.out.clone())])?;
     let min = shvis::prepare::min_vis_res(&a.scene);
     if !(min..=shvis::bake::MAX_RES).contains(&a.vis_res) {
         bail!(

@@ -11,8 +11,8 @@ use shvis::technique::{HwPath, Technique};
 
 use super::args::{GpuArgs, SceneArgs, finite_f32};
 use super::{
-    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, create_dir, prepare_settings, print_table,
-    print_written, say, with_gpu,
+    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, RunInputs, create_dir, prepare_settings,
+    print_table, print_written, say, with_gpu,
 };
 
 #[derive(Subcommand, Debug)]
@@ -102,7 +102,7 @@ pub(super) struct StudyRaysArgs {
     /// Rays per texel of each bake, comma-separated.
     #[arg(long = "ray-counts", value_delimiter = ',', default_value = "64,256,1024,4096", value_parser = clap::value_parser!(u32).range(shvis::bake::MIN_RAYS as i64..=shvis::bake::MAX_RAYS as i64))]
     ray_counts: Vec<u32>,
-    /// `house` (built-in), `patio` (built-in brick corner) or a .gltf/.glb file.
+    /// A built-in scene (`house`, `patio`: a brick corner, `bumpy`, `wavy`) or a .gltf/.glb file.
     #[arg(long, default_value = "house")]
     scene: String,
     /// Lightmap texels per side.
@@ -369,6 +369,8 @@ pub(super) fn run_study(c: StudyCommand) -> Result<()> {
 
 fn run_compression(a: StudyCompressionArgs) -> Result<()> {
     use shvis::study::tables;
+    scene_and_env(&a.scene, &a.env)
+        .check_outside(&a.out, "--out (the folder the run writes into)")?;
     create_dir(&a.out)?;
     let started = Instant::now();
     let mut prepared = shvis::prepare::prepare(&prepare_settings(&a.scene, &a.env, &[], 0)?)?;
@@ -444,6 +446,8 @@ fn run_rays(a: StudyRaysArgs) -> Result<()> {
         height_map: None,
         height_scale: 1.0,
     };
+    scene_and_env(&scene, &a.env)
+        .check_outside(&a.out, "--out (the folder the run writes into)")?;
     let mut prepare = prepare_settings(&scene, &a.env, &techniques, a.bounces)?;
     prepare.progress = false;
     for &rays in &ray_counts {
@@ -488,28 +492,9 @@ fn run_rays(a: StudyRaysArgs) -> Result<()> {
 
 fn run_bases(a: StudyBasesArgs) -> Result<()> {
     let envs = super::parse_each_once::<String>(&a.envs.join(","))?;
-    let files: Vec<(&str, &std::path::Path)> = envs
-        .iter()
-        .map(|e| {
-            let path = e
-                .strip_prefix(shvis::env::SH_PREFIX)
-                .or_else(|| e.strip_prefix(shvis::env::ANGULAR_PREFIX))
-                .unwrap_or(e);
-            ("--envs", std::path::Path::new(path))
-        })
-        .collect();
-    let outputs: Vec<(String, PathBuf)> = [
-        "bases.md",
-        "bases.json",
-        "bases_error.svg",
-        "bases_error.png",
-        "bases_hemisphere.svg",
-        "bases_hemisphere.png",
-    ]
-    .iter()
-    .map(|f| ("--out".to_string(), a.out.join(f)))
-    .collect();
-    shvis::files::check_outputs_spare_inputs(&outputs, &files)?;
+    envs.iter()
+        .fold(RunInputs::default(), |inputs, e| inputs.env("--envs", e))
+        .check_outside(&a.out, "--out (the folder the run writes into)")?;
     create_dir(&a.out)?;
     let started = Instant::now();
     let study = shvis::study::bases::run(&envs, a.quadrature as usize, true)?;
@@ -527,11 +512,8 @@ fn run_bases(a: StudyBasesArgs) -> Result<()> {
 }
 
 fn run_block(a: StudyBlockArgs) -> Result<()> {
-    let outputs: Vec<(String, PathBuf)> = ["block.md", "block.json"]
-        .iter()
-        .map(|f| ("--out".to_string(), a.out.join(f)))
-        .collect();
-    shvis::files::check_outputs_spare_inputs(&outputs, &[])?;
+    scene_and_env(&a.scene, &a.env)
+        .check_outside(&a.out, "--out (the folder the run writes into)")?;
     create_dir(&a.out)?;
     let started = Instant::now();
     let prepared = shvis::prepare::prepare(&prepare_settings(
@@ -577,6 +559,16 @@ fn run_ndf(a: StudyNdfArgs) -> Result<()> {
             shvis::ndf::MAX_SIGMA
         );
     }
+    let inputs = a
+        .diffuse_scenes
+        .iter()
+        .fold(RunInputs::default(), |inputs, s| {
+            inputs.scene("--diffuse-scenes", s)
+        });
+    a.diffuse_envs
+        .iter()
+        .fold(inputs, |inputs, e| inputs.env("--diffuse-envs", e))
+        .check_outside(&a.out, "--out (the folder the run writes into)")?;
     create_dir(&a.out)?;
     let started = Instant::now();
     let settings = shvis::study::ndf_report::NdfRunSettings {
@@ -602,6 +594,14 @@ fn run_ndf(a: StudyNdfArgs) -> Result<()> {
     Ok(())
 }
 
+/// The files a study reads through `--scene`, `--height-map` and `--env`.
+fn scene_and_env(scene: &SceneArgs, env: &str) -> RunInputs {
+    RunInputs::default()
+        .env("--env", env)
+        .scene("--scene", &scene.scene)
+        .file("--height-map", scene.height_map.as_deref())
+}
+
 /// The lightmap resolution `--model` is read at to check it before the study's work.
 const MODEL_CHECK_RES: u32 = 64;
 
@@ -613,6 +613,15 @@ fn run_normalmap(a: StudyNormalmapArgs) -> Result<()> {
     if let Some(model) = &a.model {
         shvis::scene::gltf::load(model, MODEL_CHECK_RES).context("--model")?;
     }
+    let model_files = a
+        .model
+        .iter()
+        .flat_map(|m| shvis::scene::gltf::files_read(m));
+    model_files
+        .fold(RunInputs::default().env("--env", &a.env), |inputs, f| {
+            inputs.file("--model", Some(&f))
+        })
+        .check_outside(&a.out, "--out (the folder the run writes into)")?;
     create_dir(&a.out)?;
     let started = Instant::now();
     with_gpu(&a.gpu, |ctx| {
@@ -643,6 +652,13 @@ fn run_normalmap(a: StudyNormalmapArgs) -> Result<()> {
 }
 
 fn run_rnm(a: StudyRnmArgs) -> Result<()> {
+    a.envs
+        .iter()
+        .fold(
+            RunInputs::default().scene("--scene", &a.scene),
+            |inputs, e| inputs.env("--envs", e),
+        )
+        .check_outside(&a.out, "--out (the folder the run writes into)")?;
     create_dir(&a.out)?;
     let started = Instant::now();
     let settings = shvis::study::rnm::RnmStudySettings {
@@ -670,6 +686,8 @@ fn run_rnm(a: StudyRnmArgs) -> Result<()> {
 fn run_seams(a: StudySeamsArgs) -> Result<()> {
     use shvis::study::tables;
     tables::check_clustered(&a.techniques)?;
+    scene_and_env(&a.scene, &a.env)
+        .check_outside(&a.out, "--out (the folder the run writes into)")?;
     create_dir(&a.out)?;
     let started = Instant::now();
     with_gpu(&a.gpu, |ctx| {

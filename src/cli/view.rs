@@ -10,9 +10,9 @@ use shvis::technique::{HwPath, Technique};
 
 use super::args::{GpuArgs, SceneArgs, finite_f32, finite_f64};
 use super::{
-    DEFAULT_EXPOSURE_EV, MAX_FRAME_SIDE, check_frame_memory, check_rows, check_validation,
-    clear_earlier_run, create_dir, parse_list, parse_techniques, prepare_for, print_table,
-    with_gpu,
+    DEFAULT_EXPOSURE_EV, MAX_FRAME_SIDE, RunInputs, check_frame_memory, check_rows,
+    check_validation, clear_earlier_run, create_dir, parse_list, parse_techniques, prepare_for,
+    print_table, with_gpu,
 };
 
 #[derive(Args, Debug)]
@@ -81,7 +81,7 @@ pub(super) struct RelightArgs {
     #[arg(long)]
     blocking_upload: bool,
     /// Full turns of the environment over the run.
-    #[arg(long, default_value_t = 1.0, value_parser = finite_f64)]
+    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true, value_parser = finite_f64)]
     turns: f64,
     /// Cross-fade from --env to this environment over the run (time of day).
     #[arg(long)]
@@ -120,13 +120,20 @@ pub(super) fn run_view(a: ViewArgs) -> Result<()> {
                 shot.display()
             );
         }
-        shvis::files::check_writable_file(shot, "--screenshot")?;
     }
     let set = |name: &str| std::env::var_os(name).is_some_and(|v| !v.is_empty());
     if !set("DISPLAY") && !set("WAYLAND_DISPLAY") {
         bail!(
             "no display to open a window on (DISPLAY is not set): run under `xvfb-run -a shvis view …`, or use `shvis render` / `shvis bench`"
         );
+    }
+    if let Some(shot) = &a.screenshot {
+        shvis::files::check_writable_file(shot, "--screenshot")?;
+        RunInputs::default()
+            .env("--env", &a.env)
+            .scene("--scene", &a.scene.scene)
+            .file("--height-map", a.scene.height_map.as_deref())
+            .check_spared_by(&[("--screenshot".to_string(), shot.clone())])?;
     }
     let techniques: Vec<Technique> = parse_techniques(&a.techniques)?;
     let prepared = prepare_for(
@@ -189,8 +196,22 @@ pub(super) fn run_relight(a: RelightArgs) -> Result<()> {
         &settings.paths,
         a.skip_unsupported,
     )?;
+    if !settings.techniques.iter().any(|t| t.dynamic_lighting()) {
+        bail!(
+            "--techniques {}: no technique listed follows a changing environment (their lighting is baked into the lightmap): nothing to measure",
+            a.techniques
+        );
+    }
+    let mut inputs = RunInputs::default()
+        .env("--env", &a.env)
+        .scene("--scene", &a.scene.scene)
+        .file("--height-map", a.scene.height_map.as_deref());
+    if let Some(fade) = &a.fade_to {
+        inputs = inputs.env("--fade-to", fade);
+    }
+    inputs.check_outside(&a.out, "--out (the folder the run writes into)")?;
     create_dir(&a.out)?;
-    clear_earlier_run(&a.out, &["relight.md", "relight.json"]);
+    shvis::files::remove_stale_temps(&a.out);
     let started = Instant::now();
     let prepared = prepare_for(
         &a.scene,
@@ -199,6 +220,8 @@ pub(super) fn run_relight(a: RelightArgs) -> Result<()> {
         shvis::bake::shlmap::DEFAULT_BOUNCES,
     )?;
     with_gpu(&a.gpu, |ctx| {
+        // Inputs, device and bakes are good: the earlier run's report goes only now.
+        clear_earlier_run(&a.out, &["relight.md", "relight.json"]);
         let table = shvis::relight::run(ctx, &prepared, &settings)?;
         print_table(
             &table.to_markdown(),

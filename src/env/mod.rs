@@ -302,6 +302,19 @@ pub const ANGULAR_PREFIX: &str = "angular:";
 /// Prefix of an `--env` given by its SH coefficients ([`sh_file`]).
 pub const SH_PREFIX: &str = "sh:";
 
+/// The file an `--env` argument reads ([`resolve`]): the path after `angular:` or `sh:`, or
+/// the argument itself; `None` for the built-in sky.
+pub fn file_of(name_or_path: &str) -> Option<&Path> {
+    if name_or_path == BUILTIN_SKY || name_or_path.starts_with("sky:") {
+        return None;
+    }
+    let path = [ANGULAR_PREFIX, SH_PREFIX]
+        .iter()
+        .find_map(|prefix| name_or_path.strip_prefix(prefix))
+        .unwrap_or(name_or_path);
+    Some(Path::new(path))
+}
+
 /// `--env` argument → map: [`BUILTIN_SKY`] ("sky") is the procedural sky
 /// ([`sky::sky`], [`BUILTIN_SKY_WIDTH`] × half, default [`sky::SkyParams`]); `sky:DEG` the
 /// same with the sun DEG° high ([`sky::SkyParams::with_sun_elevation`]);

@@ -203,7 +203,7 @@ pub fn check_inputs_outside(
         if path.exists() && resolved(path).starts_with(&dir) {
             return Err(FileError::OutputIsInput {
                 path: path.to_path_buf(),
-                output: format!("{output} (a folder replaced whole)"),
+                output: output.to_string(),
                 input: format!("the {option} input"),
             });
         }

@@ -93,9 +93,11 @@ impl NormalMapJob {
             if name.starts_with("sphere:") {
                 return Vec::new();
             }
-            // A glTF's buffer beside it is read too.
-            let path = PathBuf::from(name);
-            vec![(option, path.with_extension("bin")), (option, path)]
+            // With the buffers and images the glTF references.
+            crate::scene::gltf::files_read(std::path::Path::new(name))
+                .into_iter()
+                .map(|path| (option, path))
+                .collect()
         };
         let mut inputs = files("--high", &self.high);
         if let LowMesh::Load(low) = &self.low {

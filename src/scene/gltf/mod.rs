@@ -147,6 +147,53 @@ pub fn load_with_report(path: &Path, lightmap_res: u32) -> Result<(Scene, LoadRe
     .load(&name, &bytes, lightmap_res)
 }
 
+/// Every file a [`load`] of `path` reads: the file itself and the buffers and images it
+/// references by relative URI (those the URI policy allows), for the checks that keep a
+/// run's outputs off its inputs. A file that cannot be read or parsed gives itself alone
+/// (its load then says what is wrong).
+pub fn files_read(path: &Path) -> Vec<PathBuf> {
+    let mut files = vec![path.to_path_buf()];
+    let Some(json) = json_chunk(path) else {
+        return files;
+    };
+    let Ok(document) = gltf::Gltf::from_slice_without_validation(&json) else {
+        return files;
+    };
+    let base = path.parent().unwrap_or(Path::new(""));
+    let buffers = document.buffers().filter_map(|b| match b.source() {
+        gltf::buffer::Source::Uri(uri) => Some(uri),
+        gltf::buffer::Source::Bin => None,
+    });
+    let images = document.images().filter_map(|i| match i.source() {
+        gltf::image::Source::Uri { uri, .. } => Some(uri),
+        gltf::image::Source::View { .. } => None,
+    });
+    for uri in buffers.chain(images) {
+        if let Some(relative) = uri::relative_path(uri) {
+            files.push(base.join(relative));
+        }
+    }
+    files
+}
+
+/// The JSON of a `.gltf`, or the JSON chunk of a `.glb` (its binary chunk left unread), as
+/// a document [`gltf::Gltf::from_slice_without_validation`] parses; `None` when unreadable.
+fn json_chunk(path: &Path) -> Option<Vec<u8>> {
+    use std::io::Read;
+    let mut file = std::fs::File::open(path).ok()?;
+    let mut header = [0u8; 20];
+    let n = file.read(&mut header).ok()?;
+    if n == 20 && &header[..4] == b"glTF" && &header[16..20] == b"JSON" {
+        let len = u32::from_le_bytes(header[12..16].try_into().ok()?) as u64;
+        let mut json = Vec::new();
+        file.take(len.min(MAX_REFERENCED_FILE_BYTES))
+            .read_to_end(&mut json)
+            .ok()?;
+        return Some(json);
+    }
+    crate::files::read_bounded(path, MAX_REFERENCED_FILE_BYTES, "a glTF file").ok()
+}
+
 /// Loads a `.glb` or `.gltf` held in memory; only embedded data (the GLB BIN chunk, data
 /// URIs) can be referenced. The entry point of the `gltf_scene` fuzz target.
 ///

@@ -38,6 +38,15 @@ pub(super) fn read_uri(base: Option<&Path>, uri: &str) -> Result<Vec<u8>, String
     )
 }
 
+/// The relative path under the glTF file's folder that a URI names, `None` for a data URI
+/// or one the URI policy refuses (its load reports it).
+pub(super) fn relative_path(uri: &str) -> Option<PathBuf> {
+    if uri.starts_with("data:") {
+        return None;
+    }
+    check_relative_uri(uri).ok()
+}
+
 /// The relative path a non-data URI names, when the URI policy (module doc) allows it.
 fn check_relative_uri(uri: &str) -> Result<PathBuf, String> {
     let refuse = |why: &str| {
