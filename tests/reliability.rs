@@ -530,3 +530,66 @@ const NO_UV_TRIANGLE: &str = "{\"asset\": {\"version\": \"2.0\"}, \"buffers\": [
 
 /// A glTF triangle whose lightmap UVs (TEXCOORD_1) span a ten-thousandth of the map.
 const TINY_UV_TRIANGLE: &str = "{\"asset\": {\"version\": \"2.0\"}, \"buffers\": [{\"byteLength\": 120, \"uri\": \"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/zczMPc3MzD07Ac09zczMPc3MzD07Ac09\"}], \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 36}, {\"buffer\": 0, \"byteOffset\": 36, \"byteLength\": 36}, {\"buffer\": 0, \"byteOffset\": 72, \"byteLength\": 24}, {\"buffer\": 0, \"byteOffset\": 96, \"byteLength\": 24}], \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\", \"min\": [0, 0, 0], \"max\": [1, 1, 0]}, {\"bufferView\": 1, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"}, {\"bufferView\": 2, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC2\"}, {\"bufferView\": 3, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC2\"}], \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, \"NORMAL\": 1, \"TEXCOORD_0\": 2, \"TEXCOORD_1\": 3}}]}], \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}], \"scene\": 0}";
+
+/// A bake writes its folder as one run: a rebake at a lower order leaves no layer of the
+/// earlier bake, a folder that is not an earlier bake is refused before the bake, and
+/// `bake --check` passes only a folder that holds exactly the layers of its order.
+#[test]
+fn a_bake_replaces_its_folder_whole() {
+    let dir = Scratch::new("reliability", "bake-folder");
+    let out = dir.join("bake");
+    let cache = dir.join("cache");
+    let bake = |order: &str, out: &Path| {
+        shvis(
+            &[
+                "bake",
+                "--vis-res",
+                "64",
+                "--rays",
+                "36",
+                "--order",
+                order,
+                "--out",
+                s(out),
+            ],
+            &[("SHVIS_CACHE_DIR", s(&cache))],
+        )
+    };
+    let names = |d: &Path| {
+        let mut n: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        n.sort();
+        n
+    };
+    assert!(bake("6", &out).status.success());
+    assert_eq!(names(&out).len(), 11, "9 layers, ao.exr, manifest.json");
+    assert!(bake("3", &out).status.success());
+    assert_eq!(
+        names(&out),
+        [
+            "ao.exr",
+            "manifest.json",
+            "visibility_0.exr",
+            "visibility_1.exr",
+            "visibility_2.exr"
+        ]
+    );
+    let check = |d: &Path| shvis(&["bake", "--check", "--out", s(d)], &[]);
+    assert!(check(&out).status.success());
+    // A stray file, then a manifest that lists a file outside the folder.
+    std::fs::write(out.join("visibility_8.exr"), b"stale").unwrap();
+    assert_one_error_line(&check(&out), &["an order-3 bake has", "visibility_8.exr"]);
+    std::fs::remove_file(out.join("visibility_8.exr")).unwrap();
+    let manifest = out.join("manifest.json");
+    let text = std::fs::read_to_string(&manifest).unwrap();
+    std::fs::write(&manifest, text.replace("\"ao.exr\"", "\"../ao.exr\"")).unwrap();
+    assert_one_error_line(&check(&out), &["../ao.exr", "not a file of the folder"]);
+    // A folder of other files is refused before the bake, and left as it was.
+    let notes = dir.join("notes");
+    std::fs::create_dir_all(&notes).unwrap();
+    std::fs::write(notes.join("notes.txt"), b"mine").unwrap();
+    assert_one_error_line(&bake("3", &notes), &["notes", "not an earlier run's"]);
+    assert_eq!(names(&notes), ["notes.txt"]);
+}

@@ -822,13 +822,14 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), BakeError> {
 /// (zero past order²), `ao.exr` the AO in channel Y. Image row y is lightmap row y
 /// (v = 0 at the top, DESIGN §1).
 ///
-/// Every file is written atomically, and `manifest.json` (`settings`, each file's size and
-/// hash; [`files::Manifest`]) last: an earlier manifest is removed first, so a directory
-/// whose run was interrupted has none and [`files::Manifest::verify`] rejects it.
+/// The folder is written as one run ([`files::replace_dir`]), `manifest.json` (`settings`,
+/// each file's size and hash; [`files::Manifest`]) last: a killed or failed bake leaves the
+/// earlier bake whole or none, and no layer of an earlier bake of a higher order survives
+/// beside a new one. An existing `dir` must be empty or an earlier bake ([`is_bake_dir`]).
 ///
 /// # Errors
-/// [`BakeError::Io`] when `dir` cannot be created, [`BakeError::Exr`] when an image
-/// cannot be encoded, [`BakeError::File`] when a file cannot be written.
+/// [`BakeError::Exr`] when an image cannot be encoded, [`BakeError::File`] when `dir` is
+/// not an earlier bake's or a file cannot be written.
 pub fn write_exr_layers(
     dir: &Path,
     map: &VisibilityMap,
@@ -836,13 +837,6 @@ pub fn write_exr_layers(
 ) -> Result<(), BakeError> {
     use crate::files::EXR_ENCODING;
     use exr::prelude::{Image, SpecificChannels, WritableImage};
-    fs::create_dir_all(dir).map_err(|source| BakeError::Io {
-        path: dir.to_path_buf(),
-        action: "create the output directory",
-        source,
-    })?;
-    files::remove_stale_temps(dir);
-    files::Manifest::invalidate(dir)?;
     let res = map.res as usize;
     let n2 = map.order.coeff_count();
     let exr_err = |name: &str, e: exr::error::Error| BakeError::Exr {
@@ -897,15 +891,33 @@ pub fn write_exr_layers(
             }
         })
         .collect::<Result<_, _>>()?;
-    for (name, bytes) in &encoded {
-        files::write_atomic(&dir.join(name), bytes)?;
-    }
-    files::Manifest::new(
-        settings,
-        encoded.iter().map(|(n, b)| (n.clone(), b.as_slice())),
-    )
-    .write(dir)?;
+    files::replace_dir(dir, "--out", is_bake_dir, |tmp| {
+        for (name, bytes) in &encoded {
+            files::write_atomic(&tmp.join(name), bytes)?;
+        }
+        files::Manifest::new(
+            settings,
+            encoded.iter().map(|(n, b)| (n.clone(), b.as_slice())),
+        )
+        .write(tmp)
+    })?;
     Ok(())
+}
+
+/// Whether `dir` holds nothing but what [`write_exr_layers`] writes (`visibility_K.exr`,
+/// `ao.exr`, `manifest.json`): an earlier bake's folder, which a bake may replace whole.
+pub fn is_bake_dir(dir: &Path) -> bool {
+    fs::read_dir(dir).is_ok_and(|entries| {
+        entries.flatten().all(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            name == "ao.exr"
+                || name == files::MANIFEST_NAME
+                || name
+                    .strip_prefix("visibility_")
+                    .and_then(|k| k.strip_suffix(".exr"))
+                    .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
+        })
+    })
 }
 
 #[cfg(test)]

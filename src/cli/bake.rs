@@ -9,7 +9,7 @@ use shvis::prepare::VisibilityBaker;
 use shvis::prepare::bake_layers::{self, BakeLayersJob};
 
 use super::args::{BakerArgs, GpuArgs, SceneArgs, VisibilityBakerArg};
-use super::{create_dir, prepare_settings, say, with_gpu};
+use super::{RunInputs, prepare_settings, say, with_gpu};
 
 #[derive(Args, Debug)]
 pub(super) struct BakeArgs {
@@ -39,6 +39,7 @@ pub(super) struct BakeArgs {
 pub(super) fn run_bake(a: BakeArgs) -> Result<()> {
     if a.check {
         let manifest = shvis::files::Manifest::verify(&a.out).map_err(anyhow::Error::msg)?;
+        check_bake_files(&a.out, &manifest)?;
         out!(
             "{}: complete, {} files, settings {}",
             a.out.display(),
@@ -58,7 +59,28 @@ pub(super) fn run_bake(a: BakeArgs) -> Result<()> {
         compare_cpu: a.compare_cpu,
         out: a.out.clone(),
     };
-    create_dir(&a.out)?;
+    // The bake replaces --out whole: checked before it, not after.
+    RunInputs::default()
+        .scene("--scene", &a.scene.scene)
+        .file("--height-map", a.scene.height_map.as_deref())
+        .check_outside(&a.out, "--out (a folder replaced whole)")?;
+    if !shvis::files::check_replaceable_dir(&a.out, "--out", shvis::bake::cache::is_bake_dir)? {
+        let parent = match a.out.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => std::path::Path::new("."),
+        };
+        // Named by --out itself: the folder that cannot be made is where it would go.
+        shvis::files::check_writable_dir(parent, "--out").map_err(|e| match e {
+            shvis::files::FileError::Unwritable { what, cause, .. } => {
+                shvis::files::FileError::Unwritable {
+                    path: a.out.clone(),
+                    what,
+                    cause,
+                }
+            }
+            e => e,
+        })?;
+    }
     match a.baker.baker {
         VisibilityBakerArg::Cpu => {
             let cache_dir = shvis::bake::cache::default_cache_dir();
@@ -75,4 +97,47 @@ pub(super) fn run_bake(a: BakeArgs) -> Result<()> {
             Ok(bake_layers::run(&job, &settings, &baker, &mut say)?)
         }),
     }
+}
+
+/// The files a complete bake of the manifest's order holds, no more and no fewer:
+/// `visibility_0.exr` … (one per four coefficients), `ao.exr` and the manifest.
+fn check_bake_files(out: &std::path::Path, manifest: &shvis::files::Manifest) -> Result<()> {
+    let order = manifest.settings["order"]
+        .as_u64()
+        .filter(|o| (1..=u64::from(shvis::sh::MAX_ORDER)).contains(o))
+        .ok_or_else(|| {
+            anyhow::anyhow!(
+                "{}: its settings name no SH order: not a bake's manifest",
+                out.join(shvis::files::MANIFEST_NAME).display()
+            )
+        })?;
+    let layers = (order * order).div_ceil(4);
+    let mut expected: Vec<String> = (0..layers).map(|k| format!("visibility_{k}.exr")).collect();
+    expected.push("ao.exr".into());
+    let mut listed: Vec<String> = manifest.files.iter().map(|f| f.name.clone()).collect();
+    let mut present: Vec<String> = std::fs::read_dir(out)?
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n != shvis::files::MANIFEST_NAME)
+        .collect();
+    expected.sort();
+    listed.sort();
+    present.sort();
+    if listed != expected {
+        bail!(
+            "{}: an order-{order} bake has {}; its manifest lists {}",
+            out.display(),
+            expected.join(", "),
+            listed.join(", ")
+        );
+    }
+    if present != expected {
+        bail!(
+            "{}: an order-{order} bake has {}; the folder holds {}",
+            out.display(),
+            expected.join(", "),
+            present.join(", ")
+        );
+    }
+    Ok(())
 }

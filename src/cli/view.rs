@@ -120,20 +120,18 @@ pub(super) fn run_view(a: ViewArgs) -> Result<()> {
                 shot.display()
             );
         }
-    }
-    let set = |name: &str| std::env::var_os(name).is_some_and(|v| !v.is_empty());
-    if !set("DISPLAY") && !set("WAYLAND_DISPLAY") {
-        bail!(
-            "no display to open a window on (DISPLAY is not set): run under `xvfb-run -a shvis view …`, or use `shvis render` / `shvis bench`"
-        );
-    }
-    if let Some(shot) = &a.screenshot {
         shvis::files::check_writable_file(shot, "--screenshot")?;
         RunInputs::default()
             .env("--env", &a.env)
             .scene("--scene", &a.scene.scene)
             .file("--height-map", a.scene.height_map.as_deref())
             .check_spared_by(&[("--screenshot".to_string(), shot.clone())])?;
+    }
+    let set = |name: &str| std::env::var_os(name).is_some_and(|v| !v.is_empty());
+    if !set("DISPLAY") && !set("WAYLAND_DISPLAY") {
+        bail!(
+            "no display to open a window on (DISPLAY is not set): run under `xvfb-run -a shvis view …`, or use `shvis render` / `shvis bench`"
+        );
     }
     let techniques: Vec<Technique> = parse_techniques(&a.techniques)?;
     let prepared = prepare_for(

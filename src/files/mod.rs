@@ -373,6 +373,38 @@ fn write_into_device(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
         .map_err(io)
 }
 
+/// Whether [`replace_dir`] may take `dir`'s place, checked before a run's work: `Ok(true)`
+/// for a folder that is empty or `replaceable` (an earlier run's), `Ok(false)` where there
+/// is none (its parent must then take a new folder: [`check_writable_dir`] of it).
+///
+/// # Errors
+/// [`FileError::Unwritable`] for a `dir` that is not a folder or holds other files.
+pub fn check_replaceable_dir(
+    dir: &Path,
+    what: &str,
+    replaceable: impl Fn(&Path) -> bool,
+) -> Result<bool, FileError> {
+    let unwritable = |why: &str| FileError::Unwritable {
+        path: dir.to_path_buf(),
+        what: what.to_string(),
+        cause: io::Error::other(why.to_string()),
+    };
+    let dir = fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
+    match fs::symlink_metadata(&dir) {
+        Ok(m) if m.is_dir() => {
+            let empty = fs::read_dir(&dir).is_ok_and(|mut entries| entries.next().is_none());
+            if !empty && !replaceable(&dir) {
+                return Err(unwritable(
+                    "it holds files that are not an earlier run's; choose a new or empty folder",
+                ));
+            }
+            Ok(true)
+        }
+        Ok(_) => Err(unwritable("it exists and is not a directory")),
+        Err(_) => Ok(false),
+    }
+}
+
 /// Writes the output folder `dir` as one run ([`write_atomic`]'s guarantee for a folder): a
 /// temporary folder `.NAME.tmp-PID-N` beside `dir` is created, `fill` writes every file
 /// into it, and it takes `dir`'s place in one step — `rename` where `dir` does not exist,
@@ -394,11 +426,6 @@ pub fn replace_dir(
     fill: impl FnOnce(&Path) -> Result<(), FileError>,
 ) -> Result<(), FileError> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let unwritable = |path: &Path, why: &str| FileError::Unwritable {
-        path: path.to_path_buf(),
-        what: what.to_string(),
-        cause: io::Error::other(why.to_string()),
-    };
     let io_error = |path: &Path, action: &'static str| {
         let path = path.to_path_buf();
         move |cause| FileError::Io {
@@ -412,20 +439,7 @@ pub fn replace_dir(
         .then(|| fs::canonicalize(dir).ok())
         .flatten();
     let dir = linked.as_deref().unwrap_or(dir);
-    let exists = match fs::symlink_metadata(dir) {
-        Ok(m) if m.is_dir() => true,
-        Ok(_) => return Err(unwritable(dir, "it exists and is not a folder")),
-        Err(_) => false,
-    };
-    if exists {
-        let empty = fs::read_dir(dir).is_ok_and(|mut entries| entries.next().is_none());
-        if !empty && !replaceable(dir) {
-            return Err(unwritable(
-                dir,
-                "it holds files that are not an earlier run's; choose a new or empty folder",
-            ));
-        }
-    }
+    let exists = check_replaceable_dir(dir, what, &replaceable)?;
     let parent = match dir.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -795,23 +809,6 @@ impl Manifest {
         write_atomic(&dir.join(MANIFEST_NAME), (text + "\n").as_bytes())
     }
 
-    /// Removes `dir/manifest.json` if there is one: called before a directory's files are
-    /// rewritten, so that an interrupted rewrite is not taken for complete.
-    ///
-    /// # Errors
-    /// [`FileError::Io`] when it exists and cannot be removed.
-    pub fn invalidate(dir: &Path) -> Result<(), FileError> {
-        let path = dir.join(MANIFEST_NAME);
-        match fs::remove_file(&path) {
-            Err(e) if e.kind() != io::ErrorKind::NotFound => Err(FileError::Io {
-                path,
-                action: "remove",
-                cause: e,
-            }),
-            _ => Ok(()),
-        }
-    }
-
     /// The manifest of `dir` when it is there and every file it lists has its size and
     /// hash; `Err` says, in one line, why the directory is incomplete.
     pub fn verify(dir: &Path) -> Result<Manifest, String> {
@@ -826,6 +823,17 @@ impl Manifest {
         let manifest: Manifest = serde_json::from_slice(&bytes)
             .map_err(|e| format!("{}: unreadable ({e})", path.display()))?;
         for f in &manifest.files {
+            let plain = Path::new(&f.name)
+                .components()
+                .map(|c| matches!(c, std::path::Component::Normal(_)))
+                .eq([true]);
+            if !plain || f.name == MANIFEST_NAME {
+                return Err(format!(
+                    "{}: lists '{}', which is not a file of the folder",
+                    path.display(),
+                    f.name
+                ));
+            }
             let file = dir.join(&f.name);
             let content = read_bounded(&file, f.bytes, "a listed file")
                 .map_err(|e| format!("{}: does not match {MANIFEST_NAME} ({e})", file.display()))?;
@@ -981,7 +989,7 @@ mod tests {
                 .unwrap_err()
                 .contains("does not match")
         );
-        Manifest::invalidate(&dir).unwrap();
+        fs::remove_file(dir.join(MANIFEST_NAME)).unwrap();
         assert!(Manifest::verify(&dir).unwrap_err().contains("incomplete"));
         let _ = fs::remove_dir_all(&dir);
     }
