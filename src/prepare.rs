@@ -174,7 +174,8 @@ pub const MAX_VISIBILITY_ORDER: u32 = crate::sh::MAX_ORDER - 2;
 /// charts and gutters need more texels than generated UVs).
 pub fn min_vis_res(name: &str) -> u32 {
     match name {
-        "house" => house::MIN_LIGHTMAP_RES,
+        // The patio's walls and floor are packed as the house's are.
+        "house" | "patio" => house::MIN_LIGHTMAP_RES,
         _ => bake::MIN_RES,
     }
 }

@@ -437,4 +437,41 @@ fn study_ndf_bad_sigma_and_light() {
         &shvis(&["study", "ndf", "--light-dir", "1,2", "--out", out], &[]),
         &["three numbers"],
     );
+    assert_one_error_line(
+        &shvis(
+            &["study", "ndf", "--light-dir", "0,-1,0", "--out", out],
+            &[],
+        ),
+        &["--light-dir 0,-1,0", "below the bumpy plane"],
+    );
+}
+
+/// A study's list naming an item twice, or two environments that would write one figure,
+/// is refused before any work.
+#[test]
+fn study_lists_name_each_item_once() {
+    let dir = scratch("study-lists");
+    let out = dir.to_str().unwrap();
+    for (args, needles) in [
+        (
+            vec!["study", "compression", "--techniques", "pca8w,pca8w"],
+            vec!["--techniques", "pca8w is named twice"],
+        ),
+        (
+            vec!["study", "seams", "--techniques", "vq64,vq64"],
+            vec!["--techniques", "vq64 is named twice"],
+        ),
+        (
+            vec!["study", "rnm", "--envs", "sky:15,sky:15"],
+            vec!["--envs", "sky:15 is named twice"],
+        ),
+        (
+            vec!["study", "rnm", "--envs", "a/p.exr,b/p.exr"],
+            vec!["a/p.exr and b/p.exr would both write fig1_p.png"],
+        ),
+    ] {
+        let mut args = args;
+        args.extend(["--out", out]);
+        assert_one_error_line(&shvis(&args, &[]), &needles);
+    }
 }

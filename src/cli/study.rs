@@ -369,6 +369,8 @@ pub(super) fn run_study(c: StudyCommand) -> Result<()> {
 
 fn run_compression(a: StudyCompressionArgs) -> Result<()> {
     use shvis::study::tables;
+    named_once("--techniques", &a.techniques)?;
+    named_once("--paths", &a.paths)?;
     scene_and_env(&a.scene, &a.env)
         .check_outside(&a.out, "--out (the folder the run writes into)")?;
     create_dir(&a.out)?;
@@ -551,6 +553,11 @@ fn run_ndf(a: StudyNdfArgs) -> Result<()> {
     if !(light_dir.is_finite() && light_dir.length() > 1e-6) {
         bail!("--light-dir {x},{y},{z} is not a direction");
     }
+    if light_dir.normalize().y <= 0.0 {
+        bail!(
+            "--light-dir {x},{y},{z} points below the bumpy plane (its normal is +y): it would light nothing"
+        );
+    }
     if !(shvis::ndf::MIN_SIGMA..=shvis::ndf::MAX_SIGMA).contains(&a.sigma) {
         bail!(
             "--sigma {} is outside {}..={}",
@@ -591,6 +598,16 @@ fn run_ndf(a: StudyNdfArgs) -> Result<()> {
         Ok(())
     })?;
     out!("study ndf: {:.1} s", started.elapsed().as_secs_f64());
+    Ok(())
+}
+
+/// Refuses a list `option` names an item of twice (the rows would repeat).
+fn named_once<T: PartialEq + std::fmt::Display>(option: &str, items: &[T]) -> Result<()> {
+    for (i, item) in items.iter().enumerate() {
+        if items[..i].contains(item) {
+            bail!("{option}: {item} is named twice");
+        }
+    }
     Ok(())
 }
 
@@ -652,6 +669,16 @@ fn run_normalmap(a: StudyNormalmapArgs) -> Result<()> {
 }
 
 fn run_rnm(a: StudyRnmArgs) -> Result<()> {
+    named_once("--envs", &a.envs)?;
+    for (i, e) in a.envs.iter().enumerate() {
+        let stem = shvis::study::rnm::env_stem(e);
+        if let Some(other) = a.envs[..i]
+            .iter()
+            .find(|o| shvis::study::rnm::env_stem(o) == stem)
+        {
+            bail!("--envs: {other} and {e} would both write fig1_{stem}.png; rename one");
+        }
+    }
     a.envs
         .iter()
         .fold(
@@ -685,6 +712,8 @@ fn run_rnm(a: StudyRnmArgs) -> Result<()> {
 
 fn run_seams(a: StudySeamsArgs) -> Result<()> {
     use shvis::study::tables;
+    named_once("--techniques", &a.techniques)?;
+    named_once("--paths", &a.paths)?;
     tables::check_clustered(&a.techniques)?;
     scene_and_env(&a.scene, &a.env)
         .check_outside(&a.out, "--out (the folder the run writes into)")?;

@@ -59,7 +59,13 @@ impl HeightField {
                 for dy in -r..=r {
                     for dx in -r..=r {
                         let v = self.at(x + dx, y + dy);
-                        let ds = (dx * dx + dy * dy) as f64 / (2.0 * sigma_spatial * sigma_spatial);
+                        // The centre's weight is 1 at any σ: 0 / (2σ²) is NaN where σ² underflows.
+                        let d2 = (dx * dx + dy * dy) as f64;
+                        let ds = if d2 == 0.0 {
+                            0.0
+                        } else {
+                            d2 / (2.0 * sigma_spatial * sigma_spatial)
+                        };
                         let dr =
                             (v - centre).powi(2) / (2.0 * sigma_range * sigma_range).max(1e-300);
                         let w = (-ds - dr).exp();
@@ -71,5 +77,24 @@ impl HeightField {
             })
             .collect();
         HeightField { h, ..*self }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A spatial σ far below a texel (down to one whose square underflows) leaves every
+    /// height as it was: the centre weighs 1, the neighbours nothing.
+    #[test]
+    fn a_spatial_sigma_far_below_a_texel_leaves_the_heights() {
+        let field = HeightField {
+            width: 4,
+            height: 3,
+            h: (0..12).map(|i| f64::from(i * i % 7)).collect(),
+        };
+        for sigma in [1e-3, 1e-160, 1e-300] {
+            assert_eq!(field.bilateral(sigma, 0.5), field, "σ = {sigma}");
+        }
     }
 }

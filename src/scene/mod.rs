@@ -348,6 +348,9 @@ pub enum SceneError {
     Gltf { path: String, message: String },
     #[error("lightmap resolution {res} is out of range {min}..={max}")]
     LightmapRes { res: u32, min: u32, max: u32 },
+    /// The generated lightmap charts do not fit a lightmap of this resolution.
+    #[error("{charts} lightmap charts do not fit a {res}² lightmap; raise --vis-res")]
+    ChartsDoNotFit { res: u32, charts: usize },
     /// A `--height-map` that cannot be used.
     #[error("{path}: {message}")]
     HeightMap { path: String, message: String },

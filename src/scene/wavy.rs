@@ -34,16 +34,15 @@ const SEGMENTS_DOWN: u32 = 48;
 /// Builds the sphere with lightmap UVs generated for `lightmap_res`² texels.
 ///
 /// # Errors
-/// [`SceneError::LightmapRes`] for a resolution outside the generated charts' range or too
-/// small for them.
+/// [`SceneError::LightmapRes`] for a resolution outside the generated charts' range,
+/// [`SceneError::ChartsDoNotFit`] for one too small for them.
 pub fn build(lightmap_res: u32) -> Result<Scene, SceneError> {
     lightmap_uv::check_res(lightmap_res)?;
     let mut mesh = sphere_mesh();
     // Too many charts for the resolution: the same error, naming the resolution.
-    lightmap_uv::generate(&mut mesh, lightmap_res).map_err(|_| SceneError::LightmapRes {
+    lightmap_uv::generate(&mut mesh, lightmap_res).map_err(|e| SceneError::ChartsDoNotFit {
         res: lightmap_res,
-        min: lightmap_uv::MIN_LIGHTMAP_RES,
-        max: lightmap_uv::MAX_LIGHTMAP_RES,
+        charts: e.charts,
     })?;
     Ok(Scene {
         name: "wavy".to_string(),
