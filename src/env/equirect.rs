@@ -227,8 +227,13 @@ fn decode_exr(bytes: &[u8]) -> Result<EnvMap, exr::error::Error> {
     })
 }
 
+/// The texels of a Radiance HDR file whose size [`check_env_size`] has passed: without the
+/// image crate's own 512 MiB allocation limit, which refuses valid maps below
+/// [`MAX_ENV_WIDTH`] (10240 × 5120).
 fn decode_hdr(bytes: &[u8]) -> Result<EnvMap, image::ImageError> {
-    let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Hdr)?.into_rgb32f();
+    let mut reader = image::ImageReader::with_format(Cursor::new(bytes), image::ImageFormat::Hdr);
+    reader.no_limits();
+    let img = reader.decode()?.into_rgb32f();
     Ok(EnvMap {
         width: img.width(),
         height: img.height(),
