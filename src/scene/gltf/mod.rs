@@ -183,13 +183,18 @@ fn json_chunk(path: &Path) -> Option<Vec<u8>> {
     let mut file = std::fs::File::open(path).ok()?;
     let mut header = [0u8; 20];
     let n = file.read(&mut header).ok()?;
-    if n == 20 && &header[..4] == b"glTF" && &header[16..20] == b"JSON" {
+    if header[..n.min(4)] == b"glTF"[..n.min(4)] {
+        // A GLB (or the start of one): only a whole JSON chunk is parsed here, as text; a
+        // malformed GLB is the loader's to report.
+        if n < 20 || &header[16..20] != b"JSON" {
+            return None;
+        }
         let len = u32::from_le_bytes(header[12..16].try_into().ok()?) as u64;
         let mut json = Vec::new();
         file.take(len.min(MAX_REFERENCED_FILE_BYTES))
             .read_to_end(&mut json)
             .ok()?;
-        return Some(json);
+        return (json.len() as u64 == len).then_some(json);
     }
     crate::files::read_bounded(path, MAX_REFERENCED_FILE_BYTES, "a glTF file").ok()
 }
