@@ -3310,6 +3310,16 @@ fn killed_bakes_rerun_to_identical_outputs() {
             clean.keys().collect::<Vec<_>>(),
             "{point}: files (temporaries left?)"
         );
+        let temporaries: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.contains(".tmp-"))
+            .collect();
+        assert!(
+            temporaries.is_empty(),
+            "{point}: the killed run's temporary folder is left: {temporaries:?}"
+        );
         for (name, bytes) in &clean {
             assert!(
                 &got[name] == bytes,

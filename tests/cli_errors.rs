@@ -442,7 +442,7 @@ fn study_ndf_bad_sigma_and_light() {
             &["study", "ndf", "--light-dir", "0,-1,0", "--out", out],
             &[],
         ),
-        &["--light-dir 0,-1,0", "below the bumpy plane"],
+        &["--light-dir 0,-1,0", "at or below the bumpy plane"],
     );
 }
 

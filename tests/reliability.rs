@@ -265,7 +265,7 @@ fn no_output_overwrites_an_input() {
             &run,
             &[
                 "table.md",
-                "--out (the folder the run writes into) would overwrite the --env input",
+                "the --env input lies inside --out (the folder the run writes into)",
             ],
         );
     }
@@ -592,4 +592,44 @@ fn a_bake_replaces_its_folder_whole() {
     std::fs::write(notes.join("notes.txt"), b"mine").unwrap();
     assert_one_error_line(&bake("3", &notes), &["notes", "not an earlier run's"]);
     assert_eq!(names(&notes), ["notes.txt"]);
+    // The current folder, even an earlier bake, cannot be replaced.
+    let here = std::process::Command::new(env!("CARGO_BIN_EXE_shvis"))
+        .args(["bake", "--vis-res", "64", "--rays", "36", "--out", "."])
+        .current_dir(&out)
+        .env("SHVIS_CACHE_DIR", &cache)
+        .env("RUST_LOG", "off")
+        .output()
+        .unwrap();
+    assert_one_error_line(&here, &["the current folder or holds it"]);
+}
+
+/// A scene file that is a FIFO is refused by the loader: listing the glTF's files for the
+/// output checks does not open it (which would wait for a writer).
+#[test]
+fn a_fifo_scene_is_refused_not_waited_on() {
+    let dir = Scratch::new("reliability", "fifo-scene");
+    let fifo = dir.join("scene.gltf");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_shvis"))
+        .args(["render", "--technique", "preconv", "--scene", s(&fifo)])
+        .args(["--out", s(&dir.join("x.png"))])
+        .env("RUST_LOG", "off")
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if started.elapsed() > std::time::Duration::from_secs(60) {
+            child.kill().unwrap();
+            panic!("render waited on a FIFO scene");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let run = child.wait_with_output().unwrap();
+    assert_one_error_line(&run, &["scene.gltf", "not a regular file"]);
 }

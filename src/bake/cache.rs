@@ -904,18 +904,22 @@ pub fn write_exr_layers(
     Ok(())
 }
 
-/// Whether `dir` holds nothing but what [`write_exr_layers`] writes (`visibility_K.exr`,
-/// `ao.exr`, `manifest.json`): an earlier bake's folder, which a bake may replace whole.
+/// Whether `dir` holds nothing but files [`write_exr_layers`] writes (`visibility_K.exr`,
+/// `ao.exr`, `manifest.json`) and temporaries of killed writes: an earlier bake's folder,
+/// which a bake may replace whole.
 pub fn is_bake_dir(dir: &Path) -> bool {
     fs::read_dir(dir).is_ok_and(|entries| {
         entries.flatten().all(|e| {
             let name = e.file_name().to_string_lossy().into_owned();
-            name == "ao.exr"
-                || name == files::MANIFEST_NAME
-                || name
-                    .strip_prefix("visibility_")
-                    .and_then(|k| k.strip_suffix(".exr"))
-                    .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
+            let is_file = e.file_type().is_ok_and(|t| t.is_file());
+            is_file
+                && (name == "ao.exr"
+                    || name == files::MANIFEST_NAME
+                    || (name.starts_with('.') && name.contains(".tmp-"))
+                    || name
+                        .strip_prefix("visibility_")
+                        .and_then(|k| k.strip_suffix(".exr"))
+                        .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit())))
         })
     })
 }

@@ -14,7 +14,8 @@ use super::{RunInputs, prepare_settings, say, with_gpu};
 #[derive(Args, Debug)]
 pub(super) struct BakeArgs {
     /// Bake nothing: check that --out holds a complete bake (its manifest.json lists every
-    /// file with the size and hash it has) and print its settings; exit 1 if not.
+    /// file with the size and hash it has, and the files are exactly the layers of its
+    /// order and ao.exr) and print its settings; exit 1 if not.
     #[arg(long)]
     check: bool,
     /// Also run the standalone cosine-sampled AO bake (`bake::ao`) and print its figures;
@@ -25,7 +26,8 @@ pub(super) struct BakeArgs {
     /// quadrature noise) and print how far the GPU's coefficients are from it.
     #[arg(long)]
     compare_cpu: bool,
-    /// Output directory (ao.exr).
+    /// Output folder (visibility_K.exr, ao.exr, manifest.json), written as one run: an
+    /// existing one must be empty or an earlier bake, which is replaced whole.
     #[arg(short, long)]
     out: PathBuf,
     #[command(flatten)]
@@ -63,24 +65,8 @@ pub(super) fn run_bake(a: BakeArgs) -> Result<()> {
     RunInputs::default()
         .scene("--scene", &a.scene.scene)
         .file("--height-map", a.scene.height_map.as_deref())
-        .check_outside(&a.out, "--out (a folder replaced whole)")?;
-    if !shvis::files::check_replaceable_dir(&a.out, "--out", shvis::bake::cache::is_bake_dir)? {
-        let parent = match a.out.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => std::path::Path::new("."),
-        };
-        // Named by --out itself: the folder that cannot be made is where it would go.
-        shvis::files::check_writable_dir(parent, "--out").map_err(|e| match e {
-            shvis::files::FileError::Unwritable { what, cause, .. } => {
-                shvis::files::FileError::Unwritable {
-                    path: a.out.clone(),
-                    what,
-                    cause,
-                }
-            }
-            e => e,
-        })?;
-    }
+        .check_outside(&a.out, "--out (a folder the run replaces whole)")?;
+    shvis::files::check_replaceable_dir(&a.out, "--out", shvis::bake::cache::is_bake_dir)?;
     match a.baker.baker {
         VisibilityBakerArg::Cpu => {
             let cache_dir = shvis::bake::cache::default_cache_dir();

@@ -54,7 +54,7 @@ pub(super) fn run_export(a: ExportArgs) -> Result<()> {
         .env("--env", &a.env)
         .scene("--scene", &a.scene.scene)
         .file("--height-map", a.scene.height_map.as_deref())
-        .check_outside(&a.out, "--out (a folder replaced whole)")?;
+        .check_outside(&a.out, "--out (a folder the run replaces whole)")?;
     let settings = prepare_settings(&a.scene, &a.env, &[a.technique], a.bounces)?;
     let mut prepared = shvis::prepare::prepare(&settings)?;
     prepared.prepare_techniques(&[a.technique])?;

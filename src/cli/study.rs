@@ -555,7 +555,7 @@ fn run_ndf(a: StudyNdfArgs) -> Result<()> {
     }
     if light_dir.normalize().y <= 0.0 {
         bail!(
-            "--light-dir {x},{y},{z} points below the bumpy plane (its normal is +y): it would light nothing"
+            "--light-dir {x},{y},{z} points at or below the bumpy plane (its normal is +y): it would light nothing"
         );
     }
     if !(shvis::ndf::MIN_SIGMA..=shvis::ndf::MAX_SIGMA).contains(&a.sigma) {

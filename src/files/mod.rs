@@ -108,6 +108,16 @@ pub enum FileError {
         /// The option it is read by.
         input: String,
     },
+    /// An input of a run lies inside a folder the run writes.
+    #[error("{}: the {input} lies inside {output}; move it or choose another --out", .path.display())]
+    InputInOutputFolder {
+        /// The input file.
+        path: PathBuf,
+        /// The folder's option and what the run does to it.
+        output: String,
+        /// The option that names the input.
+        input: String,
+    },
     /// Larger than the reader accepts.
     #[error("{}: {bytes} bytes is more than the {limit} bytes accepted for {what}", .path.display())]
     TooLarge {
@@ -201,10 +211,10 @@ pub fn check_inputs_outside(
     let dir = resolved(dir);
     for &(option, path) in inputs {
         if path.exists() && resolved(path).starts_with(&dir) {
-            return Err(FileError::OutputIsInput {
+            return Err(FileError::InputInOutputFolder {
                 path: path.to_path_buf(),
                 output: output.to_string(),
-                input: format!("the {option} input"),
+                input: format!("{option} input"),
             });
         }
     }
@@ -236,7 +246,7 @@ pub fn read_bounded(path: &Path, limit: u64, what: &'static str) -> Result<Vec<u
     let mut bytes = Vec::with_capacity(meta.len() as usize);
     // `take` guards against a file that grows while it is read.
     File::open(path)
-        .and_then(|f| f.take(limit + 1).read_to_end(&mut bytes))
+        .and_then(|f| f.take(limit.saturating_add(1)).read_to_end(&mut bytes))
         .map_err(io_err)?;
     if bytes.len() as u64 > limit {
         return Err(FileError::TooLarge {
@@ -373,36 +383,77 @@ fn write_into_device(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
         .map_err(io)
 }
 
-/// Whether [`replace_dir`] may take `dir`'s place, checked before a run's work: `Ok(true)`
-/// for a folder that is empty or `replaceable` (an earlier run's), `Ok(false)` where there
-/// is none (its parent must then take a new folder: [`check_writable_dir`] of it).
+/// Whether [`replace_dir`] may take `dir`'s place, checked before a run's work. Returns
+/// the folder it would replace (links and `.`/`..` resolved) and whether it exists: it
+/// must be empty or `replaceable` (an earlier run's), and neither the current folder nor
+/// one holding it, nor a mount point (a folder that cannot be renamed); its parent must
+/// take files (created where missing).
 ///
 /// # Errors
-/// [`FileError::Unwritable`] for a `dir` that is not a folder or holds other files.
+/// [`FileError::Unwritable`] naming `dir` for any of these.
 pub fn check_replaceable_dir(
     dir: &Path,
     what: &str,
     replaceable: impl Fn(&Path) -> bool,
-) -> Result<bool, FileError> {
-    let unwritable = |why: &str| FileError::Unwritable {
+) -> Result<(PathBuf, bool), FileError> {
+    let unwritable = |cause: io::Error| FileError::Unwritable {
         path: dir.to_path_buf(),
         what: what.to_string(),
-        cause: io::Error::other(why.to_string()),
+        cause,
     };
-    let dir = fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
-    match fs::symlink_metadata(&dir) {
+    let refuse = |why: &str| unwritable(io::Error::other(why.to_string()));
+    if dir.as_os_str().is_empty() {
+        return Err(refuse("the name is empty"));
+    }
+    let target = resolved(dir);
+    let parent = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let exists = match fs::metadata(&target) {
         Ok(m) if m.is_dir() => {
-            let empty = fs::read_dir(&dir).is_ok_and(|mut entries| entries.next().is_none());
-            if !empty && !replaceable(&dir) {
-                return Err(unwritable(
+            if std::env::current_dir().is_ok_and(|cwd| cwd.starts_with(&target)) {
+                return Err(refuse(
+                    "it is the current folder or holds it, which cannot be replaced; name a folder inside it",
+                ));
+            }
+            #[cfg(unix)]
+            {
+                use std::os::unix::fs::MetadataExt;
+                if fs::metadata(&parent).is_ok_and(|p| p.dev() != m.dev()) {
+                    return Err(refuse(
+                        "it is a mount point, which cannot be replaced; name a folder inside it",
+                    ));
+                }
+            }
+            let empty = fs::read_dir(&target).is_ok_and(|mut entries| entries.next().is_none());
+            if !empty && !replaceable(&target) {
+                return Err(refuse(
                     "it holds files that are not an earlier run's; choose a new or empty folder",
                 ));
             }
-            Ok(true)
+            true
         }
-        Ok(_) => Err(unwritable("it exists and is not a directory")),
-        Err(_) => Ok(false),
-    }
+        Ok(_) if target != dir => {
+            return Err(refuse(&format!(
+                "it leads to {}, which is not a directory",
+                target.display()
+            )));
+        }
+        Ok(_) => return Err(refuse("it exists and is not a directory")),
+        Err(_) => false,
+    };
+    check_writable_dir(&parent, what).map_err(|e| match e {
+        FileError::Unwritable { cause, .. } => unwritable(io::Error::new(
+            cause.kind(),
+            format!(
+                "its folder {} does not take files: {cause}",
+                parent.display()
+            ),
+        )),
+        e => e,
+    })?;
+    Ok((target, exists))
 }
 
 /// Writes the output folder `dir` as one run ([`write_atomic`]'s guarantee for a folder): a
@@ -434,12 +485,8 @@ pub fn replace_dir(
             cause,
         }
     };
-    let linked = fs::symlink_metadata(dir)
-        .is_ok_and(|m| m.file_type().is_symlink())
-        .then(|| fs::canonicalize(dir).ok())
-        .flatten();
-    let dir = linked.as_deref().unwrap_or(dir);
-    let exists = check_replaceable_dir(dir, what, &replaceable)?;
+    let (target, exists) = check_replaceable_dir(dir, what, &replaceable)?;
+    let dir = target.as_path();
     let parent = match dir.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -815,7 +862,7 @@ impl Manifest {
         let path = dir.join(MANIFEST_NAME);
         let bytes = read_bounded(&path, 1 << 20, "a manifest").map_err(|e| match e {
             FileError::Io { cause, .. } if cause.kind() == io::ErrorKind::NotFound => format!(
-                "{}: no {MANIFEST_NAME}: the directory is incomplete (an interrupted run?)",
+                "{}: no {MANIFEST_NAME}: not a complete output folder (incomplete, or not one of shvis's)",
                 dir.display()
             ),
             e => e.to_string(),

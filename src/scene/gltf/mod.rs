@@ -180,6 +180,10 @@ pub fn files_read(path: &Path) -> Vec<PathBuf> {
 /// a document [`gltf::Gltf::from_slice_without_validation`] parses; `None` when unreadable.
 fn json_chunk(path: &Path) -> Option<Vec<u8>> {
     use std::io::Read;
+    // Only a regular file: opening a FIFO would wait for a writer (the loader refuses it).
+    if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+        return None;
+    }
     let mut file = std::fs::File::open(path).ok()?;
     let mut header = [0u8; 20];
     let n = file.read(&mut header).ok()?;
@@ -194,7 +198,8 @@ fn json_chunk(path: &Path) -> Option<Vec<u8>> {
         file.take(len.min(MAX_REFERENCED_FILE_BYTES))
             .read_to_end(&mut json)
             .ok()?;
-        return (json.len() as u64 == len).then_some(json);
+        // A chunk that itself starts like a GLB would be parsed as one (unchecked).
+        return (json.len() as u64 == len && !json.starts_with(b"glTF")).then_some(json);
     }
     crate::files::read_bounded(path, MAX_REFERENCED_FILE_BYTES, "a glTF file").ok()
 }
