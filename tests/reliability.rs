@@ -633,3 +633,30 @@ fn a_fifo_scene_is_refused_not_waited_on() {
     let run = child.wait_with_output().unwrap();
     assert_one_error_line(&run, &["scene.gltf", "not a regular file"]);
 }
+
+/// The SSBump bake's memory is checked against `SHVIS_MEMORY_LIMIT` before it starts, not
+/// found out by the allocator.
+#[test]
+fn an_ssbump_bake_beyond_the_memory_limit_is_refused() {
+    let dir = Scratch::new("reliability", "ssbump-memory");
+    let h = dir.join("h.png");
+    image::GrayImage::from_fn(128, 128, |x, y| image::Luma([((x * y) % 251) as u8]))
+        .save(&h)
+        .unwrap();
+    let run = shvis(
+        &[
+            "ssbump",
+            "--height-map",
+            s(&h),
+            "--height-scale",
+            "1",
+            "--rays",
+            "1",
+            "--out",
+            s(&dir.join("b.png")),
+        ],
+        &[("SHVIS_MEMORY_LIMIT", "1M")],
+    );
+    assert_one_error_line(&run, &["SSBump bake of 128×128 height texels", "memory"]);
+    assert!(!dir.join("b.png").exists());
+}

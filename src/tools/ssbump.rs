@@ -52,6 +52,8 @@ pub enum SsbumpError {
     Scene(#[from] SceneError),
     #[error(transparent)]
     Report(#[from] ReportError),
+    #[error(transparent)]
+    Limit(#[from] crate::limits::LimitError),
     #[error("{}: cannot write", .path.display())]
     Write {
         path: PathBuf,
@@ -103,6 +105,10 @@ impl SsbumpJob {
     }
 }
 
+/// Bytes the bake holds per height texel at once: the filtered heights, the occlusion and
+/// AO, the SSBump, plain D and AO colours (f64) and the 16-bit images being encoded.
+const BAKE_BYTES_PER_TEXEL: u64 = 160;
+
 /// Checks `job`, bakes the occlusion and writes the files.
 pub fn run(job: &SsbumpJob) -> Result<SsbumpSummary, SsbumpError> {
     job.check()?;
@@ -114,6 +120,11 @@ pub fn run(job: &SsbumpJob) -> Result<SsbumpSummary, SsbumpError> {
         crate::scene::load_height_map(&job.height, job.scale)?
     };
     let (width, height) = (field.width, field.height);
+    crate::limits::check_memory(
+        format_args!("the SSBump bake of {width}×{height} height texels"),
+        (width * height) as u64 * BAKE_BYTES_PER_TEXEL,
+        "use a smaller height map",
+    )?;
     let range = field.h.iter().copied().fold(f64::NEG_INFINITY, f64::max)
         - field.h.iter().copied().fold(f64::INFINITY, f64::min);
     let field = field.bilateral(job.bilateral, BILATERAL_RANGE_FRACTION * range.max(1e-9));
