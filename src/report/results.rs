@@ -68,6 +68,7 @@ impl ResultTable {
                 }),
         };
         let (device, width, height) = (field("device"), size("width")?, size("height")?);
+        let mut seen = std::collections::HashSet::new();
         for (i, row) in rows.iter().enumerate() {
             check_row(row).map_err(|detail| {
                 let text = |k: &str| row.get(k).and_then(Value::as_str).unwrap_or("?");
@@ -77,6 +78,28 @@ impl ResultTable {
                     text("path")
                 ))
             })?;
+            let key = ["technique", "path", "specular"].map(|k| row.get(k).cloned());
+            if !seen.insert(format!("{key:?}")) {
+                let text = |k: &str| row.get(k).and_then(Value::as_str).unwrap_or("?");
+                return Err(format(&format!(
+                    "results[{i}] ({} on {}): the table has this row twice",
+                    text("technique"),
+                    text("path")
+                )));
+            }
+        }
+        // A bench writes all three: a table without them is another file or a fragment.
+        for (key, missing) in [
+            ("device", device.is_empty()),
+            ("width", width == 0),
+            ("height", height == 0),
+        ] {
+            if missing {
+                return Err(format(&format!("\"{key}\" is missing")));
+            }
+        }
+        if rows.is_empty() {
+            return Err(format("its \"results\" array has no row"));
         }
         Ok(ResultTable {
             label: label.map_or_else(|| format!("{device} {width}×{height}"), str::to_string),
@@ -189,6 +212,25 @@ fn check_row(row: &Value) -> Result<(), String> {
         if matches!(measure, Measure::Bytes) && value.as_u64().is_none() {
             return Err(format!("\"{key}\" is {value}: bytes are a whole number"));
         }
+    }
+    // What every measured row holds, and holds in order.
+    let number = |k: &str| object.get(k).and_then(Value::as_f64);
+    let Some(median) = number("ms_median") else {
+        return Err("\"ms_median\" is missing: not a measured row".into());
+    };
+    if let Some(frames) = object.get("frames").filter(|v| !v.is_null())
+        && frames.as_u64().is_none_or(|n| n == 0)
+    {
+        return Err(format!(
+            "\"frames\" is {frames}, not a count of frames (1 or more)"
+        ));
+    }
+    if let (Some(min), Some(max)) = (number("ms_min"), number("ms_max"))
+        && !(min <= median && median <= max)
+    {
+        return Err(format!(
+            "\"ms_min\" {min}, \"ms_median\" {median} and \"ms_max\" {max} are not in order"
+        ));
     }
     Ok(())
 }
@@ -419,6 +461,56 @@ mod tests {
             .to_string();
         assert!(e.contains("\"technique\" is missing or not text"), "{e}");
         assert!(read_text("fine", &row(r#""ms_median":0.7,"rel_rmse":null"#)).is_ok());
+    }
+
+    #[test]
+    fn tables_that_are_not_a_whole_bench_are_refused() {
+        let table = |head: &str, rows: &str| format!(r#"{{{head}"results":[{rows}]}}"#);
+        let head = r#""device":"d","width":64,"height":32,"#;
+        let row = r#"{"technique":"unc6","path":"dx10","ms_median":1.0}"#;
+        for (name, text, says) in [
+            (
+                "no-device",
+                table(r#""width":64,"height":32,"#, row),
+                "\"device\" is missing",
+            ),
+            (
+                "no-width",
+                table(r#""device":"d","height":32,"#, row),
+                "\"width\" is missing",
+            ),
+            ("no-rows", table(head, ""), "has no row"),
+            (
+                "unmeasured",
+                table(head, r#"{"technique":"unc6","path":"dx10"}"#),
+                "\"ms_median\" is missing",
+            ),
+            (
+                "twice",
+                table(head, &format!("{row},{row}")),
+                "results[1] (unc6 on dx10): the table has this row twice",
+            ),
+            (
+                "no-frames",
+                table(
+                    head,
+                    r#"{"technique":"unc6","path":"dx10","ms_median":1,"frames":0}"#,
+                ),
+                "\"frames\" is 0",
+            ),
+            (
+                "disorder",
+                table(
+                    head,
+                    r#"{"technique":"unc6","path":"dx10","ms_median":1.6,"ms_min":1000,"ms_max":2000}"#,
+                ),
+                "are not in order",
+            ),
+        ] {
+            let e = read_text(name, &text).unwrap_err().to_string();
+            assert!(e.contains(says), "{name}: {e}");
+        }
+        assert!(read_text("whole", &table(head, row)).is_ok());
     }
 
     #[test]
