@@ -321,6 +321,26 @@ fn an_option_that_does_nothing_is_an_error() {
     );
     assert_eq!(run.status.code(), Some(2));
     assert_one_error_line(&run, &["not provided", "--specular"]);
+    for option in ["--specular-sigma", "--specular-ks"] {
+        let run = shvis(
+            &[
+                "render",
+                "--technique",
+                "preconv",
+                option,
+                "0.2",
+                "--out",
+                s(&png),
+            ],
+            &[],
+        );
+        assert_one_error_line(&run, &["not provided", "--specular"]);
+    }
+    for extra in [["--probe", "fresh"], ["--probe-frames", "5"]] {
+        let mut args = vec!["bench", "--no-probe", "--out", s(&dir.join("b"))];
+        args.extend(extra);
+        assert_one_error_line(&shvis(&args, &[]), &["--no-probe", "cannot be used with"]);
+    }
     assert_one_error_line(
         &shvis(&["render", "--out", s(&png)], &[]),
         &["not provided", "--technique"],

@@ -207,10 +207,10 @@ pub(super) struct SpecularArgs {
     #[arg(long, value_delimiter = ',')]
     pub(super) specular: Vec<shvis::render::specular::NormalFilter>,
     /// Base spread σ of a full-resolution texel's normals (the surface's roughness).
-    #[arg(long, default_value_t = 0.1, value_parser = finite_f32)]
+    #[arg(long, default_value_t = 0.1, value_parser = finite_f32, requires = "specular")]
     specular_sigma: f32,
     /// Specular factor k_s multiplied into the light's irradiance.
-    #[arg(long, default_value_t = 0.04, value_parser = finite_f32)]
+    #[arg(long, default_value_t = 0.04, value_parser = finite_f32, requires = "specular")]
     specular_ks: f32,
     /// Direction toward the specular light (x,y,z) instead of the sun's; its irradiance
     /// stays the sun's. Only with `--specular`.

@@ -93,11 +93,11 @@ pub(super) struct BenchArgs {
     no_probe: bool,
     /// Timed frames per microbenchmark of the device probe (default: `--frames`, within
     /// 5–30); fewer measure faster and fit the model less closely.
-    #[arg(help_heading = "Frames and timing", long, value_parser = clap::value_parser!(u32).range(1..=1_000))]
+    #[arg(help_heading = "Frames and timing", long, value_parser = clap::value_parser!(u32).range(1..=1_000), conflicts_with = "no_probe")]
     probe_frames: Option<u32>,
     /// The device probe: `cached` reuses one measured before on this device, driver and
     /// build with the same settings (in the bake cache's folder), `fresh` measures again.
-    #[arg(help_heading = "Frames and timing", long, value_enum, default_value_t = ProbeMode::Cached)]
+    #[arg(help_heading = "Frames and timing", long, value_enum, default_value_t = ProbeMode::Cached, conflicts_with = "no_probe")]
     probe: ProbeMode,
     /// The error ladder evaluates every Nth pixel in each direction and measures each of
     /// its steps at those pixels (1: every pixel; the rung images are 1/N of the frame's width and height).
