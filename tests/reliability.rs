@@ -336,8 +336,9 @@ fn an_option_that_does_nothing_is_an_error() {
         );
         assert_one_error_line(&run, &["not provided", "--specular"]);
     }
+    let bench_out = dir.join("b");
     for extra in [["--probe", "fresh"], ["--probe-frames", "5"]] {
-        let mut args = vec!["bench", "--no-probe", "--out", s(&dir.join("b"))];
+        let mut args = vec!["bench", "--no-probe", "--out", s(&bench_out)];
         args.extend(extra);
         assert_one_error_line(&shvis(&args, &[]), &["--no-probe", "cannot be used with"]);
     }
