@@ -384,7 +384,7 @@ impl Export {
     /// # Errors
     /// A file that cannot be written, or a `dir` that is not an earlier export.
     pub fn write(&self, dir: &Path) -> Result<(), ExportError> {
-        crate::files::replace_dir(dir, "--out", is_export, |tmp| {
+        crate::files::replace_dir(dir, "--out", is_export_dir, |tmp| {
             for (name, bytes) in &self.files {
                 crate::files::write_atomic(&tmp.join(name), bytes)?;
             }
@@ -403,7 +403,7 @@ impl Export {
 }
 
 /// Whether `dir` holds an export: its `manifest.json` has `shvis_export` (every version).
-fn is_export(dir: &Path) -> bool {
+pub fn is_export_dir(dir: &Path) -> bool {
     crate::files::read_bounded(&dir.join("manifest.json"), 1 << 20, "an export manifest")
         .ok()
         .and_then(|bytes| serde_json::from_slice::<serde_json::Value>(&bytes).ok())

@@ -9,7 +9,7 @@ use shvis::prepare::VisibilityBaker;
 use shvis::prepare::bake_layers::{self, BakeLayersJob};
 
 use super::args::{BakerArgs, GpuArgs, SceneArgs, VisibilityBakerArg};
-use super::{RunInputs, prepare_settings, say, with_gpu};
+use super::{OUT_REPLACED, RunInputs, prepare_settings, say, with_gpu};
 
 #[derive(Args, Debug)]
 pub(super) struct BakeArgs {
@@ -62,10 +62,7 @@ pub(super) fn run_bake(a: BakeArgs) -> Result<()> {
         out: a.out.clone(),
     };
     // The bake replaces --out whole: checked before it, not after.
-    RunInputs::default()
-        .scene("--scene", &a.scene.scene)
-        .file("--height-map", a.scene.height_map.as_deref())
-        .check_outside(&a.out, "--out (a folder the run replaces whole)")?;
+    RunInputs::of_scene(&a.scene).check_outside(&a.out, OUT_REPLACED)?;
     shvis::files::check_replaceable_dir(&a.out, "--out", shvis::bake::cache::is_bake_dir)?;
     match a.baker.baker {
         VisibilityBakerArg::Cpu => {

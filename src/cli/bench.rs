@@ -16,9 +16,9 @@ use super::args::{
     finite_f32, with_normal_filter,
 };
 use super::{
-    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, RunInputs, check_frame_memory, check_rows,
-    clear_earlier_run, create_dir, parse_list, parse_techniques, prepare_settings, print_table,
-    print_written, with_gpu,
+    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, OUT_FOLDER, RunInputs, check_frame_memory,
+    check_rows, clear_earlier_run, create_dir, parse_list, parse_techniques, prepare_settings,
+    print_table, print_written, with_gpu,
 };
 
 #[derive(Args, Debug)]
@@ -204,11 +204,9 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
     if a.relight_rotate.is_some() && !a.specular.specular.is_empty() {
         bail!("--relight-rotate: not with --specular (its light is the bake's sun)");
     }
-    RunInputs::default()
+    RunInputs::of_scene(&a.scene)
         .env("--env", &a.env)
-        .scene("--scene", &a.scene.scene)
-        .file("--height-map", a.scene.height_map.as_deref())
-        .check_outside(&a.out, "--out (the folder the run writes into)")?;
+        .check_outside(&a.out, OUT_FOLDER)?;
     create_dir(&a.out)?;
     shvis::files::remove_stale_temps(&a.out);
     let started = Instant::now();

@@ -10,7 +10,7 @@ use shvis::gpu::HwPath;
 use shvis::technique::Technique;
 
 use super::args::SceneArgs;
-use super::{MAX_BOUNCES, RunInputs, prepare_settings};
+use super::{MAX_BOUNCES, OUT_REPLACED, RunInputs, prepare_settings};
 
 #[derive(Args, Debug)]
 pub(super) struct ExportArgs {
@@ -50,11 +50,10 @@ pub(super) fn run_export(a: ExportArgs) -> Result<()> {
         );
     }
     // The export replaces --out whole: no input may lie inside it.
-    RunInputs::default()
+    RunInputs::of_scene(&a.scene)
         .env("--env", &a.env)
-        .scene("--scene", &a.scene.scene)
-        .file("--height-map", a.scene.height_map.as_deref())
-        .check_outside(&a.out, "--out (a folder the run replaces whole)")?;
+        .check_outside(&a.out, OUT_REPLACED)?;
+    shvis::files::check_replaceable_dir(&a.out, "--out", shvis::export::is_export_dir)?;
     let settings = prepare_settings(&a.scene, &a.env, &[a.technique], a.bounces)?;
     let mut prepared = shvis::prepare::prepare(&settings)?;
     prepared.prepare_techniques(&[a.technique])?;

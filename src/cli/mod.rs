@@ -213,7 +213,19 @@ fn check_environment() -> Result<()> {
 #[derive(Default)]
 struct RunInputs(Vec<(&'static str, PathBuf)>);
 
+/// How [`RunInputs::check_outside`] names the `--out` of a run that writes files into it.
+const OUT_FOLDER: &str = "--out (the folder the run writes into)";
+/// … and of a run that replaces it whole (`files::replace_dir`).
+const OUT_REPLACED: &str = "--out (a folder the run replaces whole)";
+
 impl RunInputs {
+    /// The files of `--scene` and `--height-map`.
+    fn of_scene(scene: &SceneArgs) -> Self {
+        RunInputs::default()
+            .scene("--scene", &scene.scene)
+            .file("--height-map", scene.height_map.as_deref())
+    }
+
     /// The files of the scene `name` (none for a built-in scene).
     fn scene(mut self, option: &'static str, name: &str) -> Self {
         let files = shvis::prepare::scene_files(name);
@@ -326,13 +338,20 @@ where
                 i + 1
             );
         }
-        let item: T = s.trim().parse()?;
-        if items.contains(&item) {
-            bail!("'{list}': {item} is named twice");
-        }
-        items.push(item);
+        items.push(s.trim().parse()?);
+        named_once(&format!("'{list}'"), &items)?;
     }
     Ok(items)
+}
+
+/// Refuses a list `option` names an item of twice (its rows would repeat).
+fn named_once<T: PartialEq + std::fmt::Display>(option: &str, items: &[T]) -> Result<()> {
+    for (i, item) in items.iter().enumerate() {
+        if items[..i].contains(item) {
+            bail!("{option}: {item} is named twice");
+        }
+    }
+    Ok(())
 }
 
 /// Clears `out` of what an earlier run left there before this one writes into it: the

@@ -112,10 +112,8 @@ pub(super) fn run_render(a: RenderArgs) -> Result<()> {
     frame_format(&a.out)?;
     check_frame_memory(a.width, a.height, 48)?;
     shvis::files::check_writable_file(&a.out, "--out")?;
-    RunInputs::default()
+    RunInputs::of_scene(&a.scene)
         .env("--env", &a.env)
-        .scene("--scene", &a.scene.scene)
-        .file("--height-map", a.scene.height_map.as_deref())
         .check_spared_by(&[("--out".to_string(), a.out.clone())])?;
     let technique = with_normal_filter(vec![a.technique], a.normal_filter)[0];
     // A path the technique has no form on is refused before its bake.

@@ -11,8 +11,8 @@ use shvis::technique::{HwPath, Technique};
 
 use super::args::{GpuArgs, SceneArgs, finite_f32};
 use super::{
-    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, RunInputs, create_dir, prepare_settings,
-    print_table, print_written, say, with_gpu,
+    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, OUT_FOLDER, RunInputs, create_dir,
+    named_once, prepare_settings, print_table, print_written, say, with_gpu,
 };
 
 #[derive(Subcommand, Debug)]
@@ -371,8 +371,9 @@ fn run_compression(a: StudyCompressionArgs) -> Result<()> {
     use shvis::study::tables;
     named_once("--techniques", &a.techniques)?;
     named_once("--paths", &a.paths)?;
-    scene_and_env(&a.scene, &a.env)
-        .check_outside(&a.out, "--out (the folder the run writes into)")?;
+    RunInputs::of_scene(&a.scene)
+        .env("--env", &a.env)
+        .check_outside(&a.out, OUT_FOLDER)?;
     create_dir(&a.out)?;
     let started = Instant::now();
     let mut prepared = shvis::prepare::prepare(&prepare_settings(&a.scene, &a.env, &[], 0)?)?;
@@ -448,8 +449,9 @@ fn run_rays(a: StudyRaysArgs) -> Result<()> {
         height_map: None,
         height_scale: 1.0,
     };
-    scene_and_env(&scene, &a.env)
-        .check_outside(&a.out, "--out (the folder the run writes into)")?;
+    RunInputs::of_scene(&scene)
+        .env("--env", &a.env)
+        .check_outside(&a.out, OUT_FOLDER)?;
     let mut prepare = prepare_settings(&scene, &a.env, &techniques, a.bounces)?;
     prepare.progress = false;
     for &rays in &ray_counts {
@@ -496,7 +498,7 @@ fn run_bases(a: StudyBasesArgs) -> Result<()> {
     let envs = super::parse_each_once::<String>(&a.envs.join(","))?;
     envs.iter()
         .fold(RunInputs::default(), |inputs, e| inputs.env("--envs", e))
-        .check_outside(&a.out, "--out (the folder the run writes into)")?;
+        .check_outside(&a.out, OUT_FOLDER)?;
     create_dir(&a.out)?;
     let started = Instant::now();
     let study = shvis::study::bases::run(&envs, a.quadrature as usize, true)?;
@@ -514,8 +516,9 @@ fn run_bases(a: StudyBasesArgs) -> Result<()> {
 }
 
 fn run_block(a: StudyBlockArgs) -> Result<()> {
-    scene_and_env(&a.scene, &a.env)
-        .check_outside(&a.out, "--out (the folder the run writes into)")?;
+    RunInputs::of_scene(&a.scene)
+        .env("--env", &a.env)
+        .check_outside(&a.out, OUT_FOLDER)?;
     create_dir(&a.out)?;
     let started = Instant::now();
     let prepared = shvis::prepare::prepare(&prepare_settings(
@@ -575,7 +578,7 @@ fn run_ndf(a: StudyNdfArgs) -> Result<()> {
     a.diffuse_envs
         .iter()
         .fold(inputs, |inputs, e| inputs.env("--diffuse-envs", e))
-        .check_outside(&a.out, "--out (the folder the run writes into)")?;
+        .check_outside(&a.out, OUT_FOLDER)?;
     create_dir(&a.out)?;
     let started = Instant::now();
     let settings = shvis::study::ndf_report::NdfRunSettings {
@@ -601,24 +604,6 @@ fn run_ndf(a: StudyNdfArgs) -> Result<()> {
     Ok(())
 }
 
-/// Refuses a list `option` names an item of twice (the rows would repeat).
-fn named_once<T: PartialEq + std::fmt::Display>(option: &str, items: &[T]) -> Result<()> {
-    for (i, item) in items.iter().enumerate() {
-        if items[..i].contains(item) {
-            bail!("{option}: {item} is named twice");
-        }
-    }
-    Ok(())
-}
-
-/// The files a study reads through `--scene`, `--height-map` and `--env`.
-fn scene_and_env(scene: &SceneArgs, env: &str) -> RunInputs {
-    RunInputs::default()
-        .env("--env", env)
-        .scene("--scene", &scene.scene)
-        .file("--height-map", scene.height_map.as_deref())
-}
-
 /// The lightmap resolution `--model` is read at to check it before the study's work.
 const MODEL_CHECK_RES: u32 = 64;
 
@@ -638,7 +623,7 @@ fn run_normalmap(a: StudyNormalmapArgs) -> Result<()> {
         .fold(RunInputs::default().env("--env", &a.env), |inputs, f| {
             inputs.file("--model", Some(&f))
         })
-        .check_outside(&a.out, "--out (the folder the run writes into)")?;
+        .check_outside(&a.out, OUT_FOLDER)?;
     create_dir(&a.out)?;
     let started = Instant::now();
     with_gpu(&a.gpu, |ctx| {
@@ -685,7 +670,7 @@ fn run_rnm(a: StudyRnmArgs) -> Result<()> {
             RunInputs::default().scene("--scene", &a.scene),
             |inputs, e| inputs.env("--envs", e),
         )
-        .check_outside(&a.out, "--out (the folder the run writes into)")?;
+        .check_outside(&a.out, OUT_FOLDER)?;
     create_dir(&a.out)?;
     let started = Instant::now();
     let settings = shvis::study::rnm::RnmStudySettings {
@@ -715,8 +700,9 @@ fn run_seams(a: StudySeamsArgs) -> Result<()> {
     named_once("--techniques", &a.techniques)?;
     named_once("--paths", &a.paths)?;
     tables::check_clustered(&a.techniques)?;
-    scene_and_env(&a.scene, &a.env)
-        .check_outside(&a.out, "--out (the folder the run writes into)")?;
+    RunInputs::of_scene(&a.scene)
+        .env("--env", &a.env)
+        .check_outside(&a.out, OUT_FOLDER)?;
     create_dir(&a.out)?;
     let started = Instant::now();
     with_gpu(&a.gpu, |ctx| {

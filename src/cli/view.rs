@@ -10,7 +10,7 @@ use shvis::technique::{HwPath, Technique};
 
 use super::args::{GpuArgs, SceneArgs, finite_f32, finite_f64};
 use super::{
-    DEFAULT_EXPOSURE_EV, MAX_FRAME_SIDE, RunInputs, check_frame_memory, check_rows,
+    DEFAULT_EXPOSURE_EV, MAX_FRAME_SIDE, OUT_FOLDER, RunInputs, check_frame_memory, check_rows,
     check_validation, clear_earlier_run, create_dir, parse_list, parse_techniques, prepare_for,
     print_table, with_gpu,
 };
@@ -121,10 +121,8 @@ pub(super) fn run_view(a: ViewArgs) -> Result<()> {
             );
         }
         shvis::files::check_writable_file(shot, "--screenshot")?;
-        RunInputs::default()
+        RunInputs::of_scene(&a.scene)
             .env("--env", &a.env)
-            .scene("--scene", &a.scene.scene)
-            .file("--height-map", a.scene.height_map.as_deref())
             .check_spared_by(&[("--screenshot".to_string(), shot.clone())])?;
     }
     let set = |name: &str| std::env::var_os(name).is_some_and(|v| !v.is_empty());
@@ -200,14 +198,11 @@ pub(super) fn run_relight(a: RelightArgs) -> Result<()> {
             a.techniques
         );
     }
-    let mut inputs = RunInputs::default()
-        .env("--env", &a.env)
-        .scene("--scene", &a.scene.scene)
-        .file("--height-map", a.scene.height_map.as_deref());
+    let mut inputs = RunInputs::of_scene(&a.scene).env("--env", &a.env);
     if let Some(fade) = &a.fade_to {
         inputs = inputs.env("--fade-to", fade);
     }
-    inputs.check_outside(&a.out, "--out (the folder the run writes into)")?;
+    inputs.check_outside(&a.out, OUT_FOLDER)?;
     create_dir(&a.out)?;
     shvis::files::remove_stale_temps(&a.out);
     let started = Instant::now();
