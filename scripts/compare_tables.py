@@ -23,5 +23,6 @@ print(f"{len(ka)} rows compared")
 for c in cols:
     w = worst.get(c)
     print(f"{c:24s} largest difference: " + ("0 (identical)" if not w else f"{w[0]:.3g} at {w[1][0]}.{w[1][1]} ({w[2]} -> {w[3]})"))
+print(f"{'table_version':24s} {a.get('table_version')} -> {b.get('table_version')}")
 for f in ["reference_rel_noise", "reference_bounced_rel_noise", "reference_bounces", "vis_res", "width", "height"]:
     print(f"{f:24s} {a[f]} -> {b[f]}")

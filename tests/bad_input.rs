@@ -1419,6 +1419,7 @@ fn env_file_cases(suite: &mut Suite) {
         }
     });
     let square = exr(&d.join("square.exr"), 16, 16, |_, _| [1.0; 3]);
+    let one_row = exr(&d.join("one_row.exr"), 2, 1, |_, _| [1.0; 3]);
     let hdr_garbage = d.join("garbage.hdr");
     write(
         &hdr_garbage,
@@ -1476,6 +1477,11 @@ fn env_file_cases(suite: &mut Suite) {
         ),
         ("3:1", s(&wide), error(1, &["three_to_one.exr", "24×8"])),
         ("1:2", s(&tall), error(1, &["tall.exr", "8×16"])),
+        (
+            "one row",
+            s(&one_row),
+            error(1, &["one_row.exr", "2×1", "too small"]),
+        ),
         (
             "NaN texel",
             s(&nan),
@@ -2516,9 +2522,10 @@ fn surface_cases(suite: &mut Suite) {
     }
 
     // report: tables that cannot be believed, outputs that would be wrong.
+    let version = shvis::report::table::TABLE_VERSION;
     let row = |extra: &str| {
         format!(
-            r#"{{"device":"d","width":64,"height":32,"results":[{{"technique":"unc6","path":"dx10"{extra}}}]}}"#
+            r#"{{"table_version":{version},"device":"d","width":64,"height":32,"results":[{{"technique":"unc6","path":"dx10"{extra}}}]}}"#
         )
     };
     let tables: Vec<(&str, String, &str)> = vec![
@@ -2535,10 +2542,28 @@ fn surface_cases(suite: &mut Suite) {
             r#"{"results":{}}"#.into(),
             "no \"results\" array",
         ),
-        ("row-number", r#"{"results":[7]}"#.into(), "is not a row"),
+        (
+            "unversioned",
+            r#"{"device":"d","width":64,"height":32,"results":[{"technique":"unc6","path":"dx10","ms_median":1}]}"#.into(),
+            "without \"table_version\"",
+        ),
+        (
+            "other-version",
+            row(r#","ms_median":1"#).replacen(
+                &format!(r#""table_version":{version}"#),
+                &format!(r#""table_version":{}"#, version + 1),
+                1,
+            ),
+            "run `shvis bench` again",
+        ),
+        (
+            "row-number",
+            format!(r#"{{"table_version":{version},"results":[7]}}"#),
+            "is not a row",
+        ),
         (
             "row-nameless",
-            r#"{"results":[{"ms_median":1}]}"#.into(),
+            format!(r#"{{"table_version":{version},"results":[{{"ms_median":1}}]}}"#),
             "\"technique\" is missing",
         ),
         (
@@ -2584,12 +2609,12 @@ fn surface_cases(suite: &mut Suite) {
         ),
         (
             "width",
-            r#"{"width":-3,"results":[]}"#.into(),
+            format!(r#"{{"table_version":{version},"width":-3,"results":[]}}"#),
             "not a frame size",
         ),
         (
             "height",
-            r#"{"height":1e7,"results":[]}"#.into(),
+            format!(r#"{{"table_version":{version},"height":1e7,"results":[]}}"#),
             "not a frame size",
         ),
         ("paper-ms", row(r#","paper_ms":-0.1"#), "cannot be negative"),
@@ -2681,7 +2706,7 @@ fn surface_cases(suite: &mut Suite) {
     let markup = d.join("markup.json");
     write(
         &markup,
-        br#"{"device":"GPU | <b>x</b>\n# y","driver":"`d`","width":8,"height":8,"results":[{"technique":"unc6|x","path":"dx10","ms_median":1}]}"#,
+        format!(r#"{{"table_version":{version},"device":"GPU | <b>x</b>\n# y","driver":"`d`","width":8,"height":8,"results":[{{"technique":"unc6|x","path":"dx10","ms_median":1}}]}}"#).as_bytes(),
     );
     let markup_page = out("report-markup.md");
     suite.add(
@@ -3775,7 +3800,11 @@ fn outputs_linked_to_devices_are_written_through_as_cp_does() {
     let table = dir.join("table.json");
     write(
         &table,
-        br#"{"device":"d","width":8,"height":8,"results":[{"technique":"preconv","path":"dx10","ms_median":1.0}]}"#,
+        format!(
+            r#"{{"table_version":{},"device":"d","width":8,"height":8,"results":[{{"technique":"preconv","path":"dx10","ms_median":1.0}}]}}"#,
+            shvis::report::table::TABLE_VERSION
+        )
+        .as_bytes(),
     );
     let page = dir.join("page.md");
     write(&page, b"earlier");

@@ -21,6 +21,7 @@ fn the_probe_runs_every_microbenchmark_and_fits_a_model_to_them() {
             triangle_pixels: 200.0,
             warmup: 1,
             frames: 5,
+            progress: false,
         },
     )
     .expect("probe runs");
@@ -297,6 +298,7 @@ fn a_cached_probe_is_reused_and_fresh_measures_again() {
         triangle_pixels: 200.0,
         warmup: 0,
         frames: 5,
+        progress: false,
     };
     let (first, _) = shvis::probe::cache::run_cached(&ctx, &settings, &dir, false).unwrap();
     assert!(first.reused_from.is_none());

@@ -336,12 +336,53 @@ fn an_option_that_does_nothing_is_an_error() {
         );
         assert_one_error_line(&run, &["not provided", "--specular"]);
     }
+    // The GPU baker's depth-map settings without it.
+    for (option, value) in [
+        ("--depth-res", "64"),
+        ("--depth-bias", "0.2"),
+        ("--slope-bias", "1"),
+    ] {
+        let run = shvis(
+            &[
+                "render",
+                "--technique",
+                "preconv",
+                option,
+                value,
+                "--out",
+                s(&png),
+            ],
+            &[],
+        );
+        assert_one_error_line(&run, &[option, "--baker gpu"]);
+    }
     let bench_out = dir.join("b");
     for extra in [["--probe", "fresh"], ["--probe-frames", "5"]] {
         let mut args = vec!["bench", "--no-probe", "--out", s(&bench_out)];
         args.extend(extra);
         assert_one_error_line(&shvis(&args, &[]), &["--no-probe", "cannot be used with"]);
     }
+    // Without a reference there are no errors to measure and no ladder.
+    for extra in [&["--ladder-stride", "1"][..], &["--point-reference"][..]] {
+        let mut args = vec!["bench", "--ref-spp", "0", "--out", s(&bench_out)];
+        args.extend_from_slice(extra);
+        assert_one_error_line(&shvis(&args, &[]), &[extra[0], "--ref-spp 0"]);
+    }
+    assert_one_error_line(
+        &shvis(
+            &[
+                "bench",
+                "--point-reference",
+                "--ladder-stride",
+                "1",
+                "--out",
+                s(&bench_out),
+            ],
+            &[],
+        ),
+        &["--ladder-stride", "no ladder with --point-reference"],
+    );
+    assert!(!bench_out.exists(), "a refused bench wrote its folder");
     assert_one_error_line(
         &shvis(&["render", "--out", s(&png)], &[]),
         &["not provided", "--technique"],
@@ -369,6 +410,25 @@ fn an_option_that_does_nothing_is_an_error() {
         ),
         &["--cpu-face-rays", "--baker cpu"],
     );
+    // The GPU baker's options with the CPU baker.
+    for option in ["--no-mirror", "--no-cull", "--direct-draws", "--validate"] {
+        let run = shvis(
+            &[
+                "normalmap",
+                "--high",
+                "sphere:2",
+                "--low",
+                "sphere:1",
+                "--baker",
+                "cpu",
+                option,
+                "--out",
+                s(&png),
+            ],
+            &[],
+        );
+        assert_one_error_line(&run, &[option, "not with --baker cpu"]);
+    }
     assert_one_error_line(
         &shvis(
             &[

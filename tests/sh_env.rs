@@ -297,6 +297,47 @@ fn three_to_one_image_is_shape_error() {
     assert!(err.to_string().contains("2:1"), "{err}");
 }
 
+/// A 2×1 map and a 1×1 probe (resampled to 2×1) have one row, which spans every elevation:
+/// refused by their size, whichever way they are read; the smallest maps that tell up from
+/// down load.
+#[test]
+fn one_row_maps_are_too_small_to_light_with() {
+    for (name, width, height, prefix) in [
+        ("two-by-one.exr", 2, 1, ""),
+        ("one-by-one.exr", 1, 1, ""),
+        ("one-by-one-probe.exr", 1, 1, "angular:"),
+    ] {
+        let env = EnvMap::from_fn(width, height, |_| [0.5; 3]);
+        let path = temp_path(name);
+        env.save_exr(&path).expect("write fixture");
+        let result = resolve(&format!("{prefix}{}", path.display()));
+        let _ = std::fs::remove_file(&path);
+        let err = result.unwrap_err();
+        assert!(
+            matches!(err, EnvError::TooSmall { width: w, height: h, .. } if (w, h) == (width, height)),
+            "{name}: {err:?}"
+        );
+        let msg = err.to_string();
+        assert!(
+            msg.contains(name)
+                && msg.contains("too small")
+                && msg.contains("4×2")
+                && !msg.contains('\n'),
+            "{msg}"
+        );
+    }
+    for (width, height) in [(4, 2), (2, 2)] {
+        let env = EnvMap::from_fn(width, height, |d| [(1.0 + d.y) as f32, 0.5, 0.5]);
+        let path = temp_path(&format!("smallest-{width}x{height}.exr"));
+        env.save_exr(&path).expect("write fixture");
+        let prefix = if width == height { "angular:" } else { "" };
+        let result = resolve(&format!("{prefix}{}", path.display()));
+        let _ = std::fs::remove_file(&path);
+        let map = result.unwrap_or_else(|e| panic!("{width}×{height}: {e}"));
+        assert_eq!((map.width, map.height), (4, 2));
+    }
+}
+
 #[test]
 fn save_load_round_trip_is_exact() {
     let env = EnvMap::from_fn(32, 16, |d| {

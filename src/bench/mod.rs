@@ -339,6 +339,7 @@ pub fn probe_settings(
         triangle_pixels: scene.pixel_weighted_triangle_area(settings.width, settings.height),
         warmup: settings.warmup.min(5),
         frames: settings.probe_frames,
+        progress: true,
     }
 }
 
@@ -375,6 +376,7 @@ fn assemble_table(
         None => (None, Vec::new()),
     };
     BenchTable {
+        table_version: crate::report::table::TABLE_VERSION,
         reference_spp: settings.ref_spp,
         ladder_stride: None,
         reference_rel_noise: references.as_ref().map(|r| r.main.rel_noise),

@@ -123,28 +123,46 @@ pub(super) struct BakerArgs {
     /// GPU simulator: a depth map per direction, not cached).
     #[arg(long, value_enum, default_value_t = VisibilityBakerArg::Cpu)]
     pub(super) baker: VisibilityBakerArg,
-    /// `--baker gpu`: depth-map texels per side (16–8192).
-    #[arg(long, default_value_t = GpuVisibilitySettings::default().depth_res, value_parser = clap::value_parser!(u32).range(16..=shvis::bake::gpu_visibility::MAX_DEPTH_RES as i64))]
-    depth_res: u32,
-    /// `--baker gpu`: constant depth bias, depth-map texels.
-    #[arg(long, default_value_t = GpuVisibilitySettings::default().bias_texels, value_parser = finite_f32)]
-    depth_bias: f32,
-    /// `--baker gpu`: depth bias per unit tan of the ray's angle to the normal, texels.
-    #[arg(long, default_value_t = GpuVisibilitySettings::default().slope_bias_texels, value_parser = finite_f32)]
-    slope_bias: f32,
+    /// `--baker gpu`: depth-map texels per side (16–8192; default 4096).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(16..=shvis::bake::gpu_visibility::MAX_DEPTH_RES as i64))]
+    depth_res: Option<u32>,
+    /// `--baker gpu`: constant depth bias, depth-map texels (default 0.1).
+    #[arg(long, value_parser = finite_f32)]
+    depth_bias: Option<f32>,
+    /// `--baker gpu`: depth bias per unit tan of the ray's angle to the normal, texels
+    /// (default 0.5).
+    #[arg(long, value_parser = finite_f32)]
+    slope_bias: Option<f32>,
 }
 
 impl BakerArgs {
+    /// Refuses the GPU baker's settings without `--baker gpu`, where they would do nothing.
+    pub(super) fn check(&self) -> Result<()> {
+        if self.baker == VisibilityBakerArg::Gpu {
+            return Ok(());
+        }
+        let given = [
+            ("--depth-res", self.depth_res.is_some()),
+            ("--depth-bias", self.depth_bias.is_some()),
+            ("--slope-bias", self.slope_bias.is_some()),
+        ];
+        if let Some((option, _)) = given.iter().find(|(_, set)| *set) {
+            bail!("{option} tunes the GPU baker's depth maps: only with --baker gpu");
+        }
+        Ok(())
+    }
+
     /// The baker `prepare_with` runs, on `ctx` for `gpu`.
     pub(super) fn visibility_baker(&self, ctx: &Arc<Context>) -> shvis::prepare::VisibilityBaker {
+        let defaults = GpuVisibilitySettings::default();
         match self.baker {
             VisibilityBakerArg::Cpu => shvis::prepare::VisibilityBaker::Cpu,
             VisibilityBakerArg::Gpu => shvis::prepare::VisibilityBaker::Gpu {
                 ctx: ctx.clone(),
                 settings: GpuVisibilitySettings {
-                    depth_res: self.depth_res,
-                    bias_texels: self.depth_bias,
-                    slope_bias_texels: self.slope_bias,
+                    depth_res: self.depth_res.unwrap_or(defaults.depth_res),
+                    bias_texels: self.depth_bias.unwrap_or(defaults.bias_texels),
+                    slope_bias_texels: self.slope_bias.unwrap_or(defaults.slope_bias_texels),
                 },
             },
         }

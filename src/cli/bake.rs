@@ -39,6 +39,7 @@ pub(super) struct BakeArgs {
 }
 
 pub(super) fn run_bake(a: BakeArgs) -> Result<()> {
+    a.baker.check()?;
     if a.check {
         let manifest = shvis::files::Manifest::verify(&a.out).map_err(anyhow::Error::msg)?;
         check_bake_files(&a.out, &manifest)?;

@@ -100,9 +100,9 @@ pub(super) struct BenchArgs {
     #[arg(help_heading = "Frames and timing", long, value_enum, default_value_t = ProbeMode::Cached, conflicts_with = "no_probe")]
     probe: ProbeMode,
     /// The error ladder evaluates every Nth pixel in each direction and measures each of
-    /// its steps at those pixels (1: every pixel; the rung images are 1/N of the frame's width and height).
-    #[arg(help_heading = "Reference and errors", long, value_name = "N", default_value_t = shvis::bench::DEFAULT_LADDER_STRIDE, value_parser = clap::value_parser!(u32).range(1..=16))]
-    ladder_stride: u32,
+    /// its steps at those pixels (1: every pixel; default 2; the rung images are 1/N of the frame's width and height).
+    #[arg(help_heading = "Reference and errors", long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=16))]
+    ladder_stride: Option<u32>,
     /// Leave out, with a note, technique × path pairs that cannot run (`nmprtsvdMp` on dx9)
     /// instead of failing.
     #[arg(help_heading = "Rows", long)]
@@ -153,12 +153,45 @@ pub(super) fn run_probe(a: ProbeArgs) -> Result<()> {
                 },
                 warmup: a.warmup,
                 frames: a.frames,
+                progress: true,
             },
         )?;
         out!("{}", probe.to_markdown());
         print_written(&shvis::report::write_probe(&probe, &a.out)?)?;
         Ok(())
     })
+}
+
+/// Refuses the reference options that would do nothing: `--point-reference` without a
+/// reference (`--ref-spp 0`), and `--ladder-stride` where the error ladder does not run
+/// (`shvis::bench::BenchSettings`'s ladder: a footprint reference, not relit, no specular
+/// term).
+fn check_reference_options(a: &BenchArgs) -> Result<()> {
+    if a.ref_spp == 0 && a.point_reference {
+        bail!(
+            "--point-reference picks the reference the errors are measured against: not with --ref-spp 0 (no reference)"
+        );
+    }
+    if a.ladder_stride.is_none() {
+        return Ok(());
+    }
+    let no_ladder = if a.ref_spp == 0 {
+        Some("--ref-spp 0 (no reference)")
+    } else if a.point_reference {
+        Some("--point-reference (the ladder starts from the footprint reference)")
+    } else if a.relight_rotate.is_some() {
+        Some("--relight-rotate")
+    } else if !a.specular.specular.is_empty() {
+        Some("--specular")
+    } else {
+        None
+    };
+    match no_ladder {
+        Some(why) => {
+            bail!("--ladder-stride sets the error ladder's grid: there is no ladder with {why}")
+        }
+        None => Ok(()),
+    }
 }
 
 /// Whether a bench reuses a cached device probe.
@@ -171,6 +204,8 @@ pub(super) enum ProbeMode {
 }
 
 pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
+    a.baker.check()?;
+    check_reference_options(&a)?;
     check_frame_memory(a.width, a.height, 320)?;
     let mut settings = BenchSettings {
         techniques: with_normal_filter(parse_techniques(&a.techniques)?, a.normal_filter),
@@ -191,7 +226,9 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
         probe_frames: a.probe_frames.unwrap_or(a.frames.clamp(5, 30)),
         relight_degrees: a.relight_rotate,
         ladder: true,
-        ladder_stride: a.ladder_stride,
+        ladder_stride: a
+            .ladder_stride
+            .unwrap_or(shvis::bench::DEFAULT_LADDER_STRIDE),
         dx11_rows: (a.techniques.trim() == "headline")
             .then(|| shvis::technique::catalog::headline_on(HwPath::Dx11)),
     };

@@ -588,4 +588,32 @@ mod tests {
                 .any(|p| p.contains("`shvis bench --strictest`, which does not exist"))
         );
     }
+
+    /// Options that are refused where they would do nothing have no clap default (clap
+    /// cannot tell a default from a typed value); their help names the default the code
+    /// fills in, so the two must agree.
+    #[test]
+    fn optional_settings_name_their_real_default_in_help() {
+        let gpu = shvis::bake::gpu_visibility::GpuVisibilitySettings::default();
+        let cases = [
+            (
+                "bench",
+                "ladder_stride",
+                shvis::bench::DEFAULT_LADDER_STRIDE.to_string(),
+            ),
+            ("render", "depth_res", gpu.depth_res.to_string()),
+            ("render", "depth_bias", gpu.bias_texels.to_string()),
+            ("render", "slope_bias", gpu.slope_bias_texels.to_string()),
+        ];
+        let cli = Cli::command();
+        for (command, id, default) in cases {
+            let sub = cli.find_subcommand(command).expect(command);
+            let arg = sub.get_arguments().find(|a| a.get_id() == id).expect(id);
+            let help = arg.get_help().map(|h| h.to_string()).unwrap_or_default();
+            assert!(
+                help.contains(&format!("default {default}")),
+                "{command} --{id}: help {help:?} does not name the default {default}"
+            );
+        }
+    }
 }

@@ -109,6 +109,7 @@ pub(super) struct ReferenceArgs {
 }
 
 pub(super) fn run_render(a: RenderArgs) -> Result<()> {
+    a.baker.check()?;
     frame_format(&a.out)?;
     check_frame_memory(a.width, a.height, 48)?;
     shvis::files::check_writable_file(&a.out, "--out")?;

@@ -284,6 +284,20 @@ pub(super) fn run_normalmap(a: NormalmapArgs) -> Result<()> {
             "--cpu-face-rays steers the CPU baker's rays: only with --baker cpu or --compare-cpu"
         );
     }
+    if a.baker == BakerArg::Cpu {
+        // The CPU baker casts rays without a device; mirroring, culling and the draw mode
+        // belong to the GPU's projection.
+        let gpu_only = [
+            ("--no-mirror", a.no_mirror),
+            ("--no-cull", a.no_cull),
+            ("--direct-draws", a.direct_draws),
+            ("--device", a.gpu.device.is_some()),
+            ("--validate", a.gpu.validate),
+        ];
+        if let Some((option, _)) = gpu_only.iter().find(|(_, set)| *set) {
+            bail!("{option} applies to the GPU baker only: not with --baker cpu");
+        }
+    }
     let low = match (a.low, a.simplify) {
         (Some(low), _) => LowMesh::Load(low),
         (None, Some(ratio)) => LowMesh::Simplify(ratio),

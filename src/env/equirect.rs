@@ -10,7 +10,8 @@
 //!
 //! Validation, in this order: non-empty ([`EnvError::Empty`]), 2:1 or 1:1
 //! ([`EnvError::Shape`]; 1:1 is a Debevec angular probe, resampled onto an equirect map by
-//! [`super::angular`]), every channel finite ([`EnvError::NonFinite`] with the count
+//! [`super::angular`]), at least [`MIN_ENV_HEIGHT`] rows ([`EnvError::TooSmall`]), every
+//! channel finite ([`EnvError::NonFinite`] with the count
 //! and the first texel in row-major order; DESIGN §6), negative values clamped to 0 with
 //! one `log::warn!` giving their count (they are not radiance, but some tools emit tiny
 //! negatives from filtering).
@@ -34,6 +35,11 @@ pub enum SquareLayout {
     Angular,
 }
 
+/// Fewest rows of a map, and side of an angular probe (resampled to as many rows): a single
+/// row spans every elevation from the zenith to the nadir, so its texel centres all lie on
+/// the horizon and it cannot tell the sky from the ground.
+pub const MIN_ENV_HEIGHT: u32 = 2;
+
 /// Share of a 1:1 image's light allowed outside its disk for detection as a probe.
 pub const MAX_LIGHT_OUTSIDE_DISK: f64 = 1e-3;
 
@@ -43,7 +49,7 @@ pub const MAX_LIGHT_OUTSIDE_DISK: f64 = 1e-3;
 /// # Errors
 /// [`EnvError::Io`] (cannot read), [`EnvError::Format`] (neither format, or decoding
 /// failed), [`EnvError::Empty`], [`EnvError::Shape`] (not 2:1 or 1:1),
-/// [`EnvError::NonFinite`], [`EnvError::Ambiguous`].
+/// [`EnvError::TooSmall`], [`EnvError::NonFinite`], [`EnvError::Ambiguous`].
 pub fn load(path: &Path) -> Result<EnvMap, EnvError> {
     load_as(path, SquareLayout::Detect)
 }
@@ -259,6 +265,13 @@ fn validate(mut map: EnvMap, path: &Path, square: SquareLayout) -> Result<EnvMap
     }
     if width != 2 * height && width != height {
         return Err(EnvError::Shape {
+            path: path.to_owned(),
+            width,
+            height,
+        });
+    }
+    if height < MIN_ENV_HEIGHT {
+        return Err(EnvError::TooSmall {
             path: path.to_owned(),
             width,
             height,

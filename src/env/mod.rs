@@ -100,6 +100,23 @@ pub enum EnvError {
         /// Height in texels.
         height: u32,
     },
+    /// Fewer rows than [`equirect::MIN_ENV_HEIGHT`] (an angular probe: after its resampling).
+    #[error(
+        "{}: {width}×{height} is too small to light with (one row cannot tell the sky from the ground): an equirectangular map needs at least {}×{} texels, an angular probe {}×{}",
+        .path.display(),
+        2 * equirect::MIN_ENV_HEIGHT,
+        equirect::MIN_ENV_HEIGHT,
+        equirect::MIN_ENV_HEIGHT,
+        equirect::MIN_ENV_HEIGHT
+    )]
+    TooSmall {
+        /// The file.
+        path: PathBuf,
+        /// Width in texels.
+        width: u32,
+        /// Height in texels.
+        height: u32,
+    },
     /// A 1:1 image with light outside its inscribed disk: not recognisably an angular probe.
     #[error(
         "{}: {width}×{width} has {:.1}% of its light outside the inscribed disk, so it is not read as an angular probe (a mirror ball, a cropped panorama?); to read it as one anyway, pass --env angular:{}",

@@ -18,6 +18,10 @@
 //!   output's place in one rename (an atomic exchange where an earlier output is there), so
 //!   a kill at any point leaves the earlier folder whole or the new one whole, and no file
 //!   of an earlier run survives beside a new one's.
+//! - **Sibling files written as one run** (`--out` and the side files named after it) go
+//!   through a [`FileSet`]: each is written to a temporary beside it, and all are renamed
+//!   into place only once every one is written, so a failure halfway leaves the earlier
+//!   files, not a mix.
 //! - [`check_writable_dir`] creates a directory and a probe file in it before any work, so
 //!   an unwritable `--out` or cache is reported before a bake, not after.
 //! - A [`Manifest`] (`manifest.json`, written last) lists a directory's files with their
@@ -36,9 +40,11 @@
 pub mod clock;
 pub mod hash;
 pub mod ktx2;
+mod set;
 pub mod stdout;
 
 pub use hash::{Hasher64, hash64, splitmix64};
+pub use set::FileSet;
 
 use std::fs::{self, File};
 use std::io::{self, Read, Write};
@@ -676,10 +682,15 @@ mod interrupt {
 /// [`KILL_WHILE_WRITING_ENV`], writes half of `bytes` to `file`, syncs it and kills the
 /// process; with `name` in [`INTERRUPT_WHILE_WRITING_ENV`], writes half of `bytes` and
 /// raises SIGINT (the handler of [`remove_temporaries_on_interrupt`] then exits). Otherwise
-/// does nothing.
+/// does nothing. A [`FileSet`]'s temporary counts as the file it stands for.
 #[cfg(feature = "test-hooks")]
 fn interrupt_while_writing(file: &mut File, name: &str, bytes: &[u8]) -> io::Result<()> {
-    let names = |var: &str| std::env::var_os(var).is_some_and(|v| v.to_string_lossy() == name);
+    let names = |var: &str| {
+        std::env::var_os(var).is_some_and(|v| {
+            let v = v.to_string_lossy();
+            v == name || name.starts_with(&format!(".{v}.tmp-"))
+        })
+    };
     if names(KILL_WHILE_WRITING_ENV) {
         file.write_all(&bytes[..bytes.len() / 2])?;
         file.sync_all()?;
@@ -704,7 +715,8 @@ fn kill_self() -> ! {
     std::process::abort();
 }
 
-/// Removes temporaries `.NAME.tmp-PID-N` (files, or [`replace_dir`]'s folders) in `dir` left
+/// Removes temporaries `.NAME.tmp-PID-N` (files, [`FileSet`]'s with their extension after
+/// N, or [`replace_dir`]'s folders) in `dir` left
 /// by processes that no longer run
 /// (on systems without `/proc`, those older than a day); returns how many were removed.
 /// Best effort: unreadable directories and entries are skipped.
@@ -735,13 +747,15 @@ pub fn remove_stale_temps(dir: &Path) -> usize {
     removed
 }
 
-/// The PID in a temporary's name `.NAME.tmp-PID-N`, `None` for other names.
+/// The PID in a temporary's name `.NAME.tmp-PID-N` (or a [`FileSet`]'s `.NAME.tmp-PID-N.EXT`),
+/// `None` for other names.
 fn temp_owner(name: &str) -> Option<u32> {
     if !name.starts_with('.') {
         return None;
     }
     let (_, tail) = name.rsplit_once(".tmp-")?;
     let (pid, n) = tail.split_once('-')?;
+    let n = n.split_once('.').map_or(n, |(n, _)| n);
     n.parse::<u64>().ok()?;
     pid.parse().ok()
 }
@@ -914,6 +928,8 @@ mod tests {
     fn temp_names_parse_back_to_their_pid() {
         assert_eq!(temp_owner(".visibility-ab.bin.tmp-1234-7"), Some(1234));
         assert_eq!(temp_owner(".x.png.tmp-1-0"), Some(1));
+        assert_eq!(temp_owner(".x.png.tmp-1-0.png"), Some(1));
+        assert_eq!(temp_owner(".x.png.tmp-1-a.png"), None);
         assert_eq!(temp_owner("x.png.tmp-1-0"), None);
         assert_eq!(temp_owner(".x.tmp-a-0"), None);
         assert_eq!(temp_owner(".x.png"), None);

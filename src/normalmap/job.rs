@@ -1,13 +1,15 @@
 //! `shvis normalmap` as one call: load (or simplify) the meshes, bake the map on the GPU,
 //! the CPU or both, write it in tangent and object space as 16-bit PNG and EXR, with both
 //! bakers the angular difference image, and optionally a glTF of the low mesh that uses
-//! the map. Progress lines go to `say` as they happen.
+//! the map — every file of the run as one set (`files::FileSet`). Progress lines go to
+//! `say` as they happen.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
 use crate::bake::raster::LightmapTexels;
+use crate::files::FileSet;
 use crate::gpu::Context;
 use crate::scene::Mesh;
 
@@ -203,6 +205,7 @@ pub fn bake(
     let frames = low_texels(low, job.res);
     let low_texels = frames.covered_count();
     let stem = job.out.with_extension("");
+    let mut files = FileSet::new();
     let gpu_image = if job.needs_gpu() {
         let ctx =
             ctx.ok_or_else(|| NormalMapError::Invalid("the GPU baker needs a device".to_string()))?;
@@ -224,7 +227,7 @@ pub fn bake(
             t.execute_s,
             t.total_s
         ));
-        write_maps(&image, &frames, &stem, "", job.res)?;
+        write_maps(&mut files, &image, &frames, &stem, "", job.res)?;
         Some(image)
     } else {
         None
@@ -240,7 +243,7 @@ pub fn bake(
             t.total_s
         ));
         let suffix = if gpu_image.is_some() { "_cpu" } else { "" };
-        write_maps(&image, &frames, &stem, suffix, job.res)?;
+        write_maps(&mut files, &image, &frames, &stem, suffix, job.res)?;
         if let Some(gpu_image) = &gpu_image {
             match compare(gpu_image, &image, &gpu_image.interior()) {
                 Some(stats) => say(&format!("gpu vs cpu, interior texels: {stats}")),
@@ -248,18 +251,29 @@ pub fn bake(
             }
             let path = PathBuf::from(format!("{}_diff.png", stem.display()));
             output::write_map(
-                &path,
+                &files.stage(&path),
                 job.res,
                 &difference_image(gpu_image, &image),
                 [0.0; 3],
-            )?;
+            )
+            .map_err(naming(&path))?;
         }
     }
-    if let Some(g) = &job.gltf {
-        let png = PathBuf::from(format!("{}.png", stem.display()));
-        let uri = relative_uri(g, &png);
-        output::write_low_gltf(g, low, Some(&uri))?;
-        say(&format!("wrote {} (normal texture {uri})", g.display()));
+    let gltf_line = match &job.gltf {
+        Some(g) => {
+            let png = PathBuf::from(format!("{}.png", stem.display()));
+            let uri = relative_uri(g, &png);
+            let (document, buffer) = output::low_gltf(g, low, Some(&uri))?;
+            let bin = g.with_extension("bin");
+            crate::files::write(files.stage(&bin), &buffer).map_err(|e| io_error(&bin, e))?;
+            crate::files::write(files.stage(g), document).map_err(|e| io_error(g, e))?;
+            Some(format!("wrote {} (normal texture {uri})", g.display()))
+        }
+        None => None,
+    };
+    files.commit()?;
+    if let Some(line) = gltf_line {
+        say(&line);
     }
     say(&format!(
         "wrote {}.{{png,exr}} and {}_object.{{png,exr}} in {:.1} s",
@@ -270,9 +284,10 @@ pub fn bake(
     Ok(())
 }
 
-/// Writes `image` as `{stem}{suffix}.{png,exr}` (tangent space) and
+/// Writes `image` into `files` as `{stem}{suffix}.{png,exr}` (tangent space) and
 /// `{stem}{suffix}_object.{png,exr}` (object space).
 fn write_maps(
+    files: &mut FileSet,
     image: &NormalImage,
     frames: &LightmapTexels,
     stem: &Path,
@@ -282,10 +297,29 @@ fn write_maps(
     let tangent = tangent_space(image, frames);
     for ext in ["png", "exr"] {
         let path = |s: &str| PathBuf::from(format!("{}{suffix}{s}.{ext}", stem.display()));
-        output::write_map(&path(""), res, &tangent, [0.0, 0.0, 1.0])?;
-        output::write_map(&path("_object"), res, &image.texels, [0.0; 3])?;
+        let (map, object) = (path(""), path("_object"));
+        output::write_map(&files.stage(&map), res, &tangent, [0.0, 0.0, 1.0])
+            .map_err(naming(&map))?;
+        output::write_map(&files.stage(&object), res, &image.texels, [0.0; 3])
+            .map_err(naming(&object))?;
     }
     Ok(())
+}
+
+/// An I/O error of writing `path`.
+fn io_error(path: &Path, e: impl std::fmt::Display) -> NormalMapError {
+    NormalMapError::Io {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    }
+}
+
+/// An I/O error of writing `path`'s temporary in a [`FileSet`], naming `path` instead.
+fn naming(path: &Path) -> impl Fn(NormalMapError) -> NormalMapError + '_ {
+    move |e| match e {
+        NormalMapError::Io { message, .. } => io_error(path, message),
+        e => e,
+    }
 }
 
 /// The angle between two maps' normals as a grey map for [`output::write_map`]:

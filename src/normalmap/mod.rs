@@ -107,6 +107,8 @@ pub enum NormalMapError {
     Invalid(String),
     #[error("{path}: {message}")]
     Io { path: String, message: String },
+    #[error(transparent)]
+    File(#[from] crate::files::FileError),
 }
 
 /// A generated map: `res`² texels, row-major, row 0 at v = 0; `xyz` the unit object-space

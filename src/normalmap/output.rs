@@ -72,7 +72,10 @@ pub fn write_map(
                     .collect(),
                 ms: Vec::new(),
             };
-            crate::report::image::write_exr(path, &frame).map_err(|e| io_error(path, e))
+            crate::report::image::write_exr(path, &frame).map_err(|e| match e {
+                crate::report::ReportError::Write { detail, .. } => io_error(path, detail),
+                e => io_error(path, e),
+            })
         }
         _ => Err(io_error(path, "the output must be a .png or .exr")),
     }
@@ -88,6 +91,22 @@ pub fn write_low_gltf(
     mesh: &Mesh,
     normal_map_uri: Option<&str>,
 ) -> Result<(), NormalMapError> {
+    let (document, buffer) = low_gltf(path, mesh, normal_map_uri)?;
+    let bin_path = path.with_extension("bin");
+    crate::files::write(&bin_path, &buffer).map_err(|e| io_error(&bin_path, e))?;
+    crate::files::write(path, document).map_err(|e| io_error(path, e))
+}
+
+/// [`write_low_gltf`]'s two files, unwritten: the glTF document of `path` and the bytes of
+/// its buffer `path`.bin.
+///
+/// # Errors
+/// A `path` without a file name.
+pub fn low_gltf(
+    path: &Path,
+    mesh: &Mesh,
+    normal_map_uri: Option<&str>,
+) -> Result<(String, Vec<u8>), NormalMapError> {
     let n = mesh.vertices.len();
     let mut bin: Vec<u8> = Vec::new();
     let mut views = Vec::new();
@@ -160,7 +179,6 @@ pub fn write_low_gltf(
         document["textures"] = json!([{ "source": 0 }]);
     }
     document["materials"] = json!([material]);
-    crate::files::write(&bin_path, &bin).map_err(|e| io_error(&bin_path, e))?;
     let text = serde_json::to_string_pretty(&document).map_err(|e| io_error(path, e))?;
-    crate::files::write(path, text).map_err(|e| io_error(path, e))
+    Ok((text, bin))
 }

@@ -21,7 +21,8 @@ const CACHE_VERSION: u64 = 2;
 /// Largest probe file read (a probe's JSON is a few hundred KiB).
 const MAX_PROBE_BYTES: u64 = 16 << 20;
 
-/// The cache file of a probe of `s` on `ctx`'s device, in `dir`.
+/// The cache file of a probe of `s` on `ctx`'s device, in `dir` (`s.progress` does not
+/// enter).
 pub fn path(dir: &Path, ctx: &Context, s: &ProbeSettings) -> PathBuf {
     let device = ctx.device_summary();
     let mut h = Hasher64::default();

@@ -226,6 +226,8 @@ pub struct ProbeSettings {
     pub triangle_pixels: f64,
     pub warmup: u32,
     pub frames: u32,
+    /// Show progress bars on stderr (its shaders built, its rounds of timed frames).
+    pub progress: bool,
 }
 
 /// Runs the probe (module doc).
@@ -271,10 +273,12 @@ pub fn run_with_monitor(
 
     // Every point's pipeline first, then the timed frames in interleaved rounds.
     let specs = point_specs(ctx, &nothing_mesh.0, &full_mesh.0, &half_mesh.0, &grids);
+    let bar = crate::bake::progress_bar(s.progress, specs.len(), "probe shaders");
     let mut planned = specs
         .into_iter()
         .map(|(kind, count, untaken, depth_test, mesh)| {
             let (point, pipeline) = planner.plan(kind, count, untaken, depth_test, mesh)?;
+            bar.inc(1);
             Ok(Planned {
                 point,
                 pipeline,
@@ -283,10 +287,15 @@ pub fn run_with_monitor(
             })
         })
         .collect::<Result<Vec<_>, GpuError>>()?;
+    bar.finish_and_clear();
     let batches = Batches::new(&gpu, s, &planned, &full_mesh.0)?;
     let all: Vec<usize> = (0..planned.len()).collect();
-    let (mut timed, mut monitor) =
-        batches.time_batch(&planned, &all, &vec![f64::NAN; planned.len()])?;
+    let (mut timed, mut monitor) = batches.time_batch(
+        &planned,
+        &all,
+        &vec![f64::NAN; planned.len()],
+        "probe frames",
+    )?;
     let mut states = DeviceStates::from_monitor(&monitor);
     let mut points: Vec<ProbePoint> = planned.iter().map(|p| p.point.clone()).collect();
     measure(&mut points, &timed, &states, states.main_state);

@@ -291,6 +291,8 @@ fn lookups_of(kind: Option<Kind>, count: u32) -> Vec<(Kind, u32)> {
 pub(super) struct Batches<'a> {
     gpu: &'a SceneGpu,
     warmup: u32,
+    /// Show a batch's progress bar (`ProbeSettings::progress`).
+    progress: bool,
     pub(super) rounds: u32,
     pub(super) per_round: u32,
     /// The planned point that monitors the device: the empty shader over the screen.
@@ -326,6 +328,7 @@ impl<'a> Batches<'a> {
         Ok(Batches {
             gpu,
             warmup: s.warmup,
+            progress: s.progress,
             rounds,
             per_round,
             monitor_index,
@@ -341,13 +344,17 @@ impl<'a> Batches<'a> {
     /// One batch: the timed frames of the points `which`, in interleaved rounds, a monitor
     /// frame after each point's frames; returns their segments and the monitor frames.
     /// Cheap points get more frames (a millisecond of jitter is 10 % of them), scaled by a
-    /// known median or, failing that, by the batch's first round.
+    /// known median or, failing that, by the batch's first round. `label` names its
+    /// progress bar.
     pub(super) fn time_batch(
         &self,
         planned: &[Planned],
         which: &[usize],
         known_ms: &[f64],
+        label: &str,
     ) -> Result<(Vec<Segmented>, Vec<f64>), GpuError> {
+        let bar =
+            crate::bake::progress_bar(self.progress, self.rounds as usize * which.len(), label);
         let mut timed = vec![Segmented::default(); which.len()];
         let mut before = self.read_monitor(planned)?;
         let mut monitor = vec![before];
@@ -385,8 +392,10 @@ impl<'a> Batches<'a> {
                 t.push(p.build, before, got, after);
                 monitor.push(after);
                 before = after;
+                bar.inc(1);
             }
         }
+        bar.finish_and_clear();
         Ok((timed, monitor))
     }
 }
@@ -436,7 +445,8 @@ pub(super) fn retime(
         planned[i].pipeline = pipeline;
         planned[i].build += 1;
     }
-    let (batch, batch_monitor) = batches.time_batch(planned, missed, &known)?;
+    let (batch, batch_monitor) =
+        batches.time_batch(planned, missed, &known, "probe frames (points timed again)")?;
     for (&i, t) in missed.iter().zip(batch) {
         timed[i].0.extend(t.0);
     }

@@ -2,9 +2,10 @@
 //! technique and path — ms and ×preconv of each, beside the paper's GeForce GTX 295 column
 //! (DESIGN §3) — as markdown for `docs/results/`, generated, never typed.
 //!
-//! A table is read as JSON values, not as [`super::table::BenchTable`], so pages can be made
-//! from tables of older builds that lack newer fields; what a table lacks is left blank. What
-//! it holds is checked before it is believed: every time, ratio, error and size the page
+//! A table is read as JSON values, not as [`super::table::BenchTable`]: what a table lacks is
+//! left blank. Its `table_version` must be [`TABLE_VERSION`], the layout this build reads
+//! (another is refused with what to do: run the bench again). What it holds is checked
+//! before it is believed: every time, ratio, error and size the page
 //! could copy must be a finite number within physical bounds ([`NUMBER_FIELDS`]), and every
 //! text the page copies (labels, device, driver, technique and path names, file names) is
 //! escaped, so a table cannot break the page's markdown.
@@ -13,6 +14,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use serde_json::Value;
+
+use super::table::TABLE_VERSION;
 
 /// One bench's table, read from its `table.json`.
 #[derive(Clone, Debug)]
@@ -34,6 +37,13 @@ pub enum ResultsError {
     Read(#[from] crate::files::FileError),
     #[error("{}: not a bench table.json: {detail}", .path.display())]
     Format { path: PathBuf, detail: String },
+    /// A bench table of another layout than [`TABLE_VERSION`].
+    #[error(
+        "{}: a bench table {found}; this build reads table_version {} only: run `shvis bench` again to write it",
+        .path.display(),
+        TABLE_VERSION
+    )]
+    Version { path: PathBuf, found: String },
 }
 
 impl ResultTable {
@@ -50,6 +60,20 @@ impl ResultTable {
             .and_then(Value::as_array)
             .ok_or_else(|| format("no \"results\" array"))?
             .clone();
+        let found = match json.get("table_version") {
+            None => Some("without \"table_version\"".to_string()),
+            Some(v) => match v.as_u64() {
+                Some(n) if n == u64::from(TABLE_VERSION) => None,
+                Some(n) => Some(format!("of table_version {n}")),
+                None => Some("whose \"table_version\" is not a version number".to_string()),
+            },
+        };
+        if let Some(found) = found {
+            return Err(ResultsError::Version {
+                path: path.to_path_buf(),
+                found,
+            });
+        }
         let field = |k: &str| {
             json.get(k)
                 .and_then(Value::as_str)
@@ -264,7 +288,11 @@ pub fn comparison_page(tables: &[ResultTable], date: &str) -> String {
          column is Iwanicki & Sloan's GeForce GTX 295 at 1280×800 (DESIGN §3). ms: the median \
          frame's GPU time; ×preconv: the row's median over `preconv`'s on the same path; \
          ×model: measured over the device cost model's time (docs/reading-results.md; — where \
-         the bench ran without the probe).\n"
+         the bench ran without the probe). rel. RMSE: against the row's own reference (the \
+         reference column: the paper's visibility techniques light directly and are measured \
+         against the direct-light reference, the lightmap bases store inter-reflected light \
+         and are measured against the bounced one); rel. RMSE, bounced: every row against the \
+         same inter-reflected reference, the one truth for comparing any two rows.\n"
     );
     md.push_str("| table | device | driver | frame | rows | file |\n|---|---|---|---|---|---|\n");
     for t in tables {
@@ -284,16 +312,16 @@ pub fn comparison_page(tables: &[ResultTable], date: &str) -> String {
             markdown_text(&t.path.display().to_string())
         );
     }
-    md.push_str("\n| technique | path | paper ms | paper ×preconv |");
+    md.push_str("\n| technique | path | reference | paper ms | paper ×preconv |");
     for t in tables {
         let _ = write!(
             md,
-            " {label} ms | {label} ×preconv | {label} ×model | {label} rel. RMSE |",
+            " {label} ms | {label} ×preconv | {label} ×model | {label} rel. RMSE | {label} rel. RMSE, bounced |",
             label = markdown_text(&t.label)
         );
     }
-    md.push_str("\n|---|---|---|---|");
-    md.push_str(&"---|---|---|---|".repeat(tables.len()));
+    md.push_str("\n|---|---|---|---|---|");
+    md.push_str(&"---|---|---|---|---|".repeat(tables.len()));
     md.push('\n');
     for (technique, path) in row_keys(tables) {
         let first = tables.iter().find_map(|t| t.row(&technique, &path));
@@ -304,9 +332,10 @@ pub fn comparison_page(tables: &[ResultTable], date: &str) -> String {
         };
         let _ = write!(
             md,
-            "| {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} |",
             markdown_text(&technique),
             markdown_text(&path),
+            reference_of(tables, &technique, &path),
             number(first, "paper_ms", 3),
             number(first, "paper_ratio_to_preconv", 2)
         );
@@ -314,16 +343,34 @@ pub fn comparison_page(tables: &[ResultTable], date: &str) -> String {
             let row = t.row(&technique, &path);
             let _ = write!(
                 md,
-                " {} | {} | {} | {} |",
+                " {} | {} | {} | {} | {} |",
                 number(row, "ms_median", 3),
                 number(row, "ratio_to_preconv", 2),
                 number(row, "x_model", 2),
-                number(row, "rel_rmse", 4)
+                number(row, "rel_rmse", 4),
+                number(row, "rel_rmse_bounced", 4)
             );
         }
         md.push('\n');
     }
     md
+}
+
+/// What the row's `rel_rmse` is measured against in the tables ("direct", "2 bounces"),
+/// each distinct value once, "—" where no table says.
+fn reference_of(tables: &[ResultTable], technique: &str, path: &str) -> String {
+    let mut seen: Vec<&str> = Vec::new();
+    for row in tables.iter().filter_map(|t| t.row(technique, path)) {
+        if let Some(r) = row.get("reference").and_then(Value::as_str)
+            && !seen.contains(&r)
+        {
+            seen.push(r);
+        }
+    }
+    if seen.is_empty() {
+        return "—".to_string();
+    }
+    markdown_text(&seen.join(" / "))
 }
 
 /// Every (technique, path) of the tables, in the first table's order, then the others'.
@@ -364,29 +411,31 @@ mod tests {
             "gpu",
             serde_json::json!([
                 {"technique": "preconv", "path": "dx9", "ms_median": 0.05, "ratio_to_preconv": 1.0,
-                 "paper_ms": 0.648, "paper_ratio_to_preconv": 1.0, "rel_rmse": 0.1},
+                 "paper_ms": 0.648, "paper_ratio_to_preconv": 1.0, "rel_rmse": 0.1,
+                 "reference": "direct"},
                 {"technique": "unc6", "path": "dx9", "ms_median": 0.6, "ratio_to_preconv": 12.0,
                  "paper_ms": 8.19, "paper_ratio_to_preconv": 12.64, "rel_rmse": 0.02,
-                 "x_model": 1.034},
+                 "x_model": 1.034, "reference": "direct", "rel_rmse_bounced": 0.03},
                 {"technique": "unc6", "path": "dx9", "specular": "mip", "ms_median": 9.0}
             ]),
         );
         let b = table(
             "cpu",
             serde_json::json!([
-                {"technique": "unc6", "path": "dx9", "ms_median": 40.0, "ratio_to_preconv": 4.5}
+                {"technique": "unc6", "path": "dx9", "ms_median": 40.0, "ratio_to_preconv": 4.5,
+                 "reference": "2 bounces"}
             ]),
         );
         let md = comparison_page(&[a, b], "2026-12-04");
         assert!(
             md.contains(
-                "| unc6 | dx9 | 8.190 | 12.64 | 0.600 | 12.00 | 1.03 | 0.0200 | 40.000 | 4.50 | — | — |"
+                "| unc6 | dx9 | direct / 2 bounces | 8.190 | 12.64 | 0.600 | 12.00 | 1.03 | 0.0200 | 0.0300 | 40.000 | 4.50 | — | — | — |"
             ),
             "{md}"
         );
         assert!(
             md.contains(
-                "| preconv | dx9 | 0.648 | 1.00 | 0.050 | 1.00 | — | 0.1000 | — | — | — | — |"
+                "| preconv | dx9 | direct | 0.648 | 1.00 | 0.050 | 1.00 | — | 0.1000 | — | — | — | — | — | — |"
             ),
             "{md}"
         );
@@ -395,12 +444,69 @@ mod tests {
     }
 
     /// Reads `json` as a table file of its own.
-    fn read_text(name: &str, json: &str) -> Result<ResultTable, ResultsError> {
+    fn read_file(name: &str, json: &str) -> Result<ResultTable, ResultsError> {
         let dir = std::env::temp_dir().join(format!("shvis-results-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join(format!("{name}.json"));
         std::fs::write(&path, json).unwrap();
         ResultTable::read(&path, None)
+    }
+
+    /// [`read_file`] of the object `json` with this build's `table_version` put first.
+    fn read_text(name: &str, json: &str) -> Result<ResultTable, ResultsError> {
+        let versioned = json.replacen('{', &format!("{{\"table_version\":{TABLE_VERSION},"), 1);
+        read_file(name, &versioned)
+    }
+
+    #[test]
+    fn tables_of_another_version_are_refused_saying_what_to_do() {
+        let rest = r#""device":"d","width":64,"height":32,"results":[{"technique":"unc6","path":"dx10","ms_median":1.0}]}"#;
+        let next = TABLE_VERSION + 1;
+        for (name, head, says) in [
+            (
+                "unversioned",
+                "{".to_string(),
+                "without \"table_version\"".to_string(),
+            ),
+            (
+                "next",
+                format!("{{\"table_version\":{next},"),
+                format!("of table_version {next}"),
+            ),
+            (
+                "text",
+                format!("{{\"table_version\":\"{TABLE_VERSION}\","),
+                "is not a version number".to_string(),
+            ),
+        ] {
+            let e = read_file(name, &format!("{head}{rest}"))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(&format!("{name}.json: a bench table ")), "{e}");
+            assert!(e.contains(&says), "{name}: {e}");
+            assert!(
+                e.contains(&format!("reads table_version {TABLE_VERSION} only"))
+                    && e.contains("run `shvis bench` again"),
+                "{e}"
+            );
+        }
+        assert!(read_text("current", &format!("{{{rest}")).is_ok());
+    }
+
+    /// The tables the results pages in docs/results/ are made from read as this build's.
+    #[test]
+    fn the_committed_results_tables_read() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/results");
+        let mut read = 0;
+        for entry in std::fs::read_dir(&dir).expect("docs/results") {
+            let path = entry.unwrap().path();
+            if path.to_string_lossy().ends_with(".table.json") {
+                let table = ResultTable::read(&path, None).unwrap_or_else(|e| panic!("{e}"));
+                assert!(!table.rows.is_empty(), "{}", path.display());
+                read += 1;
+            }
+        }
+        assert!(read > 0, "no table in {}", dir.display());
     }
 
     #[test]
@@ -528,11 +634,11 @@ mod tests {
             header,
             "| a\\|b \\# c | GPU \\`x\\` \\*bold\\* \\[link\\](y) | — | 1280×800 | 1 | a\\|b \\# c/table.json |"
         );
-        assert!(md.contains("| unc6&lt;script&gt; | dx9\\|x |"), "{md}");
+        assert!(md.contains("| unc6&lt;script&gt; | dx9\\|x | — |"), "{md}");
         // Every table line keeps its number of cells.
         for line in md.lines().filter(|l| l.starts_with('|')) {
             let cells = line.replace("\\|", "").matches('|').count();
-            assert!(cells == 7 || cells == 9, "{line}");
+            assert!(cells == 7 || cells == 11, "{line}");
         }
     }
 }

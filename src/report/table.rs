@@ -224,9 +224,16 @@ impl BenchRow {
     }
 }
 
+/// Version of `table.json`'s layout (`table_version`; docs/reading-results.md): `shvis
+/// report` reads tables of this version only. Bump it whenever a field changes meaning or
+/// form, or one `report` reads is added or removed.
+pub const TABLE_VERSION: u32 = 1;
+
 /// The whole table.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct BenchTable {
+    /// [`TABLE_VERSION`].
+    pub table_version: u32,
     pub device: String,
     /// The device's driver, name and version (`gpu::DeviceSummary::driver`).
     pub driver: String,
@@ -568,6 +575,7 @@ pub(crate) mod tests {
             },
         ];
         let table = BenchTable {
+            table_version: TABLE_VERSION,
             driver: String::new(),
             device: "test".into(),
             width: 4,
@@ -612,5 +620,6 @@ pub(crate) mod tests {
         assert_eq!(rung["image"], "preconv.dx10.exr");
         assert_eq!(json["results"][0]["technique"], "preconv");
         assert_eq!(json["results"][0]["reference"], "direct");
+        assert_eq!(json["table_version"], TABLE_VERSION);
     }
 }

@@ -1,7 +1,8 @@
 //! `shvis ssbump`: a self-shadowed bump map (Green, Valve) from a height map, written as
-//! 16-bit PNG and EXR beside the plain D encoding (`*_d`) and the scalar AO (`*_ao`).
+//! 16-bit PNG and EXR beside the plain D encoding (`*_d`) and the scalar AO (`*_ao`), the
+//! six files as one set (`files::FileSet`).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use crate::bake::ssbump::{occlusion, ssbump};
 use crate::render::Frame;
@@ -59,6 +60,8 @@ pub enum SsbumpError {
         path: PathBuf,
         source: Box<dyn std::error::Error + Send + Sync>,
     },
+    #[error(transparent)]
+    File(#[from] crate::files::FileError),
 }
 
 impl SsbumpJob {
@@ -134,9 +137,12 @@ pub fn run(job: &SsbumpJob) -> Result<SsbumpSummary, SsbumpError> {
     let stem = job.out.with_extension("");
     let with_suffix =
         |suffix: &str, ext: &str| PathBuf::from(format!("{}{suffix}.{ext}", stem.display()));
+    let mut files = crate::files::FileSet::new();
     for (texels, suffix) in [(&shadowed, ""), (&plain, "_d"), (&ao, "_ao")] {
+        let png = with_suffix(suffix, "png");
         write_png16(
-            &with_suffix(suffix, "png"),
+            &png,
+            &files.stage(&png),
             width as u32,
             height as u32,
             texels,
@@ -150,8 +156,16 @@ pub fn run(job: &SsbumpJob) -> Result<SsbumpSummary, SsbumpError> {
                 .collect(),
             ms: Vec::new(),
         };
-        write_exr(&with_suffix(suffix, "exr"), &frame)?;
+        let exr = with_suffix(suffix, "exr");
+        write_exr(&files.stage(&exr), &frame).map_err(|e| match e {
+            ReportError::Write { detail, .. } => ReportError::Write {
+                path: exr.clone(),
+                detail,
+            },
+            e => e,
+        })?;
     }
+    files.commit()?;
     let mean =
         |i: usize| occ.channels.iter().map(|c| c[i]).sum::<f64>() / occ.channels.len() as f64;
     Ok(SsbumpSummary {
@@ -162,9 +176,11 @@ pub fn run(job: &SsbumpJob) -> Result<SsbumpSummary, SsbumpError> {
     })
 }
 
-/// Writes RGB texels in [0, 1] as a 16-bit PNG.
+/// Writes RGB texels in [0, 1] as a 16-bit PNG into `to`, the temporary of `path` (the
+/// file named in errors).
 fn write_png16(
-    path: &std::path::Path,
+    path: &Path,
+    to: &Path,
     width: u32,
     height: u32,
     texels: &[[f64; 3]],
@@ -185,5 +201,5 @@ fn write_png16(
             image::ImageFormat::Png,
         )
         .map_err(|e| write_error(Box::new(e)))?;
-    crate::files::write(path, &encoded).map_err(|e| write_error(Box::new(e)))
+    crate::files::write(to, &encoded).map_err(|e| write_error(Box::new(e)))
 }
