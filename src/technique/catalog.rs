@@ -35,9 +35,9 @@ pub fn paper_table() -> Vec<Technique> {
 /// dx9 and dx10 the paper's table and the rows that stand for each later family (one, the
 /// cheapest bake that shows what the family does; two for the engine SH variants, the
 /// plain L1 engines ship and the stored ZH3 that improves on it; three for the hemisphere
-/// bases); on dx11, where lavapipe samples BC textures in software (20–40× slower than
-/// dx10), the two rows the dx11 path is about: the SH lightmap and the paper's uncompressed
-/// visibility.
+/// bases); on dx11, where lavapipe samples BC textures in software (its BC6H/BC7 rows
+/// 6.5–30× slower than dx10 in docs/results/lavapipe-dx11.md), the two rows the dx11
+/// path is about: the SH lightmap and the paper's uncompressed visibility.
 pub fn headline_on(path: HwPath) -> Vec<Technique> {
     Technique::headline(path)
 }
