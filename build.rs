@@ -15,8 +15,8 @@ fn main() {
 }
 
 /// Sets `SHVIS_BAKE_SOURCE_HASH`: FNV-1a (64-bit) over the paths and contents of every file
-/// under `src/bake`, `src/sh` and `src/env`, so a cached SH lightmap from other bake code
-/// is never believed (`bake::cache::sh_lightmap_key`).
+/// under `src/bake`, `src/sh` and `src/env`, so a cached bake from other bake code is never
+/// believed (the keys of `bake::cache`).
 fn embed_bake_source_hash() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut files = Vec::new();

@@ -570,6 +570,20 @@ fn median(values: &mut [f64]) -> Option<f64> {
 }
 
 /// An animated PNG of 8-bit sRGB frames at 12 frames per second, looping.
+/// Whether `name` is one of the images a relight run writes: `{label}.f{N}.png` (a frame of
+/// a technique or of the reference) or `{label}.apng.png` (its animation).
+pub fn is_relight_image(name: &str) -> bool {
+    let Some(stem) = name.strip_suffix(".png") else {
+        return false;
+    };
+    if stem.ends_with(".apng") {
+        return true;
+    }
+    stem.rsplit_once(".f").is_some_and(|(label, frame)| {
+        !label.is_empty() && !frame.is_empty() && frame.bytes().all(|b| b.is_ascii_digit())
+    })
+}
+
 fn write_apng(path: &Path, width: u32, height: u32, frames: &[Vec<u8>]) -> Result<(), ReportError> {
     let err = |e: png::EncodingError| ReportError::Write {
         path: path.to_path_buf(),
@@ -592,6 +606,23 @@ fn write_apng(path: &Path, width: u32, height: u32, frames: &[Vec<u8>]) -> Resul
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn relight_images_are_told_from_other_files() {
+        for ours in ["unc6.dx10.f4.png", "reference.f12.png", "pca8.dx9.apng.png"] {
+            assert!(is_relight_image(ours), "{ours}");
+        }
+        for theirs in [
+            "relight.md",
+            "photo.png",
+            "notes.f.png",
+            "x.fa1.png",
+            ".f3.png",
+            "a.f3.exr",
+        ] {
+            assert!(!is_relight_image(theirs), "{theirs}");
+        }
+    }
 
     #[test]
     fn sampled_frames_sit_between_rebuilds() {

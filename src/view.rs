@@ -100,8 +100,8 @@ pub struct ViewReport {
     pub device: String,
     pub present_mode: String,
     /// Per technique × path shown: its label, frames, median frame wall ms (render,
-    /// readback, overlay, present) and median GPU ms.
-    pub shown: Vec<(String, usize, f64, Option<f64>)>,
+    /// readback, overlay, present; `None` when no frame was timed whole) and median GPU ms.
+    pub shown: Vec<(String, usize, Option<f64>, Option<f64>)>,
     /// Lighting rebuilds swapped in, their CPU build ms (median), and the longest frame
     /// that swapped one in against the median frame of the run (the stall test).
     pub rebuilds: usize,
@@ -539,7 +539,7 @@ fn record_shown(st: &mut State, report: &mut ViewReport) {
     if st.since_switch.is_empty() && st.gpu_since_switch.is_empty() {
         return;
     }
-    let wall = TimingStats::from_ms(&st.since_switch).map_or(f64::NAN, |t| t.ms_median);
+    let wall = TimingStats::from_ms(&st.since_switch).map(|t| t.ms_median);
     let gpu = TimingStats::from_ms(&st.gpu_since_switch).map(|t| t.ms_median);
     report
         .shown

@@ -340,3 +340,33 @@ fn written_gltf_and_tangent_map_give_back_the_object_normals_in_the_renderer_fra
     assert!(stats.p99_deg < 1.0 && stats.max_deg < 2.0, "{stats}");
     common::assert_validation_clean(&ctx, "normalmap glTF round trip");
 }
+
+#[test]
+fn a_written_gltf_references_its_map_below_its_folder_by_an_encoded_uri() {
+    let res = 64;
+    let low = sphere_low(1, 1.0, res).unwrap();
+    let dir = Scratch::new("normalmap", "uri");
+    let maps = dir.join("maps 100%");
+    std::fs::create_dir_all(&maps).unwrap();
+    let map = maps.join("n#1.png");
+    output::write_map(
+        &map,
+        res,
+        &vec![[0.0, 0.0, 1.0, 1.0]; (res * res) as usize],
+        [0.0; 3],
+    )
+    .unwrap();
+    let gltf = dir.join("low 50%.gltf");
+    let uri = shvis::normalmap::job::relative_uri(&gltf, &map).unwrap();
+    assert_eq!(uri, "maps%20100%25/n%231.png");
+    output::write_low_gltf(&gltf, &low, Some(&uri)).unwrap();
+    let scene = shvis::scene::gltf::load(&gltf, res).unwrap();
+    assert_eq!(
+        (scene.material.normal.width, scene.material.normal.height),
+        (res, res)
+    );
+    // A map beside the glTF's folder cannot be referenced from it.
+    let inner = dir.join("inner").join("low.gltf");
+    let e = shvis::normalmap::job::relative_uri(&inner, &map).unwrap_err();
+    assert!(e.contains("outside the folder of --gltf"), "{e}");
+}

@@ -723,6 +723,55 @@ fn bad_files_are_one_line_errors() {
     });
     expect_error(&points_only, "no usable triangles");
 
+    let too_bright = quad_file(&dir, "too_bright", |g| {
+        g.set(
+            "materials",
+            json!([{"pbrMetallicRoughness": {"baseColorFactor": [1.5, 1.0, 1.0, 1.0]}}]),
+        );
+        if let Some(meshes) = g.root.get_mut("meshes") {
+            meshes[0]["primitives"][0]["material"] = json!(0);
+        }
+        None
+    });
+    expect_error(&too_bright, "baseColorFactor");
+
+    let flat_scale = quad_file(&dir, "flat_scale", |g| {
+        g.set(
+            "materials",
+            json!([{"normalTexture": {"index": 0, "scale": 1e39}}]),
+        );
+        if let Some(meshes) = g.root.get_mut("meshes") {
+            meshes[0]["primitives"][0]["material"] = json!(0);
+        }
+        None
+    });
+    expect_error(&flat_scale, "");
+
+    let dark_colour = quad_file(&dir, "dark_colour", |g| {
+        let c = g.floats(
+            &[0.5, 0.5, 0.5, -1.0, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5],
+            "VEC3",
+        );
+        if let Some(meshes) = g.root.get_mut("meshes") {
+            meshes[0]["primitives"][0]["attributes"]["COLOR_0"] = json!(c);
+        }
+        None
+    });
+    expect_error(&dark_colour, "COLOR_0");
+
+    // 1000 instances of a mesh whose accessors claim 6 M corners: refused before any read.
+    let many = quad_file(&dir, "many_instances", |g| {
+        for a in &mut g.accessors {
+            a["count"] = json!(6_000_000);
+        }
+        let nodes: Vec<Value> = (0..1000).map(|_| json!({"mesh": 0})).collect();
+        let refs: Vec<usize> = (0..1000).collect();
+        g.set("nodes", json!(nodes));
+        g.set("scenes", json!([{"nodes": refs}]));
+        None
+    });
+    expect_error(&many, "triangle corners");
+
     let short_glb = dir.join("short.glb");
     write_file(&short_glb, b"glTF\x02\0\0\0\x04\0\0\0");
     expect_error(&short_glb, "header length");

@@ -15,8 +15,10 @@
 //!               res²·order² coefficients f32, res² covered u8 (0/1), res² AO f32
 //! ```
 //!
-//! The key is [`hash64`](crate::files::hash64) of the format version, the kind, the vertex and index bytes of
-//! the mesh (every attribute, as laid out in [`Vertex`]) and the settings (order, rays,
+//! The key is [`hash64`](crate::files::hash64) of the format version, the kind, the bake's
+//! own sources (`SHVIS_BAKE_SOURCE_HASH` from build.rs: every file under src/bake, src/sh and
+//! src/env, so a file baked by other bake code is never read), the vertex and index bytes
+//! of the mesh (every attribute, as laid out in [`Vertex`]) and the settings (order, rays,
 //! seed, res); the file is `visibility-{key:016x}.bin` in the cache directory. A file is
 //! used only when magic, version, kind, key, length and checksum all match and the
 //! payload parses to the requested resolution and order; anything else is logged with
@@ -25,7 +27,7 @@
 //! (then a best-effort fsync of the directory), so a crash leaves the old file or none.
 //!
 //! Kind 2 holds a VQ / CPCA fit of a visibility map ([`load_or_fit_clusters`], key over the
-//! map's content, the fit's parameters and `cluster::FIT_VERSION`).
+//! bake's sources, the map's content, the fit's parameters and `cluster::FIT_VERSION`).
 //!
 //! Kind 4 holds an SH lightmap bake with the bases fitted from its samples
 //! ([`load_or_bake_sh_lightmap`]; key over the bake's own sources — `SHVIS_BAKE_SOURCE_HASH`
@@ -86,6 +88,7 @@ pub fn visibility_key(mesh: &Mesh, res: u32, settings: &VisibilitySettings) -> u
     h.write(b"shvis bake cache");
     h.write_u64(u64::from(CACHE_FORMAT_VERSION));
     h.write(b"visibility");
+    h.write(env!("SHVIS_BAKE_SOURCE_HASH").as_bytes());
     h.write_u64(u64::from(settings.order.get()));
     h.write_u64(u64::from(settings.rays));
     h.write_u64(settings.seed);
@@ -301,7 +304,15 @@ pub fn decode_sh_lightmap(
     let seconds = f64::from_bits(r.u64()?);
     let texels = (res as usize).pow(2);
     let coeffs = r.f32s(texels * 27)?;
-    let covered = r.take(texels)?.iter().map(|&c| c != 0).collect();
+    let flags = r.take(texels)?;
+    if let Some(i) = flags.iter().position(|&b| b > 1) {
+        return Err(format!(
+            "coverage flag {} at texel {i} is not 0 or 1",
+            flags[i]
+        ));
+    }
+    let covered: Vec<bool> = flags.iter().map(|&b| b != 0).collect();
+    let covered_count = covered.iter().filter(|&&c| c).count();
     let normal = r.f32s(texels * 3)?;
     let frame = r.f32s(texels * 9)?;
     let count = |r: &mut Reader<'_>, limit: usize| -> Result<usize, String> {
@@ -322,7 +333,7 @@ pub fn decode_sh_lightmap(
     let negative = (0..n).map(|_| r.u64()).collect::<Result<Vec<_>, _>>()?;
     let per_texel: usize = fits.iter().map(|f| f.stored_values()).sum();
     let n = count(&mut r, texels * per_texel)?;
-    let values = r
+    let values: Vec<half::f16> = r
         .take(n * 2)?
         .chunks_exact(2)
         .map(|b| half::f16::from_bits(u16::from_le_bytes([b[0], b[1]])))
@@ -331,6 +342,47 @@ pub fn decode_sh_lightmap(
     let scales = r.f32s(n)?;
     if !r.bytes.is_empty() {
         return Err(format!("{} bytes after the payload", r.bytes.len()));
+    }
+    // What a bake of these settings writes: every count follows from the coverage, and
+    // every value is finite.
+    let expected = [
+        (
+            "bounce sources",
+            bounce_source.len() / 3,
+            if bounces > 0 { texels } else { 0 },
+        ),
+        ("basis irradiances", basis_irradiance.len() / 9, texels),
+        ("fitted values", values.len(), covered_count * per_texel),
+        (
+            "block scales",
+            scales.len(),
+            if per_texel > 0 {
+                covered_count * fits.len()
+            } else {
+                0
+            },
+        ),
+    ];
+    for (what, count, expected) in expected {
+        if count != expected {
+            return Err(format!("{count} {what}, expected {expected}"));
+        }
+    }
+    let floats = [
+        ("coefficient", &coeffs),
+        ("normal", &normal),
+        ("frame", &frame),
+        ("bounce source", &bounce_source),
+        ("basis irradiance", &basis_irradiance),
+        ("block scale", &scales),
+    ];
+    for (what, values) in floats {
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(format!("{what} value {i} is {}, not finite", values[i]));
+        }
+    }
+    if let Some(i) = values.iter().position(|v: &half::f16| !v.is_finite()) {
+        return Err(format!("fitted value {i} is {}, not finite", values[i]));
     }
     Ok(ShLightmap {
         res,
@@ -409,20 +461,37 @@ fn load_or_build<T>(
     if let Some(dir) = path.parent() {
         files::remove_stale_temps(dir);
     }
-    match files::read_bounded(path, MAX_CACHE_FILE_BYTES, "a bake cache file") {
-        Ok(bytes) => match decode(&bytes) {
+    // A file larger than the memory left is not read: ours fit when they were written.
+    let too_large = fs::metadata(path).ok().and_then(|m| {
+        crate::limits::available_memory()
+            .filter(|&available| m.len() > available)
+            .map(|available| (m.len(), available))
+    });
+    // Ok(None): no file yet. Errors name the file.
+    let read = match too_large {
+        Some((size, available)) => Err(format!(
+            "{}: {size} bytes, more than the {available} bytes of memory available",
+            path.display()
+        )),
+        None => match files::read_bounded(path, MAX_CACHE_FILE_BYTES, "a bake cache file") {
+            Ok(bytes) => Ok(Some(bytes)),
+            Err(files::FileError::Io { cause, .. })
+                if cause.kind() == std::io::ErrorKind::NotFound =>
+            {
+                Ok(None)
+            }
+            Err(e) => Err(e.to_string()),
+        },
+    };
+    match read {
+        Ok(Some(bytes)) => match decode(&bytes) {
             Ok(value) => {
                 log::info!("{what}: using cache {}", path.display());
                 return Ok(value);
             }
             Err(e) => log::warn!("bake cache {}: {e}; rebuilding", path.display()),
         },
-        Err(files::FileError::Io { cause: source, .. })
-            if source.kind() == std::io::ErrorKind::NotFound =>
-        {
-            log::debug!("bake cache {}: not there yet", path.display());
-        }
-        // The error names the file and the cause already.
+        Ok(None) => log::debug!("bake cache {}: not there yet", path.display()),
         Err(e) => log::warn!("bake cache {e}; rebuilding"),
     }
     let value = build()?;
@@ -443,6 +512,7 @@ pub fn clusters_key(
     h.write(b"shvis bake cache");
     h.write_u64(u64::from(CACHE_FORMAT_VERSION));
     h.write(b"clusters");
+    h.write(env!("SHVIS_BAKE_SOURCE_HASH").as_bytes());
     h.write_u64(u64::from(cluster::FIT_VERSION));
     h.write_u64(k as u64);
     h.write_u64(m as u64);
@@ -1052,6 +1122,26 @@ mod tests {
             decode_sh_lightmap(&forged, 42, 4, &fits).is_err(),
             "a count past the texels"
         );
+        // Files whose checksum holds but whose content no bake of these settings writes.
+        let refused = |map: &ShLightmap, why: &str| {
+            let e = decode_sh_lightmap(&encode_sh_lightmap(map, 42), 42, 4, &fits).expect_err(why);
+            assert!(e.contains(why), "{why}: {e}");
+        };
+        let mut fewer = map.clone();
+        fewer.fitted.values.truncate(3);
+        refused(&fewer, "fitted values");
+        let mut no_scales = map.clone();
+        no_scales.fitted.scales.clear();
+        refused(&no_scales, "block scales");
+        let mut no_source = map.clone();
+        no_source.bounce_source.clear();
+        refused(&no_source, "bounce sources");
+        let mut not_finite = map.clone();
+        not_finite.coeffs[5][1] = f32::NAN;
+        refused(&not_finite, "not finite");
+        let mut infinite_value = map.clone();
+        infinite_value.fitted.values[0] = half::f16::INFINITY;
+        refused(&infinite_value, "not finite");
     }
 
     /// The key follows what the bake reads: the lighting, the fits, the settings.

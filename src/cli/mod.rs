@@ -204,6 +204,9 @@ fn check_environment() -> Result<()> {
             LANES_VALUES.join(", ")
         );
     }
+    if std::env::var_os(shvis::report::plot::FONT_ENV).is_some() {
+        shvis::report::plot::register_plot_font().map_err(anyhow::Error::msg)?;
+    }
     Ok(())
 }
 
@@ -361,6 +364,21 @@ fn clear_earlier_run(out: &std::path::Path, reports: &[&str]) {
     shvis::files::remove_stale_temps(out);
     for stale in reports {
         let _ = std::fs::remove_file(out.join(stale));
+    }
+}
+
+/// Removes the files in `out` that `written_by_run` names as the command's own (an earlier
+/// run's images), so that the folder describes one run.
+fn clear_earlier_files(out: &std::path::Path, written_by_run: fn(&str) -> bool) {
+    let Ok(entries) = std::fs::read_dir(out) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        if entry.file_type().is_ok_and(|t| t.is_file()) && name.to_str().is_some_and(written_by_run)
+        {
+            let _ = std::fs::remove_file(entry.path());
+        }
     }
 }
 

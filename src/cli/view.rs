@@ -11,8 +11,8 @@ use shvis::technique::{HwPath, Technique};
 use super::args::{GpuArgs, SceneArgs, finite_f32, finite_f64};
 use super::{
     DEFAULT_EXPOSURE_EV, MAX_FRAME_SIDE, OUT_FOLDER, RunInputs, check_frame_memory, check_rows,
-    check_validation, clear_earlier_run, create_dir, parse_list, parse_techniques, prepare_for,
-    print_table, with_gpu,
+    check_validation, clear_earlier_files, clear_earlier_run, create_dir, parse_list,
+    parse_techniques, prepare_for, print_table, with_gpu,
 };
 
 #[derive(Args, Debug)]
@@ -162,7 +162,21 @@ pub(super) fn run_view(a: ViewArgs) -> Result<()> {
 }
 
 pub(super) fn run_relight(a: RelightArgs) -> Result<()> {
-    check_frame_memory(a.width, a.height, 320)?;
+    // The frame targets, and a technique's frames kept (3 bytes a pixel) for its animation.
+    shvis::limits::check_memory(
+        format_args!(
+            "--frames {} at --width {} × --height {}: the animation's frames",
+            a.frames, a.width, a.height
+        ),
+        shvis::limits::image_bytes(u64::from(a.width), u64::from(a.height), 320).saturating_add(
+            shvis::limits::image_bytes(
+                u64::from(a.width),
+                u64::from(a.height),
+                3u64.saturating_mul(u64::from(a.frames)),
+            ),
+        ),
+        "lower --frames, --width or --height",
+    )?;
     if !(a.turns.is_finite() && a.turns.abs() <= MAX_TURNS) {
         bail!("--turns {:?} must be a number within ±{MAX_TURNS}", a.turns);
     }
@@ -215,6 +229,7 @@ pub(super) fn run_relight(a: RelightArgs) -> Result<()> {
     with_gpu(&a.gpu, |ctx| {
         // Inputs, device and bakes are good: the earlier run's report goes only now.
         clear_earlier_run(&a.out, &["relight.md", "relight.json"]);
+        clear_earlier_files(&a.out, shvis::relight::is_relight_image);
         let table = shvis::relight::run(ctx, &prepared, &settings)?;
         print_table(
             &table.to_markdown(),

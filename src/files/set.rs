@@ -21,6 +21,9 @@ pub struct FileSet {
     staged: Vec<Staged>,
     /// The folders its files go into, each cleared of stale temporaries once.
     dirs: Vec<PathBuf>,
+    /// Files an earlier run may have left that this one does not write
+    /// ([`FileSet::replaces`]).
+    earlier: Vec<PathBuf>,
 }
 
 #[derive(Debug)]
@@ -70,12 +73,20 @@ impl FileSet {
         tmp
     }
 
-    /// Puts every staged file in its place, in the order staged.
+    /// Marks `path` as one of the set's files in some runs: when this run does not stage it,
+    /// [`FileSet::commit`] removes an earlier run's copy, so the files describe one run.
+    pub fn replaces(&mut self, path: &Path) {
+        self.earlier.push(path.to_path_buf());
+    }
+
+    /// Puts every staged file in its place, in the order staged, then removes the
+    /// [`FileSet::replaces`] files it did not stage.
     ///
     /// # Errors
     /// [`FileError::Io`] naming the file that could not be placed (the temporaries not yet
     /// placed are removed), or [`write_atomic`]'s error for a link or device in the way.
     pub fn commit(mut self) -> Result<(), FileError> {
+        let written: Vec<PathBuf> = self.staged.iter().map(|s| s.path.clone()).collect();
         let mut rest = std::mem::take(&mut self.staged).into_iter();
         while let Some(staged) = rest.next() {
             if let Err(e) = place(&staged.tmp, &staged.path) {
@@ -84,6 +95,18 @@ impl FileSet {
                 return Err(e);
             }
             interrupt::unregister(staged.slot);
+        }
+        for path in self.earlier.iter().filter(|p| !written.contains(p)) {
+            match fs::remove_file(path) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    return Err(FileError::Io {
+                        path: path.clone(),
+                        action: "remove it (an earlier run's file)",
+                        cause: e,
+                    });
+                }
+                _ => {}
+            }
         }
         for dir in &self.dirs {
             if let Ok(d) = File::open(dir) {
@@ -170,6 +193,23 @@ mod tests {
         assert_eq!(fs::read(&a).unwrap(), b"new a");
         assert_eq!(fs::read(&b).unwrap(), b"new b");
         assert_eq!(names(&dir), ["a.png", "a_d.exr"]);
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_set_removes_the_files_of_an_earlier_run_it_does_not_write() {
+        let dir = scratch("earlier");
+        let (map, side) = (dir.join("n.png"), dir.join("n_cpu.png"));
+        fs::write(&map, b"old").unwrap();
+        fs::write(&side, b"old side").unwrap();
+        let mut set = FileSet::new();
+        write_atomic(&set.stage(&map), b"new").unwrap();
+        set.replaces(&map);
+        set.replaces(&side);
+        set.replaces(&dir.join("n_diff.png"));
+        set.commit().unwrap();
+        assert_eq!(names(&dir), ["n.png"]);
+        assert_eq!(fs::read(&map).unwrap(), b"new");
         let _ = fs::remove_dir_all(&dir);
     }
 

@@ -78,10 +78,12 @@ impl NormalMapJob {
                 self.out.display()
             ));
         }
-        if let Some(g) = &self.gltf
-            && g.extension().and_then(|e| e.to_str()) != Some("gltf")
-        {
-            return invalid(format!("{}: --gltf must name a .gltf file", g.display()));
+        if let Some(g) = &self.gltf {
+            if g.extension().and_then(|e| e.to_str()) != Some("gltf") {
+                return invalid(format!("{}: --gltf must name a .gltf file", g.display()));
+            }
+            // The glTF's image URI: the map must lie where the glTF can reference it.
+            relative_uri(g, &self.out.with_extension("png")).map_err(NormalMapError::Invalid)?;
         }
         if !(super::MIN_RES..=super::MAX_RES).contains(&self.res) {
             return invalid(format!(
@@ -262,7 +264,7 @@ pub fn bake(
     let gltf_line = match &job.gltf {
         Some(g) => {
             let png = PathBuf::from(format!("{}.png", stem.display()));
-            let uri = relative_uri(g, &png);
+            let uri = relative_uri(g, &png).map_err(NormalMapError::Invalid)?;
             let (document, buffer) = output::low_gltf(g, low, Some(&uri))?;
             let bin = g.with_extension("bin");
             crate::files::write(files.stage(&bin), &buffer).map_err(|e| io_error(&bin, e))?;
@@ -271,6 +273,13 @@ pub fn bake(
         }
         None => None,
     };
+    for (_, path) in job
+        .outputs()
+        .iter()
+        .filter(|(option, _)| !option.starts_with("--gltf"))
+    {
+        files.replaces(path);
+    }
     files.commit()?;
     if let Some(line) = gltf_line {
         say(&line);
@@ -339,23 +348,65 @@ pub fn difference_image(a: &NormalImage, b: &NormalImage) -> Vec<[f32; 4]> {
         .collect()
 }
 
-/// `target` as a URI relative to the directory of `from` (its file name when they share
-/// one; else the absolute path).
-pub fn relative_uri(from: &Path, target: &Path) -> String {
+/// `dir` with its links and `.`/`..` resolved, folders the run has yet to create included:
+/// the longest existing ancestor canonicalized, the rest appended.
+fn resolved(dir: &Path) -> Result<PathBuf, String> {
+    use std::path::Component;
+    let absolute = std::path::absolute(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let mut existing = absolute.as_path();
+    let mut missing = Vec::new();
+    let mut path = loop {
+        if let Ok(path) = existing.canonicalize() {
+            break path;
+        }
+        match (existing.parent(), existing.components().next_back()) {
+            (Some(parent), Some(last)) => {
+                missing.push(last);
+                existing = parent;
+            }
+            _ => return Err(format!("{}: no existing folder above it", dir.display())),
+        }
+    };
+    for part in missing.into_iter().rev() {
+        match part {
+            Component::ParentDir => {
+                path.pop();
+            }
+            Component::CurDir => {}
+            part => path.push(part),
+        }
+    }
+    Ok(path)
+}
+
+/// `target` as a URI relative to the folder of `from`, the glTF that references it: its
+/// path below that folder, each segment percent-encoded. A glTF references only files in
+/// its folder or below it (`scene::gltf`'s URI policy), so a `target` elsewhere is an
+/// error, as is a name that is not UTF-8.
+pub fn relative_uri(from: &Path, target: &Path) -> Result<String, String> {
     let dir = |p: &Path| {
         p.parent()
             .filter(|d| !d.as_os_str().is_empty())
             .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
     };
-    let same_dir = dir(from)
-        .canonicalize()
-        .ok()
-        .zip(dir(target).canonicalize().ok());
-    match (same_dir, target.file_name()) {
-        (Some((a, b)), Some(name)) if a == b => name.to_string_lossy().into_owned(),
-        _ => std::path::absolute(target)
-            .unwrap_or_else(|_| target.to_path_buf())
-            .display()
-            .to_string(),
+    let (base, folder) = (resolved(&dir(from))?, resolved(&dir(target))?);
+    let below = folder.strip_prefix(&base).map_err(|_| {
+        format!(
+            "{} lies outside the folder of --gltf {} ({}): a glTF references only files in its folder or below it; write --out there",
+            target.display(),
+            from.display(),
+            base.display()
+        )
+    })?;
+    let name = target
+        .file_name()
+        .ok_or_else(|| format!("{}: not a file name", target.display()))?;
+    let mut segments = Vec::new();
+    for part in below.iter().chain([name]) {
+        let part = part
+            .to_str()
+            .ok_or_else(|| format!("{}: the name is not UTF-8", target.display()))?;
+        segments.push(crate::scene::gltf::percent_encode(part));
     }
+    Ok(segments.join("/"))
 }

@@ -41,6 +41,17 @@ pub fn write_map(
             empty
         }
     };
+    // A non-finite vector would be written as a valid-looking colour (NaN clamps to 0).
+    let non_finite = texels
+        .iter()
+        .filter(|t| !vector(t).iter().all(|c| c.is_finite()))
+        .count();
+    if non_finite > 0 {
+        return Err(io_error(
+            path,
+            format!("{non_finite} texels hold a non-finite vector; the map is not written"),
+        ));
+    }
     match path.extension().and_then(|e| e.to_str()) {
         Some("png") => {
             let mut encoded = Vec::new();
@@ -146,8 +157,8 @@ pub fn low_gltf(
     let bin_name = bin_path
         .file_name()
         .and_then(|f| f.to_str())
-        .ok_or_else(|| io_error(path, "not a file name"))?
-        .to_string();
+        .map(crate::scene::gltf::percent_encode)
+        .ok_or_else(|| io_error(path, "not a file name"))?;
     let mut material = json!({
         "name": "normalmap",
         "pbrMetallicRoughness": { "baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0 },

@@ -27,27 +27,47 @@ pub const FONT_CANDIDATES: &[&str] = &[
     "C:\\Windows\\Fonts\\arial.ttf",
 ];
 
+/// The variable naming the plot labels' TrueType font.
+pub const FONT_ENV: &str = "SHVIS_FONT";
+
+/// Largest font file read (the usual sans fonts are well under 2 MiB).
+const MAX_FONT_BYTES: u64 = 64 << 20;
+
 /// Registers a TrueType font as plotters' "sans-serif" once per process: `$SHVIS_FONT`
-/// if set, else the first of [`FONT_CANDIDATES`] that loads. The font bytes are leaked
-/// (plotters keeps `&'static` data); a few hundred KiB, once.
+/// if set (an error when it is not a font), else the first of [`FONT_CANDIDATES`] that
+/// loads. The font bytes are leaked (plotters keeps `&'static` data); a few hundred KiB,
+/// once.
 pub fn register_plot_font() -> Result<(), String> {
     static FONT: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
     FONT.get_or_init(|| {
-        use plotters::style::{FontStyle, register_font};
-        let from_env = std::env::var_os("SHVIS_FONT").map(PathBuf::from);
-        let candidates = from_env
-            .into_iter()
-            .chain(FONT_CANDIDATES.iter().map(PathBuf::from));
-        for path in candidates {
-            if let Ok(bytes) = std::fs::read(&path) {
-                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
-                if register_font("sans-serif", FontStyle::Normal, bytes).is_ok() {
-                    log::debug!("plot font: {}", path.display());
-                    return Ok(());
-                }
+        let register = |bytes: Vec<u8>| {
+            let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+            plotters::style::register_font("sans-serif", plotters::style::FontStyle::Normal, bytes)
+                .is_ok()
+        };
+        if let Some(path) = std::env::var_os(FONT_ENV).map(PathBuf::from) {
+            let bytes = crate::files::read_bounded(&path, MAX_FONT_BYTES, "a font")
+                .map_err(|e| format!("{FONT_ENV}: {e}"))?;
+            if !register(bytes) {
+                return Err(format!(
+                    "{FONT_ENV}={}: not a TrueType font",
+                    path.display()
+                ));
+            }
+            log::debug!("plot font: {}", path.display());
+            return Ok(());
+        }
+        for path in FONT_CANDIDATES.iter().map(PathBuf::from) {
+            if let Ok(bytes) = crate::files::read_bounded(&path, MAX_FONT_BYTES, "a font")
+                && register(bytes)
+            {
+                log::debug!("plot font: {}", path.display());
+                return Ok(());
             }
         }
-        Err("no TrueType font found for plot labels; set SHVIS_FONT to a .ttf file".to_owned())
+        Err(format!(
+            "no TrueType font found for plot labels; set {FONT_ENV} to a .ttf file"
+        ))
     })
     .clone()
 }

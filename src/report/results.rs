@@ -136,15 +136,25 @@ impl ResultTable {
         })
     }
 
-    /// The row of `technique` on `path` without a specular term.
-    fn row(&self, technique: &str, path: &str) -> Option<&Value> {
-        self.rows.iter().find(|r| {
-            r.get("technique").and_then(Value::as_str) == Some(technique)
-                && r.get("path").and_then(Value::as_str) == Some(path)
-                && r.get("specular").is_none_or(Value::is_null)
-        })
+    /// Its rows without a specular term by (technique, path): the rows of the comparison.
+    fn rows_by_key(&self) -> RowIndex<'_> {
+        let mut index = RowIndex::default();
+        for row in self
+            .rows
+            .iter()
+            .filter(|r| r.get("specular").is_none_or(Value::is_null))
+        {
+            let text = |k: &str| row.get(k).and_then(Value::as_str).unwrap_or("").to_string();
+            index
+                .entry((text("technique"), text("path")))
+                .or_insert(row);
+        }
+        index
     }
 }
+
+/// A table's rows by (technique, path).
+type RowIndex<'a> = std::collections::HashMap<(String, String), &'a Value>;
 
 /// Largest `table.json` read (a bench's is tens of KiB).
 const MAX_TABLE_BYTES: u64 = 64 << 20;
@@ -323,8 +333,11 @@ pub fn comparison_page(tables: &[ResultTable], date: &str) -> String {
     md.push_str("\n|---|---|---|---|---|");
     md.push_str(&"---|---|---|---|---|".repeat(tables.len()));
     md.push('\n');
-    for (technique, path) in row_keys(tables) {
-        let first = tables.iter().find_map(|t| t.row(&technique, &path));
+    let indexes: Vec<RowIndex<'_>> = tables.iter().map(ResultTable::rows_by_key).collect();
+    for key in row_keys(tables) {
+        let rows: Vec<Option<&Value>> = indexes.iter().map(|i| i.get(&key).copied()).collect();
+        let (technique, path) = key;
+        let first = rows.iter().find_map(|r| *r);
         let number = |row: Option<&Value>, key: &str, digits: usize| {
             row.and_then(|r| r.get(key))
                 .and_then(Value::as_f64)
@@ -335,12 +348,11 @@ pub fn comparison_page(tables: &[ResultTable], date: &str) -> String {
             "| {} | {} | {} | {} | {} |",
             markdown_text(&technique),
             markdown_text(&path),
-            reference_of(tables, &technique, &path),
+            reference_of(&rows),
             number(first, "paper_ms", 3),
             number(first, "paper_ratio_to_preconv", 2)
         );
-        for t in tables {
-            let row = t.row(&technique, &path);
+        for &row in &rows {
             let _ = write!(
                 md,
                 " {} | {} | {} | {} | {} |",
@@ -356,11 +368,11 @@ pub fn comparison_page(tables: &[ResultTable], date: &str) -> String {
     md
 }
 
-/// What the row's `rel_rmse` is measured against in the tables ("direct", "2 bounces"),
-/// each distinct value once, "—" where no table says.
-fn reference_of(tables: &[ResultTable], technique: &str, path: &str) -> String {
+/// What a row's `rel_rmse` is measured against in the tables that have it ("direct",
+/// "2 bounces"), each distinct value once, "—" where no table says.
+fn reference_of(rows: &[Option<&Value>]) -> String {
     let mut seen: Vec<&str> = Vec::new();
-    for row in tables.iter().filter_map(|t| t.row(technique, path)) {
+    for row in rows.iter().flatten() {
         if let Some(r) = row.get("reference").and_then(Value::as_str)
             && !seen.contains(&r)
         {
@@ -376,13 +388,14 @@ fn reference_of(tables: &[ResultTable], technique: &str, path: &str) -> String {
 /// Every (technique, path) of the tables, in the first table's order, then the others'.
 fn row_keys(tables: &[ResultTable]) -> Vec<(String, String)> {
     let mut keys: Vec<(String, String)> = Vec::new();
+    let mut seen = std::collections::HashSet::new();
     for row in tables.iter().flat_map(|t| &t.rows) {
         if !row.get("specular").is_none_or(Value::is_null) {
             continue;
         }
         let text = |k: &str| row.get(k).and_then(Value::as_str).unwrap_or("").to_string();
         let key = (text("technique"), text("path"));
-        if !keys.contains(&key) {
+        if seen.insert(key.clone()) {
             keys.push(key);
         }
     }

@@ -20,9 +20,9 @@ impl ViewReport {
         );
         for (label, frames, wall, gpu) in &self.shown {
             text += &format!(
-                "  {label}: {frames} frames, {:.2} ms a frame ({:.1} frames/s), GPU {}\n",
-                wall,
-                1e3 / wall,
+                "  {label}: {frames} frames, {} a frame ({} frames/s), GPU {}\n",
+                or_dash(*wall, |w| format!("{w:.2} ms")),
+                or_dash(*wall, |w| format!("{:.1}", 1e3 / w)),
                 or_dash(*gpu, |g| format!("{g:.2} ms"))
             );
         }

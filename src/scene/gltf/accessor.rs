@@ -57,6 +57,16 @@ pub(super) fn read_primitive(
         }),
         Some(other) => return Err(format!("COLOR_0 is {other:?}, not VEC3 or VEC4")),
     };
+    // glTF's COLOR_0 multiplies the base colour: a fraction in [0, 1] (glTF 2.0 §3.7.2.1).
+    if let Some(bad) = colors
+        .as_ref()
+        .and_then(|c| c.iter().position(|x| !(0.0..=1.0).contains(x)))
+    {
+        return Err(format!(
+            "COLOR_0: element {} has a value outside [0, 1]",
+            bad / 3
+        ));
+    }
     for (name, values, dims) in [
         ("NORMAL", &normals, 3),
         ("TANGENT", &tangents, 4),

@@ -73,7 +73,7 @@ use super::{Camera, Material, Mesh, Scene, SceneError, Texture8, Vertex, framing
 use accessor::{PrimitiveData, read_primitive};
 use uri::read_uri;
 
-pub use uri::MAX_REFERENCED_FILE_BYTES;
+pub use uri::{MAX_REFERENCED_FILE_BYTES, percent_encode};
 
 /// Triangles with |e₁ × e₂| ≤ this × |e₁|·|e₂| (sine of the corner angle) are degenerate.
 /// Relative, so it is scale-free (Avocado is 6 cm); f32 positions resolve sines ~1e-7.
@@ -368,6 +368,31 @@ impl Loader {
         textures: &mut TextureChoice,
         report: &mut LoadReport,
     ) -> Result<bool, SceneError> {
+        // Every instance's corners become vertices of one mesh with u32 indices: the total is
+        // bounded before any is read (a small file can instance a large mesh many times).
+        let corners: u64 = instances
+            .iter()
+            .flat_map(|inst| inst.mesh.primitives())
+            .filter(|prim| prim.mode() == Mode::Triangles)
+            .map(|prim| {
+                prim.indices()
+                    .or_else(|| prim.get(&Semantic::Positions))
+                    .map_or(0, |acc| acc.count() as u64)
+            })
+            .fold(0u64, u64::saturating_add);
+        if corners > u64::from(u32::MAX) {
+            return Err(self.err(format!(
+                "the scene's instances hold {corners} triangle corners, more than the {} one mesh indexes",
+                u32::MAX
+            )));
+        }
+        let per_corner = (std::mem::size_of::<Vertex>() + std::mem::size_of::<u32>()) as u64;
+        crate::limits::check_memory(
+            format_args!("its instances' {corners} triangle corners"),
+            corners.saturating_mul(per_corner),
+            "",
+        )
+        .map_err(|e| self.err(e.to_string()))?;
         let mut all_have_uv1 = true;
         let mut modes_skipped: Vec<String> = Vec::new();
         for inst in instances {
@@ -497,6 +522,14 @@ impl Loader {
         document: &gltf::Document,
         mut blob: Option<Vec<u8>>,
     ) -> Result<Vec<Vec<u8>>, SceneError> {
+        // The buffers' declared lengths, all held at once (a buffer shorter than its length
+        // is refused below, so this bounds what is read).
+        let declared = document
+            .buffers()
+            .map(|b| b.length() as u64)
+            .fold(0u64, u64::saturating_add);
+        crate::limits::check_memory(format_args!("its buffers' {declared} bytes"), declared, "")
+            .map_err(|e| self.err(e.to_string()))?;
         let mut out = Vec::new();
         for buffer in document.buffers() {
             let data = match buffer.source() {
@@ -517,6 +550,10 @@ impl Loader {
                     buffer.length()
                 )));
             }
+            // Bytes past byteLength belong to no view: not kept.
+            let mut data = data;
+            data.truncate(buffer.length());
+            data.shrink_to_fit();
             out.push(data);
         }
         Ok(out)
@@ -659,7 +696,25 @@ impl Loader {
             }
         };
 
+        let material = prim
+            .material()
+            .index()
+            .map_or_else(|| "(the default)".to_string(), |i| i.to_string());
         let factor = prim.material().pbr_metallic_roughness().base_color_factor();
+        // A fraction of the light reflected, per channel (glTF 2.0 §5.22).
+        if !factor.iter().all(|x| (0.0..=1.0).contains(x)) {
+            return Err(err(format!(
+                "material {material}: baseColorFactor {factor:?} has a value outside [0, 1]"
+            )));
+        }
+        if let Some(normal) = prim.material().normal_texture()
+            && !normal.scale().is_finite()
+        {
+            return Err(err(format!(
+                "material {material}: normalTexture.scale {} is not finite",
+                normal.scale()
+            )));
+        }
         let tint = |k: usize| -> [f32; 3] {
             let c = colors
                 .as_ref()

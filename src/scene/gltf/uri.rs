@@ -99,6 +99,20 @@ fn short(uri: &str) -> String {
     }
 }
 
+/// `name` as one segment of a URI path: every byte but RFC 3986's unreserved characters
+/// percent-encoded (the inverse of [`percent_decode`]).
+pub fn percent_encode(name: &str) -> String {
+    let mut out = String::with_capacity(name.len());
+    for &b in name.as_bytes() {
+        if b.is_ascii_alphanumeric() || matches!(b, b'-' | b'.' | b'_' | b'~') {
+            out.push(char::from(b));
+        } else {
+            out.push_str(&format!("%{b:02X}"));
+        }
+    }
+    out
+}
+
 /// RFC 3986 percent-decoding into UTF-8, `None` when malformed.
 fn percent_decode(s: &str) -> Option<String> {
     let bytes = s.as_bytes();
