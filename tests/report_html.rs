@@ -69,6 +69,12 @@ fn bench_report_loads_in_headless_chromium() {
     let _ = std::fs::remove_dir_all(&root);
     std::fs::create_dir_all(&root).unwrap();
     let out = root.join("bench");
+    // An earlier run's images (of a row this run does not measure) and a note of the user's.
+    std::fs::create_dir_all(out.join("ladder")).unwrap();
+    for earlier in ["sh2.dx9.png", "sh2.dx9.exr", "ladder/sh2.dx9.sheet.png"] {
+        std::fs::write(out.join(earlier), b"an earlier run").unwrap();
+    }
+    std::fs::write(out.join("notes.txt"), b"kept").unwrap();
     let techniques = ["unc3", "pca4", "preconv"];
     let paths = ["dx9", "dx10"];
     let bench = Command::new(env!("CARGO_BIN_EXE_shvis"))
@@ -111,6 +117,16 @@ fn bench_report_loads_in_headless_chromium() {
     );
     let page = out.join("index.html");
     assert!(page.is_file(), "no index.html in {}", out.display());
+    for earlier in ["sh2.dx9.png", "sh2.dx9.exr", "ladder/sh2.dx9.sheet.png"] {
+        assert!(
+            !out.join(earlier).exists(),
+            "the earlier run's {earlier} is still there"
+        );
+    }
+    assert!(
+        out.join("notes.txt").is_file(),
+        "a file that is not an image was removed"
+    );
 
     let profile = root.join("profile");
     let dump = browser(

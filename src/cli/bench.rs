@@ -17,8 +17,8 @@ use super::args::{
 };
 use super::{
     DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, OUT_FOLDER, RunInputs, check_frame_memory,
-    check_rows, clear_earlier_run, create_dir, parse_list, parse_techniques, prepare_settings,
-    print_table, print_written, with_gpu,
+    check_rows, clear_earlier_files, clear_earlier_run, create_dir, parse_list, parse_techniques,
+    prepare_settings, print_table, print_written, with_gpu,
 };
 
 #[derive(Args, Debug)]
@@ -297,6 +297,8 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
                 "probe.json",
             ],
         );
+        clear_earlier_files(&a.out, shvis::report::bench_output::is_bench_image);
+        let _ = std::fs::remove_dir_all(a.out.join(shvis::report::LADDER_DIR));
         let table = shvis::bench::run(ctx, &prepared, &settings)?;
         plan.record(&table, bake_seconds);
         eprintln!(

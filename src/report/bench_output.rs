@@ -19,6 +19,15 @@ use crate::probe::Probe;
 use crate::render::Frame;
 use crate::technique::{HwPath, Technique};
 
+/// Whether `name` is a file a bench writes beside its tables: an image (`.exr`, `.png`) or
+/// a plot (`.svg`). A run removes the earlier run's, with its [`LADDER_DIR`], before it
+/// writes its own, so the folder's page shows one run.
+pub fn is_bench_image(name: &str) -> bool {
+    [".exr", ".png", ".svg"]
+        .iter()
+        .any(|ext| name.ends_with(ext))
+}
+
 /// Where a bench's files go, and which ladder rungs are written already.
 pub struct BenchOutput {
     dir: PathBuf,
