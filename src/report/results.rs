@@ -368,12 +368,13 @@ pub fn comparison_page(tables: &[ResultTable], date: &str) -> String {
     md
 }
 
-/// What a row's `rel_rmse` is measured against in the tables that have it ("direct",
-/// "2 bounces"), each distinct value once, "—" where no table says.
+/// What a row's `rel_rmse` is measured against in the tables that measured it ("direct",
+/// "2 bounces"), each distinct value once, "—" where none did.
 fn reference_of(rows: &[Option<&Value>]) -> String {
     let mut seen: Vec<&str> = Vec::new();
     for row in rows.iter().flatten() {
         if let Some(r) = row.get("reference").and_then(Value::as_str)
+            && r != "none"
             && !seen.contains(&r)
         {
             seen.push(r);
@@ -436,7 +437,8 @@ mod tests {
             "cpu",
             serde_json::json!([
                 {"technique": "unc6", "path": "dx9", "ms_median": 40.0, "ratio_to_preconv": 4.5,
-                 "reference": "2 bounces"}
+                 "reference": "2 bounces"},
+                {"technique": "preconv", "path": "dx9", "ms_median": 9.0, "reference": "none"}
             ]),
         );
         let md = comparison_page(&[a, b], "2026-12-04");
@@ -448,7 +450,7 @@ mod tests {
         );
         assert!(
             md.contains(
-                "| preconv | dx9 | direct | 0.648 | 1.00 | 0.050 | 1.00 | — | 0.1000 | — | — | — | — | — | — |"
+                "| preconv | dx9 | direct | 0.648 | 1.00 | 0.050 | 1.00 | — | 0.1000 | — | 9.000 | — | — | — | — |"
             ),
             "{md}"
         );
