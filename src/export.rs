@@ -222,7 +222,7 @@ pub fn export(
             "material_uv": "TEXCOORD_0",
             "albedo_tint": "COLOR_0 (linear RGB, multiplied into the base colour)",
         },
-        "uniform_block": uniform_block(&glsl_text, &lighting.params),
+        "uniform_block": uniform_block(&glsl_text, &lighting.params).map_err(|e| refused(format!("params.bin's block: {e}")))?,
         "shader": {
             "file": "decode.glsl",
             "stage": "fragment",
@@ -415,14 +415,19 @@ pub fn is_export_dir(dir: &Path) -> bool {
 /// std140 `layout(offset = …)`), each field with its offset, type, element count and the
 /// values `params` holds there (floats for float types, integers for integer types);
 /// members that start past `params`' end are those the build's `#if`s leave out.
-fn uniform_block(glsl: &str, params: &[u8]) -> serde_json::Value {
+///
+/// # Errors
+/// A member inside `params` whose type or array length cannot be read (a declaration this
+/// reader does not know): the manifest would leave it out, and an engine binding the block
+/// from the fields would read zeros there.
+fn uniform_block(glsl: &str, params: &[u8]) -> Result<serde_json::Value, String> {
     let mut entry = json!({
         "file": "params.bin",
         "bytes": params.len(),
         "layout": "std140, little-endian",
     });
     let Some(start) = glsl.find("binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform ") else {
-        return entry;
+        return Ok(entry);
     };
     let rest = &glsl[start..];
     let name = rest["binding = SHVIS_BINDING_TECHNIQUE_PARAMS) uniform ".len()..]
@@ -433,44 +438,38 @@ fn uniform_block(glsl: &str, params: &[u8]) -> serde_json::Value {
         .split_once('{')
         .and_then(|(_, b)| b.split_once('}'))
         .map_or("", |(b, _)| b);
-    let define = |symbol: &str| -> Option<usize> {
-        symbol.parse().ok().or_else(|| {
-            glsl.lines().find_map(|l| {
-                let mut words = l.split_whitespace();
-                (words.next() == Some("#define") && words.next() == Some(symbol))
-                    .then(|| words.next()?.parse().ok())
-                    .flatten()
-            })
-        })
-    };
     let mut fields = Vec::new();
     for line in body.lines() {
         let code = line.split("//").next().unwrap_or_default().trim();
         let Some(rest) = code.strip_prefix("layout(offset = ") else {
             continue;
         };
-        let Some((offset, decl)) = rest.split_once(')') else {
+        let unread = |why: &str| format!("{name}'s member `{code}`: {why}");
+        let (offset, decl) = rest
+            .split_once(')')
+            .ok_or_else(|| unread("no closing parenthesis"))?;
+        let offset: usize = offset
+            .trim()
+            .parse()
+            .map_err(|_| unread("the offset is not a number"))?;
+        // A member past the block's bytes is one the technique's build leaves out (an
+        // `#if` branch of the declaration).
+        if offset >= params.len() {
             continue;
-        };
-        let Ok(offset) = offset.trim().parse::<usize>() else {
-            continue;
-        };
-        let Some((ty, member)) = decl.trim().trim_end_matches(';').split_once(' ') else {
-            continue;
-        };
+        }
+        let (ty, member) = decl
+            .trim()
+            .trim_end_matches(';')
+            .split_once(' ')
+            .ok_or_else(|| unread("no type and name"))?;
         let member = member.trim();
         let (member, count) = match member.split_once('[') {
-            // A length such as `7 * 12` or `3 * GROUPS`: a product of numbers and defines.
+            // A length such as `7 * 12` or `(BASIS_COUNT + 1) * 9`: arithmetic on numbers
+            // and the shader's defines.
             Some((m, n)) => {
-                let factors: Option<Vec<usize>> = n
-                    .trim_end_matches(']')
-                    .split('*')
-                    .map(|f| define(f.trim()))
-                    .collect();
-                match factors {
-                    Some(f) => (m, f.iter().product()),
-                    None => continue,
-                }
+                let length = glsl_constant(glsl, n.trim_end_matches(']'), 0)
+                    .ok_or_else(|| unread("its array length is not a constant of the shader"))?;
+                (m, length)
             }
             None => (member, 1),
         };
@@ -481,13 +480,8 @@ fn uniform_block(glsl: &str, params: &[u8]) -> serde_json::Value {
             "vec4" => (4, false, 16),
             "ivec4" | "uvec4" => (4, true, 16),
             "mat4" => (16, false, 64),
-            _ => continue,
+            _ => return Err(unread("a type the manifest does not describe")),
         };
-        // A member past the block's bytes is one the technique's build leaves out (an
-        // `#if` branch of the declaration).
-        if offset >= params.len() {
-            continue;
-        }
         let element = |k: usize| -> Vec<serde_json::Value> {
             (0..components)
                 .map(|c| {
@@ -519,5 +513,111 @@ fn uniform_block(glsl: &str, params: &[u8]) -> serde_json::Value {
     }
     entry["block"] = json!(name);
     entry["fields"] = json!(fields);
-    entry
+    Ok(entry)
+}
+
+/// The value of the integer constant expression `text` in `glsl`: numbers, `#define`d names
+/// (their first definition), `+ - * /` and parentheses, as the GLSL preprocessor and
+/// compiler evaluate an array length; `None` for anything else (`depth` bounds the
+/// definitions followed).
+fn glsl_constant(glsl: &str, text: &str, depth: u32) -> Option<usize> {
+    if depth > 16 {
+        return None;
+    }
+    let define = |symbol: &str| -> Option<usize> {
+        let value = glsl.lines().find_map(|l| {
+            let rest = l.trim_start().strip_prefix("#define")?;
+            let rest = rest.trim_start().strip_prefix(symbol)?;
+            rest.starts_with(char::is_whitespace).then(|| rest.trim())
+        })?;
+        glsl_constant(glsl, value, depth + 1)
+    };
+    let tokens: Vec<String> = {
+        let mut tokens = Vec::new();
+        let mut word = String::new();
+        for c in text.chars() {
+            if c.is_alphanumeric() || c == '_' {
+                word.push(c);
+                continue;
+            }
+            if !word.is_empty() {
+                tokens.push(std::mem::take(&mut word));
+            }
+            if !c.is_whitespace() {
+                tokens.push(c.to_string());
+            }
+        }
+        if !word.is_empty() {
+            tokens.push(word);
+        }
+        tokens
+    };
+    // Recursive descent: sum := product (('+'|'-') product)*, product := atom (('*'|'/') atom)*.
+    fn sum(t: &[String], at: &mut usize, atom: &dyn Fn(&str) -> Option<usize>) -> Option<i64> {
+        let mut v = product(t, at, atom)?;
+        while let Some(op) = t.get(*at).filter(|op| *op == "+" || *op == "-") {
+            let plus = op == "+";
+            *at += 1;
+            let r = product(t, at, atom)?;
+            v = if plus {
+                v.checked_add(r)?
+            } else {
+                v.checked_sub(r)?
+            };
+        }
+        Some(v)
+    }
+    fn product(t: &[String], at: &mut usize, atom: &dyn Fn(&str) -> Option<usize>) -> Option<i64> {
+        let mut v = primary(t, at, atom)?;
+        while let Some(op) = t.get(*at).filter(|op| *op == "*" || *op == "/") {
+            let times = op == "*";
+            *at += 1;
+            let r = primary(t, at, atom)?;
+            v = if times {
+                v.checked_mul(r)?
+            } else {
+                v.checked_div(r)?
+            };
+        }
+        Some(v)
+    }
+    fn primary(t: &[String], at: &mut usize, atom: &dyn Fn(&str) -> Option<usize>) -> Option<i64> {
+        let token = t.get(*at)?;
+        *at += 1;
+        if token == "(" {
+            let v = sum(t, at, atom)?;
+            (t.get(*at)? == ")").then_some(())?;
+            *at += 1;
+            return Some(v);
+        }
+        let value = match token.parse::<usize>() {
+            Ok(n) => n,
+            Err(_) => atom(token)?,
+        };
+        i64::try_from(value).ok()
+    }
+    let mut at = 0;
+    let value = sum(&tokens, &mut at, &define)?;
+    (at == tokens.len()).then_some(())?;
+    usize::try_from(value).ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::glsl_constant;
+
+    #[test]
+    fn array_lengths_are_evaluated_as_glsl_constants() {
+        let glsl = "#define SHVIS_CLUSTERS 64\n#define SHVIS_CLUSTER_VECTORS 7\n#define K SHVIS_CLUSTERS\n#define M SHVIS_CLUSTER_VECTORS\n#define BLOCK ((M + 1) * 9)\n#define GROUPS ((M + 4) / 4)\n#define KEEP 3\n";
+        let value = |text| glsl_constant(glsl, text, 0);
+        assert_eq!(value("7 * 12"), Some(84));
+        assert_eq!(value("K * BLOCK"), Some(64 * 72));
+        assert_eq!(value("3 * GROUPS"), Some(6));
+        assert_eq!(value("(M + 1) * 9 - 2"), Some(70));
+        assert_eq!(value("K"), Some(64), "K is not KEEP");
+        for unreadable in ["UNDEFINED", "(7", "7 )", "2 - 3", "4 / 0", "7 % 2", ""] {
+            assert_eq!(value(unreadable), None, "{unreadable}");
+        }
+        assert_eq!(glsl_constant("#define A B\n#define B A\n", "A", 0), None);
+    }
 }

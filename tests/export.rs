@@ -296,6 +296,7 @@ fn ktx_parse_and_the_gltf_validator_read_every_export() {
 
         let manifest: serde_json::Value =
             serde_json::from_slice(out.file("manifest.json").unwrap()).unwrap();
+        assert_block_covers_params(&label, &manifest, out.file("params.bin").unwrap_or(&[]));
         assert_eq!(manifest["lightmap"]["orientation"], "rd", "{label}");
         assert_eq!(
             manifest["conventions"]["sh_basis"]["pole_axis"], "+Z",
@@ -361,43 +362,59 @@ fn ktx_parse_and_the_gltf_validator_read_every_export() {
     );
 }
 
-/// The manifest spells out `params.bin`: the technique's uniform block by name, every field
-/// with its std140 offset, type, count and values, covering the file byte for byte.
+/// The manifest's `uniform_block` of an export spells out its `params.bin`: the block by
+/// name, every field a vec4 with its std140 offset, count and values, the fields following
+/// each other and covering the file byte for byte.
+fn assert_block_covers_params(label: &str, manifest: &serde_json::Value, params: &[u8]) {
+    let block = &manifest["uniform_block"];
+    assert_eq!(block["bytes"], params.len(), "{label}");
+    if params.is_empty() {
+        return;
+    }
+    assert!(
+        block["block"]
+            .as_str()
+            .is_some_and(|b| b.ends_with("Params")),
+        "{label}: {block}"
+    );
+    let fields = block["fields"].as_array().unwrap();
+    assert!(!fields.is_empty(), "{label}");
+    let mut rebuilt = vec![0u8; params.len()];
+    let mut end = 0;
+    for field in fields {
+        assert_eq!(field["type"], "vec4", "{label}: {field}");
+        let offset = field["offset"].as_u64().unwrap() as usize;
+        let count = field["count"].as_u64().unwrap() as usize;
+        assert_eq!(offset, end, "{label}: fields follow each other");
+        let values = field["values"].as_array().unwrap();
+        // A lone vec4 holds its four components; an array, one list per element.
+        let elements: Vec<&serde_json::Value> = if count == 1 && !values[0].is_array() {
+            vec![&field["values"]]
+        } else {
+            values.iter().collect()
+        };
+        for (k, element) in elements.iter().enumerate() {
+            for (c, v) in element.as_array().unwrap().iter().enumerate() {
+                let at = offset + 16 * k + 4 * c;
+                rebuilt[at..at + 4].copy_from_slice(&(v.as_f64().unwrap() as f32).to_le_bytes());
+            }
+        }
+        end = offset + 16 * count;
+    }
+    assert_eq!(end, params.len(), "{label}: the fields cover params.bin");
+    assert_eq!(rebuilt, params, "{label}: the values are params.bin's");
+}
+
+/// The manifest spells out `params.bin` (`assert_block_covers_params`), the techniques of
+/// the engine tests here; every other export in `ktx_parse_and_the_gltf_validator_read_every_export`.
 #[test]
 fn the_manifest_spells_out_the_uniform_block() {
     let prepared = common::house();
     for name in ["shlmap", "sg9", "dice", "unc6"] {
         let out = export(prepared, name.parse().unwrap(), HwPath::Dx10).unwrap();
-        let params = out.file("params.bin").unwrap();
         let manifest: serde_json::Value =
             serde_json::from_slice(out.file("manifest.json").unwrap()).unwrap();
-        let block = &manifest["uniform_block"];
-        assert_eq!(block["bytes"], params.len(), "{name}");
-        assert!(
-            block["block"]
-                .as_str()
-                .is_some_and(|b| b.ends_with("Params"))
-        );
-        let fields = block["fields"].as_array().unwrap();
-        assert!(!fields.is_empty(), "{name}");
-        let mut rebuilt = vec![0u8; params.len()];
-        let mut end = 0;
-        for field in fields {
-            assert_eq!(field["type"], "vec4", "{name}: {field}");
-            let offset = field["offset"].as_u64().unwrap() as usize;
-            let count = field["count"].as_u64().unwrap() as usize;
-            assert_eq!(offset, end, "{name}: fields follow each other");
-            for (k, element) in field["values"].as_array().unwrap().iter().enumerate() {
-                for (c, v) in element.as_array().unwrap().iter().enumerate() {
-                    let at = offset + 16 * k + 4 * c;
-                    rebuilt[at..at + 4]
-                        .copy_from_slice(&(v.as_f64().unwrap() as f32).to_le_bytes());
-                }
-            }
-            end = offset + 16 * count;
-        }
-        assert_eq!(end, params.len(), "{name}: the fields cover params.bin");
-        assert_eq!(rebuilt, params, "{name}: the values are params.bin's");
+        assert_block_covers_params(name, &manifest, out.file("params.bin").unwrap());
     }
 }
 
