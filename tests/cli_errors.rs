@@ -469,6 +469,19 @@ fn study_lists_name_each_item_once() {
             vec!["study", "rnm", "--envs", "a/p.exr,b/p.exr"],
             vec!["a/p.exr and b/p.exr would both write fig1_p.png"],
         ),
+        (
+            vec!["study", "normalmap", "--ratios", "0.004,0.0040001"],
+            vec!["--ratios", "both 0.4 % of the model's triangles"],
+        ),
+        (
+            vec![
+                "study",
+                "ndf",
+                "--diffuse-envs",
+                "a/studio.exr,b/studio.hdr",
+            ],
+            vec!["would both write diffuse_bumpy_studio_*"],
+        ),
     ] {
         let mut args = args;
         args.extend(["--out", out]);

@@ -200,7 +200,7 @@ pub(super) fn with_normal_filter(
         .map(|t| t.name())
         .collect();
     if !unfiltered.is_empty() {
-        eprintln!(
+        note!(
             "note: --normal-filter ndf applies to unc* and preconv; {} read the MIP chain",
             unfiltered.join(", ")
         );
@@ -297,7 +297,7 @@ impl SpecularArgs {
             bail!("--specular: the environment's sun has a non-finite irradiance {radiance}");
         }
         let names: Vec<&str> = self.specular.iter().map(|f| f.name()).collect();
-        eprintln!(
+        note!(
             "specular ({}): light toward {:.3},{:.3},{:.3}, k_s·E = {:.4},{:.4},{:.4}, σ = {}",
             names.join(", "),
             direction.x,

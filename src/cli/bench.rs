@@ -279,7 +279,7 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
             );
             if !dropped.is_empty() {
                 let names: Vec<String> = dropped.iter().map(|t| t.name()).collect();
-                eprintln!(
+                note!(
                     "note: scene '{}' has no height map (--height-map): leaving out {}",
                     prepared.scene.name,
                     names.join(", ")
@@ -301,7 +301,7 @@ pub(super) fn run_bench(a: BenchArgs) -> Result<()> {
         let _ = std::fs::remove_dir_all(a.out.join(shvis::report::LADDER_DIR));
         let table = shvis::bench::run(ctx, &prepared, &settings)?;
         plan.record(&table, bake_seconds);
-        eprintln!(
+        note!(
             "bench: {} in all (the plan said about {})",
             duration(started.elapsed().as_secs_f64()),
             duration(plan.estimate_seconds())

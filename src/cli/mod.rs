@@ -11,6 +11,14 @@ macro_rules! out {
             .map_err(|e| anyhow::anyhow!("cannot write to standard output: {e}"))?
     };
 }
+/// Prints a note on standard error; one that cannot be written (a full or closed stderr)
+/// is dropped: a note is not the run's result.
+macro_rules! note {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
 mod args;
 mod bake;
 mod bench;
@@ -367,17 +375,26 @@ fn clear_earlier_run(out: &std::path::Path, reports: &[&str]) {
     }
 }
 
-/// Removes the files in `out` that `written_by_run` names as the command's own (an earlier
-/// run's images), so that the folder describes one run.
+/// Removes the files and folders in `out` that `written_by_run` names as the command's own
+/// (an earlier run's images, a study's optional outputs), so that the folder describes one
+/// run.
 fn clear_earlier_files(out: &std::path::Path, written_by_run: fn(&str) -> bool) {
     let Ok(entries) = std::fs::read_dir(out) else {
         return;
     };
     for entry in entries.flatten() {
         let name = entry.file_name();
-        if entry.file_type().is_ok_and(|t| t.is_file()) && name.to_str().is_some_and(written_by_run)
-        {
-            let _ = std::fs::remove_file(entry.path());
+        if !name.to_str().is_some_and(written_by_run) {
+            continue;
+        }
+        match entry.file_type() {
+            Ok(t) if t.is_file() => {
+                let _ = std::fs::remove_file(entry.path());
+            }
+            Ok(t) if t.is_dir() => {
+                let _ = std::fs::remove_dir_all(entry.path());
+            }
+            _ => {}
         }
     }
 }
@@ -417,7 +434,7 @@ fn check_rows(
             unsupported.join(", ")
         );
     }
-    eprintln!(
+    note!(
         "note: left out, as they cannot run: {}",
         unsupported.join(", ")
     );

@@ -11,8 +11,8 @@ use shvis::technique::{HwPath, Technique};
 
 use super::args::{GpuArgs, SceneArgs, finite_f32};
 use super::{
-    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, OUT_FOLDER, RunInputs, create_dir,
-    named_once, prepare_settings, print_table, print_written, say, with_gpu,
+    DEFAULT_EXPOSURE_EV, MAX_BOUNCES, MAX_FRAME_SIDE, OUT_FOLDER, RunInputs, clear_earlier_files,
+    create_dir, named_once, prepare_settings, print_table, print_written, say, with_gpu,
 };
 
 #[derive(Subcommand, Debug)]
@@ -138,6 +138,10 @@ pub(super) struct StudyRaysArgs {
     #[command(flatten)]
     gpu: GpuArgs,
 }
+
+/// Most disk-normal × hemisphere-cell pairs `study nmprt-svd` sums (`--disk-res`² ×
+/// `--quadrature`²; the defaults are 32² × 128² ≈ 1.7·10⁷).
+const MAX_NMPRT_SVD_PAIRS: u64 = 1 << 32;
 
 #[derive(Args, Debug)]
 pub(super) struct StudyNmprtSvdArgs {
@@ -375,6 +379,8 @@ fn run_compression(a: StudyCompressionArgs) -> Result<()> {
         .env("--env", &a.env)
         .check_outside(&a.out, OUT_FOLDER)?;
     create_dir(&a.out)?;
+    // The on-screen tables of an earlier run (this one may not measure them).
+    clear_earlier_files(&a.out, |name| matches!(name, "screen.md" | "screen.json"));
     let started = Instant::now();
     let mut prepared = shvis::prepare::prepare(&prepare_settings(&a.scene, &a.env, &[], 0)?)?;
     let markdown = tables::compression_tables(&prepared, a.scene.table_res, a.scene.seed, &a.out)?;
@@ -406,6 +412,23 @@ fn run_compression(a: StudyCompressionArgs) -> Result<()> {
 }
 
 fn run_nmprt_svd(a: StudyNmprtSvdArgs) -> Result<()> {
+    // Every disk normal sums over every hemisphere cell: about half a minute on two cores at
+    // the limit (the defaults take 0.1 s), and 96 bytes a cell.
+    let (side, cells) = (u64::from(a.side), u64::from(a.quadrature).pow(2));
+    shvis::limits::check_at_most(
+        format_args!(
+            "--disk-res {}² × --quadrature {}²: normal-direction pairs",
+            a.side, a.quadrature
+        ),
+        side * side * cells,
+        MAX_NMPRT_SVD_PAIRS,
+        "lower --disk-res or --quadrature",
+    )?;
+    shvis::limits::check_memory(
+        format_args!("--quadrature {}: the hemisphere cells", a.quadrature),
+        cells.saturating_mul(96),
+        "lower --quadrature",
+    )?;
     create_dir(&a.out)?;
     let markdown = shvis::study::nmprt_svd_report::report(a.side as usize, a.quadrature as usize);
     out!("{markdown}");
@@ -461,6 +484,11 @@ fn run_rays(a: StudyRaysArgs) -> Result<()> {
         })?;
     }
     create_dir(&a.out)?;
+    // An earlier run's benches, of ray counts this one may not measure.
+    clear_earlier_files(&a.out, |name| {
+        name.strip_prefix("rays-")
+            .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+    });
     let started = Instant::now();
     let bench = shvis::bench::BenchSettings {
         techniques,
@@ -569,6 +597,20 @@ fn run_ndf(a: StudyNdfArgs) -> Result<()> {
             shvis::ndf::MAX_SIGMA
         );
     }
+    // Each scene × environment names its images: two with one name would overwrite them.
+    let mut tags: Vec<(String, String)> = Vec::new();
+    for scene in &a.diffuse_scenes {
+        for env in &a.diffuse_envs {
+            let tag = shvis::study::ndf_diffuse::image_tag(scene, env);
+            let pair = format!("{scene} under {env}");
+            if let Some((_, earlier)) = tags.iter().find(|(t, _)| *t == tag) {
+                bail!(
+                    "--diffuse-scenes/--diffuse-envs: {earlier} and {pair} would both write diffuse_{tag}_*; give each a distinct file name"
+                );
+            }
+            tags.push((tag, pair));
+        }
+    }
     let inputs = a
         .diffuse_scenes
         .iter()
@@ -580,6 +622,12 @@ fn run_ndf(a: StudyNdfArgs) -> Result<()> {
         .fold(inputs, |inputs, e| inputs.env("--diffuse-envs", e))
         .check_outside(&a.out, OUT_FOLDER)?;
     create_dir(&a.out)?;
+    // An earlier run's figures and images, of scenes and environments this one may not
+    // measure.
+    clear_earlier_files(&a.out, |name| {
+        (name.starts_with("fig1_ndf_") && name.ends_with(".png"))
+            || (name.starts_with("diffuse_") && (name.ends_with(".exr") || name.ends_with(".png")))
+    });
     let started = Instant::now();
     let settings = shvis::study::ndf_report::NdfRunSettings {
         scenes: a.scenes,
@@ -611,6 +659,23 @@ fn run_normalmap(a: StudyNormalmapArgs) -> Result<()> {
     if let Some(r) = a.ratios.iter().find(|&&r| !(r > 0.0 && r <= 1.0)) {
         bail!("--ratios: {r} is not a fraction in (0, 1] of the model's triangles");
     }
+    // Each ratio names its files: two that read the same would write one set twice.
+    let percents: Vec<String> = a
+        .ratios
+        .iter()
+        .map(|&r| shvis::study::normalmap::ratio_percent(r))
+        .collect();
+    if let Some((i, p)) = percents
+        .iter()
+        .enumerate()
+        .find(|(i, p)| percents[..*i].contains(p))
+    {
+        bail!(
+            "--ratios: {} and {} are both {p} % of the model's triangles; give each ratio once",
+            a.ratios[percents.iter().position(|q| q == p).unwrap_or(0)],
+            a.ratios[i]
+        );
+    }
     // The model is read before the timings, which take minutes, so a bad one fails first.
     if let Some(model) = &a.model {
         shvis::scene::gltf::load(model, MODEL_CHECK_RES).context("--model")?;
@@ -625,6 +690,8 @@ fn run_normalmap(a: StudyNormalmapArgs) -> Result<()> {
         })
         .check_outside(&a.out, OUT_FOLDER)?;
     create_dir(&a.out)?;
+    // An earlier run's maps, glTFs and renders of the model at other ratios.
+    clear_earlier_files(&a.out, shvis::study::normalmap::is_ratio_output);
     let started = Instant::now();
     with_gpu(&a.gpu, |ctx| {
         let model = a.model.clone();
@@ -729,6 +796,8 @@ fn run_params(a: StudyParamsArgs) -> Result<()> {
         }
     }
     create_dir(&a.out)?;
+    // The GPU part of an earlier run (this one may not measure it).
+    clear_earlier_files(&a.out, |name| name == "gpu.csv");
     let started = Instant::now();
     let points = params::run_study(a.directions, a.seed);
     let mut written = params::write_report(&points, &a.out)?;

@@ -36,6 +36,7 @@
 //! negative. A probe here is lit from the whole sphere, as in Probulator; the hemisphere
 //! table is the lightmap texel's view.
 
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -95,11 +96,14 @@ pub fn run(envs: &[String], quadrature: usize, progress: bool) -> Result<BasesSt
     for (i, name) in envs.iter().enumerate() {
         let started = Instant::now();
         let source = Source::load(name)?;
+        bases_hemisphere::check_filterable(name, &source)?;
         let (radiance, exact) = environment(&source, &nodes);
         rows.extend(measure(name, &radiance, &exact, &nodes));
         let (info, floor) = bases_hemisphere::measure(name, &source, &normals);
         if progress {
-            eprintln!(
+            // A progress line that cannot be written (a full stderr) is dropped.
+            let _ = writeln!(
+                std::io::stderr(),
                 "study bases: [{}/{}] {name} in {:.1} s ({} samples from the {})",
                 i + 1,
                 envs.len(),

@@ -77,7 +77,7 @@
 //! bytes = 8 ⌈v / 4⌉                                                                      (7)
 //! ```
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -404,6 +404,35 @@ pub fn irradiance_truth(samples: &[Sample], normals: &[DVec3]) -> Vec<[f64; 3]> 
     blocks.concat()
 }
 
+/// Whether [`pixel_samples`] can bring `source`'s pixels above the floor within
+/// [`MAX_PIXEL_SAMPLES`]: its 2 × 2 filter halves maps of even height only.
+///
+/// # Errors
+/// [`EnvError::Format`] naming the map's size and what to do.
+pub fn check_filterable(name: &str, source: &Source) -> Result<(), EnvError> {
+    let Source::Map(map) = source else {
+        return Ok(());
+    };
+    // Rows whose centres lie above the horizon: the upper half, rounded down.
+    let upper = |w: u32, h: u32| u64::from(w) * u64::from(h / 2);
+    let (mut w, mut h) = (map.width, map.height);
+    while upper(w, h) > MAX_PIXEL_SAMPLES as u64 && w % 2 == 0 && h % 2 == 0 && h >= 4 {
+        (w, h) = (w / 2, h / 2);
+    }
+    if upper(w, h) > MAX_PIXEL_SAMPLES as u64 {
+        return Err(EnvError::Format {
+            path: PathBuf::from(name),
+            detail: format!(
+                "{}×{}: halving it 2 × 2 stops at {w}×{h} (an odd size) with {} pixels above the floor, more than the study's {MAX_PIXEL_SAMPLES}; resample the map to a height that halves further (a power of two)",
+                map.width,
+                map.height,
+                upper(w, h)
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// (1) of a map: its pixels above the floor's plane, box-filtered while they exceed
 /// [`MAX_PIXEL_SAMPLES`]; and the filter's side.
 fn pixel_samples(map: &EnvMap) -> (Vec<Sample>, u32) {
@@ -544,6 +573,25 @@ fn measure_source(
 mod tests {
     use super::*;
     use std::f64::consts::PI;
+
+    #[test]
+    fn maps_the_filter_cannot_bring_within_the_samples_are_refused() {
+        let map = |width: u32, height: u32| {
+            Source::Map(EnvMap {
+                width,
+                height,
+                texels: vec![[1.0; 3]; width as usize * height as usize],
+            })
+        };
+        // 4096 × 1024 halves to 2048 × 512: 524 288 pixels above the floor.
+        assert!(check_filterable("even", &map(4096, 1024)).is_ok());
+        let e = check_filterable("odd", &map(4098, 1025))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("4098×1025") && e.contains("resample"), "{e}");
+        // Small odd maps need no filter.
+        assert!(check_filterable("small", &map(202, 101)).is_ok());
+    }
 
     /// The study's own tolerance for a basis that can hold the lighting exactly: the
     /// kernel tables of `sh::samples` read their kernels to about 10⁻³ of their scale,

@@ -333,15 +333,23 @@ pub fn write_report(
             study.ndf_levels,
             study.ndf_build_s
         ));
+        // "—" where a mask is empty or its reference black (the pixel counts above say so).
+        let figure = |v: f64, digits: usize| {
+            if v.is_finite() {
+                format!("{v:.digits$}")
+            } else {
+                "—".to_string()
+            }
+        };
         for r in &study.rows {
             md.push_str(&format!(
-                "| spec{} | {} | {:.4} | {:.3} | {:.4} | {:.3} | {} | {} |\n",
+                "| spec{} | {} | {} | {} | {} | {} | {} | {} |\n",
                 r.filter.name(),
                 r.path,
-                r.rel_rmse_minified,
-                r.energy_minified,
-                r.rel_rmse_all,
-                r.energy_all,
+                figure(r.rel_rmse_minified, 4),
+                figure(r.energy_minified, 3),
+                figure(r.rel_rmse_all, 4),
+                figure(r.energy_all, 3),
                 r.ms_median.map_or("-".into(), |m| format!("{m:.2}")),
                 r.lookups
             ));

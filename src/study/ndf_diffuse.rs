@@ -111,6 +111,17 @@ pub fn env_label(env: &str) -> String {
         .map_or_else(|| env.to_string(), |s| s.to_string_lossy().into_owned())
 }
 
+/// The name of a scene × environment's images (`diffuse_{tag}_…`): the scene's file stem,
+/// with the environment's for any but the default sky, file-safe (letters, digits, `_`).
+pub fn image_tag(scene: &str, env: &str) -> String {
+    let scene = super::rnm::env_stem(scene);
+    if env_label(env) == "sky" {
+        scene
+    } else {
+        format!("{scene}_{}", super::rnm::env_stem(env))
+    }
+}
+
 /// Relative RMSE of `test` against `reference` over `mask`.
 fn rel_rmse(test: &Frame, reference: &Frame, mask: &[bool]) -> f64 {
     let (mut se, mut sq) = (0.0, 0.0);
@@ -221,12 +232,7 @@ pub fn run(
     let (mut scenes, mut rows) = (Vec::new(), Vec::new());
     let env = env_label(&s.env);
     for name in &s.scenes {
-        // Image names: the scene's, with the environment's for any but the default sky.
-        let tag = if env == "sky" {
-            name.clone()
-        } else {
-            format!("{name}_{env}")
-        };
+        let tag = image_tag(name, &s.env);
         let mut prepared = prepare(&PrepareSettings {
             scene: name.clone(),
             env: s.env.clone(),

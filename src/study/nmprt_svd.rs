@@ -27,6 +27,7 @@
 
 use glam::DVec3;
 use nalgebra::DMatrix;
+use rayon::prelude::*;
 
 use crate::sh::{Order, basis::eval_basis};
 use crate::technique::nmprt::disk_normals;
@@ -75,23 +76,30 @@ pub fn normal_matrix_over(
         .collect();
     let d_omega = z_span * std::f64::consts::TAU / (quadrature * quadrature) as f64;
     let normals = disk_normals(side);
-    let mut a = DMatrix::<f64>::zeros(normals.len(), 9);
-    for (k, (n, area)) in normals.iter().enumerate() {
-        let mut row = [0.0f64; 9];
-        for (w, y) in &cells {
-            let c = n.dot(*w);
-            if c > 0.0 {
-                for (r, yj) in row.iter_mut().zip(y) {
-                    *r += yj * c * d_omega;
+    // Rows in parallel, each summed in cell order: the same matrix on any thread count.
+    let rows: Vec<[f64; 9]> = normals
+        .par_iter()
+        .map(|(n, area)| {
+            let mut row = [0.0f64; 9];
+            for (w, y) in &cells {
+                let c = n.dot(*w);
+                if c > 0.0 {
+                    for (r, yj) in row.iter_mut().zip(y) {
+                        *r += yj * c * d_omega;
+                    }
                 }
             }
-        }
-        let weight = match weighting {
-            NormalWeighting::Uniform => area / n.z.max(1e-6),
-            NormalWeighting::Cosine => *area,
-        };
+            let weight = match weighting {
+                NormalWeighting::Uniform => area / n.z.max(1e-6),
+                NormalWeighting::Cosine => *area,
+            };
+            row.map(|r| r * weight.sqrt())
+        })
+        .collect();
+    let mut a = DMatrix::<f64>::zeros(normals.len(), 9);
+    for (k, row) in rows.iter().enumerate() {
         for (j, r) in row.iter().enumerate() {
-            a[(k, j)] = r * weight.sqrt();
+            a[(k, j)] = *r;
         }
     }
     a

@@ -296,7 +296,7 @@ pub fn model_row(
         model
             .file_stem()
             .map_or("model".into(), |s| s.to_string_lossy().into_owned()),
-        (ratio * 100.0).round()
+        ratio_percent(ratio)
     );
     let frames = normalmap::low_texels(&low, s.model_res);
     let tangent = normalmap::tangent_space(&image, &frames);
@@ -447,11 +447,11 @@ pub fn write_report(study: &NormalMapStudy, dir: &Path) -> Result<Vec<PathBuf>, 
                 .map(|(p, a, b)| format!("{p} {a:.4} / {b:.4}"))
                 .collect();
             md.push_str(&format!(
-                "| {} | {:.0} % | {} | {} | {}² | {} | {} | {:.2} | {:.2} | {} | {} |\n",
+                "| {} | {} % | {} | {} | {}² | {} | {} | {:.2} | {:.2} | {} | {} |\n",
                 Path::new(&m.model)
                     .file_name()
                     .map_or(m.model.clone(), |f| f.to_string_lossy().into_owned()),
-                m.ratio * 100.0,
+                ratio_percent(m.ratio),
                 m.high_triangles,
                 m.low_triangles,
                 m.res,
@@ -470,4 +470,48 @@ pub fn write_report(study: &NormalMapStudy, dir: &Path) -> Result<Vec<PathBuf>, 
         markdown: md,
     };
     Ok(super::report::write(dir, &study_report)?)
+}
+
+/// Whether `name` is one of the files the study writes per model and ratio
+/// (`{model}_{percent}pct…`, [`ratio_percent`]).
+pub fn is_ratio_output(name: &str) -> bool {
+    name.match_indices("pct").any(|(at, _)| {
+        let before = &name[..at];
+        let number = before.rsplit('_').next().unwrap_or("");
+        before.contains('_')
+            && number.bytes().any(|b| b.is_ascii_digit())
+            && number.bytes().all(|b| b.is_ascii_digit() || b == b'.')
+    })
+}
+
+/// `ratio` (a fraction of the model's triangles) in percent as the study names its files
+/// and rows: up to three decimals, trailing zeros dropped ("50", "0.4", "0.125").
+pub fn ratio_percent(ratio: f32) -> String {
+    let text = format!("{:.3}", f64::from(ratio) * 100.0);
+    text.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ratios_name_their_files_apart_and_are_told_from_other_files() {
+        assert_eq!(ratio_percent(0.5), "50");
+        assert_eq!(ratio_percent(0.004), "0.4");
+        assert_eq!(ratio_percent(0.00125), "0.125");
+        assert_eq!(ratio_percent(1.0), "100");
+        for ours in ["Avocado_50pct.png", "m_0.4pct_object.exr", "m_12pct.gltf"] {
+            assert!(is_ratio_output(ours), "{ours}");
+        }
+        for theirs in [
+            "normalmap.md",
+            "pct.png",
+            "m_pct.png",
+            "m_x1pct.png",
+            "notes.txt",
+        ] {
+            assert!(!is_ratio_output(theirs), "{theirs}");
+        }
+    }
 }
