@@ -304,14 +304,7 @@ pub fn decode_sh_lightmap(
     let seconds = f64::from_bits(r.u64()?);
     let texels = (res as usize).pow(2);
     let coeffs = r.f32s(texels * 27)?;
-    let flags = r.take(texels)?;
-    if let Some(i) = flags.iter().position(|&b| b > 1) {
-        return Err(format!(
-            "coverage flag {} at texel {i} is not 0 or 1",
-            flags[i]
-        ));
-    }
-    let covered: Vec<bool> = flags.iter().map(|&b| b != 0).collect();
+    let covered = r.coverage(texels)?;
     let covered_count = covered.iter().filter(|&&c| c).count();
     let normal = r.f32s(texels * 3)?;
     let frame = r.f32s(texels * 9)?;
@@ -744,6 +737,18 @@ impl<'a> Reader<'a> {
             .map(|b| f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]))
             .collect())
     }
+    /// `texels` coverage flags, one byte each, 0 or 1.
+    fn coverage(&mut self, texels: usize) -> Result<Vec<bool>, String> {
+        let flags = self.take(texels)?;
+        if let Some(i) = flags.iter().position(|&b| b > 1) {
+            return Err(format!(
+                "coverage flag {} at texel {i} is not 0 or 1",
+                flags[i]
+            ));
+        }
+        Ok(flags.iter().map(|&b| b != 0).collect())
+    }
+
     fn f32s(&mut self, n: usize) -> Result<Vec<f32>, String> {
         let bytes = self.take(n.checked_mul(4).ok_or("size overflows")?)?;
         Ok(bytes
@@ -825,14 +830,7 @@ pub fn decode_visibility(
     let seconds = f64::from_bits(r.u64()?);
     let texels = (res as usize) * (res as usize);
     let coeffs = r.f32s(texels * order.coeff_count())?;
-    let flags = r.take(texels)?;
-    if let Some(i) = flags.iter().position(|&b| b > 1) {
-        return Err(format!(
-            "coverage flag {} at texel {i} is not 0 or 1",
-            flags[i]
-        ));
-    }
-    let covered: Vec<bool> = flags.iter().map(|&b| b != 0).collect();
+    let covered = r.coverage(texels)?;
     let ao = r.f32s(texels)?;
     if !r.bytes.is_empty() {
         return Err(format!(
