@@ -569,7 +569,6 @@ fn median(values: &mut [f64]) -> Option<f64> {
     values.get(values.len() / 2).copied()
 }
 
-/// An animated PNG of 8-bit sRGB frames at 12 frames per second, looping.
 /// Whether `name` is one of the images a relight run writes: `{label}.f{N}.png` (a frame of
 /// a technique or of the reference) or `{label}.apng.png` (its animation).
 pub fn is_relight_image(name: &str) -> bool {
@@ -584,6 +583,7 @@ pub fn is_relight_image(name: &str) -> bool {
     })
 }
 
+/// An animated PNG of 8-bit sRGB frames at 12 frames per second, looping.
 fn write_apng(path: &Path, width: u32, height: u32, frames: &[Vec<u8>]) -> Result<(), ReportError> {
     let err = |e: png::EncodingError| ReportError::Write {
         path: path.to_path_buf(),

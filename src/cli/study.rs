@@ -484,11 +484,6 @@ fn run_rays(a: StudyRaysArgs) -> Result<()> {
         })?;
     }
     create_dir(&a.out)?;
-    // An earlier run's benches, of ray counts this one may not measure.
-    clear_earlier_files(&a.out, |name| {
-        name.strip_prefix("rays-")
-            .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
-    });
     let started = Instant::now();
     let bench = shvis::bench::BenchSettings {
         techniques,
@@ -513,6 +508,12 @@ fn run_rays(a: StudyRaysArgs) -> Result<()> {
         dx11_rows: None,
     };
     with_gpu(&a.gpu, |ctx| {
+        // Device and bakes are good: an earlier run's benches, of ray counts this one may
+        // not measure, go.
+        clear_earlier_files(&a.out, |name| {
+            name.strip_prefix("rays-")
+                .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+        });
         let study = shvis::study::rays::run(ctx, &prepare, &bench, &ray_counts, &mut say)?;
         let written = shvis::study::rays::write(&study, &a.out)?;
         print_written(&written)?;
@@ -622,12 +623,6 @@ fn run_ndf(a: StudyNdfArgs) -> Result<()> {
         .fold(inputs, |inputs, e| inputs.env("--diffuse-envs", e))
         .check_outside(&a.out, OUT_FOLDER)?;
     create_dir(&a.out)?;
-    // An earlier run's figures and images, of scenes and environments this one may not
-    // measure.
-    clear_earlier_files(&a.out, |name| {
-        (name.starts_with("fig1_ndf_") && name.ends_with(".png"))
-            || (name.starts_with("diffuse_") && (name.ends_with(".exr") || name.ends_with(".png")))
-    });
     let started = Instant::now();
     let settings = shvis::study::ndf_report::NdfRunSettings {
         scenes: a.scenes,
@@ -645,6 +640,13 @@ fn run_ndf(a: StudyNdfArgs) -> Result<()> {
         out: a.out,
     };
     with_gpu(&a.gpu, |ctx| {
+        // The device is good: an earlier run's figures and images, of scenes and
+        // environments this one may not measure, go.
+        clear_earlier_files(&settings.out, |name| {
+            (name.starts_with("fig1_ndf_") && name.ends_with(".png"))
+                || (name.starts_with("diffuse_")
+                    && (name.ends_with(".exr") || name.ends_with(".png")))
+        });
         print_written(&shvis::study::ndf_report::run(ctx, &settings, &mut say)?)?;
         Ok(())
     })?;
@@ -690,10 +692,11 @@ fn run_normalmap(a: StudyNormalmapArgs) -> Result<()> {
         })
         .check_outside(&a.out, OUT_FOLDER)?;
     create_dir(&a.out)?;
-    // An earlier run's maps, glTFs and renders of the model at other ratios.
-    clear_earlier_files(&a.out, shvis::study::normalmap::is_ratio_output);
     let started = Instant::now();
     with_gpu(&a.gpu, |ctx| {
+        // The device is good: an earlier run's maps, glTFs and renders of the model at
+        // other ratios go.
+        clear_earlier_files(&a.out, shvis::study::normalmap::is_ratio_output);
         let model = a.model.clone();
         if model.is_none() {
             out!("note: no --model: the real-model part is skipped");

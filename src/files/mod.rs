@@ -753,9 +753,15 @@ fn temp_owner(name: &str) -> Option<u32> {
     if !name.starts_with('.') {
         return None;
     }
-    let (_, tail) = name.rsplit_once(".tmp-")?;
+    let (head, tail) = name.rsplit_once(".tmp-")?;
     let (pid, n) = tail.split_once('-')?;
-    let n = n.split_once('.').map_or(n, |(n, _)| n);
+    // A set's temporary keeps its file's extension: `.NAME.tmp-PID-N.EXT` with NAME ending
+    // in `.EXT`.
+    let n = match n.split_once('.') {
+        Some((n, ext)) if head.ends_with(&format!(".{ext}")) => n,
+        Some(_) => return None,
+        None => n,
+    };
     n.parse::<u64>().ok()?;
     pid.parse().ok()
 }
@@ -930,6 +936,8 @@ mod tests {
         assert_eq!(temp_owner(".x.png.tmp-1-0"), Some(1));
         assert_eq!(temp_owner(".x.png.tmp-1-0.png"), Some(1));
         assert_eq!(temp_owner(".x.png.tmp-1-a.png"), None);
+        // A user's file of that shape whose name does not end in the extension.
+        assert_eq!(temp_owner(".notes.tmp-2024-01.md"), None);
         assert_eq!(temp_owner("x.png.tmp-1-0"), None);
         assert_eq!(temp_owner(".x.tmp-a-0"), None);
         assert_eq!(temp_owner(".x.png"), None);

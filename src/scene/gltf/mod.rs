@@ -370,15 +370,20 @@ impl Loader {
     ) -> Result<bool, SceneError> {
         // Every instance's corners become vertices of one mesh with u32 indices: the total is
         // bounded before any is read (a small file can instance a large mesh many times).
-        let corners: u64 = instances
-            .iter()
-            .flat_map(|inst| inst.mesh.primitives())
-            .filter(|prim| prim.mode() == Mode::Triangles)
-            .map(|prim| {
-                prim.indices()
-                    .or_else(|| prim.get(&Semantic::Positions))
-                    .map_or(0, |acc| acc.count() as u64)
-            })
+        let triangle_lists = || {
+            instances
+                .iter()
+                .flat_map(|inst| inst.mesh.primitives())
+                .filter(|prim| prim.mode() == Mode::Triangles)
+        };
+        let count = |acc: Option<gltf::Accessor>| acc.map_or(0, |a| a.count() as u64);
+        let corners = triangle_lists()
+            .map(|prim| count(prim.indices().or_else(|| prim.get(&Semantic::Positions))))
+            .fold(0u64, u64::saturating_add);
+        // Corners share their primitive's vertices (a vertex splits only where its
+        // tangents differ, which no file relies on for its size).
+        let vertices = triangle_lists()
+            .map(|prim| count(prim.get(&Semantic::Positions)))
             .fold(0u64, u64::saturating_add);
         if corners > u64::from(u32::MAX) {
             return Err(self.err(format!(
@@ -386,10 +391,15 @@ impl Loader {
                 u32::MAX
             )));
         }
-        let per_corner = (std::mem::size_of::<Vertex>() + std::mem::size_of::<u32>()) as u64;
+        let (per_vertex, per_corner) = (
+            std::mem::size_of::<Vertex>() as u64,
+            std::mem::size_of::<u32>() as u64,
+        );
         crate::limits::check_memory(
-            format_args!("its instances' {corners} triangle corners"),
-            corners.saturating_mul(per_corner),
+            format_args!("its instances' {vertices} vertices and {corners} triangle corners"),
+            vertices
+                .saturating_mul(per_vertex)
+                .saturating_add(corners.saturating_mul(per_corner)),
             "",
         )
         .map_err(|e| self.err(e.to_string()))?;
@@ -705,14 +715,6 @@ impl Loader {
         if !factor.iter().all(|x| (0.0..=1.0).contains(x)) {
             return Err(err(format!(
                 "material {material}: baseColorFactor {factor:?} has a value outside [0, 1]"
-            )));
-        }
-        if let Some(normal) = prim.material().normal_texture()
-            && !normal.scale().is_finite()
-        {
-            return Err(err(format!(
-                "material {material}: normalTexture.scale {} is not finite",
-                normal.scale()
             )));
         }
         let tint = |k: usize| -> [f32; 3] {
