@@ -83,6 +83,21 @@ impl Gltf {
         self.accessors.len() - 1
     }
 
+    /// `image` as a PNG in the buffer, the file's only image and texture (index 0).
+    fn embed_texture(&mut self, image: &image::RgbaImage) {
+        let mut png = Vec::new();
+        if let Err(e) = image.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        {
+            panic!("{e}");
+        }
+        let view = self.view(&png);
+        self.set(
+            "images",
+            json!([{"bufferView": view, "mimeType": "image/png"}]),
+        );
+        self.set("textures", json!([{"source": 0}]));
+    }
+
     fn set(&mut self, key: &str, value: Value) {
         self.root.insert(key.to_string(), value);
     }
@@ -736,16 +751,11 @@ fn bad_files_are_one_line_errors() {
     expect_error(&too_bright, "baseColorFactor");
 
     let flat_scale = quad_file(&dir, "flat_scale", |g| {
-        let mut png = Vec::new();
-        image::RgbaImage::from_pixel(2, 2, image::Rgba([128, 128, 255, 255]))
-            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
-            .unwrap();
-        let view = g.view(&png);
-        g.set(
-            "images",
-            json!([{"bufferView": view, "mimeType": "image/png"}]),
-        );
-        g.set("textures", json!([{"source": 0}]));
+        g.embed_texture(&image::RgbaImage::from_pixel(
+            2,
+            2,
+            image::Rgba([128, 128, 255, 255]),
+        ));
         g.set(
             "materials",
             json!([{"normalTexture": {"index": 0, "scale": 1e39}}]),
@@ -934,19 +944,10 @@ fn fuzz_seed() -> Gltf {
     let mut g = Gltf::default();
     let quad = quad_primitive(&mut g, true, true);
     let prim = sphere(&mut g, false);
-    let mut png = Vec::new();
     let img = image::RgbaImage::from_fn(4, 4, |x, y| {
         image::Rgba([x as u8 * 60, y as u8 * 60, 9, 255])
     });
-    if let Err(e) = img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png) {
-        panic!("{e}");
-    }
-    let view = g.view(&png);
-    g.set(
-        "images",
-        json!([{"bufferView": view, "mimeType": "image/png"}]),
-    );
-    g.set("textures", json!([{"source": 0}]));
+    g.embed_texture(&img);
     g.set(
         "materials",
         json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "baseColorFactor": [0.5, 0.6, 0.7, 1.0]},
