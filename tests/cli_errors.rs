@@ -470,6 +470,10 @@ fn study_lists_name_each_item_once() {
             vec!["a/p.exr and b/p.exr would both write fig1_p.png"],
         ),
         (
+            vec!["study", "rnm", "--envs", "a/ndf_bumpy.exr"],
+            vec!["fig1_ndf_bumpy.png", "study ndf's figures"],
+        ),
+        (
             vec!["study", "normalmap", "--ratios", "0.004,0.0040001"],
             vec!["--ratios", "both 0.4 % of the model's triangles"],
         ),

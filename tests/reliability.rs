@@ -606,6 +606,69 @@ fn an_interrupted_write_leaves_no_temporary() {
     assert!(left.is_empty(), "left behind: {left:?}");
 }
 
+/// SIGINT while a set of files is being put in place waits for the set: the run exits with
+/// 130 with every file of the set new (none left from the earlier run beside new ones) and
+/// no temporary behind (`files::INTERRUPT_WHILE_COMMITTING_ENV`).
+#[cfg(feature = "test-hooks")]
+#[test]
+fn an_interrupt_during_a_commit_waits_for_the_whole_set() {
+    let dir = Scratch::new("reliability", "sigint-commit");
+    let h = dir.join("h.png");
+    height_map(&h);
+    let out = dir.join("ss.png");
+    let set = [
+        "ss.png",
+        "ss.exr",
+        "ss_d.png",
+        "ss_d.exr",
+        "ss_ao.png",
+        "ss_ao.exr",
+    ];
+    for f in set {
+        std::fs::write(dir.join(f), b"an earlier run").unwrap();
+    }
+    let run = shvis(
+        &[
+            "ssbump",
+            "--height-map",
+            s(&h),
+            "--height-scale",
+            "2",
+            "--rays",
+            "8",
+            "--out",
+            s(&out),
+        ],
+        &[(shvis::files::INTERRUPT_WHILE_COMMITTING_ENV, "ss.png")],
+    );
+    assert_eq!(
+        run.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    for f in set {
+        assert_ne!(
+            std::fs::read(dir.join(f)).unwrap(),
+            b"an earlier run",
+            "{f} is the earlier run's beside new files"
+        );
+    }
+    let mut left: Vec<String> = std::fs::read_dir(&*dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    let mut expected: Vec<String> = set
+        .iter()
+        .chain(&["h.png"])
+        .map(|f| f.to_string())
+        .collect();
+    expected.sort();
+    assert_eq!(left, expected);
+}
+
 /// A glTF triangle with positions and normals and no TEXCOORD_0.
 const NO_UV_TRIANGLE: &str = "{\"asset\": {\"version\": \"2.0\"}, \"buffers\": [{\"byteLength\": 72, \"uri\": \"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/\"}], \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 36}, {\"buffer\": 0, \"byteOffset\": 36, \"byteLength\": 36}], \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\", \"min\": [0, 0, 0], \"max\": [1, 1, 0]}, {\"bufferView\": 1, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"}], \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, \"NORMAL\": 1}}]}], \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}], \"scene\": 0}";
 

@@ -733,6 +733,11 @@ fn run_rnm(a: StudyRnmArgs) -> Result<()> {
         {
             bail!("--envs: {other} and {e} would both write fig1_{stem}.png; rename one");
         }
+        if stem.starts_with("ndf_") {
+            bail!(
+                "--envs: {e} would write fig1_{stem}.png, a name of study ndf's figures; rename it"
+            );
+        }
     }
     a.envs
         .iter()
@@ -756,6 +761,11 @@ fn run_rnm(a: StudyRnmArgs) -> Result<()> {
         cache_dir: None,
     };
     with_gpu(&a.gpu, |ctx| {
+        // The device is good: an earlier run's figures, of environments this one may not
+        // measure, go (study ndf's, fig1_ndf_*, stay).
+        clear_earlier_files(&a.out, |name| {
+            name.starts_with("fig1_") && name.ends_with(".png") && !name.starts_with("fig1_ndf_")
+        });
         let written =
             shvis::study::rnm_report::run(ctx, &a.envs, &settings, &a.out, a.exposure, &mut say)?;
         print_written(&written)?;

@@ -70,6 +70,12 @@ pub const KILL_WHILE_WRITING_ENV: &str = "SHVIS_TEST_KILL_WHILE_WRITING";
 #[cfg(feature = "test-hooks")]
 pub const INTERRUPT_WHILE_WRITING_ENV: &str = "SHVIS_TEST_INTERRUPT_WHILE_WRITING";
 
+/// Test hook of the `test-hooks` feature, not a user setting: when a [`FileSet`]'s commit
+/// has placed the file whose name equals this variable's value, the process sends itself
+/// SIGINT (the interrupted-commit test of `tests/reliability.rs`).
+#[cfg(feature = "test-hooks")]
+pub const INTERRUPT_WHILE_COMMITTING_ENV: &str = "SHVIS_TEST_INTERRUPT_WHILE_COMMITTING";
+
 /// Name of a bake output directory's manifest.
 pub const MANIFEST_NAME: &str = "manifest.json";
 
@@ -607,11 +613,35 @@ pub fn remove_temporaries_on_interrupt() {
 mod interrupt {
     use std::ffi::{CString, c_char};
     use std::path::Path;
-    use std::sync::atomic::{AtomicPtr, Ordering};
+    use std::sync::atomic::{AtomicI32, AtomicPtr, AtomicUsize, Ordering};
 
     const SLOTS: usize = 64;
     static WRITING: [AtomicPtr<c_char>; SLOTS] =
         [const { AtomicPtr::new(std::ptr::null_mut()) }; SLOTS];
+    /// How many [`Hold`]s are alive, and the signal that arrived while one was.
+    static HOLDS: AtomicUsize = AtomicUsize::new(0);
+    static PENDING: AtomicI32 = AtomicI32::new(0);
+
+    /// While alive, SIGINT and SIGTERM wait: the handler notes the signal and returns, and
+    /// the last hold to go acts on it (removes the temporaries, exits). A set's commit holds
+    /// one, so an interrupt cannot land between two of its renames.
+    pub(super) struct Hold(());
+
+    pub(super) fn hold() -> Hold {
+        HOLDS.fetch_add(1, Ordering::AcqRel);
+        Hold(())
+    }
+
+    impl Drop for Hold {
+        fn drop(&mut self) {
+            if HOLDS.fetch_sub(1, Ordering::AcqRel) == 1 {
+                let signal = PENDING.swap(0, Ordering::AcqRel);
+                if signal != 0 {
+                    on_signal(signal);
+                }
+            }
+        }
+    }
 
     /// Records `tmp`; `None` when every slot is taken (then it is left to
     /// `remove_stale_temps` of the next run).
@@ -643,6 +673,10 @@ mod interrupt {
     }
 
     extern "C" fn on_signal(signal: libc::c_int) {
+        if HOLDS.load(Ordering::Acquire) > 0 {
+            PENDING.store(signal, Ordering::Release);
+            return;
+        }
         for slot in &WRITING {
             let c = slot.swap(std::ptr::null_mut(), Ordering::AcqRel);
             if !c.is_null() {

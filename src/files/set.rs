@@ -5,8 +5,13 @@
 //! Each file goes to a temporary `.NAME.tmp-PID-N.EXT` beside it (its extension kept, for
 //! the writers that pick the format by it), registered for removal on SIGINT or SIGTERM like
 //! [`write_atomic`]'s; once all are written each is renamed over its name, in the order
-//! staged. A temporary a killed run leaves is removed by [`remove_stale_temps`], which each
-//! set runs on the folders it writes into.
+//! staged, an earlier file kept aside (hard-linked to a temporary name) until every one is
+//! in place. Where one cannot be placed, those placed before it get their earlier files
+//! back; SIGINT and SIGTERM wait until the commit is over. A file whose name is a link or
+//! a device is written through ([`write_atomic`]) after the renames, which it cannot undo:
+//! where a second such file fails, the first stays written. A temporary a killed run
+//! leaves is removed by [`remove_stale_temps`], which each set runs on the folders it
+//! writes into.
 
 use std::fs::{self, File};
 use std::path::{Path, PathBuf};
@@ -41,7 +46,6 @@ impl FileSet {
 
     /// The temporary to write `path`'s bytes to, in `path`'s folder.
     pub fn stage(&mut self, path: &Path) -> PathBuf {
-        static COUNTER: AtomicU64 = AtomicU64::new(0);
         let dir = match path.parent() {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
             _ => PathBuf::from("."),
@@ -50,20 +54,7 @@ impl FileSet {
             remove_stale_temps(&dir);
             self.dirs.push(dir.clone());
         }
-        let name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "out".to_string());
-        let mut tmp_name = format!(
-            ".{name}.tmp-{}-{}",
-            std::process::id(),
-            COUNTER.fetch_add(1, Ordering::Relaxed)
-        );
-        if let Some(ext) = path.extension() {
-            tmp_name.push('.');
-            tmp_name.push_str(&ext.to_string_lossy());
-        }
-        let tmp = dir.join(tmp_name);
+        let tmp = temporary_beside(&dir, path);
         let slot = interrupt::register(&tmp);
         self.staged.push(Staged {
             tmp: tmp.clone(),
@@ -79,22 +70,47 @@ impl FileSet {
         self.earlier.push(path.to_path_buf());
     }
 
-    /// Puts every staged file in its place, in the order staged, then removes the
-    /// [`FileSet::replaces`] files it did not stage.
+    /// Puts every staged file in its place (module doc: all of them or, where one cannot
+    /// be placed, none of the renamed ones), then removes the [`FileSet::replaces`] files
+    /// it did not stage.
     ///
     /// # Errors
-    /// [`FileError::Io`] naming the file that could not be placed (the temporaries not yet
-    /// placed are removed), or [`write_atomic`]'s error for a link or device in the way.
+    /// [`FileError::Io`] naming the file that could not be placed (the temporaries are
+    /// removed and the earlier files restored), or [`write_atomic`]'s error for a link or
+    /// device in the way.
     pub fn commit(mut self) -> Result<(), FileError> {
+        let _hold = interrupt::hold();
         let written: Vec<PathBuf> = self.staged.iter().map(|s| s.path.clone()).collect();
-        let mut rest = std::mem::take(&mut self.staged).into_iter();
+        let (plain, through): (Vec<Staged>, Vec<Staged>) = std::mem::take(&mut self.staged)
+            .into_iter()
+            .partition(|s| is_plain_or_absent(&s.path));
+        let mut placed: Vec<Placed> = Vec::with_capacity(plain.len());
+        let mut rest = plain.into_iter().chain(through);
         while let Some(staged) = rest.next() {
-            if let Err(e) = place(&staged.tmp, &staged.path) {
+            let outcome = if is_plain_or_absent(&staged.path) {
+                rename_keeping_earlier(&staged.tmp, &staged.path).map(|earlier| {
+                    placed.push(Placed {
+                        path: staged.path.clone(),
+                        earlier,
+                    })
+                })
+            } else {
+                write_through(&staged.tmp, &staged.path)
+            };
+            if let Err(e) = outcome {
+                restore(&placed);
                 self.staged.push(staged);
                 self.staged.extend(rest);
                 return Err(e);
             }
             interrupt::unregister(staged.slot);
+            #[cfg(feature = "test-hooks")]
+            interrupt_after_placing(&staged.path);
+        }
+        for p in &placed {
+            if let Some(earlier) = &p.earlier {
+                let _ = fs::remove_file(earlier); // only a kept-aside copy; the sweep takes it
+            }
         }
         for path in self.earlier.iter().filter(|p| !written.contains(p)) {
             match fs::remove_file(path) {
@@ -117,6 +133,92 @@ impl FileSet {
     }
 }
 
+/// SIGINT to this thread once `path` is placed, where [`super::INTERRUPT_WHILE_COMMITTING_ENV`]
+/// names it (the commit's hold defers it to the commit's end).
+#[cfg(feature = "test-hooks")]
+fn interrupt_after_placing(path: &Path) {
+    let named = std::env::var_os(super::INTERRUPT_WHILE_COMMITTING_ENV);
+    if named.is_some_and(|n| path.file_name() == Some(n.as_os_str())) {
+        interrupt::raise_sigint();
+    }
+}
+
+/// A file a commit renamed into place, and where its earlier file was kept aside.
+struct Placed {
+    path: PathBuf,
+    earlier: Option<PathBuf>,
+}
+
+/// `.NAME.tmp-PID-N.EXT` in `dir` for `path` (its extension kept).
+fn temporary_beside(dir: &Path, path: &Path) -> PathBuf {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".to_string());
+    let mut tmp_name = format!(
+        ".{name}.tmp-{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    );
+    if let Some(ext) = path.extension() {
+        tmp_name.push('.');
+        tmp_name.push_str(&ext.to_string_lossy());
+    }
+    dir.join(tmp_name)
+}
+
+/// Whether `path` is a plain file or nothing yet (renamed over; a link or a device is
+/// written through).
+fn is_plain_or_absent(path: &Path) -> bool {
+    fs::symlink_metadata(path).map_or(true, |m| m.is_file())
+}
+
+/// Renames `tmp` over `path`, an earlier file at `path` first hard-linked to a temporary
+/// name beside it (returned, for [`restore`]); without hard links, copied there.
+fn rename_keeping_earlier(tmp: &Path, path: &Path) -> Result<Option<PathBuf>, FileError> {
+    let io = |action, cause| FileError::Io {
+        path: path.to_path_buf(),
+        action,
+        cause,
+    };
+    let earlier = if path.exists() {
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let aside = temporary_beside(dir, path);
+        if fs::hard_link(path, &aside).is_err() {
+            fs::copy(path, &aside).map_err(|e| io("keep the earlier file aside", e))?;
+        }
+        Some(aside)
+    } else {
+        None
+    };
+    if let Err(e) = fs::rename(tmp, path) {
+        if let Some(aside) = &earlier {
+            let _ = fs::remove_file(aside);
+        }
+        return Err(io("write", e));
+    }
+    Ok(earlier)
+}
+
+/// Puts back what [`rename_keeping_earlier`] replaced, latest first: each earlier file
+/// renamed back, a file that had none removed. Best effort: the commit already fails.
+fn restore(placed: &[Placed]) {
+    for p in placed.iter().rev() {
+        match &p.earlier {
+            Some(earlier) => {
+                let _ = fs::rename(earlier, &p.path);
+            }
+            None => {
+                let _ = fs::remove_file(&p.path);
+            }
+        }
+    }
+}
+
 impl Drop for FileSet {
     fn drop(&mut self) {
         for staged in self.staged.drain(..) {
@@ -126,22 +228,14 @@ impl Drop for FileSet {
     }
 }
 
-/// Renames `tmp` over `path`; where `path` is a link or a device, writes its bytes through
-/// [`write_atomic`] instead, which writes through links to files and into devices.
-fn place(tmp: &Path, path: &Path) -> Result<(), FileError> {
-    let io = |cause| FileError::Io {
+/// Writes `tmp`'s bytes through `path`, a link or a device, by [`write_atomic`] (which
+/// writes through links to files and into devices), then removes `tmp`.
+fn write_through(tmp: &Path, path: &Path) -> Result<(), FileError> {
+    let bytes = fs::read(tmp).map_err(|cause| FileError::Io {
         path: path.to_path_buf(),
         action: "write",
         cause,
-    };
-    let plain = match fs::symlink_metadata(path) {
-        Ok(m) => m.is_file(),
-        Err(_) => true,
-    };
-    if plain {
-        return fs::rename(tmp, path).map_err(io);
-    }
-    let bytes = fs::read(tmp).map_err(io)?;
+    })?;
     write_atomic(path, &bytes)?;
     let _ = fs::remove_file(tmp); // written through; a leftover is only a stale temporary
     Ok(())
@@ -193,6 +287,28 @@ mod tests {
         assert_eq!(fs::read(&a).unwrap(), b"new a");
         assert_eq!(fs::read(&b).unwrap(), b"new b");
         assert_eq!(names(&dir), ["a.png", "a_d.exr"]);
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_commit_that_cannot_place_a_file_puts_back_the_ones_it_placed() {
+        let dir = scratch("undo");
+        let (a, fresh, b) = (dir.join("a.png"), dir.join("new.png"), dir.join("b.exr"));
+        fs::write(&a, b"old a").unwrap();
+        // A folder where the set's last file goes: written through, and refused.
+        fs::create_dir(&b).unwrap();
+        let mut set = FileSet::new();
+        write_atomic(&set.stage(&a), b"new a").unwrap();
+        write_atomic(&set.stage(&fresh), b"new").unwrap();
+        write_atomic(&set.stage(&b), b"new b").unwrap();
+        assert!(set.commit().is_err());
+        assert_eq!(fs::read(&a).unwrap(), b"old a");
+        assert!(!fresh.exists(), "a file the set added stays out");
+        assert_eq!(
+            names(&dir),
+            ["a.png", "b.exr"],
+            "no temporary or kept-aside copy left"
+        );
         let _ = fs::remove_dir_all(&dir);
     }
 

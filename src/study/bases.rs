@@ -83,7 +83,7 @@ pub struct BasesStudy {
 /// the hemisphere; `progress` prints a line per environment.
 ///
 /// # Errors
-/// An environment that does not load.
+/// An environment that does not load or cannot be filtered, before any is measured.
 pub fn run(envs: &[String], quadrature: usize, progress: bool) -> Result<BasesStudy, EnvError> {
     let nodes = sphere_quadrature(quadrature);
     let normals = Normals::new(quadrature);
@@ -93,6 +93,14 @@ pub fn run(envs: &[String], quadrature: usize, progress: bool) -> Result<BasesSt
         latlong: LATLONG,
         ..HemisphereStudy::default()
     };
+    // Every map is loaded and checked before any is measured: a bad last map fails the
+    // run at once, not after the others' work. Loaded again below, one at a time, so that
+    // large maps are not all held at once.
+    if envs.len() > 1 {
+        for name in envs {
+            bases_hemisphere::check_filterable(name, &Source::load(name)?)?;
+        }
+    }
     for (i, name) in envs.iter().enumerate() {
         let started = Instant::now();
         let source = Source::load(name)?;
