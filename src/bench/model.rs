@@ -12,6 +12,9 @@ use crate::probe::{DeviceStates, Monitor, Probe, Segmented};
 use crate::render::SceneGpu;
 use crate::report::table::BenchRow;
 
+/// Fewest frames of a row in a speed state for its ×model to be taken there.
+pub(super) const MIN_STATE_FRAMES: usize = 3;
+
 /// What the model adds beside the rows.
 pub(super) struct ModelColumns {
     /// The share of the bench's monitor frames in each speed state.
@@ -63,15 +66,9 @@ pub(super) fn fill_model_columns(
         let load = row.own_mesh_load.unwrap_or(load);
         row.coverage = load.lanes / pixels;
         row.edge_pixels = load.edge_pixels;
-        // Like with like: the row's frames in the fastest state it ran in that the probe
-        // has a model of (its fastest build's), against that model; else every frame
-        // against the main model.
-        let states = &monitor.states;
         let modelled = probe.state_models.iter().map(|m| m.state);
-        let (model, measured, state, state_frames) = match times.fastest_state(states, modelled) {
-            Some((state, ms, frames)) => (probe.model_of(state), Some(ms), Some(state), frames),
-            None => (None, None, None, 0),
-        };
+        let (state, measured, state_frames) = compared_time(times, &monitor.states, modelled);
+        let model = state.and_then(|s| probe.model_of(s));
         let model = model.unwrap_or(&probe.model);
         let measured = measured.or(row.ms_median);
         let counts = model.with_untaken(&row.cost, &row.untaken_cost);
@@ -85,4 +82,49 @@ pub(super) fn fill_model_columns(
         bench_state_shares: shares,
         scene_checks,
     })
+}
+
+/// A row's time for its ×model (like with like): the median of its fastest build's frames in
+/// the fastest state it ran in that has a model (of `modelled`), with the state and its
+/// frame count; where fewer than [`MIN_STATE_FRAMES`] ran in such a state (a second-long
+/// dx11 frame whose monitor frames read as spikes), its fastest build's frames whatever
+/// the state, for the main model (state `None`, 0 frames) — never a lone frame the state
+/// filter happened to keep.
+pub(super) fn compared_time(
+    times: &Segmented,
+    states: &DeviceStates,
+    modelled: impl IntoIterator<Item = usize>,
+) -> (Option<usize>, Option<f64>, usize) {
+    match times.fastest_state(states, modelled) {
+        Some((state, ms, frames)) if frames >= MIN_STATE_FRAMES => (Some(state), Some(ms), frames),
+        _ => (None, times.fastest_build_median(), 0),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_row_with_few_frames_in_a_state_is_timed_by_its_fastest_build() {
+        let states = DeviceStates::from_monitor(&[3.0, 3.1, 3.2, 3.0, 3.1, 3.05, 3.15, 3.1]);
+        let spike = states.spike_ms * 2.0;
+        // Second-long frames, one per build: only the slowest sits between two monitor
+        // frames that are not spikes.
+        let mut heavy = Segmented::default();
+        heavy.push(0, 3.0, vec![1133.0], spike);
+        heavy.push(1, spike, vec![1200.0], 3.1);
+        heavy.push(2, 3.0, vec![1541.0], 3.1);
+        heavy.push(3, 3.1, vec![1300.0], spike);
+        assert_eq!(compared_time(&heavy, &states, [0]), (None, Some(1133.0), 0));
+        // Three frames in the state: taken there.
+        let mut settled = Segmented::default();
+        settled.push(0, 3.0, vec![10.0, 11.0], 3.1);
+        settled.push(1, 3.0, vec![12.0], 3.1);
+        settled.push(2, 3.0, vec![30.0], spike);
+        assert_eq!(
+            compared_time(&settled, &states, [0]),
+            (Some(0), Some(10.5), 3)
+        );
+    }
 }

@@ -159,8 +159,9 @@ pub struct BenchRow {
     pub model_ms: Option<f64>,
     /// Measured over model: the median of its frames in `model_state` (`probe::states`: the
     /// fastest state it ran in that the probe has a model of), of its fastest build there,
-    /// over that state's model time; where none ran in such a state (`model_state` `None`),
-    /// the median of all its frames over the main model's.
+    /// over that state's model time; where fewer than 3 frames ran in such a state
+    /// (`model_state` `None`), the median of its fastest build's frames over the main
+    /// model's.
     pub x_model: Option<f64>,
     pub model_state: Option<usize>,
     /// Frames of the row in `model_state`.
