@@ -567,13 +567,11 @@ fn errors_name_the_input_and_what_is_wrong() {
     );
 }
 
-/// SIGINT while a file is being written: the temporary is removed and the process exits
-/// with 130, leaving no output and no `.NAME.tmp-*` behind. The interruption is a hook of
-/// the `test-hooks` feature (`files::INTERRUPT_WHILE_WRITING_ENV`).
+/// `shvis ssbump` of a height map into `dir/ss.png` with the test hook `hook` on `file`,
+/// which interrupts it: asserts the exit status 130, returns the names left in `dir`
+/// (sorted; the height map `h.png` among them).
 #[cfg(feature = "test-hooks")]
-#[test]
-fn an_interrupted_write_leaves_no_temporary() {
-    let dir = Scratch::new("reliability", "sigint");
+fn interrupted_ssbump(dir: &Path, hook: &str, file: &str) -> Vec<String> {
     let h = dir.join("h.png");
     height_map(&h);
     let out = dir.join("ss.png");
@@ -589,7 +587,7 @@ fn an_interrupted_write_leaves_no_temporary() {
             "--out",
             s(&out),
         ],
-        &[(shvis::files::INTERRUPT_WHILE_WRITING_ENV, "ss.png")],
+        &[(hook, file)],
     );
     assert_eq!(
         run.status.code(),
@@ -597,13 +595,24 @@ fn an_interrupted_write_leaves_no_temporary() {
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
-    let left: Vec<String> = std::fs::read_dir(&*dir)
+    let mut left: Vec<String> = std::fs::read_dir(dir)
         .unwrap()
         .flatten()
         .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| n != "h.png")
         .collect();
-    assert!(left.is_empty(), "left behind: {left:?}");
+    left.sort();
+    left
+}
+
+/// SIGINT while a file is being written: the temporary is removed and the process exits
+/// with 130, leaving no output and no `.NAME.tmp-*` behind. The interruption is a hook of
+/// the `test-hooks` feature (`files::INTERRUPT_WHILE_WRITING_ENV`).
+#[cfg(feature = "test-hooks")]
+#[test]
+fn an_interrupted_write_leaves_no_temporary() {
+    let dir = Scratch::new("reliability", "sigint");
+    let left = interrupted_ssbump(&dir, shvis::files::INTERRUPT_WHILE_WRITING_ENV, "ss.png");
+    assert_eq!(left, ["h.png"], "left behind");
 }
 
 /// SIGINT while a set of files is being put in place waits for the set: the run exits with
@@ -613,9 +622,6 @@ fn an_interrupted_write_leaves_no_temporary() {
 #[test]
 fn an_interrupt_during_a_commit_waits_for_the_whole_set() {
     let dir = Scratch::new("reliability", "sigint-commit");
-    let h = dir.join("h.png");
-    height_map(&h);
-    let out = dir.join("ss.png");
     let set = [
         "ss.png",
         "ss.exr",
@@ -627,26 +633,7 @@ fn an_interrupt_during_a_commit_waits_for_the_whole_set() {
     for f in set {
         std::fs::write(dir.join(f), b"an earlier run").unwrap();
     }
-    let run = shvis(
-        &[
-            "ssbump",
-            "--height-map",
-            s(&h),
-            "--height-scale",
-            "2",
-            "--rays",
-            "8",
-            "--out",
-            s(&out),
-        ],
-        &[(shvis::files::INTERRUPT_WHILE_COMMITTING_ENV, "ss.png")],
-    );
-    assert_eq!(
-        run.status.code(),
-        Some(130),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let left = interrupted_ssbump(&dir, shvis::files::INTERRUPT_WHILE_COMMITTING_ENV, "ss.png");
     for f in set {
         assert_ne!(
             std::fs::read(dir.join(f)).unwrap(),
@@ -654,12 +641,6 @@ fn an_interrupt_during_a_commit_waits_for_the_whole_set() {
             "{f} is the earlier run's beside new files"
         );
     }
-    let mut left: Vec<String> = std::fs::read_dir(&*dir)
-        .unwrap()
-        .flatten()
-        .map(|e| e.file_name().to_string_lossy().into_owned())
-        .collect();
-    left.sort();
     let mut expected: Vec<String> = set
         .iter()
         .chain(&["h.png"])
