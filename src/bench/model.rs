@@ -85,20 +85,28 @@ pub(super) fn fill_model_columns(
 }
 
 /// A row's time for its ×model (like with like): the median of its fastest build's frames in
-/// the fastest state it ran in that has a model (of `modelled`), with the state and its
-/// frame count; where fewer than [`MIN_STATE_FRAMES`] ran in such a state (a second-long
-/// dx11 frame whose monitor frames read as spikes), its fastest build's frames whatever
-/// the state, for the main model (state `None`, 0 frames) — never a lone frame the state
-/// filter happened to keep.
+/// the fastest state of `modelled` that it ran at least [`MIN_STATE_FRAMES`] frames in,
+/// with the state and its frame count; where it ran that many in none (a second-long dx11
+/// frame whose monitor frames read as spikes), its fastest build's frames whatever the
+/// state, for the main model (state `None`, 0 frames), not the few frames a state filter
+/// happened to keep.
 pub(super) fn compared_time(
     times: &Segmented,
     states: &DeviceStates,
     modelled: impl IntoIterator<Item = usize>,
 ) -> (Option<usize>, Option<f64>, usize) {
-    match times.fastest_state(states, modelled) {
-        Some((state, ms, frames)) if frames >= MIN_STATE_FRAMES => (Some(state), Some(ms), frames),
-        _ => (None, times.fastest_build_median(), 0),
-    }
+    let mut modelled: Vec<usize> = modelled.into_iter().collect();
+    // States are numbered fastest first.
+    modelled.sort_unstable();
+    modelled
+        .into_iter()
+        .find_map(|state| match times.median_in(states, state) {
+            (Some(ms), frames) if frames >= MIN_STATE_FRAMES => {
+                Some((Some(state), Some(ms), frames))
+            }
+            _ => None,
+        })
+        .unwrap_or_else(|| (None, times.fastest_build_median(), 0))
 }
 
 #[cfg(test)]
@@ -126,5 +134,11 @@ mod tests {
             compared_time(&settled, &states, [0]),
             (Some(0), Some(10.5), 3)
         );
+        // Two frames in the fast state, three in the slow one: compared in the slow one.
+        let two = DeviceStates::from_monitor(&[1.0, 1.0, 1.0, 2.0, 2.0, 2.0]);
+        let mut split = Segmented::default();
+        split.push(0, 1.0, vec![5.0, 5.5], 1.0);
+        split.push(1, 2.0, vec![8.0, 8.5, 9.0], 2.0);
+        assert_eq!(compared_time(&split, &two, [1, 0]), (Some(1), Some(8.5), 3));
     }
 }

@@ -277,7 +277,8 @@ pub(super) struct StudyRnmArgs {
     spp: u32,
     #[arg(long, default_value_t = DEFAULT_EXPOSURE_EV, allow_hyphen_values = true, value_parser = finite_f32)]
     exposure: f32,
-    /// Output directory: rnm.md, rnm.json, fig1_<env>.png.
+    /// Output directory: rnm.md, rnm.json, fig1_<env>.png (the figures an earlier run's
+    /// rnm.json lists there are removed first).
     #[arg(short, long, default_value = "study-out")]
     out: PathBuf,
     #[command(flatten)]
@@ -761,11 +762,13 @@ fn run_rnm(a: StudyRnmArgs) -> Result<()> {
         cache_dir: None,
     };
     with_gpu(&a.gpu, |ctx| {
-        // The device is good: an earlier run's figures, of environments this one may not
-        // measure, go (study ndf's, fig1_ndf_*, stay).
-        clear_earlier_files(&a.out, |name| {
-            name.starts_with("fig1_") && name.ends_with(".png") && !name.starts_with("fig1_ndf_")
-        });
+        // The device is good: the figures an earlier run's report lists, of environments
+        // this one may not measure, go.
+        for figure in shvis::study::rnm::earlier_figures(&a.out) {
+            if figure.symlink_metadata().is_ok_and(|m| m.is_file()) {
+                let _ = std::fs::remove_file(&figure);
+            }
+        }
         let written =
             shvis::study::rnm_report::run(ctx, &a.envs, &settings, &a.out, a.exposure, &mut say)?;
         print_written(&written)?;

@@ -618,26 +618,51 @@ mod interrupt {
     const SLOTS: usize = 64;
     static WRITING: [AtomicPtr<c_char>; SLOTS] =
         [const { AtomicPtr::new(std::ptr::null_mut()) }; SLOTS];
-    /// How many [`Hold`]s are alive, and the signal that arrived while one was.
-    static HOLDS: AtomicUsize = AtomicUsize::new(0);
+    /// How many [`Hold`]s are alive, with [`EXITING`] set once a thread has begun to act
+    /// on a signal (remove the temporaries, exit): one word, so that a hold taken and a
+    /// signal acted on are ordered whichever threads they happen on.
+    static STATE: AtomicUsize = AtomicUsize::new(0);
+    const EXITING: usize = 1 << (usize::BITS - 1);
+    /// The signal that arrived, 0 for none.
     static PENDING: AtomicI32 = AtomicI32::new(0);
 
-    /// While alive, SIGINT and SIGTERM wait: the handler notes the signal and returns, and
-    /// the last hold to go acts on it (removes the temporaries, exits). A set's commit holds
-    /// one, so an interrupt cannot land between two of its renames.
+    /// While alive, SIGINT and SIGTERM wait: the handler (on whichever thread) notes the
+    /// signal and returns, and the last hold to go acts on it (removes the temporaries,
+    /// exits). A set's commit holds one, so an interrupt cannot land between two of its
+    /// renames. A second signal while one waits acts at once (a commit writing through a
+    /// device can block; a second Ctrl-C ends it).
     pub(super) struct Hold(());
 
     pub(super) fn hold() -> Hold {
-        HOLDS.fetch_add(1, Ordering::AcqRel);
-        Hold(())
+        loop {
+            let state = STATE.load(Ordering::SeqCst);
+            if state & EXITING != 0 {
+                // Another thread is removing the temporaries and ends the process.
+                loop {
+                    std::thread::park();
+                }
+            }
+            if STATE
+                .compare_exchange(state, state + 1, Ordering::SeqCst, Ordering::SeqCst)
+                .is_ok()
+            {
+                return Hold(());
+            }
+        }
     }
 
     impl Drop for Hold {
         fn drop(&mut self) {
-            if HOLDS.fetch_sub(1, Ordering::AcqRel) == 1 {
-                let signal = PENDING.swap(0, Ordering::AcqRel);
-                if signal != 0 {
-                    on_signal(signal);
+            // The handler stores PENDING before it reads STATE: if it saw this hold, this
+            // load sees its signal.
+            if STATE.fetch_sub(1, Ordering::SeqCst) == 1 {
+                let signal = PENDING.load(Ordering::SeqCst);
+                if signal != 0
+                    && STATE
+                        .compare_exchange(0, EXITING, Ordering::SeqCst, Ordering::SeqCst)
+                        .is_ok()
+                {
+                    exit_removing_temporaries(signal);
                 }
             }
         }
@@ -673,10 +698,28 @@ mod interrupt {
     }
 
     extern "C" fn on_signal(signal: libc::c_int) {
-        if HOLDS.load(Ordering::Acquire) > 0 {
-            PENDING.store(signal, Ordering::Release);
-            return;
+        let earlier = PENDING.swap(signal, Ordering::SeqCst);
+        loop {
+            let state = STATE.load(Ordering::SeqCst);
+            if state & EXITING != 0 {
+                return; // another thread acts on it
+            }
+            // Holds alive: the last to go acts on the signal, unless it is the second.
+            if state != 0 && earlier == 0 {
+                return;
+            }
+            if STATE
+                .compare_exchange(state, state | EXITING, Ordering::SeqCst, Ordering::SeqCst)
+                .is_ok()
+            {
+                exit_removing_temporaries(signal);
+            }
         }
+    }
+
+    /// Unlinks every registered temporary and exits with 128 + `signal`; only
+    /// async-signal-safe calls.
+    fn exit_removing_temporaries(signal: libc::c_int) -> ! {
         for slot in &WRITING {
             let c = slot.swap(std::ptr::null_mut(), Ordering::AcqRel);
             if !c.is_null() {

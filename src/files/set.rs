@@ -5,9 +5,10 @@
 //! Each file goes to a temporary `.NAME.tmp-PID-N.EXT` beside it (its extension kept, for
 //! the writers that pick the format by it), registered for removal on SIGINT or SIGTERM like
 //! [`write_atomic`]'s; once all are written each is renamed over its name, in the order
-//! staged, an earlier file kept aside (hard-linked to a temporary name) until every one is
-//! in place. Where one cannot be placed, those placed before it get their earlier files
-//! back; SIGINT and SIGTERM wait until the commit is over. A file whose name is a link or
+//! staged, an earlier file kept aside (hard-linked or copied to a temporary name) until
+//! every one is in place. Where one cannot be placed, those placed before it get their
+//! earlier files back; SIGINT and SIGTERM wait until the commit is over (a second one ends
+//! it at once). A file whose name is a link or
 //! a device is written through ([`write_atomic`]) after the renames, which it cannot undo:
 //! where a second such file fails, the first stays written. A temporary a killed run
 //! leaves is removed by [`remove_stale_temps`], which each set runs on the folders it
@@ -77,7 +78,8 @@ impl FileSet {
     /// # Errors
     /// [`FileError::Io`] naming the file that could not be placed (the temporaries are
     /// removed and the earlier files restored), or [`write_atomic`]'s error for a link or
-    /// device in the way.
+    /// device in the way; [`FileError::Io`] naming a [`FileSet::replaces`] file that could
+    /// not be removed, with the new set already in place.
     pub fn commit(mut self) -> Result<(), FileError> {
         let _hold = interrupt::hold();
         let written: Vec<PathBuf> = self.staged.iter().map(|s| s.path.clone()).collect();
@@ -108,8 +110,8 @@ impl FileSet {
             interrupt_after_placing(&staged.path);
         }
         for p in &placed {
-            if let Some(earlier) = &p.earlier {
-                let _ = fs::remove_file(earlier); // only a kept-aside copy; the sweep takes it
+            if let Earlier::Aside(aside) = &p.earlier {
+                let _ = fs::remove_file(aside); // only a kept-aside copy; the sweep takes it
             }
         }
         for path in self.earlier.iter().filter(|p| !written.contains(p)) {
@@ -143,10 +145,21 @@ fn interrupt_after_placing(path: &Path) {
     }
 }
 
-/// A file a commit renamed into place, and where its earlier file was kept aside.
+/// A file a commit renamed into place, and what became of its earlier file.
 struct Placed {
     path: PathBuf,
-    earlier: Option<PathBuf>,
+    earlier: Earlier,
+}
+
+/// The file that was at a [`Placed`] file's name before the commit.
+enum Earlier {
+    /// None was there.
+    Absent,
+    /// Kept aside at this temporary name until the commit is over.
+    Aside(PathBuf),
+    /// There, but it could be neither hard-linked nor copied aside (a file this process
+    /// cannot read, under `protected_hardlinks`): replaced for good.
+    Unkept,
 }
 
 /// `.NAME.tmp-PID-N.EXT` in `dir` for `path` (its extension kept).
@@ -175,46 +188,68 @@ fn is_plain_or_absent(path: &Path) -> bool {
 }
 
 /// Renames `tmp` over `path`, an earlier file at `path` first hard-linked to a temporary
-/// name beside it (returned, for [`restore`]); without hard links, copied there.
-fn rename_keeping_earlier(tmp: &Path, path: &Path) -> Result<Option<PathBuf>, FileError> {
-    let io = |action, cause| FileError::Io {
-        path: path.to_path_buf(),
-        action,
-        cause,
-    };
+/// name beside it (for [`restore`]); where the filesystem refuses the link, copied there;
+/// where neither can be done, replaced without a copy ([`Earlier::Unkept`]).
+fn rename_keeping_earlier(tmp: &Path, path: &Path) -> Result<Earlier, FileError> {
     let earlier = if path.exists() {
         let dir = match path.parent() {
             Some(d) if !d.as_os_str().is_empty() => d,
             _ => Path::new("."),
         };
         let aside = temporary_beside(dir, path);
-        if fs::hard_link(path, &aside).is_err() {
-            fs::copy(path, &aside).map_err(|e| io("keep the earlier file aside", e))?;
+        if fs::hard_link(path, &aside).is_ok() || copy_new(path, &aside).is_ok() {
+            Earlier::Aside(aside)
+        } else {
+            Earlier::Unkept
         }
-        Some(aside)
     } else {
-        None
+        Earlier::Absent
     };
-    if let Err(e) = fs::rename(tmp, path) {
-        if let Some(aside) = &earlier {
+    if let Err(cause) = fs::rename(tmp, path) {
+        if let Earlier::Aside(aside) = &earlier {
             let _ = fs::remove_file(aside);
         }
-        return Err(io("write", e));
+        return Err(FileError::Io {
+            path: path.to_path_buf(),
+            action: "write",
+            cause,
+        });
     }
     Ok(earlier)
 }
 
+/// Copies `from` to `to`, a name nothing holds (never over a file); a partial copy is
+/// removed.
+fn copy_new(from: &Path, to: &Path) -> std::io::Result<()> {
+    let mut source = File::open(from)?;
+    let mut copy = File::create_new(to)?;
+    std::io::copy(&mut source, &mut copy)
+        .map(drop)
+        .inspect_err(|_| {
+            let _ = fs::remove_file(to);
+        })
+}
+
 /// Puts back what [`rename_keeping_earlier`] replaced, latest first: each earlier file
-/// renamed back, a file that had none removed. Best effort: the commit already fails.
+/// renamed back, a file that had none removed, one not kept left new. Best effort: the
+/// commit already fails; an earlier file that cannot be put back is named in a warning
+/// (the next run's sweep of temporaries would remove it).
 fn restore(placed: &[Placed]) {
     for p in placed.iter().rev() {
         match &p.earlier {
-            Some(earlier) => {
-                let _ = fs::rename(earlier, &p.path);
+            Earlier::Aside(aside) => {
+                if let Err(e) = fs::rename(aside, &p.path) {
+                    log::warn!(
+                        "could not put back the earlier {} ({e}): it is at {}",
+                        p.path.display(),
+                        aside.display()
+                    );
+                }
             }
-            None => {
+            Earlier::Absent => {
                 let _ = fs::remove_file(&p.path);
             }
+            Earlier::Unkept => {}
         }
     }
 }

@@ -211,6 +211,23 @@ pub fn env_stem(env: &str) -> String {
         .collect()
 }
 
+/// The Fig. 1 composites an earlier run wrote into `dir`: one `fig1_<env>.png` per
+/// environment its `rnm.json` lists (none where there is no such report: a folder's other
+/// files are not the study's to remove).
+pub fn earlier_figures(dir: &Path) -> Vec<PathBuf> {
+    let Ok(bytes) = crate::files::read_bounded(&dir.join("rnm.json"), 1 << 24, "rnm.json") else {
+        return Vec::new();
+    };
+    let Ok(serde_json::Value::Array(results)) = serde_json::from_slice(&bytes) else {
+        return Vec::new();
+    };
+    results
+        .iter()
+        .filter_map(|r| r.get("env")?.as_str())
+        .map(|env| dir.join(format!("fig1_{}.png", env_stem(env))))
+        .collect()
+}
+
 /// Writes the Fig. 1 composites, then the report `rnm.md`, `rnm.json`
 /// ([`super::report::write`]) into `dir`; returns the paths.
 pub fn write_report(
@@ -270,6 +287,27 @@ pub fn write_report(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn earlier_figures_are_those_the_earlier_report_lists() {
+        let dir = std::env::temp_dir().join(format!("shvis-rnm-earlier-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        assert!(
+            earlier_figures(&dir).is_empty(),
+            "no report, nothing of the study's"
+        );
+        std::fs::write(
+            dir.join("rnm.json"),
+            r#"[{"env": "sky:15", "rows": []}, {"env": "a/studio.exr", "rows": []}]"#,
+        )
+        .unwrap();
+        assert_eq!(
+            earlier_figures(&dir),
+            [dir.join("fig1_sky15.png"), dir.join("fig1_studio.png")]
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     #[test]
     fn env_stems_are_file_safe() {
