@@ -7,7 +7,7 @@
 use super::rows::RowTechniques;
 use super::{BenchError, BenchSettings, Clock};
 use crate::gpu::{GpuError, TimingStats};
-use crate::probe::states::Segment;
+use crate::probe::states::{BUILD_AGREEMENT, Segment};
 use crate::probe::{Monitor, Probe, Segmented};
 use crate::report::table::BenchRow;
 use crate::technique::{HwPath, Technique};
@@ -23,11 +23,6 @@ const CHUNK_FRAMES: u32 = 3;
 /// Rounds more, at most, for a row that has no frames in a state the probe has a model of,
 /// or not two builds there that agree within [`BUILD_AGREEMENT`].
 const MODEL_STATE_ROUNDS: usize = 3;
-
-/// How far (relative) the second-fastest build of a row, in the state it is compared in,
-/// may run from the fastest before the row gets another round on a fresh build (most
-/// rows' builds agree within 5 %; an odd build runs 13–37 % slow).
-const BUILD_AGREEMENT: f64 = 0.1;
 
 /// Passes over the rows still to settle, at most, counting those that time none
 /// ([`Rounds::until_modelled`]).

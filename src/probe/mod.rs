@@ -24,11 +24,11 @@
 //! traffic by the look of it): a monitor frame after each point's frames tells which state
 //! they ran in ([`states`]); a model is fitted per state to the points' medians in it
 //! (the main one: the fastest state every point ran in, the device least disturbed). A
-//! point the fit misses by more than 8 %, or with fewer than 5 frames in a state of ≥ 20 %
-//! of the monitor frames, is timed in another batch of rounds on freshly built pipelines,
-//! its frames pooled with the first and its time that of its fastest build (a build can
-//! run ≈ 25 % slow for as long as it lives, `states`), then the model is fitted again —
-//! up to two such batches. A batch warms each pipeline up in its first round, and a cheap
+//! point with fewer than 5 frames in the fastest state of ≥ 20 % of the monitor frames, or
+//! that the fit misses by more than 8 % while no two of its builds agree within 10 %, is
+//! timed in another batch of rounds on freshly built pipelines, its frames pooled with the
+//! first and its time that of its fastest build (a build can run ≈ 25 % slow for as long
+//! as it lives, `states`), then the model is fitted again — up to two such batches. A batch warms each pipeline up in its first round, and a cheap
 //! point's (under 40 ms a frame) in every round.
 //!
 //! **Model.** The costs of [`crate::cost::CostModel`] are fitted to the points' medians by
@@ -300,8 +300,8 @@ pub fn run_with_monitor(
     let mut points: Vec<ProbePoint> = planned.iter().map(|p| p.point.clone()).collect();
     measure(&mut points, &timed, &states, states.main_state);
     let mut model = fit_points(ctx, &points)?;
-    // A point the fit misses by more than RETIME_ERROR, or with fewer than MIN_STATE_FRAMES
-    // frames in a state that held at least STATE_MODEL_SHARE of the monitor frames, is
+    // A point with fewer than MIN_STATE_FRAMES frames in the sought state, or that the fit
+    // misses by more than RETIME_ERROR while its builds disagree (`missed_points`), is
     // timed in another batch, on a pipeline built afresh (a build can run a shader ≈ 25 %
     // slower than another for as long as it lives, `states`); its segments join the first
     // ones, each point's time is its fastest build's, the states are told apart again over

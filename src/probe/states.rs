@@ -38,6 +38,12 @@ use crate::gpu::TimingStats;
 /// Monitor clusters closer than this ratio of their centres are one state.
 pub const STATE_RATIO: f64 = 1.25;
 
+/// How far (relative) the second-fastest build of a probe point or bench row, in the state
+/// it is measured in, may run from the fastest for the two to agree
+/// ([`Segmented::builds_agree_in`]): most builds agree within 5 %, an odd one runs 13–37 %
+/// slow.
+pub const BUILD_AGREEMENT: f64 = 0.1;
+
 /// The speed states the probe's monitor frames fell into.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DeviceStates {
