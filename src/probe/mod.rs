@@ -24,12 +24,13 @@
 //! traffic by the look of it): a monitor frame after each point's frames tells which state
 //! they ran in ([`states`]); a model is fitted per state to the points' medians in it
 //! (the main one: the fastest state every point ran in, the device least disturbed). A
-//! point with fewer than 5 frames in the fastest state of ≥ 20 % of the monitor frames, or
-//! that the fit misses by more than 8 % while no two of its builds agree within 10 %, is
-//! timed in another batch of rounds on freshly built pipelines, its frames pooled with the
-//! first and its time that of its fastest build (a build can run ≈ 25 % slow for as long
-//! as it lives, `states`), then the model is fitted again — up to two such batches. A batch warms each pipeline up in its first round, and a cheap
-//! point's (under 40 ms a frame) in every round.
+//! point with fewer than 5 frames (from fewer than 3 rounds) in the fastest state of ≥ 20 %
+//! of the monitor frames, or that the fit misses by more than 8 % while no two of its
+//! builds agree within 10 %, is timed in another batch of rounds on freshly built
+//! pipelines, its frames pooled with the first and its time that of its fastest build (a
+//! build can run ≈ 25 % slow for as long as it lives, `states`), then the model is fitted
+//! again — up to two such batches. A batch warms each pipeline up in its first round, and
+//! a cheap point's (under 40 ms a frame) in every round.
 //!
 //! **Model.** The costs of [`crate::cost::CostModel`] are fitted to the points' medians by
 //! a **minimax** fit: the costs that make the largest relative error over the points least
@@ -300,7 +301,7 @@ pub fn run_with_monitor(
     let mut points: Vec<ProbePoint> = planned.iter().map(|p| p.point.clone()).collect();
     measure(&mut points, &timed, &states, states.main_state);
     let mut model = fit_points(ctx, &points)?;
-    // A point with fewer than MIN_STATE_FRAMES frames in the sought state, or that the fit
+    // A point with too few frames in the sought state, or that the fit
     // misses by more than RETIME_ERROR while its builds disagree (`missed_points`), is
     // timed in another batch, on a pipeline built afresh (a build can run a shader ≈ 25 %
     // slower than another for as long as it lives, `states`); its segments join the first

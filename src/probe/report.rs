@@ -3,7 +3,9 @@
 //! against its prediction.
 
 use super::Probe;
-use super::schedule::{MIN_STATE_FRAMES, RETIME_BATCHES, RETIME_ERROR, STATE_MODEL_SHARE};
+use super::schedule::{
+    MIN_STATE_FRAMES, MIN_STATE_ROUNDS, RETIME_BATCHES, RETIME_ERROR, STATE_MODEL_SHARE,
+};
 use super::states::BUILD_AGREEMENT;
 use crate::cost::Kind;
 
@@ -50,7 +52,7 @@ impl Probe {
         );
         let retimed = self.points.iter().filter(|p| p.batches > 1).count();
         s += &format!(
-            "\ndevice: {} (a monitor frame after every point's frames; ms median: of the point's frames in the main state, of its fastest build there)\n\n{retimed} point(s) that had fewer than {MIN_STATE_FRAMES} frames in the fastest state holding {:.0} % of the monitor frames or more, or that a fit missed by more than {:.0} % while no two of their builds agreed within {:.0} %, timed in up to {RETIME_BATCHES} more batches of rounds, one at a time while so\n",
+            "\ndevice: {} (a monitor frame after every point's frames; ms median: of the point's frames in the main state, of its fastest build there)\n\n{retimed} point(s) that had fewer than {MIN_STATE_FRAMES} frames, from fewer than {MIN_STATE_ROUNDS} rounds, in the fastest state holding {:.0} % of the monitor frames or more, or that a fit missed by more than {:.0} % while no two of their builds agreed within {:.0} %, timed in up to {RETIME_BATCHES} more batches of rounds, one at a time while so\n",
             self.states.describe(),
             100.0 * STATE_MODEL_SHARE,
             100.0 * RETIME_ERROR,

@@ -73,8 +73,14 @@ pub(super) const RETIME_BATCHES: usize = 2;
 pub(super) const STATE_MODEL_SHARE: f64 = 0.2;
 
 /// Frames in a state below which a point's median there is too few to fit (one run put the
-/// 2·128² grid at 1.10× the model on 2 frames).
+/// 2·128² grid at 1.10× the model on 2 frames), unless they come from [`MIN_STATE_ROUNDS`]
+/// rounds.
 pub(super) const MIN_STATE_FRAMES: usize = 5;
+
+/// Rounds with frames in a state that are enough whatever their frames: a point of 40 ms
+/// or more has one frame a round, so 5 frames of it in a state that holds 84 % of the
+/// monitor frames would need every round there, and 67 of 90 points took another batch.
+pub(super) const MIN_STATE_ROUNDS: usize = 3;
 
 /// The untaken-branch points: indexed uniform reads (a cluster's block, as the clustered
 /// techniques' boundary path reads them) in a branch that no lane takes.
@@ -404,7 +410,8 @@ impl<'a> Batches<'a> {
 }
 
 /// The points to time again (`run_with_monitor`): those with fewer than
-/// [`MIN_STATE_FRAMES`] frames in the [`sought_state`], and those `model` misses by more
+/// [`MIN_STATE_FRAMES`] frames in the [`sought_state`] from fewer than [`MIN_STATE_ROUNDS`]
+/// rounds, and those `model` misses by more
 /// than [`RETIME_ERROR`] unless two of their builds agree there within [`BUILD_AGREEMENT`]
 /// — such a miss is the model's, which another build would only repeat (a minimax fit's
 /// worst points sit near its largest error, 7–11 % on this project's VM).
@@ -430,7 +437,9 @@ fn needs_retime(
     timed: &Segmented,
     states: &DeviceStates,
 ) -> bool {
-    let unseen = timed.ran_in(states, sought_state(states)).len() < MIN_STATE_FRAMES;
+    let sought = sought_state(states);
+    let rounds = timed.0.iter().filter(|s| states.ran_in(s, sought)).count();
+    let unseen = timed.ran_in(states, sought).len() < MIN_STATE_FRAMES && rounds < MIN_STATE_ROUNDS;
     let missed = (predicted_ms - measured_ms).abs() > RETIME_ERROR * measured_ms;
     let settled = timed.builds_agree_in(states, states.main_state, BUILD_AGREEMENT);
     unseen || (missed && !settled)
@@ -511,14 +520,21 @@ mod tests {
         seen.push(0, 5.0, vec![14.0], 5.0);
         seen.push(0, 5.0, vec![14.2], 5.0);
         assert!(!needs_retime(10.1, 10.1, &seen, &states));
-        // Four in the fast state (one beside a slow monitor frame): timed again.
+        // Two rounds of two frames in the fast state (one beside a slow monitor frame):
+        // timed again.
         let mut unseen = Segmented::default();
-        for ms in [10.0, 10.1, 10.2, 10.1] {
-            unseen.push(0, 3.0, vec![ms], 3.0);
-        }
-        unseen.push(0, 3.0, vec![10.0], 5.0);
+        unseen.push(0, 3.0, vec![10.0, 10.1], 3.0);
+        unseen.push(0, 3.0, vec![10.2, 10.1], 3.0);
+        unseen.push(0, 3.0, vec![10.0, 10.2], 5.0);
         assert_eq!(unseen.ran_in(&states, 0).len(), 4);
         assert!(needs_retime(10.1, 10.1, &unseen, &states));
+        // Three rounds of one frame: enough.
+        let mut three_rounds = Segmented::default();
+        for ms in [40.0, 40.5, 40.2] {
+            three_rounds.push(0, 3.0, vec![ms], 3.0);
+        }
+        three_rounds.push(0, 3.0, vec![40.1], 5.0);
+        assert!(!needs_retime(40.2, 40.2, &three_rounds, &states));
     }
 
     #[test]
