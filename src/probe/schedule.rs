@@ -411,10 +411,10 @@ impl<'a> Batches<'a> {
 
 /// The points to time again (`run_with_monitor`): those with fewer than
 /// [`MIN_STATE_FRAMES`] frames in the [`sought_state`] from fewer than [`MIN_STATE_ROUNDS`]
-/// rounds, and those `model` misses by more
-/// than [`RETIME_ERROR`] unless two of their builds agree there within [`BUILD_AGREEMENT`]
-/// — such a miss is the model's, which another build would only repeat (a minimax fit's
-/// worst points sit near its largest error, 7–11 % on this project's VM).
+/// rounds, and those `model` misses by more than [`RETIME_ERROR`] unless two of their
+/// builds agree within [`BUILD_AGREEMENT`] — such a miss is the model's, which another
+/// build would only repeat (a minimax fit's worst points sit near its largest error, 7–11 %
+/// on this project's VM).
 pub(super) fn missed_points(
     model: &CostModel,
     points: &[ProbePoint],
