@@ -57,10 +57,10 @@ impl Rates {
     /// a fresh clone (the headline set on dx9, dx10 and dx11 at 1280×800), the frames' rate
     /// per frame a row would draw were it not slow (the slow dx11 rows draw one a round after
     /// their first; 0.07–0.1 s per such frame-megapixel across its speed states). Its probe
-    /// took 37 s where the device kept one speed state and 76 s where it switched between
-    /// two (most points then timed in another batch); the rate is between.
+    /// at 5 frames a point took 33–62 s over six such runs, one or two speed states (43 s
+    /// the median).
     pub const LAVAPIPE: Rates = Rates {
-        probe: 9.0,
+        probe: 7.0,
         reference: 0.215,
         build: 0.17,
         frame: 0.072,
