@@ -438,8 +438,14 @@ fn needs_retime(
     states: &DeviceStates,
 ) -> bool {
     let sought = sought_state(states);
-    let rounds = timed.0.iter().filter(|s| states.ran_in(s, sought)).count();
-    let unseen = timed.ran_in(states, sought).len() < MIN_STATE_FRAMES && rounds < MIN_STATE_ROUNDS;
+    let (frames, rounds) = timed
+        .0
+        .iter()
+        .filter(|s| states.ran_in(s, sought))
+        .fold((0, 0), |(frames, rounds), s| {
+            (frames + s.ms.len(), rounds + 1)
+        });
+    let unseen = frames < MIN_STATE_FRAMES && rounds < MIN_STATE_ROUNDS;
     let missed = (predicted_ms - measured_ms).abs() > RETIME_ERROR * measured_ms;
     let settled = timed.builds_agree_in(states, states.main_state, BUILD_AGREEMENT);
     unseen || (missed && !settled)
@@ -447,7 +453,7 @@ fn needs_retime(
 
 /// The state whose frames the probe seeks: the fastest holding [`STATE_MODEL_SHARE`] of
 /// the monitor frames (the main state where none does).
-pub(super) fn sought_state(states: &DeviceStates) -> usize {
+fn sought_state(states: &DeviceStates) -> usize {
     (0..states.count())
         .find(|&state| states.shares[state] >= STATE_MODEL_SHARE)
         .unwrap_or(states.main_state)
