@@ -8,7 +8,7 @@
 //! every row — the row rebuilt for each, `warmup` untimed frames before the first and one
 //! before each later round — so that a slow spell of a shared device spreads over all rows;
 //! a row that ran in none of the speed states the probe has a model of, or in one on fewer
-//! than two builds whose medians agree within
+//! than two builds (each with a chunk's frames there) whose medians agree within
 //! [`BUILD_AGREEMENT`](crate::probe::states::BUILD_AGREEMENT), gets up to
 //! [`MODEL_STATE_ROUNDS`] more (`probe::states`).
 

@@ -61,13 +61,7 @@ impl Rounds<'_> {
         let tech = self.rows_of.build(technique, path)?;
         clock.split(|p| &mut p.build);
         let build = times.0.last().map_or(0, |s| s.build + 1);
-        let timed: Vec<f64> = times.0.iter().flat_map(|s| s.ms.iter().copied()).collect();
-        let frames =
-            if !timed.is_empty() && crate::gpu::frame_timing::median(&timed) >= SLOW_FRAME_MS {
-                1
-            } else {
-                self.per_round
-            };
+        let frames = self.round_frames(times);
         let scene = self.rows_of.scene;
         times.0.extend(timed_segments(
             self.monitor,
@@ -78,6 +72,17 @@ impl Rounds<'_> {
         )?);
         clock.split(|p| &mut p.render);
         Ok(())
+    }
+
+    /// Frames a round after the first times of a row with these frames so far: one for a
+    /// row slower than [`SLOW_FRAME_MS`], else `per_round`.
+    fn round_frames(&self, times: &Segmented) -> u32 {
+        let timed: Vec<f64> = times.0.iter().flat_map(|s| s.ms.iter().copied()).collect();
+        if !timed.is_empty() && crate::gpu::frame_timing::median(&timed) >= SLOW_FRAME_MS {
+            1
+        } else {
+            self.per_round
+        }
     }
 
     /// Rounds 2 … `rounds` over every row.
@@ -105,8 +110,9 @@ impl Rounds<'_> {
     /// A row with no frames in a state the probe has a model of (the device sat in another
     /// through all its rounds) is timed in up to MODEL_STATE_ROUNDS more until it has some:
     /// else its ×model would set frames of one state against the model of another. So is a
-    /// row whose frames in its fastest modelled state came from fewer than two builds, or
-    /// whose two fastest builds there differ by more than BUILD_AGREEMENT: a build can run
+    /// row whose frames in its fastest modelled state came from fewer than two builds with
+    /// a chunk's frames there (CHUNK_FRAMES, or a round's where a round times fewer), or
+    /// whose two fastest such builds there differ by more than BUILD_AGREEMENT: a build can run
     /// ≈ 25 % slow for as long as it lives (`probe::states`), and its time there is its
     /// fastest build's. Not with `--specular`: its rows differ by the specular term bound
     /// when they were measured, and only the last one is bound now.
@@ -130,7 +136,14 @@ impl Rounds<'_> {
                 .filter(|&i| {
                     match samples[i].fastest_state(&monitor.states, modelled.iter().copied()) {
                         Some((state, _, _)) => {
-                            !samples[i].builds_agree_in(&monitor.states, state, BUILD_AGREEMENT)
+                            // A build counts with the frames of one chunk of a round there.
+                            let frames = self.round_frames(&samples[i]).min(CHUNK_FRAMES);
+                            !samples[i].builds_agree_in(
+                                &monitor.states,
+                                state,
+                                BUILD_AGREEMENT,
+                                frames as usize,
+                            )
                         }
                         None => true,
                     }

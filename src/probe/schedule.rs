@@ -447,7 +447,7 @@ fn needs_retime(
         });
     let unseen = frames < MIN_STATE_FRAMES && rounds < MIN_STATE_ROUNDS;
     let missed = (predicted_ms - measured_ms).abs() > RETIME_ERROR * measured_ms;
-    let settled = timed.builds_agree_in(states, states.main_state, BUILD_AGREEMENT);
+    let settled = timed.builds_agree_in(states, states.main_state, BUILD_AGREEMENT, 1);
     unseen || (missed && !settled)
 }
 

@@ -262,9 +262,17 @@ impl Segmented {
     /// within `tolerance` (relative) of the first's. A row's time there is its fastest
     /// build's; a second build close to it says that build is not the odd one (builds of
     /// one pipeline ran 1.00×, 1.18× and 1.37× the fastest — pca12v25, one bench — where
-    /// most rows' builds agree within 5 %). False with fewer than two builds.
-    pub fn builds_agree_in(&self, states: &DeviceStates, state: usize, tolerance: f64) -> bool {
-        match self.build_medians(|s| states.ran_in(s, state))[..] {
+    /// most rows' builds agree within 5 %). Only builds with at least `min_frames` frames
+    /// in `state` count: two builds of a frame or two each can agree by chance. False with
+    /// fewer than two such builds.
+    pub fn builds_agree_in(
+        &self,
+        states: &DeviceStates,
+        state: usize,
+        tolerance: f64,
+        min_frames: usize,
+    ) -> bool {
+        match self.build_medians_of(|s| states.ran_in(s, state), min_frames)[..] {
             [fastest, second, ..] => second <= fastest * (1.0 + tolerance),
             _ => false,
         }
@@ -284,6 +292,11 @@ impl Segmented {
     /// Each build's median over the segments `keep` keeps (builds with frames there),
     /// fastest first.
     fn build_medians(&self, keep: impl Fn(&Segment) -> bool) -> Vec<f64> {
+        self.build_medians_of(keep, 1)
+    }
+
+    /// [`Self::build_medians`] of the builds with at least `min_frames` frames kept.
+    fn build_medians_of(&self, keep: impl Fn(&Segment) -> bool, min_frames: usize) -> Vec<f64> {
         let kept: Vec<&Segment> = self.0.iter().filter(|s| keep(s)).collect();
         let mut builds: Vec<usize> = kept.iter().map(|s| s.build).collect();
         builds.sort_unstable();
@@ -296,6 +309,9 @@ impl Segmented {
                     .filter(|s| s.build == b)
                     .flat_map(|s| s.ms.iter().copied())
                     .collect();
+                if frames.len() < min_frames {
+                    return None;
+                }
                 TimingStats::from_ms(&frames).map(|t| t.ms_median)
             })
             .collect();
@@ -381,17 +397,22 @@ mod tests {
         point.push(1, 1.0, vec![59.0], 1.0);
         assert_eq!(point.median_in(&states, 0), (Some(59.0), 7));
         // 59 against 74: the fastest two builds disagree (a third is asked for) by 25 %.
-        assert!(!point.builds_agree_in(&states, 0, 0.1));
-        assert!(point.builds_agree_in(&states, 0, 0.3));
+        assert!(!point.builds_agree_in(&states, 0, 0.1, 1));
+        assert!(point.builds_agree_in(&states, 0, 0.3, 1));
         point.push(2, 1.0, vec![62.0, 63.0], 1.0);
-        assert!(point.builds_agree_in(&states, 0, 0.1));
+        assert!(point.builds_agree_in(&states, 0, 0.1, 1));
+        // Asked for three frames a build: build 2's two do not count, and 59 against 74
+        // disagree again.
+        assert!(!point.builds_agree_in(&states, 0, 0.1, 3));
+        point.push(2, 1.0, vec![61.0], 1.0);
+        assert!(point.builds_agree_in(&states, 0, 0.1, 3));
         assert_eq!(point.median_in(&states, 0).0, Some(59.0));
         let two = DeviceStates::from_monitor(&[1.0, 1.0, 2.0, 2.0]);
         let mut row = Segmented::default();
         row.push(0, 1.0, vec![60.0], 1.0);
         row.push(1, 2.0, vec![70.0], 2.0);
         // One build in each state: none agrees with another, however loose the tolerance.
-        assert!(!row.builds_agree_in(&two, 0, 1.0) && !row.builds_agree_in(&two, 1, 1.0));
+        assert!(!row.builds_agree_in(&two, 0, 1.0, 1) && !row.builds_agree_in(&two, 1, 1.0, 1));
         assert_eq!(point.fastest_build_median(), Some(59.0));
         // One build: the median of all its frames.
         let mut one = Segmented::default();
