@@ -21,6 +21,7 @@ pub(super) trait RayLanes: Copy {
     fn add(self, o: Self) -> Self;
     fn sub(self, o: Self) -> Self;
     fn mul(self, o: Self) -> Self;
+    fn div(self, o: Self) -> Self;
     /// Per lane `self > o ? self : o` (`maxps` operand order).
     fn max(self, o: Self) -> Self;
     /// Per lane `self < o ? self : o` (`minps` operand order).
@@ -70,6 +71,10 @@ impl RayLanes for Vec4 {
     #[inline(always)]
     fn mul(self, o: Self) -> Self {
         self * o
+    }
+    #[inline(always)]
+    fn div(self, o: Self) -> Self {
+        self / o
     }
     #[inline(always)]
     fn max(self, o: Self) -> Self {
@@ -161,7 +166,7 @@ mod x86 {
     /// The arithmetic methods of [`RayLanes`] for a register wrapper `$lanes` of `$width`
     /// lanes, from its intrinsics (the same shape for AVX2 and AVX-512F).
     macro_rules! arithmetic {
-        ($lanes:ident, $width:literal, $load:ident, $store:ident, $set1:ident, $add:ident, $sub:ident, $mul:ident, $max:ident, $min:ident) => {
+        ($lanes:ident, $width:literal, $load:ident, $store:ident, $set1:ident, $add:ident, $sub:ident, $mul:ident, $div:ident, $max:ident, $min:ident) => {
             #[inline(always)]
             fn load(src: &[f32]) -> Self {
                 assert!(src.len() >= $width);
@@ -187,6 +192,10 @@ mod x86 {
             #[inline(always)]
             fn mul(self, o: Self) -> Self {
                 $lanes(unsafe { $mul(self.0, o.0) })
+            }
+            #[inline(always)]
+            fn div(self, o: Self) -> Self {
+                $lanes(unsafe { $div(self.0, o.0) })
             }
             #[inline(always)]
             fn max(self, o: Self) -> Self {
@@ -359,6 +368,7 @@ mod x86 {
             _mm256_add_ps,
             _mm256_sub_ps,
             _mm256_mul_ps,
+            _mm256_div_ps,
             _mm256_max_ps,
             _mm256_min_ps
         );
@@ -405,6 +415,7 @@ mod x86 {
             _mm512_add_ps,
             _mm512_sub_ps,
             _mm512_mul_ps,
+            _mm512_div_ps,
             _mm512_max_ps,
             _mm512_min_ps
         );

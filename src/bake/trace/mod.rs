@@ -1,5 +1,7 @@
-//! Occlusion rays against a mesh, over an obvhs compressed-wide BVH (CWBVH, Ylitie et al.
-//! 2017) of its triangles; Möller–Trumbore intersection, both faces of a triangle occlude.
+//! Occlusion and closest-hit rays against a mesh, over an obvhs compressed-wide BVH
+//! (CWBVH, Ylitie et al. 2017) whose leaves are clusters of up to
+//! [`CLUSTER`](cluster::CLUSTER) = 16 triangles ([`cluster`]); Möller–Trumbore
+//! intersection, both faces of a triangle occlude.
 //!
 //! Self-intersection (DESIGN §6 "rays grazing surfaces"): a ray leaving a surface starts at
 //! [`Tracer::offset_origin`], the surface point moved along its geometric normal by
@@ -26,77 +28,42 @@
 //! costs one 8-slot slab test — obvhs's own single-ray test at 8 wide — whose byte of
 //! entered slots is transposed into the slots' ray masks (`movemask_epi8`); without AVX2
 //! the rays go in blocks of 4 lanes, each block costing one 4-ray slab test per occupied
-//! child ([`lanes`]). On big (507k triangles) a node is reached by 5.7 rays in 1.9 blocks of
-//! 8 on average, so a test per ray beats a test per child and block; a node reached by one
-//! ray skips the transposition (each slot it enters gets the whole mask). The entered
-//! slots are then walked as bit sets, not a branch per slot. In a leaf, the
-//! ray-independent part of Möller–Trumbore (edges and normal, precomputed per triangle at
-//! build; 1/(n·d) per triangle and direction) is shared and the rest runs W rays per
-//! vector, except for a triangle reached by one live ray: it gets obvhs's scalar
-//! operations on the precomputed edges, without the lanes' broadcasts. On big that is
-//! nearly every triangle visit (1.0 ray each: about 9 triangles per 512² texel, so
-//! neighbouring texels' rays part before the leaves). A ray found occluded leaves every
-//! mask.
+//! child ([`lanes`]). Few rays of a packet reach a node below the top levels, so a test
+//! per ray beats a test per child and block; a node reached by one ray skips the
+//! transposition (each slot it enters gets the whole mask). The entered slots are then
+//! walked as bit sets, not a branch per slot. In a leaf each live ray meets the cluster's
+//! triangles W lanes at a time (16 / W vector tests, stopping at the first hit); a ray
+//! found occluded leaves every mask.
 //!
-//! On big the walk pays per visit more than it waits on memory: with 36-byte triangle
-//! records instead of 64, with the children a packet enters (or the triangle records of
-//! a node's leaves) prefetched before any is read, or with four walks interleaved a visit
-//! at a time (one walk's misses overlapping the others' work), its queries run no faster;
-//! with the one-ray paths above they run at 15.2–16.1 Mrays/s on 2 threads, 12.0
-//! without. Fans of one texel's directions share no more nodes than packets of one
-//! direction (5.7 rays a node visit either way) and make the house's walk a third slower;
-//! packets of two neighbouring directions (32 texels each, a half of the packet per
-//! direction) make big's a tenth slower. Testing a node for two rays per AVX-512 register
-//! (each ray's 8 slots in one half) leaves big's queries as fast (15.2–16.0 Mrays/s
-//! against 14.8–15.8) and makes the house's 8 % slower: Zen 4 runs a 512-bit operation
-//! as two 256-bit ones.
+//! # Why clusters
+//!
+//! With obvhs's own leaves (1–3 triangles, 1.5 on average on big, 507k triangles, at a
+//! mean depth of 6.9) most of big's query time went to the chain of boxes from the root
+//! down to each origin's own leaf, which every direction from a texel walks, and to cold
+//! reads of single triangles. Leaves of 16 triangles (11.2 on average on big, 45k
+//! clusters under 9.2k nodes, 0.7 MB of nodes) take a level off that chain and turn a
+//! leaf's triangles into a few vector tests on adjacent cache lines. Big's bake in one
+//! sitting (2 threads): 20.3–21.0 Mrays/s with 16 a cluster, 14.5–17.7 with 24, 17.4–19.2
+//! with 32, 14.3–14.8 with obvhs's leaves; 8 a cluster gave 16.4–19.2 in another sitting
+//! where obvhs's leaves gave 14.3–15.1. The peer house (23k triangles) runs at least as
+//! fast; the built-in house (448 large triangles) bakes about 15 % slower, a ray that
+//! crosses a cluster's box meeting all its triangles.
 //!
 //! The two vCPUs of the machine these figures come from see about 8 MiB of its L3: a
 //! chain of dependent loads costs 18 ns a load within 8 MiB and 110–150 ns beyond 12 MiB,
-//! with huge pages or without. Big's triangle records alone are 32 MB (the house's
-//! 1.5 MB), so on big a visit to a cold node or triangle is a DRAM read, on the house it is
-//! not; 36-byte records (18 MB) do not bring big within the cache either.
+//! with huge pages or without. Big's clusters are 35 MB (768 bytes each), so on big the
+//! first read of a cluster is a DRAM read, while its nodes stay in the cache.
 //!
-//! A timer profile of big's walk puts 14 % of its samples at the first read of a
-//! triangle record and 5 % at a node's. The far triangles are cold for every packet:
-//! the parallel rays of neighbouring groups (64 texels, about 1.5 scene units across)
-//! share few of them (walking 4 or 16 groups a direction at a time is 3 % or 7 %
-//! slower). 23 % of big's
-//! rays are occluded, and a texel's occluder at one direction almost never occludes its
-//! next (0.25 % of rays), so testing it first (an occluder cache) costs 3 %.
-//!
-//! Where a ray's work goes on big (counted over a 512² × 256 bake): 9.3 node tests and
-//! 3.1 triangle tests per ray. 73 % of the node tests are at nodes whose box holds the
-//! ray's origin — every direction from a texel walks the same chain of boxes down to its
-//! own leaf (leaves hold 1.5 triangles on average, at a mean depth of 6.9) — and 65 % of
-//! the triangle tests are on triangles wholly below the origin's horizon, its neighbours.
-//! Those triangles are in cache: leaving them out of the tests (a per-packet table) does
-//! not speed the walk. Letting steep rays skip the subtree around their origin (sound
-//! where every point of it, seen from the origin, lies lower than the ray rises) takes
-//! 12–18 % off the query time when it spans one to three levels, but bounding each
-//! texel's subtree costs about as much time as it saves at 256 directions.
-//!
-//! The chain holds a bit over half of big's bake: cut every ray at 10 ray offsets (the
-//! chain and its immediate neighbours: 7.0 node tests, 1.5 triangle tests per ray) and
-//! the bake runs 1.75× as fast. Testing each texel's chain siblings from a per-texel list
-//! instead (40 boxes relative to the origin, a conservative test 8 at a time and the
-//! exact one for the 1.5 that pass) costs more than the whole packet walk. Walking a lone
-//! ray's subtree with its own stack (44 % of visits hold one ray) or a costlier build
-//! (PLOC's widest search with spatial splits and 20 % reinsertion: 2.6 % fewer node
-//! tests) does not speed the walk either.
-//!
-//! Splitting each ray at a near radius r does not pay either. Per packet, each origin's
-//! near set is gathered from the BVH once (the triangles whose box meets a cube of
-//! half-side a bit over r around it, less those wholly below its horizon), each ray is
-//! tested against it 8 triangles per vector, and the rays left walk with the node tests'
-//! lower bound on t raised from obvhs's 1e-4 to r, so the chain's lower boxes drop out.
-//! With r from 16 ray offsets (halved while a set holds over 24 triangles: 5.9 per set
-//! on big, r = 14.5 offsets on average) big's queries alone run at 17–22 Mrays/s against
-//! 15–16, but gathering the sets costs 0.06 s a thread of a 0.5 s bake: the bake ran
-//! 12.0–18.0 Mrays/s against 13.5–15.4 in the same sitting, and the house's about 4 % slower.
-//! Raising the bound alone (no near sets, so wrong answers) shows the ceiling: big's
-//! queries at about 18, 20, 22 and 24 Mrays/s (against 16) for r = 5, 10, 17 and 35 offsets:
-//! too little even before the sets' cost to bring big's bake to twice Embree's rate.
+//! Measured with obvhs's leaves and not kept: splitting each ray at a near radius r
+//! (per packet each origin's near set, the triangles whose box meets a cube of half-side
+//! a bit over r less those wholly below its horizon, tested 8 per vector, the other rays
+//! walking with the node tests' lower bound on t raised from 1e-4 to r) ran big's queries
+//! at 17–22 Mrays/s against 15–16, but gathering the sets cost 0.06 s a thread of a 0.5 s
+//! bake (bake 12.0–18.0 against 13.5–15.4; the house about 4 % slower). Fans of one
+//! texel's directions instead of packets of one direction, packets of two neighbouring
+//! directions, prefetching the children a packet enters, four walks interleaved a visit
+//! at a time, and testing two rays' nodes per AVX-512 register (Zen 4 runs a 512-bit
+//! operation as two 256-bit ones) were no faster either.
 //!
 //! A node reached by at least [`PACKET_TEST_RAYS`] rays is first tested for the whole
 //! packet (AVX2 walk): every operation of the slab test is monotonic in each origin
@@ -104,13 +71,14 @@
 //! origins it bounds every ray's t_min and t_max; where the bounds decide every slot (all
 //! rays enter it, or none does) the per-ray tests are skipped, and each ray's answer is
 //! the one its own test gives. Nodes reached by many rays are the upper ones, large beside
-//! the packet: two thirds of the house's ray-node tests are at nodes reached by 32 rays or
-//! more, 44 % of big's. Lower nodes and triangles are not tested so: at every node and
-//! triangle, 58 % of the house's child tests and 96 % of its triangle tests are undecided
-//! at 64 texels per packet, and the walk is slower with it.
+//! the packet. Lower nodes and leaves are not tested so: with obvhs's leaves, 58 % of the
+//! house's child tests and 96 % of its triangle tests were undecided at 64 texels per
+//! packet, and the walk was slower with it.
 //!
-//! Bit-identity: every per-ray operation is the very IEEE operation, in the very order
-//! and with the same min/max operand order (NaN handling), that obvhs's single-ray
+//! Bit-identity: [`Tracer::occluded`] walks the same BVH with obvhs's single-ray
+//! traversal, meeting a cluster's triangles one by one with obvhs's `Triangle::intersect`.
+//! Every per-ray operation of the coherent walk is the very IEEE operation, in the very
+//! order and with the same min/max operand order (NaN handling), that obvhs's
 //! `CwBvhNode::intersect_ray_simd` and `Triangle::intersect` perform (products shared by
 //! the packet are the same products), and a ray enters a child exactly when its own
 //! single-ray traversal would, so each ray's answer is bit-for-bit that of
@@ -124,7 +92,8 @@
 //! lightmap bakes' gathers need it (`super::surface::PointGroup`): every ray
 //! keeps the far end of its interval (∞, then its nearest hit so far), the node tests cull
 //! by it per ray instead of by one shared `t_max`, a triangle's hit replaces a ray's when
-//! strictly nearer, and no ray leaves the walk early. Each ray's `t` is the nearest
+//! strictly nearer (in a cluster, of equal ts the first lane's, as [`Tracer::closest_hit`]
+//! keeps), and no ray leaves the walk early. Each ray's `t` is the nearest
 //! [`Tracer::closest_hit`] finds (the same operations); only where two triangles are hit
 //! at exactly the same `t` may the walks' orders pick different ones.
 
@@ -132,20 +101,21 @@ use std::time::Duration;
 
 use glam::{Vec3, Vec3A, Vec4};
 use obvhs::{
-    BvhBuildParams,
-    cwbvh::{CwBvh, builder::build_cwbvh_from_tris, node::CwBvhNode},
+    cwbvh::{CwBvh, node::CwBvhNode},
     ray::{Ray, RayHit, safe_inverse},
     triangle::Triangle,
 };
 
 use crate::scene::Mesh;
 
+mod cluster;
 mod lanes;
 
 /// The variable that picks the tracer's SIMD width, and the widths it takes.
 pub const LANES_ENV: &str = "SHVIS_TRACE_LANES";
 /// The values [`LANES_ENV`] may hold.
 pub const LANES_VALUES: [&str; 3] = ["4", "8", "16"];
+use cluster::{Cluster, LaneRay};
 use lanes::{RayLanes, Width};
 
 /// Normal offset of ray origins relative to the scene's bounding-box diagonal.
@@ -286,43 +256,20 @@ fn slots(set: impl Into<u64>) -> impl Iterator<Item = usize> {
 
 /// Any-hit ray queries against a static mesh.
 pub struct Tracer {
-    /// `None` for a mesh without a usable triangle: nothing occludes.
+    /// Over the triangle clusters; `None` for a mesh without a usable triangle: nothing
+    /// occludes.
     bvh: Option<CwBvh>,
-    /// Triangles in BVH primitive order (`triangles[i]` = input `primitive_indices[i]`).
+    /// The clusters in BVH primitive order ([`cluster`]).
+    clusters: Vec<Cluster>,
+    /// Cluster k's triangles are `triangles[starts[k]..starts[k + 1]]`, lane by lane.
+    starts: Vec<u32>,
+    /// Triangles cluster by cluster.
     triangles: Vec<Triangle>,
-    /// Mesh triangle index of each BVH primitive.
+    /// Mesh triangle index of each of `triangles`.
     mesh_triangles: Vec<u32>,
-    /// The ray-independent part of Möller–Trumbore per BVH primitive, for coherent queries.
-    edges: Vec<TriangleEdges>,
     ray_epsilon: f32,
     /// Lanes of the coherent walk on this CPU.
     width: Width,
-}
-
-/// v0 and the edges and normal of a triangle as obvhs's `Triangle::intersect` computes
-/// them (e1 = v0 − v1, e2 = v2 − v0, n = e1 × e2): the same operations, so the same bits.
-///
-/// One cache line each (64 bytes, aligned): a leaf's triangle costs one miss, not two.
-#[derive(Clone, Copy, Debug)]
-#[repr(align(64))]
-struct TriangleEdges {
-    v0: Vec3A,
-    e1: Vec3A,
-    e2: Vec3A,
-    n: Vec3A,
-}
-
-impl TriangleEdges {
-    fn of(tri: &Triangle) -> Self {
-        let e1 = tri.v0 - tri.v1;
-        let e2 = tri.v2 - tri.v0;
-        TriangleEdges {
-            v0: tri.v0,
-            e1,
-            e2,
-            n: e1.cross(e2),
-        }
-    }
 }
 
 /// A copy of `items` in memory the kernel is asked to back with 2 MiB pages (Linux's
@@ -442,36 +389,33 @@ impl Tracer {
         if input.is_empty() {
             return Tracer {
                 bvh: None,
+                clusters: Vec::new(),
+                starts: vec![0],
                 triangles: input,
                 mesh_triangles: input_triangles,
-                edges: Vec::new(),
                 ray_epsilon,
                 width: Width::detect(),
             };
         }
         let mut build_time = Duration::ZERO;
-        let bvh = build_cwbvh_from_tris(&input, BvhBuildParams::medium_build(), &mut build_time);
-        let triangles: Vec<Triangle> = bvh
-            .primitive_indices
-            .iter()
-            .map(|&i| input[i as usize])
-            .collect();
-        let mesh_triangles = bvh
-            .primitive_indices
+        let clustered = cluster::build(&input, &mut build_time);
+        let triangles: Vec<Triangle> = clustered.order.iter().map(|&i| input[i as usize]).collect();
+        let mesh_triangles = clustered
+            .order
             .iter()
             .map(|&i| input_triangles[i as usize])
             .collect();
         log::debug!(
-            "CWBVH over {} triangles built in {:.3} s",
+            "BVH over {} triangles built in {:.3} s",
             input.len(),
             build_time.as_secs_f64()
         );
-        let mut bvh = bvh;
+        let mut bvh = clustered.bvh;
         bvh.nodes = in_huge_pages(&bvh.nodes);
-        let edges: Vec<TriangleEdges> = triangles.iter().map(TriangleEdges::of).collect();
         Tracer {
             bvh: Some(bvh),
-            edges: in_huge_pages(&edges),
+            clusters: in_huge_pages(&clustered.clusters),
+            starts: clustered.starts,
             triangles: in_huge_pages(&triangles),
             mesh_triangles,
             ray_epsilon,
@@ -511,7 +455,18 @@ impl Tracer {
             self.t_min(),
             t_max,
         );
-        !bvh.ray_traverse_miss(ray, |ray, id| self.triangles[id].intersect(ray))
+        !bvh.ray_traverse_miss(ray, |ray, k| self.nearest_in_cluster(ray, k).0)
+    }
+
+    /// The nearest t at which `ray` meets a triangle of cluster `k` within its interval
+    /// (∞: none), by obvhs's `Triangle::intersect`, and that triangle (of equal ts the
+    /// first in the cluster's lane order).
+    fn nearest_in_cluster(&self, ray: &Ray, k: usize) -> (f32, u32) {
+        let (first, end) = (self.starts[k], self.starts[k + 1]);
+        (first..end).fold((f32::INFINITY, first), |(best, at), i| {
+            let t = self.triangles[i as usize].intersect(ray);
+            if t < best { (t, i) } else { (best, at) }
+        })
     }
 
     /// The nearest triangle along `origin + t·dir`, t ∈ [[`Self::t_min`], ∞) (`dir` unit
@@ -525,10 +480,16 @@ impl Tracer {
             f32::INFINITY,
         );
         let mut hit = RayHit::none();
-        if !bvh.ray_traverse(ray, &mut hit, |ray, id| self.triangles[id].intersect(ray)) {
-            return None;
-        }
-        Some(self.hit_at(hit.primitive_id, origin, dir, hit.t))
+        let mut nearest = 0;
+        let found = bvh.ray_traverse(ray, &mut hit, |ray, k| {
+            let (t, triangle) = self.nearest_in_cluster(ray, k);
+            // The traversal keeps a hit strictly nearer than its nearest so far.
+            if t < ray.tmax {
+                nearest = triangle;
+            }
+            t
+        });
+        found.then(|| self.hit_at(nearest, origin, dir, hit.t))
     }
 
     /// The [`Hit`] of BVH primitive `primitive` at distance `t` along `origin + t·dir`.
@@ -589,7 +550,8 @@ impl Tracer {
         let bvh = self.bvh.as_ref().filter(|bvh| !bvh.nodes.is_empty())?;
         Some(CoherentQuery {
             bvh,
-            edges: &self.edges,
+            clusters: &self.clusters,
+            starts: &self.starts,
             t_min: self.t_min(),
             t_max,
             dir: canonical_direction(dir),
@@ -691,69 +653,6 @@ fn child_masks_by_block<L: RayLanes>(test: &NodeTest, packet: &RayPacket, mask: 
     child_masks
 }
 
-/// A triangle's Möller–Trumbore for a coherent walk: its ray-independent part
-/// (edges, normal, 1/(n·d)) splat once, then [`LaneTriangle::test`] a block of rays at a
-/// time with the same operations in the same order as glam's Vec3A cross and dot in
-/// obvhs's `Triangle::intersect`, so the same bits.
-struct LaneTriangle<L> {
-    v0: [L; 3],
-    e1: [L; 3],
-    e2: [L; 3],
-    n: [L; 3],
-    inv_det: L,
-}
-
-impl<L: RayLanes> LaneTriangle<L> {
-    /// `None` where n·d is 0 (obvhs's `valid` needs 1/(n·d) ≠ 0).
-    #[inline(always)]
-    fn new(tri: &TriangleEdges, d: Vec3A) -> Option<Self> {
-        let inv_det = 1.0 / tri.n.dot(d);
-        if inv_det == 0.0 {
-            return None;
-        }
-        let s = L::splat;
-        let lanes = |v: Vec3A| [s(v.x), s(v.y), s(v.z)];
-        Some(LaneTriangle {
-            v0: lanes(tri.v0),
-            e1: lanes(tri.e1),
-            e2: lanes(tri.e2),
-            n: lanes(tri.n),
-            inv_det: s(inv_det),
-        })
-    }
-
-    /// For the rays `first..first + L::WIDTH` of `packet` along `d` (splat): their t and
-    /// the lanes whose hit point lies outside the triangle.
-    #[inline(always)]
-    fn test(&self, d: &[L; 3], packet: &RayPacket, first: usize) -> (L, u32) {
-        let [dx, dy, dz] = *d;
-        let cx = self.v0[0].sub(L::load(&packet.x[first..]));
-        let cy = self.v0[1].sub(L::load(&packet.y[first..]));
-        let cz = self.v0[2].sub(L::load(&packet.z[first..]));
-        // q = d × c
-        let qx = dy.mul(cz).sub(dz.mul(cy));
-        let qy = dz.mul(cx).sub(dx.mul(cz));
-        let qz = dx.mul(cy).sub(dy.mul(cx));
-        let [e1x, e1y, e1z] = self.e1;
-        let [e2x, e2y, e2z] = self.e2;
-        let [nx, ny, nz] = self.n;
-        let u = qx
-            .mul(e2x)
-            .add(qy.mul(e2y))
-            .add(qz.mul(e2z))
-            .mul(self.inv_det);
-        let v = qx
-            .mul(e1x)
-            .add(qy.mul(e1y))
-            .add(qz.mul(e1z))
-            .mul(self.inv_det);
-        let w = L::splat(1.0).sub(u).sub(v);
-        let outside = u.negative() | v.negative() | w.negative();
-        let t = nx.mul(cx).add(ny.mul(cy)).add(nz.mul(cz)).mul(self.inv_det);
-        (t, outside)
-    }
-}
-
 /// A node of a coherent walk entered by its rays: the entered slots split into leaves and
 /// internal nodes (as bit sets: a branch per slot mispredicts), the rays entering each
 /// slot in the walk's buffer ([`RayLanes::child_masks`]).
@@ -800,7 +699,8 @@ impl Entered {
 /// One [`Tracer::occluded_coherent`] query: what the walk shares across its rays.
 struct CoherentQuery<'a> {
     bvh: &'a CwBvh,
-    edges: &'a [TriangleEdges],
+    clusters: &'a [Cluster],
+    starts: &'a [u32],
     t_min: f32,
     t_max: f32,
     /// Unit direction, −0.0 components made +0.0.
@@ -839,8 +739,7 @@ impl CoherentQuery<'_> {
         // As Ray::new computes it.
         let inv = Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
         let s = L::splat;
-        let (ray_t_min, ray_t_max) = (s(self.t_min), s(self.t_max));
-        let dir = [s(d.x), s(d.y), s(d.z)];
+        let ray = LaneRay::<L>::new(d, self.t_min, self.t_max);
         let mut occluded = 0u64;
         let mut child_masks = [0u64; 8];
         packet.t_far = [self.t_max; PACKET_RAYS];
@@ -863,26 +762,17 @@ impl CoherentQuery<'_> {
             let entered = Entered::node::<L>(self, node, inv, packet, mask, &mut child_masks);
             // Leaves first (any hit removes rays from everything below).
             for c in slots(entered.leaves) {
-                let m = child_masks[c];
-                let (first_prim, count) = node.child_primitives(c);
-                for prim in first_prim..first_prim + count {
-                    let edges = &self.edges[prim as usize];
-                    let live = m & !occluded;
-                    if live & live.wrapping_sub(1) == 0 {
-                        if live != 0 && self.one_ray_hits(edges, packet, live.trailing_zeros()) {
-                            occluded |= live;
+                let (first, count) = node.child_primitives(c);
+                for k in first..first + count {
+                    let cluster = &self.clusters[k as usize];
+                    let mut live = child_masks[c] & !occluded;
+                    while live != 0 {
+                        let i = live.trailing_zeros() as usize;
+                        live &= live - 1;
+                        let o = [s(packet.x[i]), s(packet.y[i]), s(packet.z[i])];
+                        if cluster.any_hit(&o, &ray) {
+                            occluded |= 1 << i;
                         }
-                        continue;
-                    }
-                    let Some(tri) = LaneTriangle::<L>::new(edges, d) else {
-                        continue;
-                    };
-                    for (first, lanes) in blocks(L::WIDTH, live) {
-                        let (t, outside) = tri.test(&dir, packet, first);
-                        // intersect() returns t within [t_min, t_max] (else ∞) and the
-                        // any-hit traversal counts it when t < t_max.
-                        let in_range = t.ge(ray_t_min) & t.lt(ray_t_max);
-                        occluded |= u64::from(lanes & !outside & in_range) << first;
                     }
                 }
             }
@@ -900,26 +790,6 @@ impl CoherentQuery<'_> {
         occluded
     }
 
-    /// Whether ray `i` of `packet` hits the triangle at t ∈ [t_min, t_max): obvhs's
-    /// `Triangle::intersect` with the precomputed edges, its very operations, and the
-    /// any-hit traversal's `t < t_max`.
-    #[inline(always)]
-    fn one_ray_hits(&self, tri: &TriangleEdges, packet: &RayPacket, i: u32) -> bool {
-        let i = i as usize;
-        let c = tri.v0 - Vec3A::new(packet.x[i], packet.y[i], packet.z[i]);
-        let r = self.dir.cross(c);
-        let inv_det = 1.0 / tri.n.dot(self.dir);
-        let u = r.dot(tri.e2) * inv_det;
-        let v = r.dot(tri.e1) * inv_det;
-        let w = 1.0 - u - v;
-        let signs = u.to_bits() | v.to_bits() | w.to_bits();
-        if inv_det == 0.0 || signs & 0x8000_0000 != 0 {
-            return false;
-        }
-        let t = tri.n.dot(c) * inv_det;
-        t >= self.t_min && t < self.t_max
-    }
-
     /// The closest-hit walk (module doc, Closest hits): each ray's interval ends at its
     /// nearest hit so far (`packet.t_far`, its primitive in `packet.primitive`), which the
     /// node tests cull by; children are walked near first.
@@ -928,12 +798,10 @@ impl CoherentQuery<'_> {
         let (bvh, d) = (self.bvh, self.dir);
         let inv = Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
         let s = L::splat;
-        let ray_t_min = s(self.t_min);
-        let dir = [s(d.x), s(d.y), s(d.z)];
+        let ray = LaneRay::<L>::new(d, self.t_min, f32::INFINITY);
         packet.t_far = [f32::INFINITY; PACKET_RAYS];
         packet.primitive = [NO_HIT; PACKET_RAYS];
         packet.origin_box = None;
-        let mut t_lanes = [0.0f32; 16];
         let mut child_masks = [0u64; 8];
         let mut stack = std::mem::take(&mut packet.stack);
         stack.clear();
@@ -942,22 +810,14 @@ impl CoherentQuery<'_> {
             let node = &bvh.nodes[node_index as usize];
             let entered = Entered::node::<L>(self, node, inv, packet, mask, &mut child_masks);
             for c in slots(entered.leaves) {
-                let m = child_masks[c];
-                let (first_prim, count) = node.child_primitives(c);
-                for prim in first_prim..first_prim + count {
-                    let Some(tri) = LaneTriangle::<L>::new(&self.edges[prim as usize], d) else {
-                        continue;
-                    };
-                    for (first, lanes) in blocks(L::WIDTH, m) {
-                        let (t, outside) = tri.test(&dir, packet, first);
-                        let nearer = t.ge(ray_t_min) & t.lt(L::load(&packet.t_far[first..]));
-                        let hit = lanes & !outside & nearer;
-                        if hit != 0 {
-                            t.store(&mut t_lanes);
-                            for j in slots(hit) {
-                                packet.t_far[first + j] = t_lanes[j];
-                                packet.primitive[first + j] = prim;
-                            }
+                let (first, count) = node.child_primitives(c);
+                for k in first..first + count {
+                    let cluster = &self.clusters[k as usize];
+                    for i in slots(child_masks[c]) {
+                        let o = [s(packet.x[i]), s(packet.y[i]), s(packet.z[i])];
+                        if let Some((lane, t)) = cluster.nearest(&o, &ray, packet.t_far[i]) {
+                            packet.t_far[i] = t;
+                            packet.primitive[i] = self.starts[k as usize] + lane as u32;
                         }
                     }
                 }
