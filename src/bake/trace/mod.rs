@@ -42,10 +42,10 @@
 //! down to each origin's own leaf, which every direction from a texel walks, and to cold
 //! reads of single triangles. Leaves of 16 triangles (11.2 on average on big, 45k
 //! clusters under 9.2k nodes, 0.7 MB of nodes) take a level off that chain and turn a
-//! leaf's triangles into a few vector tests on adjacent cache lines. Big's bake in one
-//! sitting (2 threads): 20.3–21.0 Mrays/s with 16 a cluster, 14.5–17.7 with 24, 17.4–19.2
-//! with 32, 14.3–14.8 with obvhs's leaves; 8 a cluster gave 16.4–19.2 in another sitting
-//! where obvhs's leaves gave 14.3–15.1. The peer house (23k triangles) runs at least as
+//! leaf's triangles into a few vector tests on adjacent cache lines. Big's bake, the
+//! sizes run by turns (2 threads): 20.3–21.0 Mrays/s with 16 a cluster, 14.5–17.7 with 24,
+//! 17.4–19.2 with 32, 14.3–14.8 with obvhs's leaves; 8 a cluster gave 16.4–19.2 run by
+//! turns with obvhs's leaves at 14.3–15.1. The peer house (23k triangles) runs at least as
 //! fast; the built-in house (448 large triangles) bakes about 15 % slower, a ray that
 //! crosses a cluster's box meeting all its triangles.
 //!
