@@ -301,13 +301,12 @@ pub fn run_with_monitor(
     let mut points: Vec<ProbePoint> = planned.iter().map(|p| p.point.clone()).collect();
     measure(&mut points, &timed, &states, states.main_state);
     let mut model = fit_points(ctx, &points)?;
-    // A point with too few frames in the sought state, or that the fit
-    // misses by more than RETIME_ERROR while its builds disagree (`missed_points`), is
-    // timed in another batch, on a pipeline built afresh (a build can run a shader ≈ 25 %
-    // slower than another for as long as it lives, `states`); its segments join the first
-    // ones, each point's time is its fastest build's, the states are told apart again over
-    // every monitor frame and the model fitted again, up to RETIME_BATCHES batches while a
-    // point is still missed.
+    // A point with too few frames in the sought state, or that the fit misses by more than
+    // RETIME_ERROR while its builds disagree (`missed_points`), is timed in another batch,
+    // on a pipeline built afresh (a build can run a shader ≈ 25 % slower than another for
+    // as long as it lives, `states`); its segments join the first ones, each point's time
+    // is its fastest build's, the states are told apart again over every monitor frame and
+    // the model fitted again, up to RETIME_BATCHES batches while a point is still missed.
     let mut missed = missed_points(&model, &points, &timed, &states);
     for _ in 0..RETIME_BATCHES {
         if missed.is_empty() {

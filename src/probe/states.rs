@@ -272,7 +272,7 @@ impl Segmented {
         tolerance: f64,
         min_frames: usize,
     ) -> bool {
-        match self.build_medians_of(|s| states.ran_in(s, state), min_frames)[..] {
+        match self.build_medians(|s| states.ran_in(s, state), min_frames)[..] {
             [fastest, second, ..] => second <= fastest * (1.0 + tolerance),
             _ => false,
         }
@@ -286,17 +286,12 @@ impl Segmented {
     /// The lowest of the builds' medians over the segments `keep` keeps, and the frames kept.
     fn fastest_build(&self, keep: impl Fn(&Segment) -> bool) -> (Option<f64>, usize) {
         let frames = self.0.iter().filter(|s| keep(s)).map(|s| s.ms.len()).sum();
-        (self.build_medians(keep).first().copied(), frames)
+        (self.build_medians(keep, 1).first().copied(), frames)
     }
 
-    /// Each build's median over the segments `keep` keeps (builds with frames there),
-    /// fastest first.
-    fn build_medians(&self, keep: impl Fn(&Segment) -> bool) -> Vec<f64> {
-        self.build_medians_of(keep, 1)
-    }
-
-    /// [`Self::build_medians`] of the builds with at least `min_frames` frames kept.
-    fn build_medians_of(&self, keep: impl Fn(&Segment) -> bool, min_frames: usize) -> Vec<f64> {
+    /// Each build's median over the segments `keep` keeps, of the builds with at least
+    /// `min_frames` frames there, fastest first.
+    fn build_medians(&self, keep: impl Fn(&Segment) -> bool, min_frames: usize) -> Vec<f64> {
         let kept: Vec<&Segment> = self.0.iter().filter(|s| keep(s)).collect();
         let mut builds: Vec<usize> = kept.iter().map(|s| s.build).collect();
         builds.sort_unstable();
